@@ -1,0 +1,54 @@
+# K210 renderer: firmware build, board model runs and tests.
+# `make flash-to-emulator` and `make test` bootstrap what they need (toolchain, .venv).
+
+CROSS   ?= riscv64-unknown-elf-
+AS      := $(CROSS)as
+LD      := $(CROSS)ld
+OBJCOPY := $(CROSS)objcopy
+ASFLAGS := -march=rv64gc -mabi=lp64d -I firmware/include
+BUILD   := build
+VENV    := .venv
+PYTHON  := $(VENV)/bin/python
+FRAMES  ?= 8
+
+FW_SRCS := $(wildcard firmware/*.S)
+FW_OBJS := $(patsubst firmware/%.S,$(BUILD)/fw/%.o,$(FW_SRCS))
+FW_INCS := $(wildcard firmware/include/*.inc)
+
+.PHONY: all toolchain venv firmware flash-to-emulator test bench goldens clean
+
+all: firmware
+
+toolchain:
+	@tools/ensure-toolchain.sh
+
+$(VENV)/.installed: pyproject.toml setup.py emulator/_insn_counter.c
+	@tools/ensure-venv.sh $(VENV)
+	@touch $@
+
+venv: $(VENV)/.installed
+
+$(BUILD)/fw/%.o: firmware/%.S $(FW_INCS) | toolchain
+	@mkdir -p $(dir $@)
+	$(AS) $(ASFLAGS) -o $@ $<
+
+$(BUILD)/firmware.elf: $(FW_OBJS) firmware/k210.ld
+	$(LD) -T firmware/k210.ld --no-relax -o $@ $(FW_OBJS)
+	$(OBJCOPY) -O binary $@ $(BUILD)/firmware.bin
+
+firmware: toolchain $(BUILD)/firmware.elf
+
+flash-to-emulator: firmware venv
+	$(PYTHON) -m emulator run $(BUILD)/firmware.elf --frames $(FRAMES) --out $(BUILD)/frames
+
+test: firmware venv
+	$(PYTHON) -m pytest -q
+
+bench: firmware venv
+	$(PYTHON) tools/bench.py
+
+goldens: firmware venv
+	$(PYTHON) tools/regen_goldens.py
+
+clean:
+	rm -rf $(BUILD)

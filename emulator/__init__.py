@@ -1,0 +1,1 @@
+"""Board model of the Sipeed Maix Dock (Kendryte K210) on Unicorn."""

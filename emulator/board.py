@@ -1,0 +1,609 @@
+"""The Sipeed Maix Dock: a K210 (two harts, SRAM, peripherals) wired to an ST7789V LCD.
+
+The board owns the virtual clock. Harts run in turn, in quanta of instructions
+(one instruction per CPU clock cycle), and a quantum never runs past the next
+moment a device changes state by itself, so interrupts and DMA completions are
+seen on time. A hart that sleeps in WFI, or that keeps polling a device register
+that cannot change before the next device event, costs no host time: the board
+moves time forward instead.
+
+Wiring is derived from what the firmware programmed, as on the real board: the
+LCD sees SPI0 frames only through the chip select that FPIOA routes to pad 36,
+and its reset and D/C lines are the GPIOHS lines routed to pads 37 and 38.
+"""
+from __future__ import annotations
+
+import math
+import time as host_time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+import unicorn
+from unicorn import riscv_const as rv
+
+from . import hart as hartmod
+from .clint import Clint
+from .disasm import disassemble_one
+from .dmac import Dmac
+from .elf import RESET_PC, LoadedImage, load_elf, symbolize
+from .errors import BoardStop, FirmwareTrap, HangDetected, HardwareMisuse, UnmodelledAccess
+from .fpioa import FUNC_GPIOHS0, FUNC_SPI0_SCLK, FUNC_SPI0_SS0, Fpioa
+from .gpiohs import Gpiohs
+from .hart import CsrContext, Hart, HartState, RunEnd
+from .memory import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE, Sram
+from .mmio import Peripheral
+from .plic import SOURCE_DMA0, SOURCE_GPIOHS0, SOURCE_SPI0, SOURCE_SPI1, SOURCE_UARTHS, Plic
+from .spi import SpiController
+from .st7789v import ST7789V
+from .sysctl import Sysctl
+from .uarths import Uarths
+
+HARTS = 2
+DEFAULT_QUANTUM = 20_000          # instructions per hart per turn
+DEFAULT_HANG_BUDGET_S = 5.0       # virtual seconds without a new frame before a run counts as hung
+TRAP_GRACE_S = 0.5                # virtual time the firmware's trap handler gets to report
+POLL_REPEATS = 8                  # identical reads at one pc before a hart counts as polling
+MTIME_DIVIDER = 50                # mtime ticks at CPU clock / 50
+
+# Maix Dock pads
+PAD_LCD_CS, PAD_LCD_RST, PAD_LCD_DC, PAD_LCD_SCLK = 36, 37, 38, 39
+
+# Blocks of the K210 the model knows by name but does not implement (for clear messages)
+KNOWN_UNMODELLED = [
+    (0x5020_0000, 0x1000, "GPIO (the slow GPIO block)"), (0x5021_0000, 0x1_0000, "UART1"),
+    (0x5022_0000, 0x1_0000, "UART2"), (0x5023_0000, 0x1_0000, "UART3"), (0x5024_0000, 0x1_0000, "SPI slave"),
+    (0x5025_0000, 0x3_0000, "I2S"), (0x5028_0000, 0x3_0000, "I2C"), (0x502C_0000, 0x1_0000, "SHA256"),
+    (0x502D_0000, 0x3_0000, "timers"), (0x5040_0000, 0x2_0000, "WDT"), (0x5042_0000, 0x1_0000, "OTP"),
+    (0x5043_0000, 0x1_0000, "DVP"), (0x5045_0000, 0x1_0000, "AES"), (0x5046_0000, 0x1_0000, "RTC"),
+    (0x5400_0000, 0x100_0000, "SPI3 (on-board flash)"), (0x5000_0000 + 0x1000, 0xF000, "DMAC (past its registers)"),
+    (0x5100_0000, 0x100_0000, "SPI2"), (0x4080_0000, 0x100_0000, "KPU"), (0x4200_0000, 0x100_0000, "FFT"),
+    (0x8800_0000, 0x2_0000, "boot ROM"),
+]
+
+
+@dataclass
+class FrameRecord:
+    index: int
+    virtual_time_s: float
+    instructions: list[int]          # per hart, since the previous frame
+    instructions_total: list[int]    # per hart, since reset
+    host_time_s: float
+
+
+@dataclass
+class RunResult:
+    exit: str
+    message: str
+    frames: list[FrameRecord]
+    virtual_time_s: float
+    instructions: list[int]
+    host_time_s: float
+    warnings: list[str] = field(default_factory=list)
+
+
+def _memory_access_width(word: int) -> int:
+    """Bytes a load/store instruction moves (RV64GC encodings), 4 if unsure."""
+    if word & 3 != 3:   # compressed: c.ld/c.sd/c.ldsp/c.sdsp/c.fld/c.fsd/c.fldsp/c.fsdsp move 8
+        funct3, quadrant = (word >> 13) & 7, word & 3
+        if quadrant in (0, 2) and funct3 in (1, 3, 5, 7):
+            return 8
+        return 4
+    opcode, funct3 = word & 0x7F, (word >> 12) & 7
+    if opcode in (0x03, 0x23, 0x07, 0x27):   # integer/FP load/store
+        return 1 << (funct3 & 3)
+    if opcode == 0x2F:                       # AMO: funct3 2 = .w, 3 = .d
+        return 8 if funct3 == 3 else 4
+    return 4
+
+
+class LcdPort:
+    """The Dock's LCD connector: SPI0's eight data lines, chip select and clock through
+    FPIOA, reset and D/C on GPIOHS lines through FPIOA."""
+
+    def __init__(self, board: "Board", lcd: ST7789V) -> None:
+        self.board = board
+        self.lcd = lcd
+
+    def spi_select(self, selected: bool, now: float) -> None:
+        self.lcd.set_chip_select(selected, now)
+
+    def spi_transfer(self, data: np.ndarray, lanes: int, now: float) -> np.ndarray:
+        board = self.board
+        if not board.fpioa.pads_with_function(FUNC_SPI0_SCLK) or board.fpioa.function_of_pad(PAD_LCD_SCLK) != FUNC_SPI0_SCLK:
+            raise HardwareMisuse("SPI0 sends to the LCD but pad 39 (LCD WRX/clock) is not routed to SPI0_SCLK")
+        if lanes != 8:
+            raise HardwareMisuse(f"SPI0 sends to the LCD in a {lanes}-line format; the Dock's LCD takes SPI0's "
+                                 f"eight data lines (octal frame format, ctrlr0[22:21] = 3)")
+        if not board.sysctl.spi_dvp_data_enabled():
+            raise HardwareMisuse("SPI0 sends to the LCD with SYSCTL misc.spi_dvp_data_enable (bit 10) clear: "
+                                 "the upper data lines do not reach the LCD")
+        dc = board.gpiohs_level_on_pad(PAD_LCD_DC)
+        if dc is None:
+            raise HardwareMisuse("SPI0 sends to the LCD but its D/C line (pad 38) is not a driven GPIOHS output")
+        board.delivery_time = now
+        self.lcd.write(data, dc, now)
+        return np.zeros(len(data), dtype=np.uint8)
+
+
+class Board:
+    """A Maix Dock running one firmware image."""
+
+    def __init__(self, firmware: str, *, quantum: int = DEFAULT_QUANTUM,
+                 hang_budget_s: float = DEFAULT_HANG_BUDGET_S,
+                 console: Callable[[int], None] | None = None,
+                 on_frame: Callable[[FrameRecord, np.ndarray], None] | None = None,
+                 on_warning: Callable[[str], None] | None = None) -> None:
+        self.quantum = quantum
+        self.hang_budget_s = hang_budget_s
+        self.on_frame = on_frame or (lambda record, image: None)
+        self.on_warning = on_warning or (lambda text: None)
+        self.warnings: list[str] = []
+        self.time = 0.0
+        self.delivery_time = 0.0
+        self.memory = Sram()
+        self.sysctl = Sysctl(self)
+        self.fpioa = Fpioa(self)
+        self.gpiohs = Gpiohs(self)
+        self.uarths = Uarths(self, on_byte=console)
+        self.clint = Clint(self)
+        self.plic = Plic(self, source_level=self._source_level)
+        self.dmac = Dmac(self)
+        self.spi0 = SpiController(0, self)
+        self.spi1 = SpiController(1, self)
+        self.peripherals: list[Peripheral] = [self.sysctl, self.fpioa, self.gpiohs, self.uarths, self.clint,
+                                              self.plic, self.dmac, self.spi0, self.spi1]
+        self.timed_devices = [self.uarths, self.spi0, self.spi1, self.dmac, self.sysctl, self.clint]
+        self.lcd = ST7789V(on_frame=self._frame_captured)
+        self.lcd_port = LcdPort(self, self.lcd)
+        self.spi0.device_for_ss = self._spi0_device
+        self.spi1.device_for_ss = lambda ss: None
+        self._lcd_reset_level = 1
+        # clock epochs: cycles and mtime are integrals of the CPU clock over virtual time
+        self._epoch_time = 0.0
+        self._epoch_cycles = 0
+        self._epoch_mtime = 0
+        self._hz = self.sysctl.cpu_hz()
+        # per-run state
+        self.frames: list[FrameRecord] = []
+        self._frames_wanted = 0
+        self._last_frame_time = 0.0
+        self._last_frame_instret = [0] * HARTS
+        self._host_start = host_time.perf_counter()
+        self._stop: BoardStop | None = None
+        self._current: Hart | None = None
+        self._quantum_t0 = 0.0
+        self._quantum_start = [0] * HARTS
+        self._poll = [(-1, -1, -1, 0)] * HARTS
+        self._split: list[tuple[int, int, int] | None] = [None] * HARTS
+        self._widths: dict[int, int] = {}
+        self._trap_report: str | None = None
+        self._trap_deadline: float | None = None
+        self.image: LoadedImage = load_elf(firmware, self.memory)
+        if self.image.entry != RESET_PC:
+            self.warn(f"ELF entry is 0x{self.image.entry:x}, but the K210 starts both harts at 0x{RESET_PC:x}")
+        sites = []
+        for address, code in self.image.code_ranges:
+            sites.extend(hartmod.find_csr_sites(code, address))
+        self.harts = [Hart(h, CsrContext(mcycle=self._mcycle_reader(h), mip=self._mip_reader(h))) for h in range(HARTS)]
+        for hart in self.harts:
+            self._map(hart)
+            hart.intercept_csr_sites(sites)
+            hart.pc = RESET_PC
+
+    # --- construction -----------------------------------------------------------------
+
+    def _map(self, hart: Hart) -> None:
+        uc = hart.uc
+        uc.mem_map_ptr(SRAM_BASE, SRAM_SIZE, unicorn.UC_PROT_ALL, self.memory.address)
+        uc.mem_map_ptr(SRAM_UNCACHED_BASE, SRAM_SIZE, unicorn.UC_PROT_ALL, self.memory.address)
+        for peripheral in self.peripherals:
+            uc.mmio_map(peripheral.BASE, peripheral.SIZE,
+                        self._mmio_reader(hart, peripheral), None, self._mmio_writer(hart, peripheral), None)
+        uc.hook_add(unicorn.UC_HOOK_MEM_UNMAPPED | unicorn.UC_HOOK_MEM_FETCH_PROT | unicorn.UC_HOOK_MEM_READ_PROT
+                    | unicorn.UC_HOOK_MEM_WRITE_PROT, self._unmapped(hart))
+
+    def _mcycle_reader(self, h: int) -> Callable[[], int]:
+        return lambda: self.cycles(self.hart_now(self.harts[h]))
+
+    def _mip_reader(self, h: int) -> Callable[[], int]:
+        return lambda: self.mip(h, self.hart_now(self.harts[h]))
+
+    # --- virtual clock -----------------------------------------------------------------
+
+    def cpu_hz(self) -> float:
+        return self._hz
+
+    def hart_now(self, hart: Hart) -> float:
+        if hart is self._current:
+            return self._quantum_t0 + (hart.executed - self._quantum_start[hart.hart_id]) / self._hz
+        return self.time
+
+    def cycles(self, now: float) -> int:
+        return self._epoch_cycles + int((now - self._epoch_time) * self._hz + 1e-6)
+
+    def mtime(self, now: float) -> int:
+        return self._epoch_mtime + int((now - self._epoch_time) * self._hz / MTIME_DIVIDER + 1e-6)
+
+    def time_of_mtime(self, value: int) -> float | None:
+        if value >= 1 << 63:
+            return None
+        return self._epoch_time + (value - self._epoch_mtime) * MTIME_DIVIDER / self._hz
+
+    def set_mtime(self, value: int, now: float) -> None:
+        self._rebase(now)
+        self._epoch_mtime = value
+
+    def _rebase(self, now: float) -> None:
+        self._epoch_cycles = self.cycles(now)
+        self._epoch_mtime = self.mtime(now)
+        self._epoch_time = now
+
+    def clock_changed(self, now: float) -> None:
+        """SYSCTL changed the CPU clock: later instructions take the new cycle time."""
+        self._rebase(now)
+        self._hz = self.sysctl.cpu_hz()
+        if self._current is not None:
+            self._current.request_stop()
+
+    # --- wiring -----------------------------------------------------------------------
+
+    def _spi0_device(self, ss: int):
+        if self.fpioa.function_of_pad(PAD_LCD_CS) == FUNC_SPI0_SS0 + ss:
+            return self.lcd_port
+        return None
+
+    def gpiohs_level_on_pad(self, pad: int) -> int | None:
+        function = self.fpioa.function_of_pad(pad)
+        if FUNC_GPIOHS0 <= function < FUNC_GPIOHS0 + 32:
+            return self.gpiohs.driven_level(function - FUNC_GPIOHS0)
+        return None
+
+    def wiring_changed(self, now: float) -> None:
+        self.advance_devices(now)
+        level = self.gpiohs_level_on_pad(PAD_LCD_RST)
+        level = 1 if level is None else level
+        if level != self._lcd_reset_level:
+            self._lcd_reset_level = level
+            self.lcd.set_reset_pin(level, now)
+        self.spi0.wiring_changed(now)
+        self.spi1.wiring_changed(now)
+
+    def spi_by_name(self, name: str) -> SpiController:
+        return {"spi0": self.spi0, "spi1": self.spi1}[name]
+
+    def reset_peripheral(self, name: str, now: float) -> None:
+        """SYSCTL peri_reset released a peripheral: its registers return to reset values."""
+        target = {"spi0": self.spi0, "spi1": self.spi1, "dma": self.dmac, "fpioa": self.fpioa}.get(name)
+        if target is None:
+            return
+        index = self.peripherals.index(target)
+        fresh = SpiController(target.index, self) if isinstance(target, SpiController) else type(target)(self)
+        if isinstance(fresh, SpiController):
+            fresh.device_for_ss = target.device_for_ss
+            setattr(self, f"spi{target.index}", fresh)
+        elif isinstance(fresh, Dmac):
+            self.dmac = fresh
+        else:
+            self.fpioa = fresh
+        self.peripherals[index] = fresh
+        self.timed_devices = [self.uarths, self.spi0, self.spi1, self.dmac, self.sysctl, self.clint]
+        for hart in self.harts:
+            hart.uc.mmio_unmap(fresh.BASE, fresh.SIZE)
+            hart.uc.mmio_map(fresh.BASE, fresh.SIZE, self._mmio_reader(hart, fresh), None,
+                             self._mmio_writer(hart, fresh), None)
+
+    def warn(self, text: str) -> None:
+        line = f"[{self.time * 1e3:10.3f} ms] {text}"
+        self.warnings.append(line)
+        self.on_warning(line)
+
+    # --- interrupts --------------------------------------------------------------------
+
+    def _source_level(self, source: int) -> bool:
+        if source == SOURCE_SPI0:
+            return self.spi0.irq_line()
+        if source == SOURCE_SPI1:
+            return self.spi1.irq_line()
+        if SOURCE_DMA0 <= source < SOURCE_DMA0 + 6:
+            return self.dmac.irq_line(source - SOURCE_DMA0)
+        if source == SOURCE_UARTHS:
+            return self.uarths.irq_line()
+        if SOURCE_GPIOHS0 <= source < SOURCE_GPIOHS0 + 32:
+            return self.gpiohs.irq_line(source - SOURCE_GPIOHS0)
+        return False
+
+    def mip(self, h: int, now: float) -> int:
+        value = 0
+        if self.clint.msip(h):
+            value |= 1 << hartmod.IRQ_MSI
+        if self.clint.timer_pending(h, now):
+            value |= 1 << hartmod.IRQ_MTI
+        if self.plic.external_pending(h):
+            value |= 1 << hartmod.IRQ_MEI
+        return value
+
+    def interrupts_may_have_changed(self) -> None:
+        """A device changed an interrupt input: a running hart with interrupts enabled
+        must see it promptly, so its turn ends here."""
+        hart = self._current
+        if hart is not None and hart.csr(rv.UC_RISCV_REG_MSTATUS) & hartmod.MSTATUS_MIE:
+            hart.request_stop()
+
+    # --- devices ------------------------------------------------------------------------
+
+    def advance_devices(self, now: float) -> None:
+        for device in self.timed_devices:
+            device.advance(now)
+
+    def next_device_event(self, now: float) -> float | None:
+        times = [t for t in (d.next_event_time(now) for d in self.timed_devices) if t is not None and t > now]
+        return min(times) if times else None
+
+    # --- memory-mapped I/O dispatch --------------------------------------------------------
+
+    def _describe_access(self, hart: Hart, address: int, size: int, direction: str) -> str:
+        pc = hart.uc.reg_read(rv.UC_RISCV_REG_PC)
+        code = bytes(hart.uc.mem_read(pc, 4)) if self._is_sram(pc) else b""
+        where = symbolize(self.image.symbols, pc)
+        where = f" <{where}>" if where else ""
+        return (f"hart {hart.hart_id} at pc 0x{pc:08x}{where} ({disassemble_one(code, pc)}): "
+                f"{direction} of {size} bytes at 0x{address:08x}")
+
+    @staticmethod
+    def _is_sram(address: int) -> bool:
+        return SRAM_BASE <= address < SRAM_BASE + SRAM_SIZE or SRAM_UNCACHED_BASE <= address < SRAM_UNCACHED_BASE + SRAM_SIZE
+
+    def _fail(self, hart: Hart, error: BoardStop, address: int, size: int, direction: str) -> None:
+        if self._stop is None:
+            error.args = (f"{self._describe_access(hart, address, size, direction)}: {error.args[0]}",)
+            self._stop = error
+        hart.request_stop()
+
+    def _gate_check(self, peripheral: Peripheral) -> None:
+        gate = getattr(peripheral, "GATE", None)
+        if gate is None:
+            return
+        if not self.sysctl.gate_open(gate):
+            raise HardwareMisuse(f"{peripheral.NAME} accessed while its clock is gated "
+                                 f"(SYSCTL clk_en_peri / clk_en_cent): enable its clock first")
+        if self.sysctl.in_reset(gate):
+            raise HardwareMisuse(f"{peripheral.NAME} accessed while held in reset (SYSCTL peri_reset)")
+
+    def _access_width(self, hart: Hart, pc: int) -> int:
+        """Bytes moved by the load/store at pc. Unicorn splits a 64-bit MMIO access into
+        two 32-bit callbacks (low half first); decoding the instruction tells them apart
+        from two genuine 32-bit accesses."""
+        width = self._widths.get(pc)
+        if width is None:
+            width = _memory_access_width(hart.read_u32(pc))
+            self._widths[pc] = width
+        return width
+
+    def _mmio_reader(self, hart: Hart, peripheral: Peripheral):
+        def read(uc, offset, size, user_data):
+            if self._stop is not None:
+                return 0
+            pc = uc.reg_read(rv.UC_RISCV_REG_PC)
+            pending = self._split[hart.hart_id]
+            if pending is not None and pending[:2] == (pc, offset):
+                self._split[hart.hart_id] = None
+                return pending[2]
+            now = self.hart_now(hart)
+            width = self._access_width(hart, pc) if size == 4 else size
+            try:
+                self._gate_check(peripheral)
+                value = peripheral.read(offset, width, now)
+            except BoardStop as error:
+                self._fail(hart, error, peripheral.BASE + offset, width, "load")
+                return 0
+            if width == 8 and size == 4:
+                self._split[hart.hart_id] = (pc, offset + 4, value >> 32)
+                value &= 0xFFFF_FFFF
+            self._note_poll(hart, pc, offset + peripheral.BASE, value)
+            return value
+        return read
+
+    def _mmio_writer(self, hart: Hart, peripheral: Peripheral):
+        def write(uc, offset, size, value, user_data):
+            if self._stop is not None:
+                return
+            pc = uc.reg_read(rv.UC_RISCV_REG_PC)
+            width = self._access_width(hart, pc) if size == 4 else size
+            if width == 8 and size == 4:
+                pending = self._split[hart.hart_id]
+                if pending is None or pending[:2] != (pc, offset):
+                    self._split[hart.hart_id] = (pc, offset + 4, value & 0xFFFF_FFFF)
+                    return
+                self._split[hart.hart_id] = None
+                offset, value = offset - 4, pending[2] | (value & 0xFFFF_FFFF) << 32
+            now = self.hart_now(hart)
+            self._poll[hart.hart_id] = (-1, -1, -1, 0)
+            try:
+                self._gate_check(peripheral)
+                peripheral.write(offset, width, value, now)
+            except BoardStop as error:
+                self._fail(hart, error, peripheral.BASE + offset, width, "store")
+        return write
+
+    def _note_poll(self, hart: Hart, pc: int, address: int, value: int) -> None:
+        """Repeated identical reads of one register from one pc: the hart is polling. It
+        stops for the rest of its turn; time, not its loop, is what will change the value."""
+        last_pc, last_address, last_value, repeats = self._poll[hart.hart_id]
+        if (pc, address, value) == (last_pc, last_address, last_value):
+            repeats += 1
+            if repeats >= POLL_REPEATS:
+                hart.state = HartState.STALLED
+                hart.request_stop()
+                repeats = 0
+        else:
+            repeats = 1
+        self._poll[hart.hart_id] = (pc, address, value, repeats)
+
+    def _unmapped(self, hart: Hart):
+        def hook(uc, access, address, size, value, user_data):
+            fetch = access in (unicorn.UC_MEM_FETCH_UNMAPPED, unicorn.UC_MEM_FETCH_PROT)
+            write = access in (unicorn.UC_MEM_WRITE_UNMAPPED, unicorn.UC_MEM_WRITE_PROT)
+            name = next((n for base, length, n in KNOWN_UNMODELLED if base <= address < base + length), None)
+            if fetch:
+                error: BoardStop = FirmwareTrap(
+                    f"hart {hart.hart_id}: instruction fetch from 0x{address:08x}, which is not memory "
+                    f"(jumped from around pc 0x{uc.reg_read(rv.UC_RISCV_REG_PC):08x})")
+                if self._stop is None:
+                    self._stop = error
+                return False
+            reason = (f"{name}, which the board model does not implement" if name
+                      else "no device or memory answers at this address")
+            self._fail(hart, UnmodelledAccess(reason), address, size, "store" if write else "load")
+            return False
+        return hook
+
+    # --- frames ---------------------------------------------------------------------------
+
+    def _frame_captured(self, image: np.ndarray) -> None:
+        totals = [h.instret for h in self.harts]
+        record = FrameRecord(
+            index=len(self.frames),
+            virtual_time_s=self.delivery_time,
+            instructions=[t - last for t, last in zip(totals, self._last_frame_instret)],
+            instructions_total=totals,
+            host_time_s=host_time.perf_counter() - self._host_start,
+        )
+        self._last_frame_instret = totals
+        self._last_frame_time = self.delivery_time
+        self.frames.append(record)
+        self.on_frame(record, image)
+        if len(self.frames) >= self._frames_wanted and self._current is not None:
+            self._current.request_stop()
+
+    # --- the run loop ----------------------------------------------------------------------
+
+    def run(self, frames: int, progress: Callable[["Board"], None] | None = None) -> RunResult:
+        """Runs until `frames` frames have been shown. Raises a BoardStop subclass otherwise."""
+        self._frames_wanted = frames
+        self._host_start = host_time.perf_counter()
+        last_progress = 0.0
+        while len(self.frames) < frames:
+            self._step()
+            if progress is not None and host_time.perf_counter() - last_progress > 0.5:
+                last_progress = host_time.perf_counter()
+                progress(self)
+        return RunResult("ok", f"{len(self.frames)} frames shown", self.frames, self.time,
+                         [h.instret for h in self.harts], host_time.perf_counter() - self._host_start,
+                         self.warnings)
+
+    def _step(self) -> None:
+        t0 = self.time
+        hz = self._hz
+        next_event = self.next_device_event(t0)
+        span = self.quantum / hz
+        if next_event is not None:
+            span = min(span, max(next_event - t0, 1 / hz))
+        budget = max(1, math.ceil(span * hz - 1e-9))
+        ran_any = False
+        for hart in self.harts:
+            if hart.state is not HartState.RUNNING:
+                continue
+            ran_any = True
+            self._run_hart(hart, t0, budget)
+            if self._stop is not None:
+                raise self._stop
+            if len(self.frames) >= self._frames_wanted:
+                self.time = max(self.time, self.delivery_time)
+                return
+        if self._hz != hz:   # the clock changed during the turn; time so far ran at the old clock
+            t_end = self._epoch_time
+        elif ran_any:
+            t_end = t0 + budget / hz
+        else:
+            if next_event is None:
+                self._report_hang("every hart waits (wfi or polling) and no device will ever change state")
+            t_end = next_event
+        self.time = max(t_end, t0)
+        self.advance_devices(self.time)
+        self._wake_and_interrupt()
+        self._check_deadlines()
+
+    def _run_hart(self, hart: Hart, t0: float, budget: int) -> None:
+        self._current = hart
+        self._quantum_t0 = t0
+        self._quantum_start[hart.hart_id] = hart.executed
+        try:
+            end, ran = hart.run(budget)
+        except unicorn.UcError as error:
+            end, ran = None, 0
+            hart.pc = hart.uc.reg_read(rv.UC_RISCV_REG_PC)
+            if self._stop is None:
+                if error.errno == unicorn.UC_ERR_INSN_INVALID and hart.read_u16(hart.pc) in (0x9002,) or \
+                        hart.read_u32(hart.pc) == 0x00100073:
+                    hart.note_breakpoint()
+                    end = RunEnd.EXCEPTION
+                else:
+                    code = bytes(hart.uc.mem_read(hart.pc, 4)) if self._is_sram(hart.pc) else b""
+                    self._stop = FirmwareTrap(f"hart {hart.hart_id} at pc 0x{hart.pc:08x} "
+                                              f"({disassemble_one(code, hart.pc)}): {error}")
+        finally:
+            self._current = None
+        if self._stop is not None:
+            return
+        if end is RunEnd.WFI:
+            hart.state = HartState.ASLEEP
+        elif end is RunEnd.EXCEPTION:
+            self._deliver_exception(hart)
+
+    def _deliver_exception(self, hart: Hart) -> None:
+        exc = hart.pending_exception
+        hart.pending_exception = None
+        code = bytes(hart.uc.mem_read(exc.epc, 4)) if self._is_sram(exc.epc) else b""
+        where = symbolize(self.image.symbols, exc.epc)
+        report = (f"hart {hart.hart_id}: {hartmod.EXCEPTION_NAMES.get(exc.cause, f'exception {exc.cause}')} "
+                  f"at pc 0x{exc.epc:08x}{f' <{where}>' if where else ''} ({disassemble_one(code, exc.epc)}), "
+                  f"mtval 0x{exc.tval:x}")
+        mtvec = hart.csr(rv.UC_RISCV_REG_MTVEC)
+        if self._trap_report is not None:
+            raise FirmwareTrap(f"{self._trap_report}; then, in the trap handler, {report}")
+        if mtvec & ~3 == 0 or not self._is_sram(mtvec & ~3):
+            raise FirmwareTrap(f"{report}; mtvec = 0x{mtvec:x} points at no trap handler")
+        self._trap_report = report
+        self._trap_deadline = self.time + TRAP_GRACE_S
+        hart.enter_trap(exc.cause, exc.epc, exc.tval)
+
+    def _wake_and_interrupt(self) -> None:
+        for hart in self.harts:
+            if hart.state is HartState.STALLED:
+                hart.state = HartState.RUNNING
+            pending = self.mip(hart.hart_id, self.time) & hart.csr(rv.UC_RISCV_REG_MIE)
+            if not pending:
+                continue
+            if hart.state is HartState.ASLEEP:
+                hart.state = HartState.RUNNING
+            if hart.csr(rv.UC_RISCV_REG_MSTATUS) & hartmod.MSTATUS_MIE:
+                for irq in (hartmod.IRQ_MEI, hartmod.IRQ_MSI, hartmod.IRQ_MTI):
+                    if pending >> irq & 1:
+                        hart.enter_trap(hartmod.CAUSE_INTERRUPT | irq, hart.pc, 0)
+                        break
+
+    def _check_deadlines(self) -> None:
+        if self._trap_deadline is not None:
+            everyone_waits = all(h.state is not HartState.RUNNING for h in self.harts) and \
+                self.next_device_event(self.time) is None
+            if self.time >= self._trap_deadline or everyone_waits:
+                raise FirmwareTrap(self._trap_report + " (the firmware's trap handler has run; see the console)")
+        if self.time - self._last_frame_time > self.hang_budget_s:
+            self._report_hang(f"no frame reached the LCD for {self.hang_budget_s:g} s of virtual time")
+
+    def _report_hang(self, why: str) -> None:
+        lines = [why]
+        for hart in self.harts:
+            code = bytes(hart.uc.mem_read(hart.pc, 4)) if self._is_sram(hart.pc) else b""
+            where = symbolize(self.image.symbols, hart.pc)
+            lines.append(f"hart {hart.hart_id}: {hart.state.value} at pc 0x{hart.pc:08x}"
+                         f"{f' <{where}>' if where else ''} ({disassemble_one(code, hart.pc)}), "
+                         f"mie 0x{hart.csr(rv.UC_RISCV_REG_MIE):x}, mip 0x{self.mip(hart.hart_id, self.time):x}")
+        for peripheral in self.peripherals:
+            text = peripheral.describe_wait()
+            if text:
+                lines.append(text)
+        lines.append(f"LCD: {self.lcd.frames_captured} frames captured, display "
+                     f"{'on' if self.lcd.display_on else 'off'}, {'asleep' if self.lcd.sleeping else 'awake'}")
+        raise HangDetected("\n  ".join(lines))

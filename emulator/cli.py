@@ -1,0 +1,92 @@
+"""Command line: `python -m emulator run FIRMWARE.elf [--frames N] [--out DIR] ...`."""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+from .errors import EXIT_INTERNAL, EXIT_OK, BoardStop
+
+EXIT_STATUS_HELP = """exit status:
+  0  the requested frames were shown
+  1  internal error of the board model
+  2  bad command line
+  3  the firmware trapped (exception), or jumped outside memory
+  4  hang: no frame within the virtual-time budget, or every hart waits forever
+  5  the firmware touched an address or register the model does not implement
+  6  bad input: the firmware image is missing or not a RISC-V ELF
+  7  hardware misuse: something the real K210 would not do (e.g. CPU on an unlocked PLL)
+"""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="python -m emulator", description="Sipeed Maix Dock (Kendryte K210) board model",
+                                     epilog=EXIT_STATUS_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = parser.add_subparsers(dest="command", required=True)
+    run = sub.add_parser("run", help="run a firmware ELF and capture the LCD's frames",
+                         epilog=EXIT_STATUS_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
+    run.add_argument("firmware", help="firmware ELF (linked for SRAM at 0x80000000)")
+    run.add_argument("--frames", type=int, default=8, help="stop after this many frames reach the LCD (default 8)")
+    run.add_argument("--out", default="build/frames", help="output folder (default build/frames)")
+    run.add_argument("--budget", type=float, default=5.0,
+                     help="virtual seconds allowed between frames before the run counts as hung (default 5)")
+    run.add_argument("--quantum", type=int, default=20_000, help="instructions per hart per turn (default 20000)")
+    run.add_argument("--quiet", action="store_true", help="do not echo the console or show progress")
+    return parser
+
+
+def _progress(board) -> None:
+    frames = len(board.frames)
+    total = sum(h.instret for h in board.harts)
+    sys.stderr.write(f"\r[board] frame {frames}/{board._frames_wanted}  virtual {board.time * 1e3:9.2f} ms  "
+                     f"{total / 1e6:9.2f} M instructions ")
+    sys.stderr.flush()
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    if args.frames < 1:
+        print("--frames must be at least 1", file=sys.stderr)
+        return 2
+    from .board import Board
+    from .output import RunOutput, summary_dict
+
+    output = RunOutput(args.out)
+
+    def console(byte: int) -> None:
+        output.console_byte(byte)
+        if not args.quiet:
+            sys.stdout.buffer.write(bytes((byte,)))
+            if byte == 10:
+                sys.stdout.flush()
+
+    def warning(text: str) -> None:
+        if not args.quiet:
+            sys.stderr.write(f"\n[board] warning: {text}\n")
+
+    started = time.perf_counter()
+    board = None
+    try:
+        board = Board(args.firmware, quantum=args.quantum, hang_budget_s=args.budget, console=console,
+                      on_frame=output.frame, on_warning=warning)
+        result = board.run(args.frames, progress=None if args.quiet or not sys.stderr.isatty() else _progress)
+        status, kind, message = EXIT_OK, "ok", result.message
+    except BoardStop as stop:
+        status, kind, message = stop.exit_status, stop.kind, str(stop)
+    except Exception as error:  # an internal bug must still leave a run.json behind
+        status, kind, message = EXIT_INTERNAL, "internal", f"{type(error).__name__}: {error}"
+        import traceback
+        traceback.print_exc()
+    sys.stdout.flush()
+    frames = board.frames if board is not None else []
+    summary = summary_dict(kind, message, frames, board.time if board else 0.0,
+                           [h.instret for h in board.harts] if board else [0, 0],
+                           time.perf_counter() - started, board.warnings if board else [], args.firmware)
+    output.finish(summary)
+    if not args.quiet and sys.stderr.isatty():
+        sys.stderr.write("\n")
+    if status == EXIT_OK:
+        print(f"[board] {message}; {board.time * 1e3:.2f} ms virtual; output in {args.out}", file=sys.stderr)
+    else:
+        print(f"[board] stopped ({kind}): {message}", file=sys.stderr)
+    return status

@@ -1,0 +1,56 @@
+"""CLINT (0x0200_0000): per-hart software interrupt (msip) and timer (mtimecmp), and mtime.
+
+mtime ticks at CPU clock / 50 on the K210. The board owns the virtual clock and
+answers mtime; this model keeps msip and mtimecmp and says when each hart's
+timer interrupt becomes pending. mtimecmp is not reset by the Rocket CLINT; the
+model starts it at all ones (no timer interrupt pending), which is what random
+power-up contents almost always amount to.
+"""
+from __future__ import annotations
+
+from .mmio import Peripheral, Register
+
+HARTS = 2
+MSIP = 0x0000
+MTIMECMP = 0x4000
+MTIME = 0xBFF8
+ALL_ONES = (1 << 64) - 1
+
+
+class Clint(Peripheral):
+    NAME = "CLINT"
+    BASE = 0x0200_0000
+    SIZE = 0x10000
+    REGISTERS = {
+        **{MSIP + 4 * h: Register(f"msip{h}") for h in range(HARTS)},
+        **{MTIMECMP + 8 * h: Register(f"mtimecmp{h}", width=8, narrow_ok=True, reset=ALL_ONES) for h in range(HARTS)},
+        MTIME: Register("mtime", width=8, narrow_ok=True),
+    }
+
+    def msip(self, hart: int) -> bool:
+        return bool(self.values[MSIP + 4 * hart] & 1)
+
+    def timer_pending(self, hart: int, now: float) -> bool:
+        return self.board.mtime(now) >= self.values[MTIMECMP + 8 * hart]
+
+    def read_register(self, offset: int, reg: Register, now: float) -> int:
+        if offset == MTIME:
+            return self.board.mtime(now)
+        return self.values[offset]
+
+    def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
+        if offset == MTIME:
+            self.board.set_mtime(value, now)
+        elif offset < MTIMECMP:
+            self.values[offset] = value & 1
+        else:
+            self.values[offset] = value
+        self.board.interrupts_may_have_changed()
+
+    def next_event_time(self, now: float) -> float | None:
+        times = []
+        for hart in range(HARTS):
+            when = self.board.time_of_mtime(self.values[MTIMECMP + 8 * hart])
+            if when is not None and when > now:
+                times.append(when)
+        return min(times) if times else None

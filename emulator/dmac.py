@@ -1,0 +1,277 @@
+"""DMAC (0x5000_0000): the DesignWare AXI DMA controller, six channels, 64-bit registers.
+
+Modelled: single-block transfers memory-to-memory, memory-to-peripheral and
+peripheral-to-memory, with the peripheral side handshaking through the request
+SYSCTL dma_sel routes to the channel's handshake interface (dst_per / src_per).
+A channel's chen bit drops when its block is done; the channel's intstatus
+then has BLOCK_TFR_DONE (bit 0) and DMA_TFR_DONE (bit 1) set as far as
+intstatus_en allows, and its interrupt line (PLIC source 27 + n) is high while
+intstatus & intsignal_en is non-zero and cfg.int_en is set.
+Linked-list and multi-block transfers are not modelled and stop the run.
+Registers are 64 bits wide and only 64-bit accesses (ld/sd) are accepted.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import HardwareMisuse, UnmodelledAccess
+from .mmio import Peripheral, Register, field
+
+CHANNELS = 6
+ID, COMPVER, CFG, CHEN, INTSTATUS, COM_INTCLEAR = 0x00, 0x08, 0x10, 0x18, 0x30, 0x38
+COM_INTSTATUS_EN, COM_INTSIGNAL_EN, COM_INTSTATUS, RESET = 0x40, 0x48, 0x50, 0x58
+CH_BASE, CH_STRIDE = 0x100, 0x100
+SAR, DAR, BLOCK_TS, CTL, CH_CFG, LLP, STATUS = 0x00, 0x08, 0x10, 0x18, 0x20, 0x28, 0x30
+SWHSSRC, SWHSDST, BLK_TFR_RESUMEREQ, AXI_ID, AXI_QOS = 0x38, 0x40, 0x48, 0x50, 0x58
+INTSTATUS_EN, CH_INTSTATUS, INTSIGNAL_EN, INTCLEAR = 0x80, 0x88, 0x90, 0x98
+
+CFG_ENABLE, CFG_INT_EN = 1, 2
+TT_MEM2MEM, TT_MEM2PER, TT_PER2MEM = 0, 1, 2
+INT_BLOCK_TFR_DONE, INT_DMA_TFR_DONE = 1, 2
+WIDTH_BYTES = {0: 1, 1: 2, 2: 4, 3: 8}
+# memory-to-memory copies move one 64-bit AXI beat per bus clock (ACLK = CPU clock)
+MEM2MEM_BYTES_PER_CYCLE = 8
+
+
+def _channel_registers() -> dict[int, Register]:
+    names = {SAR: "sar", DAR: "dar", BLOCK_TS: "block_ts", CTL: "ctl", CH_CFG: "cfg", LLP: "llp",
+             STATUS: "status", SWHSSRC: "swhssrc", SWHSDST: "swhsdst", BLK_TFR_RESUMEREQ: "blk_tfr_resumereq",
+             AXI_ID: "axi_id", AXI_QOS: "axi_qos", INTSTATUS_EN: "intstatus_en", CH_INTSTATUS: "intstatus",
+             INTSIGNAL_EN: "intsignal_en", INTCLEAR: "intclear"}
+    table = {}
+    for n in range(CHANNELS):
+        for off, name in names.items():
+            table[CH_BASE + CH_STRIDE * n + off] = Register(
+                f"ch{n}_{name}", width=8,
+                writable=off not in (STATUS, CH_INTSTATUS),
+                readable=off != INTCLEAR,
+            )
+    return table
+
+
+@dataclass
+class Transfer:
+    """A channel's block in flight."""
+
+    kind: int
+    items: int
+    src_width: int
+    dst_width: int
+    src: int
+    dst: int
+    src_fixed: bool
+    dst_fixed: bool
+    done_items: int = 0
+    done_at: float | None = None
+    peripheral: object = None
+
+
+class DmaChannel:
+    """One channel; the SPI controllers talk to it through the handshake methods."""
+
+    def __init__(self, dmac: "Dmac", index: int) -> None:
+        self.dmac = dmac
+        self.index = index
+        self.transfer: Transfer | None = None
+
+    def _reg(self, off: int) -> int:
+        return self.dmac.values[CH_BASE + CH_STRIDE * self.index + off]
+
+    def remaining(self) -> int:
+        t = self.transfer
+        return 0 if t is None else t.items - t.done_items
+
+    def read_for_peripheral(self, n: int) -> np.ndarray:
+        """The next n items from memory, for a peripheral's transmit FIFO."""
+        t = self.transfer
+        values = self.dmac.board.memory.read_items(t.src, t.src_width, n, t.src_fixed)
+        if not t.src_fixed:
+            t.src += n * t.src_width
+        t.done_items += n
+        return values
+
+    def accept_from_peripheral(self, values: np.ndarray, now: float) -> None:
+        """Received items from a peripheral's receive FIFO, written to memory."""
+        t = self.transfer
+        if t is None:
+            return
+        take = values[: self.remaining()]
+        self.dmac.board.memory.write_items(t.dst, t.dst_width, take, t.dst_fixed)
+        if not t.dst_fixed:
+            t.dst += len(take) * t.dst_width
+        t.done_items += len(take)
+        if not self.remaining():
+            self.peripheral_done(now)
+
+    def peripheral_done(self, at: float) -> None:
+        if self.transfer is not None:
+            self.transfer.done_at = at
+
+
+class Dmac(Peripheral):
+    NAME = "DMAC"
+    BASE = 0x5000_0000
+    SIZE = 0x1000
+    GATE = "dma"
+    REGISTERS = {
+        ID: Register("id", width=8, writable=False), COMPVER: Register("compver", width=8, writable=False,
+                                                                        reset=0x3130_302A),
+        CFG: Register("cfg", width=8), CHEN: Register("chen", width=8),
+        INTSTATUS: Register("intstatus", width=8, writable=False),
+        COM_INTCLEAR: Register("com_intclear", width=8, readable=False),
+        COM_INTSTATUS_EN: Register("com_intstatus_en", width=8),
+        COM_INTSIGNAL_EN: Register("com_intsignal_en", width=8),
+        COM_INTSTATUS: Register("com_intstatus", width=8, writable=False),
+        RESET: Register("reset", width=8),
+        **_channel_registers(),
+    }
+
+    def __init__(self, board=None) -> None:
+        super().__init__(board)
+        self.channels = [DmaChannel(self, n) for n in range(CHANNELS)]
+
+    def _ch(self, n: int, off: int) -> int:
+        return CH_BASE + CH_STRIDE * n + off
+
+    # --- time ------------------------------------------------------------------------
+
+    def advance(self, now: float) -> None:
+        for channel in self.channels:
+            t = channel.transfer
+            if t is not None and t.done_at is not None and t.done_at <= now:
+                self._complete(channel)
+
+    def next_event_time(self, now: float) -> float | None:
+        times = [c.transfer.done_at for c in self.channels
+                 if c.transfer is not None and c.transfer.done_at is not None and c.transfer.done_at > now]
+        return min(times) if times else None
+
+    def _complete(self, channel: DmaChannel) -> None:
+        n = channel.index
+        t = channel.transfer
+        if t.peripheral is not None:
+            t.peripheral.detach_dma(channel)
+        channel.transfer = None
+        self.values[CHEN] &= ~(1 << n)
+        self.values[self._ch(n, STATUS)] = t.items
+        enabled = self.values[self._ch(n, INTSTATUS_EN)]
+        self.values[self._ch(n, CH_INTSTATUS)] |= (INT_BLOCK_TFR_DONE | INT_DMA_TFR_DONE) & enabled
+        self.board.interrupts_may_have_changed()
+
+    def irq_line(self, n: int) -> bool:
+        if not self.values[CFG] & CFG_INT_EN:
+            return False
+        return bool(self.values[self._ch(n, CH_INTSTATUS)] & self.values[self._ch(n, INTSIGNAL_EN)])
+
+    def describe_wait(self) -> str | None:
+        for channel in self.channels:
+            t = channel.transfer
+            if t is not None and t.done_at is None and t.peripheral is not None:
+                return (f"DMA channel {channel.index} waits for {t.peripheral.NAME} "
+                        f"({'TX' if t.kind == TT_MEM2PER else 'RX'} requests; {channel.remaining()} of "
+                        f"{t.items} items left; check {t.peripheral.NAME}.dmacr, ssienr and ser)")
+        return None
+
+    # --- registers ------------------------------------------------------------------------
+
+    def read_register(self, offset: int, reg: Register, now: float) -> int:
+        self.board.advance_devices(now)
+        if offset == INTSTATUS:
+            return sum(1 << n for n in range(CHANNELS) if self.values[self._ch(n, CH_INTSTATUS)])
+        if offset == RESET:
+            return 0   # reset completes at once
+        return self.values[offset]
+
+    def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
+        self.board.advance_devices(now)
+        if offset == RESET:
+            if value & 1:
+                for channel in self.channels:
+                    if channel.transfer is not None and channel.transfer.peripheral is not None:
+                        channel.transfer.peripheral.detach_dma(channel)
+                    channel.transfer = None
+                self.values = {off: r.reset for off, r in self.REGISTERS.items()}
+            return
+        if offset == CHEN:
+            self._write_chen(value, now)
+            return
+        if offset == COM_INTCLEAR:
+            return
+        if offset >= CH_BASE and (offset - CH_BASE) % CH_STRIDE == INTCLEAR:
+            status = offset - INTCLEAR + CH_INTSTATUS
+            self.values[status] &= ~value
+            self.board.interrupts_may_have_changed()
+            return
+        self.values[offset] = value
+        if offset == CFG:
+            self.board.interrupts_may_have_changed()
+
+    def _write_chen(self, value: int, now: float) -> None:
+        old = self.values[CHEN]
+        write_enable = (value >> 8) & 0x3F
+        new = (old & ~write_enable) | (value & write_enable)
+        for n in range(CHANNELS):
+            bit = 1 << n
+            if write_enable & bit and new & bit and not old & bit:
+                if not self.values[CFG] & CFG_ENABLE:
+                    self.board.warn(f"DMAC: channel {n} enabled while the DMAC is disabled (cfg bit 0): ignored")
+                    new &= ~bit
+                    continue
+                self.values[CHEN] = (self.values[CHEN] & ~bit) | bit
+                self._start(n, now)
+            elif write_enable & bit and not new & bit and old & bit:
+                raise UnmodelledAccess(f"DMAC: disabling channel {n} in the middle of a transfer is not modelled")
+        self.values[CHEN] = (self.values[CHEN] & ~0x3F) | (new & 0x3F)
+
+    def _start(self, n: int, now: float) -> None:
+        ctl = self.values[self._ch(n, CTL)]
+        cfg = self.values[self._ch(n, CH_CFG)]
+        if field(cfg, 0, 4) or self.values[self._ch(n, LLP)]:
+            raise UnmodelledAccess(f"DMAC channel {n}: multi-block / linked-list transfers are not modelled")
+        kind = field(cfg, 32, 3)
+        src_width = WIDTH_BYTES[field(ctl, 8, 3) if field(ctl, 8, 3) < 4 else 3]
+        dst_width = WIDTH_BYTES[field(ctl, 11, 3) if field(ctl, 11, 3) < 4 else 3]
+        items = field(self.values[self._ch(n, BLOCK_TS)], 0, 22) + 1
+        transfer = Transfer(kind, items, src_width, dst_width,
+                            self.values[self._ch(n, SAR)], self.values[self._ch(n, DAR)],
+                            bool(ctl >> 4 & 1), bool(ctl >> 6 & 1))
+        channel = self.channels[n]
+        channel.transfer = transfer
+        memory = self.board.memory
+        if kind == TT_MEM2MEM:
+            if src_width != dst_width:
+                raise UnmodelledAccess(f"DMAC channel {n}: memory-to-memory with different widths is not modelled")
+            values = memory.read_items(transfer.src, src_width, items, transfer.src_fixed)
+            memory.write_items(transfer.dst, dst_width, values, transfer.dst_fixed)
+            transfer.done_items = items
+            transfer.done_at = now + items * src_width / MEM2MEM_BYTES_PER_CYCLE / self.board.cpu_hz()
+            return
+        if kind not in (TT_MEM2PER, TT_PER2MEM):
+            raise UnmodelledAccess(f"DMAC channel {n}: transfer type {kind} is not modelled")
+        to_peripheral = kind == TT_MEM2PER
+        hs_software = bool(cfg >> (36 if to_peripheral else 35) & 1)
+        if hs_software:
+            raise UnmodelledAccess(f"DMAC channel {n}: software handshake on the peripheral side is not modelled")
+        handshake = field(cfg, 44, 4) if to_peripheral else field(cfg, 39, 4)
+        request = self.board.sysctl.dma_request(handshake)
+        if request is None:
+            raise HardwareMisuse(f"DMAC channel {n}: handshake interface {handshake} has no peripheral request "
+                                 f"selected in SYSCTL dma_sel")
+        device_name, direction = request
+        if direction != ("tx" if to_peripheral else "rx"):
+            raise HardwareMisuse(f"DMAC channel {n}: {'memory-to-peripheral' if to_peripheral else 'peripheral-to-memory'} "
+                                 f"transfer handshakes with {device_name.upper()} {direction.upper()}")
+        spi = self.board.spi_by_name(device_name)
+        address = transfer.dst if to_peripheral else transfer.src
+        if not spi.is_data_register(address):
+            raise HardwareMisuse(f"DMAC channel {n}: {'dar' if to_peripheral else 'sar'} = 0x{address:x} is not "
+                                 f"{spi.NAME}'s data register, yet the channel handshakes with {spi.NAME}")
+        if (src_width if to_peripheral else dst_width) not in (1, 2, 4):
+            raise UnmodelledAccess(f"DMAC channel {n}: 64-bit items to or from an SPI FIFO are not modelled")
+        transfer.peripheral = spi
+        if to_peripheral:
+            spi.attach_tx_dma(channel, now)
+        else:
+            spi.attach_rx_dma(channel, now)

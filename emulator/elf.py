@@ -1,0 +1,77 @@
+"""Loading a firmware ELF the way the K210 boot ROM places it: every loadable
+segment's bytes at its physical address in SRAM; both harts then start at
+0x8000_0000 whatever the ELF's entry field says."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from elftools.common.exceptions import ELFError
+from elftools.elf.constants import P_FLAGS
+from elftools.elf.elffile import ELFFile
+
+from .errors import BadInput
+from .memory import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE, Sram
+
+EM_RISCV = "EM_RISCV"
+RESET_PC = SRAM_BASE
+
+
+@dataclass
+class LoadedImage:
+    entry: int
+    code_ranges: list[tuple[int, bytes]]   # executable segments (address, bytes) for CSR scanning
+    symbols: dict[int, str]
+    image_bytes: int
+
+
+def _in_sram(address: int, length: int) -> bool:
+    return any(base <= address and address + length <= base + SRAM_SIZE for base in (SRAM_BASE, SRAM_UNCACHED_BASE))
+
+
+def load_elf(path: str | Path, memory: Sram) -> LoadedImage:
+    """Copies the ELF's loadable segments into SRAM. Raises BadInput naming what is wrong."""
+    path = Path(path)
+    if not path.is_file():
+        raise BadInput(f"firmware image {path} does not exist (build it with `make firmware`)")
+    try:
+        with path.open("rb") as handle:
+            elf = ELFFile(handle)
+            if elf.header["e_machine"] != EM_RISCV or elf.elfclass != 64:
+                raise BadInput(f"{path}: not a 64-bit RISC-V ELF (machine {elf.header['e_machine']}, "
+                               f"class {elf.elfclass})")
+            code_ranges, total = [], 0
+            for segment in elf.iter_segments():
+                if segment["p_type"] != "PT_LOAD" or segment["p_filesz"] == 0:
+                    continue
+                address, data = segment["p_paddr"], segment.data()
+                if not _in_sram(address, len(data)):
+                    raise BadInput(f"{path}: segment at 0x{address:x} ({len(data)} bytes) lies outside the "
+                                   f"K210's 8 MiB SRAM at 0x{SRAM_BASE:x}")
+                memory.load(address, data)
+                total += len(data)
+                if segment["p_flags"] & P_FLAGS.PF_X:
+                    code_ranges.append((address, data))
+            if not code_ranges:
+                raise BadInput(f"{path}: no executable segment to run")
+            symbols = {}
+            symtab = elf.get_section_by_name(".symtab")
+            if symtab is not None:
+                for symbol in symtab.iter_symbols():
+                    if symbol["st_info"]["type"] in ("STT_FUNC", "STT_NOTYPE") and symbol.name and symbol["st_value"]:
+                        symbols.setdefault(symbol["st_value"], symbol.name)
+            return LoadedImage(elf.header["e_entry"], code_ranges, symbols, total)
+    except (ELFError, ValueError) as error:
+        raise BadInput(f"{path}: not a valid ELF file ({error})") from None
+
+
+def symbolize(symbols: dict[int, str], address: int) -> str:
+    """'name+0xoff' for the nearest symbol at or below address, or '' if none."""
+    best = None
+    for start in symbols:
+        if start <= address and (best is None or start > best):
+            best = start
+    if best is None or address - best > 0x10000:
+        return ""
+    offset = address - best
+    return symbols[best] + (f"+0x{offset:x}" if offset else "")

@@ -1,0 +1,60 @@
+"""Why a run of the board model ended, and the exit status each reason gets.
+
+Every way a run can go wrong has its own exception class and its own exit
+status, so scripts and CI can tell a firmware trap from a hang from an access
+to hardware the model does not implement.
+"""
+from __future__ import annotations
+
+EXIT_OK = 0
+EXIT_INTERNAL = 1
+EXIT_USAGE = 2
+EXIT_TRAP = 3
+EXIT_HANG = 4
+EXIT_UNMODELLED = 5
+EXIT_BAD_INPUT = 6
+EXIT_MISUSE = 7
+
+
+class BoardStop(Exception):
+    """Base of every reason that ends a run early; `exit_status` is the CLI's exit code."""
+
+    exit_status = EXIT_INTERNAL
+    kind = "internal"
+
+
+class FirmwareTrap(BoardStop):
+    """The firmware took a synchronous exception that its own handler could not deal with."""
+
+    exit_status = EXIT_TRAP
+    kind = "trap"
+
+
+class HangDetected(BoardStop):
+    """No frame reached the LCD within the virtual-time budget, or every hart waits forever."""
+
+    exit_status = EXIT_HANG
+    kind = "hang"
+
+
+class UnmodelledAccess(BoardStop):
+    """A load or store hit an address or register that no model implements."""
+
+    exit_status = EXIT_UNMODELLED
+    kind = "unmodelled"
+
+
+class BadInput(BoardStop):
+    """The firmware image (or another input file) is missing or malformed."""
+
+    exit_status = EXIT_BAD_INPUT
+    kind = "bad-input"
+
+
+class HardwareMisuse(BoardStop):
+    """The firmware used a modelled device in a way the real part does not support
+    (for example running the CPU from PLL0 before it locked, or touching a
+    peripheral whose clock is gated)."""
+
+    exit_status = EXIT_MISUSE
+    kind = "misuse"

@@ -1,0 +1,60 @@
+"""FPIOA (0x502B_0000): which function drives each of the 48 IO pads.
+
+The board derives its wiring from this: the LCD's chip select, reset and D/C
+lines and the SD card's signals reach their devices only through the pads the
+firmware routed, as on the Maix Dock.
+"""
+from __future__ import annotations
+
+from .mmio import Peripheral, Register
+
+PAD_COUNT = 48
+FUNCTION_MASK = 0xFF
+
+# Function numbers (K210 datasheet / SDK fpioa_function_t)
+FUNC_SPI0_D0 = 4
+FUNC_SPI0_SS0 = 12
+FUNC_SPI0_SCLK = 17
+FUNC_UARTHS_RX = 18
+FUNC_UARTHS_TX = 19
+FUNC_GPIOHS0 = 24
+FUNC_GPIO0 = 56
+FUNC_SPI1_D0 = 70
+FUNC_SPI1_D1 = 71
+FUNC_SPI1_SS0 = 78
+FUNC_SPI1_SCLK = 83
+FUNC_RESV0 = 0  # JTAG_TCLK is 0 in the SDK; a pad never written keeps its reset function
+
+TIE_EN = 0xC0
+TIE_VAL = 0xE0
+
+
+class Fpioa(Peripheral):
+    NAME = "FPIOA"
+    BASE = 0x502B_0000
+    SIZE = 0x1000
+    GATE = "fpioa"
+    REGISTERS = {
+        **{4 * pad: Register(f"io{pad}") for pad in range(PAD_COUNT)},
+        **{TIE_EN + 4 * i: Register(f"tie_en{i}") for i in range(8)},
+        **{TIE_VAL + 4 * i: Register(f"tie_val{i}") for i in range(8)},
+    }
+
+    def __init__(self, board=None) -> None:
+        super().__init__(board)
+        # Reset: every pad's function select is 0xFF-free "reserved"; the SDK treats pads as
+        # unassigned until fpioa_set_function. Use an impossible function number so that a
+        # pad nobody routed drives nothing.
+        for pad in range(PAD_COUNT):
+            self.values[4 * pad] = FUNCTION_MASK
+
+    def function_of_pad(self, pad: int) -> int:
+        return self.values[4 * pad] & FUNCTION_MASK
+
+    def pads_with_function(self, function: int) -> list[int]:
+        return [pad for pad in range(PAD_COUNT) if self.function_of_pad(pad) == function]
+
+    def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
+        self.values[offset] = value
+        if self.board is not None and offset < 4 * PAD_COUNT:
+            self.board.wiring_changed(now)

@@ -1,0 +1,84 @@
+"""GPIOHS (0x3800_1000): 32 high-speed GPIO lines (SiFive GPIO layout).
+
+Output level of line n = bit n of (output_val XOR output_xor) when output_en
+bit n is set. Inputs read back the pad: a line driven by the chip reads what
+it drives; an undriven line reads its pull (pue/pde), else 0. Edge and level
+interrupt pending bits follow the input value; writing 1 clears an edge bit.
+"""
+from __future__ import annotations
+
+from .mmio import Peripheral, Register
+
+INPUT_VAL, INPUT_EN, OUTPUT_EN, OUTPUT_VAL, PUE, PDE = 0x00, 0x04, 0x08, 0x0C, 0x10, 0x14
+RISE_IE, RISE_IP, FALL_IE, FALL_IP = 0x18, 0x1C, 0x20, 0x24
+HIGH_IE, HIGH_IP, LOW_IE, LOW_IP = 0x28, 0x2C, 0x30, 0x34
+IOF_EN, IOF_SEL, OUTPUT_XOR = 0x38, 0x3C, 0x40
+LINES = 32
+MASK = 0xFFFF_FFFF
+
+
+class Gpiohs(Peripheral):
+    NAME = "GPIOHS"
+    BASE = 0x3800_1000
+    SIZE = 0x1000
+    REGISTERS = {
+        INPUT_VAL: Register("input_val", writable=False),
+        INPUT_EN: Register("input_en"), OUTPUT_EN: Register("output_en"),
+        OUTPUT_VAL: Register("output_val"), PUE: Register("pue"), PDE: Register("pde"),
+        RISE_IE: Register("rise_ie"), RISE_IP: Register("rise_ip"),
+        FALL_IE: Register("fall_ie"), FALL_IP: Register("fall_ip"),
+        HIGH_IE: Register("high_ie"), HIGH_IP: Register("high_ip", writable=True),
+        LOW_IE: Register("low_ie"), LOW_IP: Register("low_ip", writable=True),
+        IOF_EN: Register("iof_en"), IOF_SEL: Register("iof_sel"), OUTPUT_XOR: Register("output_xor"),
+    }
+
+    def __init__(self, board=None) -> None:
+        super().__init__(board)
+        self._last_input = 0
+
+    def driven_level(self, line: int) -> int | None:
+        """Level the chip drives on a line, or None when the line is not an output."""
+        if not self.values[OUTPUT_EN] >> line & 1:
+            return None
+        return ((self.values[OUTPUT_VAL] ^ self.values[OUTPUT_XOR]) >> line) & 1
+
+    def input_value(self) -> int:
+        driven = self.values[OUTPUT_EN]
+        out = self.values[OUTPUT_VAL] ^ self.values[OUTPUT_XOR]
+        pulled = self.values[PUE] & ~self.values[PDE]
+        return ((out & driven) | (pulled & ~driven)) & self.values[INPUT_EN] & MASK
+
+    def irq_line(self, line: int) -> bool:
+        pending = ((self.values[RISE_IP] & self.values[RISE_IE]) | (self.values[FALL_IP] & self.values[FALL_IE])
+                   | (self.values[HIGH_IP] & self.values[HIGH_IE]) | (self.values[LOW_IP] & self.values[LOW_IE]))
+        return bool(pending >> line & 1)
+
+    def _sample_inputs(self) -> None:
+        now_in = self.input_value()
+        rose = now_in & ~self._last_input
+        fell = self._last_input & ~now_in
+        self.values[RISE_IP] |= rose
+        self.values[FALL_IP] |= fell
+        self.values[HIGH_IP] = now_in
+        self.values[LOW_IP] = ~now_in & self.values[INPUT_EN] & MASK
+        self._last_input = now_in
+
+    def read_register(self, offset: int, reg: Register, now: float) -> int:
+        if offset == INPUT_VAL:
+            return self.input_value()
+        return self.values[offset]
+
+    def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
+        if offset in (RISE_IP, FALL_IP):
+            self.values[offset] &= ~value & MASK   # write 1 to clear
+            return
+        if offset in (HIGH_IP, LOW_IP):
+            return  # level pending bits follow the input; writes have no effect
+        before = [self.driven_level(n) for n in range(LINES)]
+        if self.board is not None:
+            # bytes already on the SPI wire must see the pin levels of their own time
+            self.board.advance_devices(now)
+        self.values[offset] = value
+        self._sample_inputs()
+        if self.board is not None and before != [self.driven_level(n) for n in range(LINES)]:
+            self.board.wiring_changed(now)

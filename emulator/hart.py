@@ -1,0 +1,278 @@
+"""One K210 hart: a Unicorn RV64GC engine plus what Unicorn does not do by itself.
+
+Unicorn executes the instructions; this module adds the parts of a K210 hart
+that Unicorn leaves out (see ../shared/unicorn-riscv-notes.md):
+
+- an exact instruction count (a native per-instruction hook, `_insn_counter.c`),
+- `mhartid`, `mcycle`, `minstret`, `cycle`, `instret` and `mip` reads, by code
+  hooks on every CSR instruction that names them,
+- synchronous exceptions and interrupts entering `mtvec` the way the privileged
+  spec says, delivered by the board between runs,
+- `wfi`, which ends a run: the board keeps the hart asleep until an enabled
+  interrupt is pending.
+"""
+from __future__ import annotations
+
+import ctypes
+import enum
+from dataclasses import dataclass
+from typing import Callable
+
+import unicorn
+from unicorn import riscv_const as rv
+from unicorn.unicorn_py3 import unicorn as _ucpy
+
+from . import _insn_counter
+
+# CSR numbers the board answers itself
+CSR_MHARTID = 0xF14
+CSR_MCYCLE = 0xB00
+CSR_MINSTRET = 0xB02
+CSR_CYCLE = 0xC00
+CSR_INSTRET = 0xC02
+CSR_MIP = 0x344
+INTERCEPTED_CSRS = {CSR_MHARTID, CSR_MCYCLE, CSR_MINSTRET, CSR_CYCLE, CSR_INSTRET, CSR_MIP}
+READ_ONLY_CSRS = {CSR_MHARTID, CSR_CYCLE, CSR_INSTRET}
+
+MSTATUS_MIE = 1 << 3
+MSTATUS_MPIE = 1 << 7
+MSTATUS_MPP = 3 << 11
+
+CAUSE_INTERRUPT = 1 << 63
+CAUSE_ILLEGAL_INSTRUCTION = 2
+CAUSE_BREAKPOINT = 3
+CAUSE_ECALL_M = 11
+IRQ_MSI, IRQ_MTI, IRQ_MEI = 3, 7, 11
+
+EXCEPTION_NAMES = {
+    0: "instruction address misaligned", 1: "instruction access fault",
+    2: "illegal instruction", 3: "breakpoint", 4: "load address misaligned",
+    5: "load access fault", 6: "store address misaligned", 7: "store access fault",
+    8: "environment call from U-mode", 9: "environment call from S-mode",
+    11: "environment call from M-mode",
+}
+
+INSN_WFI = 0x10500073
+
+
+class _Counter(ctypes.Structure):
+    _fields_ = [("executed", ctypes.c_uint64), ("limit", ctypes.c_uint64), ("stop", ctypes.c_void_p)]
+
+
+_counter_lib = ctypes.CDLL(_insn_counter.__file__)
+_COUNT_HOOK = ctypes.cast(_counter_lib.count_instruction, ctypes.c_void_p)
+_UC_EMU_STOP = ctypes.cast(_ucpy.uclib.uc_emu_stop, ctypes.c_void_p).value
+
+
+class HartState(enum.Enum):
+    RUNNING = "running"
+    ASLEEP = "asleep (wfi)"
+    STALLED = "polling a device register"
+
+
+class RunEnd(enum.Enum):
+    """Why `Hart.run` returned."""
+
+    BUDGET = "budget"          # the instruction budget is used up
+    WFI = "wfi"                # the hart executed wfi
+    EXCEPTION = "exception"    # a synchronous exception is waiting in `pending_exception`
+    STOPPED = "stopped"        # the board asked the hart to stop early (poll stall, clock change)
+
+
+@dataclass
+class PendingException:
+    cause: int
+    epc: int
+    tval: int
+
+
+@dataclass
+class CsrContext:
+    """What a CSR read needs from the board at the moment of the read."""
+
+    mcycle: Callable[[], int]
+    mip: Callable[[], int]
+
+
+class Hart:
+    """A hart of the K210. The board maps memory and MMIO into `uc` and calls `run`."""
+
+    def __init__(self, hart_id: int, csr_context: CsrContext) -> None:
+        self.hart_id = hart_id
+        self.uc = unicorn.Uc(unicorn.UC_ARCH_RISCV, unicorn.UC_MODE_RISCV64)
+        self.csr_context = csr_context
+        self.state = HartState.RUNNING
+        self.pc = 0
+        self.pending_exception: PendingException | None = None
+        self.stop_requested = False
+        self.retired_adjust = 0   # instructions counted by the hook that did not retire (trapped)
+        self.minstret_offset = 0  # set by firmware writes to minstret
+        self.mcycle_offset = 0
+        self._counter = _Counter(0, 0, _UC_EMU_STOP)
+        handle = ctypes.c_size_t()
+        status = _ucpy.uclib.uc_hook_add(
+            self.uc._uch, ctypes.byref(handle), unicorn.UC_HOOK_CODE, _COUNT_HOOK,
+            ctypes.byref(self._counter), ctypes.c_uint64(1), ctypes.c_uint64(0),
+        )
+        if status != 0:
+            raise RuntimeError(f"cannot install the instruction counter: unicorn status {status}")
+        self.uc.hook_add(unicorn.UC_HOOK_INTR, self._on_exception)
+
+    # --- counters --------------------------------------------------------------------
+
+    @property
+    def executed(self) -> int:
+        """Instructions started since reset (the hook's count)."""
+        return self._counter.executed
+
+    @property
+    def instret(self) -> int:
+        """Instructions retired since reset (what minstret counts)."""
+        return self._counter.executed - self.retired_adjust
+
+    # --- running ---------------------------------------------------------------------
+
+    def run(self, budget: int) -> tuple[RunEnd, int]:
+        """Runs at most `budget` instructions from `self.pc`. Returns why it stopped and how many ran."""
+        start = self._counter.executed
+        self._counter.limit = start + budget
+        self.stop_requested = False
+        self.uc.emu_start(self.pc, 0)
+        ran = self._counter.executed - start
+        self.pc = self.uc.reg_read(rv.UC_RISCV_REG_PC)
+        if self.pending_exception is not None:
+            return RunEnd.EXCEPTION, ran
+        if ran >= budget:
+            return RunEnd.BUDGET, ran
+        if self.stop_requested:
+            return RunEnd.STOPPED, ran
+        if ran > 0 and self.read_u32(self.pc - 4) == INSN_WFI:
+            return RunEnd.WFI, ran
+        return RunEnd.STOPPED, ran
+
+    def request_stop(self) -> None:
+        """Ends the current run soon (at the end of the current translation block)."""
+        self.stop_requested = True
+        self.uc.emu_stop()
+
+    def read_u32(self, address: int) -> int:
+        try:
+            return int.from_bytes(self.uc.mem_read(address, 4), "little")
+        except unicorn.UcError:
+            return 0
+
+    def read_u16(self, address: int) -> int:
+        try:
+            return int.from_bytes(self.uc.mem_read(address, 2), "little")
+        except unicorn.UcError:
+            return 0
+
+    # --- exceptions and interrupts ---------------------------------------------------
+
+    def _on_exception(self, uc: unicorn.Uc, intno: int, user_data: object) -> None:
+        next_pc = uc.reg_read(rv.UC_RISCV_REG_PC)
+        if intno == 8:  # QEMU reports ecall as U-mode's number; the hart is in M-mode
+            cause, epc = CAUSE_ECALL_M, next_pc - 4
+        else:
+            cause, epc = intno, self._faulting_pc(next_pc)
+        tval = 0
+        if cause == CAUSE_ILLEGAL_INSTRUCTION:
+            low = self.read_u16(epc)
+            tval = low if low & 3 != 3 else self.read_u32(epc)
+        self.pending_exception = PendingException(cause, epc, tval)
+        self.retired_adjust += 1
+        uc.emu_stop()
+
+    def _faulting_pc(self, next_pc: int) -> int:
+        """Unicorn reports the pc after a faulting instruction; find where it started.
+        A compressed parcel at next_pc - 2 preceded by another compressed parcel means a
+        16-bit instruction; otherwise the instruction is the 32-bit one at next_pc - 4."""
+        before = self.read_u16(next_pc - 4)
+        last = self.read_u16(next_pc - 2)
+        if last & 3 != 3 and before & 3 != 3:
+            return next_pc - 2
+        return next_pc - 4
+
+    def note_breakpoint(self) -> None:
+        """Unicorn ends a run with an error at ebreak; turn that into the breakpoint exception."""
+        self.pc = self.uc.reg_read(rv.UC_RISCV_REG_PC)
+        self.pending_exception = PendingException(CAUSE_BREAKPOINT, self.pc, self.pc)
+
+    def enter_trap(self, cause: int, epc: int, tval: int) -> None:
+        """Takes a trap into machine mode exactly as the privileged spec describes."""
+        uc = self.uc
+        mstatus = uc.reg_read(rv.UC_RISCV_REG_MSTATUS)
+        mie_bit = 1 if mstatus & MSTATUS_MIE else 0
+        mstatus = (mstatus & ~(MSTATUS_MIE | MSTATUS_MPIE)) | (mie_bit << 7) | MSTATUS_MPP
+        uc.reg_write(rv.UC_RISCV_REG_MSTATUS, mstatus)
+        uc.reg_write(rv.UC_RISCV_REG_MEPC, epc)
+        uc.reg_write(rv.UC_RISCV_REG_MCAUSE, cause)
+        uc.reg_write(rv.UC_RISCV_REG_MTVAL, tval)
+        mtvec = uc.reg_read(rv.UC_RISCV_REG_MTVEC)
+        base = mtvec & ~3
+        if (mtvec & 3) == 1 and cause & CAUSE_INTERRUPT:
+            base += 4 * (cause & 0xFFFF)
+        self.pc = base
+        self.state = HartState.RUNNING
+
+    def csr(self, reg: int) -> int:
+        return self.uc.reg_read(reg)
+
+    # --- CSR interception --------------------------------------------------------------
+
+    def intercept_csr_sites(self, sites: list[tuple[int, int]]) -> None:
+        """Installs a hook on each (address, instruction word) that accesses an intercepted CSR."""
+        for address, word in sites:
+            self.uc.hook_add(unicorn.UC_HOOK_CODE, self._on_csr, word, address, address)
+
+    def _on_csr(self, uc: unicorn.Uc, address: int, size: int, word: int) -> None:
+        csr = word >> 20
+        rd = (word >> 7) & 31
+        rs1 = (word >> 15) & 31
+        funct3 = (word >> 12) & 7
+        operand = rs1 if funct3 & 4 else (uc.reg_read(rv.UC_RISCV_REG_X0 + rs1) if rs1 else 0)
+        writes = (funct3 & 3) == 1 or rs1 != 0
+        if writes and csr in READ_ONLY_CSRS:
+            # a write to a read-only CSR is an illegal instruction, as on the real hart
+            self.pending_exception = PendingException(CAUSE_ILLEGAL_INSTRUCTION, address, word)
+            self.retired_adjust += 1
+            uc.emu_stop()
+            return
+        old = self._csr_value(csr)
+        if writes:
+            op = funct3 & 3
+            new = operand if op == 1 else (old | operand if op == 2 else old & ~operand)
+            self._csr_write(csr, new & (2**64 - 1))
+        if rd:
+            uc.reg_write(rv.UC_RISCV_REG_X0 + rd, old)
+        uc.reg_write(rv.UC_RISCV_REG_PC, address + 4)
+
+    def _csr_value(self, csr: int) -> int:
+        if csr == CSR_MHARTID:
+            return self.hart_id
+        if csr in (CSR_MCYCLE, CSR_CYCLE):
+            return (self.csr_context.mcycle() + self.mcycle_offset) & (2**64 - 1)
+        if csr in (CSR_MINSTRET, CSR_INSTRET):
+            return (self.instret + self.minstret_offset) & (2**64 - 1)
+        return self.csr_context.mip()
+
+    def _csr_write(self, csr: int, value: int) -> None:
+        if csr == CSR_MCYCLE:
+            self.mcycle_offset = value - self.csr_context.mcycle()
+        elif csr == CSR_MINSTRET:
+            # the CSR instruction itself retires after the write, so minstret reads value + 1 next
+            self.minstret_offset = value - self.instret
+        # mip: MSIP/MTIP/MEIP are read-only in mip; the writable bits belong to S/U modes,
+        # which the K210 firmware here does not use. Writes are ignored like the hardware does.
+
+
+def find_csr_sites(code: bytes, base: int) -> list[tuple[int, int]]:
+    """Every 2-byte-aligned address in `code` holding a CSR instruction on an intercepted CSR.
+    Sites that are really the middle of another instruction never execute, so extra
+    candidates are harmless."""
+    sites = []
+    for offset in range(0, len(code) - 3, 2):
+        word = int.from_bytes(code[offset:offset + 4], "little")
+        if word & 0x7F == 0x73 and (word >> 12) & 3 and (word >> 20) in INTERCEPTED_CSRS:
+            sites.append((base + offset, word))
+    return sites

@@ -1,0 +1,71 @@
+"""K210 SRAM: 6 MiB general SRAM + 2 MiB AI SRAM, seen cached at 0x8000_0000 and
+uncached at 0x4000_0000. One host buffer backs both views and both harts' engines,
+and the DMAC reads and writes the same bytes.
+
+Real SRAM powers up with random contents; the model fills it with a fixed
+pseudo-random pattern so firmware that forgets to clear .bss misbehaves here
+too, yet every run is the same.
+"""
+from __future__ import annotations
+
+import ctypes
+
+import numpy as np
+
+from .errors import HardwareMisuse
+
+SRAM_BASE = 0x8000_0000
+SRAM_UNCACHED_BASE = 0x4000_0000
+SRAM_SIZE = 8 * 1024 * 1024          # 6 MiB SRAM0/SRAM1 + 2 MiB AI SRAM
+GENERAL_SRAM_SIZE = 6 * 1024 * 1024
+POWER_ON_SEED = 0x0210
+
+
+class Sram:
+    def __init__(self, fill_seed: int | None = POWER_ON_SEED) -> None:
+        self.buffer = (ctypes.c_uint8 * SRAM_SIZE)()
+        self.bytes = np.frombuffer(self.buffer, dtype=np.uint8)
+        if fill_seed is not None:
+            self.bytes[:] = np.random.default_rng(fill_seed).integers(0, 256, SRAM_SIZE, dtype=np.uint8)
+
+    @property
+    def address(self) -> int:
+        return ctypes.addressof(self.buffer)
+
+    def offset_of(self, address: int, length: int = 1) -> int:
+        """Offset in the buffer for a bus address in either view; raises if outside SRAM."""
+        for base in (SRAM_BASE, SRAM_UNCACHED_BASE):
+            if base <= address and address + length <= base + SRAM_SIZE:
+                return address - base
+        raise HardwareMisuse(f"DMA access to 0x{address:x}..0x{address + length - 1:x}, which is not SRAM")
+
+    def load(self, address: int, data: bytes) -> None:
+        offset = self.offset_of(address, max(1, len(data)))
+        self.bytes[offset:offset + len(data)] = np.frombuffer(data, dtype=np.uint8)
+
+    def read(self, address: int, length: int) -> bytes:
+        offset = self.offset_of(address, length)
+        return self.bytes[offset:offset + length].tobytes()
+
+    def read_items(self, address: int, width: int, count: int, fixed: bool) -> np.ndarray:
+        """count little-endian items of `width` bytes (as uint32/uint64), from consecutive
+        addresses, or all from one address when `fixed`."""
+        dtype = {1: np.uint8, 2: "<u2", 4: "<u4", 8: "<u8"}[width]
+        if fixed:
+            offset = self.offset_of(address, width)
+            item = self.bytes[offset:offset + width].view(dtype)[0]
+            return np.full(count, item, dtype=np.uint64 if width == 8 else np.uint32)
+        offset = self.offset_of(address, width * count)
+        raw = self.bytes[offset:offset + width * count].view(dtype)
+        return raw.astype(np.uint64 if width == 8 else np.uint32)
+
+    def write_items(self, address: int, width: int, values: np.ndarray, fixed: bool) -> None:
+        dtype = {1: np.uint8, 2: "<u2", 4: "<u4", 8: "<u8"}[width]
+        if len(values) == 0:
+            return
+        if fixed:
+            offset = self.offset_of(address, width)
+            self.bytes[offset:offset + width] = np.array([values[-1]], dtype=dtype).view(np.uint8)
+            return
+        offset = self.offset_of(address, width * len(values))
+        self.bytes[offset:offset + width * len(values)] = values.astype(dtype).view(np.uint8)

@@ -1,0 +1,109 @@
+"""Memory-mapped peripherals: the common register-table machinery.
+
+A peripheral declares its registers as a table (offset -> Register) the way a
+datasheet lists them. The board routes loads and stores to `read`/`write`;
+an offset that is not in the table, a write to a read-only register or an
+access of the wrong width stops the run with `UnmodelledAccess`, so firmware
+never silently talks to hardware the model does not implement.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+from .errors import UnmodelledAccess
+
+if TYPE_CHECKING:
+    from .board import Board
+
+
+@dataclass(frozen=True)
+class Register:
+    """One register of a peripheral's register table."""
+
+    name: str
+    width: int = 4          # bytes: 4 for 32-bit registers, 8 for the DMAC's 64-bit ones
+    readable: bool = True
+    writable: bool = True
+    reset: int = 0
+    narrow_ok: bool = False  # a 64-bit register that may also be accessed as two 32-bit halves
+
+
+class Peripheral:
+    """Base class of every memory-mapped block. Subclasses fill `REGISTERS` and
+    override `read_register`/`write_register` for registers with side effects."""
+
+    NAME = "peripheral"
+    BASE = 0
+    SIZE = 0x1000
+    REGISTERS: dict[int, Register] = {}
+
+    def __init__(self, board: "Board | None" = None) -> None:
+        self.board = board
+        self.values: dict[int, int] = {off: reg.reset for off, reg in self.REGISTERS.items()}
+
+    # --- routing, called by the board -------------------------------------------------
+
+    def lookup(self, offset: int, size: int, is_write: bool) -> tuple[int, Register]:
+        """Finds the register an access hits; raises UnmodelledAccess if none can take it."""
+        reg = self.REGISTERS.get(offset)
+        base = offset
+        if reg is None and size == 4 and (offset - 4) in self.REGISTERS:
+            wide = self.REGISTERS[offset - 4]
+            if wide.width == 8 and wide.narrow_ok:
+                reg, base = wide, offset - 4
+        if reg is None:
+            raise UnmodelledAccess(f"{self.NAME} has no register at offset 0x{offset:x}")
+        if size != reg.width and not (reg.width == 8 and reg.narrow_ok and size == 4):
+            raise UnmodelledAccess(
+                f"{self.NAME}.{reg.name} is a {reg.width * 8}-bit register; "
+                f"a {size * 8}-bit access is not supported by the model"
+            )
+        if is_write and not reg.writable:
+            raise UnmodelledAccess(f"{self.NAME}.{reg.name} is read-only")
+        if not is_write and not reg.readable:
+            raise UnmodelledAccess(f"{self.NAME}.{reg.name} is write-only")
+        return base, reg
+
+    def read(self, offset: int, size: int, now: float) -> int:
+        base, reg = self.lookup(offset, size, False)
+        value = self.read_register(base, reg, now)
+        if base != offset:
+            return (value >> 32) & 0xFFFF_FFFF
+        if size == 4:
+            return value & 0xFFFF_FFFF
+        return value
+
+    def write(self, offset: int, size: int, value: int, now: float) -> None:
+        base, reg = self.lookup(offset, size, True)
+        if reg.width == 8 and size == 4:
+            old = self.values.get(base, 0)
+            if base == offset:
+                value = (old & ~0xFFFF_FFFF) | (value & 0xFFFF_FFFF)
+            else:
+                value = (old & 0xFFFF_FFFF) | ((value & 0xFFFF_FFFF) << 32)
+        self.write_register(base, reg, value & ((1 << (reg.width * 8)) - 1), now)
+
+    # --- behaviour, overridden by subclasses ------------------------------------------
+
+    def read_register(self, offset: int, reg: Register, now: float) -> int:
+        return self.values[offset]
+
+    def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
+        self.values[offset] = value
+
+    def next_event_time(self, now: float) -> float | None:
+        """The next virtual time at which this device changes state by itself (None: never)."""
+        return None
+
+    def advance(self, now: float) -> None:
+        """Brings the device's time-driven state up to `now`."""
+
+    def describe_wait(self) -> str | None:
+        """If the device is stuck waiting for something, a sentence saying what (for hang reports)."""
+        return None
+
+
+def field(value: int, low: int, width: int) -> int:
+    """Extracts bits [low + width - 1 : low] of value."""
+    return (value >> low) & ((1 << width) - 1)

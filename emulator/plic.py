@@ -1,0 +1,98 @@
+"""PLIC (0x0C00_0000): the platform-level interrupt controller, one M-mode context per hart.
+
+Sources 1..65 (SPI0 1, SPI1 2, DMA channels 27..32, UARTHS 33, GPIOHS 34..65).
+Context n belongs to hart n (the Kendryte SDK's `plic->targets.target[core_id]`).
+Interrupts are level-triggered through a gateway: a source becomes pending when its
+line is high and it is not being served; claim returns the highest-priority pending
+enabled source above the threshold (ties: lowest id) and clears its pending bit;
+the source can pend again only after its id is written back to complete.
+"""
+from __future__ import annotations
+
+from typing import Callable
+
+from .mmio import Peripheral, Register
+
+SOURCES = 66          # 0 is "no interrupt"
+CONTEXTS = 2
+PRIORITY = 0x0000
+PENDING = 0x1000
+ENABLE = 0x2000
+ENABLE_STRIDE = 0x80
+THRESHOLD = 0x20_0000
+CLAIM = 0x20_0004
+CONTEXT_STRIDE = 0x1000
+PRIORITY_MASK = 7
+WORDS = (SOURCES + 31) // 32
+
+SOURCE_SPI0, SOURCE_SPI1, SOURCE_DMA0, SOURCE_UARTHS, SOURCE_GPIOHS0 = 1, 2, 27, 33, 34
+
+
+class Plic(Peripheral):
+    NAME = "PLIC"
+    BASE = 0x0C00_0000
+    SIZE = 0x0400_0000
+    REGISTERS = {
+        **{PRIORITY + 4 * s: Register(f"priority{s}") for s in range(1, SOURCES)},
+        **{PENDING + 4 * w: Register(f"pending{w}", writable=False) for w in range(WORDS)},
+        **{ENABLE + ENABLE_STRIDE * c + 4 * w: Register(f"enable{c}_{w}")
+           for c in range(CONTEXTS) for w in range(WORDS)},
+        **{THRESHOLD + CONTEXT_STRIDE * c: Register(f"threshold{c}") for c in range(CONTEXTS)},
+        **{CLAIM + CONTEXT_STRIDE * c: Register(f"claim{c}") for c in range(CONTEXTS)},
+    }
+
+    def __init__(self, board=None, source_level: Callable[[int], bool] | None = None) -> None:
+        super().__init__(board)
+        self.source_level = source_level or (lambda source: False)
+        self.pending: set[int] = set()
+        self.in_service: set[int] = set()
+
+    def sample(self) -> None:
+        """Gateways: latch a pending bit for each high source line not being served."""
+        for source in range(1, SOURCES):
+            if source not in self.in_service and source not in self.pending and self.source_level(source):
+                self.pending.add(source)
+
+    def _enabled(self, context: int, source: int) -> bool:
+        word = self.values[ENABLE + ENABLE_STRIDE * context + 4 * (source // 32)]
+        return bool(word >> (source % 32) & 1)
+
+    def _best(self, context: int) -> int:
+        threshold = self.values[THRESHOLD + CONTEXT_STRIDE * context] & PRIORITY_MASK
+        best, best_priority = 0, threshold
+        for source in sorted(self.pending):
+            priority = self.values[PRIORITY + 4 * source] & PRIORITY_MASK
+            if priority > best_priority and self._enabled(context, source):
+                best, best_priority = source, priority
+        return best
+
+    def external_pending(self, context: int) -> bool:
+        """MEIP for the hart owning `context`."""
+        self.sample()
+        return self._best(context) != 0
+
+    def read_register(self, offset: int, reg: Register, now: float) -> int:
+        self.board.advance_devices(now)
+        self.sample()
+        if PENDING <= offset < PENDING + 4 * WORDS:
+            word = (offset - PENDING) // 4
+            return sum(1 << (s % 32) for s in self.pending if s // 32 == word)
+        if offset >= CLAIM - 4 and (offset - CLAIM) % CONTEXT_STRIDE == 0:
+            context = (offset - CLAIM) // CONTEXT_STRIDE
+            source = self._best(context)
+            if source:
+                self.pending.discard(source)
+                self.in_service.add(source)
+            self.board.interrupts_may_have_changed()
+            return source
+        return self.values[offset]
+
+    def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
+        if offset >= CLAIM - 4 and (offset - CLAIM) % CONTEXT_STRIDE == 0:
+            self.in_service.discard(value)   # complete
+            self.sample()
+        elif offset < PENDING:
+            self.values[offset] = value & PRIORITY_MASK
+        else:
+            self.values[offset] = value
+        self.board.interrupts_may_have_changed()

@@ -1,0 +1,459 @@
+"""SPI0 / SPI1: the DesignWare SSI controllers as configured on the K210.
+
+Frames written to the data register go through a 32-entry transmit FIFO and
+out on the wire at the serial clock the firmware programmed: a frame of `dfs`
+bits takes dfs / lanes serial clock periods (lanes: 1 standard, 2 dual, 4 quad,
+8 octal). A frame reaches the selected device when its last bit is out, so the
+device sees pins such as the LCD's D/C as they are at that moment. In
+transmit-and-receive mode the device's answer goes into the 32-entry receive
+FIFO; in receive-only mode writing one dummy frame clocks ctrlr1 + 1 frames in.
+
+DMA: with dmacr.tdmae set and a DMAC channel handshaking to this controller's
+TX request, the channel keeps the FIFO full, so a DMA transfer is one unbroken
+train of frames on the wire; each word is read from memory when a FIFO slot
+frees (at most 32 frames ahead of the wire). With rdmae set, received frames
+go to memory as they arrive.
+
+Configuration registers can only be written while the controller is disabled
+(ssienr = 0); the real controller ignores such writes, and so does the model
+(with a warning in the run log).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field as dc_field
+from typing import TYPE_CHECKING, Protocol
+
+import numpy as np
+
+from .errors import UnmodelledAccess
+from .mmio import Peripheral, Register, field
+
+if TYPE_CHECKING:
+    from .dmac import DmaChannel
+
+CTRLR0, CTRLR1, SSIENR, MWCR, SER, BAUDR = 0x00, 0x04, 0x08, 0x0C, 0x10, 0x14
+TXFTLR, RXFTLR, TXFLR, RXFLR, SR, IMR, ISR, RISR = 0x18, 0x1C, 0x20, 0x24, 0x28, 0x2C, 0x30, 0x34
+TXOICR, RXOICR, RXUICR, MSTICR, ICR = 0x38, 0x3C, 0x40, 0x44, 0x48
+DMACR, DMATDLR, DMARDLR, IDR, VERSION = 0x4C, 0x50, 0x54, 0x58, 0x5C
+DR_FIRST, DR_LAST = 0x60, 0xEC
+RX_SAMPLE_DELAY, SPI_CTRLR0, XIP_MODE_BITS, ENDIAN = 0xF0, 0xF4, 0xFC, 0x118
+
+FIFO_DEPTH = 32
+TMOD_TX_RX, TMOD_TX, TMOD_RX, TMOD_EEPROM = 0, 1, 2, 3
+FORMAT_LANES = {0: 1, 1: 2, 2: 4, 3: 8}
+FORMAT_NAMES = {0: "standard", 1: "dual", 2: "quad", 3: "octal"}
+
+SR_BUSY, SR_TFNF, SR_TFE, SR_RFNE, SR_RFF = 1, 2, 4, 8, 16
+# interrupt bits (isr/risr/imr)
+INT_TXE, INT_TXO, INT_RXU, INT_RXO, INT_RXF = 1, 2, 4, 8, 16
+DMACR_RDMAE, DMACR_TDMAE = 1, 2
+
+CONFIG_REGISTERS = {CTRLR0, CTRLR1, BAUDR, SPI_CTRLR0, ENDIAN}
+EPSILON = 1e-12
+
+
+class SpiDevice(Protocol):
+    """A device on an SPI bus: what the board wires behind a chip select."""
+
+    def spi_select(self, selected: bool, now: float) -> None: ...
+
+    def spi_transfer(self, data: np.ndarray, lanes: int, now: float) -> np.ndarray: ...
+
+
+@dataclass
+class _Train:
+    """Frames going out back to back: frame i starts at start + i * period."""
+
+    start: float
+    period: float
+    bits: int
+    frames: list = dc_field(default_factory=list)  # numpy chunks of uint32 frames, in order
+    count: int = 0          # frames queued in this train
+    delivered: int = 0      # frames already handed to the device
+
+    def end(self) -> float:
+        return self.start + self.count * self.period
+
+    def started(self, now: float) -> int:
+        if now < self.start - EPSILON:
+            return 0
+        return min(self.count, int((now - self.start) / self.period + EPSILON) + 1)
+
+    def finished(self, now: float) -> int:
+        if now < self.start:
+            return 0
+        return min(self.count, int((now - self.start) / self.period + EPSILON))
+
+    def take(self, n: int) -> np.ndarray:
+        """Removes and returns the next n undelivered frames."""
+        out, need = [], n
+        while need:
+            chunk = self.frames[0]
+            if len(chunk) <= need:
+                out.append(chunk)
+                need -= len(chunk)
+                self.frames.pop(0)
+            else:
+                out.append(chunk[:need])
+                self.frames[0] = chunk[need:]
+                need = 0
+        self.delivered += n
+        return np.concatenate(out) if len(out) > 1 else out[0]
+
+
+class SpiController(Peripheral):
+    """One DW SSI controller (index 0 = SPI0, 1 = SPI1)."""
+
+    SIZE = 0x1000
+    REGISTERS = {
+        CTRLR0: Register("ctrlr0", reset=0x0007_0000), CTRLR1: Register("ctrlr1"),
+        SSIENR: Register("ssienr"), MWCR: Register("mwcr"), SER: Register("ser"),
+        BAUDR: Register("baudr"), TXFTLR: Register("txftlr"), RXFTLR: Register("rxftlr"),
+        TXFLR: Register("txflr", writable=False), RXFLR: Register("rxflr", writable=False),
+        SR: Register("sr", writable=False), IMR: Register("imr", reset=0x3F),
+        ISR: Register("isr", writable=False), RISR: Register("risr", writable=False),
+        TXOICR: Register("txoicr", writable=False), RXOICR: Register("rxoicr", writable=False),
+        RXUICR: Register("rxuicr", writable=False), MSTICR: Register("msticr", writable=False),
+        ICR: Register("icr", writable=False), DMACR: Register("dmacr"),
+        DMATDLR: Register("dmatdlr"), DMARDLR: Register("dmardlr"),
+        IDR: Register("idr", writable=False, reset=0xFFFF_FFFF),
+        VERSION: Register("ssic_version_id", writable=False, reset=0x3430_312A),
+        **{off: Register(f"dr{(off - DR_FIRST) // 4}") for off in range(DR_FIRST, DR_LAST + 4, 4)},
+        RX_SAMPLE_DELAY: Register("rx_sample_delay"), SPI_CTRLR0: Register("spi_ctrlr0"),
+        XIP_MODE_BITS: Register("xip_mode_bits"), ENDIAN: Register("endian"),
+    }
+
+    def __init__(self, index: int, board=None) -> None:
+        self.index = index
+        self.NAME = f"SPI{index}"
+        self.GATE = f"spi{index}"
+        self.BASE = 0x5200_0000 + 0x0100_0000 * index
+        super().__init__(board)
+        self.device_for_ss = lambda ss: None   # set by the board's wiring
+        self._train: _Train | None = None
+        self._held: list[int] = []               # frames written while no slave is selected
+        self._rx: list[int] = []
+        self._rx_remaining = 0                   # receive-only frames still to clock in
+        self._raw_int = 0
+        self._selected: SpiDevice | None = None
+        self.tx_dma: "DmaChannel | None" = None
+        self.rx_dma: "DmaChannel | None" = None
+        self._dma_started = 0.0
+
+    # --- configuration decoded -----------------------------------------------------------
+
+    @property
+    def frame_bits(self) -> int:
+        return field(self.values[CTRLR0], 16, 5) + 1
+
+    @property
+    def tmod(self) -> int:
+        return field(self.values[CTRLR0], 8, 2)
+
+    @property
+    def frame_format(self) -> int:
+        return field(self.values[CTRLR0], 21, 2)
+
+    @property
+    def enabled(self) -> bool:
+        return bool(self.values[SSIENR] & 1)
+
+    def sclk_hz(self) -> float:
+        divider = self.values[BAUDR] & 0xFFFE   # SCKDV is even; bit 0 reads as written but is ignored
+        if divider == 0 or self.board is None:
+            return 0.0
+        return self.board.sysctl.spi_source_hz(self.index) / divider
+
+    def frame_period(self) -> float:
+        hz = self.sclk_hz()
+        if hz == 0:
+            return float("inf")
+        return self.frame_bits / FORMAT_LANES[self.frame_format] / hz
+
+    def _check_wire_format(self) -> None:
+        """The model passes whole bytes to devices; say so clearly for anything else."""
+        bits = self.frame_bits
+        if bits % 8:
+            raise UnmodelledAccess(f"{self.NAME}: {bits}-bit frames (only whole bytes reach devices in the model)")
+        if self.values[ENDIAN]:
+            raise UnmodelledAccess(f"{self.NAME}.endian = 0x{self.values[ENDIAN]:x}: byte-order conversion is not modelled")
+        if self.frame_format:
+            spi_ctrlr0 = self.values[SPI_CTRLR0]
+            trans_type = field(spi_ctrlr0, 0, 2)
+            addr_bits = field(spi_ctrlr0, 2, 4) * 4
+            inst_bits = {0: 0, 1: 4, 2: 8, 3: 16}[field(spi_ctrlr0, 8, 2)]
+            wait = field(spi_ctrlr0, 11, 5)
+            if inst_bits not in (0, bits) or addr_bits not in (0, bits) or wait or (
+                    trans_type != 2 and (inst_bits or addr_bits)):
+                raise UnmodelledAccess(
+                    f"{self.NAME}: {FORMAT_NAMES[self.frame_format]} format with instruction {inst_bits} bits, "
+                    f"address {addr_bits} bits, {wait} wait cycles, transfer type {trans_type}: the model "
+                    f"supports instruction/address phases sent like frames (lengths 0 or the frame size, "
+                    f"type 2, no wait cycles)"
+                )
+            if self.tmod != TMOD_TX:
+                raise UnmodelledAccess(f"{self.NAME}: receiving in {FORMAT_NAMES[self.frame_format]} format is not modelled")
+        if self.tmod == TMOD_EEPROM:
+            raise UnmodelledAccess(f"{self.NAME}: EEPROM-read transfer mode (tmod 3) is not modelled")
+
+    # --- chip select and device wiring -------------------------------------------------------
+
+    def _slave(self) -> SpiDevice | None:
+        ser = self.values[SER]
+        for ss in range(4):
+            if ser >> ss & 1:
+                device = self.device_for_ss(ss)
+                if device is not None:
+                    return device
+        return None
+
+    def _update_selection(self, now: float) -> None:
+        device = self._slave() if self.enabled and self.values[SER] else None
+        if device is not self._selected:
+            if self._selected is not None:
+                self._selected.spi_select(False, now)
+            self._selected = device
+            if device is not None:
+                device.spi_select(True, now)
+
+    def is_data_register(self, address: int) -> bool:
+        return self.BASE + DR_FIRST <= address <= self.BASE + DR_LAST
+
+    def wiring_changed(self, now: float) -> None:
+        self.advance(now)
+        self._update_selection(now)
+
+    # --- time -------------------------------------------------------------------------
+
+    def advance(self, now: float) -> None:
+        """Moves frames along the wire up to `now`: DMA refills, deliveries, received frames."""
+        self._dma_refill(now)
+        train = self._train
+        if train is None:
+            return
+        done = train.finished(now)
+        if done > train.delivered:
+            self._deliver(train.take(done - train.delivered), now)
+        if train.delivered == train.count and now >= train.end() - EPSILON:
+            self._train = None
+
+    def _deliver(self, frames: np.ndarray, now: float) -> None:
+        bits = self.frame_bits
+        nbytes = bits // 8
+        data = frames.astype(">u4").view(np.uint8).reshape(-1, 4)[:, 4 - nbytes:].reshape(-1)
+        device = self._selected
+        if device is not None:
+            reply = device.spi_transfer(data, FORMAT_LANES[self.frame_format], now)
+        else:
+            reply = np.full(len(data), 0xFF, dtype=np.uint8)  # MISO pulled up: nothing answers
+        if self.tmod in (TMOD_TX_RX, TMOD_RX):
+            words = reply.reshape(-1, nbytes)
+            values = np.zeros(len(words), dtype=np.uint32)
+            for i in range(nbytes):
+                values = (values << 8) | words[:, i]
+            self._receive(values, now)
+
+    def _receive(self, values: np.ndarray, now: float) -> None:
+        if self.rx_dma is not None and self.values[DMACR] & DMACR_RDMAE:
+            self.rx_dma.accept_from_peripheral(values, now)
+            return
+        room = FIFO_DEPTH - len(self._rx)
+        self._rx.extend(int(v) for v in values[:room])
+        if len(values) > room:
+            self._raw_int |= INT_RXO
+            self.board.warn(f"{self.NAME}: receive FIFO overflow, {len(values) - room} frames lost")
+
+    def _push(self, values: np.ndarray, now: float) -> None:
+        """Queues frames for the wire as written at `now` (by the CPU or the DMA)."""
+        if not self.enabled:
+            return
+        if not self.values[SER] or self.frame_period() == float("inf"):
+            self._held.extend(int(v) for v in values)
+            return
+        train = self._train
+        if train is None or train.end() < now - EPSILON:
+            if train is not None:
+                self.advance(now)
+            self._check_wire_format()
+            train = self._train = _Train(start=now, period=self.frame_period(), bits=self.frame_bits)
+        train.frames.append(values.astype(np.uint32))
+        train.count += len(values)
+
+    def tx_level(self, now: float) -> int:
+        """txflr: frames in the FIFO that have not started shifting out."""
+        held = len(self._held)
+        train = self._train
+        if train is None:
+            return min(held, FIFO_DEPTH)
+        return min(FIFO_DEPTH, train.count - train.started(now) + held)
+
+    def busy(self, now: float) -> bool:
+        train = self._train
+        return train is not None and now < train.end() - EPSILON
+
+    def next_event_time(self, now: float) -> float | None:
+        """The next moment software can see a change: the TX DMA block completing, a slot
+        freeing in a full FIFO, the wire going idle."""
+        train = self._train
+        if train is None:
+            return None
+        times = [train.end()]
+        if train.count - train.started(now) >= FIFO_DEPTH:
+            times.append(train.start + (train.count - FIFO_DEPTH) * train.period)
+        if self.tx_dma is not None and self.tx_dma.remaining():
+            times.append(self._dma_push_time(train.count + self.tx_dma.remaining() - 1))
+        later = [t for t in times if t > now + EPSILON]
+        return min(later) if later else None
+
+    # --- DMA handshakes -------------------------------------------------------------------
+
+    def attach_tx_dma(self, channel: "DmaChannel", now: float) -> None:
+        self.advance(now)
+        self.tx_dma = channel
+        self._dma_started = now
+        self._dma_refill(now)
+
+    def attach_rx_dma(self, channel: "DmaChannel", now: float) -> None:
+        self.advance(now)
+        self.rx_dma = channel
+        if self._rx and self.values[DMACR] & DMACR_RDMAE:
+            values = np.array(self._rx, dtype=np.uint32)
+            self._rx.clear()
+            channel.accept_from_peripheral(values, now)
+
+    def detach_dma(self, channel: "DmaChannel") -> None:
+        if self.tx_dma is channel:
+            self.tx_dma = None
+        if self.rx_dma is channel:
+            self.rx_dma = None
+
+    def _dma_push_time(self, index: int) -> float:
+        """When train frame `index` enters the FIFO under DMA: as soon as frame index - 32
+        has started shifting and freed a slot (never before the channel was enabled)."""
+        train = self._train
+        return max(self._dma_started, train.start + (index - FIFO_DEPTH) * train.period)
+
+    def _dma_refill(self, now: float) -> None:
+        """The TX DMA keeps the FIFO full: push every word whose slot has freed by `now`."""
+        channel = self.tx_dma
+        if channel is None or not channel.remaining():
+            return
+        if not (self.values[DMACR] & DMACR_TDMAE) or not self.enabled:
+            return   # no request reaches the DMAC: the channel waits (a hang report says why)
+        if self._train is None:
+            room = FIFO_DEPTH - len(self._held)
+            if room <= 0:
+                return
+            self._push(channel.read_for_peripheral(min(room, channel.remaining())), now)
+            if self._train is None:
+                return
+            if not channel.remaining():
+                channel.peripheral_done(now)
+                return
+        train = self._train
+        # frames started by now if the train had never run dry (the DMA keeps it going)
+        started = int((now - train.start) / train.period + EPSILON) + 1 if now >= train.start else 0
+        n = min(channel.remaining(), started + FIFO_DEPTH - train.count)
+        if n > 0:
+            last_index = train.count + n - 1
+            train.frames.append(channel.read_for_peripheral(n).astype(np.uint32))
+            train.count += n
+            if not channel.remaining():
+                channel.peripheral_done(self._dma_push_time(last_index))
+
+    # --- registers --------------------------------------------------------------------------
+
+    def irq_line(self) -> bool:
+        return bool(self._interrupts(self.board.time) & self.values[IMR])
+
+    def _interrupts(self, now: float) -> int:
+        raw = self._raw_int
+        if self.tx_level(now) <= (self.values[TXFTLR] & 0x1F):
+            raw |= INT_TXE
+        if len(self._rx) > (self.values[RXFTLR] & 0x1F):
+            raw |= INT_RXF
+        return raw
+
+    def read_register(self, offset: int, reg: Register, now: float) -> int:
+        self.advance(now)
+        if DR_FIRST <= offset <= DR_LAST:
+            if not self._rx:
+                self._raw_int |= INT_RXU
+                return 0
+            return self._rx.pop(0)
+        if offset == TXFLR:
+            return self.tx_level(now)
+        if offset == RXFLR:
+            return len(self._rx)
+        if offset == SR:
+            level = self.tx_level(now)
+            value = 0
+            if self.busy(now) or self._rx_remaining:
+                value |= SR_BUSY
+            if level < FIFO_DEPTH:
+                value |= SR_TFNF
+            if level == 0:
+                value |= SR_TFE
+            if self._rx:
+                value |= SR_RFNE
+            if len(self._rx) >= FIFO_DEPTH:
+                value |= SR_RFF
+            return value
+        if offset == RISR:
+            return self._interrupts(now)
+        if offset == ISR:
+            return self._interrupts(now) & self.values[IMR]
+        if offset in (TXOICR, RXOICR, RXUICR, MSTICR, ICR):
+            bits = {TXOICR: INT_TXO, RXOICR: INT_RXO, RXUICR: INT_RXU, MSTICR: 0,
+                    ICR: INT_TXO | INT_RXO | INT_RXU}[offset]
+            self._raw_int &= ~bits
+            return 0
+        return self.values[offset]
+
+    def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
+        self.advance(now)
+        if DR_FIRST <= offset <= DR_LAST:
+            self._write_data(value, now)
+            return
+        if offset in CONFIG_REGISTERS and self.enabled:
+            self.board.warn(f"{self.NAME}.{reg.name} written while the controller is enabled: ignored, "
+                            f"as the DW SSI ignores it")
+            return
+        if offset == SSIENR:
+            was = self.enabled
+            self.values[SSIENR] = value & 1
+            if was and not self.enabled:
+                # disabling halts any transfer and clears both FIFOs
+                self._train = None
+                self._held.clear()
+                self._rx.clear()
+                self._rx_remaining = 0
+                self._raw_int = 0
+            self._update_selection(now)
+            return
+        self.values[offset] = value
+        if offset == SER:
+            self._update_selection(now)
+            if value and self._held:
+                held = np.array(self._held, dtype=np.uint32)
+                self._held.clear()
+                self._push(held, now)
+        if offset == DMACR:
+            self._dma_refill(now)
+
+    def _write_data(self, value: int, now: float) -> None:
+        if not self.enabled:
+            return
+        if self.tx_level(now) >= FIFO_DEPTH:
+            self._raw_int |= INT_TXO
+            self.board.warn(f"{self.NAME}: write to a full transmit FIFO lost (0x{value:x})")
+            return
+        if self.tmod == TMOD_RX:
+            # receive-only: one write starts clocking ctrlr1 + 1 frames in (sending 0xFF filler,
+            # the idle level of the data-out line)
+            self._check_wire_format()
+            count = (self.values[CTRLR1] & 0xFFFF) + 1
+            filler = (1 << self.frame_bits) - 1
+            self._push(np.full(count, filler, dtype=np.uint32), now)
+            return
+        self._push(np.array([value & ((1 << self.frame_bits) - 1)], dtype=np.uint32), now)

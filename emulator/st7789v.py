@@ -1,0 +1,563 @@
+"""Sitronix ST7789V LCD controller (240 x 320 panel, 4-line SPI), as the board sees it.
+
+The board drives four wires and this model reacts to them the way the chip does:
+
+* RESX  -> `set_reset_pin`      (active low hardware reset)
+* CSX   -> `set_chip_select`    (chip select)
+* D/CX plus the SPI bytes -> `write` (dc=0: every byte is a command; dc=1: every
+  byte is a parameter of the last command or, after RAMWR, pixel data)
+
+What the panel shows is `shown_image()`, a (240, 320, 3) RGB picture oriented the
+way a person sees the Maix Dock (landscape, 320 wide). Every time the firmware has
+written every GRAM cell since the last captured frame, the model captures a frame
+and calls `on_frame` with that picture.
+
+Timing and protocol mistakes do not stop the run: the chip itself does not
+complain either. They are collected as strings in `warnings`.
+
+Supported commands (everything else is ignored, parameters included, as the chip
+ignores commands it does not know):
+
+    code  name     params  effect
+    0x00  NOP      0       nothing, but ends a RAMWR
+    0x01  SWRESET  0       registers to defaults (GRAM kept); 5 ms busy
+    0x10  SLPIN    0       sleep in (panel black); 5 ms settle
+    0x11  SLPOUT   0       sleep out; 5 ms settle
+    0x12  PTLON    0       partial mode (recorded only)
+    0x13  NORON    0       normal mode
+    0x20  INVOFF   0       colour inversion off
+    0x21  INVON    0       colour inversion on (of what is shown; GRAM unchanged)
+    0x28  DISPOFF  0       panel black
+    0x29  DISPON   0       panel shows GRAM
+    0x2A  CASET    4       XS hi, XS lo, XE hi, XE lo
+    0x2B  RASET    4       YS hi, YS lo, YE hi, YE lo
+    0x2C  RAMWR    stream  pixel data into the window
+    0x36  MADCTL   1       MY MX MV ML BGR MH
+    0x3A  COLMOD   1       pixel format (0x55 16-bit, 0x66 18-bit, 0x53 12-bit)
+
+GRAM representation (the `gram` property): a (320, 240) uint32 array, indexed
+[row, column] of the physical panel, each cell an 18-bit colour packed as
+R6 << 12 | G6 << 6 | B6 (6 bits per channel, as the chip stores it).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Callable
+
+import numpy as np
+
+# --- command codes (datasheet "System Function Command Table 1") ---------------------
+
+NOP = 0x00
+SWRESET = 0x01
+SLPIN = 0x10
+SLPOUT = 0x11
+PTLON = 0x12
+NORON = 0x13
+INVOFF = 0x20
+INVON = 0x21
+DISPOFF = 0x28
+DISPON = 0x29
+CASET = 0x2A
+RASET = 0x2B
+RAMWR = 0x2C
+MADCTL = 0x36
+COLMOD = 0x3A
+
+COMMAND_NAMES: dict[int, str] = {
+    NOP: "NOP",
+    SWRESET: "SWRESET",
+    SLPIN: "SLPIN",
+    SLPOUT: "SLPOUT",
+    PTLON: "PTLON",
+    NORON: "NORON",
+    INVOFF: "INVOFF",
+    INVON: "INVON",
+    DISPOFF: "DISPOFF",
+    DISPON: "DISPON",
+    CASET: "CASET",
+    RASET: "RASET",
+    RAMWR: "RAMWR",
+    MADCTL: "MADCTL",
+    COLMOD: "COLMOD",
+}
+
+# Commands whose effect waits for a fixed number of parameter bytes.
+PARAMETER_COUNT: dict[int, int] = {CASET: 4, RASET: 4, MADCTL: 1, COLMOD: 1}
+
+# --- MADCTL bits ---------------------------------------------------------------------
+
+MADCTL_MY = 0x80   # row address order (bottom to top)
+MADCTL_MX = 0x40   # column address order (right to left)
+MADCTL_MV = 0x20   # row/column exchange
+MADCTL_ML = 0x10   # vertical refresh order: no effect on a still image
+MADCTL_BGR = 0x08  # data is B, G, R: swap red and blue on the way into GRAM
+MADCTL_MH = 0x04   # horizontal refresh order: no effect on a still image
+
+# --- COLMOD: D2..D0 select the format of the MCU (SPI) interface ----------------------
+# D6..D4 select the RGB-interface format, which does not matter on SPI, so
+# 0x55 and 0x05 are both 16-bit for this wiring (datasheet COLMOD description).
+
+COLMOD_12BIT = 0b011
+COLMOD_16BIT = 0b101
+COLMOD_18BIT = 0b110
+SUPPORTED_COLMOD_FORMATS = (COLMOD_12BIT, COLMOD_16BIT, COLMOD_18BIT)
+
+# --- timing (datasheet AC characteristics and command descriptions) ------------------
+
+RESET_BUSY_S = 5e-3          # after SWRESET or RESX release: commands are not accepted
+SLEEP_SETTLE_S = 5e-3        # after SLPIN/SLPOUT: supplies and clocks still settling
+SLEEP_TOGGLE_S = 120e-3      # SLPIN<->SLPOUT minimum spacing
+RESET_PULSE_MIN_S = 10e-6    # tRW: shorter RESX pulses are not guaranteed to reset
+
+PIXELS = 240 * 320
+# Seed of the power-up GRAM noise: real GRAM powers up random, a fixed seed keeps
+# runs reproducible while still showing garbage if firmware never clears the screen.
+POWER_ON_GRAM_SEED = 0x7789
+# Above this many pointer positions a window's address table is not cached
+# (CASET/RASET accept 16-bit addresses; 65536 x 65536 positions would not fit).
+WINDOW_CACHE_LIMIT = 1 << 20
+
+
+@dataclass
+class Registers:
+    """The controller's register state that the model implements; reset values
+    are the datasheet's "after H/W reset" and "after S/W reset" column."""
+
+    madctl: int = 0x00
+    colmod: int = 0x66
+    xs: int = 0x0000
+    xe: int = 0x00EF
+    ys: int = 0x0000
+    ye: int = 0x013F
+    sleeping: bool = True
+    display_on: bool = False
+    inverted: bool = False
+    normal_mode: bool = True   # False after PTLON (partial mode)
+
+
+@dataclass(frozen=True)
+class _WindowGeometry:
+    """Everything that decides where a pointer position lands in GRAM."""
+
+    xs: int
+    width: int
+    ys: int
+    height: int
+    mv: bool
+    mx: bool
+    my: bool
+
+
+class ST7789V:
+    """Sitronix ST7789V on a 4-line SPI bus, driving a 240 x 320 panel."""
+
+    WIDTH = 240   # physical GRAM columns
+    HEIGHT = 320  # physical GRAM rows
+
+    def __init__(self, on_frame: Callable[[np.ndarray], None] | None = None) -> None:
+        self.on_frame = on_frame
+        self.warnings: list[str] = []
+        self.frames_captured = 0
+
+        self._regs = Registers()
+        rng = np.random.default_rng(POWER_ON_GRAM_SEED)
+        self._gram = rng.integers(0, 1 << 18, PIXELS, dtype=np.uint32)  # flat, row * 240 + column
+        self._covered = np.zeros(PIXELS, dtype=bool)
+        self._covered_count = 0
+
+        self._resx_high = True
+        self._resx_low_since = 0.0
+        # The board owns CSX; until it drives the pin the bus is assumed selected.
+        self._selected = True
+
+        # No constraint at power-up: the chip is ready when the board starts.
+        self._busy_until = float("-inf")
+        self._busy_reason = ""
+        self._settle_until = float("-inf")
+        self._settle_reason = ""
+        self._last_sleep_change = float("-inf")
+
+        self._command: int | None = None      # command whose parameters are being received
+        self._params: list[int] = []
+        self._surplus_warned = False
+        self._ram_write = False
+        self._pointer = 0                     # position inside the window, 0 .. window size - 1
+        self._pending = np.zeros(0, dtype=np.uint8)   # bytes (or 12-bit nibbles) of an incomplete pixel
+
+        self._window_key: _WindowGeometry | None = None
+        self._window_cells: np.ndarray | None = None
+        self._window_all_on_panel = True
+
+    # --- read-only state for tests and tools ------------------------------------------
+
+    @property
+    def sleeping(self) -> bool:
+        return self._regs.sleeping
+
+    @property
+    def display_on(self) -> bool:
+        return self._regs.display_on
+
+    @property
+    def inverted(self) -> bool:
+        return self._regs.inverted
+
+    @property
+    def normal_mode(self) -> bool:
+        return self._regs.normal_mode
+
+    @property
+    def madctl(self) -> int:
+        return self._regs.madctl
+
+    @property
+    def colmod(self) -> int:
+        return self._regs.colmod
+
+    @property
+    def window(self) -> tuple[int, int, int, int]:
+        """(XS, XE, YS, YE) as last set by CASET/RASET, in logical coordinates."""
+        return (self._regs.xs, self._regs.xe, self._regs.ys, self._regs.ye)
+
+    @property
+    def registers(self) -> Registers:
+        """A copy of the whole register state."""
+        return replace(self._regs)
+
+    @property
+    def gram(self) -> np.ndarray:
+        """Physical GRAM, (320 rows, 240 columns) of packed 18-bit colours
+        R6 << 12 | G6 << 6 | B6 (read-only view)."""
+        view = self._gram.reshape(self.HEIGHT, self.WIDTH).view()
+        view.flags.writeable = False
+        return view
+
+    # --- pins ----------------------------------------------------------------------------
+
+    def set_reset_pin(self, level: int, now_s: float) -> None:
+        """RESX, active low. The falling edge resets the registers (GRAM keeps its
+        content); commands are refused until 5 ms after the rising edge."""
+        high = bool(level)
+        if high == self._resx_high:
+            return
+        self._resx_high = high
+        if not high:
+            self._resx_low_since = now_s
+            self._reset_registers(now_s)
+            return
+        pulse = now_s - self._resx_low_since
+        if pulse < RESET_PULSE_MIN_S:
+            self._warn(now_s, f"RESX low pulse of {pulse * 1e6:.2f} us is shorter than "
+                              f"the {RESET_PULSE_MIN_S * 1e6:.0f} us the datasheet requires")
+        self._busy_until = now_s + RESET_BUSY_S
+        self._busy_reason = f"RESX release at {_ms(now_s)}"
+
+    def set_chip_select(self, selected: bool, now_s: float) -> None:
+        """CSX. Deselecting pauses the transfer: a RAMWR and a half-received
+        parameter list carry on after re-selection, but the bits of a pixel that
+        was not complete are lost."""
+        self._selected = bool(selected)
+        if not self._selected:
+            self._pending = self._pending[:0]
+
+    # --- the bus ---------------------------------------------------------------------------
+
+    def write(self, data: np.ndarray, dc: int, now_s: float) -> None:
+        """Bytes clocked in with one D/C level: dc=0 commands, dc=1 parameters or pixels."""
+        if isinstance(data, (bytes, bytearray, memoryview)):
+            data = np.frombuffer(data, dtype=np.uint8)
+        data = np.asarray(data, dtype=np.uint8).ravel()
+        if data.size == 0:
+            return
+        if not self._resx_high:
+            self._warn(now_s, f"{data.size} byte(s) sent while RESX is low: ignored")
+            return
+        if not self._selected:
+            self._warn(now_s, f"{data.size} byte(s) sent while CSX is high: ignored")
+            return
+        if dc == 0:
+            for code in data.tolist():
+                self._receive_command(code, now_s)
+        else:
+            self._receive_data(data, now_s)
+
+    # --- what the panel shows ---------------------------------------------------------------
+
+    def shown_image(self) -> np.ndarray:
+        """(240, 320, 3) uint8 RGB as seen on the Maix Dock: PNG pixel (x, y) is
+        GRAM row 319 - x, column y. Black while sleeping or with the display off."""
+        if self._regs.sleeping or not self._regs.display_on:
+            return np.zeros((self.WIDTH, self.HEIGHT, 3), dtype=np.uint8)
+        upright = self._gram.reshape(self.HEIGHT, self.WIDTH)[::-1, :].T
+        image = np.empty((self.WIDTH, self.HEIGHT, 3), dtype=np.uint8)
+        for channel, shift in enumerate((12, 6, 0)):
+            six = ((upright >> shift) & 0x3F).astype(np.uint8)
+            image[:, :, channel] = (six << 2) | (six >> 4)
+        if self._regs.inverted:
+            np.subtract(255, image, out=image)
+        return image
+
+    # --- commands ------------------------------------------------------------------------
+
+    def _receive_command(self, code: int, now_s: float) -> None:
+        name = _command_name(code)
+        if self._command in PARAMETER_COUNT and len(self._params) < PARAMETER_COUNT[self._command]:
+            self._warn(now_s, f"{_command_name(self._command)} got {len(self._params)} of "
+                              f"{PARAMETER_COUNT[self._command]} parameters before {name}: ignored")
+        # A new command always ends the previous one, RAMWR included.
+        self._command = None
+        self._params = []
+        self._surplus_warned = False
+        self._ram_write = False
+        self._pending = self._pending[:0]
+
+        if now_s < self._busy_until:
+            self._warn(now_s, f"{name} ignored: chip busy for 5 ms after {self._busy_reason}")
+            return
+        if now_s < self._settle_until:
+            self._warn(now_s, f"{name} sent within 5 ms after {self._settle_reason}")
+
+        self._command = code
+        if code not in PARAMETER_COUNT:
+            self._execute(code, [], now_s)
+
+    def _receive_data(self, data: np.ndarray, now_s: float) -> None:
+        if self._ram_write:
+            self._receive_pixel_bytes(data)
+            return
+        code = self._command
+        if code is None or code not in COMMAND_NAMES:
+            return  # no accepted command, or one the chip does not know: bytes are dropped
+        needed = PARAMETER_COUNT.get(code, 0) - len(self._params)
+        if needed > 0:
+            self._params.extend(data[:needed].tolist())
+            if len(self._params) == PARAMETER_COUNT[code]:
+                self._execute(code, self._params, now_s)
+        if data.size > max(needed, 0) and not self._surplus_warned:
+            self._surplus_warned = True
+            self._warn(now_s, f"{_command_name(code)} takes {PARAMETER_COUNT.get(code, 0)} "
+                              f"parameter(s); extra data bytes ignored")
+
+    def _execute(self, code: int, params: list[int], now_s: float) -> None:
+        regs = self._regs
+        if code == NOP:
+            pass
+        elif code == SWRESET:
+            self._software_reset(now_s)
+        elif code == SLPIN:
+            self._sleep(True, now_s)
+        elif code == SLPOUT:
+            self._sleep(False, now_s)
+        elif code == PTLON:
+            regs.normal_mode = False
+        elif code == NORON:
+            regs.normal_mode = True
+        elif code == INVOFF:
+            regs.inverted = False
+        elif code == INVON:
+            regs.inverted = True
+        elif code == DISPOFF:
+            regs.display_on = False
+        elif code == DISPON:
+            regs.display_on = True
+        elif code == CASET:
+            regs.xs, regs.xe = _address_pair(params)
+        elif code == RASET:
+            regs.ys, regs.ye = _address_pair(params)
+        elif code == RAMWR:
+            self._ram_write = True
+            self._pointer = 0
+        elif code == MADCTL:
+            regs.madctl = params[0]
+        elif code == COLMOD:
+            if params[0] & 0x07 in SUPPORTED_COLMOD_FORMATS:
+                regs.colmod = params[0]
+            else:
+                self._warn(now_s, f"COLMOD 0x{params[0]:02X} selects no supported SPI pixel "
+                                  f"format; keeping 0x{regs.colmod:02X}")
+
+    def _software_reset(self, now_s: float) -> None:
+        self._reset_registers(now_s)
+        self._busy_until = now_s + RESET_BUSY_S
+        self._busy_reason = f"SWRESET at {_ms(now_s)}"
+
+    def _reset_registers(self, now_s: float) -> None:
+        """Shared by RESX and SWRESET: defaults, sleep in, display off; GRAM kept."""
+        if not self._regs.sleeping:
+            # Reset from sleep-out is a sleep-in as far as the 120 ms SLPOUT rule goes.
+            self._last_sleep_change = now_s
+        self._regs = Registers()
+        self._command = None
+        self._params = []
+        self._ram_write = False
+        self._pending = self._pending[:0]
+        self._settle_until = float("-inf")
+
+    def _sleep(self, enter: bool, now_s: float) -> None:
+        name = "SLPIN" if enter else "SLPOUT"
+        if enter != self._regs.sleeping:
+            since = now_s - self._last_sleep_change
+            if since < SLEEP_TOGGLE_S:
+                self._warn(now_s, f"{name} only {since * 1e3:.3f} ms after the last sleep "
+                                  f"change; the datasheet asks for 120 ms")
+            self._last_sleep_change = now_s
+        self._regs.sleeping = enter
+        self._settle_until = now_s + SLEEP_SETTLE_S
+        self._settle_reason = f"{name} at {_ms(now_s)}"
+
+    # --- pixels ---------------------------------------------------------------------------
+
+    def _receive_pixel_bytes(self, data: np.ndarray) -> None:
+        """Turns wire bytes into packed 18-bit colours, carrying an incomplete
+        pixel over to the next call, and stores them."""
+        fmt = self._regs.colmod & 0x07
+        if fmt == COLMOD_12BIT:
+            # 12-bit pixels straddle byte boundaries, so work in nibbles: 3 per pixel.
+            units = np.empty(data.size * 2, dtype=np.uint8)
+            units[0::2] = data >> 4
+            units[1::2] = data & 0x0F
+            per_pixel = 3
+        else:
+            units = data
+            per_pixel = 2 if fmt == COLMOD_16BIT else 3
+        if self._pending.size:
+            units = np.concatenate((self._pending, units))
+        count = units.size // per_pixel
+        self._pending = units[count * per_pixel:].copy()
+        if count == 0:
+            return
+        fields = units[:count * per_pixel].reshape(count, per_pixel).astype(np.uint32)
+        red, green, blue = _decode_pixels(fields, fmt)
+        if self._regs.madctl & MADCTL_BGR:
+            red, blue = blue, red
+        self._store_pixels((red << 12) | (green << 6) | blue)
+
+    def _store_pixels(self, colours: np.ndarray) -> None:
+        """Writes colours at the pointer, wrapping from (XE, YE) back to (XS, YS)."""
+        geometry = self._geometry()
+        size = geometry.width * geometry.height
+        done = 0
+        while done < colours.size:
+            run = min(colours.size - done, size - self._pointer)
+            cells = self._cells_for(geometry, self._pointer, run)
+            self._write_cells(cells, colours[done:done + run])
+            self._pointer = (self._pointer + run) % size
+            done += run
+
+    def _write_cells(self, cells: np.ndarray, colours: np.ndarray) -> None:
+        """Stores colours in GRAM cells (all distinct, -1 = off the panel) in wire
+        order, capturing a frame the moment the last uncovered cell is written."""
+        if not self._window_all_on_panel:
+            on_panel = cells >= 0
+            cells, colours = cells[on_panel], colours[on_panel]
+        while cells.size:
+            fresh = ~self._covered[cells]
+            fresh_count = int(np.count_nonzero(fresh))
+            missing = PIXELS - self._covered_count
+            if fresh_count < missing:
+                self._gram[cells] = colours
+                self._covered[cells] = True
+                self._covered_count += fresh_count
+                return
+            last = int(np.searchsorted(np.cumsum(fresh), missing))
+            self._gram[cells[:last + 1]] = colours[:last + 1]
+            self._capture_frame()
+            cells, colours = cells[last + 1:], colours[last + 1:]
+
+    def _capture_frame(self) -> None:
+        self._covered[:] = False
+        self._covered_count = 0
+        self.frames_captured += 1
+        if self.on_frame is not None:
+            self.on_frame(self.shown_image())
+
+    # --- address mapping ------------------------------------------------------------------
+
+    def _geometry(self) -> _WindowGeometry:
+        regs = self._regs
+        # The datasheet requires XS <= XE and YS <= YE and leaves the opposite
+        # undefined; the model lets the pointer wrap right after the start
+        # address, i.e. a one-column (one-row) window, so the mistake is visible.
+        return _WindowGeometry(
+            xs=regs.xs, width=max(regs.xe - regs.xs + 1, 1),
+            ys=regs.ys, height=max(regs.ye - regs.ys + 1, 1),
+            mv=bool(regs.madctl & MADCTL_MV),
+            mx=bool(regs.madctl & MADCTL_MX),
+            my=bool(regs.madctl & MADCTL_MY),
+        )
+
+    def _cells_for(self, geometry: _WindowGeometry, start: int, count: int) -> np.ndarray:
+        """Flat GRAM indices of pointer positions start .. start+count-1 (no wrap)."""
+        size = geometry.width * geometry.height
+        if geometry != self._window_key:
+            self._window_key = geometry
+            self._window_cells = None
+            if size <= WINDOW_CACHE_LIMIT:
+                self._window_cells = _map_positions(geometry, np.arange(size, dtype=np.int64))
+                self._window_all_on_panel = bool(self._window_cells.min() >= 0)
+            else:
+                self._window_all_on_panel = False
+        if self._window_cells is not None:
+            return self._window_cells[start:start + count]
+        return _map_positions(geometry, np.arange(start, start + count, dtype=np.int64))
+
+    # --- bookkeeping --------------------------------------------------------------------
+
+    def _warn(self, now_s: float, message: str) -> None:
+        self.warnings.append(f"ST7789V at {_ms(now_s)}: {message}")
+
+
+# --- helpers --------------------------------------------------------------------------
+
+
+def _map_positions(geometry: _WindowGeometry, positions: np.ndarray) -> np.ndarray:
+    """Pointer positions -> flat physical GRAM index (row * 240 + column).
+
+    The pointer walks x from XS to XE, then the next y. Logical (x, y) is
+    physical (column, row) = (y, x) with MV, else (x, y); MX mirrors the
+    column, MY the row. Datasheet: data whose address is beyond the panel is
+    ignored, so such positions get -1 and are skipped while the pointer still
+    advances over them.
+    """
+    x = geometry.xs + positions % geometry.width
+    y = geometry.ys + positions // geometry.width
+    logical_width, logical_height = (ST7789V.HEIGHT, ST7789V.WIDTH) if geometry.mv \
+        else (ST7789V.WIDTH, ST7789V.HEIGHT)
+    on_panel = (x < logical_width) & (y < logical_height)
+    column, row = (y, x) if geometry.mv else (x, y)
+    if geometry.mx:
+        column = ST7789V.WIDTH - 1 - column
+    if geometry.my:
+        row = ST7789V.HEIGHT - 1 - row
+    cells = row * ST7789V.WIDTH + column
+    cells[~on_panel] = -1
+    return cells
+
+
+def _decode_pixels(fields: np.ndarray, fmt: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Wire fields (one row per pixel, uint32) -> 6-bit R, G, B as GRAM stores them."""
+    if fmt == COLMOD_16BIT:
+        value = (fields[:, 0] << 8) | fields[:, 1]      # RRRRRGGG GGGBBBBB
+        red5, green6, blue5 = value >> 11, (value >> 5) & 0x3F, value & 0x1F
+        # 5 -> 6 bits: the MSB doubles as the LSB, so 0 and full scale stay exact.
+        return (red5 << 1) | (red5 >> 4), green6, (blue5 << 1) | (blue5 >> 4)
+    if fmt == COLMOD_12BIT:
+        # 4 -> 6 bits by repeating the top bits, the same rule as for 5 -> 6.
+        red4, green4, blue4 = fields[:, 0], fields[:, 1], fields[:, 2]
+        return (red4 << 2) | (red4 >> 2), (green4 << 2) | (green4 >> 2), (blue4 << 2) | (blue4 >> 2)
+    # 18-bit: one byte per channel, the lower two bits are don't-care.
+    return fields[:, 0] >> 2, fields[:, 1] >> 2, fields[:, 2] >> 2
+
+
+def _address_pair(params: list[int]) -> tuple[int, int]:
+    """CASET/RASET parameters: start hi, start lo, end hi, end lo."""
+    return (params[0] << 8) | params[1], (params[2] << 8) | params[3]
+
+
+def _command_name(code: int) -> str:
+    return f"{COMMAND_NAMES.get(code, 'command')} (0x{code:02X})"
+
+
+def _ms(now_s: float) -> str:
+    return f"t={now_s * 1e3:.3f} ms"

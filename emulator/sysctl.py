@@ -1,0 +1,220 @@
+"""SYSCTL (0x5044_0000): PLLs, clock selects, clock gates, thresholds, resets, DMA selects.
+
+The model computes the CPU clock and every SPI clock from what the firmware
+programmed, and refuses what the real chip cannot do: running the CPU from
+PLL0 before it locked, or reprogramming PLL0 while the CPU runs from it.
+
+Register offsets follow the Kendryte standalone SDK's `sysctl_t`. Note: the
+facts sheet lists peri_reset at 0x60; the SDK has peri_reset at 0x34 and the
+reset-source status at 0x60, and the SDK is what runs on real boards.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from .errors import HardwareMisuse, UnmodelledAccess
+from .mmio import Peripheral, Register, field
+
+OSC_HZ = 26_000_000
+# The PLL datasheet figure is not public; the SDK polls the lock bits. 50 us is
+# well inside what such PLLs need and short enough not to distort start-up time.
+PLL_LOCK_TIME_S = 50e-6
+
+PLL0, PLL1, PLL2 = 0x08, 0x0C, 0x10
+PLL_LOCK = 0x18
+CLK_SEL0 = 0x20
+CLK_EN_CENT = 0x28
+CLK_EN_PERI = 0x2C
+SOFT_RESET = 0x30
+PERI_RESET = 0x34
+CLK_TH0 = 0x38
+CLK_TH1 = 0x3C
+MISC = 0x54
+DMA_SEL0, DMA_SEL1 = 0x64, 0x68
+
+# pll register fields
+PLL_CLKR = (0, 4)
+PLL_CLKF = (4, 6)
+PLL_CLKOD = (10, 4)
+PLL_RESET_BIT = 20
+PLL_PWRD_BIT = 21
+PLL_BYPASS_BIT = 23
+PLL_OUT_EN_BIT = 25
+
+# clk_en_cent bits
+CENT_CPU, CENT_SRAM0, CENT_SRAM1, CENT_APB0, CENT_APB1, CENT_APB2 = range(6)
+# clk_en_peri bits
+PERI_BITS = {
+    "rom": 0, "dma": 1, "ai": 2, "dvp": 3, "fft": 4, "gpio": 5, "spi0": 6, "spi1": 7,
+    "spi2": 8, "spi3": 9, "i2s0": 10, "i2s1": 11, "i2s2": 12, "i2c0": 13, "i2c1": 14,
+    "i2c2": 15, "uart1": 16, "uart2": 17, "uart3": 18, "aes": 19, "fpioa": 20,
+    "timer0": 21, "timer1": 22, "timer2": 23, "wdt0": 24, "wdt1": 25, "sha": 26, "otp": 27,
+    "rtc": 29,
+}
+# which APB bus each gated peripheral hangs off (the SDK's sysctl_clock_bus_en)
+PERI_BUS = {"gpio": CENT_APB0, "fpioa": CENT_APB0, "spi0": CENT_APB2, "spi1": CENT_APB2,
+            "spi2": CENT_APB0, "spi3": CENT_APB2, "dma": None}
+
+# DMA request codes selected by dma_sel (SDK sysctl_dma_select_t, first entries)
+DMA_REQUESTS = {0: ("spi0", "rx"), 1: ("spi0", "tx"), 2: ("spi1", "rx"), 3: ("spi1", "tx")}
+
+
+@dataclass
+class PllState:
+    """Time the PLL's reset was last released while powered (None: not running)."""
+
+    running_since: float | None = None
+
+
+class Sysctl(Peripheral):
+    NAME = "SYSCTL"
+    BASE = 0x5044_0000
+    SIZE = 0x1000
+    REGISTERS = {
+        0x00: Register("git_id", writable=False, reset=0x0000_0000),
+        0x04: Register("clk_freq", writable=False, reset=OSC_HZ),
+        PLL0: Register("pll0", reset=(1 << PLL_PWRD_BIT)),
+        PLL1: Register("pll1"),
+        PLL2: Register("pll2"),
+        0x14: Register("resv5"),
+        PLL_LOCK: Register("pll_lock"),
+        0x1C: Register("rom_error", writable=False),
+        CLK_SEL0: Register("clk_sel0"),
+        0x24: Register("clk_sel1"),
+        CLK_EN_CENT: Register("clk_en_cent", reset=(1 << CENT_CPU) | (1 << CENT_SRAM0) | (1 << CENT_SRAM1)),
+        CLK_EN_PERI: Register("clk_en_peri", reset=1 << PERI_BITS["rom"]),
+        SOFT_RESET: Register("soft_reset"),
+        PERI_RESET: Register("peri_reset"),
+        CLK_TH0: Register("clk_th0"),
+        CLK_TH1: Register("clk_th1"),
+        0x40: Register("clk_th2"),
+        0x44: Register("clk_th3"),
+        0x48: Register("clk_th4"),
+        0x4C: Register("clk_th5"),
+        0x50: Register("clk_th6"),
+        MISC: Register("misc"),
+        0x58: Register("peri"),
+        0x5C: Register("spi_sleep"),
+        0x60: Register("reset_status", reset=1),
+        DMA_SEL0: Register("dma_sel0"),
+        DMA_SEL1: Register("dma_sel1"),
+        0x6C: Register("power_sel"),
+    }
+
+    def __init__(self, board=None) -> None:
+        super().__init__(board)
+        # PLL0 comes out of reset powered and running (at 26 MHz: all dividers 0), so it
+        # reads as locked; PLL1/PLL2 are off until firmware powers them.
+        self.plls = {PLL0: PllState(-PLL_LOCK_TIME_S), PLL1: PllState(), PLL2: PllState()}
+        self.slip_sticky = {PLL0: False, PLL1: False, PLL2: False}
+
+    # --- clocks the rest of the board asks for -------------------------------------------
+
+    def pll_locked(self, reg: int, now: float) -> bool:
+        since = self.plls[reg].running_since
+        return since is not None and now - since >= PLL_LOCK_TIME_S
+
+    def pll_hz(self, reg: int) -> float:
+        value = self.values[reg]
+        if value & (1 << PLL_BYPASS_BIT):
+            return float(OSC_HZ)
+        clkr, clkf, clkod = field(value, *PLL_CLKR), field(value, *PLL_CLKF), field(value, *PLL_CLKOD)
+        return OSC_HZ * (clkf + 1) / ((clkr + 1) * (clkod + 1))
+
+    def cpu_hz(self) -> float:
+        sel = self.values[CLK_SEL0]
+        if not sel & 1:
+            return float(OSC_HZ)
+        return self.pll_hz(PLL0) / (2 << field(sel, 1, 2))
+
+    def spi_source_hz(self, index: int) -> float:
+        """SPIn source clock = PLL0 / ((threshold + 1) * 2) (SDK formula)."""
+        threshold = field(self.values[CLK_TH1], 8 * index, 8)
+        return self.pll_hz(PLL0) / ((threshold + 1) * 2)
+
+    def gate_open(self, name: str) -> bool:
+        """Whether the named peripheral's clock gate and its bus gate are both on."""
+        peri_bit = PERI_BITS.get(name)
+        if peri_bit is not None and not self.values[CLK_EN_PERI] >> peri_bit & 1:
+            return False
+        bus = PERI_BUS.get(name)
+        return bus is None or bool(self.values[CLK_EN_CENT] >> bus & 1)
+
+    def in_reset(self, name: str) -> bool:
+        bit = PERI_BITS.get(name)
+        return bit is not None and bool(self.values[PERI_RESET] >> bit & 1)
+
+    def spi_dvp_data_enabled(self) -> bool:
+        return bool(self.values[MISC] >> 10 & 1)
+
+    def dma_request(self, handshake: int) -> tuple[str, str] | None:
+        """The peripheral request (device, direction) routed to DMA handshake interface n."""
+        if handshake < 5:
+            code = field(self.values[DMA_SEL0], 6 * handshake, 6)
+        else:
+            code = field(self.values[DMA_SEL1], 0, 6)
+        return DMA_REQUESTS.get(code)
+
+    # --- register behaviour ----------------------------------------------------------------
+
+    def read_register(self, offset: int, reg: Register, now: float) -> int:
+        if offset == PLL_LOCK:
+            value = 0
+            for pll, lock_shift in ((PLL0, 0), (PLL1, 8), (PLL2, 16)):
+                if self.pll_locked(pll, now):
+                    value |= (3 if pll == PLL0 else 1) << lock_shift
+                if self.slip_sticky[pll]:
+                    value |= 1 << (lock_shift + 2)
+            return value
+        return self.values[offset]
+
+    def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
+        board = self.board
+        if offset in self.plls:
+            if offset == PLL0 and self.values[CLK_SEL0] & 1 and value != self.values[PLL0]:
+                raise HardwareMisuse(
+                    "SYSCTL.pll0 changed while the CPU (ACLK) runs from PLL0; switch ACLK to the "
+                    "26 MHz oscillator first (clk_sel0.aclk_sel = 0), as the SDK does"
+                )
+            old = self.values[offset]
+            self.values[offset] = value
+            powered = bool(value >> PLL_PWRD_BIT & 1)
+            in_reset = bool(value >> PLL_RESET_BIT & 1)
+            changed_config = (old ^ value) & 0x000F_FFFF
+            if not powered or in_reset or changed_config:
+                self.plls[offset].running_since = None
+            if powered and not in_reset and (old >> PLL_RESET_BIT & 1 or self.plls[offset].running_since is None):
+                self.plls[offset].running_since = now
+            return
+        if offset == PLL_LOCK:
+            for pll, lock_shift in ((PLL0, 0), (PLL1, 8), (PLL2, 16)):
+                if value >> (lock_shift + 2) & 1:
+                    self.slip_sticky[pll] = False
+            return
+        if offset == CLK_SEL0:
+            if value & 1 and not self.values[CLK_SEL0] & 1:
+                if not self.pll_locked(PLL0, now):
+                    raise HardwareMisuse("SYSCTL.clk_sel0: ACLK switched to PLL0 before PLL0 locked (pll_lock[1:0] != 3)")
+                if not self.values[PLL0] >> PLL_OUT_EN_BIT & 1:
+                    raise HardwareMisuse("SYSCTL.clk_sel0: ACLK switched to PLL0 while PLL0's output is disabled (out_en = 0)")
+            old_hz = self.cpu_hz()
+            self.values[CLK_SEL0] = value
+            if board is not None and self.cpu_hz() != old_hz:
+                board.clock_changed(now)
+            return
+        if offset == SOFT_RESET and value & 1:
+            raise UnmodelledAccess("SYSCTL.soft_reset: a whole-chip soft reset is not modelled")
+        if offset == PERI_RESET:
+            released = self.values[PERI_RESET] & ~value
+            self.values[PERI_RESET] = value
+            if board is not None:
+                for name, bit in PERI_BITS.items():
+                    if released >> bit & 1:
+                        board.reset_peripheral(name, now)
+            return
+        self.values[offset] = value
+
+    def next_event_time(self, now: float) -> float | None:
+        times = [s.running_since + PLL_LOCK_TIME_S for s in self.plls.values()
+                 if s.running_since is not None and now < s.running_since + PLL_LOCK_TIME_S]
+        return min(times) if times else None

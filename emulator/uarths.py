@@ -1,0 +1,89 @@
+"""UARTHS (0x3800_0000): the SiFive UART wired to the Dock's USB serial bridge.
+
+Bytes written to txdata go through an 8-entry transmit FIFO that drains at the
+programmed baud rate (core clock / (div + 1), 10 bits per byte with one stop
+bit); each byte reaches the console when its stop bit is out. With txen = 0
+bytes wait in the FIFO, as on the real UART. Nothing is ever received.
+"""
+from __future__ import annotations
+
+from collections import deque
+from typing import Callable
+
+from .mmio import Peripheral, Register
+
+TXDATA, RXDATA, TXCTRL, RXCTRL, IE, IP, DIV = 0x00, 0x04, 0x08, 0x0C, 0x10, 0x14, 0x18
+TX_FIFO_DEPTH = 8
+FULL = 1 << 31
+EMPTY = 1 << 31
+IP_TXWM = 1
+
+
+class Uarths(Peripheral):
+    NAME = "UARTHS"
+    BASE = 0x3800_0000
+    SIZE = 0x1000
+    REGISTERS = {
+        TXDATA: Register("txdata"), RXDATA: Register("rxdata", writable=False),
+        TXCTRL: Register("txctrl"), RXCTRL: Register("rxctrl"),
+        IE: Register("ie"), IP: Register("ip", writable=False),
+        DIV: Register("div", reset=0x0D8D),  # 115200 baud from the 26 MHz oscillator... about
+    }
+
+    def __init__(self, board=None, on_byte: Callable[[int], None] | None = None) -> None:
+        super().__init__(board)
+        self.on_byte = on_byte or (lambda b: None)
+        self._fifo: deque[int] = deque()
+        self._shifting_until: float | None = None   # end time of the byte on the wire
+
+    def _byte_time(self) -> float:
+        hz = self.board.cpu_hz() if self.board is not None else 26e6
+        bits = 10 + (1 if self.values[TXCTRL] >> 1 & 1 else 0)
+        return bits * (self.values[DIV] + 1) / hz
+
+    def advance(self, now: float) -> None:
+        while True:
+            if self._shifting_until is not None:
+                if self._shifting_until > now:
+                    return
+                self.on_byte(self._pending_byte)
+                start = self._shifting_until
+                self._shifting_until = None
+            else:
+                start = now
+            if not self._fifo or not self.values[TXCTRL] & 1:
+                return
+            self._pending_byte = self._fifo.popleft()
+            self._shifting_until = start + self._byte_time()
+
+    def next_event_time(self, now: float) -> float | None:
+        return self._shifting_until
+
+    def tx_level(self) -> int:
+        return len(self._fifo)
+
+    def irq_line(self) -> bool:
+        return bool(self.read_ip() & self.values[IE])
+
+    def read_ip(self) -> int:
+        watermark = (self.values[TXCTRL] >> 16) & 7
+        return IP_TXWM if len(self._fifo) < watermark else 0
+
+    def read_register(self, offset: int, reg: Register, now: float) -> int:
+        self.advance(now)
+        if offset == TXDATA:
+            return FULL if len(self._fifo) >= TX_FIFO_DEPTH else 0
+        if offset == RXDATA:
+            return EMPTY
+        if offset == IP:
+            return self.read_ip()
+        return self.values[offset]
+
+    def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
+        self.advance(now)
+        if offset == TXDATA:
+            if len(self._fifo) < TX_FIFO_DEPTH:   # a write to a full FIFO is lost, as on the chip
+                self._fifo.append(value & 0xFF)
+        else:
+            self.values[offset] = value
+        self.advance(now)

@@ -1,0 +1,269 @@
+# lcd.S: the ST7789V on the Maix Dock: bring-up, windows, whole frames.
+#
+# D/C (GPIOHS1) is 0 for a command byte and 1 for its parameters and for
+# pixel data; it only changes between SPI transfers (spi_dma.S waits for the
+# bus to drain before returning). Reset is GPIOHS0, active low.
+#
+# INVOFF: the Kendryte SDK's lcd_init for this board sends no inversion
+# command and MaixPy's default for the Dock is invert = False, so the panel
+# needs none; INVOFF is sent explicitly so the state does not depend on
+# what the boot ROM or a previous program left behind.
+
+    .option norelax
+    .include "k210.inc"
+    .include "st7789v.inc"
+
+    .text
+    .globl lcd_init
+# lcd_init
+#   What: SPI0 to its idle LCD set-up, hardware reset pulse, then SWRESET,
+#         SLPOUT, COLMOD 16-bit, MADCTL upright landscape, INVOFF, NORON,
+#         full-screen window, DISPON; marks the LCD ready for the trap
+#         handler's error screen. Runs on hart 0 before hart 1 is released.
+#   Arguments: a0 = CPU clock in Hz (for the delays).
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+lcd_init:
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+    sd      s0, 0(sp)
+    mv      s0, a0
+
+    call    spi0_init
+
+    li      a0, GPIOHS_LCD_DC_BIT
+    call    gpiohs_set
+    li      a0, GPIOHS_LCD_RST_BIT
+    call    gpiohs_clear
+    li      a0, LCD_RESET_LOW_US
+    mv      a1, s0
+    call    delay_us
+    li      a0, GPIOHS_LCD_RST_BIT
+    call    gpiohs_set
+    li      a0, LCD_RESET_WAIT_US
+    mv      a1, s0
+    call    delay_us
+
+    li      a0, LCD_CMD_SWRESET
+    call    lcd_command
+    li      a0, LCD_RESET_WAIT_US
+    mv      a1, s0
+    call    delay_us
+
+    li      a0, LCD_CMD_SLPOUT
+    call    lcd_command
+    li      a0, LCD_RESET_WAIT_US
+    mv      a1, s0
+    call    delay_us
+
+    li      a0, LCD_CMD_COLMOD
+    li      a1, COLMOD_RGB565
+    call    lcd_command_byte
+    li      a0, LCD_CMD_MADCTL
+    li      a1, LCD_MADCTL_DOCK
+    call    lcd_command_byte
+    li      a0, LCD_CMD_INVOFF
+    call    lcd_command
+    li      a0, LCD_CMD_NORON
+    call    lcd_command
+    li      a0, 0
+    li      a1, 0
+    li      a2, LCD_WIDTH - 1
+    li      a3, LCD_HEIGHT - 1
+    call    lcd_set_window
+    li      a0, LCD_CMD_DISPON
+    call    lcd_command
+
+    fence   rw, w
+    la      t0, lcd_ready
+    li      t1, 1
+    sw      t1, 0(t0)
+
+    ld      s0, 0(sp)
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
+    ret
+
+    .globl lcd_command
+# lcd_command
+#   What: sends one command byte with D/C low.
+#   Arguments: a0 = command code.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+lcd_command:
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+    sb      a0, 0(sp)
+    li      a0, GPIOHS_LCD_DC_BIT
+    call    gpiohs_clear
+    mv      a0, sp
+    li      a1, 1
+    call    spi0_send_bytes
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
+    ret
+
+    .globl lcd_command_params
+# lcd_command_params
+#   What: sends a command byte (D/C low) followed by its parameter bytes
+#         (D/C high).
+#   Arguments: a0 = command code, a1 = parameter address, a2 = count (> 0).
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+lcd_command_params:
+    addi    sp, sp, -32
+    sd      ra, 24(sp)
+    sd      s0, 16(sp)
+    sd      s1, 8(sp)
+    mv      s0, a1
+    mv      s1, a2
+    call    lcd_command
+    li      a0, GPIOHS_LCD_DC_BIT
+    call    gpiohs_set
+    mv      a0, s0
+    mv      a1, s1
+    call    spi0_send_bytes
+    ld      s1, 8(sp)
+    ld      s0, 16(sp)
+    ld      ra, 24(sp)
+    addi    sp, sp, 32
+    ret
+
+# lcd_command_byte (file-local)
+#   What: a command with a single parameter byte.
+#   Arguments: a0 = command code, a1 = parameter.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+lcd_command_byte:
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+    sb      a1, 0(sp)
+    mv      a1, sp
+    li      a2, 1
+    call    lcd_command_params
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
+    ret
+
+# lcd_command_range (file-local)
+#   What: CASET or RASET: start and end as two big-endian 16-bit values.
+#   Arguments: a0 = command code, a1 = start, a2 = end.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+lcd_command_range:
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+    srli    t0, a1, 8
+    sb      t0, 0(sp)
+    sb      a1, 1(sp)
+    srli    t0, a2, 8
+    sb      t0, 2(sp)
+    sb      a2, 3(sp)
+    mv      a1, sp
+    li      a2, LCD_WINDOW_BYTES
+    call    lcd_command_params
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
+    ret
+
+    .globl lcd_set_window
+# lcd_set_window
+#   What: sets the GRAM window the next RAMWR fills (inclusive corners, in
+#         the landscape coordinates MADCTL set up).
+#   Arguments: a0 = x start, a1 = y start, a2 = x end, a3 = y end.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+lcd_set_window:
+    addi    sp, sp, -32
+    sd      ra, 24(sp)
+    sd      s0, 16(sp)
+    sd      s1, 8(sp)
+    mv      s0, a1
+    mv      s1, a3
+    mv      a1, a0
+    li      a0, LCD_CMD_CASET
+    call    lcd_command_range
+    li      a0, LCD_CMD_RASET
+    mv      a1, s0
+    mv      a2, s1
+    call    lcd_command_range
+    ld      s1, 8(sp)
+    ld      s0, 16(sp)
+    ld      ra, 24(sp)
+    addi    sp, sp, 32
+    ret
+
+# lcd_begin_full_frame (file-local)
+#   What: full-screen window, RAMWR, D/C high: the LCD now takes pixels.
+#   Arguments: none. Results: none.
+#   Clobbers: only ABI temporaries.
+lcd_begin_full_frame:
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+    li      a0, 0
+    li      a1, 0
+    li      a2, LCD_WIDTH - 1
+    li      a3, LCD_HEIGHT - 1
+    call    lcd_set_window
+    li      a0, LCD_CMD_RAMWR
+    call    lcd_command
+    li      a0, GPIOHS_LCD_DC_BIT
+    call    gpiohs_set
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
+    ret
+
+    .globl lcd_send_frame
+# lcd_send_frame
+#   What: sends a whole 320 x 240 RGB565 framebuffer to the LCD by DMA
+#         (sleeps in WFI while it goes). The buffer holds 32-bit words with
+#         the earlier pixel of each pair in bits 31:16.
+#   Arguments: a0 = framebuffer address.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+lcd_send_frame:
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+    sd      s0, 0(sp)
+    mv      s0, a0
+    call    lcd_begin_full_frame
+    mv      a0, s0
+    li      a1, LCD_FB_WORDS
+    call    spi0_dma_send_words
+    ld      s0, 0(sp)
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
+    ret
+
+    .globl lcd_error_screen
+# lcd_error_screen
+#   What: fills the whole screen with solid red by a polled SPI transfer,
+#         after stopping any DMA in flight. For the trap handler: needs no
+#         framebuffer, no interrupts, no delays. Does nothing if the LCD
+#         was never brought up.
+#   Arguments: none. Results: none.
+#   Clobbers: only ABI temporaries.
+    .equ LCD_ERROR_WORD, (RGB565_RED << 16) | RGB565_RED
+lcd_error_screen:
+    la      t0, lcd_ready
+    lw      t0, 0(t0)
+    beqz    t0, 1f
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+    call    dma_stop
+    call    lcd_begin_full_frame
+    li      a0, LCD_ERROR_WORD
+    li      a1, LCD_FB_WORDS
+    call    spi0_fill_words
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
+1:  ret
+
+# ---------------------------------------------------------------------------
+    .data
+    .balign 4
+    .globl lcd_ready
+# lcd_ready: 1 once lcd_init has brought the panel up. In .data so that a
+# trap on hart 1 before .bss is cleared reads a valid 0.
+lcd_ready:
+    .word   0

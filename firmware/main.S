@@ -1,0 +1,198 @@
+# main.S: what each hart does after boot, and the frame handoff between them.
+#
+# Hart 0 brings the board up (clocks, pins, console, LCD, DMAC), releases
+# hart 1, then draws frames forever. Hart 1 sends finished frames to the LCD
+# and reports each one. After the release only hart 1 touches SPI0, the
+# DMAC and the LCD's GPIOHS lines.
+#
+# Handoff: two framebuffers, frame n goes into buffer n & 1. Each buffer has
+# a state word, FB_FREE (hart 0 may draw into it) or FB_FULL (hart 1 may
+# send it), and the number of the frame it holds.
+#   hart 0: wait state[b] == FREE; draw; frame[b] = n;
+#           state[b] = FULL (release order); msip[1] = 1
+#   hart 1: wait state[b] == FULL (acquire); send by DMA;
+#           state[b] = FREE (release order); msip[0] = 1; print "frame N"
+# A waiting hart clears its own msip *before* reading the state, then WFIs:
+# a signal sent after the read leaves msip pending and WFI falls through, so
+# no wake-up is lost. Both walk the buffers in the same order (0, 1, 0, ...),
+# so frames reach the LCD in the order they were drawn.
+
+    .option norelax
+    .include "k210.inc"
+    .include "st7789v.inc"
+
+    .text
+    .globl main_hart0
+# main_hart0
+#   What: hart 0 after .bss clearing: bring-up, release of hart 1, draw loop.
+#   Arguments: none. Results: never returns.
+#   Clobbers: everything (it is the bottom of hart 0's call stack).
+main_hart0:
+    call    clocks_init
+    mv      s0, a0                      # s0 = CPU Hz
+    mv      s1, a1                      # s1 = PLL0 Hz
+    call    pins_init
+    mv      a0, s0
+    call    console_init
+
+    la      a0, msg_boot
+    call    console_puts
+    la      a0, msg_clocks_pll0
+    call    console_puts
+    mv      a0, s1
+    call    console_put_dec
+    la      a0, msg_clocks_cpu
+    call    console_puts
+    mv      a0, s0
+    call    console_put_dec
+    la      a0, msg_hz_nl
+    call    console_puts
+    la      a0, msg_pins
+    call    console_puts
+
+    mv      a0, s0
+    call    lcd_init
+    call    dma_init
+    la      a0, msg_lcd
+    call    console_puts
+
+    call    boot_release_hart1
+
+    li      s2, 0                       # s2 = frame number n
+1:  andi    s3, s2, 1                   # s3 = buffer index b
+    mv      a0, s3
+    li      a1, FB_FREE
+    call    fb_wait_state
+    mv      a0, s3
+    call    fb_address
+    mv      a1, s2
+    call    pattern_draw
+    slli    t0, s3, 3
+    la      t1, fb_frame
+    add     t1, t1, t0
+    sd      s2, 0(t1)
+    mv      a0, s3
+    li      a1, FB_FULL
+    li      a2, 1                       # tell hart 1
+    call    fb_set_state
+    addi    s2, s2, 1
+    j       1b
+
+    .globl main_hart1
+# main_hart1
+#   What: hart 1 after its release: display loop, sending each full buffer
+#         to the LCD, handing it back and printing its frame number.
+#   Arguments: none. Results: never returns.
+#   Clobbers: everything (it is the bottom of hart 1's call stack).
+main_hart1:
+    la      a0, msg_hart1
+    call    console_line
+    call    dma_irq_init
+
+    li      s2, 0                       # s2 = frames shown
+1:  andi    s3, s2, 1                   # s3 = buffer index b
+    mv      a0, s3
+    li      a1, FB_FULL
+    call    fb_wait_state
+    slli    t0, s3, 3
+    la      t1, fb_frame
+    add     t1, t1, t0
+    ld      s4, 0(t1)                   # s4 = frame number in the buffer
+    mv      a0, s3
+    call    fb_address
+    call    lcd_send_frame
+    mv      a0, s3
+    li      a1, FB_FREE
+    li      a2, 0                       # tell hart 0
+    call    fb_set_state
+    la      a0, msg_frame
+    mv      a1, s4
+    call    console_line_dec
+    addi    s2, s2, 1
+    j       1b
+
+# fb_address (file-local)
+#   What: address of framebuffer a0.
+#   Arguments: a0 = buffer index (0 or 1).
+#   Results: a0 = address.
+#   Clobbers: only ABI temporaries.
+fb_address:
+    li      t0, LCD_FB_BYTES
+    mul     t0, t0, a0
+    la      a0, framebuffers
+    add     a0, a0, t0
+    ret
+
+# fb_wait_state (file-local)
+#   What: sleeps until buffer a0's state word equals a1, woken by this hart's
+#         CLINT software interrupt. Acquire: what the other hart wrote before
+#         setting the state is visible after return.
+#   Arguments: a0 = buffer index, a1 = wanted state.
+#   Results: none.
+#   Clobbers: only ABI temporaries. Leaves this hart's msip clear.
+fb_wait_state:
+    slli    t0, a0, 2
+    la      t1, fb_state
+    add     t1, t1, t0                  # t1 = &state[b]
+    csrr    t2, mhartid
+    slli    t2, t2, CLINT_MSIP_SHIFT
+    li      t3, CLINT_MSIP
+    add     t2, t2, t3                  # t2 = &msip[this hart]
+    li      t4, MIE_MSIE
+    csrs    mie, t4
+1:  sw      zero, 0(t2)
+    fence                               # the clear lands before the state read
+    lw      t3, 0(t1)
+    beq     t3, a1, 2f
+    wfi
+    j       1b
+2:  fence   r, rw
+    csrc    mie, t4
+    ret
+
+# fb_set_state (file-local)
+#   What: publishes buffer a0's new state (after every earlier memory access
+#         of this hart) and raises hart a2's software interrupt.
+#   Arguments: a0 = buffer index, a1 = new state, a2 = hart to signal.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+fb_set_state:
+    slli    t0, a0, 2
+    la      t1, fb_state
+    add     t1, t1, t0
+    fence   rw, w
+    amoswap.w.rl zero, a1, (t1)
+    fence                               # state visible before the IPI
+    slli    t2, a2, CLINT_MSIP_SHIFT
+    li      t3, CLINT_MSIP
+    add     t2, t2, t3
+    li      t3, 1
+    sw      t3, 0(t2)
+    ret
+
+# ---------------------------------------------------------------------------
+    .section .rodata
+msg_boot:           .asciz "boot: hart 0 up\n"
+msg_clocks_pll0:    .asciz "clocks: PLL0 "
+msg_clocks_cpu:     .asciz " Hz, CPU "
+msg_hz_nl:          .asciz " Hz\n"
+msg_pins:           .asciz "pins: LCD and UART routed\n"
+msg_lcd:            .asciz "lcd: ST7789V ready\n"
+msg_hart1:          .asciz "hart 1: display loop\n"
+msg_frame:          .asciz "frame "
+
+# ---------------------------------------------------------------------------
+    .bss
+    .balign 64
+    .globl framebuffers
+# framebuffers: two 320 x 240 RGB565 frames, pixel pairs packed per pattern.S.
+framebuffers:
+    .space  NUM_FRAMEBUFFERS * LCD_FB_BYTES
+    .balign 8
+# fb_frame: frame number held by each buffer (written by hart 0 before FULL).
+fb_frame:
+    .space  NUM_FRAMEBUFFERS * XLEN_BYTES
+    .balign 4
+# fb_state: FB_FREE / FB_FULL per buffer; 0 = FREE after .bss clearing.
+fb_state:
+    .space  NUM_FRAMEBUFFERS * 4

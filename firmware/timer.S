@@ -1,0 +1,48 @@
+# timer.S: delays on the CLINT timer, sleeping in WFI.
+#
+# mtime ticks at CPU clock / 50. A delay programs this hart's mtimecmp and
+# enables only mie.MTIE while it sleeps; mstatus.MIE stays 0, so the pending
+# timer interrupt wakes WFI without ever entering the trap handler.
+
+    .option norelax
+    .include "k210.inc"
+
+    .text
+    .globl delay_us
+# delay_us
+#   What: waits at least a0 microseconds.
+#   Arguments: a0 = microseconds (0 returns at once), a1 = CPU clock in Hz
+#         (mtime runs at a1 / 50; pass the clock in force at the time).
+#   Results: none.
+#   Clobbers: only ABI temporaries. mie.MTIE is left clear and this hart's
+#         mtimecmp is left at all ones (never fires).
+delay_us:
+    beqz    a0, 9f
+    # ticks = ceil(us * hz / (50 * 1e6)): rounding up keeps short waits
+    # (1 us at 26 MHz is half a tick) from collapsing to zero.
+    mul     t0, a0, a1
+    li      t1, MTIME_DIV * 1000000
+    add     t0, t0, t1
+    addi    t0, t0, -1
+    divu    t0, t0, t1                  # t0 = ticks (>= 1)
+
+    li      t2, CLINT_MTIME
+    ld      t3, 0(t2)
+    add     t0, t0, t3                  # t0 = target mtime
+
+    csrr    t4, mhartid
+    slli    t4, t4, CLINT_MTIMECMP_SHIFT
+    li      t5, CLINT_MTIMECMP
+    add     t5, t5, t4                  # t5 = &mtimecmp[hart]
+    sd      t0, 0(t5)
+
+    li      t6, MIE_MTIE
+    csrs    mie, t6
+1:  ld      t3, 0(t2)
+    bgeu    t3, t0, 2f
+    wfi
+    j       1b
+2:  li      t3, MTIMECMP_NEVER
+    sd      t3, 0(t5)                   # drops MTIP before MTIE goes away
+    csrc    mie, t6
+9:  ret

@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# Creates the project's virtual environment and installs the project (with its native
+# instruction counter, which needs a C compiler and the Python headers) and test tools.
+set -euo pipefail
+venv=${1:-.venv}
+python=${PYTHON:-python3}
+if ! "$python" -c 'import sys; sys.exit(sys.version_info < (3, 10))' 2>/dev/null; then
+    echo "error: Python 3.10 or newer is needed as '$python'" >&2
+    exit 1
+fi
+if [ ! -x "$venv/bin/python" ]; then
+    echo "[setup] creating virtual environment $venv"
+    "$python" -m venv "$venv"
+fi
+echo "[setup] installing the project into $venv"
+"$venv/bin/python" -m pip install --quiet --upgrade pip >/dev/null
+"$venv/bin/python" -m pip install --quiet -e '.[test]'
