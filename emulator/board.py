@@ -177,6 +177,7 @@ class Board:
         self._poll = [(-1, -1, -1, 0)] * HARTS
         self._split: list[tuple[int, int, int] | None] = [None] * HARTS
         self._widths: dict[int, int] = {}
+        self.device_writes: dict[str, list[int]] = {}   # stores per device, per hart
         self._trap_report: str | None = None
         self._trap_deadline: float | None = None
         self.image: LoadedImage = load_elf(firmware, self.memory)
@@ -419,6 +420,7 @@ class Board:
                 offset, value = offset - 4, pending[2] | (value & 0xFFFF_FFFF) << 32
             now = self.hart_now(hart)
             self._poll[hart.hart_id] = (-1, -1, -1, 0)
+            self.device_writes.setdefault(peripheral.NAME, [0] * HARTS)[hart.hart_id] += 1
             try:
                 self._gate_check(peripheral)
                 peripheral.write(offset, width, value, now)

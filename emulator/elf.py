@@ -58,7 +58,8 @@ def load_elf(path: str | Path, memory: Sram) -> LoadedImage:
             symtab = elf.get_section_by_name(".symtab")
             if symtab is not None:
                 for symbol in symtab.iter_symbols():
-                    if symbol["st_info"]["type"] in ("STT_FUNC", "STT_NOTYPE") and symbol.name and symbol["st_value"]:
+                    if symbol["st_info"]["type"] in ("STT_FUNC", "STT_NOTYPE") and symbol.name \
+                            and not symbol.name.startswith("$") and symbol["st_value"]:
                         symbols.setdefault(symbol["st_value"], symbol.name)
             return LoadedImage(elf.header["e_entry"], code_ranges, symbols, total)
     except (ELFError, ValueError) as error:

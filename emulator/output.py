@@ -47,7 +47,8 @@ class RunOutput:
 
 
 def summary_dict(exit_kind: str, message: str, frames: list[FrameRecord], virtual_time_s: float,
-                 instructions: list[int], host_time_s: float, warnings: list[str], firmware: str) -> dict:
+                 instructions: list[int], host_time_s: float, warnings: list[str], firmware: str,
+                 device_writes: dict[str, list[int]]) -> dict:
     return {
         "exit": exit_kind,
         "message": message,
@@ -55,6 +56,7 @@ def summary_dict(exit_kind: str, message: str, frames: list[FrameRecord], virtua
         "virtual_time_s": virtual_time_s,
         "instructions": instructions,
         "host_time_s": host_time_s,
+        "device_writes": device_writes,
         "frames": [asdict(f) for f in frames],
         "warnings": warnings,
     }

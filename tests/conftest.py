@@ -1,0 +1,58 @@
+"""Shared fixtures: the firmware is built once (by `make firmware`, which `make test` runs
+first) and one board-model run of it is shared by every test that looks at its output."""
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+FIRMWARE = ROOT / "build" / "firmware.elf"
+GOLDEN = ROOT / "tests" / "golden"
+GOLDEN_FRAMES = 4
+
+
+def run_emulator(*args: str, timeout: float = 600) -> subprocess.CompletedProcess:
+    """Runs `python -m emulator` exactly as a user would."""
+    return subprocess.run([sys.executable, "-m", "emulator", *args], cwd=ROOT, capture_output=True,
+                          text=True, timeout=timeout)
+
+
+@pytest.fixture(scope="session")
+def firmware() -> Path:
+    subprocess.run(["make", "-s", "build/firmware.elf"], cwd=ROOT, check=True)
+    return FIRMWARE
+
+
+@pytest.fixture(scope="session")
+def firmware_run(firmware, tmp_path_factory):
+    """One run of the firmware for the golden frames, shared by the end-to-end tests."""
+    out = tmp_path_factory.mktemp("firmware_run")
+    result = run_emulator("run", str(firmware), "--frames", str(GOLDEN_FRAMES), "--out", str(out), "--quiet")
+    summary = json.loads((out / "run.json").read_text()) if (out / "run.json").exists() else None
+    return result, out, summary
+
+
+@pytest.fixture(scope="session")
+def assemble(tmp_path_factory):
+    """Assembles and links a small RV64GC program for SRAM at 0x8000_0000; returns the ELF path."""
+    folder = tmp_path_factory.mktemp("programs")
+    cache: dict[str, Path] = {}
+
+    def build(source: str) -> Path:
+        if source in cache:
+            return cache[source]
+        name = f"prog{len(cache)}"
+        (folder / f"{name}.S").write_text(source)
+        subprocess.run(["riscv64-unknown-elf-as", "-march=rv64gc", "-mabi=lp64d", "-o", str(folder / f"{name}.o"),
+                        str(folder / f"{name}.S")], check=True)
+        subprocess.run(["riscv64-unknown-elf-ld", "-Ttext=0x80000000", "--no-relax", "-N", "-o",
+                        str(folder / f"{name}.elf"), str(folder / f"{name}.o")], check=True)
+        cache[source] = folder / f"{name}.elf"
+        return cache[source]
+
+    return build

@@ -1,0 +1,164 @@
+"""End to end through the real command: build the firmware, boot it on the board model,
+and hold the first frames against the golden PNGs."""
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from conftest import GOLDEN, GOLDEN_FRAMES, ROOT, run_emulator
+
+sys.path.insert(0, str(ROOT))
+from tools.golden import compare  # noqa: E402
+
+BOOT_STAGES = ["boot: hart 0 up", "clocks:", "pins:", "lcd: ST7789V ready", "hart 1: display loop"]
+
+
+def test_run_succeeds_and_writes_its_outputs(firmware_run):
+    result, out, summary = firmware_run
+    assert result.returncode == 0, result.stderr
+    assert summary["exit"] == "ok"
+    assert len(summary["frames"]) == GOLDEN_FRAMES
+    for n in range(GOLDEN_FRAMES):
+        assert (out / f"frame_{n:04d}.png").exists()
+    animation = Image.open(out / "animation.png")
+    assert getattr(animation, "n_frames", 1) == GOLDEN_FRAMES
+    for frame in summary["frames"]:
+        assert set(frame) >= {"index", "virtual_time_s", "instructions", "host_time_s"}
+        assert len(frame["instructions"]) == 2
+    times = [f["virtual_time_s"] for f in summary["frames"]]
+    assert times == sorted(times) and times[0] > 0
+
+
+def test_console_has_a_line_per_boot_stage(firmware_run):
+    result, out, _ = firmware_run
+    console = (out / "console.log").read_text()
+    assert console == result.stdout or result.stdout == ""   # --quiet: the log still has it all
+    position = 0
+    for stage in BOOT_STAGES:
+        found = console.find(stage, position)
+        assert found >= 0, f"missing boot stage {stage!r} in:\n{console}"
+        position = found
+
+
+@pytest.mark.parametrize("index", range(GOLDEN_FRAMES))
+def test_frame_matches_golden(firmware_run, index, tmp_path):
+    _, out, _ = firmware_run
+    actual = out / f"frame_{index:04d}.png"
+    golden = GOLDEN / f"frame_{index:04d}.png"
+    assert golden.exists(), "no golden yet: run `make goldens` on purpose and review the images"
+    diff = tmp_path / f"diff_{index:04d}.png"
+    differing = compare(actual, golden, diff)
+    assert differing == 0, f"{differing} pixels differ from {golden}; diff image: {diff}"
+
+
+def _frame_number(path: Path) -> int:
+    """The test pattern writes the frame number in binary along the bottom 16 rows:
+    16 blocks of 20 pixels, white = 1, most significant bit on the left."""
+    image = np.asarray(Image.open(path).convert("RGB")).astype(int)
+    row = image[240 - 8]
+    bits = [1 if row[20 * b + 10].sum() > 600 else 0 for b in range(16)]
+    return int("".join(map(str, bits)), 2)
+
+
+def test_frames_arrive_in_order(firmware_run):
+    _, out, _ = firmware_run
+    numbers = [_frame_number(out / f"frame_{n:04d}.png") for n in range(GOLDEN_FRAMES)]
+    assert numbers == list(range(numbers[0], numbers[0] + GOLDEN_FRAMES))
+
+
+def test_both_harts_work_and_hart1_drives_the_display(firmware_run):
+    _, _, summary = firmware_run
+    writes = summary["device_writes"]
+    # after bring-up only hart 1 talks to the DMAC: every frame is started by hart 1
+    assert writes["DMAC"][1] >= GOLDEN_FRAMES
+    assert writes["SPI0"][1] >= GOLDEN_FRAMES
+    for frame in summary["frames"][1:]:
+        hart0, hart1 = frame["instructions"]
+        assert hart0 > 10_000, "hart 0 draws every frame"
+        assert hart1 > 0, "hart 1 sends every frame"
+
+
+def test_missing_firmware_is_bad_input(tmp_path):
+    result = run_emulator("run", str(tmp_path / "nope.elf"), "--out", str(tmp_path / "out"), "--quiet")
+    assert result.returncode == 6
+    assert "does not exist" in result.stderr
+    assert json.loads((tmp_path / "out" / "run.json").read_text())["exit"] == "bad-input"
+
+
+def test_not_an_elf_is_bad_input(tmp_path):
+    bogus = tmp_path / "bogus.elf"
+    bogus.write_bytes(b"this is not an ELF file")
+    result = run_emulator("run", str(bogus), "--out", str(tmp_path / "out"), "--quiet")
+    assert result.returncode == 6
+    assert "not a valid ELF" in result.stderr
+
+
+def test_unmodelled_access_names_hart_pc_instruction_address(assemble, tmp_path):
+    elf = assemble("""
+    .globl _start
+_start:
+    li t0, 0x50200000      # the slow GPIO block, not modelled
+    lw t1, 8(t0)
+1:  j 1b
+""")
+    result = run_emulator("run", str(elf), "--out", str(tmp_path), "--quiet", "--budget", "0.01")
+    assert result.returncode == 5, result.stderr
+    message = result.stderr
+    for part in ("hart 0", "pc 0x80000004", "lw", "load of 4 bytes", "0x50200008", "GPIO"):
+        assert part in message, message
+
+
+def test_trap_without_handler_is_a_trap(assemble, tmp_path):
+    elf = assemble("""
+    .globl _start
+_start:
+    .word 0xffffffff
+""")
+    result = run_emulator("run", str(elf), "--out", str(tmp_path), "--quiet")
+    assert result.returncode == 3, result.stderr
+    assert "illegal instruction" in result.stderr and "mtvec" in result.stderr
+
+
+def test_hang_is_reported(assemble, tmp_path):
+    elf = assemble("""
+    .globl _start
+_start:
+    csrr t0, mhartid
+1:  addi t1, t1, 1
+    j 1b
+""")
+    result = run_emulator("run", str(elf), "--out", str(tmp_path), "--quiet", "--budget", "0.02")
+    assert result.returncode == 4, result.stderr
+    assert "no frame reached the LCD" in result.stderr
+    assert "hart 0: running" in result.stderr
+
+
+def test_firmware_trap_handler_runs_then_run_stops(firmware, tmp_path):
+    """The project's firmware trap handler reports on the console before the board stops."""
+    import subprocess
+    trapping = tmp_path / "trap.elf"
+    # patch the firmware's first instruction after boot stages into an illegal one: use objcopy
+    # to copy, then overwrite the first word of pattern drawing with 0xffffffff
+    from elftools.elf.elffile import ELFFile
+    data = bytearray(firmware.read_bytes())
+    with firmware.open("rb") as handle:
+        elf = ELFFile(handle)
+        symbol = elf.get_section_by_name(".symtab").get_symbol_by_name("pattern_draw")
+        assert symbol, "pattern_draw symbol missing"
+        address = symbol[0]["st_value"]
+        offset = None
+        for segment in elf.iter_segments():
+            if segment["p_type"] == "PT_LOAD" and segment["p_vaddr"] <= address < segment["p_vaddr"] + segment["p_filesz"]:
+                offset = segment["p_offset"] + address - segment["p_vaddr"]
+    data[offset:offset + 4] = b"\xff\xff\xff\xff"
+    trapping.write_bytes(bytes(data))
+    result = run_emulator("run", str(trapping), "--out", str(tmp_path / "out"), "--quiet")
+    assert result.returncode == 3, result.stderr
+    console = (tmp_path / "out" / "console.log").read_text()
+    assert "trap: mcause=0x" in console and "mepc=0x" in console
+    assert f"0x{address:x}" in result.stderr
