@@ -147,7 +147,7 @@ class Board:
         self.gpiohs = Gpiohs(self)
         self.uarths = Uarths(self, on_byte=console)
         self.clint = Clint(self)
-        self.plic = Plic(self, source_level=self._source_level)
+        self.plic = Plic(self, high_sources=self._high_sources)
         self.dmac = Dmac(self)
         self.spi0 = SpiController(0, self)
         self.spi1 = SpiController(1, self)
@@ -178,6 +178,7 @@ class Board:
         self._split: list[tuple[int, int, int] | None] = [None] * HARTS
         self._widths: dict[int, int] = {}
         self.device_writes: dict[str, list[int]] = {}   # stores per device, per hart
+        self.host_time_in_harts = 0.0                     # host seconds spent executing guest code
         self._trap_report: str | None = None
         self._trap_deadline: float | None = None
         self.image: LoadedImage = load_elf(firmware, self.memory)
@@ -301,18 +302,19 @@ class Board:
 
     # --- interrupts --------------------------------------------------------------------
 
-    def _source_level(self, source: int) -> bool:
-        if source == SOURCE_SPI0:
-            return self.spi0.irq_line()
-        if source == SOURCE_SPI1:
-            return self.spi1.irq_line()
-        if SOURCE_DMA0 <= source < SOURCE_DMA0 + 6:
-            return self.dmac.irq_line(source - SOURCE_DMA0)
-        if source == SOURCE_UARTHS:
-            return self.uarths.irq_line()
-        if SOURCE_GPIOHS0 <= source < SOURCE_GPIOHS0 + 32:
-            return self.gpiohs.irq_line(source - SOURCE_GPIOHS0)
-        return False
+    def _high_sources(self) -> list[int]:
+        """PLIC sources whose interrupt line is high right now."""
+        high = []
+        if self.spi0.irq_line():
+            high.append(SOURCE_SPI0)
+        if self.spi1.irq_line():
+            high.append(SOURCE_SPI1)
+        high.extend(SOURCE_DMA0 + n for n in range(6) if self.dmac.irq_line(n))
+        if self.uarths.irq_line():
+            high.append(SOURCE_UARTHS)
+        lines = self.gpiohs.irq_lines()
+        high.extend(SOURCE_GPIOHS0 + n for n in range(32) if lines >> n & 1)
+        return high
 
     def mip(self, h: int, now: float) -> int:
         value = 0
@@ -530,6 +532,7 @@ class Board:
         self._current = hart
         self._quantum_t0 = t0
         self._quantum_start[hart.hart_id] = hart.executed
+        started = host_time.perf_counter()
         try:
             end, ran = hart.run(budget)
         except unicorn.UcError as error:
@@ -546,6 +549,7 @@ class Board:
                                               f"({disassemble_one(code, hart.pc)}): {error}")
         finally:
             self._current = None
+            self.host_time_in_harts += host_time.perf_counter() - started
         if self._stop is not None:
             return
         if end is RunEnd.WFI:

@@ -48,10 +48,13 @@ class Gpiohs(Peripheral):
         pulled = self.values[PUE] & ~self.values[PDE]
         return ((out & driven) | (pulled & ~driven)) & self.values[INPUT_EN] & MASK
 
+    def irq_lines(self) -> int:
+        """Bit n set: GPIOHS line n's interrupt (PLIC source 34 + n) is high."""
+        return ((self.values[RISE_IP] & self.values[RISE_IE]) | (self.values[FALL_IP] & self.values[FALL_IE])
+                | (self.values[HIGH_IP] & self.values[HIGH_IE]) | (self.values[LOW_IP] & self.values[LOW_IE]))
+
     def irq_line(self, line: int) -> bool:
-        pending = ((self.values[RISE_IP] & self.values[RISE_IE]) | (self.values[FALL_IP] & self.values[FALL_IE])
-                   | (self.values[HIGH_IP] & self.values[HIGH_IE]) | (self.values[LOW_IP] & self.values[LOW_IE]))
-        return bool(pending >> line & 1)
+        return bool(self.irq_lines() >> line & 1)
 
     def _sample_inputs(self) -> None:
         now_in = self.input_value()

@@ -9,7 +9,7 @@ the source can pend again only after its id is written back to complete.
 """
 from __future__ import annotations
 
-from typing import Callable
+from typing import Callable, Iterable
 
 from .mmio import Peripheral, Register
 
@@ -41,16 +41,16 @@ class Plic(Peripheral):
         **{CLAIM + CONTEXT_STRIDE * c: Register(f"claim{c}") for c in range(CONTEXTS)},
     }
 
-    def __init__(self, board=None, source_level: Callable[[int], bool] | None = None) -> None:
+    def __init__(self, board=None, high_sources: Callable[[], Iterable[int]] | None = None) -> None:
         super().__init__(board)
-        self.source_level = source_level or (lambda source: False)
+        self.high_sources = high_sources or (lambda: ())
         self.pending: set[int] = set()
         self.in_service: set[int] = set()
 
     def sample(self) -> None:
         """Gateways: latch a pending bit for each high source line not being served."""
-        for source in range(1, SOURCES):
-            if source not in self.in_service and source not in self.pending and self.source_level(source):
+        for source in self.high_sources():
+            if source not in self.in_service:
                 self.pending.add(source)
 
     def _enabled(self, context: int, source: int) -> bool:

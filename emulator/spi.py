@@ -297,8 +297,12 @@ class SpiController(Peripheral):
         train = self._train
         if train is None:
             return None
-        times = [train.end()]
-        if train.count - train.started(now) >= FIFO_DEPTH:
+        dma_left = self.tx_dma.remaining() if self.tx_dma is not None else 0
+        # under DMA the train runs on until the block's last frame is out
+        times = [train.end() + dma_left * train.period]
+        if self.tx_dma is None and train.count - train.started(now) >= FIFO_DEPTH:
+            # a CPU waiting for room in a full FIFO can go on when the next frame starts
+            # (under DMA the slots are the DMA's business and nobody waits on them)
             times.append(train.start + (train.count - FIFO_DEPTH) * train.period)
         if self.tx_dma is not None and self.tx_dma.remaining():
             times.append(self._dma_push_time(train.count + self.tx_dma.remaining() - 1))
