@@ -104,7 +104,7 @@ boot_release_hart1:
     amoswap.w.rl zero, t1, (t0)
     fence                               # the word is visible before the IPI
     li      t0, CLINT_MSIP + (1 << CLINT_MSIP_SHIFT)
-    li      t1, 1
+    li      t1, CLINT_MSIP_RAISE
     sw      t1, 0(t0)
     ret
 

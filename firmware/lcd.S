@@ -238,7 +238,7 @@ lcd_send_frame:
     .globl lcd_error_screen
 # lcd_error_screen
 #   What: fills the whole screen with solid red by a polled SPI transfer,
-#         after stopping any DMA in flight. For the trap handler: needs no
+#         after letting any DMA in flight finish. For the trap handler: needs no
 #         framebuffer, no interrupts, no delays. Does nothing if the LCD
 #         was never brought up.
 #   Arguments: none. Results: none.
@@ -250,7 +250,7 @@ lcd_error_screen:
     beqz    t0, 1f
     addi    sp, sp, -16
     sd      ra, 8(sp)
-    call    dma_stop
+    call    dma_quiesce
     call    lcd_begin_full_frame
     li      a0, LCD_ERROR_WORD
     li      a1, LCD_FB_WORDS

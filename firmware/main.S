@@ -16,6 +16,8 @@
 # a signal sent after the read leaves msip pending and WFI falls through, so
 # no wake-up is lost. Both walk the buffers in the same order (0, 1, 0, ...),
 # so frames reach the LCD in the order they were drawn.
+# A trap on either hart raises halt_request (trap.S): a waiting hart then
+# leaves its loop, hart 1 painting the error screen on the way out.
 
     .option norelax
     .include "k210.inc"
@@ -35,6 +37,8 @@ main_hart0:
     mv      a0, s0
     call    console_init
 
+    call    console_lock                # hart 1 is parked, but a trap in here must
+                                        # see that a line was cut short
     la      a0, msg_boot
     call    console_puts
     la      a0, msg_clocks_pll0
@@ -49,12 +53,13 @@ main_hart0:
     call    console_puts
     la      a0, msg_pins
     call    console_puts
+    call    console_unlock
 
     mv      a0, s0
     call    lcd_init
     call    dma_init
     la      a0, msg_lcd
-    call    console_puts
+    call    console_line
 
     call    boot_release_hart1
 
@@ -63,6 +68,7 @@ main_hart0:
     mv      a0, s3
     li      a1, FB_FREE
     call    fb_wait_state
+    bnez    a0, trap_park
     mv      a0, s3
     call    fb_address
     mv      a1, s2
@@ -73,7 +79,7 @@ main_hart0:
     sd      s2, 0(t1)
     mv      a0, s3
     li      a1, FB_FULL
-    li      a2, 1                       # tell hart 1
+    li      a2, 1                       # tell hart 1 (the display hart)
     call    fb_set_state
     addi    s2, s2, 1
     j       1b
@@ -94,6 +100,7 @@ main_hart1:
     mv      a0, s3
     li      a1, FB_FULL
     call    fb_wait_state
+    bnez    a0, 2f
     slli    t0, s3, 3
     la      t1, fb_frame
     add     t1, t1, t0
@@ -111,6 +118,10 @@ main_hart1:
     addi    s2, s2, 1
     j       1b
 
+    # Hart 0 trapped: it no longer draws and leaves SPI0 to this hart.
+2:  call    lcd_error_screen
+    j       trap_park
+
 # fb_address (file-local)
 #   What: address of framebuffer a0.
 #   Arguments: a0 = buffer index (0 or 1).
@@ -126,9 +137,10 @@ fb_address:
 # fb_wait_state (file-local)
 #   What: sleeps until buffer a0's state word equals a1, woken by this hart's
 #         CLINT software interrupt. Acquire: what the other hart wrote before
-#         setting the state is visible after return.
+#         setting the state is visible after return. Gives up when a trap
+#         on the other hart has raised halt_request.
 #   Arguments: a0 = buffer index, a1 = wanted state.
-#   Results: none.
+#   Results: a0 = 0 when the state was reached, 1 when halted.
 #   Clobbers: only ABI temporaries. Leaves this hart's msip clear.
 fb_wait_state:
     slli    t0, a0, 2
@@ -140,14 +152,21 @@ fb_wait_state:
     add     t2, t2, t3                  # t2 = &msip[this hart]
     li      t4, MIE_MSIE
     csrs    mie, t4
+    la      t5, halt_request
 1:  sw      zero, 0(t2)
-    fence                               # the clear lands before the state read
+    fence                               # the clear lands before the reads
+    lw      t3, 0(t5)
+    bnez    t3, 3f
     lw      t3, 0(t1)
     beq     t3, a1, 2f
     wfi
     j       1b
 2:  fence   r, rw
     csrc    mie, t4
+    li      a0, 0
+    ret
+3:  csrc    mie, t4
+    li      a0, 1
     ret
 
 # fb_set_state (file-local)
@@ -166,7 +185,7 @@ fb_set_state:
     slli    t2, a2, CLINT_MSIP_SHIFT
     li      t3, CLINT_MSIP
     add     t2, t2, t3
-    li      t3, 1
+    li      t3, CLINT_MSIP_RAISE
     sw      t3, 0(t2)
     ret
 

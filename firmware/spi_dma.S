@@ -285,17 +285,26 @@ spi0_dma_send_words:
     addi    sp, sp, 32
     ret
 
-    .globl dma_stop
-# dma_stop
-#   What: stops DMAC channel 0 and SPI0's DMA requests wherever they are, so
-#         the trap handler can take SPI0 over for a polled transfer.
+    .globl dma_quiesce
+# dma_quiesce
+#   What: brings DMAC channel 0 and SPI0 to rest wherever they are, so the
+#         trap handler can take SPI0 over for a polled transfer. A block in
+#         flight is let finish (it ends by itself within one frame time);
+#         only if it never does is the channel switched off by force.
 #   Arguments: none. Results: none.
 #   Clobbers: only ABI temporaries.
-dma_stop:
+    .equ DMA_QUIESCE_POLLS,     1 << 24     # far longer than one frame's DMA
+dma_quiesce:
     li      t0, DMAC_BASE
+    li      t2, DMA_QUIESCE_POLLS
+1:  ld      t1, DMAC_CHEN(t0)
+    andi    t1, t1, DMAC_CHEN_CH0
+    beqz    t1, 2f
+    addi    t2, t2, -1
+    bnez    t2, 1b
     li      t1, DMAC_CHEN_WE_CH0
     sd      t1, DMAC_CHEN(t0)
-    li      t0, SPI0_BASE
+2:  li      t0, SPI0_BASE
     sw      zero, SPI_DMACR(t0)
     sw      zero, SPI_SER(t0)
     sw      zero, SPI_SSIENR(t0)

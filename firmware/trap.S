@@ -1,8 +1,15 @@
 # trap.S: the machine-mode trap handler (mtvec, direct mode).
 #
 # The firmware never enables mstatus.MIE, so any trap is a fault: the handler
-# saves the registers, reports the trap on UARTHS, paints the screen red if
-# the LCD is up, and parks the hart. It never returns.
+# saves the registers, reports the trap on UARTHS, has the screen painted
+# red if the LCD is up, and parks the hart. It never returns.
+#
+# Who paints: SPI0 must have one user at a time. Once hart 1 runs the display
+# loop it owns SPI0, so a trap on hart 0 after the release only raises
+# halt_request and hart 1's msip; hart 1 finishes the frame it is sending,
+# sees the request in its wait and paints the error screen itself. A trap on
+# hart 1, or on hart 0 before the release, paints directly. Either way
+# halt_request also stops the other hart's frame loop.
 #
 # mscratch holds this hart's trap save area (set by boot.S; the top
 # TRAP_FRAME_SIZE bytes of its stack region), so the handler does not trust
@@ -85,16 +92,17 @@ trap_entry:
     lwu     a0, 0(t0)
     call    console_init
 1:
-    # Take the console unless this hart already holds it (a fault inside
-    # its own console output): then just keep printing.
+    # Take the console, unless this hart already holds it (the fault hit
+    # its own console output): then end the half-printed line and go on.
     la      t0, console_owner
     lw      t0, 0(t0)
     addi    t1, s4, 1
-    beq     t0, t1, 2f
-    call    console_lock
-2:
-    li      a0, '\n'                    # finish whatever line was interrupted
+    bne     t0, t1, 2f
+    li      a0, '\n'
     call    console_putc
+    j       3f
+2:  call    console_lock
+3:
     la      a0, msg_trap_mcause
     call    console_puts
     mv      a0, s1
@@ -120,23 +128,46 @@ trap_entry:
     slli    t0, s1, 1
     srli    t0, t0, 1                   # t0 = cause code without the interrupt bit
     la      t1, exception_names
-    bgez    s1, 3f
+    bgez    s1, 4f
     la      t1, interrupt_names
-3:  li      t2, MCAUSE_CODE_NAMED
+4:  li      t2, MCAUSE_CODE_NAMED
     la      a0, msg_cause_unknown
-    bgeu    t0, t2, 4f
+    bgeu    t0, t2, 5f
     slli    t0, t0, 3
     add     t1, t1, t0
     ld      t1, 0(t1)
-    beqz    t1, 4f
+    beqz    t1, 5f
     mv      a0, t1
-4:  call    console_puts
+5:  call    console_puts
     li      a0, '\n'
     call    console_putc
     call    console_unlock
 
-    call    lcd_error_screen
+    # Stop the other hart's frame loop and wake it so it sees the request.
+    la      t0, halt_request
+    li      t1, 1
+    amoswap.w.rl zero, t1, (t0)
+    fence
+    xori    t0, s4, OTHER_HART_XOR
+    slli    t0, t0, CLINT_MSIP_SHIFT
+    li      t1, CLINT_MSIP
+    add     t0, t0, t1
+    li      t1, CLINT_MSIP_RAISE
+    sw      t1, 0(t0)
 
+    # Paint here unless hart 1 is running the display loop and will do it.
+    bnez    s4, 6f
+    la      t0, boot_release
+    lw      t0, 0(t0)
+    li      t1, BOOT_RELEASE_MAGIC
+    beq     t0, t1, trap_park
+6:  call    lcd_error_screen
+
+    .globl trap_park
+# trap_park
+#   What: stops this hart for good: interrupts masked, WFI forever.
+#   Arguments: none. Results: never returns.
+#   Clobbers: nothing that matters any more.
 trap_park:
     csrci   mstatus, MSTATUS_MIE
     csrw    mie, zero
@@ -185,3 +216,13 @@ interrupt_names:
     .dword  0, msg_int_5, 0, msg_int_7
     .dword  0, msg_int_9, 0, msg_int_11
     .dword  0, 0, 0, 0
+
+# ---------------------------------------------------------------------------
+    .data
+    .balign 4
+    .globl halt_request
+# halt_request: 0 normally; 1 once a hart has trapped (frame loops stop and
+# the display hart paints the error screen). In .data: valid before .bss
+# clearing.
+halt_request:
+    .word   0

@@ -162,3 +162,8 @@ def test_firmware_trap_handler_runs_then_run_stops(firmware, tmp_path):
     console = (tmp_path / "out" / "console.log").read_text()
     assert "trap: mcause=0x" in console and "mepc=0x" in console
     assert f"0x{address:x}" in result.stderr
+    # the handler painted the error screen: the last frame the LCD showed is solid red
+    frames = sorted((tmp_path / "out").glob("frame_*.png"))
+    assert frames, "the trap handler painted no error screen"
+    error_screen = np.asarray(Image.open(frames[-1]).convert("RGB"))
+    assert (error_screen == (255, 0, 0)).all()
