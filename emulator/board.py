@@ -133,8 +133,9 @@ class Board:
                  hang_budget_s: float = DEFAULT_HANG_BUDGET_S,
                  console: Callable[[int], None] | None = None,
                  on_frame: Callable[[FrameRecord, np.ndarray], None] | None = None,
-                 on_warning: Callable[[str], None] | None = None) -> None:
+                 on_warning: Callable[[str], None] | None = None, permissive: bool = False) -> None:
         self.quantum = quantum
+        self.permissive = permissive   # unimplemented registers of modelled devices warn instead of stopping
         self.hang_budget_s = hang_budget_s
         self.on_frame = on_frame or (lambda record, image: None)
         self.on_warning = on_warning or (lambda text: None)
@@ -353,11 +354,18 @@ class Board:
         return (f"hart {hart.hart_id} at pc 0x{pc:08x}{where} ({disassemble_one(code, pc)}): "
                 f"{direction} of {size} bytes at 0x{address:08x}")
 
+    def _is_device(self, address: int) -> bool:
+        return any(p.BASE <= address < p.BASE + p.SIZE for p in self.peripherals)
+
     @staticmethod
     def _is_sram(address: int) -> bool:
         return SRAM_BASE <= address < SRAM_BASE + SRAM_SIZE or SRAM_UNCACHED_BASE <= address < SRAM_UNCACHED_BASE + SRAM_SIZE
 
     def _fail(self, hart: Hart, error: BoardStop, address: int, size: int, direction: str) -> None:
+        if self.permissive and isinstance(error, UnmodelledAccess) and self._is_device(address):
+            self.warn(f"{self._describe_access(hart, address, size, direction)}: {error.args[0]} "
+                      f"(permissive: loads read 0, stores are ignored)")
+            return
         if self._stop is None:
             error.args = (f"{self._describe_access(hart, address, size, direction)}: {error.args[0]}",)
             self._stop = error

@@ -32,6 +32,9 @@ def build_parser() -> argparse.ArgumentParser:
                      help="virtual seconds allowed between frames before the run counts as hung (default 5)")
     run.add_argument("--quantum", type=int, default=20_000, help="instructions per hart per turn (default 20000)")
     run.add_argument("--quiet", action="store_true", help="do not echo the console or show progress")
+    run.add_argument("--permissive", action="store_true",
+                     help="an access to a register a modelled device does not implement warns (loads read 0, "
+                          "stores are ignored) instead of stopping the run; addresses no device claims still stop it")
     return parser
 
 
@@ -68,7 +71,7 @@ def main(argv: list[str] | None = None) -> int:
     board = None
     try:
         board = Board(args.firmware, quantum=args.quantum, hang_budget_s=args.budget, console=console,
-                      on_frame=output.frame, on_warning=warning)
+                      on_frame=output.frame, on_warning=warning, permissive=args.permissive)
         result = board.run(args.frames, progress=None if args.quiet or not sys.stderr.isatty() else _progress)
         status, kind, message = EXIT_OK, "ok", result.message
     except BoardStop as stop:

@@ -167,3 +167,27 @@ def test_firmware_trap_handler_runs_then_run_stops(firmware, tmp_path):
     assert frames, "the trap handler painted no error screen"
     error_screen = np.asarray(Image.open(frames[-1]).convert("RGB"))
     assert (error_screen == (255, 0, 0)).all()
+
+
+UNKNOWN_REGISTER_PROGRAM = """
+    .globl _start
+_start:
+    li t0, 0x38000000      # UARTHS
+    lw t1, 0x20(t0)        # no such register
+1:  j 1b
+"""
+
+
+def test_unknown_register_stops_a_strict_run(assemble, tmp_path):
+    result = run_emulator("run", str(assemble(UNKNOWN_REGISTER_PROGRAM)), "--out", str(tmp_path), "--quiet",
+                          "--budget", "0.01")
+    assert result.returncode == 5, result.stderr
+    assert "UARTHS has no register at offset 0x20" in result.stderr
+
+
+def test_permissive_run_warns_and_goes_on(assemble, tmp_path):
+    result = run_emulator("run", str(assemble(UNKNOWN_REGISTER_PROGRAM)), "--out", str(tmp_path), "--quiet",
+                          "--budget", "0.01", "--permissive")
+    assert result.returncode == 4, result.stderr   # it went on, and then never drew a frame
+    warnings = json.loads((tmp_path / "run.json").read_text())["warnings"]
+    assert any("UARTHS has no register at offset 0x20" in w and "permissive" in w for w in warnings)
