@@ -27,12 +27,14 @@ from .clint import Clint
 from .disasm import disassemble_one
 from .dmac import Dmac
 from .elf import RESET_PC, LoadedImage, load_elf, symbolize
-from .errors import BoardStop, FirmwareTrap, HangDetected, HardwareMisuse, UnmodelledAccess
-from .fpioa import FUNC_GPIOHS0, FUNC_SPI0_SCLK, FUNC_SPI0_SS0, Fpioa
+from .errors import BoardStop, FirmwareReportedError, FirmwareTrap, HangDetected, HardwareMisuse, UnmodelledAccess
+from .fpioa import (FUNC_GPIOHS0, FUNC_SPI0_SCLK, FUNC_SPI0_SS0, FUNC_SPI1_D0, FUNC_SPI1_D1, FUNC_SPI1_SCLK,
+                    FUNC_SPI1_SS0, Fpioa)
 from .gpiohs import Gpiohs
 from .hart import CsrContext, Hart, HartState, RunEnd
 from .memory import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE, Sram
 from .mmio import Peripheral
+from .sdcard import SdCard, SdImage
 from .plic import SOURCE_DMA0, SOURCE_GPIOHS0, SOURCE_SPI0, SOURCE_SPI1, SOURCE_UARTHS, Plic
 from .spi import SpiController
 from .st7789v import ST7789V
@@ -48,6 +50,10 @@ MTIME_DIVIDER = 50                # mtime ticks at CPU clock / 50
 
 # Maix Dock pads
 PAD_LCD_CS, PAD_LCD_RST, PAD_LCD_DC, PAD_LCD_SCLK = 36, 37, 38, 39
+PAD_SD_MISO, PAD_SD_SCLK, PAD_SD_MOSI, PAD_SD_CS = 26, 27, 28, 29
+SD_IDENTIFICATION_MAX_HZ = 400_000
+SD_DEFAULT_SPEED_MAX_HZ = 25_000_000
+FIRMWARE_ERROR_PREFIX = b"error "
 
 # Blocks of the K210 the model knows by name but does not implement (for clear messages)
 KNOWN_UNMODELLED = [
@@ -126,6 +132,49 @@ class LcdPort:
         return np.zeros(len(data), dtype=np.uint8)
 
 
+class SdSlot:
+    """The Dock's micro SD slot on SPI1: MISO, clock and MOSI through FPIOA (pads 26-28),
+    chip select on pad 29 as SPI1's own slave select or as a GPIOHS line."""
+
+    def __init__(self, board: "Board", card: SdCard) -> None:
+        self.board = board
+        self.card = card
+        self._warned_clock = False
+
+    def cs_is_gpiohs(self) -> bool:
+        function = self.board.fpioa.function_of_pad(PAD_SD_CS)
+        return FUNC_GPIOHS0 <= function < FUNC_GPIOHS0 + 32
+
+    def spi_select(self, selected: bool, now: float) -> None:
+        if not self.cs_is_gpiohs():
+            self.card.set_selected(selected, now)
+
+    def gpio_changed(self, now: float) -> None:
+        if self.cs_is_gpiohs():
+            level = self.board.gpiohs_level_on_pad(PAD_SD_CS)
+            self.card.set_selected(level == 0, now)
+
+    def spi_transfer(self, data: np.ndarray, lanes: int, now: float) -> np.ndarray:
+        fpioa = self.board.fpioa
+        if fpioa.function_of_pad(PAD_SD_SCLK) != FUNC_SPI1_SCLK or fpioa.function_of_pad(PAD_SD_MOSI) != FUNC_SPI1_D0:
+            return np.full(len(data), 0xFF, dtype=np.uint8)   # the card sees no clock or no data
+        if lanes != 1:
+            raise HardwareMisuse(f"SPI1 talks to the SD card in a {lanes}-line format; SPI mode uses one data line")
+        self._check_clock()
+        reply = self.card.exchange(data, now)
+        if fpioa.function_of_pad(PAD_SD_MISO) != FUNC_SPI1_D1:
+            return np.full(len(data), 0xFF, dtype=np.uint8)   # nothing routes the card's answer back
+        return reply
+
+    def _check_clock(self) -> None:
+        hz = self.board.spi1.sclk_hz()
+        limit = SD_DEFAULT_SPEED_MAX_HZ if self.card.initialised else SD_IDENTIFICATION_MAX_HZ
+        if hz > limit * 1.0001 and not self._warned_clock:
+            self._warned_clock = True
+            phase = "in default speed mode" if self.card.initialised else "before initialisation completes"
+            self.board.warn(f"SD card clocked at {hz / 1e6:.3f} MHz {phase} (the card allows {limit / 1e6:g} MHz)")
+
+
 class Board:
     """A Maix Dock running one firmware image."""
 
@@ -133,7 +182,8 @@ class Board:
                  hang_budget_s: float = DEFAULT_HANG_BUDGET_S,
                  console: Callable[[int], None] | None = None,
                  on_frame: Callable[[FrameRecord, np.ndarray], None] | None = None,
-                 on_warning: Callable[[str], None] | None = None, permissive: bool = False) -> None:
+                 on_warning: Callable[[str], None] | None = None, permissive: bool = False,
+                 sd_image: str | None = None, sd_writable: bool = False) -> None:
         self.quantum = quantum
         self.permissive = permissive   # unimplemented registers of modelled devices warn instead of stopping
         self.hang_budget_s = hang_budget_s
@@ -146,7 +196,9 @@ class Board:
         self.sysctl = Sysctl(self)
         self.fpioa = Fpioa(self)
         self.gpiohs = Gpiohs(self)
-        self.uarths = Uarths(self, on_byte=console)
+        self._console = console or (lambda byte: None)
+        self._console_line = bytearray()
+        self.uarths = Uarths(self, on_byte=self._console_byte)
         self.clint = Clint(self)
         self.plic = Plic(self, high_sources=self._high_sources)
         self.dmac = Dmac(self)
@@ -158,7 +210,9 @@ class Board:
         self.lcd = ST7789V(on_frame=self._frame_captured)
         self.lcd_port = LcdPort(self, self.lcd)
         self.spi0.device_for_ss = self._spi0_device
-        self.spi1.device_for_ss = lambda ss: None
+        self.sd_image = SdImage(sd_image, writable=sd_writable) if sd_image else None
+        self.sd_slot = SdSlot(self, SdCard(self.sd_image, warn=self.warn)) if self.sd_image else None
+        self.spi1.device_for_ss = self._spi1_device
         self._lcd_reset_level = 1
         # clock epochs: cycles and mtime are integrals of the CPU clock over virtual time
         self._epoch_time = 0.0
@@ -181,6 +235,7 @@ class Board:
         self.device_writes: dict[str, list[int]] = {}   # stores per device, per hart
         self.host_time_in_harts = 0.0                     # host seconds spent executing guest code
         self._trap_report: str | None = None
+        self._error_report: tuple[int, str] | None = None
         self._trap_deadline: float | None = None
         self.image: LoadedImage = load_elf(firmware, self.memory)
         if self.image.entry != RESET_PC:
@@ -256,6 +311,16 @@ class Board:
             return self.lcd_port
         return None
 
+    def _spi1_device(self, ss: int):
+        """The SD slot answers on SPI1 when pad 29 carries SPI1's slave select ss, or a GPIOHS
+        line (then the card itself decides, from that line, whether it is selected)."""
+        if self.sd_slot is None:
+            return None
+        function = self.fpioa.function_of_pad(PAD_SD_CS)
+        if function == FUNC_SPI1_SS0 + ss or self.sd_slot.cs_is_gpiohs():
+            return self.sd_slot
+        return None
+
     def gpiohs_level_on_pad(self, pad: int) -> int | None:
         function = self.fpioa.function_of_pad(pad)
         if FUNC_GPIOHS0 <= function < FUNC_GPIOHS0 + 32:
@@ -271,6 +336,8 @@ class Board:
             self.lcd.set_reset_pin(level, now)
         self.spi0.wiring_changed(now)
         self.spi1.wiring_changed(now)
+        if self.sd_slot is not None:
+            self.sd_slot.gpio_changed(now)
 
     def spi_by_name(self, name: str) -> SpiController:
         return {"spi0": self.spi0, "spi1": self.spi1}[name]
@@ -295,6 +362,26 @@ class Board:
             hart.uc.mmio_unmap(fresh.BASE, fresh.SIZE)
             hart.uc.mmio_map(fresh.BASE, fresh.SIZE, self._mmio_reader(hart, fresh), None,
                              self._mmio_writer(hart, fresh), None)
+
+    def _console_byte(self, byte: int) -> None:
+        """Console output; a line `error <code> ...` is the firmware's fatal error report."""
+        self._console(byte)
+        if byte != 10:
+            self._console_line.append(byte)
+            return
+        line = bytes(self._console_line).rstrip(b"\r")
+        self._console_line.clear()
+        if line.startswith(FIRMWARE_ERROR_PREFIX) and self._error_report is None:
+            words = line.decode("ascii", "replace")
+            code = words.split()[1] if len(words.split()) > 1 else ""
+            if code.isdigit():
+                self._error_report = (int(code), words)
+                self._trap_deadline = self.time + TRAP_GRACE_S
+
+    def close(self) -> None:
+        """Releases the SD card image (flushing it when writes were allowed)."""
+        if self.sd_image is not None:
+            self.sd_image.close()
 
     def warn(self, text: str) -> None:
         line = f"[{self.time * 1e3:10.3f} ms] {text}"
@@ -602,7 +689,10 @@ class Board:
             everyone_waits = all(h.state is not HartState.RUNNING for h in self.harts) and \
                 self.next_device_event(self.time) is None
             if self.time >= self._trap_deadline or everyone_waits:
-                raise FirmwareTrap(self._trap_report + " (the firmware's trap handler has run; see the console)")
+                if self._trap_report is not None:
+                    raise FirmwareTrap(self._trap_report + " (the firmware's trap handler has run; see the console)")
+                code, line = self._error_report
+                raise FirmwareReportedError(f"the firmware reported: {line}", code)
         if self.time - self._last_frame_time > self.hang_budget_s:
             self._report_hang(f"no frame reached the LCD for {self.hang_budget_s:g} s of virtual time")
 

@@ -16,6 +16,7 @@ EXIT_STATUS_HELP = """exit status:
   5  the firmware touched an address or register the model does not implement
   6  bad input: the firmware image is missing or not a RISC-V ELF
   7  hardware misuse: something the real K210 would not do (e.g. CPU on an unlocked PLL)
+  8  the firmware reported a fatal error on its console ("error <code> <words>")
 """
 
 
@@ -26,6 +27,9 @@ def build_parser() -> argparse.ArgumentParser:
     run = sub.add_parser("run", help="run a firmware ELF and capture the LCD's frames",
                          epilog=EXIT_STATUS_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
     run.add_argument("firmware", help="firmware ELF (linked for SRAM at 0x80000000)")
+    run.add_argument("--sd", metavar="IMAGE", help="SD card image in the Dock's slot (opened read-only: the "
+                     "firmware's writes are kept in memory for the run)")
+    run.add_argument("--sd-writable", action="store_true", help="let the firmware's writes reach the image file")
     run.add_argument("--frames", type=int, default=8, help="stop after this many frames reach the LCD (default 8)")
     run.add_argument("--out", default="build/frames", help="output folder (default build/frames)")
     run.add_argument("--budget", type=float, default=5.0,
@@ -71,7 +75,8 @@ def main(argv: list[str] | None = None) -> int:
     board = None
     try:
         board = Board(args.firmware, quantum=args.quantum, hang_budget_s=args.budget, console=console,
-                      on_frame=output.frame, on_warning=warning, permissive=args.permissive)
+                      on_frame=output.frame, on_warning=warning, permissive=args.permissive,
+                      sd_image=args.sd, sd_writable=args.sd_writable)
         result = board.run(args.frames, progress=None if args.quiet or not sys.stderr.isatty() else _progress)
         status, kind, message = EXIT_OK, "ok", result.message
     except BoardStop as stop:
@@ -81,6 +86,8 @@ def main(argv: list[str] | None = None) -> int:
         import traceback
         traceback.print_exc()
     sys.stdout.flush()
+    if board is not None:
+        board.close()
     frames = board.frames if board is not None else []
     summary = summary_dict(kind, message, frames, board.time if board else 0.0,
                            [h.instret for h in board.harts] if board else [0, 0],

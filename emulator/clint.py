@@ -33,6 +33,13 @@ class Clint(Peripheral):
     def timer_pending(self, hart: int, now: float) -> bool:
         return self.board.mtime(now) >= self.values[MTIMECMP + 8 * hart]
 
+    def write(self, offset: int, size: int, value: int, now: float) -> None:
+        if size == 4 and offset in (MTIME, MTIME + 4):
+            # a 32-bit store replaces one half of the running counter; the other half is
+            # what mtime holds now, not what was last written
+            self.values[MTIME] = self.board.mtime(now)
+        super().write(offset, size, value, now)
+
     def read_register(self, offset: int, reg: Register, now: float) -> int:
         if offset == MTIME:
             return self.board.mtime(now)

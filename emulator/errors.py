@@ -14,6 +14,7 @@ EXIT_HANG = 4
 EXIT_UNMODELLED = 5
 EXIT_BAD_INPUT = 6
 EXIT_MISUSE = 7
+EXIT_FIRMWARE_ERROR = 8
 
 
 class BoardStop(Exception):
@@ -58,3 +59,15 @@ class HardwareMisuse(BoardStop):
 
     exit_status = EXIT_MISUSE
     kind = "misuse"
+
+
+class FirmwareReportedError(BoardStop):
+    """The firmware reported a fatal error of its own on the console
+    (a line `error <code> <words>`), e.g. no SD card or a missing file."""
+
+    exit_status = EXIT_FIRMWARE_ERROR
+    kind = "firmware-error"
+
+    def __init__(self, message: str, code: int) -> None:
+        super().__init__(message)
+        self.code = code

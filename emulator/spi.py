@@ -282,6 +282,11 @@ class SpiController(Peripheral):
     def tx_level(self, now: float) -> int:
         """txflr: frames in the FIFO that have not started shifting out."""
         held = len(self._held)
+        if self.tmod == TMOD_RX:
+            # receive-only: the frames on the wire are clocks, not transmit data; the dummy
+            # word that starts them leaves the FIFO at once (it waits there only while no
+            # slave is selected)
+            return 1 if held else 0
         train = self._train
         if train is None:
             return min(held, FIFO_DEPTH)
@@ -293,19 +298,35 @@ class SpiController(Peripheral):
 
     def next_event_time(self, now: float) -> float | None:
         """The next moment software can see a change: the TX DMA block completing, a slot
-        freeing in a full FIFO, the wire going idle."""
+        freeing in a full FIFO, a received frame changing the receive FIFO's status, the
+        wire going idle."""
         train = self._train
         if train is None:
             return None
         dma_left = self.tx_dma.remaining() if self.tx_dma is not None else 0
         # under DMA the train runs on until the block's last frame is out
         times = [train.end() + dma_left * train.period]
-        if self.tx_dma is None and train.count - train.started(now) >= FIFO_DEPTH:
+        if self.tx_dma is None and self.tmod != TMOD_RX and train.count - train.started(now) >= FIFO_DEPTH:
             # a CPU waiting for room in a full FIFO can go on when the next frame starts
             # (under DMA the slots are the DMA's business and nobody waits on them)
             times.append(train.start + (train.count - FIFO_DEPTH) * train.period)
         if self.tx_dma is not None and self.tx_dma.remaining():
             times.append(self._dma_push_time(train.count + self.tx_dma.remaining() - 1))
+        if self.tmod in (TMOD_TX_RX, TMOD_RX) and not (self.rx_dma is not None and self.values[DMACR] & DMACR_RDMAE):
+            # a CPU reading the receive FIFO sees it change when frames arrive: the first one
+            # into an empty FIFO (RFNE), the one that lifts the level above rxftlr (RXF), the
+            # one that fills it (RFF) and the one that overflows it (RXO)
+            done = train.finished(now)
+            level = len(self._rx)
+            threshold = self.values[RXFTLR] & 0x1F
+            wanted = [FIFO_DEPTH - level if level < FIFO_DEPTH else 1]
+            if level == 0:
+                wanted.append(1)
+            if level <= threshold:
+                wanted.append(threshold + 1 - level)
+            arrival = done + min(wanted)
+            if arrival <= train.count:
+                times.append(train.start + arrival * train.period)
         later = [t for t in times if t > now + EPSILON]
         return min(later) if later else None
 

@@ -1,0 +1,386 @@
+"""An SDHC card in SPI mode, backed by an image file, as the Dock's micro SD slot holds it.
+
+The card sees bytes on MOSI and answers on MISO, byte for byte, as the SD Physical
+Layer Simplified Specification describes SPI mode:
+
+- power-up: at least 74 clocks with CS high before the first command;
+- CMD0 (enter SPI mode, idle), CMD8 (interface condition, R7), CMD55 + ACMD41
+  (initialisation: the card stays idle until ACMD41 comes INIT_TIME_S after the
+  first one), CMD58 (OCR, R3: powered up, CCS = 1), CMD59 (CRC on/off), CMD9/CMD10
+  (CSD/CID as 16-byte data blocks), CMD13 (R2), CMD16 (block length; fixed 512 on
+  SDHC), CMD17/CMD18 (single/multiple block read, until CMD12), CMD24/CMD25
+  (single/multiple block write), CMD12 (stop: a stuff byte, R1, then busy);
+- Ncr: responses come NCR_BYTES bytes after the command; read data come NAC_BYTES
+  bytes after the response, as a 0xFE token, 512 bytes and their CRC16;
+- CRC7 is checked on CMD0 and CMD8 always, and on every command after CMD59(1);
+  a bad CRC answers R1 with the CRC-error bit and the command is not executed.
+  CRC16 of written blocks is checked while CRC checking is on;
+- any other command, or an application command without CMD55, answers R1 with
+  the illegal-command bit.
+
+Block addresses (CCS = 1). The image is opened read-only unless writes are asked
+for; then writes go to the file. Read-only, the card still accepts writes (it has
+no write-protect switch in SPI mode) but keeps them in memory for the run only,
+so the image on disk never changes.
+"""
+from __future__ import annotations
+
+import mmap
+from pathlib import Path
+
+import numpy as np
+
+from .errors import BadInput
+
+BLOCK = 512
+NCR_BYTES = 1            # bytes of 0xFF between a command and its response (spec: 1..8)
+NAC_BYTES = 8            # bytes of 0xFF between a read command's response and its data token
+STOP_BUSY_BYTES = 4      # busy (0x00) bytes after CMD12
+WRITE_BUSY_S = 250e-6    # programming time after a written block
+INIT_TIME_S = 10e-3      # initialisation time after the first ACMD41
+POWER_UP_CLOCKS = 74
+
+R1_IDLE, R1_ILLEGAL, R1_CRC, R1_ADDRESS, R1_PARAMETER = 0x01, 0x04, 0x08, 0x20, 0x40
+TOKEN_START, TOKEN_MULTI_WRITE, TOKEN_STOP_TRAN = 0xFE, 0xFC, 0xFD
+ERROR_TOKEN_OUT_OF_RANGE = 0x08
+DATA_ACCEPTED, DATA_CRC_ERROR = 0x05, 0x0B
+OCR_POWERED_UP, OCR_CCS, OCR_VOLTAGE = 1 << 31, 1 << 30, 0x00FF_8000
+
+
+def crc7(data: bytes) -> int:
+    """CRC7 (x^7 + x^3 + 1) of data, as the 7-bit value."""
+    crc = 0
+    for byte in data:
+        for bit in range(7, -1, -1):
+            feedback = ((byte >> bit) & 1) ^ ((crc >> 6) & 1)
+            crc = (crc << 1) & 0x7F
+            if feedback:
+                crc ^= 0x09
+    return crc
+
+
+_CRC16_TABLE = []
+for _n in range(256):
+    _c = _n << 8
+    for _ in range(8):
+        _c = ((_c << 1) ^ 0x1021) if _c & 0x8000 else (_c << 1)
+    _CRC16_TABLE.append(_c & 0xFFFF)
+_CRC16 = np.array(_CRC16_TABLE, dtype=np.uint16)
+
+
+def crc16(data: bytes) -> int:
+    """CRC16-CCITT (x^16 + x^12 + x^5 + 1, initial 0) as SD data blocks carry it."""
+    crc = 0
+    table = _CRC16_TABLE
+    for byte in data:
+        crc = ((crc << 8) & 0xFFFF) ^ table[(crc >> 8) ^ byte]
+    return crc
+
+
+def command_frame(index: int, argument: int) -> bytes:
+    """The 6-byte frame of a command, with its CRC7 (for tests and tools)."""
+    body = bytes([0x40 | index]) + argument.to_bytes(4, "big")
+    return body + bytes([(crc7(body) << 1) | 1])
+
+
+class SdImage:
+    """The card's storage: the image file, read-only unless `writable`."""
+
+    def __init__(self, path: str | Path, writable: bool = False) -> None:
+        path = Path(path)
+        if not path.is_file():
+            raise BadInput(f"SD card image {path} does not exist")
+        size = path.stat().st_size
+        if size == 0 or size % BLOCK:
+            raise BadInput(f"SD card image {path}: {size} bytes is not a whole number of 512-byte blocks "
+                           f"(truncated?)")
+        self.path = path
+        self.writable = writable
+        self._file = path.open("r+b" if writable else "rb")
+        self._map = mmap.mmap(self._file.fileno(), 0, access=mmap.ACCESS_WRITE if writable else mmap.ACCESS_READ)
+        self.blocks = size // BLOCK
+        self.overlay: dict[int, bytes] = {}
+        self._check_partitions()
+
+    def _check_partitions(self) -> None:
+        """A partition table that reaches past the end of the file means a truncated image."""
+        mbr = self._map[:BLOCK]
+        if mbr[510:512] != b"\x55\xaa":
+            return   # no MBR: a superfloppy or a blank card; the firmware will say what it thinks
+        for entry in range(4):
+            raw = mbr[446 + 16 * entry: 446 + 16 * (entry + 1)]
+            kind = raw[4]
+            first = int.from_bytes(raw[8:12], "little")
+            count = int.from_bytes(raw[12:16], "little")
+            if kind and count and first + count > self.blocks:
+                raise BadInput(f"SD card image {self.path} is truncated: partition {entry + 1} ends at block "
+                               f"{first + count}, the image has {self.blocks} blocks")
+
+    def read(self, block: int) -> bytes:
+        if block in self.overlay:
+            return self.overlay[block]
+        return self._map[block * BLOCK:(block + 1) * BLOCK]
+
+    def write(self, block: int, data: bytes) -> None:
+        if self.writable:
+            self._map[block * BLOCK:(block + 1) * BLOCK] = data
+        else:
+            self.overlay[block] = bytes(data)
+
+    def close(self) -> None:
+        if self.writable:
+            self._map.flush()
+        self._map.close()
+        self._file.close()
+
+
+class SdCard:
+    """The card's SPI-mode state machine. `exchange` takes MOSI bytes and returns MISO bytes."""
+
+    def __init__(self, image: SdImage, warn=None) -> None:
+        self.image = image
+        self.warn = warn or (lambda text: None)
+        self.selected = False
+        self.spi_mode = False
+        self.initialised = False
+        self.init_started: float | None = None
+        self.crc_checking = False
+        self.app_command = False
+        self.powerup_clocks = 0
+        self._command = bytearray()
+        self._out = bytearray()
+        self._out_pos = 0
+        self._reading: int | None = None      # next block of a CMD18 stream
+        self._write_mode: str | None = None   # "single" or "multi" while a write command is active
+        self._write_buffer: bytearray | None = None
+        self._busy_until = 0.0
+        self.commands_seen: list[int] = []
+
+    # --- chip select ---------------------------------------------------------------
+
+    def set_selected(self, selected: bool, now: float) -> None:
+        if selected == self.selected:
+            return
+        self.selected = selected
+        if not selected:
+            # CS high: a half-received command is dropped and the card lets go of MISO
+            self._command.clear()
+
+    # --- byte exchange -------------------------------------------------------------------
+
+    def exchange(self, mosi: np.ndarray, now: float) -> np.ndarray:
+        """The card's answer to a run of bytes clocked while it is selected."""
+        if not self.selected:
+            self.powerup_clocks += 8 * len(mosi)
+            return np.full(len(mosi), 0xFF, dtype=np.uint8)
+        out = np.full(len(mosi), 0xFF, dtype=np.uint8)
+        i, n = 0, len(mosi)
+        while i < n:
+            if self._write_buffer is not None or (self._write_mode and not self._command):
+                out[i] = self._write_byte(int(mosi[i]), now)
+                i += 1
+                continue
+            pending = len(self._out) - self._out_pos
+            if pending and not self._command:
+                # bulk path: while the host only clocks 0xFF, stream what the card has to say
+                run = mosi[i:i + pending]
+                stops = np.flatnonzero(run != 0xFF)
+                take = int(stops[0]) if len(stops) else len(run)
+                if take:
+                    out[i:i + take] = np.frombuffer(bytes(self._out[self._out_pos:self._out_pos + take]), np.uint8)
+                    self._out_pos += take
+                    i += take
+                    self._refill_stream()
+                    continue
+            out[i] = self._next_out_byte(now)
+            self._command_byte(int(mosi[i]), now)
+            i += 1
+        return out
+
+    def _next_out_byte(self, now: float) -> int:
+        if self._out_pos < len(self._out):
+            byte = self._out[self._out_pos]
+            self._out_pos += 1
+            self._refill_stream()
+            return byte
+        return 0x00 if now < self._busy_until else 0xFF   # busy while programming a block
+
+    def _say(self, data: bytes) -> None:
+        if self._out_pos >= len(self._out):
+            self._out = bytearray()
+            self._out_pos = 0
+        self._out += data
+
+    def _refill_stream(self) -> None:
+        """A CMD18 stream keeps producing blocks as the host reads them."""
+        if self._reading is not None and len(self._out) - self._out_pos < BLOCK:
+            self._queue_block(self._reading)
+            if self._reading is not None:
+                self._reading += 1
+
+    def _queue_block(self, block: int) -> None:
+        if block >= self.image.blocks:
+            self._say(b"\xff" * NAC_BYTES + bytes([ERROR_TOKEN_OUT_OF_RANGE]))
+            self._reading = None
+            return
+        data = self.image.read(block)
+        self._say(b"\xff" * NAC_BYTES + bytes([TOKEN_START]) + data + crc16(data).to_bytes(2, "big"))
+
+    # --- commands ------------------------------------------------------------------------
+
+    def _command_byte(self, byte: int, now: float) -> None:
+        if not self._command:
+            if byte & 0xC0 != 0x40:
+                return   # not a command start: 0xFF while the host waits, or noise
+        self._command.append(byte)
+        if len(self._command) == 6:
+            frame = bytes(self._command)
+            self._command.clear()
+            self._execute(frame, now)
+
+    def _r1(self) -> int:
+        return 0 if self.initialised else R1_IDLE
+
+    def _execute(self, frame: bytes, now: float) -> None:
+        index = frame[0] & 0x3F
+        argument = int.from_bytes(frame[1:5], "big")
+        app = self.app_command
+        self.app_command = False
+        self.commands_seen.append(index + (100 if app else 0))
+        if not self.spi_mode and index != 0:
+            return   # in SD mode the card does not answer on these lines
+        if index == 12 and self._reading is not None:
+            # stop transmission: drop what was queued, one stuff byte, R1, busy
+            self._reading = None
+            self._out = bytearray()
+            self._out_pos = 0
+            self._say(b"\xff" + bytes([self._r1()]) + b"\x00" * STOP_BUSY_BYTES)
+            return
+        crc_ok = (crc7(frame[:5]) << 1 | 1) == frame[5]
+        if not self.spi_mode and not crc_ok:
+            return   # still in SD mode, where a command with a bad CRC gets no response
+        if (index in (0, 8) or self.crc_checking) and not crc_ok:
+            self._respond(self._r1() | R1_CRC)
+            return
+        if index == 0:
+            if not self.spi_mode and self.powerup_clocks < POWER_UP_CLOCKS:
+                self.warn(f"SD card: CMD0 after only {self.powerup_clocks} clocks with CS high "
+                          f"(the card needs at least {POWER_UP_CLOCKS} after power-up): ignored")
+                return
+            self.spi_mode = True
+            self.initialised = False
+            self.init_started = None
+            self._reading = None
+            self._respond(R1_IDLE)
+        elif index == 8:
+            if argument & 0xF00 != 0x100:
+                self._respond(self._r1(), (argument & 0xFF).to_bytes(4, "big"))   # voltage not accepted
+            else:
+                self._respond(self._r1(), (argument & 0xFFF).to_bytes(4, "big"))
+        elif index == 55:
+            self.app_command = True
+            self._respond(self._r1())
+        elif index == 41 and app:
+            if self.init_started is None:
+                self.init_started = now
+            if not argument & (1 << 30):
+                self._respond(self._r1())   # without HCS an SDHC card never leaves idle
+                return
+            if now - self.init_started >= INIT_TIME_S:
+                self.initialised = True
+            self._respond(self._r1())
+        elif index == 58:
+            ocr = OCR_VOLTAGE | (OCR_POWERED_UP | OCR_CCS if self.initialised else 0)
+            self._respond(self._r1(), ocr.to_bytes(4, "big"))
+        elif index == 59:
+            self.crc_checking = bool(argument & 1)
+            self._respond(self._r1())
+        elif not self.initialised and index in (9, 10, 12, 13, 16, 17, 18, 24, 25):
+            self._respond(R1_IDLE | R1_ILLEGAL)
+        elif index in (9, 10):
+            register = self._csd() if index == 9 else self._cid()
+            self._respond(0)
+            self._say(b"\xff" * NAC_BYTES + bytes([TOKEN_START]) + register + crc16(register).to_bytes(2, "big"))
+        elif index == 13:
+            self._respond(0, b"\x00")
+        elif index == 16:
+            self._respond(0 if argument <= BLOCK else R1_PARAMETER)
+        elif index in (17, 18):
+            if argument >= self.image.blocks:
+                self._respond(R1_PARAMETER)
+                return
+            self._respond(0)
+            self._queue_block(argument)
+            if index == 18:
+                self._reading = argument + 1
+        elif index in (24, 25):
+            if argument >= self.image.blocks:
+                self._respond(R1_PARAMETER)
+                return
+            self._respond(0)
+            self._write_mode = "single" if index == 24 else "multi"
+            self._write_block = argument
+        elif index == 12:
+            self._respond(0)
+        else:
+            self._respond(self._r1() | R1_ILLEGAL)
+
+    def _respond(self, r1: int, extra: bytes = b"") -> None:
+        self._say(b"\xff" * NCR_BYTES + bytes([r1]) + extra)
+
+    # --- writes ----------------------------------------------------------------------------
+
+    def _write_byte(self, byte: int, now: float) -> int:
+        busy = now < self._busy_until
+        reply = self._next_out_byte(now)
+        if self._write_buffer is None:
+            if busy:
+                return reply   # still programming the previous block: the host must wait
+            if byte == TOKEN_START and self._write_mode == "single" or byte == TOKEN_MULTI_WRITE and self._write_mode == "multi":
+                self._write_buffer = bytearray()
+            elif byte == TOKEN_STOP_TRAN and self._write_mode == "multi":
+                self._write_mode = None
+                self._busy_until = now + WRITE_BUSY_S
+            elif byte & 0xC0 == 0x40 and self._write_mode:
+                self._write_mode = None
+                self._command_byte(byte, now)
+            return reply
+        self._write_buffer.append(byte)
+        if len(self._write_buffer) < BLOCK + 2:
+            return reply
+        data = bytes(self._write_buffer[:BLOCK])
+        crc = int.from_bytes(self._write_buffer[BLOCK:], "big")
+        self._write_buffer = None
+        if self.crc_checking and crc != crc16(data):
+            self._say(bytes([DATA_CRC_ERROR]))
+            self._write_mode = None
+            return reply
+        self.image.write(self._write_block, data)
+        self._write_block += 1
+        self._say(bytes([DATA_ACCEPTED]))
+        self._busy_until = now + WRITE_BUSY_S
+        if self._write_mode == "single":
+            self._write_mode = None
+        return reply
+
+    # --- registers ---------------------------------------------------------------------------
+
+    def _csd(self) -> bytes:
+        """CSD version 2.0 (SDHC): capacity = (C_SIZE + 1) * 512 KiB."""
+        c_size = max(0, self.image.blocks // 1024 - 1)
+        csd = bytearray(16)
+        csd[0] = 0x40                      # CSD_STRUCTURE = 1
+        csd[1] = 0x0E                      # TAAC
+        csd[3] = 0x32                      # TRAN_SPEED: 25 MHz
+        csd[4], csd[5] = 0x5B, 0x59        # CCC, READ_BL_LEN = 9
+        csd[7] = (c_size >> 16) & 0x3F
+        csd[8] = (c_size >> 8) & 0xFF
+        csd[9] = c_size & 0xFF
+        csd[10], csd[11], csd[12], csd[13] = 0x7F, 0x80, 0x0A, 0x40
+        csd[15] = (crc7(bytes(csd[:15])) << 1) | 1
+        return bytes(csd)
+
+    def _cid(self) -> bytes:
+        cid = bytearray(b"\x00EMK210SD\x10\x00\x00\x00\x01\x01\x6a\x00")
+        cid[15] = (crc7(bytes(cid[:15])) << 1) | 1
+        return bytes(cid)

@@ -1,0 +1,160 @@
+"""Shared helpers for the peripheral and hart unit tests.
+
+Tiny RISC-V programs are assembled at test time (riscv64-unknown-elf-as/-ld,
+linked at 0x8000_0000) and cached for the whole session, so each distinct
+source is built once however many tests use it. Boards are built from those
+images; register-level tests then poke the peripheral objects directly with
+explicit virtual times, CPU-level tests step the board with `run_until`.
+"""
+from __future__ import annotations
+
+import hashlib
+import shutil
+import subprocess
+import tempfile
+import textwrap
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+import pytest
+from unicorn import riscv_const as rv
+
+from emulator.board import Board
+
+AS = "riscv64-unknown-elf-as"
+LD = "riscv64-unknown-elf-ld"
+
+# Both harts start at 0x8000_0000: hart 1 parks in wfi with every interrupt masked
+# (it never wakes), hart 0 runs the body and then spins at `done`.
+PROLOGUE = """
+    .option norelax
+    .globl _start
+_start:
+    csrr    t0, mhartid
+    bnez    t0, park_hart1
+"""
+EPILOGUE = """
+done:
+    j       done
+park_hart1:
+    csrw    mie, zero
+1:  wfi
+    j       1b
+"""
+
+_CACHE: dict[str, str] = {}
+_DIR: list[Path] = []
+
+
+def _build_dir() -> Path:
+    if not _DIR:
+        _DIR.append(Path(tempfile.mkdtemp(prefix="k210-test-fw-")))
+    return _DIR[0]
+
+
+def build_elf(source: str) -> str:
+    """Assembles and links a complete program (with its own _start); returns the ELF
+    path. Cached by source text for the whole test session."""
+    source = textwrap.dedent(source)
+    key = hashlib.sha1(source.encode()).hexdigest()[:16]
+    path = _CACHE.get(key)
+    if path is not None:
+        return path
+    if shutil.which(AS) is None:
+        pytest.skip(f"{AS} not installed")
+    directory = _build_dir()
+    src, obj, elf = directory / f"{key}.S", directory / f"{key}.o", directory / f"{key}.elf"
+    src.write_text(source)
+    subprocess.run([AS, "-march=rv64gc", "-mabi=lp64d", "-o", str(obj), str(src)],
+                   check=True, capture_output=True, text=True)
+    # -N: one segment starting exactly at 0x8000_0000 (no ELF header paged in below SRAM)
+    subprocess.run([LD, "-N", "--no-relax", "-Ttext=0x80000000", "-o", str(elf), str(obj)],
+                   check=True, capture_output=True, text=True)
+    _CACHE[key] = str(elf)
+    return str(elf)
+
+
+def program(body: str, data: str = "") -> str:
+    """A program whose hart 0 runs `body` then spins; hart 1 sleeps for good."""
+    text = PROLOGUE + textwrap.dedent(body) + EPILOGUE
+    if data:
+        text += "\n    .data\n    .balign 8\n" + textwrap.dedent(data)
+    return build_elf(text)
+
+
+IDLE_SOURCE = PROLOGUE + EPILOGUE
+
+
+@pytest.fixture(scope="session")
+def idle_elf() -> str:
+    return build_elf(IDLE_SOURCE)
+
+
+def make_board(elf: str | None = None, **kwargs) -> Board:
+    board = Board(elf or build_elf(IDLE_SOURCE), **kwargs)
+    board._frames_wanted = 1 << 60   # step freely: no frame count ends a turn early
+    board.hang_budget_s = 1e9
+    return board
+
+
+@pytest.fixture
+def board(idle_elf) -> Board:
+    """A board running the idle program; peripherals are poked directly."""
+    return make_board(idle_elf)
+
+
+def symbol(board: Board, name: str) -> int:
+    for address, sym in board.image.symbols.items():
+        if sym == name:
+            return address
+    raise KeyError(name)
+
+
+def run_until(board: Board, done: Callable[[Board], bool], max_time_s: float = 0.01,
+              max_steps: int = 100_000) -> None:
+    """Steps the board until done(board) or max_time_s of virtual time passed."""
+    for _ in range(max_steps):
+        if done(board):
+            return
+        if board.time > max_time_s:
+            break
+        board._step()
+    assert done(board), f"condition not reached by t = {board.time:.6g} s"
+
+
+def at_done(board: Board, hart: int = 0) -> bool:
+    """Hart 0 has reached the `done` spin loop."""
+    return board.harts[hart].uc.reg_read(rv.UC_RISCV_REG_PC) == symbol(board, "done") or \
+        board.harts[hart].pc == symbol(board, "done")
+
+
+def run_to_done(board: Board, max_time_s: float = 0.01) -> None:
+    run_until(board, at_done, max_time_s)
+
+
+def reg(board: Board, name: str, hart: int = 0) -> int:
+    return board.harts[hart].uc.reg_read(getattr(rv, f"UC_RISCV_REG_{name.upper()}"))
+
+
+class RecordingDevice:
+    """An SPI device for tests: records selects and transfers (with their times), and
+    answers each byte from `replies` (then 0xFF)."""
+
+    def __init__(self, replies: bytes = b"") -> None:
+        self.replies = bytearray(replies)
+        self.received = bytearray()
+        self.transfers: list[tuple[float, bytes, int]] = []
+        self.selects: list[tuple[bool, float]] = []
+
+    def spi_select(self, selected: bool, now: float) -> None:
+        self.selects.append((selected, now))
+
+    def spi_transfer(self, data: np.ndarray, lanes: int, now: float) -> np.ndarray:
+        data = bytes(np.asarray(data, dtype=np.uint8))
+        self.received += data
+        self.transfers.append((now, data, lanes))
+        out = bytearray()
+        for _ in data:
+            out.append(self.replies.pop(0) if self.replies else 0xFF)
+        return np.frombuffer(bytes(out), dtype=np.uint8).copy()

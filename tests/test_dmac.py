@@ -1,0 +1,343 @@
+"""DMAC (DesignWare AXI DMAC, facts sheet section 8): 64-bit registers, chen write
+enables, memory-to-memory copies, and SPI transfers through the dma_sel handshake."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from emulator import dmac as d
+from emulator import spi as s
+from emulator.errors import HardwareMisuse, UnmodelledAccess
+from emulator.plic import SOURCE_DMA0
+from k210_fixtures import RecordingDevice, board, idle_elf, make_board, program, reg, run_to_done  # noqa: F401
+
+CPU_HZ = 26e6
+SRC, DST = 0x8010_0000, 0x8020_0000
+W32 = 2                                          # transfer width code for 32 bits
+SPI1_DR = 0x5300_0060
+SPI_BIT = 26 / 13e6                              # baudr 26 from the 13 MHz SPI source
+EPS = 1e-10
+
+
+def ch(n: int, off: int) -> int:
+    return d.CH_BASE + d.CH_STRIDE * n + off
+
+
+def ctl(src_width=W32, dst_width=W32, sinc_fixed=False, dinc_fixed=False) -> int:
+    return sinc_fixed << 4 | dinc_fixed << 6 | src_width << 8 | dst_width << 11
+
+
+def chcfg(tt=d.TT_MEM2MEM, hs_src_sw=True, hs_dst_sw=True, src_per=0, dst_per=0) -> int:
+    return tt << 32 | hs_src_sw << 35 | hs_dst_sw << 36 | src_per << 39 | dst_per << 44
+
+
+def w(board, off, value, now):
+    board.dmac.write(off, 8, value, now)
+
+
+def r(board, off, now):
+    return board.dmac.read(off, 8, now)
+
+
+def setup_channel(board, n, *, sar, dar, items, ctl_value, cfg_value, now=0.0):
+    w(board, ch(n, d.SAR), sar, now)
+    w(board, ch(n, d.DAR), dar, now)
+    w(board, ch(n, d.BLOCK_TS), items - 1, now)
+    w(board, ch(n, d.CTL), ctl_value, now)
+    w(board, ch(n, d.CH_CFG), cfg_value, now)
+
+
+def memcpy_channel(board, n, items, now=0.0, src=SRC, dst=DST):
+    setup_channel(board, n, sar=src, dar=dst, items=items, ctl_value=ctl(), cfg_value=chcfg(), now=now)
+
+
+def run_devices(board, t, until, limit=1.0):
+    """Moves device time from t, event by event, until until() holds; returns the time."""
+    board.advance_devices(t)
+    while not until():
+        nxt = board.next_device_event(t)
+        assert nxt is not None and nxt <= limit, "no further device event"
+        t = nxt
+        board.advance_devices(t)
+    return t
+
+
+# --- 64-bit registers through real programs -------------------------------------------------
+
+DMAC_CLOCK_ON = """
+    li      s0, 0x50440000
+    lw      t0, 0x2c(s0)
+    ori     t0, t0, 1 << 1               # DMA clock
+    sw      t0, 0x2c(s0)
+    li      s1, 0x50000000
+"""
+
+
+def test_ld_sd_on_64_bit_registers():
+    board = make_board(program(DMAC_CLOCK_ON + """
+        ld      s2, 0x00(s1)                 # id
+        ld      s3, 0x08(s1)                 # compver
+        li      t0, 3
+        sd      t0, 0x10(s1)                 # cfg: enable, int_en
+        ld      s4, 0x10(s1)
+        li      t0, 0x123456789abcdef0
+        sd      t0, 0x100(s1)                # ch0 sar: both halves matter
+        ld      s5, 0x100(s1)
+        li      t0, 0x0000004000000001
+        sd      t0, 0x120(s1)                # ch0 cfg with a high-half field
+        ld      s6, 0x120(s1)
+    """))
+    run_to_done(board)
+    assert reg(board, "s3") == 0x3130_302A
+    assert reg(board, "s4") == 3
+    assert board.dmac.values[d.CFG] == 3
+    assert reg(board, "s5") == 0x1234_5678_9ABC_DEF0
+    assert board.dmac.values[ch(0, d.SAR)] == 0x1234_5678_9ABC_DEF0
+    assert reg(board, "s6") == 0x0000_0040_0000_0001
+
+
+@pytest.mark.parametrize("insn, direction", [("lw t0, 0x10(s1)", "load"), ("sw zero, 0x10(s1)", "store"),
+                                             ("lwu t0, 0x08(s1)", "load"), ("lw t0, 0x104(s1)", "load")])
+def test_32_bit_access_to_a_dmac_register_is_unmodelled(insn, direction):
+    board = make_board(program(DMAC_CLOCK_ON + f"    {insn}\n"))
+    with pytest.raises(UnmodelledAccess) as info:
+        run_to_done(board)
+    text = str(info.value)
+    assert f"{direction} of 4 bytes" in text
+    assert "hart 0" in text and insn.split()[0] in text
+
+
+def test_dmac_gated_clock_is_misuse():
+    board = make_board(program("""
+        li      s1, 0x50000000
+        ld      t0, 0x08(s1)
+    """))
+    with pytest.raises(HardwareMisuse, match="DMAC accessed while its clock is gated"):
+        run_to_done(board)
+
+
+def test_register_table(board):
+    with pytest.raises(UnmodelledAccess, match="read-only"):
+        w(board, d.ID, 1, 0.0)
+    with pytest.raises(UnmodelledAccess, match="read-only"):
+        w(board, ch(0, d.CH_INTSTATUS), 1, 0.0)
+    with pytest.raises(UnmodelledAccess, match="write-only"):
+        r(board, ch(0, d.INTCLEAR), 0.0)
+    with pytest.raises(UnmodelledAccess):
+        r(board, ch(6, d.SAR), 0.0)                    # six channels only
+    with pytest.raises(UnmodelledAccess, match="32-bit access"):
+        board.dmac.read(d.CFG, 4, 0.0)
+
+
+# --- chen ---------------------------------------------------------------------------------
+
+def test_chen_write_enable_bits(board):
+    w(board, d.CFG, d.CFG_ENABLE, 0.0)
+    memcpy_channel(board, 0, 4096)
+    memcpy_channel(board, 1, 4096, src=SRC + 0x4000, dst=DST + 0x4000)
+    memcpy_channel(board, 2, 4096, src=SRC + 0x8000, dst=DST + 0x8000)
+    w(board, d.CHEN, 0b111, 1e-6)                       # no write-enable bits: nothing happens
+    assert r(board, d.CHEN, 1e-6) & 0x3F == 0
+    assert board.dmac.channels[0].transfer is None
+    w(board, d.CHEN, 0x0101, 2e-6)                      # channel 0 only
+    assert r(board, d.CHEN, 2e-6) & 0x3F == 0b001
+    w(board, d.CHEN, 0x0404 | 0b011, 2e-6)              # channel 2; bits 0, 1 without their enables
+    assert r(board, d.CHEN, 2e-6) & 0x3F == 0b101
+    assert board.dmac.channels[1].transfer is None
+    with pytest.raises(UnmodelledAccess, match="disabling channel 0"):
+        w(board, d.CHEN, 0x0100, 3e-6)                  # write-enabled 0 on a busy channel
+
+
+def test_channel_enable_while_the_dmac_is_disabled_is_ignored(board):
+    memcpy_channel(board, 0, 16)
+    w(board, d.CHEN, 0x0101, 0.0)
+    assert r(board, d.CHEN, 0.0) & 1 == 0
+    assert any("DMAC is disabled" in text for text in board.warnings)
+
+
+# --- memory to memory -----------------------------------------------------------------------
+
+def test_memory_to_memory_copy_and_completion(board):
+    data = np.arange(1000, 1000 + 256, dtype="<u4").tobytes()
+    board.memory.load(SRC, data)
+    w(board, d.CFG, d.CFG_ENABLE, 0.0)
+    memcpy_channel(board, 3, 256, dst=DST - 0x4000_0000)   # destination through the uncached alias
+    w(board, ch(3, d.INTSTATUS_EN), d.INT_DMA_TFR_DONE, 0.0)
+    w(board, ch(3, d.INTSIGNAL_EN), d.INT_DMA_TFR_DONE, 0.0)
+    t0 = 5e-6
+    w(board, d.CHEN, 0x0808, t0)
+    done = t0 + 256 * 4 / d.MEM2MEM_BYTES_PER_CYCLE / CPU_HZ
+    assert board.dmac.next_event_time(t0) == pytest.approx(done)
+    assert r(board, d.CHEN, done - 1e-9) & 0x08
+    assert r(board, ch(3, d.CH_INTSTATUS), done - 1e-9) == 0
+    assert r(board, d.CHEN, done + EPS) & 0x08 == 0
+    assert board.memory.read(DST, len(data)) == data
+    assert r(board, ch(3, d.CH_INTSTATUS), done + EPS) == d.INT_DMA_TFR_DONE   # only what intstatus_en allows
+    assert r(board, d.INTSTATUS, done + EPS) == 1 << 3
+    # the interrupt line needs intsignal_en and cfg.int_en
+    assert not board.dmac.irq_line(3)
+    w(board, d.CFG, d.CFG_ENABLE | d.CFG_INT_EN, done + EPS)
+    assert board.dmac.irq_line(3) and not board.dmac.irq_line(2)
+    assert SOURCE_DMA0 + 3 in board._high_sources()
+    w(board, ch(3, d.INTSIGNAL_EN), 0, done + EPS)
+    assert not board.dmac.irq_line(3)
+    w(board, ch(3, d.INTSIGNAL_EN), d.INT_DMA_TFR_DONE, done + EPS)
+    w(board, ch(3, d.INTCLEAR), d.INT_DMA_TFR_DONE, done + 2 * EPS)
+    assert r(board, ch(3, d.CH_INTSTATUS), done + 2 * EPS) == 0
+    assert not board.dmac.irq_line(3)
+    assert r(board, d.INTSTATUS, done + 2 * EPS) == 0
+
+
+def test_both_done_bits_when_enabled(board):
+    w(board, d.CFG, d.CFG_ENABLE, 0.0)
+    memcpy_channel(board, 0, 8)
+    w(board, ch(0, d.INTSTATUS_EN), 0xFFFF_FFFF, 0.0)
+    w(board, d.CHEN, 0x0101, 0.0)
+    assert r(board, ch(0, d.CH_INTSTATUS), 1e-3) == d.INT_BLOCK_TFR_DONE | d.INT_DMA_TFR_DONE
+
+
+def test_fixed_addresses_and_byte_items(board):
+    board.memory.load(SRC, bytes([0xAB, 0xCD]))
+    w(board, d.CFG, d.CFG_ENABLE, 0.0)
+    setup_channel(board, 0, sar=SRC, dar=DST, items=16, ctl_value=ctl(0, 0, sinc_fixed=True),
+                  cfg_value=chcfg())
+    w(board, d.CHEN, 0x0101, 0.0)
+    r(board, d.CHEN, 1e-3)
+    assert board.memory.read(DST, 16) == b"\xAB" * 16
+
+
+def test_unmodelled_transfers(board):
+    w(board, d.CFG, d.CFG_ENABLE, 0.0)
+    memcpy_channel(board, 0, 8)
+    w(board, ch(0, d.LLP), 0x8030_0000, 0.0)
+    with pytest.raises(UnmodelledAccess, match="linked-list"):
+        w(board, d.CHEN, 0x0101, 0.0)
+    setup_channel(board, 1, sar=SRC, dar=DST, items=8, ctl_value=ctl(), cfg_value=chcfg() | 0b0101)
+    with pytest.raises(UnmodelledAccess, match="multi-block"):
+        w(board, d.CHEN, 0x0202, 0.0)
+
+
+def test_dma_outside_sram_is_misuse(board):
+    w(board, d.CFG, d.CFG_ENABLE, 0.0)
+    memcpy_channel(board, 0, 8, src=0x9000_0000)
+    with pytest.raises(HardwareMisuse, match="not SRAM"):
+        w(board, d.CHEN, 0x0101, 0.0)
+
+
+# --- memory to SPI and SPI to memory --------------------------------------------------------------
+
+@pytest.fixture
+def spi_bus(board):
+    dev = RecordingDevice()
+    board.spi1.device_for_ss = lambda ss: dev if ss == 0 else None
+    return board, board.spi1, dev
+
+
+def spi_setup(spi, dfs, tmod, now=0.0, ctrlr1=0, dmacr=0):
+    spi.write(s.CTRLR0, 4, (dfs - 1) << 16 | tmod << 8, now)
+    spi.write(s.BAUDR, 4, 26, now)
+    spi.write(s.CTRLR1, 4, ctrlr1, now)
+    spi.write(s.DMACR, 4, dmacr, now)
+    spi.write(s.SSIENR, 4, 1, now)
+
+
+def test_memory_to_spi_in_order_and_on_time(spi_bus):
+    board, spi, dev = spi_bus
+    n = 100
+    words = np.array([0x1000_0000 * (i % 16) + i for i in range(n)], dtype="<u4")
+    board.memory.load(SRC, words.tobytes())
+    board.sysctl.write(0x64, 4, 3 << 12, 0.0)          # dma_sel: channel 2 <- SSI1_TX
+    w(board, d.CFG, d.CFG_ENABLE | d.CFG_INT_EN, 0.0)
+    setup_channel(board, 2, sar=SRC, dar=SPI1_DR, items=n, ctl_value=ctl(dinc_fixed=True),
+                  cfg_value=chcfg(d.TT_MEM2PER, hs_dst_sw=False, dst_per=2))
+    w(board, ch(2, d.INTSTATUS_EN), d.INT_DMA_TFR_DONE, 0.0)
+    w(board, ch(2, d.INTSIGNAL_EN), d.INT_DMA_TFR_DONE, 0.0)
+    spi_setup(spi, 32, s.TMOD_TX, dmacr=s.DMACR_TDMAE)
+    spi.write(s.SER, 4, 1, 0.0)
+    t0 = 1e-6
+    w(board, d.CHEN, 0x0404, t0)
+    period = 32 * SPI_BIT
+    t_done = run_devices(board, t0, lambda: not board.dmac.values[d.CHEN] & 0x04)
+    assert abs(t_done - (t0 + n * period)) <= (s.FIFO_DEPTH + 1) * period
+    assert board.dmac.irq_line(2)
+    # the wire keeps going until the last frame is out
+    t_end = run_devices(board, t_done, lambda: not spi.busy(board.time) and len(dev.received) == 4 * n)
+    assert t_end == pytest.approx(t0 + n * period, abs=1e-9)
+    assert bytes(dev.received) == words.astype(">u4").tobytes()
+    assert spi.read(s.SR, 4, t_end + EPS) == s.SR_TFNF | s.SR_TFE
+
+
+def test_memory_to_spi_with_8_bit_frames_keeps_the_fifo_full(spi_bus):
+    board, spi, dev = spi_bus
+    n = 80
+    board.memory.load(SRC, np.arange(n, dtype="<u4").tobytes())
+    board.sysctl.write(0x64, 4, 3, 0.0)                # channel 0 <- SSI1_TX
+    w(board, d.CFG, d.CFG_ENABLE, 0.0)
+    setup_channel(board, 0, sar=SRC, dar=SPI1_DR, items=n, ctl_value=ctl(dinc_fixed=True),
+                  cfg_value=chcfg(d.TT_MEM2PER, hs_dst_sw=False, dst_per=0))
+    spi_setup(spi, 8, s.TMOD_TX, dmacr=s.DMACR_TDMAE)
+    spi.write(s.SER, 4, 1, 0.0)
+    w(board, d.CHEN, 0x0101, 0.0)
+    period = 8 * SPI_BIT
+    assert spi.read(s.TXFLR, 4, 10 * period + EPS) == s.FIFO_DEPTH   # refilled as slots free
+    t_end = run_devices(board, 0.0, lambda: len(dev.received) == n and not spi.busy(board.time))
+    assert t_end == pytest.approx(n * period, abs=1e-9)             # one unbroken train
+    assert bytes(dev.received) == bytes(range(n))
+
+
+def test_memory_to_spi_waits_for_the_handshake(spi_bus):
+    board, spi, dev = spi_bus
+    board.memory.load(SRC, np.arange(8, dtype="<u4").tobytes())
+    board.sysctl.write(0x64, 4, 3, 0.0)
+    w(board, d.CFG, d.CFG_ENABLE, 0.0)
+    setup_channel(board, 0, sar=SRC, dar=SPI1_DR, items=8, ctl_value=ctl(dinc_fixed=True),
+                  cfg_value=chcfg(d.TT_MEM2PER, hs_dst_sw=False, dst_per=0))
+    spi_setup(spi, 8, s.TMOD_TX, dmacr=0)               # tdmae off: no requests
+    spi.write(s.SER, 4, 1, 0.0)
+    w(board, d.CHEN, 0x0101, 0.0)
+    assert r(board, d.CHEN, 1.0) & 1
+    assert dev.received == b""
+    assert "waits for SPI1" in board.dmac.describe_wait()
+
+
+def test_memory_to_spi_handshake_misuse(spi_bus):
+    board, spi, dev = spi_bus
+    w(board, d.CFG, d.CFG_ENABLE, 0.0)
+    board.sysctl.write(0x64, 4, 2, 0.0)                 # channel 0 <- SSI1_RX: wrong direction
+    setup_channel(board, 0, sar=SRC, dar=SPI1_DR, items=8, ctl_value=ctl(dinc_fixed=True),
+                  cfg_value=chcfg(d.TT_MEM2PER, hs_dst_sw=False, dst_per=0))
+    with pytest.raises(HardwareMisuse, match="SPI1 RX"):
+        w(board, d.CHEN, 0x0101, 0.0)
+    board.sysctl.write(0x64, 4, 3, 0.0)
+    setup_channel(board, 1, sar=SRC, dar=0x5200_0060, items=8, ctl_value=ctl(dinc_fixed=True),
+                  cfg_value=chcfg(d.TT_MEM2PER, hs_dst_sw=False, dst_per=0))
+    with pytest.raises(HardwareMisuse, match="not SPI1's data register"):
+        w(board, d.CHEN, 0x0202, 0.0)
+
+
+def test_spi_receive_to_memory(spi_bus):
+    board, spi, dev = spi_bus
+    n = 40                                              # more than one FIFO's worth
+    reply = bytes((7 * i + 3) & 0xFF for i in range(n))
+    dev.replies = bytearray(reply)
+    board.memory.load(DST, b"\x55" * (4 * n + 8))
+    board.sysctl.write(0x64, 4, 2 << 6, 0.0)            # channel 1 <- SSI1_RX
+    w(board, d.CFG, d.CFG_ENABLE, 0.0)
+    setup_channel(board, 1, sar=SPI1_DR, dar=DST, items=n, ctl_value=ctl(sinc_fixed=True),
+                  cfg_value=chcfg(d.TT_PER2MEM, hs_src_sw=False, src_per=1))
+    w(board, ch(1, d.INTSTATUS_EN), d.INT_DMA_TFR_DONE, 0.0)
+    spi_setup(spi, 8, s.TMOD_RX, ctrlr1=n - 1, dmacr=s.DMACR_RDMAE)
+    w(board, d.CHEN, 0x0202, 0.0)
+    t0 = 2e-6
+    spi.write(s.DR_FIRST, 4, 0xFFFF_FFFF, t0)           # dummy word
+    spi.write(s.SER, 4, 1, t0)
+    period = 8 * SPI_BIT
+    assert r(board, d.CHEN, t0 + (n - 1) * period + EPS) & 0x02
+    t_done = run_devices(board, t0, lambda: not board.dmac.values[d.CHEN] & 0x02)
+    assert t_done == pytest.approx(t0 + n * period, abs=1e-9)
+    got = np.frombuffer(board.memory.read(DST, 4 * n), dtype="<u4")
+    assert bytes(got.astype(np.uint8)) == reply
+    assert got.max() < 256
+    assert board.memory.read(DST + 4 * n, 4) == b"\x55" * 4          # nothing past the block
+    assert spi.read(s.RXFLR, 4, t_done) == 0                          # all went to memory
+    assert r(board, ch(1, d.CH_INTSTATUS), t_done) == d.INT_DMA_TFR_DONE

@@ -1,0 +1,252 @@
+"""The SD card model against the SPI-mode protocol: exact bytes for each command."""
+from __future__ import annotations
+
+import zlib
+
+import numpy as np
+import pytest
+
+from emulator.errors import BadInput
+from emulator.sdcard import (BLOCK, INIT_TIME_S, NAC_BYTES, NCR_BYTES, SdCard, SdImage, command_frame, crc7,
+                             crc16)
+
+BLOCKS = 64
+
+
+def _pattern(block: int) -> bytes:
+    return bytes((block * 7 + i) & 0xFF for i in range(BLOCK))
+
+
+@pytest.fixture
+def image_path(tmp_path):
+    path = tmp_path / "card.img"
+    path.write_bytes(b"".join(_pattern(b) for b in range(BLOCKS)))
+    return path
+
+
+def clock(card: SdCard, data: bytes, now: float = 0.0) -> bytes:
+    return card.exchange(np.frombuffer(data, dtype=np.uint8).copy(), now).tobytes()
+
+
+def command(card: SdCard, index: int, argument: int, reply_bytes: int, now: float = 0.0, crc: bool = True) -> bytes:
+    """Sends a command and clocks reply_bytes of 0xFF; returns what came back after the frame."""
+    frame = command_frame(index, argument)
+    if not crc:
+        frame = frame[:5] + b"\x01"
+    clock(card, frame, now)
+    return clock(card, b"\xff" * reply_bytes, now)
+
+
+def powered(image_path, writable=False) -> SdCard:
+    card = SdCard(SdImage(image_path, writable=writable))
+    clock(card, b"\xff" * 10)            # 80 clocks with CS high
+    card.set_selected(True, 0.0)
+    return card
+
+
+def initialised(image_path, writable=False) -> SdCard:
+    card = powered(image_path, writable)
+    command(card, 0, 0, 2)
+    command(card, 8, 0x1AA, 6)
+    for now in (0.0, INIT_TIME_S):
+        command(card, 55, 0, 2, now)
+        command(card, 41, 0x4000_0000, 2, now)
+    return card
+
+
+def test_crc7_matches_the_well_known_command_crcs():
+    assert (crc7(bytes([0x40, 0, 0, 0, 0])) << 1 | 1) == 0x95     # CMD0
+    assert (crc7(bytes([0x48, 0, 0, 1, 0xAA])) << 1 | 1) == 0x87  # CMD8(0x1AA)
+
+
+def test_crc16_of_a_block_of_ff_is_the_spec_example():
+    assert crc16(b"\xff" * 512) == 0x7FA1
+
+
+def test_cmd0_needs_power_up_clocks(image_path):
+    warnings = []
+    card = SdCard(SdImage(image_path), warn=warnings.append)
+    card.set_selected(True, 0.0)
+    assert command(card, 0, 0, 4) == b"\xff" * 4
+    assert "74" in warnings[0]
+
+
+def test_cmd0_enters_idle_with_r1_01_after_ncr(image_path):
+    card = powered(image_path)
+    reply = command(card, 0, 0, 3)
+    assert reply == b"\xff" * NCR_BYTES + b"\x01" + b"\xff" * (2 - NCR_BYTES)
+
+
+def test_cmd0_and_cmd8_need_a_good_crc(image_path):
+    card = powered(image_path)
+    assert command(card, 0, 0, 2, crc=False) == b"\xff\xff"   # still in SD mode: no answer at all
+    command(card, 0, 0, 2)
+    assert command(card, 0, 0, 2, crc=False)[NCR_BYTES] == 0x09   # idle | CRC error
+    assert command(card, 8, 0x1AA, 2, crc=False)[NCR_BYTES] == 0x09
+
+
+def test_cmd8_echoes_voltage_and_check_pattern(image_path):
+    card = powered(image_path)
+    command(card, 0, 0, 2)
+    reply = command(card, 8, 0x1AA, 6)
+    assert reply[NCR_BYTES:NCR_BYTES + 5] == bytes([0x01, 0x00, 0x00, 0x01, 0xAA])
+
+
+def test_acmd41_keeps_idle_until_the_initialisation_time(image_path):
+    card = powered(image_path)
+    command(card, 0, 0, 2)
+    command(card, 55, 0, 2, 0.0)
+    assert command(card, 41, 0x4000_0000, 2, 0.0)[NCR_BYTES] == 0x01
+    command(card, 55, 0, 2, INIT_TIME_S / 2)
+    assert command(card, 41, 0x4000_0000, 2, INIT_TIME_S / 2)[NCR_BYTES] == 0x01
+    command(card, 55, 0, 2, INIT_TIME_S)
+    assert command(card, 41, 0x4000_0000, 2, INIT_TIME_S)[NCR_BYTES] == 0x00
+
+
+def test_cmd41_without_cmd55_is_illegal(image_path):
+    card = powered(image_path)
+    command(card, 0, 0, 2)
+    assert command(card, 41, 0x4000_0000, 2)[NCR_BYTES] == 0x05
+
+
+def test_cmd58_reports_powered_up_sdhc(image_path):
+    card = initialised(image_path)
+    reply = command(card, 58, 0, 6)
+    assert reply[NCR_BYTES:NCR_BYTES + 5] == bytes([0x00, 0xC0, 0xFF, 0x80, 0x00])
+
+
+def test_reads_before_initialisation_are_illegal(image_path):
+    card = powered(image_path)
+    command(card, 0, 0, 2)
+    assert command(card, 17, 0, 2)[NCR_BYTES] == 0x05
+
+
+def test_cmd17_returns_token_block_and_crc16(image_path):
+    card = initialised(image_path)
+    reply = command(card, 17, 5, NCR_BYTES + 1 + NAC_BYTES + 1 + BLOCK + 2)
+    assert reply[NCR_BYTES] == 0x00
+    data_start = NCR_BYTES + 1 + NAC_BYTES
+    assert reply[NCR_BYTES + 1:data_start] == b"\xff" * NAC_BYTES
+    assert reply[data_start] == 0xFE
+    block = reply[data_start + 1:data_start + 1 + BLOCK]
+    assert block == _pattern(5)
+    assert int.from_bytes(reply[data_start + 1 + BLOCK:data_start + 3 + BLOCK], "big") == crc16(block)
+
+
+def test_cmd17_out_of_range_is_a_parameter_error(image_path):
+    card = initialised(image_path)
+    assert command(card, 17, BLOCKS, 2)[NCR_BYTES] == 0x40
+
+
+def test_cmd18_streams_blocks_until_cmd12(image_path):
+    card = initialised(image_path)
+    per_block = NAC_BYTES + 1 + BLOCK + 2
+    reply = command(card, 18, 10, NCR_BYTES + 1 + 3 * per_block)
+    stream = reply[NCR_BYTES + 1:]
+    for n in range(3):
+        chunk = stream[n * per_block:(n + 1) * per_block]
+        assert chunk[NAC_BYTES] == 0xFE
+        assert chunk[NAC_BYTES + 1:NAC_BYTES + 1 + BLOCK] == _pattern(10 + n)
+    clock(card, command_frame(12, 0))
+    after = clock(card, b"\xff" * 12)
+    # one stuff byte, R1, busy, then released
+    assert after[0] == 0xFF and after[1] == 0x00
+    assert after[2:6] == b"\x00" * 4 and after[6:] == b"\xff" * 6
+
+
+def test_cmd59_turns_crc_checking_on_for_every_command(image_path):
+    card = initialised(image_path)
+    assert command(card, 13, 0, 3, crc=False)[NCR_BYTES] == 0x00      # not checked yet
+    command(card, 59, 1, 2)
+    assert command(card, 13, 0, 3, crc=False)[NCR_BYTES] == 0x08
+    assert command(card, 13, 0, 3)[NCR_BYTES:NCR_BYTES + 2] == b"\x00\x00"
+
+
+def test_unknown_command_is_illegal(image_path):
+    card = initialised(image_path)
+    assert command(card, 5, 0, 2)[NCR_BYTES] == 0x04
+
+
+def test_csd_reports_the_capacity(image_path):
+    card = initialised(image_path)
+    reply = command(card, 9, 0, NCR_BYTES + 1 + NAC_BYTES + 1 + 16 + 2)
+    csd = reply[NCR_BYTES + 1 + NAC_BYTES + 1:][:16]
+    assert csd[0] >> 6 == 1
+    c_size = ((csd[7] & 0x3F) << 16) | (csd[8] << 8) | csd[9]
+    assert c_size == max(0, BLOCKS // 1024 - 1)
+    assert csd[15] == (crc7(csd[:15]) << 1) | 1
+
+
+def _write_block(card: SdCard, index: int, block: int, data: bytes, now: float = 1.0) -> bytes:
+    assert command(card, index, block, 2, now)[NCR_BYTES] == 0x00
+    clock(card, b"\xff" + (b"\xfe" if index == 24 else b"\xfc") + data + crc16(data).to_bytes(2, "big"), now)
+    return clock(card, b"\xff" * 2, now)
+
+
+def test_write_lands_in_memory_only_when_read_only(image_path):
+    before = image_path.read_bytes()
+    card = initialised(image_path)
+    data = bytes(range(256)) * 2
+    response = _write_block(card, 24, 3, data)
+    assert response[0] & 0x1F == 0x05
+    assert response[1] == 0x00                         # busy while programming
+    assert clock(card, b"\xff", 2.0) == b"\xff"        # ready later
+    assert card.image.read(3) == data                  # the firmware reads back what it wrote
+    card.image.close()
+    assert image_path.read_bytes() == before           # the file is untouched
+
+
+def test_write_reaches_the_file_when_writable(image_path):
+    card = initialised(image_path, writable=True)
+    data = b"\xa5" * BLOCK
+    assert _write_block(card, 24, 7, data)[0] & 0x1F == 0x05
+    card.image.close()
+    assert image_path.read_bytes()[7 * BLOCK:8 * BLOCK] == data
+
+
+def test_write_with_bad_crc_is_rejected_when_checking(image_path):
+    card = initialised(image_path, writable=True)
+    command(card, 59, 1, 2)
+    assert command(card, 24, 2, 2, 1.0)[NCR_BYTES] == 0x00
+    clock(card, b"\xff\xfe" + b"\x11" * BLOCK + b"\x00\x00", 1.0)
+    assert clock(card, b"\xff", 1.0)[0] & 0x1F == 0x0B
+    card.image.close()
+    assert image_path.read_bytes()[2 * BLOCK:3 * BLOCK] == _pattern(2)
+
+
+def test_multi_block_write_with_stop_token(image_path):
+    card = initialised(image_path, writable=True)
+    assert command(card, 25, 20, 2, 1.0)[NCR_BYTES] == 0x00
+    for n in range(2):
+        data = bytes([n + 1]) * BLOCK
+        clock(card, b"\xff\xfc" + data + crc16(data).to_bytes(2, "big"), 1.0 + n)
+        assert clock(card, b"\xff", 1.0 + n)[0] & 0x1F == 0x05
+        clock(card, b"\xff" * 4, 2.0 + n)   # well after the programming time
+    clock(card, b"\xfd", 5.0)
+    card.image.close()
+    written = image_path.read_bytes()
+    assert written[20 * BLOCK:21 * BLOCK] == b"\x01" * BLOCK and written[21 * BLOCK:22 * BLOCK] == b"\x02" * BLOCK
+
+
+def test_deselected_card_does_not_answer(image_path):
+    card = initialised(image_path)
+    card.set_selected(False, 0.0)
+    assert command(card, 13, 0, 3) == b"\xff" * 3
+
+
+def test_missing_and_truncated_images_are_bad_input(tmp_path):
+    with pytest.raises(BadInput, match="does not exist"):
+        SdImage(tmp_path / "none.img")
+    odd = tmp_path / "odd.img"
+    odd.write_bytes(b"\x00" * 1000)
+    with pytest.raises(BadInput, match="whole number"):
+        SdImage(odd)
+    truncated = tmp_path / "truncated.img"
+    mbr = bytearray(BLOCK)
+    mbr[446 + 4] = 0x0C
+    mbr[446 + 8:446 + 12] = (2048).to_bytes(4, "little")
+    mbr[446 + 12:446 + 16] = (100_000).to_bytes(4, "little")
+    mbr[510:512] = b"\x55\xaa"
+    truncated.write_bytes(bytes(mbr) + b"\x00" * BLOCK * 100)
+    with pytest.raises(BadInput, match="truncated"):
+        SdImage(truncated)

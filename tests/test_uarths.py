@@ -1,0 +1,167 @@
+"""UARTHS transmit path (facts sheet section 6): baud = core clock / (div + 1), ten bit
+times per byte (start, 8 data, stop), an 8-entry transmit FIFO, txctrl.txen."""
+from __future__ import annotations
+
+import pytest
+
+from emulator import uarths as u
+from emulator.errors import UnmodelledAccess
+from k210_fixtures import idle_elf, make_board, program, run_until  # noqa: F401
+
+CPU_HZ = 26e6
+DIV = 25                       # 26 MHz / 26 = 1 Mbaud: one bit per microsecond
+BIT = (DIV + 1) / CPU_HZ
+BYTE = 10 * BIT
+EPS = 1e-12                    # float slack at exact boundaries
+
+
+@pytest.fixture
+def console_board(idle_elf):
+    out: list[tuple[int, float]] = []
+    board = make_board(idle_elf, console=lambda b: out.append(b))
+    board.uarths.write(u.DIV, 4, DIV, 0.0)
+    return board, out
+
+
+def full(board, now) -> bool:
+    return bool(board.uarths.read(u.TXDATA, 4, now) & u.FULL)
+
+
+def test_bytes_reach_the_console_after_ten_bit_times(console_board):
+    board, out = console_board
+    uart = board.uarths
+    uart.write(u.TXCTRL, 4, 1, 0.0)
+    t0 = 3e-6
+    for ch in b"OK!":
+        uart.write(u.TXDATA, 4, ch, t0)
+    uart.advance(t0 + BYTE * 0.999)
+    assert out == []
+    uart.advance(t0 + BYTE + EPS)
+    assert out == [ord("O")]
+    uart.advance(t0 + 2 * BYTE * 0.9999)
+    assert out == [ord("O")]
+    uart.advance(t0 + 2 * BYTE + EPS)
+    assert bytes(out) == b"OK"
+    assert uart.next_event_time(t0 + 2 * BYTE + EPS) == pytest.approx(t0 + 3 * BYTE)
+    uart.advance(t0 + 3 * BYTE + EPS)
+    assert bytes(out) == b"OK!"
+    assert uart.next_event_time(t0 + 3 * BYTE + EPS) is None
+
+
+def test_byte_time_follows_div(console_board):
+    board, out = console_board
+    uart = board.uarths
+    uart.write(u.DIV, 4, 2 * DIV + 1, 0.0)            # half the baud rate
+    uart.write(u.TXCTRL, 4, 1, 0.0)
+    uart.write(u.TXDATA, 4, 0x55, 0.0)
+    uart.advance(BYTE * 1.99)
+    assert out == []
+    uart.advance(BYTE * 2 + EPS)
+    assert out == [0x55]
+
+
+def test_two_stop_bits_make_eleven_bit_times(console_board):
+    board, out = console_board
+    uart = board.uarths
+    uart.write(u.TXCTRL, 4, 0b11, 0.0)                # txen, nstop = 2
+    uart.write(u.TXDATA, 4, 0x41, 0.0)
+    uart.advance(10.5 * BIT)
+    assert out == []
+    uart.advance(11 * BIT + EPS)
+    assert out == [0x41]
+
+
+def test_nothing_is_sent_while_txen_is_clear(console_board):
+    board, out = console_board
+    uart = board.uarths
+    uart.write(u.TXDATA, 4, ord("a"), 0.0)
+    uart.write(u.TXDATA, 4, ord("b"), 0.0)
+    uart.advance(1.0)
+    assert out == []
+    assert uart.next_event_time(1.0) is None
+    uart.write(u.TXCTRL, 4, 1, 1.0)                  # enable: the queue drains from now
+    uart.advance(1.0 + BYTE * 0.999)
+    assert out == []
+    uart.advance(1.0 + 2 * BYTE + EPS)
+    assert bytes(out) == b"ab"
+
+
+def test_fifo_full_after_eight_queued_bytes_and_a_write_to_a_full_fifo_is_lost(console_board):
+    board, out = console_board
+    uart = board.uarths
+    for i in range(8):
+        assert not full(board, 0.0), i
+        uart.write(u.TXDATA, 4, 0x30 + i, 0.0)
+    assert full(board, 0.0)
+    uart.write(u.TXDATA, 4, ord("X"), 0.0)          # lost
+    uart.write(u.TXCTRL, 4, 1, 0.0)
+    # enabling moved one byte into the shift register: a FIFO slot is free again
+    assert not full(board, 0.0)
+    uart.advance(1.0)
+    assert bytes(out) == b"01234567"
+
+
+def test_with_txen_the_shift_register_holds_a_ninth_byte(console_board):
+    board, out = console_board
+    uart = board.uarths
+    uart.write(u.TXCTRL, 4, 1, 0.0)
+    for i in range(9):
+        uart.write(u.TXDATA, 4, 0x61 + i, 0.0)
+    assert full(board, 0.0)
+    uart.write(u.TXDATA, 4, ord("X"), 0.0)          # lost
+    assert full(board, BYTE * 0.999)
+    assert not full(board, BYTE + EPS)                      # first byte out, next one shifting
+    uart.advance(1.0)
+    assert bytes(out) == b"abcdefghi"
+
+
+def test_rxdata_reads_empty_and_unknown_offsets_are_unmodelled(console_board):
+    board, _ = console_board
+    assert board.uarths.read(u.RXDATA, 4, 0.0) & u.EMPTY
+    with pytest.raises(UnmodelledAccess):
+        board.uarths.read(0x1C, 4, 0.0)
+    with pytest.raises(UnmodelledAccess, match="read-only"):
+        board.uarths.write(u.RXDATA, 4, 0, 0.0)
+
+
+def test_txwm_interrupt_pending_below_the_watermark(console_board):
+    board, _ = console_board
+    uart = board.uarths
+    uart.write(u.TXCTRL, 4, 2 << 16, 0.0)            # txcnt 2, txen off
+    assert uart.read(u.IP, 4, 0.0) & u.IP_TXWM
+    uart.write(u.TXDATA, 4, 1, 0.0)
+    uart.write(u.TXDATA, 4, 2, 0.0)
+    assert not uart.read(u.IP, 4, 0.0) & u.IP_TXWM
+    assert not uart.irq_line()
+    uart.write(u.IE, 4, u.IP_TXWM, 0.0)
+    uart.write(u.TXCTRL, 4, 2 << 16 | 1, 0.0)        # txen: one byte leaves the FIFO
+    assert uart.irq_line()
+
+
+def test_a_program_prints_through_uarths():
+    elf = program("""
+        li      s0, 0x38000000
+        li      t0, 25
+        sw      t0, 0x18(s0)            # div
+        li      t0, 1
+        sw      t0, 0x08(s0)            # txen
+        la      s1, message
+    1:  lbu     t1, 0(s1)
+        beqz    t1, 3f
+    2:  lw      t2, 0(s0)              # wait while the FIFO is full
+        bltz    t2, 2b
+        sw      t1, 0(s0)
+        addi    s1, s1, 1
+        j       1b
+    3:
+    """, data="""
+    message: .asciz "Hello, K210 board model! 0123456789"
+    """)
+    out = bytearray()
+    board = make_board(elf, console=out.append, quantum=2000)
+    text = b"Hello, K210 board model! 0123456789"
+    run_until(board, lambda b: len(out) == len(text), max_time_s=1e-3)
+    assert bytes(out) == text
+    # the run cannot be faster than the wire: 10 bit times per byte
+    assert board.time >= len(text) * BYTE - 1e-9
+    assert board.time <= len(text) * BYTE + 2000 / CPU_HZ + 1e-6
