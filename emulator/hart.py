@@ -151,9 +151,12 @@ class Hart:
         return RunEnd.STOPPED, ran
 
     def request_stop(self) -> None:
-        """Ends the current run soon (at the end of the current translation block)."""
+        """Ends the current run once the current instruction has completed: the native
+        counter stops the engine before the next instruction starts. (uc.emu_stop called
+        from an MMIO callback makes Unicorn 2.1.4 run the accessing instruction again when
+        the hart resumes: a store would be repeated, a FIFO popped twice.)"""
         self.stop_requested = True
-        self.uc.emu_stop()
+        self._counter.limit = min(self._counter.limit, self._counter.executed)
 
     def read_u32(self, address: int) -> int:
         try:
@@ -170,11 +173,12 @@ class Hart:
     # --- exceptions and interrupts ---------------------------------------------------
 
     def _on_exception(self, uc: unicorn.Uc, intno: int, user_data: object) -> None:
-        next_pc = uc.reg_read(rv.UC_RISCV_REG_PC)
-        if intno == 8:  # QEMU reports ecall as U-mode's number; the hart is in M-mode
-            cause, epc = CAUSE_ECALL_M, next_pc - 4
-        else:
-            cause, epc = intno, self._faulting_pc(next_pc)
+        # Unicorn 2.1.4 moves the pc 4 bytes past the faulting instruction before calling
+        # this hook, whatever the instruction's length (a 2-byte c.unimp too), so the
+        # faulting instruction is always at pc - 4.
+        epc = uc.reg_read(rv.UC_RISCV_REG_PC) - 4
+        # QEMU reports ecall as U-mode's number; the hart is in M-mode
+        cause = CAUSE_ECALL_M if intno == 8 else intno
         tval = 0
         if cause == CAUSE_ILLEGAL_INSTRUCTION:
             low = self.read_u16(epc)
@@ -182,16 +186,6 @@ class Hart:
         self.pending_exception = PendingException(cause, epc, tval)
         self.retired_adjust += 1
         uc.emu_stop()
-
-    def _faulting_pc(self, next_pc: int) -> int:
-        """Unicorn reports the pc after a faulting instruction; find where it started.
-        A compressed parcel at next_pc - 2 preceded by another compressed parcel means a
-        16-bit instruction; otherwise the instruction is the 32-bit one at next_pc - 4."""
-        before = self.read_u16(next_pc - 4)
-        last = self.read_u16(next_pc - 2)
-        if last & 3 != 3 and before & 3 != 3:
-            return next_pc - 2
-        return next_pc - 4
 
     def note_breakpoint(self) -> None:
         """Unicorn ends a run with an error at ebreak; turn that into the breakpoint exception."""
@@ -253,14 +247,17 @@ class Hart:
         if csr in (CSR_MCYCLE, CSR_CYCLE):
             return (self.csr_context.mcycle() + self.mcycle_offset) & (2**64 - 1)
         if csr in (CSR_MINSTRET, CSR_INSTRET):
-            return (self.instret + self.minstret_offset) & (2**64 - 1)
+            # the counting hook has already counted the CSR instruction itself, which has
+            # not retired yet: a read returns the instructions retired before it
+            return (self.instret - 1 + self.minstret_offset) & (2**64 - 1)
         return self.csr_context.mip()
 
     def _csr_write(self, csr: int, value: int) -> None:
         if csr == CSR_MCYCLE:
             self.mcycle_offset = value - self.csr_context.mcycle()
         elif csr == CSR_MINSTRET:
-            # the CSR instruction itself retires after the write, so minstret reads value + 1 next
+            # the write replaces the CSR instruction's own increment: the next instruction
+            # reads exactly `value` (privileged spec, "CSR side effects")
             self.minstret_offset = value - self.instret
         # mip: MSIP/MTIP/MEIP are read-only in mip; the writable bits belong to S/U modes,
         # which the K210 firmware here does not use. Writes are ignored like the hardware does.

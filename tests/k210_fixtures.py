@@ -8,6 +8,7 @@ explicit virtual times, CPU-level tests step the board with `run_until`.
 """
 from __future__ import annotations
 
+import atexit
 import hashlib
 import shutil
 import subprocess
@@ -50,6 +51,7 @@ _DIR: list[Path] = []
 def _build_dir() -> Path:
     if not _DIR:
         _DIR.append(Path(tempfile.mkdtemp(prefix="k210-test-fw-")))
+        atexit.register(shutil.rmtree, _DIR[0], True)
     return _DIR[0]
 
 

@@ -52,9 +52,9 @@ def memcpy_channel(board, n, items, now=0.0, src=SRC, dst=DST):
 
 
 def run_devices(board, t, until, limit=1.0):
-    """Moves device time from t, event by event, until until() holds; returns the time."""
+    """Moves device time from t, event by event, until until(t) holds; returns the time."""
     board.advance_devices(t)
-    while not until():
+    while not until(t):
         nxt = board.next_device_event(t)
         assert nxt is not None and nxt <= limit, "no further device event"
         t = nxt
@@ -257,11 +257,11 @@ def test_memory_to_spi_in_order_and_on_time(spi_bus):
     t0 = 1e-6
     w(board, d.CHEN, 0x0404, t0)
     period = 32 * SPI_BIT
-    t_done = run_devices(board, t0, lambda: not board.dmac.values[d.CHEN] & 0x04)
+    t_done = run_devices(board, t0, lambda t: not board.dmac.values[d.CHEN] & 0x04)
     assert abs(t_done - (t0 + n * period)) <= (s.FIFO_DEPTH + 1) * period
     assert board.dmac.irq_line(2)
     # the wire keeps going until the last frame is out
-    t_end = run_devices(board, t_done, lambda: not spi.busy(board.time) and len(dev.received) == 4 * n)
+    t_end = run_devices(board, t_done, lambda t: not spi.busy(t) and len(dev.received) == 4 * n)
     assert t_end == pytest.approx(t0 + n * period, abs=1e-9)
     assert bytes(dev.received) == words.astype(">u4").tobytes()
     assert spi.read(s.SR, 4, t_end + EPS) == s.SR_TFNF | s.SR_TFE
@@ -280,7 +280,7 @@ def test_memory_to_spi_with_8_bit_frames_keeps_the_fifo_full(spi_bus):
     w(board, d.CHEN, 0x0101, 0.0)
     period = 8 * SPI_BIT
     assert spi.read(s.TXFLR, 4, 10 * period + EPS) == s.FIFO_DEPTH   # refilled as slots free
-    t_end = run_devices(board, 0.0, lambda: len(dev.received) == n and not spi.busy(board.time))
+    t_end = run_devices(board, 0.0, lambda t: len(dev.received) == n and not spi.busy(t))
     assert t_end == pytest.approx(n * period, abs=1e-9)             # one unbroken train
     assert bytes(dev.received) == bytes(range(n))
 
@@ -333,7 +333,7 @@ def test_spi_receive_to_memory(spi_bus):
     spi.write(s.SER, 4, 1, t0)
     period = 8 * SPI_BIT
     assert r(board, d.CHEN, t0 + (n - 1) * period + EPS) & 0x02
-    t_done = run_devices(board, t0, lambda: not board.dmac.values[d.CHEN] & 0x02)
+    t_done = run_devices(board, t0, lambda t: not board.dmac.values[d.CHEN] & 0x02)
     assert t_done == pytest.approx(t0 + n * period, abs=1e-9)
     got = np.frombuffer(board.memory.read(DST, 4 * n), dtype="<u4")
     assert bytes(got.astype(np.uint8)) == reply
@@ -341,3 +341,98 @@ def test_spi_receive_to_memory(spi_bus):
     assert board.memory.read(DST + 4 * n, 4) == b"\x55" * 4          # nothing past the block
     assert spi.read(s.RXFLR, 4, t_done) == 0                          # all went to memory
     assert r(board, ch(1, d.CH_INTSTATUS), t_done) == d.INT_DMA_TFR_DONE
+
+
+def test_sdk_order_channel_enabled_before_the_slave_select(spi_bus):
+    """The SDK enables the DMA channel, then writes ser: the wire starts at the ser write
+    and the frames still leave in order, back to back."""
+    board, spi, dev = spi_bus
+    n = 50
+    board.memory.load(SRC, np.arange(100, 100 + n, dtype="<u4").tobytes())
+    board.sysctl.write(0x64, 4, 3, 0.0)
+    w(board, d.CFG, d.CFG_ENABLE, 0.0)
+    setup_channel(board, 0, sar=SRC, dar=SPI1_DR, items=n, ctl_value=ctl(dinc_fixed=True),
+                  cfg_value=chcfg(d.TT_MEM2PER, hs_dst_sw=False, dst_per=0))
+    spi_setup(spi, 8, s.TMOD_TX, dmacr=s.DMACR_TDMAE)
+    w(board, d.CHEN, 0x0101, 0.0)
+    t1 = 1e-3
+    assert spi.read(s.TXFLR, 4, t1) == s.FIFO_DEPTH        # the DMA filled the FIFO, nothing sent
+    assert dev.received == b""
+    spi.write(s.SER, 4, 1, t1)
+    period = 8 * SPI_BIT
+    t_end = run_devices(board, t1, lambda t: len(dev.received) == n and not spi.busy(t))
+    assert t_end == pytest.approx(t1 + n * period, abs=1e-9)
+    assert bytes(dev.received) == bytes(range(100, 100 + n))
+    assert not board.dmac.values[d.CHEN] & 1
+
+
+def test_dmac_reset_register(board):
+    w(board, d.CFG, d.CFG_ENABLE, 0.0)
+    memcpy_channel(board, 0, 4096)
+    w(board, d.CHEN, 0x0101, 0.0)
+    w(board, d.RESET, 1, 1e-9)
+    assert r(board, d.RESET, 1e-9) == 0                    # reset completes at once
+    assert r(board, d.CFG, 1e-9) == 0
+    assert r(board, d.CHEN, 1e-9) == 0
+    assert r(board, ch(0, d.SAR), 1e-9) == 0
+    assert r(board, d.COMPVER, 1e-9) == 0x3130_302A
+    assert board.dmac.channels[0].transfer is None
+
+
+def test_dma_to_spi_through_a_program():
+    """Firmware: DMA 100 words to SPI1 (8-bit frames), wait for chen to drop, then for the
+    wire to go idle. The whole wait is the wire time of 100 frames."""
+    board = make_board(program(DMAC_CLOCK_ON + """
+        lw      t0, 0x28(s0)
+        ori     t0, t0, 1 << 5              # APB2
+        sw      t0, 0x28(s0)
+        lw      t0, 0x2c(s0)
+        ori     t0, t0, 1 << 7              # SPI1 clock
+        sw      t0, 0x2c(s0)
+        li      t0, 3
+        sw      t0, 0x64(s0)                # dma_sel0: channel 0 <- SSI1_TX
+        li      s2, 0x53000000
+        li      t0, (7 << 16) | (1 << 8)
+        sw      t0, 0x00(s2)
+        li      t0, 26
+        sw      t0, 0x14(s2)
+        li      t0, 2
+        sw      t0, 0x4c(s2)                # dmacr: TX DMA
+        li      t0, 1
+        sw      t0, 0x08(s2)                # ssienr
+        li      t0, 1
+        sd      t0, 0x10(s1)                # DMAC cfg enable
+        la      t0, words
+        sd      t0, 0x100(s1)               # sar
+        addi    t0, s2, 0x60
+        sd      t0, 0x108(s1)               # dar
+        li      t0, 99
+        sd      t0, 0x110(s1)               # block_ts
+        li      t0, (2 << 8) | (2 << 11) | (1 << 6)
+        sd      t0, 0x118(s1)               # ctl: 32-bit, dst fixed
+        li      t0, (1 << 32) | (1 << 35)   # mem-to-periph, src software handshake, dst_per 0
+        sd      t0, 0x120(s1)
+        li      t0, 0x0101
+        csrr    s10, mcycle
+        sd      t0, 0x18(s1)                # chen
+        li      t0, 1
+        sw      t0, 0x10(s2)                # ser: go
+    1:  ld      t1, 0x18(s1)
+        andi    t1, t1, 1
+        bnez    t1, 1b
+        csrr    s9, mcycle
+    2:  lw      t1, 0x28(s2)
+        andi    t1, t1, 5
+        li      t2, 4
+        bne     t1, t2, 2b
+        csrr    s11, mcycle
+    """, data="words:\n" + "".join(f"    .word {i}\n" for i in range(100))), quantum=2000)
+    dev = RecordingDevice()
+    board.spi1.device_for_ss = lambda ss: dev if ss == 0 else None
+    run_to_done(board, max_time_s=0.01)
+    assert bytes(dev.received) == bytes(range(100))
+    period_cycles = 8 * 26 * 2                              # 8 bits * 2 us at 26 MHz
+    dma_wait = reg(board, "s9") - reg(board, "s10")
+    assert abs(dma_wait - 100 * period_cycles) <= (s.FIFO_DEPTH + 1) * period_cycles
+    total = reg(board, "s11") - reg(board, "s10")
+    assert 100 * period_cycles <= total <= 100 * period_cycles + 60

@@ -476,3 +476,57 @@ def test_spi_unknown_offset_and_read_only_registers(bus):
         spi.write(s.SR, 4, 0, 0.0)
     with pytest.raises(UnmodelledAccess, match="read-only"):
         spi.write(s.TXFLR, 4, 0, 0.0)
+
+
+def test_baudr_bit_zero_is_ignored(bus):
+    board, spi, dev = bus
+    setup(spi, ctrlr0(8, s.TMOD_TX), baudr=BAUDR + 1)
+    assert spi.frame_period() == pytest.approx(FRAME8)
+    setup(spi, ctrlr0(8, s.TMOD_TX), baudr=0)
+    spi.write(s.DR_FIRST, 4, 1, 0.0)                      # no serial clock: nothing moves
+    assert txflr(spi, 1.0) == 1
+    assert dev.received == b""
+
+
+def test_identical_frames_read_by_the_cpu_are_each_popped_once():
+    """Reading the data register from one pc and getting the same value eight times looks
+    like polling to the board, which ends the hart's turn; the load must not be repeated
+    (that would pop a frame nobody sees)."""
+    board = make_board(program("""
+        li      s0, 0x50440000
+        lw      t0, 0x28(s0)
+        ori     t0, t0, 1 << 5
+        sw      t0, 0x28(s0)
+        lw      t0, 0x2c(s0)
+        ori     t0, t0, 1 << 7
+        sw      t0, 0x2c(s0)
+        li      s1, 0x53000000
+        li      t0, (7 << 16)              # 8-bit frames, transmit and receive
+        sw      t0, 0x00(s1)
+        li      t0, 26
+        sw      t0, 0x14(s1)
+        li      t0, 1
+        sw      t0, 0x08(s1)
+        sw      t0, 0x10(s1)
+        li      t1, 12
+    1:  sw      zero, 0x60(s1)
+        addi    t1, t1, -1
+        bnez    t1, 1b
+        li      t2, 12
+    2:  lw      t1, 0x24(s1)               # wait for all twelve replies
+        bne     t1, t2, 2b
+        li      t1, 10
+        li      s3, 0
+    3:  lw      t0, 0x60(s1)               # ten reads from one pc, all 0xFF
+        add     s3, s3, t0
+        addi    t1, t1, -1
+        bnez    t1, 3b
+        lw      s2, 0x24(s1)               # two frames left
+        lw      s4, 0x60(s1)
+    """))
+    dev = RecordingDevice(b"\xFF" * 11 + b"\x5A")
+    board.spi1.device_for_ss = lambda ss: dev if ss == 0 else None
+    run_to_done(board)
+    assert reg(board, "s3") == 10 * 0xFF
+    assert reg(board, "s2") == 2
+    assert reg(board, "s4") == 0xFF

@@ -7,7 +7,7 @@ import pytest
 
 from emulator import sysctl as sc
 from emulator.errors import HardwareMisuse, UnmodelledAccess
-from k210_fixtures import board, idle_elf, make_board, program, reg, run_to_done  # noqa: F401
+from k210_fixtures import board, idle_elf, make_board, program, run_to_done  # noqa: F401
 
 MHZ = 1e6
 LOCK = sc.PLL_LOCK_TIME_S

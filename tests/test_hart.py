@@ -1,0 +1,596 @@
+"""Harts on Unicorn (facts sheet section 2): mhartid, exact minstret, mcycle, synchronous
+exceptions entering mtvec as the privileged spec says, wfi, interrupts, and the report
+of an access to an address nothing answers."""
+from __future__ import annotations
+
+import pytest
+
+from emulator.errors import FirmwareTrap, UnmodelledAccess
+from emulator.hart import CAUSE_INTERRUPT, HartState, IRQ_MEI, IRQ_MSI, IRQ_MTI
+from k210_fixtures import at_done, build_elf, make_board, program, reg, run_to_done, run_until, symbol
+
+CPU_HZ = 26e6
+MSTATUS_MIE, MSTATUS_MPIE, MSTATUS_MPP = 1 << 3, 1 << 7, 3 << 11
+
+# A trap handler for hart 0 that records mcause/mepc/mtval/mstatus in s8..s11 and stops.
+HANDLER = """
+    j       done
+    .balign 4
+handler:
+    csrr    s8, mcause
+    csrr    s9, mepc
+    csrr    s10, mtval
+    csrr    s11, mstatus
+    csrr    s7, mcycle
+    j       done
+"""
+SET_MTVEC = """
+    la      t0, handler
+    csrw    mtvec, t0
+"""
+
+
+def trap_program(body: str) -> str:
+    return program(SET_MTVEC + body + HANDLER)
+
+
+# --- identity and counters ---------------------------------------------------------------------
+
+def test_mhartid_differs_per_hart():
+    board = make_board(build_elf("""
+        .globl _start
+    _start:
+        csrr    a0, mhartid
+        la      t0, ids
+        slli    t1, a0, 3
+        add     t0, t0, t1
+        addi    t2, a0, 100
+        sd      t2, 0(t0)
+        bnez    a0, park
+    done:
+        j       done
+    park:
+        wfi
+        j       park
+        .data
+        .balign 8
+    ids: .dword 0, 0
+    """))
+    run_until(board, lambda b: at_done(b) and b.harts[1].state is HartState.ASLEEP)
+    assert reg(board, "a0", 0) == 0 and reg(board, "a0", 1) == 1
+    ids = board.memory.read(symbol(board, "ids"), 16)
+    assert int.from_bytes(ids[:8], "little") == 100
+    assert int.from_bytes(ids[8:], "little") == 101
+
+
+def test_writing_mhartid_is_an_illegal_instruction():
+    board = make_board(trap_program("""
+        csrw    mhartid, zero
+    """))
+    run_to_done(board)
+    assert reg(board, "s8") == 2
+    assert board.harts[0].uc.mem_read(reg(board, "s9"), 4) == (0xF1401073).to_bytes(4, "little")
+
+
+COUNTERS = """
+    csrr    a1, minstret                 # the very first instruction: nothing retired yet
+    csrr    s5, mcycle
+    csrr    s0, minstret
+    li      t0, 1000
+1:  addi    t0, t0, -1
+    bnez    t0, 1b
+    csrr    s1, minstret
+    csrr    s2, instret
+    csrr    s3, mcycle
+    csrr    s4, cycle
+    li      t1, 5000
+    csrw    minstret, t1
+    csrr    a2, minstret                 # reads what was written
+    csrr    a3, minstret
+"""
+
+
+@pytest.mark.parametrize("quantum", [37, 20_000])
+def test_minstret_counts_exactly(quantum):
+    board = make_board(build_elf("""
+        .globl _start
+    _start:
+    """ + COUNTERS + """
+        bnez    a1, done
+    done:
+        j       done
+    """), quantum=quantum)
+    run_until(board, lambda b: at_done(b, 0) and at_done(b, 1))
+    for hart in (0, 1):
+        assert reg(board, "a1", hart) == 0
+        # csrr s0 + li + 1000 * (addi, bnez) retire between the two reads
+        assert reg(board, "s1", hart) - reg(board, "s0", hart) == 2 + 2000
+        assert reg(board, "s2", hart) == reg(board, "s1", hart) + 1
+        assert reg(board, "a2", hart) == 5000
+        assert reg(board, "a3", hart) == 5001
+
+
+@pytest.mark.parametrize("quantum", [37, 20_000])
+def test_mcycle_counts_one_cycle_per_instruction_while_running(quantum):
+    board = make_board(program(COUNTERS), quantum=quantum)
+    run_to_done(board)
+    # from csrr s5 to csrr s3: 2005 instructions at one per cycle
+    assert reg(board, "s3") - reg(board, "s5") == 2005
+    assert reg(board, "s4") == reg(board, "s3") + 1
+
+
+def test_mcycle_follows_virtual_time_across_sleep():
+    """mcycle is the CPU clock: it keeps counting while the hart sleeps in wfi."""
+    board = make_board(program("""
+        li      t0, 0x0200BFF8
+        ld      t1, 0(t0)
+        li      t2, 5200                      # 10 ms of mtime at 26 MHz / 50
+        add     t1, t1, t2
+        li      t0, 0x02004000
+        sd      t1, 0(t0)
+        li      t0, 1 << 7                    # MTIE, interrupts globally off
+        csrw    mie, t0
+        csrr    s0, mcycle
+        csrr    s2, minstret
+        wfi
+        csrr    s1, mcycle
+        csrr    s3, minstret
+    """))
+    run_to_done(board, max_time_s=0.05)
+    assert reg(board, "s1") - reg(board, "s0") >= 0.010 * CPU_HZ - 200
+    assert reg(board, "s1") - reg(board, "s0") <= 0.010 * CPU_HZ + 200
+    assert reg(board, "s3") - reg(board, "s2") == 3           # csrr s2, wfi, csrr s1
+
+
+# --- synchronous exceptions -------------------------------------------------------------------
+
+@pytest.mark.parametrize("layout, fault_label", [
+    # a plain 32-bit illegal instruction after a 32-bit and before a compressed one
+    ("""
+        .option push
+        .option norvc
+        addi    a0, t1, 0
+        .option pop
+    fault:
+        .word   0xffffffff
+        c.nop
+    """, "fault"),
+    # compressed c.unimp after a 32-bit instruction whose upper half looks compressed-less
+    ("""
+        .option push
+        .option norvc
+        addi    a0, t1, 0                     # t1 = x6: bits 17:16 of the word are 11
+        .option pop
+    fault:
+        c.unimp
+        c.nop
+        c.nop
+    """, "fault"),
+    # compressed c.unimp between compressed instructions
+    ("""
+        c.nop
+    fault:
+        c.unimp
+        c.nop
+        addi    a0, a0, 1
+    """, "fault"),
+    # compressed c.unimp followed by a 32-bit instruction
+    ("""
+        .option push
+        .option norvc
+        nop
+        .option pop
+    fault:
+        c.unimp
+        .option push
+        .option norvc
+        addi    a0, t1, 0
+        .option pop
+    """, "fault"),
+    # F instruction with mstatus.FS = 0 (the K210's reset state)
+    ("""
+        c.nop
+    fault:
+        fadd.d  f0, f1, f2
+        c.nop
+    """, "fault"),
+])
+def test_illegal_instruction_enters_mtvec(layout, fault_label):
+    board = make_board(trap_program(layout))
+    run_to_done(board)
+    fault = symbol(board, fault_label)
+    assert reg(board, "s8") == 2
+    assert reg(board, "s9") == fault
+    low = int.from_bytes(board.memory.read(fault, 2), "little")
+    word = low if low & 3 != 3 else int.from_bytes(board.memory.read(fault, 4), "little")
+    assert reg(board, "s10") == word                     # mtval: the instruction bits
+    status = reg(board, "s11")
+    assert status & MSTATUS_MPP == MSTATUS_MPP and not status & MSTATUS_MIE
+    assert "illegal instruction" in board._trap_report
+    assert f"0x{fault:08x}" in board._trap_report
+
+
+def test_illegal_instruction_does_not_retire():
+    board = make_board(program(SET_MTVEC + """
+        csrr    s0, minstret
+        .word   0xffffffff
+        j       done
+        .balign 4
+    handler:
+        csrr    s1, minstret
+        j       done
+    """))
+    run_to_done(board)
+    # only csrr s0 retired between the reads: the faulting instruction did not
+    assert reg(board, "s1") - reg(board, "s0") == 1
+
+
+def test_ecall_gives_cause_11_at_the_ecall():
+    board = make_board(trap_program("""
+        c.nop
+    the_ecall:
+        ecall
+        c.nop
+    """))
+    run_to_done(board)
+    assert reg(board, "s8") == 11
+    assert reg(board, "s9") == symbol(board, "the_ecall")
+    assert reg(board, "s10") == 0
+
+
+def test_ebreak_gives_cause_3():
+    board = make_board(trap_program("""
+        .option push
+        .option norvc
+    the_ebreak:
+        ebreak
+        .option pop
+    """))
+    run_to_done(board)
+    assert reg(board, "s8") == 3
+    assert reg(board, "s9") == symbol(board, "the_ebreak")
+
+
+def test_mret_returns_to_mepc_plus_4():
+    """A handler that skips the ecall and returns: the program carries on after it."""
+    board = make_board(program("""
+        la      t0, handler
+        csrw    mtvec, t0
+        li      s1, 0
+        ecall
+        li      s1, 42
+        j       done
+        .balign 4
+    handler:
+        csrr    t0, mepc
+        addi    t0, t0, 4
+        csrw    mepc, t0
+        mret
+    """))
+    run_to_done(board)
+    assert reg(board, "s1") == 42
+    assert reg(board, "priv") == 3                          # still machine mode (MPP = M)
+
+
+def test_exception_without_a_trap_handler_stops_the_run():
+    board = make_board(program("""
+        csrw    mtvec, zero
+        .word   0xffffffff
+    """))
+    with pytest.raises(FirmwareTrap, match="illegal instruction.*points at no trap handler"):
+        run_to_done(board)
+
+
+# --- wfi and interrupts --------------------------------------------------------------------------
+
+WFI_MSIP = """
+    .globl _start
+_start:
+    csrr    a0, mhartid
+    bnez    a0, hart1
+    li      t0, 1 << 3                        # MSIE; mstatus.MIE stays 0: wake, no trap
+    csrw    mie, t0
+    csrr    s0, minstret
+    wfi
+    csrr    s1, minstret
+    csrr    s2, mcycle
+    li      t0, 0x02000000
+    sw      zero, 0(t0)                       # clear msip[0]
+done:
+    j       done
+hart1:
+    li      t0, 30000
+1:  addi    t0, t0, -1
+    bnez    t0, 1b
+    csrr    s3, mcycle
+    li      t0, 0x02000000
+    li      t1, 1
+    sw      t1, 0(t0)                         # msip[0] = 1
+park:
+    csrw    mie, zero
+    wfi
+    j       park
+"""
+
+
+def test_wfi_sleeps_until_msip_wakes_the_hart():
+    board = make_board(build_elf(WFI_MSIP))
+    board._step()
+    assert board.harts[0].state is HartState.ASLEEP
+    asleep_at = board.harts[0].instret
+    board._step()
+    assert board.harts[0].state is HartState.ASLEEP
+    assert board.harts[0].instret == asleep_at             # sleeping costs no instructions
+    run_until(board, at_done)
+    assert reg(board, "s1", 0) - reg(board, "s0", 0) == 2  # csrr, wfi
+    assert reg(board, "s2", 0) >= reg(board, "s3", 1)      # woke after hart 1 raised msip
+    assert reg(board, "mcause", 0) == 0                    # MIE = 0: no trap taken
+    assert not board.clint.msip(0)
+
+
+def test_wfi_with_nothing_to_wake_it_is_a_hang():
+    from emulator.errors import HangDetected
+    board = make_board(program("""
+        csrw    mie, zero
+        wfi
+        li      s1, 1
+    """))
+    with pytest.raises(HangDetected, match="every hart waits"):
+        run_to_done(board)
+
+
+TIMER_IRQ = """
+    la      t0, handler
+    csrw    mtvec, t0
+    li      t0, 0x0200BFF8
+    ld      t1, 0(t0)
+    addi    t1, t1, 100                       # 100 ticks = 5000 cycles from now
+    li      t0, 0x02004000
+    sd      t1, 0(t0)
+    csrr    s6, mcycle
+    li      t0, 1 << 7                        # MTIE
+    csrw    mie, t0
+    csrsi   mstatus, 8                        # MIE
+loop:
+    addi    s1, s1, 1
+    j       loop
+""" + HANDLER
+
+
+def test_timer_interrupt_enters_mtvec_with_the_interrupt_bit():
+    board = make_board(program(TIMER_IRQ), quantum=100)
+    run_to_done(board)
+    assert reg(board, "s8") == CAUSE_INTERRUPT | IRQ_MTI
+    assert reg(board, "s9") in (symbol(board, "loop"), symbol(board, "loop") + 2)
+    status = reg(board, "s11")
+    assert status & MSTATUS_MPIE and not status & MSTATUS_MIE
+    assert status & MSTATUS_MPP == MSTATUS_MPP
+    assert reg(board, "s1") > 0                            # the loop ran before the interrupt
+    # t1 = mtimecmp; mtime ticks every 50 cycles from cycle 0
+    latency = reg(board, "s7") - reg(board, "t1") * 50
+    assert 0 <= latency <= 150
+
+
+@pytest.mark.xfail(strict=False, reason="board.py: a device event created during a turn (here mtimecmp) "
+                   "does not shorten the turn, so the interrupt comes up to a quantum late")
+def test_timer_interrupt_latency_with_the_default_quantum():
+    board = make_board(program(TIMER_IRQ))
+    run_to_done(board)
+    latency = reg(board, "s7") - reg(board, "t1") * 50
+    assert 0 <= latency <= 150
+
+
+def test_vectored_mtvec_for_interrupts():
+    board = make_board(program("""
+        la      t0, vectors
+        ori     t0, t0, 1                     # vectored mode
+        csrw    mtvec, t0
+        li      t0, 0x02000000
+        li      t1, 1
+        sw      t1, 0(t0)                     # msip[0]
+        li      t0, 1 << 3
+        csrw    mie, t0
+        csrsi   mstatus, 8
+    1:  j       1b
+        .balign 64
+        .option push
+        .option norvc                         # 4-byte entries
+    vectors:
+        j       wrong
+        j       wrong
+        j       wrong
+        j       soft                          # entry 3: machine software interrupt
+        j       wrong
+        j       wrong
+        j       wrong
+        j       wrong
+        .option pop
+    wrong:
+        li      s1, -1
+        j       done
+    soft:
+        li      s1, 3
+        csrr    s8, mcause
+        j       done
+    """), quantum=100)
+    run_to_done(board)
+    assert reg(board, "s1") == 3
+    assert reg(board, "s8") == CAUSE_INTERRUPT | IRQ_MSI
+
+
+def test_external_interrupt_through_the_plic():
+    """GPIOHS line 0 rising edge -> PLIC source 34 -> MEIP -> mcause 11 with the interrupt bit;
+    the handler claims 34."""
+    board = make_board(program("""
+        li      s0, 0x50440000
+        lw      t0, 0x28(s0)
+        ori     t0, t0, 1 << 3
+        sw      t0, 0x28(s0)
+        la      t0, handler
+        csrw    mtvec, t0
+        li      s1, 0x0C000000
+        li      t0, 1
+        sw      t0, 34 * 4(s1)               # priority[34] = 1
+        li      t1, 0x0C002004
+        li      t0, 1 << 2
+        sw      t0, 0(t1)                    # context 0 enables source 34
+        li      t1, 0x0C200000
+        sw      zero, 0(t1)                  # threshold 0
+        li      t0, 1 << 11
+        csrw    mie, t0                      # MEIE
+        csrsi   mstatus, 8
+        li      s2, 0x38001000
+        li      t0, 1
+        sw      t0, 0x04(s2)                 # input_en
+        sw      t0, 0x08(s2)                 # output_en
+        sw      t0, 0x18(s2)                 # rise_ie
+        sw      t0, 0x0C(s2)                 # output_val: rising edge
+    1:  j       1b
+        .balign 4
+    handler:
+        csrr    s8, mcause
+        li      t1, 0x0C200004
+        lw      s3, 0(t1)                    # claim
+        j       done
+    """), quantum=100)
+    run_to_done(board)
+    assert reg(board, "s8") == CAUSE_INTERRUPT | IRQ_MEI
+    assert reg(board, "s3") == 34
+
+
+def test_masked_interrupts_are_not_taken():
+    board = make_board(program("""
+        la      t0, handler
+        csrw    mtvec, t0
+        li      t0, 0x02000000
+        li      t1, 1
+        sw      t1, 0(t0)                     # msip[0], but mie.MSIE = 0
+        csrsi   mstatus, 8
+        li      t0, 2000
+    1:  addi    t0, t0, -1
+        bnez    t0, 1b
+        li      s1, 7
+        j       done
+        .balign 4
+    handler:
+        li      s1, -1
+        j       done
+    """), quantum=100)
+    run_to_done(board)
+    assert reg(board, "s1") == 7
+
+
+# --- accesses nothing answers ------------------------------------------------------------------
+
+def test_unmapped_load_names_hart_pc_instruction_address_size_and_direction():
+    board = make_board(program("""
+        li      t0, 0x60000000
+    bad:
+        lw      t1, 8(t0)
+    """))
+    with pytest.raises(UnmodelledAccess) as info:
+        run_to_done(board)
+    text = str(info.value)
+    bad = symbol(board, "bad")
+    assert "hart 0" in text
+    assert f"pc 0x{bad:08x}" in text
+    assert "lw t1, 8(t0)" in text
+    assert "0x60000008" in text
+    assert "load of 4 bytes" in text
+
+
+def test_store_to_a_known_but_unmodelled_block_names_it():
+    board = make_board(build_elf("""
+        .globl _start
+    _start:
+        csrr    a0, mhartid
+        beqz    a0, done
+        li      t0, 0x50210000
+    bad:
+        sd      a0, 0x10(t0)
+    done:
+        j       done
+    """))
+    with pytest.raises(UnmodelledAccess) as info:
+        run_until(board, lambda b: False, max_time_s=1e-3)
+    text = str(info.value)
+    assert "hart 1" in text
+    assert f"pc 0x{symbol(board, 'bad'):08x}" in text
+    assert "sd a0, 0x10(t0)" in text
+    assert "store of 8 bytes at 0x50210010" in text
+    assert "UART1" in text
+
+
+def test_mip_reads_the_board_pending_bits():
+    board = make_board(program("""
+        csrr    s1, mip
+        li      t0, 0x02000000
+        li      t1, 1
+        sw      t1, 0(t0)                     # msip[0]
+        csrr    s2, mip
+        li      t0, 0x02004000
+        sd      zero, 0(t0)                   # mtimecmp[0] = 0: timer pending
+        csrr    s3, mip
+        li      t0, -1
+        csrw    mip, t0                       # the machine bits of mip are read-only
+        csrr    s4, mip
+    """))
+    run_to_done(board)
+    assert reg(board, "s1") == 0
+    assert reg(board, "s2") == 1 << IRQ_MSI
+    assert reg(board, "s3") == 1 << IRQ_MSI | 1 << IRQ_MTI
+    assert reg(board, "s4") == 1 << IRQ_MSI | 1 << IRQ_MTI
+
+
+def test_software_interrupt_wins_over_timer():
+    """Both pending when MIE turns on: MSI is taken first (privileged spec order MEI, MSI, MTI)."""
+    board = make_board(program(SET_MTVEC + """
+        li      t0, 0x02000000
+        li      t1, 1
+        sw      t1, 0(t0)                     # msip[0]
+        li      t0, 0x02004000
+        sd      zero, 0(t0)                   # timer pending too
+        li      t0, (1 << 3) | (1 << 7)
+        csrw    mie, t0
+        csrsi   mstatus, 8
+    1:  j       1b
+    """ + HANDLER), quantum=100)
+    run_to_done(board)
+    assert reg(board, "s8") == CAUSE_INTERRUPT | IRQ_MSI
+
+
+# --- turns ended by devices ---------------------------------------------------------------------
+
+STORES_WITH_MIE = """
+    csrsi   mstatus, 8                        # MIE on, mie = 0: nothing can interrupt
+    csrr    s0, mcycle
+    csrr    s2, minstret
+    li      t0, 0x02000004
+    li      t1, 100
+1:  sw      zero, 0(t0)                       # msip[1] = 0: the board re-checks interrupts
+    addi    t1, t1, -1
+    bnez    t1, 1b
+    csrr    s1, mcycle
+    csrr    s3, minstret
+"""
+
+
+def test_a_device_ending_the_turn_does_not_repeat_the_access():
+    """Each store to the CLINT with mstatus.MIE set ends the hart's turn (an interrupt may
+    now be pending). The store must still happen exactly once: the loop retires exactly
+    3 instructions per iteration and terminates."""
+    board = make_board(program(STORES_WITH_MIE), quantum=50)
+    run_to_done(board, max_time_s=0.05)
+    assert reg(board, "t1") == 0
+    # csrr s2, li t0 (lui + addi), li t1, 100 * (sw, addi, bnez), csrr s1
+    assert reg(board, "s3") - reg(board, "s2") == 1 + 2 + 1 + 300 + 1
+
+
+@pytest.mark.xfail(strict=False, reason="board.py: when a device ends a hart's turn early "
+                   "(interrupts_may_have_changed), the board still advances time by the whole quantum, "
+                   "so each such store costs a quantum of cycles")
+def test_a_device_ending_the_turn_costs_no_time():
+    board = make_board(program(STORES_WITH_MIE))
+    run_to_done(board, max_time_s=1.0)
+    cycles = reg(board, "s1") - reg(board, "s0")
+    assert cycles <= 2 * (reg(board, "s3") - reg(board, "s2"))
