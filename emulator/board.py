@@ -88,19 +88,41 @@ class RunResult:
     warnings: list[str] = field(default_factory=list)
 
 
-def _memory_access_width(word: int) -> int:
-    """Bytes a load/store instruction moves (RV64GC encodings), 4 if unsure."""
-    if word & 3 != 3:   # compressed: c.ld/c.sd/c.ldsp/c.sdsp/c.fld/c.fsd/c.fldsp/c.fsdsp move 8
-        funct3, quadrant = (word >> 13) & 7, word & 3
-        if quadrant in (0, 2) and funct3 in (1, 3, 5, 7):
-            return 8
-        return 4
-    opcode, funct3 = word & 0x7F, (word >> 12) & 7
-    if opcode in (0x03, 0x23, 0x07, 0x27):   # integer/FP load/store
-        return 1 << (funct3 & 3)
-    if opcode == 0x2F:                       # AMO: funct3 2 = .w, 3 = .d
-        return 8 if funct3 == 3 else 4
-    return 4
+def _bits(word: int, high: int, low: int) -> int:
+    return (word >> low) & ((1 << (high - low + 1)) - 1)
+
+
+def _signed(value: int, bits: int) -> int:
+    return value - (1 << bits) if value >> (bits - 1) & 1 else value
+
+
+def decode_memory_access(word: int) -> tuple[int, int, int] | None:
+    """(bytes moved, base register, offset) of an RV64GC load/store/AMO, or None."""
+    if word & 3 != 3:                         # compressed
+        op, funct3 = word & 3, _bits(word, 15, 13)
+        if op == 0 and funct3 in (1, 2, 3, 5, 6, 7):          # c.fld c.lw c.ld c.fsd c.sw c.sd
+            rs1 = 8 + _bits(word, 9, 7)
+            if funct3 in (2, 6):
+                imm = _bits(word, 12, 10) << 3 | _bits(word, 6, 6) << 2 | _bits(word, 5, 5) << 6
+                return 4, rs1, imm
+            return 8, rs1, _bits(word, 12, 10) << 3 | _bits(word, 6, 5) << 6
+        if op == 2 and funct3 in (1, 2, 3):                    # c.fldsp c.lwsp c.ldsp
+            if funct3 == 2:
+                return 4, 2, _bits(word, 12, 12) << 5 | _bits(word, 6, 4) << 2 | _bits(word, 3, 2) << 6
+            return 8, 2, _bits(word, 12, 12) << 5 | _bits(word, 6, 5) << 3 | _bits(word, 4, 2) << 6
+        if op == 2 and funct3 in (5, 6, 7):                    # c.fsdsp c.swsp c.sdsp
+            if funct3 == 6:
+                return 4, 2, _bits(word, 12, 9) << 2 | _bits(word, 8, 7) << 6
+            return 8, 2, _bits(word, 12, 10) << 3 | _bits(word, 9, 7) << 6
+        return None
+    opcode, funct3, rs1 = word & 0x7F, _bits(word, 14, 12), _bits(word, 19, 15)
+    if opcode in (0x03, 0x07):                                 # loads
+        return 1 << (funct3 & 3), rs1, _signed(word >> 20, 12)
+    if opcode in (0x23, 0x27):                                 # stores
+        return 1 << (funct3 & 3), rs1, _signed(_bits(word, 31, 25) << 5 | _bits(word, 11, 7), 12)
+    if opcode == 0x2F:                                         # AMOs and LR/SC
+        return (8 if funct3 == 3 else 4), rs1, 0
+    return None
 
 
 class LcdPort:
@@ -228,10 +250,13 @@ class Board:
         self._stop: BoardStop | None = None
         self._current: Hart | None = None
         self._quantum_t0 = 0.0
+        self._turn_hz = self._hz
+        self._turn_horizon = 0.0
         self._quantum_start = [0] * HARTS
         self._poll = [(-1, -1, -1, 0)] * HARTS
         self._split: list[tuple[int, int, int] | None] = [None] * HARTS
-        self._widths: dict[int, int] = {}
+        self._accesses: dict[int, tuple[int, int, int]] = {}
+        self._faulting_pc: list[int | None] = [None] * HARTS
         self.device_writes: dict[str, list[int]] = {}   # stores per device, per hart
         self.host_time_in_harts = 0.0                     # host seconds spent executing guest code
         self._trap_report: str | None = None
@@ -273,9 +298,10 @@ class Board:
         return self._hz
 
     def hart_now(self, hart: Hart) -> float:
+        """The virtual time a hart has reached (mid-turn: counting its instructions so far)."""
         if hart is self._current:
-            return self._quantum_t0 + (hart.executed - self._quantum_start[hart.hart_id]) / self._hz
-        return self.time
+            return self._quantum_t0 + (hart.executed - self._quantum_start[hart.hart_id]) / self._turn_hz
+        return hart.time
 
     def cycles(self, now: float) -> int:
         return self._epoch_cycles + int((now - self._epoch_time) * self._hz + 1e-6)
@@ -343,25 +369,11 @@ class Board:
         return {"spi0": self.spi0, "spi1": self.spi1}[name]
 
     def reset_peripheral(self, name: str, now: float) -> None:
-        """SYSCTL peri_reset released a peripheral: its registers return to reset values."""
+        """SYSCTL peri_reset released a block: it returns to its reset state."""
         target = {"spi0": self.spi0, "spi1": self.spi1, "dma": self.dmac, "fpioa": self.fpioa}.get(name)
-        if target is None:
-            return
-        index = self.peripherals.index(target)
-        fresh = SpiController(target.index, self) if isinstance(target, SpiController) else type(target)(self)
-        if isinstance(fresh, SpiController):
-            fresh.device_for_ss = target.device_for_ss
-            setattr(self, f"spi{target.index}", fresh)
-        elif isinstance(fresh, Dmac):
-            self.dmac = fresh
-        else:
-            self.fpioa = fresh
-        self.peripherals[index] = fresh
-        self.timed_devices = [self.uarths, self.spi0, self.spi1, self.dmac, self.sysctl, self.clint]
-        for hart in self.harts:
-            hart.uc.mmio_unmap(fresh.BASE, fresh.SIZE)
-            hart.uc.mmio_map(fresh.BASE, fresh.SIZE, self._mmio_reader(hart, fresh), None,
-                             self._mmio_writer(hart, fresh), None)
+        if target is not None:
+            self.advance_devices(now)
+            target.reset(now)
 
     def _console_byte(self, byte: int) -> None:
         """Console output; a line `error <code> ...` is the firmware's fatal error report."""
@@ -414,9 +426,10 @@ class Board:
             value |= 1 << hartmod.IRQ_MEI
         return value
 
-    def interrupts_may_have_changed(self) -> None:
-        """A device changed an interrupt input: a running hart with interrupts enabled
-        must see it promptly, so its turn ends here."""
+    def interrupts_may_have_changed(self, now: float | None = None) -> None:
+        """A device changed an interrupt input at `now`: sleeping harts it concerns wake
+        then, and a running hart with interrupts enabled ends its turn to take it."""
+        self._wake_sleepers(self.time if now is None else now)
         hart = self._current
         if hart is not None and hart.csr(rv.UC_RISCV_REG_MSTATUS) & hartmod.MSTATUS_MIE:
             hart.request_stop()
@@ -468,15 +481,30 @@ class Board:
         if self.sysctl.in_reset(gate):
             raise HardwareMisuse(f"{peripheral.NAME} accessed while held in reset (SYSCTL peri_reset)")
 
-    def _access_width(self, hart: Hart, pc: int) -> int:
-        """Bytes moved by the load/store at pc. Unicorn splits a 64-bit MMIO access into
-        two 32-bit callbacks (low half first); decoding the instruction tells them apart
-        from two genuine 32-bit accesses."""
-        width = self._widths.get(pc)
-        if width is None:
-            width = _memory_access_width(hart.read_u32(pc))
-            self._widths[pc] = width
-        return width
+    def _access(self, hart: Hart, pc: int) -> tuple[int, int, int]:
+        """(width, base register, offset) of the load/store at pc, decoded once per pc.
+        Unicorn splits a 64-bit or misaligned MMIO access into several callbacks; the
+        instruction says what the hart really did."""
+        access = self._accesses.get(pc)
+        if access is None:
+            access = decode_memory_access(hart.read_u32(pc)) or (4, 0, 0)
+            self._accesses[pc] = access
+        return access
+
+    def _misaligned(self, hart: Hart, pc: int, width: int, rs1: int, imm: int, is_store: bool) -> bool:
+        """A misaligned device access raises the misaligned-access exception, as on the K210;
+        the rest of the instruction's callbacks are ignored."""
+        if self._faulting_pc[hart.hart_id] == pc:
+            return True
+        base = hart.uc.reg_read(rv.UC_RISCV_REG_X0 + rs1) if rs1 else 0
+        address = (base + imm) & (2**64 - 1)
+        if address % width == 0:
+            return False
+        hart.pending_exception = hartmod.PendingException(6 if is_store else 4, pc, address)
+        hart.retired_adjust += 1
+        hart.request_stop()
+        self._faulting_pc[hart.hart_id] = pc
+        return True
 
     def _mmio_reader(self, hart: Hart, peripheral: Peripheral):
         def read(uc, offset, size, user_data):
@@ -488,7 +516,9 @@ class Board:
                 self._split[hart.hart_id] = None
                 return pending[2]
             now = self.hart_now(hart)
-            width = self._access_width(hart, pc) if size == 4 else size
+            width, rs1, imm = self._access(hart, pc)
+            if self._misaligned(hart, pc, width, rs1, imm, False):
+                return 0
             try:
                 self._gate_check(peripheral)
                 value = peripheral.read(offset, width, now)
@@ -507,7 +537,9 @@ class Board:
             if self._stop is not None:
                 return
             pc = uc.reg_read(rv.UC_RISCV_REG_PC)
-            width = self._access_width(hart, pc) if size == 4 else size
+            width, rs1, imm = self._access(hart, pc)
+            if self._misaligned(hart, pc, width, rs1, imm, True):
+                return
             if width == 8 and size == 4:
                 pending = self._split[hart.hart_id]
                 if pending is None or pending[:2] != (pc, offset):
@@ -523,6 +555,12 @@ class Board:
                 peripheral.write(offset, width, value, now)
             except BoardStop as error:
                 self._fail(hart, error, peripheral.BASE + offset, width, "store")
+                return
+            # a store that makes a device do something before this turn's planned end (start a
+            # transfer, set a timer) ends the turn, so the next one stops at that event
+            event = self.next_device_event(now)
+            if event is not None and event < self._turn_horizon:
+                hart.request_stop()
         return write
 
     def _note_poll(self, hart: Hart, pc: int, address: int, value: int) -> None:
@@ -532,7 +570,7 @@ class Board:
         if (pc, address, value) == (last_pc, last_address, last_value):
             repeats += 1
             if repeats >= POLL_REPEATS:
-                hart.state = HartState.STALLED
+                hart.polling = True
                 hart.request_stop()
                 repeats = 0
         else:
@@ -592,50 +630,89 @@ class Board:
                          self.warnings)
 
     def _step(self) -> None:
-        t0 = self.time
+        """One turn: the running hart that is furthest behind in virtual time runs until
+        its quantum ends, the next device event, or one quantum past the other hart."""
+        running = [h for h in self.harts if h.state is HartState.RUNNING]
+        if not running:
+            # every hart sleeps in wfi: time moves on to the next thing a device does
+            wake = self.next_device_event(self.time)
+            if wake is None:
+                self._report_hang("every hart sleeps in wfi and no device will ever raise an interrupt")
+            self._set_time(wake)
+            self._check_deadlines()
+            return
+        hart = min(running, key=lambda h: (h.time, h.hart_id))
+        self._take_interrupt(hart)
+        t0 = hart.time
         hz = self._hz
-        next_event = self.next_device_event(t0)
-        span = self.quantum / hz
-        if next_event is not None:
-            span = min(span, max(next_event - t0, 1 / hz))
-        budget = max(1, math.ceil(span * hz - 1e-9))
-        ran_any = False
-        for hart in self.harts:
-            if hart.state is not HartState.RUNNING:
-                continue
-            ran_any = True
-            self._run_hart(hart, t0, budget)
-            if self._stop is not None:
-                raise self._stop
-            if len(self.frames) >= self._frames_wanted:
-                self.time = max(self.time, self.delivery_time)
-                return
-        if self._hz != hz:   # the clock changed during the turn; time so far ran at the old clock
-            t_end = self._epoch_time
-        elif ran_any:
-            t_end = t0 + budget / hz
-        else:
-            if next_event is None:
-                self._report_hang("every hart waits (wfi or polling) and no device will ever change state")
-            t_end = next_event
-        self.time = max(t_end, t0)
-        self.advance_devices(self.time)
-        self._wake_and_interrupt()
+        horizon = t0 + self.quantum / hz
+        event = self.next_device_event(t0)
+        if event is not None:
+            horizon = min(horizon, event)
+        for other in running:
+            if other is not hart:
+                horizon = min(horizon, other.time + self.quantum / hz)
+        budget = max(1, math.ceil((horizon - t0) * hz - 1e-9))
+        self._turn_horizon = t0 + budget / hz
+        ran = self._run_hart(hart, t0, budget, hz)
+        if self._stop is not None:
+            raise self._stop
+        hart.time = t0 + ran / hz
+        if hart.polling:
+            # nothing the hart's loop does will change what it polls before the next device
+            # event: it waits until then (or the end of its turn) without executing
+            hart.polling = False
+            event = self.next_device_event(hart.time)
+            hart.time = max(hart.time, min(event, horizon) if event is not None else horizon)
+        if len(self.frames) >= self._frames_wanted:
+            self.time = max(self.time, self.delivery_time)
+            return
+        running = [h.time for h in self.harts if h.state is HartState.RUNNING]
+        if running:
+            self._set_time(min(running))
         self._check_deadlines()
 
-    def _run_hart(self, hart: Hart, t0: float, budget: int) -> None:
+    def _set_time(self, now: float) -> None:
+        """Moves the board's time (the earliest time a running hart has reached) forward:
+        devices catch up and sleeping harts with a pending enabled interrupt wake."""
+        if now > self.time:
+            self.time = now
+        self.advance_devices(self.time)
+        self._wake_sleepers(self.time)
+
+    def _wake_sleepers(self, now: float) -> None:
+        for hart in self.harts:
+            if hart.state is HartState.ASLEEP and self.mip(hart.hart_id, now) & hart.csr(rv.UC_RISCV_REG_MIE):
+                hart.state = HartState.RUNNING
+                hart.time = max(hart.time, now)
+
+    def _take_interrupt(self, hart: Hart) -> None:
+        """Before a turn: a pending enabled interrupt with mstatus.MIE set enters mtvec."""
+        if not hart.csr(rv.UC_RISCV_REG_MSTATUS) & hartmod.MSTATUS_MIE:
+            return
+        pending = self.mip(hart.hart_id, hart.time) & hart.csr(rv.UC_RISCV_REG_MIE)
+        for irq in (hartmod.IRQ_MEI, hartmod.IRQ_MSI, hartmod.IRQ_MTI):
+            if pending >> irq & 1:
+                hart.enter_trap(hartmod.CAUSE_INTERRUPT | irq, hart.pc, 0)
+                return
+
+    def _run_hart(self, hart: Hart, t0: float, budget: int, hz: float) -> int:
+        """Runs one turn of a hart; returns how many instructions it executed."""
         self._current = hart
+        self._faulting_pc[hart.hart_id] = None
         self._quantum_t0 = t0
+        self._turn_hz = hz
         self._quantum_start[hart.hart_id] = hart.executed
         started = host_time.perf_counter()
+        before = hart.executed
+        end = None
         try:
-            end, ran = hart.run(budget)
+            end, _ = hart.run(budget)
         except unicorn.UcError as error:
-            end, ran = None, 0
             hart.pc = hart.uc.reg_read(rv.UC_RISCV_REG_PC)
             if self._stop is None:
-                if error.errno == unicorn.UC_ERR_INSN_INVALID and hart.read_u16(hart.pc) in (0x9002,) or \
-                        hart.read_u32(hart.pc) == 0x00100073:
+                if error.errno == unicorn.UC_ERR_INSN_INVALID and (hart.read_u16(hart.pc) == 0x9002 or
+                                                                    hart.read_u32(hart.pc) == 0x00100073):
                     hart.note_breakpoint()
                     end = RunEnd.EXCEPTION
                 else:
@@ -645,12 +722,13 @@ class Board:
         finally:
             self._current = None
             self.host_time_in_harts += host_time.perf_counter() - started
-        if self._stop is not None:
-            return
-        if end is RunEnd.WFI:
-            hart.state = HartState.ASLEEP
-        elif end is RunEnd.EXCEPTION:
-            self._deliver_exception(hart)
+        ran = hart.executed - before
+        if self._stop is None:
+            if end is RunEnd.WFI:
+                hart.state = HartState.ASLEEP
+            elif end is RunEnd.EXCEPTION:
+                self._deliver_exception(hart)
+        return ran
 
     def _deliver_exception(self, hart: Hart) -> None:
         exc = hart.pending_exception
@@ -668,21 +746,6 @@ class Board:
         self._trap_report = report
         self._trap_deadline = self.time + TRAP_GRACE_S
         hart.enter_trap(exc.cause, exc.epc, exc.tval)
-
-    def _wake_and_interrupt(self) -> None:
-        for hart in self.harts:
-            if hart.state is HartState.STALLED:
-                hart.state = HartState.RUNNING
-            pending = self.mip(hart.hart_id, self.time) & hart.csr(rv.UC_RISCV_REG_MIE)
-            if not pending:
-                continue
-            if hart.state is HartState.ASLEEP:
-                hart.state = HartState.RUNNING
-            if hart.csr(rv.UC_RISCV_REG_MSTATUS) & hartmod.MSTATUS_MIE:
-                for irq in (hartmod.IRQ_MEI, hartmod.IRQ_MSI, hartmod.IRQ_MTI):
-                    if pending >> irq & 1:
-                        hart.enter_trap(hartmod.CAUSE_INTERRUPT | irq, hart.pc, 0)
-                        break
 
     def _check_deadlines(self) -> None:
         if self._trap_deadline is not None:

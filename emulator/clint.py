@@ -52,7 +52,7 @@ class Clint(Peripheral):
             self.values[offset] = value & 1
         else:
             self.values[offset] = value
-        self.board.interrupts_may_have_changed()
+        self.board.interrupts_may_have_changed(now)
 
     def next_event_time(self, now: float) -> float | None:
         times = []

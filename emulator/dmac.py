@@ -105,6 +105,11 @@ class DmaChannel:
         if not self.remaining():
             self.peripheral_done(now)
 
+    def peripheral_gone(self) -> None:
+        """The peripheral was reset under the channel: no more requests will come."""
+        if self.transfer is not None:
+            self.transfer.peripheral = None
+
     def peripheral_done(self, at: float) -> None:
         if self.transfer is not None:
             self.transfer.done_at = at
@@ -132,6 +137,13 @@ class Dmac(Peripheral):
         super().__init__(board)
         self.channels = [DmaChannel(self, n) for n in range(CHANNELS)]
 
+    def reset(self, now: float) -> None:
+        for channel in self.channels:
+            if channel.transfer is not None and channel.transfer.peripheral is not None:
+                channel.transfer.peripheral.detach_dma(channel)
+            channel.transfer = None
+        super().reset(now)
+
     def _ch(self, n: int, off: int) -> int:
         return CH_BASE + CH_STRIDE * n + off
 
@@ -158,7 +170,7 @@ class Dmac(Peripheral):
         self.values[self._ch(n, STATUS)] = t.items
         enabled = self.values[self._ch(n, INTSTATUS_EN)]
         self.values[self._ch(n, CH_INTSTATUS)] |= (INT_BLOCK_TFR_DONE | INT_DMA_TFR_DONE) & enabled
-        self.board.interrupts_may_have_changed()
+        self.board.interrupts_may_have_changed(t.done_at)
 
     def irq_line(self, n: int) -> bool:
         if not self.values[CFG] & CFG_INT_EN:
@@ -188,11 +200,7 @@ class Dmac(Peripheral):
         self.board.advance_devices(now)
         if offset == RESET:
             if value & 1:
-                for channel in self.channels:
-                    if channel.transfer is not None and channel.transfer.peripheral is not None:
-                        channel.transfer.peripheral.detach_dma(channel)
-                    channel.transfer = None
-                self.values = {off: r.reset for off, r in self.REGISTERS.items()}
+                self.reset(now)
             return
         if offset == CHEN:
             self._write_chen(value, now)
@@ -202,11 +210,11 @@ class Dmac(Peripheral):
         if offset >= CH_BASE and (offset - CH_BASE) % CH_STRIDE == INTCLEAR:
             status = offset - INTCLEAR + CH_INTSTATUS
             self.values[status] &= ~value
-            self.board.interrupts_may_have_changed()
+            self.board.interrupts_may_have_changed(now)
             return
         self.values[offset] = value
         if offset == CFG:
-            self.board.interrupts_may_have_changed()
+            self.board.interrupts_may_have_changed(now)
 
     def _write_chen(self, value: int, now: float) -> None:
         old = self.values[CHEN]

@@ -42,11 +42,19 @@ class Fpioa(Peripheral):
 
     def __init__(self, board=None) -> None:
         super().__init__(board)
-        # Reset: every pad's function select is 0xFF-free "reserved"; the SDK treats pads as
-        # unassigned until fpioa_set_function. Use an impossible function number so that a
-        # pad nobody routed drives nothing.
+        self._unroute_all()
+
+    def _unroute_all(self) -> None:
+        # The SDK treats pads as unassigned until fpioa_set_function; an impossible function
+        # number at reset means a pad nobody routed drives nothing.
         for pad in range(PAD_COUNT):
             self.values[4 * pad] = FUNCTION_MASK
+
+    def reset(self, now: float) -> None:
+        super().reset(now)
+        self._unroute_all()
+        if self.board is not None:
+            self.board.wiring_changed(now)
 
     def function_of_pad(self, pad: int) -> int:
         return self.values[4 * pad] & FUNCTION_MASK

@@ -67,7 +67,6 @@ _UC_EMU_STOP = ctypes.cast(_ucpy.uclib.uc_emu_stop, ctypes.c_void_p).value
 class HartState(enum.Enum):
     RUNNING = "running"
     ASLEEP = "asleep (wfi)"
-    STALLED = "polling a device register"
 
 
 class RunEnd(enum.Enum):
@@ -102,6 +101,8 @@ class Hart:
         self.uc = unicorn.Uc(unicorn.UC_ARCH_RISCV, unicorn.UC_MODE_RISCV64)
         self.csr_context = csr_context
         self.state = HartState.RUNNING
+        self.time = 0.0          # virtual time the hart has reached (asleep: when it went to sleep)
+        self.polling = False     # set during a turn when the board saw it poll an unchanging register
         self.pc = 0
         self.pending_exception: PendingException | None = None
         self.stop_requested = False

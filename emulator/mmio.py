@@ -42,6 +42,10 @@ class Peripheral:
         self.board = board
         self.values: dict[int, int] = {off: reg.reset for off, reg in self.REGISTERS.items()}
 
+    def reset(self, now: float) -> None:
+        """A reset of this block (SYSCTL peri_reset): registers return to their reset values."""
+        self.values = {off: reg.reset for off, reg in self.REGISTERS.items()}
+
     # --- routing, called by the board -------------------------------------------------
 
     def lookup(self, offset: int, size: int, is_write: bool) -> tuple[int, Register]:

@@ -83,7 +83,7 @@ class Plic(Peripheral):
             if source:
                 self.pending.discard(source)
                 self.in_service.add(source)
-            self.board.interrupts_may_have_changed()
+            self.board.interrupts_may_have_changed(now)
             return source
         return self.values[offset]
 
@@ -95,4 +95,4 @@ class Plic(Peripheral):
             self.values[offset] = value & PRIORITY_MASK
         else:
             self.values[offset] = value
-        self.board.interrupts_may_have_changed()
+        self.board.interrupts_may_have_changed(now)

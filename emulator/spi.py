@@ -140,6 +140,22 @@ class SpiController(Peripheral):
         self.rx_dma: "DmaChannel | None" = None
         self._dma_started = 0.0
 
+    def reset(self, now: float) -> None:
+        """peri_reset: FIFOs, transfers and registers back to reset; devices deselected."""
+        if self._selected is not None:
+            self._selected.spi_select(False, now)
+            self._selected = None
+        for channel in (self.tx_dma, self.rx_dma):
+            if channel is not None:
+                channel.peripheral_gone()
+        super().reset(now)
+        self._train = None
+        self._held.clear()
+        self._rx.clear()
+        self._rx_remaining = 0
+        self._raw_int = 0
+        self.tx_dma = self.rx_dma = None
+
     # --- configuration decoded -----------------------------------------------------------
 
     @property

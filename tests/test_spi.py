@@ -326,8 +326,6 @@ def test_spi_transfer_through_a_program():
     send_and_wait(quantum=200)
 
 
-@pytest.mark.xfail(strict=False, reason="board.py: a hart that stalls polling ends its turn at the end of "
-                   "the quantum planned before it ran, overshooting device events created during the turn")
 def test_spi_wait_is_the_wire_time_with_the_default_quantum():
     send_and_wait(quantum=20_000)
 
@@ -377,8 +375,6 @@ def test_cpu_polled_receive_only_transfer():
     receive_100(quantum=2000)
 
 
-@pytest.mark.xfail(strict=False, reason="board.py: the first poll stall runs to the end of a 20,000-cycle "
-                   "quantum planned before the transfer started; the receive FIFO overflows meanwhile")
 def test_cpu_polled_receive_only_transfer_with_the_default_quantum():
     receive_100(quantum=20_000)
 
