@@ -15,14 +15,14 @@ FW_SRCS := $(wildcard firmware/*.S)
 FW_OBJS := $(patsubst firmware/%.S,$(BUILD)/fw/%.o,$(FW_SRCS))
 FW_INCS := $(wildcard firmware/include/*.inc)
 
-.PHONY: all toolchain venv firmware flash-to-emulator test bench goldens clean
+.PHONY: all toolchain venv firmware card flash-to-emulator test bench goldens clean
 
 all: firmware
 
 toolchain:
 	@tools/ensure-toolchain.sh
 
-$(VENV)/.installed: pyproject.toml setup.py emulator/_insn_counter.c
+$(VENV)/.installed: pyproject.toml setup.py emulator/_insn_counter.c | toolchain
 	@tools/ensure-venv.sh $(VENV)
 	@touch $@
 
@@ -38,16 +38,27 @@ $(BUILD)/firmware.elf: $(FW_OBJS) firmware/k210.ld
 
 firmware: toolchain $(BUILD)/firmware.elf
 
-flash-to-emulator: firmware venv
-	$(PYTHON) -m emulator run $(BUILD)/firmware.elf --frames $(FRAMES) --out $(BUILD)/frames
+# The default card: the generated test models and textures, and a scene naming one of them.
+CARD        := $(BUILD)/card.img
+CARD_SCENE  := --scene model=models/torus.obj --scene texture=textures/torus.ppm
 
-test: firmware venv
+$(CARD): tools/make_assets.py $(wildcard sdcard_image/*.py) | venv
+	rm -rf $(BUILD)/assets
+	$(PYTHON) tools/make_assets.py $(BUILD)/assets
+	$(PYTHON) -m sdcard_image build $@ --force -q $(CARD_SCENE) $(BUILD)/assets/models $(BUILD)/assets/textures
+
+card: $(CARD)
+
+flash-to-emulator: firmware venv $(CARD)
+	$(PYTHON) -m emulator run $(BUILD)/firmware.elf --sd $(CARD) --frames $(FRAMES) --out $(BUILD)/frames
+
+test: firmware venv $(CARD)
 	$(PYTHON) -m pytest -q
 
-bench: firmware venv
+bench: firmware venv $(CARD)
 	$(PYTHON) tools/bench.py
 
-goldens: firmware venv
+goldens: firmware venv $(CARD)
 	$(PYTHON) tools/regen_goldens.py
 
 clean:

@@ -50,6 +50,10 @@ DMACR_RDMAE, DMACR_TDMAE = 1, 2
 
 CONFIG_REGISTERS = {CTRLR0, CTRLR1, BAUDR, SPI_CTRLR0, ENDIAN}
 EPSILON = 1e-12
+# Frame counts come from (time - start) / period in floating point; a time that lands on a
+# frame boundary may come out a hair short of the whole number. A millionth of a frame is
+# far below anything the wire could resolve.
+FRAME_EPSILON = 1e-6
 
 
 class SpiDevice(Protocol):
@@ -77,12 +81,12 @@ class _Train:
     def started(self, now: float) -> int:
         if now < self.start - EPSILON:
             return 0
-        return min(self.count, int((now - self.start) / self.period + EPSILON) + 1)
+        return min(self.count, int((now - self.start) / self.period + FRAME_EPSILON) + 1)
 
     def finished(self, now: float) -> int:
         if now < self.start:
             return 0
-        return min(self.count, int((now - self.start) / self.period + EPSILON))
+        return min(self.count, int((now - self.start) / self.period + FRAME_EPSILON))
 
     def take(self, n: int) -> np.ndarray:
         """Removes and returns the next n undelivered frames."""
@@ -393,7 +397,7 @@ class SpiController(Peripheral):
                 return
         train = self._train
         # frames started by now if the train had never run dry (the DMA keeps it going)
-        started = int((now - train.start) / train.period + EPSILON) + 1 if now >= train.start else 0
+        started = int((now - train.start) / train.period + FRAME_EPSILON) + 1 if now >= train.start else 0
         n = min(channel.remaining(), started + FIFO_DEPTH - train.count)
         if n > 0:
             last_index = train.count + n - 1

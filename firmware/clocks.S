@@ -14,8 +14,9 @@
     .globl clocks_init
 # clocks_init
 #   What: PLL0 to 806 MHz, ACLK (CPU) = PLL0 / 2 = 403 MHz; clocks of the CPU,
-#         SRAM banks, APB buses, DMA, GPIO, SPI0, SPI1 and FPIOA on; SPI0 source
-#         = PLL0 / 2; SPI0 drives the LCD data lines (misc.spi0_dvp_data_en).
+#         SRAM banks, APB buses, DMA, GPIO, SPI0, SPI1 and FPIOA on; SPI0 and
+#         SPI1 sources = PLL0 / 2; SPI0 drives the LCD data lines
+#         (misc.spi0_dvp_data_en).
 #         Records the CPU clock in cpu_hz for code that needs it later.
 #   Arguments: none.
 #   Results: a0 = CPU clock in Hz, a1 = PLL0 output in Hz (both computed back
@@ -104,11 +105,13 @@ clocks_init:
     or      t0, t0, t1
     sw      t0, SYSCTL_CLK_EN_PERI(s0)
 
-    # SPI0 source = PLL0 / ((0 + 1) * 2); the LCD's serial clock is divided
-    # from this by baudr in spi_dma.S.
+    # SPI0 and SPI1 sources = PLL0 / ((0 + 1) * 2); the LCD's and the SD
+    # card's serial clocks are divided from these by baudr (spi_dma.S, sd.S).
     lw      t0, SYSCTL_CLK_TH1(s0)
-    andi    t0, t0, ~CLK_TH1_SPI0_MASK
-    ori     t0, t0, CLK_TH1_SPI0_VALUE << CLK_TH1_SPI0_SHIFT
+    li      t1, ~(CLK_TH1_SPI0_MASK | CLK_TH1_SPI1_MASK)
+    and     t0, t0, t1
+    li      t1, (CLK_TH1_SPI0_VALUE << CLK_TH1_SPI0_SHIFT) | (CLK_TH1_SPI1_VALUE << CLK_TH1_SPI1_SHIFT)
+    or      t0, t0, t1
     sw      t0, SYSCTL_CLK_TH1(s0)
 
     # The LCD's 8 data lines hang off SPI0's DVP data path.

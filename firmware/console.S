@@ -67,12 +67,34 @@ console_puts:
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 console_put_hex64:
+    li      a1, 16
+    j       console_put_hex
+
+    .globl console_put_hex32
+# console_put_hex32
+#   What: sends the low 32 bits of a0 as 8 hexadecimal digits (lower case, no
+#         prefix), e.g. CRC-32 values.
+#   Arguments: a0 = value.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+console_put_hex32:
+    li      a1, 8
+    j       console_put_hex
+
+    .globl console_put_hex
+# console_put_hex
+#   What: sends the low a1 nibbles of a0 as hexadecimal digits, most
+#         significant first (lower case, no prefix, leading zeros kept).
+#   Arguments: a0 = value, a1 = number of digits (1 .. 16).
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+console_put_hex:
     addi    sp, sp, -32
     sd      ra, 24(sp)
     sd      s0, 16(sp)
     sd      s1, 8(sp)
     mv      s0, a0
-    li      s1, 64
+    slli    s1, a1, 2                   # s1 = bit position above the next digit
 1:  addi    s1, s1, -4
     srl     t0, s0, s1
     andi    t0, t0, 0xF

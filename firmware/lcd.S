@@ -237,13 +237,14 @@ lcd_send_frame:
 
     .globl lcd_error_screen
 # lcd_error_screen
-#   What: fills the whole screen with solid red by a polled SPI transfer,
-#         after letting any DMA in flight finish. For the trap handler: needs no
-#         framebuffer, no interrupts, no delays. Does nothing if the LCD
-#         was never brought up.
+#   What: fills the whole screen with the error colour (lcd_error_colour:
+#         solid red for a trap unless errors.S chose the colour of a fatal
+#         error) by a polled SPI transfer, after letting any DMA in flight
+#         finish. For the trap handler and fatal errors: needs no framebuffer,
+#         no interrupts, no delays. Does nothing if the LCD was never brought
+#         up.
 #   Arguments: none. Results: none.
 #   Clobbers: only ABI temporaries.
-    .equ LCD_ERROR_WORD, (RGB565_RED << 16) | RGB565_RED
 lcd_error_screen:
     la      t0, lcd_ready
     lw      t0, 0(t0)
@@ -252,7 +253,10 @@ lcd_error_screen:
     sd      ra, 8(sp)
     call    dma_quiesce
     call    lcd_begin_full_frame
-    li      a0, LCD_ERROR_WORD
+    la      t0, lcd_error_colour
+    lhu     a0, 0(t0)
+    slli    t1, a0, 16
+    or      a0, a0, t1                  # both pixels of each 32-bit frame
     li      a1, LCD_FB_WORDS
     call    spi0_fill_words
     ld      ra, 8(sp)
@@ -267,3 +271,8 @@ lcd_error_screen:
 # trap on hart 1 before .bss is cleared reads a valid 0.
 lcd_ready:
     .word   0
+    .globl lcd_error_colour
+# lcd_error_colour: RGB565 colour lcd_error_screen fills the screen with; red
+# (a trap) unless errors.S stored the colour of a fatal error first.
+lcd_error_colour:
+    .word   RGB565_RED

@@ -1,7 +1,9 @@
 # main.S: what each hart does after boot, and the frame handoff between them.
 #
-# Hart 0 brings the board up (clocks, pins, console, LCD, DMAC), releases
-# hart 1, then draws frames forever. Hart 1 sends finished frames to the LCD
+# Hart 0 brings the board up (clocks, pins, console, LCD, DMAC), loads
+# scene.ini and the files it names from the SD card (sd.S, fat32.S,
+# scene.S; any failure there is fatal, errors.S), releases hart 1, then
+# draws frames forever. Hart 1 sends finished frames to the LCD
 # and reports each one. After the release only hart 1 touches SPI0, the
 # DMAC and the LCD's GPIOHS lines.
 #
@@ -26,7 +28,8 @@
     .text
     .globl main_hart0
 # main_hart0
-#   What: hart 0 after .bss clearing: bring-up, release of hart 1, draw loop.
+#   What: hart 0 after .bss clearing: bring-up, SD card loading, release of
+#         hart 1, draw loop.
 #   Arguments: none. Results: never returns.
 #   Clobbers: everything (it is the bottom of hart 0's call stack).
 main_hart0:
@@ -60,6 +63,14 @@ main_hart0:
     call    dma_init
     la      a0, msg_lcd
     call    console_line
+
+    # The card's files, with the LCD up so that a failure can be shown and
+    # before hart 1 (and its use of SPI0 / DMA channel 0) is released.
+    call    crc_init
+    call    heap_init
+    call    sd_init
+    call    fat32_mount
+    call    scene_load
 
     call    boot_release_hart1
 
@@ -195,7 +206,7 @@ msg_boot:           .asciz "boot: hart 0 up\n"
 msg_clocks_pll0:    .asciz "clocks: PLL0 "
 msg_clocks_cpu:     .asciz " Hz, CPU "
 msg_hz_nl:          .asciz " Hz\n"
-msg_pins:           .asciz "pins: LCD and UART routed\n"
+msg_pins:           .asciz "pins: LCD, UART and SD routed\n"
 msg_lcd:            .asciz "lcd: ST7789V ready\n"
 msg_hart1:          .asciz "hart 1: display loop\n"
 msg_frame:          .asciz "frame "

@@ -1,11 +1,16 @@
-# pins.S: FPIOA pad routing and the GPIOHS lines of the LCD.
+# pins.S: FPIOA pad routing, the GPIOHS lines of the LCD and the SD card's
+# chip select.
 #
 # Pad words follow the SDK's fpioa_set_function / function_config table:
-#   SPI0_SS3, SPI0_SCLK, UARTHS_TX (outputs): function | drive 0xF | oe_en
+#   SPI0_SS3, SPI0_SCLK, SPI1_SCLK,
+#   UARTHS_TX (outputs):                     function | drive 0xF | oe_en
 #   UARTHS_RX (input):                       function | ie_en | Schmitt trigger
-#   GPIOHS0/1 (bidirectional lines):         function | drive 0xF | oe_en |
+#   GPIOHS0/1/7, SPI1_D0/D1 (bidirectional): function | drive 0xF | oe_en |
 #                                            ie_en | Schmitt trigger
-# (the GPIOHS block's output_en, not the pad, decides the direction there).
+# (the GPIOHS block's output_en, not the pad, decides the direction of a
+# GPIOHS line; SPI1 in standard format drives D0 and listens on D1).
+# The SD card's chip select (pad 29) is GPIOHS7 driven by software (sd.S),
+# not SPI1_SSn: the controller's own select drops whenever its FIFO runs dry.
 # Unlike the SDK, no other pad is scanned for the same function: nothing but
 # this firmware has routed pads since reset.
 
@@ -22,16 +27,22 @@ pin_table:
     .word   PAD_LCD_RST,   (FUNC_GPIOHS0 + GPIOHS_LCD_RST) | FPIOA_CFG_GPIOHS
     .word   PAD_LCD_DC,    (FUNC_GPIOHS0 + GPIOHS_LCD_DC) | FPIOA_CFG_GPIOHS
     .word   PAD_LCD_SCLK,  FUNC_SPI0_SCLK | FPIOA_CFG_OUTPUT
+    .word   PAD_SD_MISO,   FUNC_SPI1_D1 | FPIOA_CFG_BIDIR
+    .word   PAD_SD_SCLK,   FUNC_SPI1_SCLK | FPIOA_CFG_OUTPUT
+    .word   PAD_SD_MOSI,   FUNC_SPI1_D0 | FPIOA_CFG_BIDIR
+    .word   PAD_SD_CS,     (FUNC_GPIOHS0 + GPIOHS_SD_CS) | FPIOA_CFG_GPIOHS
 pin_table_end:
     .equ PIN_ENTRY_BYTES, 8
 
     .text
     .globl pins_init
 # pins_init
-#   What: routes the UARTHS, LCD chip select/clock and the LCD reset and D/C
-#         GPIOHS lines to their Maix Dock pads; drives reset and D/C high
-#         (reset released, data mode) before making them outputs, so neither
-#         line glitches low. Needs the FPIOA clock (clocks_init).
+#   What: routes the UARTHS, LCD chip select/clock, the LCD reset and D/C
+#         GPIOHS lines, SPI1 (SD clock, MOSI, MISO) and the SD chip select
+#         GPIOHS line to their Maix Dock pads; drives reset, D/C and the SD
+#         chip select high (reset released, data mode, card deselected)
+#         before making them outputs, so no line glitches low. Needs the
+#         FPIOA clock (clocks_init).
 #   Arguments: none. Results: none.
 #   Clobbers: only ABI temporaries.
 pins_init:
@@ -47,7 +58,7 @@ pins_init:
     bltu    t0, t1, 1b
 
     li      t0, GPIOHS_BASE
-    li      t1, GPIOHS_LCD_RST_BIT | GPIOHS_LCD_DC_BIT
+    li      t1, GPIOHS_LCD_RST_BIT | GPIOHS_LCD_DC_BIT | GPIOHS_SD_CS_BIT
     lw      t2, GPIOHS_OUTPUT_VAL(t0)
     or      t2, t2, t1
     sw      t2, GPIOHS_OUTPUT_VAL(t0)

@@ -1,5 +1,6 @@
 # spi_dma.S: SPI0 in octal transmit-only mode (the LCD bus), DMAC channel 0
-# feeding it, and the PLIC wait for the DMA to finish.
+# feeding it, and the PLIC wait for a DMA channel to finish (any channel:
+# sd.S waits on its own channel the same way).
 #
 # Two frame layouts, both "instruction/address as frame format" so that what
 # reaches the wire is exactly each FIFO frame, most significant bit first:
@@ -159,27 +160,88 @@ dma_init:
     .globl dma_irq_init
 # dma_irq_init
 #   What: lets DMAC channel 0's interrupt (PLIC source 27) reach the calling
-#         hart's M-mode context (context = hart id on the K210), threshold 0.
-#         mie.MEIE is only set while waiting, and mstatus.MIE never, so this
-#         wakes WFI and never takes a trap.
+#         hart (dma_irq_enable for the LCD's channel).
 #   Arguments: none. Results: none.
 #   Clobbers: only ABI temporaries.
 dma_irq_init:
+    li      a0, 0
+    # fall through
+
+    .globl dma_irq_enable
+# dma_irq_enable
+#   What: lets DMAC channel a0's interrupt (PLIC source 27 + a0) reach the
+#         calling hart's M-mode context (context = hart id on the K210),
+#         threshold 0. mie.MEIE is only set while waiting, and mstatus.MIE
+#         never, so this wakes WFI and never takes a trap.
+#   Arguments: a0 = DMAC channel (0 .. 5).
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+dma_irq_enable:
     csrr    t0, mhartid
-    li      t1, PLIC_PRIORITY + 4 * PLIC_SRC_DMA0
+    addi    t3, a0, PLIC_SRC_DMA0       # t3 = PLIC source
+    slli    t1, t3, 2
+    li      t2, PLIC_PRIORITY
+    add     t1, t1, t2
     li      t2, PLIC_DMA0_PRIORITY
     sw      t2, 0(t1)
-    li      t1, PLIC_ENABLE + 4 * (PLIC_SRC_DMA0 / 32)
+    srli    t1, t3, 5
+    slli    t1, t1, 2                   # t1 = offset of the source's enable word
+    li      t2, PLIC_ENABLE
+    add     t1, t1, t2
     slli    t2, t0, PLIC_ENABLE_SHIFT
     add     t1, t1, t2
     lw      t2, 0(t1)
-    li      t3, 1 << (PLIC_SRC_DMA0 % 32)
-    or      t2, t2, t3
+    andi    t4, t3, 31
+    li      t5, 1
+    sll     t5, t5, t4
+    or      t2, t2, t5
     sw      t2, 0(t1)
     li      t1, PLIC_THRESHOLD
     slli    t2, t0, PLIC_CONTEXT_SHIFT
     add     t1, t1, t2
     sw      zero, 0(t1)
+    ret
+
+    .globl dma_wait_channel
+# dma_wait_channel
+#   What: sleeps in WFI until DMAC channel a0 has finished its block (its
+#         chen bit drops), then claims the PLIC interrupt, clears the
+#         channel's and the common interrupt status and completes the claim.
+#         Only mie.MEIE is enabled while sleeping, so a software interrupt
+#         from the other hart cannot turn this into a busy loop; it stays
+#         pending in the CLINT for the caller's own wait. The caller enabled
+#         the channel's interrupt (intstatus_en, intsignal_en, dma_irq_enable).
+#   Arguments: a0 = DMAC channel (0 .. 5).
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+dma_wait_channel:
+    li      t0, DMAC_BASE
+    li      t2, 1
+    sll     t2, t2, a0                  # t2 = the channel's chen bit
+    li      t3, MIE_MEIE
+    csrs    mie, t3
+1:  wfi
+    ld      t1, DMAC_CHEN(t0)
+    and     t1, t1, t2
+    bnez    t1, 1b
+    csrc    mie, t3
+
+    # Claim, quiet the source, complete: completing while the DMAC still
+    # asserts the (level) interrupt would make the PLIC raise it again.
+    csrr    t4, mhartid
+    slli    t4, t4, PLIC_CONTEXT_SHIFT
+    li      t5, PLIC_THRESHOLD + PLIC_CLAIM_OFF
+    add     t5, t5, t4                  # t5 = &claim[context]
+    lw      t6, 0(t5)
+    slli    t1, a0, DMAC_CH_STRIDE_SHIFT
+    add     t1, t1, t0                  # t1 = channel a0's registers - DMAC_CH0
+    li      t2, DMAC_CH_INT_BLOCK_DONE
+    sd      t2, DMAC_CH0 + DMAC_CH_INTCLEAR(t1)
+    li      t2, DMAC_COM_INTCLEAR_ALL
+    sd      t2, DMAC_COM_INTCLEAR(t0)
+    beqz    t6, 2f                      # nothing claimed: nothing to complete
+    sw      t6, 0(t5)
+2:  fence                               # what the DMAC wrote is read after this
     ret
 
     .globl spi0_dma_send_words
@@ -250,31 +312,9 @@ spi0_dma_send_words:
     li      t1, SPI_SER_LCD
     sw      t1, SPI_SER(t2)
 
-    # Sleep until the block is done. Only MEIE is enabled, so a software
-    # interrupt from the other hart cannot turn this into a busy loop; it
-    # stays pending in the CLINT for the caller's own wait.
-    li      t3, MIE_MEIE
-    csrs    mie, t3
-2:  wfi
-    ld      t1, DMAC_CHEN(t0)
-    andi    t1, t1, DMAC_CHEN_CH0
-    bnez    t1, 2b
-    csrc    mie, t3
-
-    # Claim, quiet the source, complete: completing while the DMAC still
-    # asserts the (level) interrupt would make the PLIC raise it again.
-    csrr    t4, mhartid
-    slli    t4, t4, PLIC_CONTEXT_SHIFT
-    li      t5, PLIC_THRESHOLD + PLIC_CLAIM_OFF
-    add     t5, t5, t4                  # t5 = &claim[context]
-    lw      t6, 0(t5)
-    li      t1, DMAC_CH_INT_BLOCK_DONE
-    sd      t1, DMAC_CH0 + DMAC_CH_INTCLEAR(t0)
-    li      t1, DMAC_COM_INTCLEAR_ALL
-    sd      t1, DMAC_COM_INTCLEAR(t0)
-    beqz    t6, 3f                      # nothing claimed: nothing to complete
-    sw      t6, 0(t5)
-3:
+    # Sleep until the block is done.
+    li      a0, 0
+    call    dma_wait_channel
     call    spi0_finish
     li      t0, SPI0_BASE
     sw      zero, SPI_DMACR(t0)

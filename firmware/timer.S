@@ -46,3 +46,36 @@ delay_us:
     sd      t3, 0(t5)                   # drops MTIP before MTIE goes away
     csrc    mie, t6
 9:  ret
+
+    .globl timer_deadline
+# timer_deadline
+#   What: the mtime value a0 microseconds from now, at the CPU clock in force
+#         (cpu_hz), for timeouts checked with timer_expired between tries.
+#   Arguments: a0 = microseconds.
+#   Results: a0 = deadline (an mtime value).
+#   Clobbers: only ABI temporaries.
+timer_deadline:
+    la      t0, cpu_hz
+    lwu     t0, 0(t0)
+    mul     t0, a0, t0
+    li      t1, MTIME_DIV * 1000000
+    add     t0, t0, t1
+    addi    t0, t0, -1
+    divu    t0, t0, t1                  # ticks, rounded up
+    li      t2, CLINT_MTIME
+    ld      t3, 0(t2)
+    add     a0, t0, t3
+    ret
+
+    .globl timer_expired
+# timer_expired
+#   What: whether mtime has reached a deadline from timer_deadline.
+#   Arguments: a0 = deadline.
+#   Results: a0 = 1 when it has passed, else 0.
+#   Clobbers: only ABI temporaries.
+timer_expired:
+    li      t0, CLINT_MTIME
+    ld      t0, 0(t0)
+    sltu    a0, t0, a0
+    xori    a0, a0, 1
+    ret

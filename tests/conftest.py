@@ -12,6 +12,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
 FIRMWARE = ROOT / "build" / "firmware.elf"
+CARD = ROOT / "build" / "card.img"
 GOLDEN = ROOT / "tests" / "golden"
 GOLDEN_FRAMES = 4
 
@@ -29,10 +30,18 @@ def firmware() -> Path:
 
 
 @pytest.fixture(scope="session")
-def firmware_run(firmware, tmp_path_factory):
+def card() -> Path:
+    """The default card `make flash-to-emulator` uses (generated models and textures)."""
+    subprocess.run(["make", "-s", "build/card.img"], cwd=ROOT, check=True)
+    return CARD
+
+
+@pytest.fixture(scope="session")
+def firmware_run(firmware, card, tmp_path_factory):
     """One run of the firmware for the golden frames, shared by the end-to-end tests."""
     out = tmp_path_factory.mktemp("firmware_run")
-    result = run_emulator("run", str(firmware), "--frames", str(GOLDEN_FRAMES), "--out", str(out), "--quiet")
+    result = run_emulator("run", str(firmware), "--sd", str(card), "--frames", str(GOLDEN_FRAMES),
+                          "--out", str(out), "--quiet")
     summary = json.loads((out / "run.json").read_text()) if (out / "run.json").exists() else None
     return result, out, summary
 

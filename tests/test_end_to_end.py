@@ -138,7 +138,7 @@ _start:
     assert "hart 0: running" in result.stderr
 
 
-def test_firmware_trap_handler_runs_then_run_stops(firmware, tmp_path):
+def test_firmware_trap_handler_runs_then_run_stops(firmware, card, tmp_path):
     """The project's firmware trap handler reports on the console before the board stops."""
     import subprocess
     trapping = tmp_path / "trap.elf"
@@ -157,7 +157,7 @@ def test_firmware_trap_handler_runs_then_run_stops(firmware, tmp_path):
                 offset = segment["p_offset"] + address - segment["p_vaddr"]
     data[offset:offset + 4] = b"\xff\xff\xff\xff"
     trapping.write_bytes(bytes(data))
-    result = run_emulator("run", str(trapping), "--out", str(tmp_path / "out"), "--quiet")
+    result = run_emulator("run", str(trapping), "--sd", str(card), "--out", str(tmp_path / "out"), "--quiet")
     assert result.returncode == 3, result.stderr
     console = (tmp_path / "out" / "console.log").read_text()
     assert "trap: mcause=0x" in console and "mepc=0x" in console

@@ -70,8 +70,8 @@ def hart_mips(code: bytes, instructions: int, quantum: int) -> float:
     return hart.executed / (time.perf_counter() - start) / 1e6
 
 
-def firmware_figures(firmware: Path, frames: int) -> dict:
-    board = Board(str(firmware))
+def firmware_figures(firmware: Path, card: Path, frames: int) -> dict:
+    board = Board(str(firmware), sd_image=str(card))
     start = time.perf_counter()
     board.run(frames)
     host = time.perf_counter() - start
@@ -92,6 +92,7 @@ def firmware_figures(firmware: Path, frames: int) -> dict:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--firmware", default=str(ROOT / "build" / "firmware.elf"))
+    parser.add_argument("--card", default=str(ROOT / "build" / "card.img"))
     parser.add_argument("--frames", type=int, default=60)
     parser.add_argument("--loop-instructions", type=int, default=40_000_000)
     args = parser.parse_args()
@@ -101,7 +102,7 @@ def main() -> int:
     total = 4 * iterations + 1
     raw = raw_unicorn_mips(code, total)
     counted = hart_mips(code, total, 20_000)
-    board = firmware_figures(Path(args.firmware), args.frames)
+    board = firmware_figures(Path(args.firmware), Path(args.card), args.frames)
     results = {
         "raw_unicorn_mips": raw,
         "hart_with_counter_mips": counted,

@@ -1,21 +1,26 @@
 #!/usr/bin/env bash
-# Makes sure the GNU RISC-V toolchain (Debian: gcc-riscv64-unknown-elf, which brings
-# binutils-riscv64-unknown-elf) is installed; installs it with apt-get when missing.
+# Makes sure the outside tools the project needs are installed; installs what is missing
+# with apt-get (Debian):
+#   - the GNU RISC-V toolchain (gcc-riscv64-unknown-elf brings binutils-riscv64-unknown-elf),
+#     to assemble and link the firmware;
+#   - dosfstools and mtools, with which the tests check SD card images independently.
 set -euo pipefail
-if command -v riscv64-unknown-elf-as >/dev/null && command -v riscv64-unknown-elf-ld >/dev/null \
-        && command -v riscv64-unknown-elf-objcopy >/dev/null; then
-    exit 0
-fi
-packages="binutils-riscv64-unknown-elf gcc-riscv64-unknown-elf"
-echo "[setup] the RISC-V toolchain is missing: installing Debian packages: $packages"
+missing=""
+for tool in riscv64-unknown-elf-as riscv64-unknown-elf-ld riscv64-unknown-elf-objcopy; do
+    command -v "$tool" >/dev/null || missing="binutils-riscv64-unknown-elf gcc-riscv64-unknown-elf"
+done
+command -v fsck.fat >/dev/null || [ -x /usr/sbin/fsck.fat ] || [ -x /sbin/fsck.fat ] || missing="$missing dosfstools"
+command -v mdir >/dev/null || missing="$missing mtools"
+[ -z "$missing" ] && exit 0
+echo "[setup] missing tools: installing Debian packages: $missing"
 echo "[setup] (this needs root: apt-get update && apt-get install)"
 sudo=""
 if [ "$(id -u)" != 0 ]; then
     if command -v sudo >/dev/null; then sudo="sudo"; else
-        echo "error: not root and no sudo; install as root: apt-get install $packages" >&2
+        echo "error: not root and no sudo; install as root: apt-get install $missing" >&2
         exit 1
     fi
 fi
 $sudo apt-get update -qq
-DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq $packages >/dev/null
-command -v riscv64-unknown-elf-as >/dev/null || { echo "error: toolchain install failed" >&2; exit 1; }
+DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq $missing >/dev/null
+command -v riscv64-unknown-elf-as >/dev/null || { echo "error: the RISC-V toolchain did not install" >&2; exit 1; }

@@ -15,7 +15,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests"))
-from conftest import GOLDEN, GOLDEN_FRAMES  # noqa: E402
+from conftest import CARD, GOLDEN, GOLDEN_FRAMES  # noqa: E402
 from tools.golden import compare  # noqa: E402
 
 
@@ -23,7 +23,7 @@ def main() -> int:
     firmware = ROOT / "build" / "firmware.elf"
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp)
-        result = subprocess.run([sys.executable, "-m", "emulator", "run", str(firmware), "--frames",
+        result = subprocess.run([sys.executable, "-m", "emulator", "run", str(firmware), "--sd", str(CARD), "--frames",
                                  str(GOLDEN_FRAMES), "--out", str(out), "--quiet"], cwd=ROOT)
         if result.returncode != 0:
             print(f"the firmware run failed (exit {result.returncode}); goldens left unchanged", file=sys.stderr)

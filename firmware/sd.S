@@ -1,0 +1,882 @@
+# sd.S: the SD card in SPI mode on SPI1: bring-up and block reads.
+#
+# Wiring (pins.S): SCLK pad 27, MOSI pad 28 (SPI1_D0), MISO pad 26
+# (SPI1_D1), chip select pad 29 = GPIOHS7 driven here by software. SPI1 runs
+# standard format, work mode 0, 8-bit frames: transmit-and-receive for
+# commands, responses and tokens (one byte at a time: sd_xchg), receive-only
+# with DMAC channel 1 for the 512 data bytes of each block.
+#
+# Every command carries its CRC7 (crc.S), so CMD59 can turn the card's CRC
+# checking on; every data block's CRC16 is checked and a bad block is read
+# again from that block (SD_READ_RETRIES times) before error 4.
+#
+# Bring-up (sd_init), at <= 400 kHz:
+#   >= 74 clocks with CS high; CMD0 -> R1 idle (SD_CMD0_TRIES tries, no
+#   answer at all = no card); CMD8(0x1AA) -> R7 echo; CMD55 + ACMD41(HCS)
+#   until R1 = 0 (1 s limit on the CLINT timer, delay_us between tries);
+#   CMD58 -> OCR (power-up bit, CCS); CMD59(1) CRC on; CMD16(512) for a
+#   byte-addressed card; then SCLK to 403 MHz / 18 = 22.4 MHz.
+#
+# Reads (sd_read_blocks): CMD17 for one block, CMD18 + CMD12 for several,
+# so a run of contiguous clusters costs one command. For each block: poll
+# for the data token, then SPI1 receive-only for 512 frames with RX DMA
+# into the destination, then the two CRC bytes by the CPU. While a block
+# arrives by DMA, the CPU checks the previous block's CRC16 and hands it to
+# the caller's hook (fat32.S computes the file's CRC-32 there), then sleeps
+# in WFI until DMAC channel 1 is done: the SPI clock, not the CPU, bounds
+# the reading. After CMD12: one stuff byte, R1, then busy (0x00) until 0xFF.
+#
+# Failures end in errors.S reports (codes in errors.inc); sd_init and
+# sd_read_blocks return only on success.
+
+    .option norelax
+    .include "k210.inc"
+    .include "sd.inc"
+    .include "errors.inc"
+
+    .if SD_DMA_CHANNEL != 1
+    .error "SD_DMA_SEL_SHIFT / SD_DMA_SEL_MASK assume DMAC channel 1"
+    .endif
+    .if SD_BAUDR_FAST < 2 || SD_BAUDR_INIT > 0xFFFF
+    .error "SD clock dividers out of range"
+    .endif
+
+    .text
+    .globl sd_init
+# sd_init
+#   What: SPI1 and DMAC channel 1 set up for the card, then the card's SPI
+#         mode bring-up (see the file comment) and the fast clock. Prints
+#         one console line on success. Needs clocks_init, pins_init,
+#         console_init, crc_init, dma_init; the LCD should be up so that
+#         errors can be shown.
+#   Arguments: none. Results: none (returns only with a ready card).
+#   Clobbers: only ABI temporaries.
+sd_init:
+    addi    sp, sp, -48
+    sd      ra, 40(sp)
+    sd      s0, 32(sp)
+    sd      s1, 24(sp)
+    sd      s2, 16(sp)
+
+    li      a0, SD_BAUDR_INIT
+    call    sd_spi_setup
+
+    # DMAC channel 1's handshake interface carries SSI1_RX; its interrupt
+    # reaches this hart for the WFI waits.
+    li      t0, SYSCTL_BASE
+    lw      t1, SYSCTL_DMA_SEL0(t0)
+    li      t2, ~SD_DMA_SEL_MASK
+    and     t1, t1, t2
+    ori     t1, t1, DMA_REQ_SSI1_RX << SD_DMA_SEL_SHIFT
+    sw      t1, SYSCTL_DMA_SEL0(t0)
+    li      a0, SD_DMA_CHANNEL
+    call    dma_irq_enable
+
+    # Supply ramp, then >= 74 clocks with CS high (pins_init left it high).
+    li      a0, SD_POWER_UP_US
+    call    sd_delay_us
+    li      s0, SD_INIT_CLOCK_BYTES
+1:  li      a0, SD_IDLE_BYTE
+    call    sd_xchg
+    addi    s0, s0, -1
+    bnez    s0, 1b
+
+    # CMD0: software reset into SPI mode; the card answers "idle".
+    li      s0, SD_CMD0_TRIES
+2:  li      a0, SD_CMD0_GO_IDLE
+    li      a1, 0
+    li      a2, 0
+    call    sd_cmd
+    mv      s1, a0                      # s1 = last R1
+    li      t0, SD_R1_IDLE
+    beq     a0, t0, 3f
+    li      a0, SD_CMD0_RETRY_US
+    call    sd_delay_us
+    addi    s0, s0, -1
+    bnez    s0, 2b
+    li      t0, SD_R1_NONE
+    bne     s1, t0, 4f
+    li      a0, ERR_NO_CARD
+    la      a1, msg_no_card
+    li      a2, 0
+    call    error_fatal
+4:  li      a0, SD_CMD0_GO_IDLE
+    mv      a1, s1
+    call    sd_fail_r1
+
+    # CMD8: a version 2 card echoes the voltage range and check pattern.
+3:  li      a0, SD_CMD8_SEND_IF_COND
+    li      a1, SD_CMD8_ARG
+    li      a2, 1
+    call    sd_cmd
+    mv      s1, a1                      # s1 = R7 payload
+    li      t0, SD_R1_NONE
+    beq     a0, t0, 5f
+    andi    t0, a0, SD_R1_ILLEGAL_COMMAND
+    beqz    t0, 6f
+    li      a0, ERR_UNSUPPORTED
+    la      a1, msg_sd_v1
+    li      a2, 0
+    call    error_fatal
+6:  li      t0, SD_R1_IDLE
+    bne     a0, t0, 5f
+    li      t0, SD_CMD8_ECHO_MASK
+    and     t0, s1, t0
+    li      t1, SD_CMD8_ARG
+    beq     t0, t1, 7f
+    li      a0, ERR_UNSUPPORTED
+    la      a1, msg_cmd8_echo
+    mv      a2, s1
+    li      a3, 8
+    call    error_fatal_hex
+5:  mv      a1, a0
+    li      a0, SD_CMD8_SEND_IF_COND
+    call    sd_fail_r1
+
+    # CMD55 + ACMD41 until the card leaves the idle state (1 s at most).
+7:  li      a0, SD_ACMD41_TIMEOUT_US
+    call    timer_deadline
+    mv      s2, a0                      # s2 = deadline
+8:  li      a0, SD_CMD55_APP_CMD
+    li      a1, 0
+    li      a2, 0
+    call    sd_cmd
+    andi    t0, a0, ~SD_R1_IDLE
+    beqz    t0, 9f
+    mv      a1, a0
+    li      a0, SD_CMD55_APP_CMD
+    call    sd_fail_r1
+9:  li      a0, SD_ACMD41_SEND_OP_COND
+    li      a1, SD_ACMD41_HCS
+    li      a2, 0
+    call    sd_cmd
+    beqz    a0, 11f                     # ready
+    li      t0, SD_R1_IDLE
+    beq     a0, t0, 10f
+    mv      a1, a0
+    li      a0, SD_ACMD41_SEND_OP_COND
+    call    sd_fail_r1
+10: mv      a0, s2
+    call    timer_expired
+    beqz    a0, 12f
+    li      a0, ERR_CARD_TIMEOUT
+    la      a1, msg_acmd41_timeout
+    li      a2, 0
+    call    error_fatal
+12: li      a0, SD_ACMD41_POLL_US
+    call    sd_delay_us
+    j       8b
+
+    # CMD58: OCR. Powered up; CCS tells block from byte addressing.
+11: li      a0, SD_CMD58_READ_OCR
+    li      a1, 0
+    li      a2, 1
+    call    sd_cmd_ok
+    mv      s1, a0                      # s1 = OCR
+    li      t0, SD_OCR_POWERED_UP
+    and     t0, s1, t0
+    bnez    t0, 13f
+    li      a0, ERR_UNSUPPORTED
+    la      a1, msg_ocr_power
+    mv      a2, s1
+    li      a3, 8
+    call    error_fatal_hex
+13: srli    s1, s1, SD_OCR_CCS_SHIFT
+    andi    s1, s1, 1                   # s1 = CCS
+    la      t0, sd_ccs
+    sw      s1, 0(t0)
+
+    # CMD59(1): the card checks the CRC7 of every command from now on.
+    li      a0, SD_CMD59_CRC_ON_OFF
+    li      a1, SD_CMD59_CRC_ON
+    li      a2, 0
+    call    sd_cmd_ok
+
+    # A byte-addressed (standard capacity) card: make sure blocks are 512.
+    bnez    s1, 14f
+    li      a0, SD_CMD16_SET_BLOCKLEN
+    li      a1, SD_BLOCK_BYTES
+    li      a2, 0
+    call    sd_cmd_ok
+
+    # Identification done: up to the default-speed clock.
+14: li      a0, SD_BAUDR_FAST
+    call    sd_spi_setup
+
+    call    console_lock
+    la      a0, msg_sd_ready
+    call    console_puts
+    la      a0, msg_sdhc
+    bnez    s1, 15f
+    la      a0, msg_sdsc
+15: call    console_puts
+    la      a0, msg_sd_clock
+    call    console_puts
+    li      a0, SD_FAST_ACTUAL_HZ
+    call    console_put_dec
+    la      a0, msg_hz_nl
+    call    console_puts
+    call    console_unlock
+
+    ld      s2, 16(sp)
+    ld      s1, 24(sp)
+    ld      s0, 32(sp)
+    ld      ra, 40(sp)
+    addi    sp, sp, 48
+    ret
+
+    .globl sd_read_blocks
+# sd_read_blocks
+#   What: reads a1 consecutive 512-byte blocks starting at block a0 into
+#         memory at a2: CMD17 for one block, CMD18 + CMD12 for more. Each
+#         block's CRC16 is checked while the next block is already arriving
+#         by DMA; a bad block (or an error token) is read again from that
+#         block, SD_READ_RETRIES times, then error 4. Each block that passed
+#         its check is handed to the hook, in order, once: also while the
+#         next block is arriving, so the hook's work costs no time (it must
+#         not touch SPI1, GPIOHS7 or DMAC channel 1).
+#   Arguments: a0 = first block number, a1 = block count (0 does nothing),
+#         a2 = destination (a1 * 512 bytes; any alignment), a3 = hook or 0,
+#         a4 = hook context. The hook is called as hook(a0 = the block's
+#         address in memory, a1 = context) and follows the calling
+#         convention.
+#   Results: none (returns only when every block arrived intact).
+#   Clobbers: only ABI temporaries.
+sd_read_blocks:
+    addi    sp, sp, -112
+    sd      ra, 104(sp)
+    sd      s0, 96(sp)
+    sd      s1, 88(sp)
+    sd      s2, 80(sp)
+    sd      s3, 72(sp)
+    sd      s4, 64(sp)
+    sd      s5, 56(sp)
+    sd      s6, 48(sp)
+    sd      s7, 40(sp)
+    sd      s8, 32(sp)
+    sd      s9, 24(sp)
+    sd      s10, 16(sp)
+    sd      s11, 8(sp)
+    mv      s0, a0                      # s0 = next block to receive
+    mv      s1, a1                      # s1 = blocks left to receive
+    mv      s2, a2                      # s2 = where block s0 goes
+    mv      s6, a3                      # s6 = hook
+    mv      s10, a4                     # s10 = hook context
+    li      s3, 0                       # s3 = failures of block s4 so far
+    li      s4, -1                      # s4 = block that failed last
+    beqz    s1, 90f
+    # s7 = 1 while block s0 - 1 (at s2 - 512) is received but not checked;
+    # s8 = the CRC16 the card sent with it.
+
+10: # One read command from block s0.
+    li      s7, 0
+    li      s5, SD_CMD17_READ_SINGLE    # s5 = command in use
+    li      t0, 1
+    beq     s1, t0, 11f
+    li      s5, SD_CMD18_READ_MULTIPLE
+11: call    sd_select
+    mv      a1, s0
+    la      t0, sd_ccs
+    lw      t0, 0(t0)
+    bnez    t0, 12f
+    slli    a1, a1, SD_BLOCK_SHIFT      # standard capacity: byte address
+12: mv      a0, s5
+    call    sd_command
+    beqz    a0, 20f
+    mv      s9, a0
+    call    sd_deselect
+    li      t0, SD_R1_NONE
+    beq     s9, t0, 13f
+    andi    t0, s9, SD_R1_CRC_ERROR
+    bnez    t0, 60f                     # the card saw a bad command CRC: again
+13: mv      a0, s5
+    mv      a1, s9
+    call    sd_fail_r1
+
+20: # One block: token, then 512 bytes by DMA while the previous block is
+    # checked, then its CRC16.
+    call    sd_wait_token
+    li      t0, SD_TOKEN_START_BLOCK
+    bne     a0, t0, 40f                 # error token
+    mv      a0, s2
+    call    sd_receive_start
+    li      s11, 0                      # s11 = the previous block failed
+    beqz    s7, 21f
+    addi    a0, s2, -SD_BLOCK_BYTES
+    mv      a1, s8
+    mv      a2, s6
+    mv      a3, s10
+    call    sd_check_block
+    seqz    s11, a0
+21: call    sd_receive_finish
+    li      a0, SD_IDLE_BYTE
+    call    sd_xchg
+    slli    s9, a0, 8
+    li      a0, SD_IDLE_BYTE
+    call    sd_xchg
+    or      s9, s9, a0                  # s9 = CRC16 the card sent
+    bnez    s11, 50f
+    li      s7, 1
+    mv      s8, s9
+    addi    s0, s0, 1
+    addi    s2, s2, SD_BLOCK_BYTES
+    addi    s1, s1, -1
+    bnez    s1, 20b                     # (only CMD18 gets here with blocks left)
+
+    # Every block received: end the command, check the last one.
+    li      t0, SD_CMD18_READ_MULTIPLE
+    bne     s5, t0, 30f
+    call    sd_stop_transmission
+30: call    sd_deselect
+    addi    a0, s2, -SD_BLOCK_BYTES
+    mv      a1, s8
+    mv      a2, s6
+    mv      a3, s10
+    call    sd_check_block
+    bnez    a0, 90f
+    j       55f
+
+40: # Block s0 came with an error token: settle the previous one first.
+    beqz    s7, 41f
+    addi    a0, s2, -SD_BLOCK_BYTES
+    mv      a1, s8
+    mv      a2, s6
+    mv      a3, s10
+    call    sd_check_block
+    beqz    a0, 50f
+41: li      t0, SD_CMD18_READ_MULTIPLE
+    bne     s5, t0, 42f
+    call    sd_stop_transmission
+42: call    sd_deselect
+    j       60f
+
+50: # Block s0 - 1 failed its check: end the command, back up to it.
+    li      t0, SD_CMD18_READ_MULTIPLE
+    bne     s5, t0, 51f
+    call    sd_stop_transmission
+51: call    sd_deselect
+55: addi    s0, s0, -1
+    addi    s2, s2, -SD_BLOCK_BYTES
+    addi    s1, s1, 1
+
+60: # Read again from block s0, unless it has failed too often.
+    beq     s0, s4, 61f
+    mv      s4, s0
+    li      s3, 0
+61: addi    s3, s3, 1
+    li      t0, SD_READ_RETRIES
+    bleu    s3, t0, 10b
+    li      a0, ERR_CRC
+    la      a1, msg_crc_block
+    mv      a2, s0
+    la      a3, msg_crc_block_tail
+    call    error_fatal_dec
+
+90: ld      s11, 8(sp)
+    ld      s10, 16(sp)
+    ld      s9, 24(sp)
+    ld      s8, 32(sp)
+    ld      s7, 40(sp)
+    ld      s6, 48(sp)
+    ld      s5, 56(sp)
+    ld      s4, 64(sp)
+    ld      s3, 72(sp)
+    ld      s2, 80(sp)
+    ld      s1, 88(sp)
+    ld      s0, 96(sp)
+    ld      ra, 104(sp)
+    addi    sp, sp, 112
+    ret
+
+# sd_check_block (file-local)
+#   What: checks a received block against the CRC16 the card sent with it
+#         and, if it matches, hands it to the hook.
+#   Arguments: a0 = block in memory, a1 = CRC16 from the card, a2 = hook
+#         or 0, a3 = hook context.
+#   Results: a0 = 1 good, 0 bad.
+#   Clobbers: only ABI temporaries.
+sd_check_block:
+    addi    sp, sp, -48
+    sd      ra, 40(sp)
+    sd      s0, 32(sp)
+    sd      s1, 24(sp)
+    sd      s2, 16(sp)
+    sd      s3, 8(sp)
+    mv      s0, a0
+    mv      s1, a1
+    mv      s2, a2
+    mv      s3, a3
+    li      a1, SD_BLOCK_BYTES
+    call    crc16_ccitt
+    bne     a0, s1, 2f
+    beqz    s2, 1f
+    mv      a0, s0
+    mv      a1, s3
+    jalr    s2
+1:  li      a0, 1
+    j       3f
+2:  li      a0, 0
+3:  ld      s3, 8(sp)
+    ld      s2, 16(sp)
+    ld      s1, 24(sp)
+    ld      s0, 32(sp)
+    ld      ra, 40(sp)
+    addi    sp, sp, 48
+    ret
+
+# sd_wait_token (file-local)
+#   What: clocks 0xFF until the card sends something other than 0xFF (the
+#         data token, or an error token), at most SD_READ_TIMEOUT_US (then
+#         error 2).
+#   Arguments: none.
+#   Results: a0 = the token byte.
+#   Clobbers: only ABI temporaries.
+sd_wait_token:
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+    sd      s0, 0(sp)
+    li      a0, SD_READ_TIMEOUT_US
+    call    timer_deadline
+    mv      s0, a0
+1:  li      a0, SD_IDLE_BYTE
+    call    sd_xchg
+    li      t0, SD_IDLE_BYTE
+    bne     a0, t0, 2f
+    mv      a0, s0
+    call    timer_expired
+    beqz    a0, 1b
+    li      a0, ERR_CARD_TIMEOUT
+    la      a1, msg_token_timeout
+    li      a2, 0
+    call    error_fatal
+2:  ld      s0, 0(sp)
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
+    ret
+
+# sd_receive_start (file-local)
+#   What: starts receiving the 512 data bytes of a block (after its token)
+#         into memory by DMA: SPI1 receive-only for 512 frames with RX DMA
+#         requests, DMAC channel 1 from SPI1's data register to a0, one
+#         dummy write to start the clock. Returns at once; sd_receive_finish
+#         waits for the end.
+#   Arguments: a0 = destination (512 bytes).
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+sd_receive_start:
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+    sd      s0, 0(sp)
+    mv      s0, a0
+
+    li      a0, SD_CTRLR0_RX_ONLY
+    li      a1, SD_BLOCK_BYTES - 1      # ctrlr1 = frames - 1
+    li      a2, SPI_DMACR_RDMAE
+    call    sd_spi_mode
+
+    # Channel 1: stale interrupts cleared, off before reprogramming.
+    li      t0, DMAC_BASE
+    li      t1, DMAC_CH_INTCLEAR_ALL
+    sd      t1, SD_DMAC_CH + DMAC_CH_INTCLEAR(t0)
+1:  ld      t1, DMAC_CHEN(t0)
+    andi    t1, t1, SD_DMAC_CHEN
+    bnez    t1, 1b
+    li      t1, SD_DMAC_CFG             # cfg before sar/dar/block_ts, as the SDK notes
+    sd      t1, SD_DMAC_CH + DMAC_CH_CFG(t0)
+    li      t1, SPI1_DR_ADDR
+    sd      t1, SD_DMAC_CH + DMAC_CH_SAR(t0)
+    sd      s0, SD_DMAC_CH + DMAC_CH_DAR(t0)
+    li      t1, SD_BLOCK_BYTES - 1
+    sd      t1, SD_DMAC_CH + DMAC_CH_BLOCK_TS(t0)
+    li      t1, SD_DMAC_CTL
+    sd      t1, SD_DMAC_CH + DMAC_CH_CTL(t0)
+    li      t1, DMAC_CH_INT_BLOCK_DONE
+    sd      t1, SD_DMAC_CH + DMAC_CH_INTSTATUS_EN(t0)
+    sd      t1, SD_DMAC_CH + DMAC_CH_INTSIGNAL_EN(t0)
+    fence   rw, o                       # earlier accesses to the buffer come first
+    li      t1, SD_DMAC_CHEN | SD_DMAC_CHEN_WE
+    sd      t1, DMAC_CHEN(t0)
+
+    # One dummy write clocks ctrlr1 + 1 frames in (MOSI idles high).
+    li      t0, SPI1_BASE
+    li      t1, SD_IDLE_BYTE
+    sw      t1, SPI_DR(t0)
+
+    ld      s0, 0(sp)
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
+    ret
+
+# sd_receive_finish (file-local)
+#   What: sleeps until the block sd_receive_start began is in memory, then
+#         puts SPI1 back in transmit-and-receive mode, DMA requests off.
+#   Arguments: none. Results: none.
+#   Clobbers: only ABI temporaries.
+sd_receive_finish:
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+    li      a0, SD_DMA_CHANNEL
+    call    dma_wait_channel
+    li      a0, SD_CTRLR0_TX_RX
+    li      a1, 0
+    li      a2, 0
+    call    sd_spi_mode
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
+    ret
+
+# sd_stop_transmission (file-local)
+#   What: ends a CMD18 stream: CMD12, skip the stuff byte, R1, then wait
+#         while the card holds MISO low (busy), at most SD_BUSY_TIMEOUT_US.
+#         The card stays selected.
+#   Arguments: none. Results: none.
+#   Clobbers: only ABI temporaries.
+sd_stop_transmission:
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+    sd      s0, 0(sp)
+    li      a0, SD_CMD12_STOP
+    li      a1, 0
+    call    sd_command                  # skips the stuff byte for CMD12
+    li      t0, SD_R1_NONE
+    bne     a0, t0, 1f
+    mv      a1, a0
+    li      a0, SD_CMD12_STOP
+    call    sd_fail_r1
+1:  li      a0, SD_BUSY_TIMEOUT_US
+    call    timer_deadline
+    mv      s0, a0
+2:  li      a0, SD_IDLE_BYTE
+    call    sd_xchg
+    li      t0, SD_IDLE_BYTE
+    beq     a0, t0, 3f
+    mv      a0, s0
+    call    timer_expired
+    beqz    a0, 2b
+    li      a0, ERR_CARD_TIMEOUT
+    la      a1, msg_busy_timeout
+    li      a2, 0
+    call    error_fatal
+3:  ld      s0, 0(sp)
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
+    ret
+
+# sd_cmd (file-local)
+#   What: one command as its own transaction: select, command, R1 and (if
+#         a2) the 4 bytes of R3/R7, deselect. A response with the CRC-error
+#         bit set is sent again, up to SD_CMD_CRC_TRIES sends, then error 4.
+#   Arguments: a0 = command index, a1 = argument, a2 = 1 to read 4 more
+#         bytes after R1, else 0.
+#   Results: a0 = R1 (SD_R1_NONE when nothing answered), a1 = the 4 bytes
+#         (big-endian, as sent) or 0.
+#   Clobbers: only ABI temporaries.
+sd_cmd:
+    addi    sp, sp, -64
+    sd      ra, 56(sp)
+    sd      s0, 48(sp)
+    sd      s1, 40(sp)
+    sd      s2, 32(sp)
+    sd      s3, 24(sp)
+    sd      s4, 16(sp)
+    sd      s5, 8(sp)
+    mv      s0, a0                      # s0 = command
+    mv      s1, a1                      # s1 = argument
+    mv      s2, a2                      # s2 = read R3/R7 payload
+    li      s4, SD_CMD_CRC_TRIES        # s4 = sends left
+1:  call    sd_select
+    mv      a0, s0
+    mv      a1, s1
+    call    sd_command
+    mv      s3, a0                      # s3 = R1
+    li      s5, 0                       # s5 = payload
+    beqz    s2, 2f
+    li      t0, SD_R1_NONE
+    beq     s3, t0, 2f
+    call    sd_read_u32
+    mv      s5, a0
+2:  call    sd_deselect
+    li      t0, SD_R1_NONE
+    beq     s3, t0, 3f
+    andi    t0, s3, SD_R1_CRC_ERROR
+    beqz    t0, 3f
+    addi    s4, s4, -1
+    bnez    s4, 1b
+    li      a0, ERR_CRC
+    la      a1, msg_crc_cmd
+    mv      a2, s0
+    la      a3, msg_crc_cmd_tail
+    call    error_fatal_dec
+3:  mv      a0, s3
+    mv      a1, s5
+    ld      s5, 8(sp)
+    ld      s4, 16(sp)
+    ld      s3, 24(sp)
+    ld      s2, 32(sp)
+    ld      s1, 40(sp)
+    ld      s0, 48(sp)
+    ld      ra, 56(sp)
+    addi    sp, sp, 64
+    ret
+
+# sd_cmd_ok (file-local)
+#   What: sd_cmd for a command that must answer R1 = 0 (ready, no error
+#         bits); anything else ends in sd_fail_r1's report.
+#   Arguments: as sd_cmd.
+#   Results: a0 = the 4 bytes after R1 (when a2 = 1), else 0.
+#   Clobbers: only ABI temporaries.
+sd_cmd_ok:
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+    sd      s0, 0(sp)
+    mv      s0, a0
+    call    sd_cmd
+    beqz    a0, 1f
+    mv      a1, a0
+    mv      a0, s0
+    call    sd_fail_r1
+1:  mv      a0, a1
+    ld      s0, 0(sp)
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
+    ret
+
+# sd_fail_r1 (file-local)
+#   What: reports a command whose response is unusable: no answer at all is
+#         error 2 ("card timeout: no response to CMD<n>"), an answer with
+#         unexpected bits is error 3 ("unsupported card: CMD<n> R1 0x<r1>").
+#   Arguments: a0 = command index, a1 = R1 (SD_R1_NONE = no answer).
+#   Results: never returns.
+#   Clobbers: everything.
+sd_fail_r1:
+    mv      s0, a0
+    mv      s1, a1
+    li      t0, SD_R1_NONE
+    bne     s1, t0, 1f
+    li      a0, ERR_CARD_TIMEOUT
+    call    error_begin
+    la      a0, msg_no_response
+    call    console_puts
+    mv      a0, s0
+    call    console_put_dec
+    j       error_end
+1:  li      a0, ERR_UNSUPPORTED
+    call    error_begin
+    la      a0, msg_refused
+    call    console_puts
+    mv      a0, s0
+    call    console_put_dec
+    la      a0, msg_refused_r1
+    call    console_puts
+    mv      a0, s1
+    li      a1, 2
+    call    console_put_hex
+    j       error_end
+
+# sd_command (file-local)
+#   What: sends one command frame (the card is selected) and waits up to
+#         SD_NCR_BYTES bytes for its R1. For CMD12 the stuff byte that
+#         follows the frame is skipped first.
+#   Arguments: a0 = command index, a1 = 32-bit argument.
+#   Results: a0 = R1, or SD_R1_NONE when no response started.
+#   Clobbers: only ABI temporaries.
+sd_command:
+    addi    sp, sp, -48
+    sd      ra, 40(sp)
+    sd      s0, 32(sp)
+    sd      s1, 24(sp)
+    sd      s2, 16(sp)
+    mv      s2, a0
+    # frame at 0(sp): start | index, argument MSB first, CRC7 | end bit
+    ori     t0, a0, SD_CMD_START
+    sb      t0, 0(sp)
+    srli    t0, a1, 24
+    sb      t0, 1(sp)
+    srli    t0, a1, 16
+    sb      t0, 2(sp)
+    srli    t0, a1, 8
+    sb      t0, 3(sp)
+    sb      a1, 4(sp)
+    mv      a0, sp
+    li      a1, SD_CMD_CRC_BYTES
+    call    crc7_sd
+    sb      a0, SD_CMD_CRC_BYTES(sp)
+    mv      s0, sp
+    addi    s1, sp, SD_CMD_FRAME_BYTES
+1:  lbu     a0, 0(s0)
+    call    sd_xchg
+    addi    s0, s0, 1
+    bltu    s0, s1, 1b
+
+    li      t0, SD_CMD12_STOP
+    bne     s2, t0, 2f
+    li      a0, SD_IDLE_BYTE            # stuff byte
+    call    sd_xchg
+2:  li      s0, SD_NCR_BYTES
+3:  li      a0, SD_IDLE_BYTE
+    call    sd_xchg
+    andi    t0, a0, SD_R1_START_MASK
+    beqz    t0, 4f
+    addi    s0, s0, -1
+    bnez    s0, 3b
+    li      a0, SD_R1_NONE
+4:  ld      s2, 16(sp)
+    ld      s1, 24(sp)
+    ld      s0, 32(sp)
+    ld      ra, 40(sp)
+    addi    sp, sp, 48
+    ret
+
+# sd_read_u32 (file-local)
+#   What: clocks in 4 bytes, most significant first (R3 / R7 payload).
+#   Arguments: none.
+#   Results: a0 = the 32-bit value.
+#   Clobbers: only ABI temporaries.
+sd_read_u32:
+    addi    sp, sp, -32
+    sd      ra, 24(sp)
+    sd      s0, 16(sp)
+    sd      s1, 8(sp)
+    li      s0, 0
+    li      s1, 4
+1:  li      a0, SD_IDLE_BYTE
+    call    sd_xchg
+    slli    s0, s0, 8
+    or      s0, s0, a0
+    addi    s1, s1, -1
+    bnez    s1, 1b
+    mv      a0, s0
+    ld      s1, 8(sp)
+    ld      s0, 16(sp)
+    ld      ra, 24(sp)
+    addi    sp, sp, 32
+    ret
+
+# sd_select (file-local)
+#   What: chip select low, then one 0xFF byte so the card drives MISO.
+#   Arguments: none. Results: none.
+#   Clobbers: only ABI temporaries.
+sd_select:
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+    li      a0, GPIOHS_SD_CS_BIT
+    call    gpiohs_clear
+    li      a0, SD_IDLE_BYTE
+    call    sd_xchg
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
+    ret
+
+# sd_deselect (file-local)
+#   What: chip select high, then one 0xFF byte (8 clocks) so the card
+#         releases MISO. No byte is on the wire when CS changes: sd_xchg
+#         returns only after its byte has come back.
+#   Arguments: none. Results: none.
+#   Clobbers: only ABI temporaries.
+sd_deselect:
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+    li      a0, GPIOHS_SD_CS_BIT
+    call    gpiohs_set
+    li      a0, SD_IDLE_BYTE
+    call    sd_xchg
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
+    ret
+
+# sd_xchg (file-local)
+#   What: sends one byte on MOSI and returns the byte clocked in on MISO
+#         (SPI1 in transmit-and-receive mode, FIFOs in step: each call
+#         leaves both empty).
+#   Arguments: a0 = byte to send.
+#   Results: a0 = byte received.
+#   Clobbers: only ABI temporaries.
+sd_xchg:
+    li      t0, SPI1_BASE
+    sw      a0, SPI_DR(t0)
+1:  lw      t1, SPI_SR(t0)
+    andi    t1, t1, SPI_SR_RFNE
+    beqz    t1, 1b
+    lw      a0, SPI_DR(t0)
+    andi    a0, a0, 0xFF
+    ret
+
+# sd_spi_setup (file-local)
+#   What: SPI1 disabled, programmed for the card (transmit-and-receive,
+#         8-bit standard frames, the given clock divider, no interrupts, no
+#         DMA requests), enabled with its transfer-enable select bit.
+#   Arguments: a0 = baudr (even).
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+sd_spi_setup:
+    li      t0, SPI1_BASE
+    sw      zero, SPI_SSIENR(t0)
+    sw      a0, SPI_BAUDR(t0)
+    li      t1, SD_CTRLR0_TX_RX
+    sw      t1, SPI_CTRLR0(t0)
+    sw      zero, SPI_CTRLR1(t0)
+    sw      zero, SPI_SPI_CTRLR0(t0)
+    sw      zero, SPI_IMR(t0)
+    sw      zero, SPI_DMACR(t0)
+    li      t1, SPI_DMARDLR_VALUE
+    sw      t1, SPI_DMARDLR(t0)
+    li      t1, SPI_SSIENR_ENABLE
+    sw      t1, SPI_SSIENR(t0)
+    li      t1, SD_SPI_SER
+    sw      t1, SPI_SER(t0)
+    ret
+
+# sd_spi_mode (file-local)
+#   What: switches SPI1 between transfer modes (disable, ctrlr0/ctrlr1,
+#         enable, then the DMA request enables). Disabling empties both
+#         FIFOs; no byte is in flight when this is called.
+#   Arguments: a0 = ctrlr0, a1 = ctrlr1, a2 = dmacr.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+sd_spi_mode:
+    li      t0, SPI1_BASE
+    sw      zero, SPI_SSIENR(t0)
+    sw      a0, SPI_CTRLR0(t0)
+    sw      a1, SPI_CTRLR1(t0)
+    li      t1, SPI_SSIENR_ENABLE
+    sw      t1, SPI_SSIENR(t0)
+    sw      a2, SPI_DMACR(t0)
+    ret
+
+# sd_delay_us (file-local)
+#   What: delay_us at the CPU clock in force (cpu_hz).
+#   Arguments: a0 = microseconds. Results: none.
+#   Clobbers: only ABI temporaries.
+sd_delay_us:
+    la      t0, cpu_hz
+    lwu     a1, 0(t0)
+    j       delay_us
+
+# ---------------------------------------------------------------------------
+    .section .rodata
+msg_sd_ready:       .asciz "sd: card ready, "
+msg_sdhc:           .asciz "SDHC (block addressing)"
+msg_sdsc:           .asciz "SDSC (byte addressing)"
+msg_sd_clock:       .asciz ", SPI1 "
+msg_hz_nl:          .asciz " Hz\n"
+msg_no_card:        .asciz "no card: no response to CMD0"
+msg_sd_v1:          .asciz "unsupported card: CMD8 illegal (SD 1.x card)"
+msg_cmd8_echo:      .asciz "unsupported card: CMD8 echo "
+msg_ocr_power:      .asciz "unsupported card: OCR not powered up "
+msg_acmd41_timeout: .asciz "card timeout: still initialising after ACMD41 for 1 s"
+msg_token_timeout:  .asciz "card timeout: no data token"
+msg_busy_timeout:   .asciz "card timeout: busy after CMD12"
+msg_no_response:    .asciz "card timeout: no response to CMD"
+msg_refused:        .asciz "unsupported card: CMD"
+msg_refused_r1:     .asciz " answered R1 0x"
+msg_crc_block:      .asciz "CRC errors: block "
+msg_crc_block_tail: .asciz " stays bad after retries"
+msg_crc_cmd:        .asciz "CRC errors: CMD"
+msg_crc_cmd_tail:   .asciz " response keeps reporting a CRC error"
+
+# ---------------------------------------------------------------------------
+    .bss
+    .balign 4
+# sd_ccs: 1 = block-addressed card (SDHC/SDXC), 0 = byte-addressed (SDSC).
+sd_ccs:
+    .space  4

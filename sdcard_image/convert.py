@@ -1,0 +1,355 @@
+"""Turning the user's input files into the files that go on the card.
+
+Rules (what a user putting a model and its texture on a card expects):
+
+* ``.obj``: checked (see `objcheck`), copied unchanged;
+* ``.ppm``: validated (P3/P6 header and length), copied unchanged, never resized;
+* other images Pillow reads (PNG, JPEG, BMP, GIF, TIFF, WebP, TGA, ...): converted to binary
+  PPM (P6, maxval 255) named after the source with a ``.ppm`` extension, upright per EXIF,
+  alpha dropped, optionally resized to ``--texture-size``;
+* anything else: copied unchanged.
+"""
+from __future__ import annotations
+
+import io
+import re
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from . import objcheck, ppm
+from .errors import BadInputError, UsageError
+from .fat32 import check_card_name
+from .rawfat import fat_fold
+
+if TYPE_CHECKING:
+    from PIL import Image
+
+SCENE_FILE = "scene.ini"
+
+# Pillow formats that are not pictures a user would mean as a texture (documents, videos,
+# scientific-data stubs), and extensions that commonly mean something else (.rgb raw dumps,
+# .fit fitness logs, .im chat logs...): such files are copied unchanged.
+_NOT_TEXTURE_FORMATS = {"EPS", "BUFR", "GRIB", "HDF5", "MPEG", "IPTC", "WMF"}
+_NOT_TEXTURE_EXTS = {".ppm", ".rgb", ".rgba", ".bw", ".fit", ".im"}
+
+
+def image_extensions() -> set[str]:
+    """Lower-case extensions that are converted to PPM: every Pillow-readable picture format
+    except PPM itself and the exclusions above."""
+    from PIL import Image
+    Image.init()
+    return {ext for ext, fmt in Image.registered_extensions().items()
+            if fmt in Image.OPEN and fmt not in _NOT_TEXTURE_FORMATS
+            and ext not in _NOT_TEXTURE_EXTS}
+
+
+@dataclass(frozen=True)
+class PlacedFile:
+    """A file as placed on the card (one line of the build report)."""
+
+    #: Absolute card path, "/" separated ("/tex/cube.ppm").
+    card_path: str
+    size: int
+    #: The input it came from; None for a scene.ini written from --scene.
+    source: Path | None
+    #: For converted files: what it was converted from ("tex/cube.png (PNG 300x200 ...)").
+    converted_from: str | None = None
+    #: What was checked or done ("OBJ: 8 vertices ...", "copied").
+    detail: str = "copied"
+
+    def report_line(self) -> str:
+        """"/tex/cube.ppm  196623 bytes  <- converted from tex/cube.png (PNG 256x256)"."""
+        if self.converted_from:
+            origin = f"converted from {self.converted_from}"
+        elif self.source is not None:
+            origin = f"from {self.source}" + (f" ({self.detail})" if self.detail else "")
+        else:
+            origin = self.detail
+        return f"{self.card_path}  {self.size} bytes  <- {origin}"
+
+
+@dataclass
+class CardPlan:
+    """Everything that goes on a card: folders (parents first) and files with their bytes."""
+
+    dirs: list[str] = field(default_factory=list)
+    files: list[tuple[PlacedFile, bytes]] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
+
+
+def parse_texture_size(text: str) -> tuple[int, int]:
+    """"64x32" -> (64, 32); raises `UsageError` on anything else."""
+    m = re.fullmatch(r"\s*(\d+)\s*[xX]\s*(\d+)\s*", text)
+    if not m or not (1 <= int(m.group(1)) <= 8192 and 1 <= int(m.group(2)) <= 8192):
+        raise UsageError(f"--texture-size {text!r}: expected WxH with 1..8192, e.g. 128x128")
+    return int(m.group(1)), int(m.group(2))
+
+
+def _to_rgb8(img: "Image.Image") -> "Image.Image":
+    """8-bit RGB from any Pillow mode; 16-bit and float greys are scaled, not clipped."""
+    import numpy as np
+    from PIL import Image
+    if img.mode in ("I;16", "I;16L", "I;16B", "I;16N", "I"):
+        arr = np.asarray(img, dtype=np.float64)
+        top = 65535.0 if img.mode.startswith("I;16") or arr.max() > 255 else 255.0
+        arr = np.clip(arr / top * 255.0 + 0.5, 0, 255).astype(np.uint8)
+        return Image.fromarray(arr, "L").convert("RGB")
+    if img.mode == "F":
+        arr = np.asarray(img, dtype=np.float64)
+        top = 1.0 if arr.max() <= 1.0 else 255.0
+        arr = np.clip(arr / top * 255.0 + 0.5, 0, 255).astype(np.uint8)
+        return Image.fromarray(arr, "L").convert("RGB")
+    if img.mode == "P" and "transparency" in img.info:
+        img = img.convert("RGBA")
+    return img.convert("RGB")
+
+
+def convert_image(data: bytes, path: Path | str,
+                  texture_size: tuple[int, int] | None = None) -> tuple[bytes, str]:
+    """A Pillow-readable image -> (P6 bytes, description such as "PNG 300x200, alpha dropped").
+
+    Raises `BadInputError` when Pillow cannot decode the file.
+    """
+    from PIL import Image, ImageOps, UnidentifiedImageError
+    fmt = Path(path).suffix.lstrip(".").upper() or "image"
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", Image.DecompressionBombWarning)
+            img = Image.open(io.BytesIO(data))
+            fmt = img.format or fmt
+            frames = getattr(img, "n_frames", 1)  # the transposed copy forgets it
+            img.load()
+            stored = img.size
+            orientation = img.getexif().get(0x0112, 1)
+            img = ImageOps.exif_transpose(img)
+    except UnidentifiedImageError:
+        raise BadInputError(path, "not an image Pillow can read (unknown or damaged format)") \
+            from None
+    except (OSError, SyntaxError, ValueError, Image.DecompressionBombError,
+            Image.DecompressionBombWarning) as exc:
+        raise BadInputError(path, f"cannot decode {fmt} image: {exc}") from None
+    notes = [f"{fmt} {stored[0]}x{stored[1]}"]
+    if orientation not in (1, 0):
+        notes.append("turned upright per EXIF")
+    if frames > 1:
+        notes.append(f"first of {frames} frames")
+    if img.mode in ("RGBA", "LA", "PA") or (img.mode == "P" and "transparency" in img.info):
+        notes.append("alpha dropped")
+    rgb = _to_rgb8(img)
+    if texture_size and rgb.size != texture_size:
+        rgb = rgb.resize(texture_size, Image.Resampling.LANCZOS)
+        notes.append(f"resized to {texture_size[0]}x{texture_size[1]}")
+    return ppm.encode_p6(rgb.width, rgb.height, rgb.tobytes()), ", ".join(notes)
+
+
+def parse_scene_args(items: list[str]) -> dict[str, str]:
+    """["model=models/cube.obj", ...] -> ordered dict; raises `UsageError` on bad items."""
+    scene: dict[str, str] = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep:
+            raise UsageError(f"--scene {item!r}: expected KEY=VALUE")
+        key = key.strip(" \t")
+        if key.lower() in (k.lower() for k in scene):
+            raise UsageError(f"--scene {item!r}: key {key!r} given twice")
+        scene[key] = value.strip(" \t")
+    return scene
+
+
+# The rules of the firmware's scene.ini reader (firmware/scene.S): '#' starts a comment
+# anywhere, keys compare case-insensitively, values are under 256 bytes, no control
+# characters. Checked here so a card the tool accepts is a card the firmware accepts.
+KNOWN_SCENE_KEYS = ("model", "texture")  # scene_keys in firmware/scene.S
+SCENE_VALUE_MAX = 255
+_SCENE_KEY = re.compile(r"[A-Za-z0-9_.\-]+\Z")
+
+
+def _scene_problem(key: str, value: str) -> str | None:
+    """Why `key = value` would be rejected by the firmware, or None."""
+    if not key:
+        return "no key before '='"
+    if not _SCENE_KEY.match(key):
+        return f"key {key!r}: use letters, digits, '_', '-' and '.'"
+    if not value:
+        return f"no value for {key!r}"
+    if any(ord(c) < 0x20 or ord(c) == 0x7F for c in key + value if c != "\t"):
+        return f"control character in {key!r}"
+    if len(value.encode("utf-8")) > SCENE_VALUE_MAX:
+        return f"value of {key!r} is longer than {SCENE_VALUE_MAX} bytes"
+    return None
+
+
+def scene_ini(scene: dict[str, str]) -> bytes:
+    """The scene.ini text: one "key = value" line per entry, in the given order."""
+    lines = []
+    seen: set[str] = set()
+    for key, value in scene.items():
+        key, value = str(key).strip(" \t"), str(value).strip(" \t")
+        if key.lower() in seen:
+            raise UsageError(f"scene key {key!r} given twice (keys ignore case)")
+        seen.add(key.lower())
+        problem = _scene_problem(key, value)
+        if "#" in value:
+            problem = f"value of {key!r} contains '#', which starts a comment in scene.ini"
+        if problem:
+            raise UsageError(f"--scene {key}={value}: {problem}")
+        lines.append(f"{key} = {value}\n")
+    return "".join(lines).encode("utf-8")
+
+
+def check_scene_ini(data: bytes, path: Path | str) -> dict[str, str]:
+    """Validates a scene.ini given as input by the firmware's rules: "key = value" lines,
+    blank lines, '#' comments, LF or CRLF, an optional UTF-8 byte-order mark. Raises
+    `BadInputError` with the line of the first bad line; returns the settings."""
+    if data.startswith(b"\xef\xbb\xbf"):
+        data = data[3:]
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = data.count(b"\n", 0, exc.start) + 1
+        raise BadInputError(path, "not UTF-8 text", line) from None
+    scene: dict[str, str] = {}
+    for lineno, line in enumerate(text.split("\n"), start=1):
+        content = line.removesuffix("\r").split("#", 1)[0].strip(" \t")
+        if not content:
+            continue
+        key, sep, value = content.partition("=")
+        if not sep:
+            raise BadInputError(path, f"expected 'key = value', got {content[:40]!r}", lineno)
+        key, value = key.strip(" \t"), value.strip(" \t")
+        problem = _scene_problem(key, value)
+        if problem:
+            raise BadInputError(path, problem, lineno)
+        if key.lower() in scene:
+            raise BadInputError(path, f"key {key!r} given twice", lineno)
+        scene[key.lower()] = value
+    return scene
+
+
+def scene_warnings(scene: dict[str, str], card_files: set[str], origin: str) -> list[str]:
+    """Notes on settings the firmware will trip over: unknown keys, files not on the card."""
+    notes = []
+    for key, value in scene.items():
+        if key.lower() not in KNOWN_SCENE_KEYS:
+            notes.append(f"{origin}: key {key!r} is not one the firmware knows "
+                         f"({', '.join(KNOWN_SCENE_KEYS)})")
+        elif "/" + fat_fold(value.lstrip("/")) not in card_files:
+            notes.append(f"{origin}: {key} = {value}: no such file on the card")
+    return notes
+
+
+def _display(path: Path) -> str:
+    return str(path)
+
+
+class _Planner:
+    def __init__(self, texture_size: tuple[int, int] | None) -> None:
+        self.texture_size = texture_size
+        self.plan = CardPlan()
+        self.image_exts = image_extensions()
+        # Per card folder: folded name -> (card name, input it came from)
+        self.names: dict[str, dict[str, tuple[str, str]]] = {"": {}}
+        #: Settings of a scene.ini given as input, and its path.
+        self.scene_input: tuple[dict[str, str], str] | None = None
+
+    def claim(self, card_dir: str, name: str, origin: str) -> str:
+        problem = check_card_name(name)
+        if problem:
+            raise UsageError(f"{origin}: cannot be put on the card: {problem}")
+        taken = self.names.setdefault(card_dir, {})
+        folded = fat_fold(name)
+        if folded in taken:
+            other_name, other_origin = taken[folded]
+            how = "the same name" if other_name == name else "names differing only in case"
+            raise UsageError(f"{origin} and {other_origin} would both be {card_dir}/"
+                             f"{other_name} on the card ({how}; FAT names are "
+                             f"case-insensitive)")
+        taken[folded] = (name, origin)
+        return f"{card_dir}/{name}"
+
+    def add_dir(self, src: Path, card_dir: str, name: str, seen: set[Path]) -> None:
+        real = src.resolve()
+        if real in seen:
+            raise UsageError(f"{src}: folder contains itself through a symbolic link")
+        path = self.claim(card_dir, name, _display(src))
+        self.plan.dirs.append(path)
+        self.names.setdefault(path, {})
+        for child in sorted(src.iterdir(), key=lambda p: p.name):
+            self.add(child, path, seen | {real})
+
+    def add(self, src: Path, card_dir: str, seen: set[Path] = frozenset()) -> None:
+        name = src.name or src.resolve().name
+        if src.is_dir():
+            self.add_dir(src, card_dir, name, set(seen))
+        elif src.is_file():
+            self.add_file(src, card_dir, name)
+        elif src.exists() or src.is_symlink():
+            raise UsageError(f"{src}: not a regular file or folder")
+        else:
+            raise UsageError(f"{src}: no such file or folder")
+
+    def add_file(self, src: Path, card_dir: str, name: str) -> None:
+        try:
+            data = src.read_bytes()
+        except OSError as exc:
+            raise UsageError(f"{src}: cannot read: {exc.strerror}") from None
+        ext = src.suffix.lower()
+        converted_from = None
+        if ext == ".obj":
+            stats = objcheck.check_obj(data, src)
+            detail = f"OBJ checked: {stats.summary()}"
+            for keyword, line in stats.ignored.items():
+                self.plan.warnings.append(f"{src}:{line}: '{keyword}' statements are valid OBJ "
+                                          f"but not drawn by the renderer")
+            if stats.faces == 0:
+                self.plan.warnings.append(f"{src}: has no faces")
+        elif ext == ".ppm":
+            info = ppm.parse_ppm(data, src)
+            detail = f"PPM {info.magic} {info.width}x{info.height} maxval {info.maxval}"
+            if self.texture_size and (info.width, info.height) != self.texture_size:
+                self.plan.warnings.append(
+                    f"{src}: kept at {info.width}x{info.height}; --texture-size only applies "
+                    f"to converted images")
+        elif ext in self.image_exts:
+            data, how = convert_image(data, src, self.texture_size)
+            converted_from = f"{src} ({how})"
+            detail = "converted"
+            name = (src.stem or name) + ".ppm"
+        else:
+            detail = "copied"
+        if card_dir == "" and fat_fold(name) == fat_fold(SCENE_FILE) and converted_from is None:
+            self.scene_input = (check_scene_ini(data, src), str(src))
+            detail = "scene description checked"
+        card_path = self.claim(card_dir, name, _display(src))
+        self.plan.files.append((PlacedFile(card_path=card_path, size=len(data), source=src,
+                                           converted_from=converted_from, detail=detail), data))
+
+
+def plan_card(inputs: list[Path], scene: dict[str, str] | None = None,
+              texture_size: tuple[int, int] | None = None) -> CardPlan:
+    """Checks and converts the inputs; each lands at the card root under its own name.
+
+    Raises `UsageError` for missing inputs and colliding names, `BadInputError` for broken
+    OBJ/PPM/image/scene files.
+    """
+    planner = _Planner(texture_size)
+    for src in inputs:
+        planner.add(Path(src), "")
+    if scene:
+        root = planner.names[""]
+        if fat_fold(SCENE_FILE) in root:
+            raise UsageError(f"both --scene and an input {root[fat_fold(SCENE_FILE)][1]} give "
+                             f"the card's {SCENE_FILE}: use one or the other")
+        data = scene_ini(scene)
+        card_path = planner.claim("", SCENE_FILE, "--scene")
+        planner.plan.files.append((PlacedFile(card_path=card_path, size=len(data), source=None,
+                                              detail="written from --scene"), data))
+    on_card = {fat_fold(p.card_path) for p, _ in planner.plan.files}
+    if scene:
+        planner.plan.warnings += scene_warnings(scene, on_card, "--scene")
+    elif planner.scene_input:
+        settings, origin = planner.scene_input
+        planner.plan.warnings += scene_warnings(settings, on_card, origin)
+    return planner.plan

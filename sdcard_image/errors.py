@@ -1,0 +1,58 @@
+"""Errors of the card-image tool, each tied to the exit status the command line reports.
+
+Callers of the Python API catch `SdImageError` (or one subclass); the command line turns
+`exit_status` into the process status so scripts can tell the failures apart.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+EXIT_OK = 0
+EXIT_USAGE = 2
+EXIT_BAD_INPUT = 3
+EXIT_OUTPUT_EXISTS = 4
+EXIT_TOO_SMALL = 5
+EXIT_CORRUPT_IMAGE = 6
+
+
+class SdImageError(Exception):
+    """Base class: a failure the user can act on (never a bug in this tool)."""
+
+    exit_status = 1
+
+
+class UsageError(SdImageError):
+    """Bad arguments: wrong option value, colliding card names, a path not on the card."""
+
+    exit_status = EXIT_USAGE
+
+
+class BadInputError(SdImageError):
+    """An input file is broken (OBJ, PPM, image, scene.ini); names the file and line."""
+
+    exit_status = EXIT_BAD_INPUT
+
+    def __init__(self, path: Path | str, message: str, line: int | None = None) -> None:
+        self.path = Path(path)
+        self.line = line
+        self.reason = message
+        where = f"{path}:{line}" if line is not None else f"{path}"
+        super().__init__(f"{where}: {message}")
+
+
+class OutputExistsError(SdImageError):
+    """The output exists and --force was not given."""
+
+    exit_status = EXIT_OUTPUT_EXISTS
+
+
+class ImageTooSmallError(SdImageError):
+    """The content does not fit in the requested image size."""
+
+    exit_status = EXIT_TOO_SMALL
+
+
+class CorruptImageError(SdImageError):
+    """An image to read is not an MBR-partitioned FAT32 card, or its FAT32 is damaged."""
+
+    exit_status = EXIT_CORRUPT_IMAGE
