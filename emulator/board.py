@@ -205,7 +205,8 @@ class Board:
                  console: Callable[[int], None] | None = None,
                  on_frame: Callable[[FrameRecord, np.ndarray], None] | None = None,
                  on_warning: Callable[[str], None] | None = None, permissive: bool = False,
-                 sd_image: str | None = None, sd_writable: bool = False) -> None:
+                 sd_image: str | None = None, sd_writable: bool = False,
+                 sd_faults: frozenset[str] = frozenset()) -> None:
         self.quantum = quantum
         self.permissive = permissive   # unimplemented registers of modelled devices warn instead of stopping
         self.hang_budget_s = hang_budget_s
@@ -229,11 +230,12 @@ class Board:
         self.peripherals: list[Peripheral] = [self.sysctl, self.fpioa, self.gpiohs, self.uarths, self.clint,
                                               self.plic, self.dmac, self.spi0, self.spi1]
         self.timed_devices = [self.uarths, self.spi0, self.spi1, self.dmac, self.sysctl, self.clint]
+        self._timed_set = set(self.timed_devices)
         self.lcd = ST7789V(on_frame=self._frame_captured)
         self.lcd_port = LcdPort(self, self.lcd)
         self.spi0.device_for_ss = self._spi0_device
         self.sd_image = SdImage(sd_image, writable=sd_writable) if sd_image else None
-        self.sd_slot = SdSlot(self, SdCard(self.sd_image, warn=self.warn)) if self.sd_image else None
+        self.sd_slot = SdSlot(self, SdCard(self.sd_image, warn=self.warn, faults=sd_faults)) if self.sd_image else None
         self.spi1.device_for_ss = self._spi1_device
         self._lcd_reset_level = 1
         # clock epochs: cycles and mtime are integrals of the CPU clock over virtual time
@@ -416,13 +418,15 @@ class Board:
         high.extend(SOURCE_GPIOHS0 + n for n in range(32) if lines >> n & 1)
         return high
 
-    def mip(self, h: int, now: float) -> int:
+    def mip(self, h: int, now: float, mask: int = ~0) -> int:
+        """The hart's pending interrupt bits; only those in `mask` are computed (sampling the
+        PLIC is the expensive part, and a hart that has MEIE clear does not need it)."""
         value = 0
-        if self.clint.msip(h):
+        if mask >> hartmod.IRQ_MSI & 1 and self.clint.msip(h):
             value |= 1 << hartmod.IRQ_MSI
-        if self.clint.timer_pending(h, now):
+        if mask >> hartmod.IRQ_MTI & 1 and self.clint.timer_pending(h, now):
             value |= 1 << hartmod.IRQ_MTI
-        if self.plic.external_pending(h):
+        if mask >> hartmod.IRQ_MEI & 1 and self.plic.external_pending(h):
             value |= 1 << hartmod.IRQ_MEI
         return value
 
@@ -431,7 +435,7 @@ class Board:
         then, and a running hart with interrupts enabled ends its turn to take it."""
         self._wake_sleepers(self.time if now is None else now)
         hart = self._current
-        if hart is not None and hart.csr(rv.UC_RISCV_REG_MSTATUS) & hartmod.MSTATUS_MIE:
+        if hart is not None and hart.reg(rv.UC_RISCV_REG_MSTATUS) & hartmod.MSTATUS_MIE:
             hart.request_stop()
 
     # --- devices ------------------------------------------------------------------------
@@ -473,7 +477,7 @@ class Board:
 
     def _gate_check(self, peripheral: Peripheral) -> None:
         gate = getattr(peripheral, "GATE", None)
-        if gate is None:
+        if gate is None or gate in self.sysctl.usable:
             return
         if not self.sysctl.gate_open(gate):
             raise HardwareMisuse(f"{peripheral.NAME} accessed while its clock is gated "
@@ -496,7 +500,7 @@ class Board:
         the rest of the instruction's callbacks are ignored."""
         if self._faulting_pc[hart.hart_id] == pc:
             return True
-        base = hart.uc.reg_read(rv.UC_RISCV_REG_X0 + rs1) if rs1 else 0
+        base = hart.reg(rv.UC_RISCV_REG_X0 + rs1) if rs1 else 0
         address = (base + imm) & (2**64 - 1)
         if address % width == 0:
             return False
@@ -510,7 +514,7 @@ class Board:
         def read(uc, offset, size, user_data):
             if self._stop is not None:
                 return 0
-            pc = uc.reg_read(rv.UC_RISCV_REG_PC)
+            pc = hart.reg(rv.UC_RISCV_REG_PC)
             pending = self._split[hart.hart_id]
             if pending is not None and pending[:2] == (pc, offset):
                 self._split[hart.hart_id] = None
@@ -536,7 +540,7 @@ class Board:
         def write(uc, offset, size, value, user_data):
             if self._stop is not None:
                 return
-            pc = uc.reg_read(rv.UC_RISCV_REG_PC)
+            pc = hart.reg(rv.UC_RISCV_REG_PC)
             width, rs1, imm = self._access(hart, pc)
             if self._misaligned(hart, pc, width, rs1, imm, True):
                 return
@@ -558,9 +562,14 @@ class Board:
                 return
             # a store that makes a device do something before this turn's planned end (start a
             # transfer, set a timer) ends the turn, so the next one stops at that event
-            event = self.next_device_event(now)
-            if event is not None and event < self._turn_horizon:
-                hart.request_stop()
+            # A hart with interrupts enabled must take an interrupt the moment its device raises
+            # it: a store that schedules something before this turn's planned end ends the turn.
+            # (Without mstatus.MIE nothing can preempt the hart; status reads are exact in any
+            # case, and sleeping harts wake at the event's own time.)
+            if peripheral in self._timed_set and hart.reg(rv.UC_RISCV_REG_MSTATUS) & hartmod.MSTATUS_MIE:
+                event = self.next_device_event(now)
+                if event is not None and event < self._turn_horizon:
+                    hart.request_stop()
         return write
 
     def _note_poll(self, hart: Hart, pc: int, address: int, value: int) -> None:
@@ -610,7 +619,7 @@ class Board:
         self._last_frame_time = self.delivery_time
         self.frames.append(record)
         self.on_frame(record, image)
-        if len(self.frames) >= self._frames_wanted and self._current is not None:
+        if len(self.frames) >= self._frames_wanted and self._current is not None and self._trap_deadline is None:
             self._current.request_stop()
 
     # --- the run loop ----------------------------------------------------------------------
@@ -620,7 +629,9 @@ class Board:
         self._frames_wanted = frames
         self._host_start = host_time.perf_counter()
         last_progress = 0.0
-        while len(self.frames) < frames:
+        # a firmware that reported an error or trapped is given its grace period even when
+        # its error screen was the last frame asked for: the run ends with that error
+        while len(self.frames) < frames or self._trap_deadline is not None:
             self._step()
             if progress is not None and host_time.perf_counter() - last_progress > 0.5:
                 last_progress = host_time.perf_counter()
@@ -664,7 +675,7 @@ class Board:
             hart.polling = False
             event = self.next_device_event(hart.time)
             hart.time = max(hart.time, min(event, horizon) if event is not None else horizon)
-        if len(self.frames) >= self._frames_wanted:
+        if len(self.frames) >= self._frames_wanted and self._trap_deadline is None:
             self.time = max(self.time, self.delivery_time)
             return
         running = [h.time for h in self.harts if h.state is HartState.RUNNING]
@@ -682,15 +693,19 @@ class Board:
 
     def _wake_sleepers(self, now: float) -> None:
         for hart in self.harts:
-            if hart.state is HartState.ASLEEP and self.mip(hart.hart_id, now) & hart.csr(rv.UC_RISCV_REG_MIE):
+            if hart.state is not HartState.ASLEEP:
+                continue
+            enabled = hart.reg(rv.UC_RISCV_REG_MIE)
+            if enabled and self.mip(hart.hart_id, now, enabled):
                 hart.state = HartState.RUNNING
                 hart.time = max(hart.time, now)
 
     def _take_interrupt(self, hart: Hart) -> None:
         """Before a turn: a pending enabled interrupt with mstatus.MIE set enters mtvec."""
-        if not hart.csr(rv.UC_RISCV_REG_MSTATUS) & hartmod.MSTATUS_MIE:
+        if not hart.reg(rv.UC_RISCV_REG_MSTATUS) & hartmod.MSTATUS_MIE:
             return
-        pending = self.mip(hart.hart_id, hart.time) & hart.csr(rv.UC_RISCV_REG_MIE)
+        enabled = hart.reg(rv.UC_RISCV_REG_MIE)
+        pending = self.mip(hart.hart_id, hart.time, enabled) & enabled
         for irq in (hartmod.IRQ_MEI, hartmod.IRQ_MSI, hartmod.IRQ_MTI):
             if pending >> irq & 1:
                 hart.enter_trap(hartmod.CAUSE_INTERRUPT | irq, hart.pc, 0)

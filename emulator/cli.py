@@ -30,6 +30,10 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--sd", metavar="IMAGE", help="SD card image in the Dock's slot (opened read-only: the "
                      "firmware's writes are kept in memory for the run)")
     run.add_argument("--sd-writable", action="store_true", help="let the firmware's writes reach the image file")
+    run.add_argument("--sd-fault", action="append", default=[], metavar="FAULT",
+                     help="make the card misbehave, to test firmware error paths: "
+                          "no-init (never leaves idle), bad-crc (every block's CRC16 wrong), "
+                          "flaky-crc (each block's first CRC16 wrong); repeatable")
     run.add_argument("--frames", type=int, default=8, help="stop after this many frames reach the LCD (default 8)")
     run.add_argument("--out", default="build/frames", help="output folder (default build/frames)")
     run.add_argument("--budget", type=float, default=5.0,
@@ -76,7 +80,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         board = Board(args.firmware, quantum=args.quantum, hang_budget_s=args.budget, console=console,
                       on_frame=output.frame, on_warning=warning, permissive=args.permissive,
-                      sd_image=args.sd, sd_writable=args.sd_writable)
+                      sd_image=args.sd, sd_writable=args.sd_writable, sd_faults=frozenset(args.sd_fault))
         result = board.run(args.frames, progress=None if args.quiet or not sys.stderr.isatty() else _progress)
         status, kind, message = EXIT_OK, "ok", result.message
     except BoardStop as stop:

@@ -31,7 +31,12 @@ CSR_MINSTRET = 0xB02
 CSR_CYCLE = 0xC00
 CSR_INSTRET = 0xC02
 CSR_MIP = 0x344
-INTERCEPTED_CSRS = {CSR_MHARTID, CSR_MCYCLE, CSR_MINSTRET, CSR_CYCLE, CSR_INSTRET, CSR_MIP}
+CSR_MSTATUS = 0x300
+CSR_MIE = 0x304
+# mstatus and mie are real Unicorn CSRs; they are intercepted only so that a write that may
+# unmask a pending interrupt ends the hart's turn, and the interrupt is taken right there
+INTERRUPT_ENABLE_CSRS = {CSR_MSTATUS: rv.UC_RISCV_REG_MSTATUS, CSR_MIE: rv.UC_RISCV_REG_MIE}
+INTERCEPTED_CSRS = {CSR_MHARTID, CSR_MCYCLE, CSR_MINSTRET, CSR_CYCLE, CSR_INSTRET, CSR_MIP, *INTERRUPT_ENABLE_CSRS}
 READ_ONLY_CSRS = {CSR_MHARTID, CSR_CYCLE, CSR_INSTRET}
 
 MSTATUS_MIE = 1 << 3
@@ -118,6 +123,14 @@ class Hart:
         if status != 0:
             raise RuntimeError(f"cannot install the instruction counter: unicorn status {status}")
         self.uc.hook_add(unicorn.UC_HOOK_INTR, self._on_exception)
+        self._reg_value = ctypes.c_uint64()
+        self._reg_ref = ctypes.byref(self._reg_value)
+
+    def reg(self, register: int) -> int:
+        """A register's value, read straight through Unicorn's C API (the MMIO paths call
+        this on every device access, where the Python wrapper's overhead shows)."""
+        _ucpy.uclib.uc_reg_read(self.uc._uch, register, self._reg_ref)
+        return self._reg_value.value
 
     # --- counters --------------------------------------------------------------------
 
@@ -243,6 +256,8 @@ class Hart:
         uc.reg_write(rv.UC_RISCV_REG_PC, address + 4)
 
     def _csr_value(self, csr: int) -> int:
+        if csr in INTERRUPT_ENABLE_CSRS:
+            return self.uc.reg_read(INTERRUPT_ENABLE_CSRS[csr])
         if csr == CSR_MHARTID:
             return self.hart_id
         if csr in (CSR_MCYCLE, CSR_CYCLE):
@@ -254,6 +269,16 @@ class Hart:
         return self.csr_context.mip()
 
     def _csr_write(self, csr: int, value: int) -> None:
+        if csr in INTERRUPT_ENABLE_CSRS:
+            register = INTERRUPT_ENABLE_CSRS[csr]
+            if csr == CSR_MSTATUS:
+                # FS must stay as written (it turns the FPU on); WPRI fields read back as zero
+                value &= 0x8000_000F_007F_FFEA
+            unmasks = value & ~self.uc.reg_read(register)
+            self.uc.reg_write(register, value)
+            if unmasks:
+                self.request_stop()
+            return
         if csr == CSR_MCYCLE:
             self.mcycle_offset = value - self.csr_context.mcycle()
         elif csr == CSR_MINSTRET:

@@ -134,10 +134,23 @@ class SdImage:
         self._file.close()
 
 
+# Faults a test can inject, to drive firmware error paths a healthy card never takes.
+FAULTS = {
+    "no-init": "ACMD41 never completes: the card stays idle (the firmware should time out)",
+    "bad-crc": "every data block is sent with a wrong CRC16",
+    "flaky-crc": "the first time each block is sent its CRC16 is wrong; a retry gets it right",
+}
+
+
 class SdCard:
     """The card's SPI-mode state machine. `exchange` takes MOSI bytes and returns MISO bytes."""
 
-    def __init__(self, image: SdImage, warn=None) -> None:
+    def __init__(self, image: SdImage, warn=None, faults: frozenset[str] = frozenset()) -> None:
+        unknown = set(faults) - set(FAULTS)
+        if unknown:
+            raise BadInput(f"unknown SD card fault(s): {', '.join(sorted(unknown))} (known: {', '.join(FAULTS)})")
+        self.faults = frozenset(faults)
+        self._blocks_sent: set[int] = set()
         self.image = image
         self.warn = warn or (lambda text: None)
         self.selected = False
@@ -224,7 +237,11 @@ class SdCard:
             self._reading = None
             return
         data = self.image.read(block)
-        self._say(b"\xff" * NAC_BYTES + bytes([TOKEN_START]) + data + crc16(data).to_bytes(2, "big"))
+        crc = crc16(data)
+        if "bad-crc" in self.faults or ("flaky-crc" in self.faults and block not in self._blocks_sent):
+            crc ^= 0xFFFF
+        self._blocks_sent.add(block)
+        self._say(b"\xff" * NAC_BYTES + bytes([TOKEN_START]) + data + crc.to_bytes(2, "big"))
 
     # --- commands ------------------------------------------------------------------------
 
@@ -286,7 +303,7 @@ class SdCard:
             if not argument & (1 << 30):
                 self._respond(self._r1())   # without HCS an SDHC card never leaves idle
                 return
-            if now - self.init_started >= INIT_TIME_S:
+            if now - self.init_started >= INIT_TIME_S and "no-init" not in self.faults:
                 self.initialised = True
             self._respond(self._r1())
         elif index == 58:

@@ -103,6 +103,7 @@ class Sysctl(Peripheral):
 
     def __init__(self, board=None) -> None:
         super().__init__(board)
+        self.usable: set[str] = set()   # gates open and not in reset, kept current on writes
         # PLL0 comes out of reset powered and running (at 26 MHz: all dividers 0), so it
         # reads as locked; PLL1/PLL2 are off until firmware powers them.
         self.plls = {PLL0: PllState(-PLL_LOCK_TIME_S), PLL1: PllState(), PLL2: PllState()}
@@ -140,6 +141,9 @@ class Sysctl(Peripheral):
         bus = PERI_BUS.get(name)
         return bus is None or bool(self.values[CLK_EN_CENT] >> bus & 1)
 
+    def _update_usable(self) -> None:
+        self.usable = {name for name in PERI_BITS if self.gate_open(name) and not self.in_reset(name)}
+
     def in_reset(self, name: str) -> bool:
         bit = PERI_BITS.get(name)
         return bit is not None and bool(self.values[PERI_RESET] >> bit & 1)
@@ -169,6 +173,10 @@ class Sysctl(Peripheral):
         return self.values[offset]
 
     def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
+        self._write_register(offset, reg, value, now)
+        self._update_usable()
+
+    def _write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
         board = self.board
         if offset in self.plls:
             if offset == PLL0 and self.values[CLK_SEL0] & 1 and value != self.values[PLL0]:

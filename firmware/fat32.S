@@ -10,8 +10,10 @@
 #
 # FAT entries are read through a one-sector cache (fat_cache). Chains are
 # checked as they are followed: an entry < 2 or >= cluster count + 2, the
-# bad-cluster marker, a chain longer than the volume's cluster count (a
-# loop) or a file chain that ends before the file's size is error 8.
+# bad-cluster marker, a chain longer than the volume's cluster count, a
+# loop (Brent's cycle detection: found long before that bound), or a file
+# chain that ends before or goes on after the file's size (a loop never
+# ends) is error 8.
 #
 # Lookup: paths are '/'-separated, relative to the root (leading '/'
 # allowed). In each directory (any cluster chain) an entry matches by its
@@ -79,6 +81,12 @@
     .equ UTF16_LOW_SURROGATE,   0xDC00
     .equ UTF16_SURROGATE_SHIFT, 10
     .equ UTF16_SURROGATE_BITS,  0x3FF
+# fat_walk: the loop detector of the chain being followed
+    .equ WALK_SAVED,            0           # cluster to watch for
+    .equ WALK_POWER,            8           # steps until the next one is watched
+    .equ WALK_COUNT,            16          # steps since
+    .equ WALK_STEPS,            24          # clusters visited
+    .equ WALK_BYTES,            32
 # fat32_load's CRC context (on its stack), handed to fat_crc_sector
     .equ CRC_CTX_CRC,           0           # CRC-32 so far
     .equ CRC_CTX_LEFT,          8           # file bytes not yet counted
@@ -112,8 +120,10 @@ msg_chain_open:     .asciz " ("
 msg_chain_close:    .asciz ")"
 msg_chain_range:    .asciz "cluster out of range"
 msg_chain_bad:      .asciz "bad cluster"
-msg_chain_loop:     .asciz "chain longer than the volume: loop"
+msg_chain_loop:     .asciz "loop"
+msg_chain_volume:   .asciz "chain longer than the volume"
 msg_chain_short:    .asciz "chain ends before the file's size"
+msg_chain_long:     .asciz "chain does not end at the file's size"
 msg_too_large:      .asciz "file too large for memory: "
 msg_too_large_size: .asciz " ("
 msg_too_large_free: .asciz " bytes, "
@@ -464,8 +474,7 @@ fat32_find:
     call    utf8_to_utf16
     mv      s10, a0                     # s10 = name length (UTF-16 units)
     mv      a0, s0
-    call    fat_check_cluster
-    li      s7, 1                       # s7 = clusters visited
+    call    fat_walk_start
     li      s4, -1                      # s4 = long name state: -1 none, n > 0 next
                                         #      ordinal expected, 0 complete
     la      t0, fat_volume
@@ -557,15 +566,10 @@ fat32_find:
 
     # Next cluster of the directory.
     mv      a0, s0
-    call    fat_chain_next
+    call    fat_walk_next
     beqz    a0, 20f
     mv      s0, a0
-    addi    s7, s7, 1
-    la      t0, fat_volume
-    ld      t0, VOL_CLUSTERS(t0)
-    bleu    s7, t0, 1b
-    la      a0, msg_chain_loop
-    call    fat_chain_error
+    j       1b
 
 20: li      a0, 0
     j       31f
@@ -820,7 +824,8 @@ utf8_to_utf16:
 #         a2 = destination (size rounded up to whole sectors), a3 = hook
 #         or 0, a4 = hook context.
 #   Results: none.
-#   Errors: 8 corrupt chain (out of range, bad cluster, loop, too short).
+#   Errors: 8 corrupt chain (out of range, bad cluster, loop, longer than
+#         the volume, ending before or after the file's size).
 #   Clobbers: only ABI temporaries.
 fat32_read:
     beqz    a1, 9f
@@ -842,8 +847,7 @@ fat32_read:
     mv      s2, a2                      # s2 = destination
     mv      s8, a3                      # s8 = hook
     mv      s9, a4                      # s9 = hook context
-    call    fat_check_cluster
-    li      s5, 1                       # s5 = clusters visited
+    call    fat_walk_start
     la      t0, fat_volume
     ld      s6, VOL_SPC_SHIFT(t0)       # s6 = log2(sectors per cluster)
 
@@ -852,15 +856,9 @@ fat32_read:
 2:  sll     t0, s4, s6
     bgeu    t0, s1, 5f                  # the run covers the rest of the file
     mv      a0, s0
-    call    fat_chain_next
-    bnez    a0, 3f
+    call    fat_walk_next
+    bnez    a0, 4f
     la      a0, msg_chain_short
-    call    fat_chain_error
-3:  addi    s5, s5, 1
-    la      t0, fat_volume
-    ld      t0, VOL_CLUSTERS(t0)
-    bleu    s5, t0, 4f
-    la      a0, msg_chain_loop
     call    fat_chain_error
 4:  addi    t0, s0, 1
     mv      s7, a0                      # s7 = next cluster
@@ -869,8 +867,14 @@ fat32_read:
     addi    s4, s4, 1
     j       2b
 
-5:  # Last run: only the sectors the size needs.
-    mv      a0, s3
+5:  # Last run: only the sectors the size needs. The chain must end with
+    # the file's last cluster (a loop never ends; it would repeat data).
+    mv      a0, s0
+    call    fat_chain_next
+    beqz    a0, 51f
+    la      a0, msg_chain_long
+    call    fat_chain_error
+51: mv      a0, s3
     call    fat_cluster_lba
     mv      a1, s1
     mv      a2, s2
@@ -1008,6 +1012,71 @@ fat_chain_next:
     addi    sp, sp, 16
     ret
 
+# fat_walk_start (file-local)
+#   What: starts following a cluster chain (a directory's or a file's) with
+#         fat_walk_next: checks the first cluster, resets the loop detector.
+#   Arguments: a0 = first cluster.
+#   Results: none.
+#   Errors: 8 if the cluster is out of range.
+#   Clobbers: only ABI temporaries.
+fat_walk_start:
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+    sd      a0, 0(sp)
+    call    fat_check_cluster
+    ld      a0, 0(sp)
+    la      t0, fat_walk
+    sd      a0, WALK_SAVED(t0)
+    li      t1, 1
+    sd      t1, WALK_POWER(t0)
+    sd      zero, WALK_COUNT(t0)
+    sd      t1, WALK_STEPS(t0)
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
+    ret
+
+# fat_walk_next (file-local)
+#   What: the next cluster of the chain fat_walk_start began (see
+#         fat_chain_next), with two guards: Brent's cycle detection (the
+#         walk remembers one cluster, replaced after 1, 2, 4, 8 ... steps;
+#         meeting it again means a loop, found within about twice the
+#         chain's length before the loop plus the loop's length) and a
+#         bound: a chain longer than the volume's cluster count.
+#   Arguments: a0 = current cluster.
+#   Results: a0 = next cluster, or 0 at the end of the chain.
+#   Errors: 8 out of range, bad cluster, loop, longer than the volume.
+#   Clobbers: only ABI temporaries.
+fat_walk_next:
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+    call    fat_chain_next
+    beqz    a0, 2f
+    la      t0, fat_walk
+    ld      t1, WALK_SAVED(t0)
+    bne     a0, t1, 1f
+    la      a0, msg_chain_loop
+    call    fat_chain_error
+1:  ld      t1, WALK_STEPS(t0)
+    addi    t1, t1, 1
+    sd      t1, WALK_STEPS(t0)
+    la      t2, fat_volume
+    ld      t2, VOL_CLUSTERS(t2)
+    bleu    t1, t2, 11f
+    la      a0, msg_chain_volume
+    call    fat_chain_error
+11: ld      t1, WALK_COUNT(t0)
+    addi    t1, t1, 1
+    ld      t2, WALK_POWER(t0)
+    bne     t1, t2, 12f
+    sd      a0, WALK_SAVED(t0)          # a new cluster to watch for
+    slli    t2, t2, 1
+    sd      t2, WALK_POWER(t0)
+    li      t1, 0
+12: sd      t1, WALK_COUNT(t0)
+2:  ld      ra, 8(sp)
+    addi    sp, sp, 16
+    ret
+
 # fat_chain_error (file-local)
 #   What: error 8, "corrupt FAT chain: <path> (<reason>)".
 #   Arguments: a0 = reason (string).
@@ -1046,6 +1115,9 @@ fat_volume:
 # fat_path: the path being opened, for error reports.
 fat_path:
     .space  8
+# fat_walk: the chain being followed (WALK_* offsets).
+fat_walk:
+    .space  WALK_BYTES
     .balign 2
 # lfn_buffer: the long name being collected, 13 UTF-16 units per entry.
 lfn_buffer:
