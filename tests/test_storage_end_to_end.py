@@ -1,0 +1,246 @@
+"""The firmware reads FAT32 cards through the emulated SD card: every file it loads must
+match, byte for byte (size and CRC-32), what the host put on the card, and every failure
+must end in its own error code, console line and error screen colour."""
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+import zlib
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from conftest import ROOT, run_emulator
+from sdcard_image.fat32 import CardWriter
+from sdcard_image.layouts import build_special_card, cluster_chain
+
+LOAD = re.compile(r"^load (.+) (\d+) crc32=([0-9a-f]{8})$", re.M)
+ERROR = re.compile(r"^error (\d+) (.*)$", re.M)
+BIG_BYTES = 2 * 1024 * 1024 + 12345
+LONG_PATH = "Long Folder Name/deeper/a file with a rather long name.obj"
+SCENE_BYTES = 512   # scene.ini is written once as a one-cluster placeholder and patched per test
+
+
+def _error_colours() -> dict[int, tuple[int, int, int]]:
+    """Error code -> RGB888 of its screen colour, from the firmware's own table."""
+    text = (ROOT / "firmware" / "include" / "errors.inc").read_text()
+    codes = {name: int(value, 0) for name, value in re.findall(r"\.equ ERR_(\w+),\s+(\w+)", text)
+             if not name.startswith("COLOUR") and name != "CODE_COUNT"}
+    colours = {}
+    for name, code in codes.items():
+        match = re.search(rf"\.equ ERR_COLOUR_{name},\s+(\w+)", text)
+        if match:
+            rgb565 = int(match.group(1), 0)
+            # as the panel shows it: 5-bit red/blue widened to its 6-bit GRAM, then to 8 bits
+            r6, g6, b6 = (rgb565 >> 11) << 1 | rgb565 >> 15, (rgb565 >> 5) & 63, (rgb565 & 31) << 1 | (rgb565 >> 4) & 1
+            colours[code] = tuple((c << 2) | (c >> 4) for c in (r6, g6, b6))
+    return colours
+
+
+@pytest.fixture(scope="session")
+def loader_card(tmp_path_factory):
+    """One card with every layout the loader must cope with; returns (image, files)."""
+    image = tmp_path_factory.mktemp("loader") / "card.img"
+    special = build_special_card(image)
+    rng = np.random.default_rng(3)
+    files: dict[str, bytes] = {special.fragmented_path: special.fragmented_data}
+    files.update(special.survivors)
+    files.update(special.big_dir_files)
+    files.update(special.case_variants)
+    with CardWriter.open(image) as writer:
+        cluster = writer.bytes_per_cluster
+        writer.makedirs("/sizes")
+        extra = {
+            "/sizes/empty.bin": b"",
+            "/sizes/one.bin": b"\x5a",
+            "/sizes/cluster.bin": rng.integers(0, 256, cluster, dtype=np.uint8).tobytes(),
+            "/sizes/big.bin": rng.integers(0, 256, BIG_BYTES, dtype=np.uint8).tobytes(),
+            "/" + LONG_PATH: b"# a model with a long name\nv 0 0 0\n",
+        }
+        writer.makedirs("/Long Folder Name/deeper")
+        for path, data in extra.items():
+            writer.write(path, data)
+        writer.write("/scene.ini", _scene_bytes(""))
+    files.update(extra)
+    return image, files
+
+
+def _scene_bytes(text: str) -> bytes:
+    """scene.ini text padded with comment lines to SCENE_BYTES, so it fits the placeholder."""
+    data = text.encode()
+    pad = SCENE_BYTES - len(data)
+    assert pad >= 0
+    lines = []
+    while pad:
+        take = min(pad, 64)
+        lines.append(b"#" * (take - 1) + b"\n" if take > 1 else b"\n")
+        pad -= take
+    return data + b"".join(lines)
+
+
+def _partition_geometry(image: Path) -> tuple[int, int, int, int, int]:
+    """(partition start byte, reserved sectors, FAT count, sectors per FAT, sectors per cluster)."""
+    raw = image.read_bytes()[:1024 * 1024 + 512] if image.stat().st_size > 1024 * 1024 else image.read_bytes()
+    start = int.from_bytes(raw[446 + 8:446 + 12], "little") * 512
+    bpb = raw[start:start + 512]
+    return (start, int.from_bytes(bpb[0x0E:0x10], "little"), bpb[0x10],
+            int.from_bytes(bpb[0x24:0x28], "little"), bpb[0x0D])
+
+
+def _cluster_offset(image: Path, cluster: int) -> int:
+    start, reserved, fats, fat_sectors, per_cluster = _partition_geometry(image)
+    return start + (reserved + fats * fat_sectors + (cluster - 2) * per_cluster) * 512
+
+
+def run_scene(firmware: Path, image: Path, scene: str, tmp_path: Path, *extra: str):
+    """Copies the card, puts `scene` into its scene.ini placeholder and boots the firmware."""
+    tmp_path.mkdir(parents=True, exist_ok=True)
+    card = tmp_path / "card.img"
+    shutil.copyfile(image, card)
+    chain = cluster_chain(card, "/scene.ini")
+    with card.open("r+b") as handle:
+        handle.seek(_cluster_offset(card, chain[0]))
+        handle.write(_scene_bytes(scene))
+    out = tmp_path / "out"
+    result = run_emulator("run", str(firmware), "--sd", str(card), "--frames", "1", "--out", str(out),
+                          "--quiet", *extra)
+    return result, (out / "console.log").read_text(errors="replace"), out
+
+
+def _lookup(files: dict[str, bytes], path: str) -> bytes:
+    """FAT names match without regard to case."""
+    wanted = "/" + path.lower()
+    matches = [data for name, data in files.items() if name.lower() == wanted]
+    assert len(matches) == 1, path
+    return matches[0]
+
+
+CASES = {
+    "empty-and-one-byte": ("sizes/empty.bin", "sizes/one.bin"),
+    "one-cluster-and-fragmented": ("sizes/cluster.bin", "frag/fragmented.bin"),
+    "several-mib-and-long-name": ("SIZES/BIG.BIN", LONG_PATH),
+    "behind-deleted-entries": ("deleted/kept long name.txt", "deleted/keep1.txt"),
+    "case-variants": ("case/v1/CUBE.OBJ", "Case/V3/cube.obj"),
+}
+
+
+@pytest.mark.parametrize("model, texture", CASES.values(), ids=CASES.keys())
+def test_loaded_files_match_the_host_byte_for_byte(firmware, loader_card, tmp_path, model, texture):
+    image, files = loader_card
+    result, console, _ = run_scene(firmware, image, f"# test scene\r\nmodel = {model}\r\ntexture = {texture}\r\n",
+                                   tmp_path)
+    assert result.returncode == 0, result.stderr + console
+    loads = {path: (int(size), crc) for path, size, crc in LOAD.findall(console)}
+    for path in (model, texture):
+        data = _lookup(files, path)
+        assert loads.get(path) == (len(data), f"{zlib.crc32(data):08x}"), console
+
+
+def test_a_directory_spanning_several_clusters(firmware, loader_card, tmp_path):
+    image, files = loader_card
+    many = sorted(name for name in files if name.startswith("/many/"))
+    assert len(cluster_chain(image, "/many")) >= 3
+    last, middle = many[-1], many[len(many) // 2]
+    result, console, _ = run_scene(firmware, image, f"model={last[1:]}\ntexture={middle[1:]}\n", tmp_path)
+    assert result.returncode == 0, result.stderr + console
+    for path in (last, middle):
+        data = files[path]
+        assert f"load {path[1:]} {len(data)} crc32={zlib.crc32(data):08x}" in console
+
+
+def test_a_block_with_a_bad_crc_is_read_again(firmware, loader_card, tmp_path):
+    image, files = loader_card
+    result, console, _ = run_scene(firmware, image, "model=frag/fragmented.bin\n", tmp_path,
+                                   "--sd-fault", "flaky-crc")
+    assert result.returncode == 0, result.stderr + console
+    data = files["/frag/fragmented.bin"]
+    assert f"load frag/fragmented.bin {len(data)} crc32={zlib.crc32(data):08x}" in console
+
+
+# --- failures ---------------------------------------------------------------------------------
+
+def assert_error(result, console: str, out: Path, code: int, words: str) -> None:
+    assert result.returncode == 8, result.stderr + console
+    errors = ERROR.findall(console)
+    assert errors and int(errors[0][0]) == code, console
+    assert words in errors[0][1], console
+    frames = sorted(out.glob("frame_*.png"))
+    assert frames, "no error screen was shown"
+    screen = np.asarray(Image.open(frames[-1]).convert("RGB"))
+    colour = _error_colours()[code]
+    assert (screen == colour).all(), f"error screen is not the colour of code {code}"
+
+
+def test_error_colours_are_distinct():
+    colours = _error_colours()
+    assert len(colours) == 9 and len(set(colours.values())) == 9
+
+
+def test_no_card(firmware, tmp_path):
+    out = tmp_path / "out"
+    result = run_emulator("run", str(firmware), "--frames", "1", "--out", str(out), "--quiet")
+    assert_error(result, (out / "console.log").read_text(), out, 1, "no card")
+
+
+def test_card_that_never_initialises_times_out(firmware, loader_card, tmp_path):
+    result, console, out = run_scene(firmware, loader_card[0], "model=sizes/one.bin\n", tmp_path,
+                                     "--sd-fault", "no-init")
+    assert_error(result, console, out, 2, "timeout")
+
+
+def test_blocks_that_stay_bad_are_a_crc_error(firmware, loader_card, tmp_path):
+    result, console, out = run_scene(firmware, loader_card[0], "model=sizes/one.bin\n", tmp_path,
+                                     "--sd-fault", "bad-crc")
+    assert_error(result, console, out, 4, "CRC")
+
+
+def test_card_without_fat32_partition(firmware, tmp_path):
+    blank = tmp_path / "blank.img"
+    blank.write_bytes(bytes(4 * 1024 * 1024))
+    out = tmp_path / "out"
+    result = run_emulator("run", str(firmware), "--sd", str(blank), "--frames", "1", "--out", str(out), "--quiet")
+    assert_error(result, (out / "console.log").read_text(), out, 5, "FAT32")
+
+
+def test_missing_file(firmware, loader_card, tmp_path):
+    result, console, out = run_scene(firmware, loader_card[0], "model=sizes/none.bin\n", tmp_path)
+    assert_error(result, console, out, 6, "sizes/none.bin")
+
+
+def test_file_too_large_for_memory(firmware, loader_card, tmp_path):
+    image = tmp_path / "huge.img"
+    shutil.copyfile(loader_card[0], image)
+    huge = tmp_path / "huge.bin"
+    huge.write_bytes(bytes(7 * 1024 * 1024))       # more than the 6 MiB of SRAM
+    subprocess.run(["mcopy", "-i", f"{image}@@1M", str(huge), "::/huge.bin"], check=True)
+    result, console, out = run_scene(firmware, image, "model = huge.bin\n", tmp_path / "run")
+    assert_error(result, console, out, 7, "huge.bin")
+
+
+def _fat_entry_offsets(image: Path, cluster: int) -> list[int]:
+    """Byte offsets of a cluster's entry in every FAT of the card's first partition."""
+    start, reserved, fats, fat_sectors, _ = _partition_geometry(image)
+    return [start + (reserved + n * fat_sectors) * 512 + 4 * cluster for n in range(fats)]
+
+
+@pytest.mark.parametrize("damage", ["loop", "out-of-range"])
+def test_corrupt_chain(firmware, loader_card, tmp_path, damage):
+    image = tmp_path / "corrupt.img"
+    shutil.copyfile(loader_card[0], image)
+    chain = cluster_chain(image, "/frag/fragmented.bin")
+    target = chain[0] if damage == "loop" else 0x0FFF_FFF0
+    with image.open("r+b") as handle:
+        for offset in _fat_entry_offsets(image, chain[-1]):
+            handle.seek(offset)
+            handle.write(target.to_bytes(4, "little"))
+    result, console, out = run_scene(firmware, image, "model=frag/fragmented.bin\n", tmp_path / "run")
+    assert_error(result, console, out, 8, "chain")
+
+
+def test_unknown_scene_key_names_its_line(firmware, loader_card, tmp_path):
+    result, console, out = run_scene(firmware, loader_card[0], "model=sizes/one.bin\n# fine\nshiny = yes\n",
+                                     tmp_path)
+    assert_error(result, console, out, 9, "line 3")
