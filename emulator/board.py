@@ -221,6 +221,7 @@ class Board:
         self.gpiohs = Gpiohs(self)
         self._console = console or (lambda byte: None)
         self._console_line = bytearray()
+        self.console_lines: list[tuple[float, str]] = []   # (virtual time the line ended, text)
         self.uarths = Uarths(self, on_byte=self._console_byte)
         self.clint = Clint(self)
         self.plic = Plic(self, high_sources=self._high_sources)
@@ -385,6 +386,7 @@ class Board:
             return
         line = bytes(self._console_line).rstrip(b"\r")
         self._console_line.clear()
+        self.console_lines.append((self.uarths.last_byte_time, line.decode("ascii", "replace")))
         if line.startswith(FIRMWARE_ERROR_PREFIX) and self._error_report is None:
             words = line.decode("ascii", "replace")
             code = words.split()[1] if len(words.split()) > 1 else ""

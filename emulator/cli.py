@@ -96,7 +96,7 @@ def main(argv: list[str] | None = None) -> int:
     summary = summary_dict(kind, message, frames, board.time if board else 0.0,
                            [h.instret for h in board.harts] if board else [0, 0],
                            time.perf_counter() - started, board.warnings if board else [], args.firmware,
-                           board.device_writes if board else {})
+                           board.device_writes if board else {}, board.console_lines if board else [])
     output.finish(summary)
     if not args.quiet and sys.stderr.isatty():
         sys.stderr.write("\n")

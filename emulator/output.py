@@ -48,7 +48,7 @@ class RunOutput:
 
 def summary_dict(exit_kind: str, message: str, frames: list[FrameRecord], virtual_time_s: float,
                  instructions: list[int], host_time_s: float, warnings: list[str], firmware: str,
-                 device_writes: dict[str, list[int]]) -> dict:
+                 device_writes: dict[str, list[int]], console_lines: list[tuple[float, str]]) -> dict:
     return {
         "exit": exit_kind,
         "message": message,
@@ -57,6 +57,7 @@ def summary_dict(exit_kind: str, message: str, frames: list[FrameRecord], virtua
         "instructions": instructions,
         "host_time_s": host_time_s,
         "device_writes": device_writes,
+        "console": [{"virtual_time_s": t, "line": line} for t, line in console_lines],
         "frames": [asdict(f) for f in frames],
         "warnings": warnings,
     }

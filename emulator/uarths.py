@@ -35,6 +35,7 @@ class Uarths(Peripheral):
         self.on_byte = on_byte or (lambda b: None)
         self._fifo: deque[int] = deque()
         self._shifting_until: float | None = None   # end time of the byte on the wire
+        self.last_byte_time = 0.0                    # when the last byte's stop bit went out
 
     def _byte_time(self) -> float:
         hz = self.board.cpu_hz() if self.board is not None else 26e6
@@ -46,6 +47,7 @@ class Uarths(Peripheral):
             if self._shifting_until is not None:
                 if self._shifting_until > now:
                     return
+                self.last_byte_time = self._shifting_until
                 self.on_byte(self._pending_byte)
                 start = self._shifting_until
                 self._shifting_until = None

@@ -18,6 +18,10 @@
     .equ CRC16_POLY,            0x1021
     .equ CRC32_POLY_REFLECTED,  0xEDB88320
     .equ CRC_TABLE_ENTRIES,     256
+    .equ CRC7_TOP_BIT,          0x80        # bit 7 of the left-aligned register
+    .equ CRC16_TOP_SHIFT,       15          # bit 15 of the register
+    .equ CRC16_ENTRY_SHIFT,     1           # 2-byte table entries
+    .equ CRC32_ENTRY_SHIFT,     2           # 4-byte table entries
     .equ CRC_BITS_PER_BYTE,     8
     .equ BYTE_MASK,             0xFF
     .equ HALFWORD_MASK,         0xFFFF
@@ -41,7 +45,7 @@ crc_init:
     # CRC7: shift left 8 times, feeding back x^3 + 1 when bit 7 falls out.
     mv      t1, t0
     li      t2, CRC_BITS_PER_BYTE
-2:  andi    t3, t1, 0x80
+2:  andi    t3, t1, CRC7_TOP_BIT
     slli    t1, t1, 1
     beqz    t3, 3f
     xori    t1, t1, CRC7_POLY_ALIGNED
@@ -51,9 +55,9 @@ crc_init:
     sb      t1, 0(t3)
 
     # CRC16: i in the top byte, shift left 8 times.
-    slli    t1, t0, 8
+    slli    t1, t0, CRC_BITS_PER_BYTE
     li      t2, CRC_BITS_PER_BYTE
-2:  srli    t3, t1, 15
+2:  srli    t3, t1, CRC16_TOP_SHIFT
     andi    t3, t3, 1
     slli    t1, t1, 1
     beqz    t3, 3f
@@ -61,7 +65,7 @@ crc_init:
 3:  addi    t2, t2, -1
     bnez    t2, 2b
     and     t1, t1, a5
-    slli    t3, t0, 1
+    slli    t3, t0, CRC16_ENTRY_SHIFT
     add     t3, a1, t3
     sh      t1, 0(t3)
 
@@ -74,7 +78,7 @@ crc_init:
     xor     t1, t1, a4
 3:  addi    t2, t2, -1
     bnez    t2, 2b
-    slli    t3, t0, 2
+    slli    t3, t0, CRC32_ENTRY_SHIFT
     add     t3, a2, t3
     sw      t1, 0(t3)
 
@@ -117,12 +121,12 @@ crc16_ccitt:
     li      t1, 0                       # t1 = crc
     bgeu    a0, a1, 2f
 1:  lbu     t2, 0(a0)
-    srli    t3, t1, 8
+    srli    t3, t1, CRC_BITS_PER_BYTE
     xor     t3, t3, t2
-    slli    t3, t3, 1
+    slli    t3, t3, CRC16_ENTRY_SHIFT
     add     t3, t3, t0
     lhu     t3, 0(t3)
-    slli    t1, t1, 8
+    slli    t1, t1, CRC_BITS_PER_BYTE
     xor     t1, t1, t3
     and     t1, t1, t4
     addi    a0, a0, 1
@@ -159,10 +163,10 @@ crc32_update:
 1:  lbu     t2, 0(a1)
     xor     t3, t1, t2
     andi    t3, t3, BYTE_MASK
-    slli    t3, t3, 2
+    slli    t3, t3, CRC32_ENTRY_SHIFT
     add     t3, t3, t0
     lwu     t3, 0(t3)
-    srli    t1, t1, 8
+    srli    t1, t1, CRC_BITS_PER_BYTE
     xor     t1, t1, t3
     addi    a1, a1, 1
     bltu    a1, a2, 1b

@@ -38,16 +38,16 @@
 .macro LE16 rd, off, base, tmp
     lbu     \rd, \off(\base)
     lbu     \tmp, \off+1(\base)
-    slli    \tmp, \tmp, 8
+    slli    \tmp, \tmp, BYTE_BITS
     or      \rd, \rd, \tmp
 .endm
 .macro LE32 rd, off, base, tmp
     LE16    \rd, \off, \base, \tmp
     lbu     \tmp, \off+2(\base)
-    slli    \tmp, \tmp, 16
+    slli    \tmp, \tmp, 2 * BYTE_BITS
     or      \rd, \rd, \tmp
     lbu     \tmp, \off+3(\base)
-    slli    \tmp, \tmp, 24
+    slli    \tmp, \tmp, 3 * BYTE_BITS
     or      \rd, \rd, \tmp
 .endm
 
@@ -59,9 +59,16 @@
     call    error_fatal
 .endm
 
+    .equ BYTE_BITS,             8
+    .equ BYTE_MASK,             0xFF
+    .equ UTF16_UNIT_BYTES,      2
+    .equ UTF16_UNIT_SHIFT,      1
+    .equ CLUSTER_HI_SHIFT,      16          # DIR_CLUSTER_HI holds bits 31:16
+    .equ CHECKSUM_ROTATE,       7           # rotate right by 1 in 8 bits = << 7 | >> 1
     .equ ASCII_LOWER_A,         'a'
     .equ ASCII_LOWER_Z,         'z'
     .equ ASCII_CASE_BIT,        0x20
+    .equ ASCII_CASE_SHIFT,      5           # ASCII_CASE_BIT = 1 << 5
     .equ ASCII_LIMIT,           0x80        # case folding stops here
     .equ PATH_SEPARATOR,        '/'
     .equ EXT_SEPARATOR,         '.'
@@ -76,6 +83,9 @@
     .equ UTF8_LEAD3_TAG,        0xE0
     .equ UTF8_LEAD4_MASK,       0xF8
     .equ UTF8_LEAD4_TAG,        0xF0
+    .equ UTF8_LEAD2_CONTS,      1           # continuation bytes after each lead
+    .equ UTF8_LEAD3_CONTS,      2
+    .equ UTF8_LEAD4_CONTS,      3
     .equ UTF16_SUPPLEMENTARY,   0x10000
     .equ UTF16_HIGH_SURROGATE,  0xD800
     .equ UTF16_LOW_SURROGATE,   0xDC00
@@ -524,7 +534,7 @@ fat32_find:
 
     # A long-name entry: ordinal t0 (bit 6 = first stored).
 5:  andi    t2, t0, LFN_LAST
-    andi    t0, t0, ~LFN_LAST & 0xFF
+    andi    t0, t0, ~LFN_LAST & BYTE_MASK
     beqz    t2, 6f
     beqz    t0, 10f                     # ordinal 0 or > 20: not a valid sequence
     li      t3, LFN_MAX_ORDINAL
@@ -539,7 +549,7 @@ fat32_find:
     bne     t3, s5, 10f
 7:  # Copy its 13 characters to lfn_buffer[(ordinal - 1) * 13 ..].
     addi    t0, t0, -1
-    li      t1, LFN_CHARS * 2
+    li      t1, LFN_CHARS * UTF16_UNIT_BYTES
     mul     t0, t0, t1
     la      t1, lfn_buffer
     add     t0, t0, t1                  # t0 = destination
@@ -552,7 +562,7 @@ fat32_find:
     slli    t5, t5, 8
     or      t4, t4, t5
     sh      t4, 0(t0)
-    addi    t0, t0, 2
+    addi    t0, t0, UTF16_UNIT_BYTES
     addi    t1, t1, 1
     bltu    t1, t2, 8b
     addi    s4, s4, -1
@@ -574,7 +584,7 @@ fat32_find:
 20: li      a0, 0
     j       31f
 30: lhu     a1, DIR_CLUSTER_HI(s2)
-    slli    a1, a1, 16
+    slli    a1, a1, CLUSTER_HI_SHIFT
     lhu     t0, DIR_CLUSTER_LO(s2)
     or      a1, a1, t0
     lwu     a2, DIR_FILE_SIZE(s2)
@@ -606,12 +616,12 @@ short_name_checksum:
     addi    t2, a0, DIR_NAME_BYTES
     li      t0, 0
 1:  srli    t1, t0, 1
-    slli    t0, t0, 7
+    slli    t0, t0, CHECKSUM_ROTATE
     or      t0, t0, t1
-    andi    t0, t0, 0xFF
+    andi    t0, t0, BYTE_MASK
     lbu     t1, 0(a0)
     add     t0, t0, t1
-    andi    t0, t0, 0xFF
+    andi    t0, t0, BYTE_MASK
     addi    a0, a0, 1
     bltu    a0, t2, 1b
     mv      a0, t0
@@ -621,11 +631,11 @@ short_name_checksum:
 .macro ASCII_FOLD reg, tmp
     addi    \tmp, \reg, -ASCII_LOWER_A
     sltiu   \tmp, \tmp, ASCII_LOWER_Z - ASCII_LOWER_A + 1
-    slli    \tmp, \tmp, 5               # ASCII_CASE_BIT when a lower-case letter
+    slli    \tmp, \tmp, ASCII_CASE_SHIFT              # ASCII_CASE_BIT when a lower-case letter
     sub     \reg, \reg, \tmp
 .endm
-    .if ASCII_CASE_BIT != (1 << 5)
-    .error "ASCII_FOLD shifts by 5"
+    .if ASCII_CASE_BIT != (1 << ASCII_CASE_SHIFT)
+    .error "ASCII_CASE_SHIFT does not match ASCII_CASE_BIT"
     .endif
 
 # long_name_matches (file-local)
@@ -641,16 +651,16 @@ long_name_matches:
     li      t0, LFN_CHARS
     mul     t0, t0, a0
     la      t1, lfn_buffer
-    slli    t0, t0, 1
+    slli    t0, t0, UTF16_UNIT_SHIFT
     add     t0, t0, t1                  # t0 = end of the stored units
     mv      t2, t1
 1:  bgeu    t2, t0, 2f                  # t2 = scan for the terminating NUL
     lhu     t3, 0(t2)
     beqz    t3, 2f
-    addi    t2, t2, 2
+    addi    t2, t2, UTF16_UNIT_BYTES
     j       1b
 2:  sub     t2, t2, t1
-    srli    t2, t2, 1                   # t2 = long name length
+    srli    t2, t2, UTF16_UNIT_SHIFT    # t2 = long name length
     bne     t2, a1, 9f
     la      t3, fat_name16
 3:  beqz    t2, 8f
@@ -663,8 +673,8 @@ long_name_matches:
     ASCII_FOLD t4, t6
     ASCII_FOLD t5, t6
     bne     t4, t5, 9f
-4:  addi    t1, t1, 2
-    addi    t3, t3, 2
+4:  addi    t1, t1, UTF16_UNIT_BYTES
+    addi    t3, t3, UTF16_UNIT_BYTES
     addi    t2, t2, -1
     j       3b
 8:  li      a0, 1
@@ -761,18 +771,18 @@ utf8_to_utf16:
     bltu    t0, t1, 7f                  # ASCII
     andi    t1, t0, UTF8_LEAD2_MASK
     li      t2, UTF8_LEAD2_TAG
-    li      t3, 1                       # t3 = continuation bytes
-    andi    t4, t0, ~UTF8_LEAD2_MASK & 0xFF
+    li      t3, UTF8_LEAD2_CONTS                     # t3 = continuation bytes
+    andi    t4, t0, ~UTF8_LEAD2_MASK & BYTE_MASK
     beq     t1, t2, 2f
     andi    t1, t0, UTF8_LEAD3_MASK
     li      t2, UTF8_LEAD3_TAG
-    li      t3, 2
-    andi    t4, t0, ~UTF8_LEAD3_MASK & 0xFF
+    li      t3, UTF8_LEAD3_CONTS
+    andi    t4, t0, ~UTF8_LEAD3_MASK & BYTE_MASK
     beq     t1, t2, 2f
     andi    t1, t0, UTF8_LEAD4_MASK
     li      t2, UTF8_LEAD4_TAG
-    li      t3, 3
-    andi    t4, t0, ~UTF8_LEAD4_MASK & 0xFF
+    li      t3, UTF8_LEAD4_CONTS
+    andi    t4, t0, ~UTF8_LEAD4_MASK & BYTE_MASK
     beq     t1, t2, 2f
     j       7f                          # not a lead byte: itself
 2:  mv      t5, a0                      # t5 = scan; t4 = code point so far
@@ -797,7 +807,7 @@ utf8_to_utf16:
     add     t1, t1, t2
     li      t2, LFN_BUFFER_UNITS
     bgeu    a3, t2, 4f
-    slli    t2, a3, 1
+    slli    t2, a3, UTF16_UNIT_SHIFT
     add     t2, t2, a2
     sh      t1, 0(t2)
 4:  addi    a3, a3, 1
@@ -806,7 +816,7 @@ utf8_to_utf16:
     add     t0, t0, t2
 7:  li      t2, LFN_BUFFER_UNITS        # store unit t0
     bgeu    a3, t2, 8f
-    slli    t2, a3, 1
+    slli    t2, a3, UTF16_UNIT_SHIFT
     add     t2, t2, a2
     sh      t0, 0(t2)
 8:  addi    a3, a3, 1

@@ -37,7 +37,7 @@
     .if SD_DMA_CHANNEL != 1
     .error "SD_DMA_SEL_SHIFT / SD_DMA_SEL_MASK assume DMAC channel 1"
     .endif
-    .if SD_BAUDR_FAST < 2 || SD_BAUDR_INIT > 0xFFFF
+    .if SD_BAUDR_FAST < 2 || SD_BAUDR_INIT > SD_BAUDR_MAX
     .error "SD clock dividers out of range"
     .endif
 
@@ -127,7 +127,7 @@ sd_init:
     li      a0, ERR_UNSUPPORTED
     la      a1, msg_cmd8_echo
     mv      a2, s1
-    li      a3, 8
+    li      a3, SD_WORD_HEX_DIGITS
     call    error_fatal_hex
 5:  mv      a1, a0
     li      a0, SD_CMD8_SEND_IF_COND
@@ -179,7 +179,7 @@ sd_init:
     li      a0, ERR_UNSUPPORTED
     la      a1, msg_ocr_power
     mv      a2, s1
-    li      a3, 8
+    li      a3, SD_WORD_HEX_DIGITS
     call    error_fatal_hex
 13: srli    s1, s1, SD_OCR_CCS_SHIFT
     andi    s1, s1, 1                   # s1 = CCS
@@ -311,7 +311,7 @@ sd_read_blocks:
 21: call    sd_receive_finish
     li      a0, SD_IDLE_BYTE
     call    sd_xchg
-    slli    s9, a0, 8
+    slli    s9, a0, SD_BYTE_BITS
     li      a0, SD_IDLE_BYTE
     call    sd_xchg
     or      s9, s9, a0                  # s9 = CRC16 the card sent
@@ -669,7 +669,7 @@ sd_fail_r1:
     la      a0, msg_refused_r1
     call    console_puts
     mv      a0, s1
-    li      a1, 2
+    li      a1, SD_R1_HEX_DIGITS
     call    console_put_hex
     j       error_end
 
@@ -690,11 +690,11 @@ sd_command:
     # frame at 0(sp): start | index, argument MSB first, CRC7 | end bit
     ori     t0, a0, SD_CMD_START
     sb      t0, 0(sp)
-    srli    t0, a1, 24
+    srli    t0, a1, 3 * SD_BYTE_BITS
     sb      t0, 1(sp)
-    srli    t0, a1, 16
+    srli    t0, a1, 2 * SD_BYTE_BITS
     sb      t0, 2(sp)
-    srli    t0, a1, 8
+    srli    t0, a1, SD_BYTE_BITS
     sb      t0, 3(sp)
     sb      a1, 4(sp)
     mv      a0, sp
@@ -738,10 +738,10 @@ sd_read_u32:
     sd      s0, 16(sp)
     sd      s1, 8(sp)
     li      s0, 0
-    li      s1, 4
+    li      s1, SD_R3_PAYLOAD_BYTES
 1:  li      a0, SD_IDLE_BYTE
     call    sd_xchg
-    slli    s0, s0, 8
+    slli    s0, s0, SD_BYTE_BITS
     or      s0, s0, a0
     addi    s1, s1, -1
     bnez    s1, 1b
@@ -798,7 +798,7 @@ sd_xchg:
     andi    t1, t1, SPI_SR_RFNE
     beqz    t1, 1b
     lw      a0, SPI_DR(t0)
-    andi    a0, a0, 0xFF
+    andi    a0, a0, SD_BYTE_MASK
     ret
 
 # sd_spi_setup (file-local)

@@ -89,6 +89,44 @@ def firmware_figures(firmware: Path, card: Path, frames: int) -> dict:
     }
 
 
+THESIS_MODEL_BYTES = round(38.8 * 1024)      # the thesis's model A: 400 polygons, 38.8 KiB .obj
+THESIS_TEXTURE_BYTES = round(183.2 * 1024)   # and its 250 x 250 texture, 183.2 KiB .ppm
+
+
+def sd_figures(firmware: Path, folder: Path) -> dict:
+    """Virtual times of SD bring-up and of loading files the size of the thesis's model A
+    (from the console lines' timestamps; each span includes printing its console line)."""
+    from sdcard_image import build_image
+    sys.path.insert(0, str(ROOT / "tools"))
+    from make_assets import torus
+
+    model = torus().encode()
+    model += b"#" * (THESIS_MODEL_BYTES - len(model) - 1) + b"\n"       # padded to the thesis's size
+    header = b"P6\n# padded to the thesis's texture size\n250 250\n255\n"
+    pixels = bytes((i * 7) & 0xFF for i in range(250 * 250 * 3))
+    texture = header[:4] + b"#" * (THESIS_TEXTURE_BYTES - len(header) - len(pixels)) + header[4:] + pixels
+    (folder / "a").mkdir()
+    (folder / "a" / "model.obj").write_bytes(model)
+    (folder / "a" / "texture.ppm").write_bytes(texture)
+    card = folder / "thesis.img"
+    build_image(card, [folder / "a"], scene={"model": "a/model.obj", "texture": "a/texture.ppm"})
+    board = Board(str(firmware), sd_image=str(card))
+    board.run(1)
+    times = {}
+    for t, line in board.console_lines:
+        for key in ("lcd:", "fat32:", "load scene.ini", "load a/model.obj", "load a/texture.ppm"):
+            if line.startswith(key):
+                times[key] = t
+    board.close()
+    return {
+        "model_bytes": len(model), "texture_bytes": len(texture),
+        "card_setup_to_root_ms": (times["fat32:"] - times["lcd:"]) * 1e3,
+        "model_read_ms": (times["load a/model.obj"] - times["load scene.ini"]) * 1e3,
+        "texture_read_ms": (times["load a/texture.ppm"] - times["load a/model.obj"]) * 1e3,
+        "thesis_ms": {"card_setup_to_root": 32.35, "texture_read": 200.75, "model_read": 43.05},
+    }
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--firmware", default=str(ROOT / "build" / "firmware.elf"))
@@ -103,12 +141,15 @@ def main() -> int:
     raw = raw_unicorn_mips(code, total)
     counted = hart_mips(code, total, 20_000)
     board = firmware_figures(Path(args.firmware), Path(args.card), args.frames)
+    with tempfile.TemporaryDirectory() as tmp:
+        sd = sd_figures(Path(args.firmware), Path(tmp))
     results = {
         "raw_unicorn_mips": raw,
         "hart_with_counter_mips": counted,
         "firmware": board,
         "ratio_hart_to_raw": counted / raw,
         "ratio_board_to_raw": board["effective_mips"] / raw,
+        "sd": sd,
     }
     print(f"raw Unicorn, tight loop, no limit:         {raw:8.1f} MIPS")
     print(f"board hart, same loop, exact counting:     {counted:8.1f} MIPS  ({counted / raw:.2f} x raw)")
@@ -118,6 +159,9 @@ def main() -> int:
           f"{100 * board['share_of_host_time_executing']:.0f} % of host time is spent executing")
     print(f"  {board['frames']} frames in {board['host_time_s']:.2f} s host = {board['frames_per_host_second']:.1f} frames/s; "
           f"virtual {board['virtual_fps']:.1f} frames/s; instructions per hart {board['instructions']}")
+    print(f"SD (virtual time; thesis in brackets): card set-up to root directory {sd['card_setup_to_root_ms']:.2f} ms "
+          f"[32.35], model {sd['model_bytes']} bytes {sd['model_read_ms']:.2f} ms [43.05], "
+          f"texture {sd['texture_bytes']} bytes {sd['texture_read_ms']:.2f} ms [200.75]")
     out = ROOT / "build" / "bench.json"
     out.parent.mkdir(exist_ok=True)
     out.write_text(json.dumps(results, indent=2) + "\n")
