@@ -53,7 +53,7 @@ flash-to-emulator: firmware venv $(CARD)
 	$(PYTHON) -m emulator run $(BUILD)/firmware.elf --sd $(CARD) --frames $(FRAMES) --out $(BUILD)/frames
 
 test: firmware venv $(CARD)
-	$(PYTHON) -m pytest -q
+	$(PYTHON) -m pytest -q -n 2
 
 bench: firmware venv $(CARD)
 	$(PYTHON) tools/bench.py
