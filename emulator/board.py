@@ -261,6 +261,7 @@ class Board:
         self._accesses: dict[int, tuple[int, int, int]] = {}
         self._faulting_pc: list[int | None] = [None] * HARTS
         self.device_writes: dict[str, list[int]] = {}   # stores per device, per hart
+        self._grabs: list[tuple[float, Callable[["Board"], None]]] = []
         self.host_time_in_harts = 0.0                     # host seconds spent executing guest code
         self._trap_report: str | None = None
         self._error_report: tuple[int, str] | None = None
@@ -626,6 +627,16 @@ class Board:
 
     # --- the run loop ----------------------------------------------------------------------
 
+    def grab_at(self, at_s: float, action: Callable[["Board"], None]) -> None:
+        """Calls action(board) once the board's virtual time reaches at_s (a framebuffer grab)."""
+        self._grabs.append((at_s, action))
+        self._grabs.sort(key=lambda item: item[0])
+
+    def _run_grabs(self) -> None:
+        while self._grabs and self._grabs[0][0] <= self.time:
+            _, action = self._grabs.pop(0)
+            action(self)
+
     def run(self, frames: int, progress: Callable[["Board"], None] | None = None) -> RunResult:
         """Runs until `frames` frames have been shown. Raises a BoardStop subclass otherwise."""
         self._frames_wanted = frames
@@ -635,6 +646,8 @@ class Board:
         # its error screen was the last frame asked for: the run ends with that error
         while len(self.frames) < frames or self._trap_deadline is not None:
             self._step()
+            if self._grabs:
+                self._run_grabs()
             if progress is not None and host_time.perf_counter() - last_progress > 0.5:
                 last_progress = host_time.perf_counter()
                 progress(self)
@@ -651,6 +664,8 @@ class Board:
             wake = self.next_device_event(self.time)
             if wake is None:
                 self._report_hang("every hart sleeps in wfi and no device will ever raise an interrupt")
+            if self._grabs and self.time < self._grabs[0][0] < wake:
+                wake = self._grabs[0][0]   # stop at a requested grab rather than jump past it
             self._set_time(wake)
             self._check_deadlines()
             return
@@ -662,6 +677,8 @@ class Board:
         event = self.next_device_event(t0)
         if event is not None:
             horizon = min(horizon, event)
+        if self._grabs and self._grabs[0][0] > t0:
+            horizon = min(horizon, self._grabs[0][0])
         for other in running:
             if other is not hart:
                 horizon = min(horizon, other.time + self.quantum / hz)

@@ -5,7 +5,9 @@ import argparse
 import sys
 import time
 
-from .errors import EXIT_INTERNAL, EXIT_OK, BoardStop
+from pathlib import Path
+
+from .errors import EXIT_GOLDEN_MISMATCH, EXIT_INTERNAL, EXIT_OK, EXIT_USAGE, BoardStop
 
 EXIT_STATUS_HELP = """exit status:
   0  the requested frames were shown
@@ -17,6 +19,7 @@ EXIT_STATUS_HELP = """exit status:
   6  bad input: the firmware image is missing or not a RISC-V ELF
   7  hardware misuse: something the real K210 would not do (e.g. CPU on an unlocked PLL)
   8  the firmware reported a fatal error on its console ("error <code> <words>")
+  9  --golden: a shown frame differs from its golden PNG (diff images are in the output folder)
 """
 
 
@@ -39,6 +42,16 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--budget", type=float, default=5.0,
                      help="virtual seconds allowed between frames before the run counts as hung (default 5)")
     run.add_argument("--quantum", type=int, default=20_000, help="instructions per hart per turn (default 20000)")
+    run.add_argument("--golden", metavar="DIR", type=Path,
+                     help="compare every shown frame with DIR/frame_NNNN.png of the same index; write "
+                          "diff_NNNN.png for frames that differ and exit with status 9 on any mismatch")
+    run.add_argument("--tolerance", type=int, default=0, metavar="N",
+                     help="with --golden: a pixel matches when no channel differs by more than N (default 0: exact)")
+    run.add_argument("--grab", action="append", default=[], metavar="WHAT@SECONDS",
+                     help="write a PNG of a framebuffer at a virtual time, whether or not a frame is complete: "
+                          "WHAT is 'gram' (the LCD's memory), a firmware symbol or a 0x address of a 320x240 "
+                          "RGB565 buffer in SRAM; add ':pairs' for the project's pixel-pair order or "
+                          ":WxH for another size, e.g. --grab framebuffers@0.45:pairs; repeatable")
     run.add_argument("--quiet", action="store_true", help="do not echo the console or show progress")
     run.add_argument("--permissive", action="store_true",
                      help="an access to a register a modelled device does not implement warns (loads read 0, "
@@ -58,9 +71,19 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     if args.frames < 1:
         print("--frames must be at least 1", file=sys.stderr)
-        return 2
+        return EXIT_USAGE
     from .board import Board
+    from .grab import GrabRequest, parse_grab
+    from .golden import compare_run
     from .output import RunOutput, summary_dict
+    try:
+        grabs: list[GrabRequest] = [parse_grab(text) for text in args.grab]
+    except ValueError as error:
+        print(f"--grab: {error}", file=sys.stderr)
+        return EXIT_USAGE
+    if args.golden is not None and not args.golden.is_dir():
+        print(f"--golden: {args.golden} is not a folder", file=sys.stderr)
+        return EXIT_USAGE
 
     output = RunOutput(args.out)
 
@@ -81,6 +104,8 @@ def main(argv: list[str] | None = None) -> int:
         board = Board(args.firmware, quantum=args.quantum, hang_budget_s=args.budget, console=console,
                       on_frame=output.frame, on_warning=warning, permissive=args.permissive,
                       sd_image=args.sd, sd_writable=args.sd_writable, sd_faults=frozenset(args.sd_fault))
+        for request in grabs:
+            board.grab_at(request.at_s, lambda b, request=request: output.grab(request, b))
         result = board.run(args.frames, progress=None if args.quiet or not sys.stderr.isatty() else _progress)
         status, kind, message = EXIT_OK, "ok", result.message
     except BoardStop as stop:
@@ -97,6 +122,20 @@ def main(argv: list[str] | None = None) -> int:
                            [h.instret for h in board.harts] if board else [0, 0],
                            time.perf_counter() - started, board.warnings if board else [], args.firmware,
                            board.device_writes if board else {}, board.console_lines if board else [])
+    if args.golden is not None and board is not None:
+        comparisons = compare_run(output.frame_paths, args.golden, output.folder, args.tolerance)
+        summary["golden"] = {"folder": str(args.golden), "tolerance": args.tolerance,
+                             "frames": [c.as_dict() for c in comparisons]}
+        mismatches = [c for c in comparisons if not c.matches]
+        for comparison in mismatches:
+            print(f"[golden] {comparison.describe()}", file=sys.stderr)
+        if status == EXIT_OK and mismatches:
+            status, kind = EXIT_GOLDEN_MISMATCH, "golden-mismatch"
+            message = f"{len(mismatches)} of {len(comparisons)} frames differ from {args.golden}"
+            summary["exit"], summary["message"] = kind, message
+        elif status == EXIT_OK:
+            print(f"[golden] all {len(comparisons)} frames match {args.golden}", file=sys.stderr)
+    summary["grabs"] = output.grabs
     output.finish(summary)
     if not args.quiet and sys.stderr.isatty():
         sys.stderr.write("\n")

@@ -19,12 +19,15 @@ class RunOutput:
     def __init__(self, folder: str | Path) -> None:
         self.folder = Path(folder)
         self.folder.mkdir(parents=True, exist_ok=True)
-        for stale in list(self.folder.glob("frame_*.png")) + [self.folder / ANIMATION_NAME]:
+        stale_files = list(self.folder.glob("frame_*.png")) + list(self.folder.glob("diff_*.png")) + \
+            list(self.folder.glob("grab_*.png")) + [self.folder / ANIMATION_NAME]
+        for stale in stale_files:
             stale.unlink(missing_ok=True)
         self.console_path = self.folder / "console.log"
         self._console = self.console_path.open("wb")
         self.frame_paths: list[Path] = []
         self.frame_times: list[float] = []
+        self.grabs: list[dict] = []
 
     def console_byte(self, byte: int) -> None:
         self._console.write(bytes((byte,)))
@@ -34,6 +37,18 @@ class RunOutput:
         Image.fromarray(image, "RGB").save(path)
         self.frame_paths.append(path)
         self.frame_times.append(record.virtual_time_s)
+
+    def grab(self, request, board) -> None:
+        """Writes grab_<what>_<ms>ms.png for a --grab request (see grab.py)."""
+        from .grab import grab
+        name = f"grab_{request.what}_{request.at_s * 1e3:.3f}ms.png".replace("/", "_")
+        try:
+            image = grab(board, request)
+        except Exception as error:   # a bad symbol or address is reported, the run goes on
+            self.grabs.append({"request": request.label, "error": str(error)})
+            return
+        Image.fromarray(image, "RGB").save(self.folder / name)
+        self.grabs.append({"request": request.label, "virtual_time_s": board.time, "file": name})
 
     def finish(self, summary: dict) -> None:
         self._console.close()

@@ -12,8 +12,7 @@ from PIL import Image
 
 from conftest import GOLDEN, GOLDEN_FRAMES, ROOT, run_emulator
 
-sys.path.insert(0, str(ROOT))
-from tools.golden import compare  # noqa: E402
+from emulator.golden import compare_frame
 
 BOOT_STAGES = ["boot: hart 0 up", "clocks:", "pins:", "lcd: ST7789V ready", "hart 1: display loop"]
 
@@ -51,9 +50,8 @@ def test_frame_matches_golden(firmware_run, index, tmp_path):
     actual = out / f"frame_{index:04d}.png"
     golden = GOLDEN / f"frame_{index:04d}.png"
     assert golden.exists(), "no golden yet: run `make goldens` on purpose and review the images"
-    diff = tmp_path / f"diff_{index:04d}.png"
-    differing = compare(actual, golden, diff)
-    assert differing == 0, f"{differing} pixels differ from {golden}; diff image: {diff}"
+    comparison = compare_frame(index, actual, golden, tmp_path / f"diff_{index:04d}.png")
+    assert comparison.matches, comparison.describe()
 
 
 def _frame_number(path: Path) -> int:

@@ -16,7 +16,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests"))
 from conftest import CARD, GOLDEN, GOLDEN_FRAMES  # noqa: E402
-from tools.golden import compare  # noqa: E402
+from emulator.golden import compare_frame  # noqa: E402
 
 
 def main() -> int:
@@ -33,8 +33,8 @@ def main() -> int:
             name = f"frame_{n:04d}.png"
             new, old = out / name, GOLDEN / name
             if old.exists():
-                differing = compare(new, old, out / f"diff_{n:04d}.png")
-                state = "unchanged" if differing == 0 else f"{differing} pixels changed"
+                comparison = compare_frame(n, new, old, out / f"diff_{n:04d}.png")
+                state = "unchanged" if comparison.matches else f"{comparison.differing_pixels} pixels changed"
             else:
                 state = "new"
             shutil.copyfile(new, old)

@@ -1,0 +1,91 @@
+"""Framebuffer grabs: a picture of a buffer at a chosen virtual time of a run, whether or
+not a frame is complete then: the LCD's GRAM, or an RGB565 buffer in SRAM named by a
+firmware symbol or an address."""
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from .board import Board
+
+GRAB_SYNTAX = re.compile(r"^(?P<what>[^@]+)@(?P<at>[0-9.eE+-]+)(?P<options>(:[A-Za-z0-9x]+)*)$")
+DEFAULT_WIDTH, DEFAULT_HEIGHT = 320, 240
+
+
+@dataclass(frozen=True)
+class GrabRequest:
+    what: str            # "gram", a symbol, or a 0x address
+    at_s: float
+    width: int = DEFAULT_WIDTH
+    height: int = DEFAULT_HEIGHT
+    pairs: bool = False  # pixels stored in swapped pairs (first pixel in the upper half of a word)
+
+    @property
+    def label(self) -> str:
+        return f"{self.what}@{self.at_s:g}"
+
+
+def parse_grab(text: str) -> GrabRequest:
+    """Parses WHAT@SECONDS[:pairs][:WxH]; raises ValueError with what is wrong."""
+    match = GRAB_SYNTAX.match(text)
+    if not match:
+        raise ValueError(f"{text!r}: expected WHAT@SECONDS[:pairs][:WxH], e.g. gram@0.5 or framebuffers@0.5:pairs")
+    at_s = float(match.group("at"))
+    if at_s < 0:
+        raise ValueError(f"{text!r}: the time must not be negative")
+    width, height, pairs = DEFAULT_WIDTH, DEFAULT_HEIGHT, False
+    for option in filter(None, match.group("options").split(":")):
+        if option == "pairs":
+            pairs = True
+        elif re.fullmatch(r"\d+x\d+", option):
+            width, height = map(int, option.split("x"))
+        else:
+            raise ValueError(f"{text!r}: unknown option {option!r} (pairs, or a size like 320x240)")
+    what = match.group("what")
+    if what == "gram" and (pairs or (width, height) != (DEFAULT_WIDTH, DEFAULT_HEIGHT)):
+        raise ValueError(f"{text!r}: gram takes no options")
+    return GrabRequest(what, at_s, width, height, pairs)
+
+
+def gram_image(board: "Board") -> np.ndarray:
+    """The LCD's GRAM as the Dock shows it upright (regardless of sleep, display or inversion)."""
+    upright = np.asarray(board.lcd.gram)[::-1, :].T
+    image = np.empty(upright.shape + (3,), dtype=np.uint8)
+    for channel, shift in enumerate((12, 6, 0)):
+        six = ((upright >> shift) & 0x3F).astype(np.uint8)
+        image[:, :, channel] = (six << 2) | (six >> 4)
+    return image
+
+
+def buffer_address(board: "Board", what: str) -> int:
+    if what.lower().startswith("0x"):
+        return int(what, 16)
+    for address, name in board.image.symbols.items():
+        if name == what:
+            return address
+    raise ValueError(f"no symbol {what!r} in the firmware")
+
+
+def rgb565_image(raw: bytes, width: int, height: int, pairs: bool) -> np.ndarray:
+    pixels = np.frombuffer(raw, dtype="<u2").reshape(height, width)
+    if pairs:
+        pixels = pixels.reshape(height, width // 2, 2)[:, :, ::-1].reshape(height, width)
+    r, g, b = (pixels >> 11) & 31, (pixels >> 5) & 63, pixels & 31
+    image = np.empty((height, width, 3), dtype=np.uint8)
+    image[..., 0] = (r << 3) | (r >> 2)
+    image[..., 1] = (g << 2) | (g >> 4)
+    image[..., 2] = (b << 3) | (b >> 2)
+    return image
+
+
+def grab(board: "Board", request: GrabRequest) -> np.ndarray:
+    """The requested buffer as an RGB image, read now."""
+    if request.what == "gram":
+        return gram_image(board)
+    address = buffer_address(board, request.what)
+    raw = board.memory.read(address, request.width * request.height * 2)
+    return rgb565_image(raw, request.width, request.height, request.pairs)

@@ -1,0 +1,94 @@
+"""The run command's golden-frame check (--golden, --tolerance) and framebuffer grabs (--grab)."""
+from __future__ import annotations
+
+import json
+import shutil
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from conftest import GOLDEN, GOLDEN_FRAMES, run_emulator
+from emulator.grab import parse_grab, rgb565_image
+
+
+def _run(firmware, card, out, *extra):
+    result = run_emulator("run", str(firmware), "--sd", str(card), "--frames", str(GOLDEN_FRAMES),
+                          "--out", str(out), "--quiet", *extra)
+    return result, json.loads((out / "run.json").read_text())
+
+
+@pytest.fixture
+def goldens(tmp_path):
+    folder = tmp_path / "golden"
+    shutil.copytree(GOLDEN, folder)
+    return folder
+
+
+def test_matching_frames_pass(firmware, card, tmp_path, goldens):
+    result, summary = _run(firmware, card, tmp_path / "out", "--golden", str(goldens))
+    assert result.returncode == 0, result.stderr
+    assert all(frame["matches"] for frame in summary["golden"]["frames"])
+    assert len(summary["golden"]["frames"]) == GOLDEN_FRAMES
+
+
+def _nudge(path, box, delta):
+    image = np.asarray(Image.open(path).convert("RGB")).astype(int)
+    x0, y0, x1, y1 = box
+    image[y0:y1 + 1, x0:x1 + 1] = np.clip(image[y0:y1 + 1, x0:x1 + 1] + delta, 0, 255)
+    Image.fromarray(image.astype(np.uint8)).save(path)
+
+
+def test_a_differing_frame_fails_with_a_diff_image(firmware, card, tmp_path, goldens):
+    _nudge(goldens / "frame_0002.png", (100, 50, 109, 54), -3)   # 10 x 5 pixels, 3 levels darker
+    result, summary = _run(firmware, card, tmp_path / "out", "--golden", str(goldens))
+    assert result.returncode == 9, result.stderr
+    frame = summary["golden"]["frames"][2]
+    assert not frame["matches"] and frame["differing_pixels"] == 50
+    assert frame["bounding_box"] == [100, 50, 109, 54] and frame["max_channel_error"] == 3
+    assert (tmp_path / "out" / "diff_0002.png").exists()
+    assert "50 pixels differ" in result.stderr and summary["exit"] == "golden-mismatch"
+
+
+@pytest.mark.parametrize("tolerance, status", [(3, 0), (2, 9)])
+def test_tolerance(firmware, card, tmp_path, goldens, tolerance, status):
+    _nudge(goldens / "frame_0001.png", (0, 0, 3, 3), -3)
+    result, _ = _run(firmware, card, tmp_path / "out", "--golden", str(goldens), "--tolerance", str(tolerance))
+    assert result.returncode == status, result.stderr
+
+
+def test_a_missing_golden_frame_is_a_mismatch(firmware, card, tmp_path, goldens):
+    (goldens / "frame_0003.png").unlink()
+    result, summary = _run(firmware, card, tmp_path / "out", "--golden", str(goldens))
+    assert result.returncode == 9
+    assert "no golden frame" in summary["golden"]["frames"][3]["problem"]
+
+
+def test_grab_reads_the_buffers_at_the_requested_time(firmware, card, tmp_path):
+    out = tmp_path / "out"
+    result, summary = _run(firmware, card, out, "--grab", "framebuffers@0.49:pairs", "--grab", "gram@0.05",
+                           "--grab", "no_such_symbol@0.2")
+    assert result.returncode == 0, result.stderr
+    grabs = {g["request"]: g for g in summary["grabs"]}
+    assert grabs["framebuffers@0.49"]["virtual_time_s"] == pytest.approx(0.49)
+    picture = np.asarray(Image.open(out / grabs["framebuffers@0.49"]["file"]))
+    # the test pattern's first colour bars: white, then yellow
+    assert tuple(picture[20, 20]) == (255, 255, 255) and tuple(picture[20, 60]) == (255, 255, 0)
+    assert (out / grabs["gram@0.05"]["file"]).exists()
+    assert "no symbol" in grabs["no_such_symbol@0.2"]["error"]
+
+
+def test_grab_syntax():
+    request = parse_grab("0x80001000@1.5:pairs:64x32")
+    assert (request.what, request.at_s, request.width, request.height, request.pairs) == ("0x80001000", 1.5, 64, 32, True)
+    for bad in ("gram", "gram@x", "fb@1:wide", "gram@1:pairs"):
+        with pytest.raises(ValueError):
+            parse_grab(bad)
+
+
+def test_rgb565_pairs_layout():
+    # two pixels in one word: the first pixel of the pair sits in the upper half
+    raw = (0xF800).to_bytes(2, "little") + (0x001F).to_bytes(2, "little")   # word = 0x001F_F800
+    plain = rgb565_image(raw, 2, 1, pairs=False)
+    paired = rgb565_image(raw, 2, 1, pairs=True)
+    assert tuple(plain[0, 0]) == (255, 0, 0) and tuple(paired[0, 0]) == (0, 0, 255)
