@@ -40,9 +40,11 @@ firmware: toolchain $(BUILD)/firmware.elf
 
 # The default card: the generated test models and textures, and a scene naming one of them.
 CARD        := $(BUILD)/card.img
-CARD_SCENE  := --scene model=models/torus.obj --scene texture=textures/torus.ppm
+CARD_SCENE  := --scene model=models/torus.obj --scene texture=textures/torus.ppm --scene mode=textured \
+               --scene "translate=0 0 -2.6" --scene "axis=1 0.6 0.2" --scene angle=40 --scene step=4 \
+               --scene "light=0.3 0.5 1" --scene ambient=0.25
 
-$(CARD): tools/make_assets.py $(wildcard sdcard_image/*.py) | venv
+$(CARD): tools/make_assets.py $(wildcard sdcard_image/*.py) Makefile | venv
 	rm -rf $(BUILD)/assets
 	$(PYTHON) tools/make_assets.py $(BUILD)/assets
 	$(PYTHON) -m sdcard_image build $@ --force -q $(CARD_SCENE) $(BUILD)/assets/models $(BUILD)/assets/textures
@@ -59,7 +61,7 @@ bench: firmware venv $(CARD)
 	$(PYTHON) tools/bench.py
 
 goldens: firmware venv $(CARD)
-	$(PYTHON) tools/regen_goldens.py
+	$(PYTHON) tools/regen_goldens.py $(SCENES)
 
 clean:
 	rm -rf $(BUILD)

@@ -74,11 +74,12 @@ def rgb565_image(raw: bytes, width: int, height: int, pairs: bool) -> np.ndarray
     pixels = np.frombuffer(raw, dtype="<u2").reshape(height, width)
     if pairs:
         pixels = pixels.reshape(height, width // 2, 2)[:, :, ::-1].reshape(height, width)
-    r, g, b = (pixels >> 11) & 31, (pixels >> 5) & 63, pixels & 31
+    # widened as the ST7789V widens 16-bit colour into its 6-bit GRAM and the panel shows it,
+    # so a grab of a framebuffer compares exactly with the frames the LCD captured
+    r5, g6, b5 = (pixels >> 11) & 31, (pixels >> 5) & 63, pixels & 31
     image = np.empty((height, width, 3), dtype=np.uint8)
-    image[..., 0] = (r << 3) | (r >> 2)
-    image[..., 1] = (g << 2) | (g >> 4)
-    image[..., 2] = (b << 3) | (b >> 2)
+    for channel, six in enumerate(((r5 << 1) | (r5 >> 4), g6, (b5 << 1) | (b5 >> 4))):
+        image[..., channel] = ((six << 2) | (six >> 4)).astype(np.uint8)
     return image
 
 

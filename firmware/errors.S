@@ -26,6 +26,7 @@ error_colours:
     .hword  ERR_COLOUR_NO_CARD, ERR_COLOUR_CARD_TIMEOUT, ERR_COLOUR_UNSUPPORTED
     .hword  ERR_COLOUR_CRC, ERR_COLOUR_NO_FAT32, ERR_COLOUR_NOT_FOUND
     .hword  ERR_COLOUR_TOO_LARGE, ERR_COLOUR_BAD_CHAIN, ERR_COLOUR_BAD_SCENE
+    .hword  ERR_COLOUR_BAD_MODEL, ERR_COLOUR_BAD_TEXTURE, ERR_COLOUR_MODEL_TOO_LARGE
 error_colours_end:
     .if (error_colours_end - error_colours) != 2 * ERR_CODE_COUNT
     .error "error_colours needs one colour per code"

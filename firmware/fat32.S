@@ -388,14 +388,37 @@ fat32_load:
 
     .globl fat32_open
 # fat32_open
-#   What: looks a file up by path: each component in turn, from the root
-#         directory; every component but the last must be a directory, the
-#         last must not be. Remembers the path for error reports.
+#   What: fat32_lookup, with "not found" a fatal error.
 #   Arguments: a0 = path (NUL-terminated).
 #   Results: a0 = the file's first cluster (0 for an empty file), a1 = size.
 #   Errors: 6 not found, 8 corrupt chain in a directory.
 #   Clobbers: only ABI temporaries.
 fat32_open:
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+    call    fat32_lookup
+    beqz    a2, 1f
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
+    ret
+1:  la      t0, fat_path
+    ld      a2, 0(t0)
+    li      a0, ERR_NOT_FOUND
+    la      a1, msg_not_found
+    call    error_fatal
+
+    .globl fat32_lookup
+# fat32_lookup
+#   What: looks a file up by path: each component in turn, from the root
+#         directory; every component but the last must be a directory, the
+#         last must not be. Remembers the path for error reports.
+#   Arguments: a0 = path (NUL-terminated).
+#   Results: a2 = 1 found, then a0 = the file's first cluster (0 for an
+#         empty file), a1 = size; a2 = 0 not found (no such file, or a
+#         folder where a file is wanted or the other way round).
+#   Errors: 8 corrupt chain in a directory.
+#   Clobbers: only ABI temporaries.
+fat32_lookup:
     addi    sp, sp, -48
     sd      ra, 40(sp)
     sd      s0, 32(sp)
@@ -438,18 +461,16 @@ fat32_open:
 6:  bnez    s3, 9f                      # a folder where a file is wanted
     mv      a0, a1
     mv      a1, a2
-    ld      s3, 8(sp)
+    li      a2, 1
+    j       10f
+9:  li      a2, 0
+10: ld      s3, 8(sp)
     ld      s2, 16(sp)
     ld      s1, 24(sp)
     ld      s0, 32(sp)
     ld      ra, 40(sp)
     addi    sp, sp, 48
     ret
-9:  la      t0, fat_path
-    ld      a2, 0(t0)
-    li      a0, ERR_NOT_FOUND
-    la      a1, msg_not_found
-    call    error_fatal
 
 # fat32_find (file-local)
 #   What: searches one directory (its whole cluster chain) for an entry

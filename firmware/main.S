@@ -2,7 +2,8 @@
 #
 # Hart 0 brings the board up (clocks, pins, console, LCD, DMAC), loads
 # scene.ini and the files it names from the SD card (sd.S, fat32.S,
-# scene.S; any failure there is fatal, errors.S), releases hart 1, then
+# scene.S), parses the model and the texture into `scene` (obj.S, ppm.S;
+# any failure there is fatal, errors.S), releases hart 1, then
 # draws frames forever. Hart 1 sends finished frames to the LCD
 # and reports each one. After the release only hart 1 touches SPI0, the
 # DMAC and the LCD's GPIOHS lines.
@@ -70,7 +71,10 @@ main_hart0:
     call    heap_init
     call    sd_init
     call    fat32_mount
-    call    scene_load
+    call    scene_load                  # scene.ini, the model and texture files
+    call    obj_parse_model             # the mesh into `scene` (obj.S)
+    call    ppm_parse_texture           # the texture into `scene` (ppm.S)
+    call    render_init                 # renderer buffers for this scene (render.S)
 
     call    boot_release_hart1
 
@@ -83,7 +87,7 @@ main_hart0:
     mv      a0, s3
     call    fb_address
     mv      a1, s2
-    call    pattern_draw
+    call    render_frame
     slli    t0, s3, 3
     la      t1, fb_frame
     add     t1, t1, t0

@@ -1,19 +1,53 @@
-# scene.S: scene.ini, the card's description of what to show, and the
-# loading of the files it names.
+# scene.S: scene.ini, the card's description of what to show; the `scene`
+# structure (scene.inc) it fills; the loading of the files it names.
 #
 # scene.ini (in the card's root) is text, one setting per line:
 #     key = value
-# '#' starts a comment (to the end of the line); blank lines are fine; lines
+# '#' starts a comment (to the end of the line), except as the first
+# character of a value (background = #RRGGBB); blank lines are fine; lines
 # end in LF or CRLF; spaces and tabs around keys and values are ignored; a
 # UTF-8 byte-order mark at the start is skipped. Keys are matched
-# case-insensitively against scene_keys. An unknown key, a duplicate key, a
-# line without '=', an empty key or value, a value of SCENE_VALUE_MAX bytes
-# or more, or a control character outside a comment is error 9 naming the
-# line (counted from 1).
+# case-insensitively against scene_keys, and so are the words of mode and
+# cull. Every key has a default, so scene.ini may leave any of them out, and
+# a card without scene.ini at all shows the defaults (that is not an error).
 #
-# The parser is table-driven: a key is one scene_keys row (name, kind, value
-# buffer, loaded-file record). Kind SCENE_KIND_FILE values are paths that
-# scene_load then loads; a key that is absent is skipped silently.
+# key         value                                   default       scene field
+# ----------  --------------------------------------  ------------  ----------------
+# model       path of a Wavefront .obj (obj.S)        model.obj     (scene_model)
+# texture     path of a P3 / P6 .ppm (ppm.S); not     texture.ppm   (scene_texture)
+#             loaded in wireframe mode
+# mode        textured | flat | wireframe             textured      SCENE_MODE
+# cull        on|off|yes|no|true|false|1|0            on            SCENE_CULL
+# scale       s  or  sx sy sz                         1 1 1         SCENE_SCALE
+# axis        x y z, not all zero (stored normalised) 0 1 0         SCENE_AXIS
+# angle       degrees at frame 0                      0             SCENE_ANGLE
+# step        degrees per frame                       4             SCENE_STEP
+# translate   x y z                                   0 0 -3        SCENE_TRANSLATE
+# fov         vertical, degrees, 0 < fov < 180        60            SCENE_FOV
+# near        near plane, > 0                         0.1           SCENE_NEAR
+# far         far plane, > near                       100           SCENE_FAR
+# light       x y z towards the light, not all zero   0 0 1         SCENE_LIGHT
+#             (stored normalised)
+# ambient     0 <= ambient <= 1                       0.2           SCENE_AMBIENT
+# background  R G B (integers 0..255) or #RRGGBB      #102010       SCENE_BACKGROUND
+#                                                     (RGB565 0x10A2)
+#
+# Conventions (scene.inc): right-handed, camera at the origin looking down
+# -z (a model in view has negative z), angles in degrees about the axis.
+#
+# Numbers are parse.S's (sign, digits, fraction, exponent: -1.5e-3), each
+# rounded to single precision, which must be finite. Vectors are numbers
+# separated by spaces or tabs. Paths are from the card's root (fat32.S).
+#
+# An unknown key, a duplicate key, a line without '=', an empty key or value,
+# a path of SCENE_VALUE_MAX bytes or more, a control character outside a
+# comment, or a bad value (not a number, the wrong count of numbers, out of
+# range as listed, an unknown word, a zero vector) is error 9 naming the line
+# (counted from 1): "error 9 bad scene.ini line N: <what>". far <= near is
+# reported on far's line (near's when far is left at its default).
+#
+# The parser is table-driven: a key is one scene_keys row (SCENE_KEY macro:
+# name, kind, count of numbers, check, target, aux, extra, line word).
 #
 # Every file loaded (scene.ini included) is reported on the console as
 #     load <path> <size> crc32=<8 lowercase hex digits>
@@ -22,48 +56,158 @@
     .option norelax
     .include "k210.inc"
     .include "errors.inc"
+    .include "scene.inc"
+    .include "text.inc"
 
-    .equ SCENE_VALUE_MAX,       256         # value bytes, NUL included
-    .equ SCENE_KIND_FILE,       1           # the value is a path to load
+    .equ SCENE_VALUE_MAX,       256         # path bytes, NUL included
+# Kinds of value (SCENE_KEY_KIND)
+    .equ SCENE_KIND_FILE,       1           # a path, loaded by scene_load
+    .equ SCENE_KIND_WORD,       2           # one word of a list -> u32
+    .equ SCENE_KIND_NUMBERS,    3           # SCENE_KEY_COUNT numbers -> f32 each
+    .equ SCENE_KIND_COLOUR,     4           # R G B or #RRGGBB -> RGB565 u32
+# Checks (SCENE_KEY_CHECK) on a SCENE_KIND_NUMBERS value
+    .equ SCENE_CHECK_NONE,      0
+    .equ SCENE_CHECK_BROADCAST, 1           # one number stands for all of them
+    .equ SCENE_CHECK_DIRECTION, 2           # 3 numbers, not all 0; normalised
+    .equ SCENE_CHECK_FOV,       3           # 0 < x < SCENE_FOV_LIMIT
+    .equ SCENE_CHECK_POSITIVE,  4           # x > 0
+    .equ SCENE_CHECK_UNIT,      5           # 0 <= x <= 1
+# When a SCENE_KIND_FILE file is loaded (its SCENE_KEY_CHECK)
+    .equ SCENE_FILE_ALWAYS,     0
+    .equ SCENE_FILE_SURFACE,    1           # not in wireframe mode
+    .equ SCENE_FOV_LIMIT,       180         # degrees, excluded
+    .equ SCENE_NUMBERS_MAX,     3           # most numbers a key takes
+    .equ SCENE_DOUBLE_BYTES,    8
+    .equ SCENE_DOUBLE_SHIFT,    3           # log2 of SCENE_DOUBLE_BYTES
+# scene_parse's scan of a line (t5)
+    .equ SCAN_KEY,              0           # before the first '='
+    .equ SCAN_VALUE_START,      1           # after it, only blanks since
+    .equ SCAN_VALUE,            2           # in the value
+    .equ SCENE_F32_BYTES,       4
+    .equ SCENE_HEX_DIGITS,      6           # "#RRGGBB" after the '#'
+    .equ SCENE_HEX_MAX,         0xF
+    .equ SCENE_BYTE_BITS,       8
+    .equ SCENE_BYTE_MASK,       0xFF
 # scene_keys rows
     .equ SCENE_KEY_NAME,        0           # key (NUL-terminated, lower case)
-    .equ SCENE_KEY_KIND,        8
-    .equ SCENE_KEY_VALUE,       16          # value buffer, SCENE_VALUE_MAX bytes
-    .equ SCENE_KEY_FILE,        24          # file record: address, size (0, 0 = none)
-    .equ SCENE_KEY_BYTES,       32
+    .equ SCENE_KEY_KIND,        8           # byte: SCENE_KIND_*
+    .equ SCENE_KEY_COUNT,       9           # byte: numbers (SCENE_KIND_NUMBERS)
+    .equ SCENE_KEY_CHECK,       10          # byte: SCENE_CHECK_* / SCENE_FILE_*
+    .equ SCENE_KEY_TARGET,      16          # where the value goes
+    .equ SCENE_KEY_AUX,         24          # FILE: file record; WORD: word list
+    .equ SCENE_KEY_EXTRA,       32          # FILE: default path; WORD: message
+    .equ SCENE_KEY_LINE,        40          # u32 word: line that set it, 0 = none
+    .equ SCENE_KEY_BYTES,       48
+# word lists (SCENE_KIND_WORD): rows of word, value; a 0 word ends the list
+    .equ SCENE_WORD_NAME,       0
+    .equ SCENE_WORD_VALUE,      8
+    .equ SCENE_WORD_BYTES,      16
+# file records (scene_model, scene_texture)
     .equ FILE_RECORD_ADDRESS,   0
     .equ FILE_RECORD_SIZE,      8
     .equ FILE_RECORD_BYTES,     16
 
-    .equ CHAR_TAB,              '\t'
-    .equ CHAR_LF,               '\n'
-    .equ CHAR_CR,               '\r'
-    .equ CHAR_SPACE,            ' '
-    .equ CHAR_COMMENT,          '#'
-    .equ CHAR_EQUALS,           '='
-    .equ CHAR_FIRST_PRINTABLE,  0x20
-    .equ CHAR_DELETE,           0x7F
-    .equ ASCII_UPPER_A,         'A'
-    .equ ASCII_UPPER_Z,         'Z'
-    .equ ASCII_CASE_SHIFT,      5           # 'a' - 'A' = 1 << 5
     .equ UTF8_BOM_0,            0xEF
     .equ UTF8_BOM_1,            0xBB
     .equ UTF8_BOM_2,            0xBF
     .equ UTF8_BOM_BYTES,        3
 
+# SCENE_KEY name, kind, count, check, target, aux, extra: one scene_keys row,
+# its name string and its line word (scene_line_<name>).
+.macro SCENE_KEY name, kind, count, check, target, aux=0, extra=0
+    .dword  scene_key_name_\name
+    .byte   \kind, \count, \check, 0
+    .word   0
+    .dword  \target, \aux, \extra, scene_line_\name
+    .pushsection .rodata.scene_key_names, "a"
+scene_key_name_\name:
+    .asciz  "\name"
+    .popsection
+    .pushsection .bss
+    .balign 4
+scene_line_\name:
+    .space  4
+    .popsection
+.endm
+
     .section .rodata
     .balign 8
-# The keys scene.ini may set. Adding a key: one row here plus its buffers.
+# The keys scene.ini may set. Adding a key: one row here, its default in
+# scene_default_values (or a default path), its field in scene.inc.
 scene_keys:
-    .dword  key_model, SCENE_KIND_FILE, scene_model_path, scene_model
-    .dword  key_texture, SCENE_KIND_FILE, scene_texture_path, scene_texture
+    SCENE_KEY model, SCENE_KIND_FILE, 0, SCENE_FILE_ALWAYS, scene_model_path, scene_model, default_model_path
+    SCENE_KEY texture, SCENE_KIND_FILE, 0, SCENE_FILE_SURFACE, scene_texture_path, scene_texture, default_texture_path
+    SCENE_KEY mode, SCENE_KIND_WORD, 0, 0, scene + SCENE_MODE, words_mode, msg_expect_mode
+    SCENE_KEY cull, SCENE_KIND_WORD, 0, 0, scene + SCENE_CULL, words_cull, msg_expect_cull
+    SCENE_KEY scale, SCENE_KIND_NUMBERS, 3, SCENE_CHECK_BROADCAST, scene + SCENE_SCALE
+    SCENE_KEY axis, SCENE_KIND_NUMBERS, 3, SCENE_CHECK_DIRECTION, scene + SCENE_AXIS
+    SCENE_KEY angle, SCENE_KIND_NUMBERS, 1, SCENE_CHECK_NONE, scene + SCENE_ANGLE
+    SCENE_KEY step, SCENE_KIND_NUMBERS, 1, SCENE_CHECK_NONE, scene + SCENE_STEP
+    SCENE_KEY translate, SCENE_KIND_NUMBERS, 3, SCENE_CHECK_NONE, scene + SCENE_TRANSLATE
+    SCENE_KEY fov, SCENE_KIND_NUMBERS, 1, SCENE_CHECK_FOV, scene + SCENE_FOV
+    SCENE_KEY near, SCENE_KIND_NUMBERS, 1, SCENE_CHECK_POSITIVE, scene + SCENE_NEAR
+    SCENE_KEY far, SCENE_KIND_NUMBERS, 1, SCENE_CHECK_POSITIVE, scene + SCENE_FAR
+    SCENE_KEY light, SCENE_KIND_NUMBERS, 3, SCENE_CHECK_DIRECTION, scene + SCENE_LIGHT
+    SCENE_KEY ambient, SCENE_KIND_NUMBERS, 1, SCENE_CHECK_UNIT, scene + SCENE_AMBIENT
+    SCENE_KEY background, SCENE_KIND_COLOUR, 0, 0, scene + SCENE_BACKGROUND
 scene_keys_end:
 
-key_model:          .asciz "model"
-key_texture:        .asciz "texture"
+    .balign 8
+words_mode:
+    .dword  word_textured, MODE_TEXTURED
+    .dword  word_flat, MODE_FLAT
+    .dword  word_wireframe, MODE_WIREFRAME
+    .dword  0
+words_cull:
+    .dword  word_on, CULL_ON
+    .dword  word_off, CULL_OFF
+    .dword  word_yes, CULL_ON
+    .dword  word_no, CULL_OFF
+    .dword  word_true, CULL_ON
+    .dword  word_false, CULL_OFF
+    .dword  word_1, CULL_ON
+    .dword  word_0, CULL_OFF
+    .dword  0
+
+    .balign 4
+# scene_default_values: the scene structure's settings, SCENE_MODE up to
+# MESH_VCOUNT, before scene.ini (the mesh and texture fields start at 0).
+scene_default_values:
+    .word   MODE_TEXTURED               # SCENE_MODE
+    .word   CULL_ON                     # SCENE_CULL
+    .float  1.0, 1.0, 1.0               # SCENE_SCALE
+    .float  0.0, 1.0, 0.0               # SCENE_AXIS
+    .float  0.0                         # SCENE_ANGLE
+    .float  4.0                         # SCENE_STEP
+    .float  0.0, 0.0, -3.0              # SCENE_TRANSLATE
+    .float  60.0                        # SCENE_FOV
+    .float  0.1                         # SCENE_NEAR
+    .float  100.0                       # SCENE_FAR
+    .float  0.0, 0.0, 1.0               # SCENE_LIGHT
+    .float  0.2                         # SCENE_AMBIENT
+    .word   0x10A2                      # SCENE_BACKGROUND: RGB 16, 20, 16
+scene_default_values_end:
+    .if (scene_default_values_end - scene_default_values) != MESH_VCOUNT
+    .error "scene_default_values must cover SCENE_MODE .. SCENE_BACKGROUND"
+    .endif
+
+default_model_path:     .asciz "model.obj"
+default_texture_path:   .asciz "texture.ppm"
+word_textured:      .asciz "textured"
+word_flat:          .asciz "flat"
+word_wireframe:     .asciz "wireframe"
+word_on:            .asciz "on"
+word_off:           .asciz "off"
+word_yes:           .asciz "yes"
+word_no:            .asciz "no"
+word_true:          .asciz "true"
+word_false:         .asciz "false"
+word_1:             .asciz "1"
+word_0:             .asciz "0"
 path_scene_ini:     .asciz "scene.ini"
 msg_load:           .asciz "load "
 msg_crc32:          .asciz " crc32="
+msg_no_scene_ini:   .asciz "scene: no scene.ini, defaults\n"
 msg_bad_scene:      .asciz "bad scene.ini line "
 msg_colon:          .asciz ": "
 msg_unknown_key:    .asciz "unknown key"
@@ -73,13 +217,29 @@ msg_empty_key:      .asciz "malformed line (no key)"
 msg_empty_value:    .asciz "malformed line (no value)"
 msg_long_value:     .asciz "malformed line (value too long)"
 msg_control:        .asciz "malformed line (control character)"
+msg_expect_mode:    .asciz "bad value (expected textured, flat or wireframe)"
+msg_expect_cull:    .asciz "bad value (expected on, off, yes, no, true, false, 1 or 0)"
+msg_not_number:     .asciz "bad value (not a number)"
+msg_expect_1:       .asciz "bad value (expected 1 number)"
+msg_expect_3:       .asciz "bad value (expected 3 numbers)"
+msg_expect_1_or_3:  .asciz "bad value (expected 1 or 3 numbers)"
+msg_out_of_range:   .asciz "bad value (number out of range)"
+msg_zero_vector:    .asciz "bad value (zero vector)"
+msg_fov_range:      .asciz "bad value (fov must be between 0 and 180 degrees)"
+msg_positive:       .asciz "bad value (must be greater than 0)"
+msg_unit_range:     .asciz "bad value (must be between 0 and 1)"
+msg_colour:         .asciz "bad value (expected R G B with 0..255 each, or #RRGGBB)"
+msg_far_near:       .asciz "bad value (far must be greater than near)"
 
     .text
     .globl scene_load
 # scene_load
-#   What: loads and parses scene.ini from the card's root, then loads every
-#         file it names (model, texture), recording each in its file record
-#         (scene_model, scene_texture). Needs fat32_mount and heap_init.
+#   What: fills `scene` with the defaults, reads and parses scene.ini from
+#         the card's root when there is one, checks far > near, then loads
+#         the files the scene needs (the model; the texture unless the mode
+#         is wireframe), recording each in its file record (scene_model,
+#         scene_texture; 0, 0 for a file not loaded). Once per boot. Needs
+#         fat32_mount and heap_init.
 #   Arguments: none. Results: none (errors are fatal).
 #   Clobbers: only ABI temporaries.
 scene_load:
@@ -87,28 +247,97 @@ scene_load:
     sd      ra, 24(sp)
     sd      s0, 16(sp)
     sd      s1, 8(sp)
+    call    scene_defaults
     la      a0, path_scene_ini
+    call    fat32_lookup
+    bnez    a2, 1f
+    la      a0, msg_no_scene_ini
+    call    console_line
+    j       2f
+1:  la      a0, path_scene_ini
     call    scene_load_file
     call    scene_parse
+2:  call    scene_check_planes
+
     la      s0, scene_keys
     la      s1, scene_keys_end
-1:  ld      t0, SCENE_KEY_KIND(s0)
+3:  lbu     t0, SCENE_KEY_KIND(s0)
     li      t1, SCENE_KIND_FILE
-    bne     t0, t1, 2f
-    ld      a0, SCENE_KEY_VALUE(s0)
-    lbu     t0, 0(a0)
-    beqz    t0, 2f                      # not in scene.ini: skipped
+    bne     t0, t1, 4f
+    lbu     t0, SCENE_KEY_CHECK(s0)
+    li      t1, SCENE_FILE_SURFACE
+    bne     t0, t1, 31f
+    la      t2, scene
+    lwu     t2, SCENE_MODE(t2)
+    li      t1, MODE_WIREFRAME
+    beq     t2, t1, 4f                  # wireframe: no surface, no texture
+31: ld      a0, SCENE_KEY_TARGET(s0)
     call    scene_load_file
-    ld      t0, SCENE_KEY_FILE(s0)
+    ld      t0, SCENE_KEY_AUX(s0)
     sd      a0, FILE_RECORD_ADDRESS(t0)
     sd      a1, FILE_RECORD_SIZE(t0)
-2:  addi    s0, s0, SCENE_KEY_BYTES
-    bltu    s0, s1, 1b
+4:  addi    s0, s0, SCENE_KEY_BYTES
+    bltu    s0, s1, 3b
     ld      s1, 8(sp)
     ld      s0, 16(sp)
     ld      ra, 24(sp)
     addi    sp, sp, 32
     ret
+
+# scene_defaults (file-local)
+#   What: `scene` = scene_default_values then zeros up to SCENE_SIZE; every
+#         path buffer = its key's default path.
+#   Arguments: none. Results: none.
+#   Clobbers: only ABI temporaries.
+scene_defaults:
+    la      t0, scene_default_values
+    la      t1, scene
+    addi    t2, t1, MESH_VCOUNT
+1:  lw      t3, 0(t0)
+    sw      t3, 0(t1)
+    addi    t0, t0, SCENE_F32_BYTES
+    addi    t1, t1, SCENE_F32_BYTES
+    bltu    t1, t2, 1b
+    la      t2, scene + SCENE_SIZE
+2:  sw      zero, 0(t1)
+    addi    t1, t1, SCENE_F32_BYTES
+    bltu    t1, t2, 2b
+
+    la      t0, scene_keys
+    la      t1, scene_keys_end
+3:  lbu     t2, SCENE_KEY_KIND(t0)
+    li      t3, SCENE_KIND_FILE
+    bne     t2, t3, 5f
+    ld      t2, SCENE_KEY_EXTRA(t0)     # default path
+    ld      t3, SCENE_KEY_TARGET(t0)    # path buffer
+4:  lbu     t4, 0(t2)
+    sb      t4, 0(t3)
+    addi    t2, t2, 1
+    addi    t3, t3, 1
+    bnez    t4, 4b
+5:  addi    t0, t0, SCENE_KEY_BYTES
+    bltu    t0, t1, 3b
+    ret
+
+# scene_check_planes (file-local)
+#   What: error 9 unless SCENE_FAR > SCENE_NEAR, on far's line (near's when
+#         scene.ini did not set far).
+#   Arguments: none. Results: none.
+#   Clobbers: only ABI temporaries.
+scene_check_planes:
+    la      t0, scene
+    flw     ft0, SCENE_NEAR(t0)
+    flw     ft1, SCENE_FAR(t0)
+    flt.s   t1, ft0, ft1
+    beqz    t1, 1f
+    ret
+1:  la      t0, scene_line_far
+    lwu     a0, 0(t0)
+    bnez    a0, 2f
+    la      t0, scene_line_near
+    lwu     a0, 0(t0)
+2:  la      a1, msg_far_near
+    j       scene_error
 
     .globl scene_load_file
 # scene_load_file
@@ -156,8 +385,8 @@ scene_load_file:
     ret
 
 # scene_parse (file-local)
-#   What: parses scene.ini's text (see the file comment), copying each
-#         value into its key's buffer.
+#   What: parses scene.ini's text (see the file comment), storing each
+#         value (scene_set_value).
 #   Arguments: a0 = text, a1 = length in bytes.
 #   Results: none (errors are fatal).
 #   Clobbers: only ABI temporaries.
@@ -206,7 +435,10 @@ scene_parse:
     li      t1, CHAR_CR
     bne     t0, t1, 4f
     addi    s5, s5, -1
+    # t5 = where the scan is (SCAN_*): a '#' at SCAN_VALUE_START starts
+    # the value (#RRGGBB), elsewhere a comment.
 4:  mv      t2, s0
+    li      t5, SCAN_KEY
 5:  bgeu    t2, s5, 7f
     lbu     t0, 0(t2)
     li      t1, CHAR_COMMENT
@@ -217,9 +449,22 @@ scene_parse:
     bltu    t0, t1, 80f
     li      t1, CHAR_DELETE
     beq     t0, t1, 80f
+    li      t1, CHAR_SPACE
+    beq     t0, t1, 51f
+    li      t1, CHAR_EQUALS
+    bne     t0, t1, 52f
+    bnez    t5, 52f                     # past SCAN_KEY (0)
+    li      t5, SCAN_VALUE_START    # the first '='
+    j       51f
+52: beqz    t5, 51f
+    li      t5, SCAN_VALUE          # a value character
 51: addi    t2, t2, 1
     j       5b
-6:  mv      s5, t2
+6:  li      t1, SCAN_VALUE_START
+    bne     t5, t1, 61f
+    li      t5, SCAN_VALUE          # '#' opening the value: kept
+    j       51b
+61: mv      s5, t2
 7:  # trim: s4 = first, s5 = end
     mv      a0, s0
     mv      a1, s5
@@ -243,23 +488,20 @@ scene_parse:
     call    scene_find_key
     beqz    a0, 84f
     mv      s7, a0                      # s7 = the key's row
+    ld      t0, SCENE_KEY_LINE(s7)
+    lwu     t1, 0(t0)
+    bnez    t1, 85f                     # set before: duplicate
+    sw      s2, 0(t0)
     # value = (s6, s5) trimmed
     addi    a0, s6, 1
     mv      a1, s5
     call    trim_blanks
     beq     a0, a1, 83f
-    sub     t0, a1, a0                  # t0 = value length
-    li      t1, SCENE_VALUE_MAX
-    bgeu    t0, t1, 86f
-    ld      t2, SCENE_KEY_VALUE(s7)
-    lbu     t3, 0(t2)
-    bnez    t3, 85f                     # set before: duplicate
-10: lbu     t3, 0(a0)
-    sb      t3, 0(t2)
-    addi    a0, a0, 1
-    addi    t2, t2, 1
-    bltu    a0, a1, 10b
-    sb      zero, 0(t2)
+    mv      a2, a1
+    mv      a1, a0
+    mv      a0, s7
+    mv      a3, s2
+    call    scene_set_value
 60: addi    s0, s3, 1                   # next line
     addi    s2, s2, 1
     j       1b
@@ -275,8 +517,6 @@ scene_parse:
 84: la      a1, msg_unknown_key
     j       89f
 85: la      a1, msg_duplicate_key
-    j       89f
-86: la      a1, msg_long_value
 89: mv      a0, s2
     j       scene_error
 
@@ -290,6 +530,252 @@ scene_parse:
     ld      s0, 64(sp)
     ld      ra, 72(sp)
     addi    sp, sp, 80
+    ret
+
+# scene_set_value (file-local)
+#   What: checks one key's value by its row's kind and stores it (path
+#         buffer, u32 word, f32 numbers or RGB565 colour; see the file
+#         comment).
+#   Arguments: a0 = row, a1 = value start, a2 = value end (non-empty,
+#         trimmed), a3 = line number (for errors).
+#   Results: none (a bad value is error 9).
+#   Clobbers: only ABI temporaries.
+scene_set_value:
+    addi    sp, sp, -96
+    sd      ra, 88(sp)
+    sd      s0, 80(sp)
+    sd      s1, 72(sp)
+    sd      s2, 64(sp)
+    sd      s3, 56(sp)
+    sd      s4, 48(sp)
+    sd      s5, 40(sp)
+    # 0(sp): SCENE_NUMBERS_MAX doubles
+    mv      s0, a0                      # s0 = row
+    mv      s1, a1                      # s1 = value start
+    mv      s2, a2                      # s2 = value end
+    mv      s3, a3                      # s3 = line
+    lbu     t0, SCENE_KEY_KIND(s0)
+    li      t1, SCENE_KIND_FILE
+    beq     t0, t1, 10f
+    li      t1, SCENE_KIND_WORD
+    beq     t0, t1, 20f
+    li      t1, SCENE_KIND_NUMBERS
+    beq     t0, t1, 30f
+    j       50f
+
+    # A path: copied into its buffer.
+10: sub     t0, s2, s1
+    li      t1, SCENE_VALUE_MAX
+    bgeu    t0, t1, 86f
+    ld      t2, SCENE_KEY_TARGET(s0)
+11: lbu     t3, 0(s1)
+    sb      t3, 0(t2)
+    addi    s1, s1, 1
+    addi    t2, t2, 1
+    bltu    s1, s2, 11b
+    sb      zero, 0(t2)
+    j       90f
+
+    # A word of the row's list.
+20: ld      s4, SCENE_KEY_AUX(s0)       # s4 = word row
+21: ld      a0, SCENE_WORD_NAME(s4)
+    beqz    a0, 29f
+    mv      a1, s1
+    mv      a2, s2
+    call    scene_name_equals
+    bnez    a0, 22f
+    addi    s4, s4, SCENE_WORD_BYTES
+    j       21b
+22: ld      t0, SCENE_WORD_VALUE(s4)
+    ld      t1, SCENE_KEY_TARGET(s0)
+    sw      t0, 0(t1)
+    j       90f
+29: ld      a1, SCENE_KEY_EXTRA(s0)
+    j       89f
+
+    # Numbers.
+30: mv      a0, s1
+    mv      a1, s2
+    mv      a2, sp
+    lbu     a3, SCENE_KEY_COUNT(s0)
+    call    parse_numbers
+    bnez    a1, 81f
+    lbu     s4, SCENE_KEY_COUNT(s0)     # s4 = numbers wanted
+    lbu     s5, SCENE_KEY_CHECK(s0)     # s5 = check
+    beq     a0, s4, 32f
+    li      t0, SCENE_CHECK_BROADCAST
+    bne     s5, t0, 82f
+    li      t0, 1
+    bne     a0, t0, 82f
+    fld     ft0, 0(sp)                  # one number: copied to every slot
+    mv      t1, sp
+    slli    t2, s4, SCENE_DOUBLE_SHIFT
+    add     t2, t2, sp
+31: fsd     ft0, 0(t1)
+    addi    t1, t1, SCENE_DOUBLE_BYTES
+    bltu    t1, t2, 31b
+    # Every number must be finite in single precision.
+32: mv      t1, sp
+    slli    t2, s4, SCENE_DOUBLE_SHIFT
+    add     t2, t2, sp
+33: fld     ft0, 0(t1)
+    fcvt.s.d ft1, ft0
+    fclass.s t3, ft1
+    andi    t3, t3, FCLASS_NOT_FINITE
+    bnez    t3, 83f
+    addi    t1, t1, SCENE_DOUBLE_BYTES
+    bltu    t1, t2, 33b
+    # The row's check (single-number checks on the value as stored).
+    fld     ft0, 0(sp)
+    fcvt.s.d ft0, ft0                   # ft0 = first number, single
+    fmv.w.x ft1, zero                   # ft1 = 0
+    li      t0, SCENE_CHECK_DIRECTION
+    beq     s5, t0, 40f
+    li      t0, SCENE_CHECK_FOV
+    beq     s5, t0, 41f
+    li      t0, SCENE_CHECK_POSITIVE
+    beq     s5, t0, 42f
+    li      t0, SCENE_CHECK_UNIT
+    beq     s5, t0, 43f
+    j       48f
+40: fld     ft2, 0(sp)                  # direction: normalised in double
+    fld     ft3, SCENE_DOUBLE_BYTES(sp)
+    fld     ft4, 2 * SCENE_DOUBLE_BYTES(sp)
+    fmul.d  ft5, ft2, ft2
+    fmadd.d ft5, ft3, ft3, ft5
+    fmadd.d ft5, ft4, ft4, ft5
+    fmv.d.x ft6, zero
+    feq.d   t0, ft5, ft6
+    bnez    t0, 84f
+    fsqrt.d ft5, ft5
+    fdiv.d  ft2, ft2, ft5
+    fdiv.d  ft3, ft3, ft5
+    fdiv.d  ft4, ft4, ft5
+    fsd     ft2, 0(sp)
+    fsd     ft3, SCENE_DOUBLE_BYTES(sp)
+    fsd     ft4, 2 * SCENE_DOUBLE_BYTES(sp)
+    j       48f
+41: fle.s   t0, ft0, ft1                # fov: 0 < x < 180
+    bnez    t0, 87f
+    li      t0, SCENE_FOV_LIMIT
+    fcvt.s.w ft2, t0
+    fle.s   t0, ft2, ft0
+    bnez    t0, 87f
+    j       48f
+42: fle.s   t0, ft0, ft1                # x > 0
+    bnez    t0, 88f
+    j       48f
+43: flt.s   t0, ft0, ft1                # 0 <= x <= 1
+    bnez    t0, 79f
+    li      t0, 1
+    fcvt.s.w ft2, t0
+    flt.s   t0, ft2, ft0
+    bnez    t0, 79f
+    # Store them, single precision.
+48: ld      t0, SCENE_KEY_TARGET(s0)
+    mv      t1, sp
+    slli    t2, s4, SCENE_DOUBLE_SHIFT
+    add     t2, t2, sp
+49: fld     ft0, 0(t1)
+    fcvt.s.d ft0, ft0
+    fsw     ft0, 0(t0)
+    addi    t0, t0, SCENE_F32_BYTES
+    addi    t1, t1, SCENE_DOUBLE_BYTES
+    bltu    t1, t2, 49b
+    j       90f
+
+    # A colour: #RRGGBB, or R G B.
+50: lbu     t0, 0(s1)
+    li      t1, CHAR_COMMENT
+    bne     t0, t1, 55f
+    sub     t0, s2, s1
+    li      t1, SCENE_HEX_DIGITS + 1
+    bne     t0, t1, 85f
+    addi    t0, s1, 1
+    li      t2, 0                       # t2 = 0xRRGGBB
+51: bgeu    t0, s2, 53f
+    lbu     t3, 0(t0)
+    addi    t4, t3, -CHAR_DIGIT_0
+    li      t5, DECIMAL_BASE
+    bltu    t4, t5, 52f
+    ori     t3, t3, ASCII_CASE_BIT
+    addi    t4, t3, -CHAR_LOWER_A
+    li      t5, SCENE_HEX_MAX - HEX_LETTER_VALUE + 1
+    bgeu    t4, t5, 85f
+    addi    t4, t4, HEX_LETTER_VALUE
+52: slli    t2, t2, HEX_DIGIT_BITS
+    or      t2, t2, t4
+    addi    t0, t0, 1
+    j       51b
+53: srli    a0, t2, 2 * SCENE_BYTE_BITS
+    srli    a1, t2, SCENE_BYTE_BITS
+    andi    a1, a1, SCENE_BYTE_MASK
+    andi    a2, t2, SCENE_BYTE_MASK
+    j       58f
+55: mv      a0, s1
+    mv      a1, s2
+    mv      a2, sp
+    li      a3, SCENE_NUMBERS_MAX
+    call    parse_numbers
+    bnez    a1, 85f
+    li      t0, SCENE_NUMBERS_MAX
+    bne     a0, t0, 85f
+    mv      t1, sp
+    addi    t2, sp, SCENE_NUMBERS_MAX * SCENE_DOUBLE_BYTES
+    li      t5, RGB888_MAX
+56: fld     ft0, 0(t1)                  # each an integer 0 .. 255, kept in place
+    fcvt.l.d t3, ft0, rtz
+    fcvt.d.l ft1, t3
+    feq.d   t4, ft0, ft1
+    beqz    t4, 85f
+    bltz    t3, 85f
+    bgtu    t3, t5, 85f
+    sd      t3, 0(t1)
+    addi    t1, t1, SCENE_DOUBLE_BYTES
+    bltu    t1, t2, 56b
+    ld      a0, 0(sp)
+    ld      a1, SCENE_DOUBLE_BYTES(sp)
+    ld      a2, 2 * SCENE_DOUBLE_BYTES(sp)
+58: li      a3, RGB888_MAX
+    call    ppm_rgb565
+    ld      t0, SCENE_KEY_TARGET(s0)
+    sw      a0, 0(t0)
+    j       90f
+
+79: la      a1, msg_unit_range
+    j       89f
+81: la      a1, msg_not_number
+    j       89f
+82: la      a1, msg_expect_1_or_3
+    li      t0, SCENE_CHECK_BROADCAST
+    beq     s5, t0, 89f
+    la      a1, msg_expect_1
+    li      t0, 1
+    beq     s4, t0, 89f
+    la      a1, msg_expect_3
+    j       89f
+83: la      a1, msg_out_of_range
+    j       89f
+84: la      a1, msg_zero_vector
+    j       89f
+85: la      a1, msg_colour
+    j       89f
+86: la      a1, msg_long_value
+    j       89f
+87: la      a1, msg_fov_range
+    j       89f
+88: la      a1, msg_positive
+89: mv      a0, s3
+    j       scene_error
+
+90: ld      s5, 40(sp)
+    ld      s4, 48(sp)
+    ld      s3, 56(sp)
+    ld      s2, 64(sp)
+    ld      s1, 72(sp)
+    ld      s0, 80(sp)
+    ld      ra, 88(sp)
+    addi    sp, sp, 96
     ret
 
 # scene_error (file-local)
@@ -335,47 +821,81 @@ trim_blanks:
 5:  ret
 
 # scene_find_key (file-local)
-#   What: the scene_keys row whose name equals [a0, a1), ASCII letters
-#         compared case-insensitively.
+#   What: the scene_keys row whose name equals [a0, a1) (scene_name_equals).
 #   Arguments: a0 = key start, a1 = key end (non-empty).
 #   Results: a0 = row address, or 0 when no key has that name.
 #   Clobbers: only ABI temporaries.
 scene_find_key:
-    la      a2, scene_keys
-    la      a3, scene_keys_end
-1:  ld      t0, SCENE_KEY_NAME(a2)      # t0 = table name
-    mv      t1, a0                      # t1 = key byte
-2:  lbu     t2, 0(t0)
-    beqz    t2, 4f                      # table name ended
-    beq     t1, a1, 5f                  # key ended first
-    lbu     t3, 0(t1)
+    addi    sp, sp, -32
+    sd      ra, 24(sp)
+    sd      s0, 16(sp)
+    sd      s1, 8(sp)
+    sd      s2, 0(sp)
+    mv      s1, a0
+    mv      s2, a1
+    la      s0, scene_keys
+1:  ld      a0, SCENE_KEY_NAME(s0)
+    mv      a1, s1
+    mv      a2, s2
+    call    scene_name_equals
+    bnez    a0, 2f
+    addi    s0, s0, SCENE_KEY_BYTES
+    la      t0, scene_keys_end
+    bltu    s0, t0, 1b
+    li      a0, 0
+    j       3f
+2:  mv      a0, s0
+3:  ld      s2, 0(sp)
+    ld      s1, 8(sp)
+    ld      s0, 16(sp)
+    ld      ra, 24(sp)
+    addi    sp, sp, 32
+    ret
+
+# scene_name_equals (file-local)
+#   What: whether [a1, a2) spells the name a0, ASCII letters compared
+#         case-insensitively.
+#   Arguments: a0 = name (NUL-terminated, lower case), a1 = text start,
+#         a2 = text end.
+#   Results: a0 = 1 equal, 0 not.
+#   Clobbers: only ABI temporaries.
+scene_name_equals:
+1:  lbu     t2, 0(a0)
+    beqz    t2, 4f                      # name ended
+    beq     a1, a2, 5f                  # text ended first
+    lbu     t3, 0(a1)
     addi    t4, t3, -ASCII_UPPER_A      # an upper-case letter goes to lower
-    sltiu   t4, t4, ASCII_UPPER_Z - ASCII_UPPER_A + 1   # case (the table's)
+    sltiu   t4, t4, ASCII_UPPER_Z - ASCII_UPPER_A + 1   # case (the name's)
     slli    t4, t4, ASCII_CASE_SHIFT
     or      t3, t3, t4
     bne     t2, t3, 5f
-    addi    t0, t0, 1
-    addi    t1, t1, 1
-    j       2b
-4:  bne     t1, a1, 5f                  # both ended: a match
-    mv      a0, a2
+    addi    a0, a0, 1
+    addi    a1, a1, 1
+    j       1b
+4:  bne     a1, a2, 5f                  # both ended: equal
+    li      a0, 1
     ret
-5:  addi    a2, a2, SCENE_KEY_BYTES
-    bltu    a2, a3, 1b
-    li      a0, 0
+5:  li      a0, 0
     ret
 
 # ---------------------------------------------------------------------------
     .bss
+    .balign 1 << SCENE_ALIGN_SHIFT
+    .globl scene
+# scene: what to show and how (scene.inc): settings from scene.ini, the mesh
+# (obj.S) and the texture (ppm.S).
+scene:
+    .space  SCENE_SIZE
     .balign 8
     .globl scene_model
     .globl scene_texture
-# File records of what scene.ini named: address, size (both 0 when absent).
+# File records of what the scene loaded: address, size (both 0 when not
+# loaded).
 scene_model:
     .space  FILE_RECORD_BYTES
 scene_texture:
     .space  FILE_RECORD_BYTES
-# Values as written in scene.ini (NUL-terminated; empty = key absent).
+# Paths (NUL-terminated): the default, or the value from scene.ini.
 scene_model_path:
     .space  SCENE_VALUE_MAX
 scene_texture_path:

@@ -159,9 +159,14 @@ def parse_scene_args(items: list[str]) -> dict[str, str]:
 
 
 # The rules of the firmware's scene.ini reader (firmware/scene.S): '#' starts a comment
-# anywhere, keys compare case-insensitively, values are under 256 bytes, no control
-# characters. Checked here so a card the tool accepts is a card the firmware accepts.
-KNOWN_SCENE_KEYS = ("model", "texture")  # scene_keys in firmware/scene.S
+# anywhere but as the first character of a value (background = #RRGGBB), keys compare
+# case-insensitively, values are under 256 bytes, no control characters. Checked here so a
+# card the tool accepts is a card the firmware accepts (values other than paths are checked
+# by the firmware only).
+KNOWN_SCENE_KEYS = ("model", "texture", "mode", "cull", "scale", "axis", "angle", "step",
+                    "translate", "fov", "near", "far", "light", "ambient",
+                    "background")  # scene_keys in firmware/scene.S
+SCENE_FILE_KEYS = ("model", "texture")  # keys whose value is a path on the card
 SCENE_VALUE_MAX = 255
 _SCENE_KEY = re.compile(r"[A-Za-z0-9_.\-]+\Z")
 
@@ -191,12 +196,23 @@ def scene_ini(scene: dict[str, str]) -> bytes:
             raise UsageError(f"scene key {key!r} given twice (keys ignore case)")
         seen.add(key.lower())
         problem = _scene_problem(key, value)
-        if "#" in value:
+        if "#" in value[1:]:
             problem = f"value of {key!r} contains '#', which starts a comment in scene.ini"
         if problem:
             raise UsageError(f"--scene {key}={value}: {problem}")
         lines.append(f"{key} = {value}\n")
     return "".join(lines).encode("utf-8")
+
+
+def _strip_scene_comment(line: str) -> str:
+    """A scene.ini line without its comment: from a '#' to the end, except a '#' that is the
+    first non-blank character after the first '=' (it starts the value, as in #RRGGBB)."""
+    key, sep, value = line.partition("=")
+    if "#" in key or not sep:
+        return line.split("#", 1)[0]
+    lead = len(value) - len(value.lstrip(" \t"))
+    cut = value.find("#", lead + 1 if value[lead:lead + 1] == "#" else lead)
+    return key + sep + (value if cut < 0 else value[:cut])
 
 
 def check_scene_ini(data: bytes, path: Path | str) -> dict[str, str]:
@@ -212,7 +228,7 @@ def check_scene_ini(data: bytes, path: Path | str) -> dict[str, str]:
         raise BadInputError(path, "not UTF-8 text", line) from None
     scene: dict[str, str] = {}
     for lineno, line in enumerate(text.split("\n"), start=1):
-        content = line.removesuffix("\r").split("#", 1)[0].strip(" \t")
+        content = _strip_scene_comment(line.removesuffix("\r")).strip(" \t")
         if not content:
             continue
         key, sep, value = content.partition("=")
@@ -235,7 +251,7 @@ def scene_warnings(scene: dict[str, str], card_files: set[str], origin: str) -> 
         if key.lower() not in KNOWN_SCENE_KEYS:
             notes.append(f"{origin}: key {key!r} is not one the firmware knows "
                          f"({', '.join(KNOWN_SCENE_KEYS)})")
-        elif "/" + fat_fold(value.lstrip("/")) not in card_files:
+        elif key.lower() in SCENE_FILE_KEYS and "/" + fat_fold(value.lstrip("/")) not in card_files:
             notes.append(f"{origin}: {key} = {value}: no such file on the card")
     return notes
 

@@ -20,6 +20,7 @@ from __future__ import annotations
 import random
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Callable
 
 from . import rawfat
 from .errors import OutputExistsError
@@ -116,16 +117,17 @@ def delete_leaving_entries(writer: CardWriter, card_paths: list[str]) -> None:
 
 
 def fill_directory(writer: CardWriter, card_dir: str, min_clusters: int = 3,
-                   name_pattern: str = "entry number {:03d}.txt") -> dict[str, bytes]:
+                   name_pattern: str = "entry number {:03d}.txt",
+                   content_for: Callable[[int], bytes] | None = None) -> dict[str, bytes]:
     """Adds small files to a folder (created if needed) until its entries span at least
     `min_clusters` clusters; returns {card path: content}. Long names (an LFN slot plus the
-    8.3 slot each) make the folder grow quickly."""
+    8.3 slot each) make the folder grow quickly. `content_for(i)` gives file i's bytes."""
     writer.makedirs(card_dir)
     files: dict[str, bytes] = {}
     i = 0
     while True:
         path = _join(card_dir, name_pattern.format(i))
-        content = f"file {i} in {card_dir}\n".encode()
+        content = content_for(i) if content_for else f"file {i} in {card_dir}\n".encode()
         writer.write(path, content)
         files[path] = content
         i += 1

@@ -10,11 +10,12 @@ from pathlib import Path
 
 import pytest
 
+from golden_scenes import GOLDEN  # noqa: F401  (re-exported for the tests)
+
 ROOT = Path(__file__).resolve().parent.parent
 FIRMWARE = ROOT / "build" / "firmware.elf"
 CARD = ROOT / "build" / "card.img"
-GOLDEN = ROOT / "tests" / "golden"
-GOLDEN_FRAMES = 4
+GOLDEN_FRAMES = 4   # frames of the default scene the shared run shows
 
 
 def run_emulator(*args: str, timeout: float = 600) -> subprocess.CompletedProcess:

@@ -12,7 +12,7 @@ from PIL import Image
 
 from conftest import GOLDEN, GOLDEN_FRAMES, ROOT, run_emulator
 
-from emulator.golden import compare_frame
+from golden_scenes import SCENES, scene_card
 
 BOOT_STAGES = ["boot: hart 0 up", "clocks:", "pins:", "lcd: ST7789V ready", "hart 1: display loop"]
 
@@ -44,29 +44,19 @@ def test_console_has_a_line_per_boot_stage(firmware_run):
         position = found
 
 
-@pytest.mark.parametrize("index", range(GOLDEN_FRAMES))
-def test_frame_matches_golden(firmware_run, index, tmp_path):
-    _, out, _ = firmware_run
-    actual = out / f"frame_{index:04d}.png"
-    golden = GOLDEN / f"frame_{index:04d}.png"
-    assert golden.exists(), "no golden yet: run `make goldens` on purpose and review the images"
-    comparison = compare_frame(index, actual, golden, tmp_path / f"diff_{index:04d}.png")
-    assert comparison.matches, comparison.describe()
-
-
-def _frame_number(path: Path) -> int:
-    """The test pattern writes the frame number in binary along the bottom 16 rows:
-    16 blocks of 20 pixels, white = 1, most significant bit on the left."""
-    image = np.asarray(Image.open(path).convert("RGB")).astype(int)
-    row = image[240 - 8]
-    bits = [1 if row[20 * b + 10].sum() > 600 else 0 for b in range(16)]
-    return int("".join(map(str, bits)), 2)
-
-
-def test_frames_arrive_in_order(firmware_run):
-    _, out, _ = firmware_run
-    numbers = [_frame_number(out / f"frame_{n:04d}.png") for n in range(GOLDEN_FRAMES)]
-    assert numbers == list(range(numbers[0], numbers[0] + GOLDEN_FRAMES))
+@pytest.mark.parametrize("name", SCENES)
+def test_scene_matches_its_golden_frames(name, firmware, tmp_path):
+    """Every golden scene, every frame, exactly (regenerate deliberately with `make goldens`)."""
+    _, frames = SCENES[name]
+    card = scene_card(name, tmp_path)
+    out = tmp_path / "out"
+    result = run_emulator("run", str(firmware), "--sd", str(card), "--frames", str(frames), "--out", str(out),
+                          "--quiet", "--golden", str(GOLDEN / name))
+    summary = json.loads((out / "run.json").read_text())
+    problems = [c for c in summary.get("golden", {}).get("frames", []) if not c["matches"]]
+    assert result.returncode == 0, "\n".join(
+        [result.stderr] + [f"frame {c['index']}: {c['problem'] or c['differing_pixels']} differing; diff {c['diff_image']}"
+                           for c in problems])
 
 
 def test_both_harts_work_and_hart1_drives_the_display(firmware_run):
@@ -140,14 +130,13 @@ def test_firmware_trap_handler_runs_then_run_stops(firmware, card, tmp_path):
     """The project's firmware trap handler reports on the console before the board stops."""
     import subprocess
     trapping = tmp_path / "trap.elf"
-    # patch the firmware's first instruction after boot stages into an illegal one: use objcopy
-    # to copy, then overwrite the first word of pattern drawing with 0xffffffff
+    # turn the first instruction of the renderer's per-frame entry into an illegal one
     from elftools.elf.elffile import ELFFile
     data = bytearray(firmware.read_bytes())
     with firmware.open("rb") as handle:
         elf = ELFFile(handle)
-        symbol = elf.get_section_by_name(".symtab").get_symbol_by_name("pattern_draw")
-        assert symbol, "pattern_draw symbol missing"
+        symbol = elf.get_section_by_name(".symtab").get_symbol_by_name("render_frame")
+        assert symbol, "render_frame symbol missing"
         address = symbol[0]["st_value"]
         offset = None
         for segment in elf.iter_segments():

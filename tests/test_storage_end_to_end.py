@@ -15,7 +15,8 @@ from PIL import Image
 
 from conftest import ROOT, run_emulator
 from sdcard_image.fat32 import CardWriter
-from sdcard_image.layouts import build_special_card, cluster_chain
+from sdcard_image.layouts import (cluster_chain, delete_leaving_entries, fill_directory, is_fragmented,
+                                  place_case_variants, write_fragmented)
 
 LOAD = re.compile(r"^load (.+) (\d+) crc32=([0-9a-f]{8})$", re.M)
 ERROR = re.compile(r"^error (\d+) (.*)$", re.M)
@@ -40,31 +41,73 @@ def _error_colours() -> dict[int, tuple[int, int, int]]:
     return colours
 
 
+TRIANGLE = b"v 0 0 -1\nv 1 0 -1\nv 0 1 -1\nf 1 2 3\n"
+
+
+def obj_bytes(size: int, tag: str) -> bytes:
+    """A valid one-triangle .obj of exactly `size` bytes (comment lines make up the rest)."""
+    head = f"# {tag}\n".encode() + TRIANGLE
+    return head + _padding(size - len(head))
+
+
+def ppm_bytes(size: int) -> bytes:
+    """A valid 2x2 P6 texture of exactly `size` bytes (comment lines in its header)."""
+    pixels = bytes([255, 0, 0, 0, 255, 0, 0, 0, 255, 255, 255, 255])
+    tail = b"2 2\n255\n" + pixels
+    return b"P6\n" + _padding(size - 3 - len(tail)) + tail
+
+
+def _padding(count: int) -> bytes:
+    assert count >= 0
+    lines = []
+    while count:
+        take = min(count, 80)
+        lines.append(b"#" * (take - 1) + b"\n" if take > 1 else b"\n")
+        count -= take
+    return b"".join(lines)
+
+
 @pytest.fixture(scope="session")
 def loader_card(tmp_path_factory):
-    """One card with every layout the loader must cope with; returns (image, files)."""
+    """One card with every layout the loader must cope with, all files valid models or
+    textures; returns (image, {card path: bytes})."""
     image = tmp_path_factory.mktemp("loader") / "card.img"
-    special = build_special_card(image)
-    rng = np.random.default_rng(3)
-    files: dict[str, bytes] = {special.fragmented_path: special.fragmented_data}
-    files.update(special.survivors)
-    files.update(special.big_dir_files)
-    files.update(special.case_variants)
-    with CardWriter.open(image) as writer:
+    files: dict[str, bytes] = {}
+    with CardWriter.create(image, 64) as writer:
         cluster = writer.bytes_per_cluster
+        writer.makedirs("/frag")
+        files["/frag/fragmented.obj"] = obj_bytes(cluster * 9 + 123, "fragmented model")
+        write_fragmented(writer, "/frag/fragmented.obj", files["/frag/fragmented.obj"], fragments=3)
+        files["/frag/fragmented.ppm"] = ppm_bytes(cluster * 5 + 77)
+        write_fragmented(writer, "/frag/fragmented.ppm", files["/frag/fragmented.ppm"], fragments=3)
+        writer.makedirs("/deleted")
+        names = ["first deleted file.obj", "KEEP1.OBJ", "second deleted.obj", "kept long name.obj", "GONE.OBJ"]
+        for n, name in enumerate(names):
+            files[f"/deleted/{name}"] = obj_bytes(300 + 611 * n, name)
+            writer.write(f"/deleted/{name}", files[f"/deleted/{name}"])
+        gone = ["/deleted/first deleted file.obj", "/deleted/second deleted.obj", "/deleted/GONE.OBJ"]
+        delete_leaving_entries(writer, gone)
+        for path in gone:
+            del files[path]
+        files.update(fill_directory(writer, "/many", min_clusters=3, name_pattern="entry number {:03d}.obj",
+                                    content_for=lambda i: obj_bytes(60 + i, f"entry {i}")))
+        files.update(place_case_variants(writer, "/case", ["Cube.obj", "cube.obj", "CUBE.OBJ"],
+                                         [obj_bytes(100 + 10 * i, f"variant {i}") for i in range(3)]))
         writer.makedirs("/sizes")
-        extra = {
-            "/sizes/empty.bin": b"",
-            "/sizes/one.bin": b"\x5a",
-            "/sizes/cluster.bin": rng.integers(0, 256, cluster, dtype=np.uint8).tobytes(),
-            "/sizes/big.bin": rng.integers(0, 256, BIG_BYTES, dtype=np.uint8).tobytes(),
-            "/" + LONG_PATH: b"# a model with a long name\nv 0 0 0\n",
-        }
         writer.makedirs("/Long Folder Name/deeper")
+        extra = {
+            "/sizes/empty.obj": b"",
+            "/sizes/one.obj": b"\n",
+            "/sizes/cluster.obj": obj_bytes(cluster, "exactly one cluster"),
+            "/sizes/big.obj": obj_bytes(BIG_BYTES, "several MiB"),
+            "/" + LONG_PATH: obj_bytes(700, "long name"),
+        }
         for path, data in extra.items():
             writer.write(path, data)
+        files.update(extra)
         writer.write("/scene.ini", _scene_bytes(""))
-    files.update(extra)
+    assert len(cluster_chain(image, "/many")) >= 3
+    assert is_fragmented(cluster_chain(image, "/frag/fragmented.obj"))
     return image, files
 
 
@@ -118,46 +161,66 @@ def _lookup(files: dict[str, bytes], path: str) -> bytes:
     return matches[0]
 
 
+WIREFRAME = "mode = wireframe\n"    # no texture is read: one model file per run
+
 CASES = {
-    "empty-and-one-byte": ("sizes/empty.bin", "sizes/one.bin"),
-    "one-cluster-and-fragmented": ("sizes/cluster.bin", "frag/fragmented.bin"),
-    "several-mib-and-long-name": ("SIZES/BIG.BIN", LONG_PATH),
-    "behind-deleted-entries": ("deleted/kept long name.txt", "deleted/keep1.txt"),
-    "case-variants": ("case/v1/CUBE.OBJ", "Case/V3/cube.obj"),
+    "one-cluster": "sizes/cluster.obj",
+    "fragmented": "frag/fragmented.obj",
+    "several-mib": "SIZES/BIG.OBJ",
+    "long-name-in-subfolders": LONG_PATH,
+    "behind-deleted-entries": "deleted/kept long name.obj",
+    "8.3-name-any-case": "deleted/keep1.obj",
+    "case-variant-1": "case/v1/CUBE.OBJ",
+    "case-variant-3": "Case/V3/cube.obj",
 }
 
 
-@pytest.mark.parametrize("model, texture", CASES.values(), ids=CASES.keys())
-def test_loaded_files_match_the_host_byte_for_byte(firmware, loader_card, tmp_path, model, texture):
+def _load_line(path: str, data: bytes) -> str:
+    return f"load {path} {len(data)} crc32={zlib.crc32(data):08x}"
+
+
+@pytest.mark.parametrize("model", CASES.values(), ids=CASES.keys())
+def test_loaded_files_match_the_host_byte_for_byte(firmware, loader_card, tmp_path, model):
     image, files = loader_card
-    result, console, _ = run_scene(firmware, image, f"# test scene\r\nmodel = {model}\r\ntexture = {texture}\r\n",
+    result, console, _ = run_scene(firmware, image, f"# test scene\r\nmodel = {model}\r\n{WIREFRAME}", tmp_path)
+    assert result.returncode == 0, result.stderr + console
+    assert _load_line(model, _lookup(files, model)) in console
+    assert "model: 1 triangles" in console
+
+
+def test_a_fragmented_texture_loads_too(firmware, loader_card, tmp_path):
+    image, files = loader_card
+    result, console, _ = run_scene(firmware, image, "model=sizes/cluster.obj\ntexture=frag/fragmented.ppm\n",
                                    tmp_path)
     assert result.returncode == 0, result.stderr + console
-    loads = {path: (int(size), crc) for path, size, crc in LOAD.findall(console)}
-    for path in (model, texture):
-        data = _lookup(files, path)
-        assert loads.get(path) == (len(data), f"{zlib.crc32(data):08x}"), console
+    assert _load_line("frag/fragmented.ppm", files["/frag/fragmented.ppm"]) in console
+    assert "texture: 2x2" in console
+
+
+@pytest.mark.parametrize("model", ["sizes/empty.obj", "sizes/one.obj"])
+def test_tiny_files_load_exactly_then_fail_as_models(firmware, loader_card, tmp_path, model):
+    """0- and 1-byte files load byte for byte; as models they have no faces, which is error 10."""
+    image, files = loader_card
+    result, console, out = run_scene(firmware, image, f"model={model}\n{WIREFRAME}", tmp_path)
+    assert _load_line(model, files["/" + model]) in console
+    assert_error(result, console, out, 10, "no faces")
 
 
 def test_a_directory_spanning_several_clusters(firmware, loader_card, tmp_path):
     image, files = loader_card
     many = sorted(name for name in files if name.startswith("/many/"))
-    assert len(cluster_chain(image, "/many")) >= 3
-    last, middle = many[-1], many[len(many) // 2]
-    result, console, _ = run_scene(firmware, image, f"model={last[1:]}\ntexture={middle[1:]}\n", tmp_path)
+    last = many[-1]
+    result, console, _ = run_scene(firmware, image, f"model={last[1:]}\n{WIREFRAME}", tmp_path)
     assert result.returncode == 0, result.stderr + console
-    for path in (last, middle):
-        data = files[path]
-        assert f"load {path[1:]} {len(data)} crc32={zlib.crc32(data):08x}" in console
+    assert _load_line(last[1:], files[last]) in console
 
 
 def test_a_block_with_a_bad_crc_is_read_again(firmware, loader_card, tmp_path):
     image, files = loader_card
-    result, console, _ = run_scene(firmware, image, "model=frag/fragmented.bin\n", tmp_path,
+    result, console, _ = run_scene(firmware, image, f"model=frag/fragmented.obj\n{WIREFRAME}", tmp_path,
                                    "--sd-fault", "flaky-crc")
     assert result.returncode == 0, result.stderr + console
-    data = files["/frag/fragmented.bin"]
-    assert f"load frag/fragmented.bin {len(data)} crc32={zlib.crc32(data):08x}" in console
+    assert _load_line("frag/fragmented.obj", files["/frag/fragmented.obj"]) in console
 
 
 # --- failures ---------------------------------------------------------------------------------
@@ -176,7 +239,7 @@ def assert_error(result, console: str, out: Path, code: int, words: str) -> None
 
 def test_error_colours_are_distinct():
     colours = _error_colours()
-    assert len(colours) == 9 and len(set(colours.values())) == 9
+    assert len(colours) >= 9 and len(set(colours.values())) == len(colours)
 
 
 def test_no_card(firmware, tmp_path):
@@ -186,13 +249,13 @@ def test_no_card(firmware, tmp_path):
 
 
 def test_card_that_never_initialises_times_out(firmware, loader_card, tmp_path):
-    result, console, out = run_scene(firmware, loader_card[0], "model=sizes/one.bin\n", tmp_path,
+    result, console, out = run_scene(firmware, loader_card[0], f"model=sizes/cluster.obj\n{WIREFRAME}", tmp_path,
                                      "--sd-fault", "no-init")
     assert_error(result, console, out, 2, "timeout")
 
 
 def test_blocks_that_stay_bad_are_a_crc_error(firmware, loader_card, tmp_path):
-    result, console, out = run_scene(firmware, loader_card[0], "model=sizes/one.bin\n", tmp_path,
+    result, console, out = run_scene(firmware, loader_card[0], f"model=sizes/cluster.obj\n{WIREFRAME}", tmp_path,
                                      "--sd-fault", "bad-crc")
     assert_error(result, console, out, 4, "CRC")
 
@@ -206,8 +269,8 @@ def test_card_without_fat32_partition(firmware, tmp_path):
 
 
 def test_missing_file(firmware, loader_card, tmp_path):
-    result, console, out = run_scene(firmware, loader_card[0], "model=sizes/none.bin\n", tmp_path)
-    assert_error(result, console, out, 6, "sizes/none.bin")
+    result, console, out = run_scene(firmware, loader_card[0], f"model=sizes/none.obj\n{WIREFRAME}", tmp_path)
+    assert_error(result, console, out, 6, "sizes/none.obj")
 
 
 def test_file_too_large_for_memory(firmware, loader_card, tmp_path):
@@ -215,9 +278,9 @@ def test_file_too_large_for_memory(firmware, loader_card, tmp_path):
     shutil.copyfile(loader_card[0], image)
     huge = tmp_path / "huge.bin"
     huge.write_bytes(bytes(7 * 1024 * 1024))       # more than the 6 MiB of SRAM
-    subprocess.run(["mcopy", "-i", f"{image}@@1M", str(huge), "::/huge.bin"], check=True)
-    result, console, out = run_scene(firmware, image, "model = huge.bin\n", tmp_path / "run")
-    assert_error(result, console, out, 7, "huge.bin")
+    subprocess.run(["mcopy", "-i", f"{image}@@1M", str(huge), "::/huge.obj"], check=True)
+    result, console, out = run_scene(firmware, image, f"model = huge.obj\n{WIREFRAME}", tmp_path / "run")
+    assert_error(result, console, out, 7, "huge.obj")
 
 
 def _fat_entry_offsets(image: Path, cluster: int) -> list[int]:
@@ -230,17 +293,17 @@ def _fat_entry_offsets(image: Path, cluster: int) -> list[int]:
 def test_corrupt_chain(firmware, loader_card, tmp_path, damage):
     image = tmp_path / "corrupt.img"
     shutil.copyfile(loader_card[0], image)
-    chain = cluster_chain(image, "/frag/fragmented.bin")
+    chain = cluster_chain(image, "/frag/fragmented.obj")
     target = chain[0] if damage == "loop" else 0x0FFF_FFF0
     with image.open("r+b") as handle:
         for offset in _fat_entry_offsets(image, chain[-1]):
             handle.seek(offset)
             handle.write(target.to_bytes(4, "little"))
-    result, console, out = run_scene(firmware, image, "model=frag/fragmented.bin\n", tmp_path / "run")
+    result, console, out = run_scene(firmware, image, f"model=frag/fragmented.obj\n{WIREFRAME}", tmp_path / "run")
     assert_error(result, console, out, 8, "chain")
 
 
 def test_unknown_scene_key_names_its_line(firmware, loader_card, tmp_path):
-    result, console, out = run_scene(firmware, loader_card[0], "model=sizes/one.bin\n# fine\nshiny = yes\n",
+    result, console, out = run_scene(firmware, loader_card[0], "model=sizes/cluster.obj\n# fine\nshiny = yes\n",
                                      tmp_path)
     assert_error(result, console, out, 9, "line 3")

@@ -127,12 +127,67 @@ def sd_figures(firmware: Path, folder: Path) -> dict:
     }
 
 
+# The thesis's three test models, at the two scales it measured each at (the `scale` key)
+THESIS_SCENES = [
+    ("A torus 400 tri, 250x250", "models/torus.obj", "textures/torus.ppm", (0.35, 0.175)),
+    ("B gem 64 tri, 100x78", "models/gem.obj", "textures/gem.ppm", (0.9, 0.45)),
+    ("C cube 6 faces, 8x8", "models/cube.obj", "textures/cube.ppm", (0.9, 0.45)),
+]
+MODES = ("textured", "flat", "wireframe")
+BENCH_FRAMES = 6
+
+
+def renderer_figures(firmware: Path, folder: Path) -> list[dict]:
+    """Instructions per frame per hart, virtual frame time and frame rate for every thesis scene,
+    scale and mode (steady state: the first frame, which includes loading, is left out)."""
+    from sdcard_image import build_image
+    subprocess.run([sys.executable, str(ROOT / "tools" / "make_assets.py"), str(folder / "assets")], check=True)
+    records = []
+    for name, model, texture, scales in THESIS_SCENES:
+        for scale in scales:
+            for mode in MODES:
+                card = folder / "card.img"
+                scene = {"model": model, "texture": texture, "mode": mode, "scale": str(scale),
+                         "translate": "0 0 -3", "step": "4"}
+                build_image(card, [folder / "assets" / "models", folder / "assets" / "textures"], scene=scene,
+                            force=True)
+                board = Board(str(firmware), sd_image=str(card))
+                board.run(BENCH_FRAMES)
+                board.close()
+                steady = board.frames[1:]
+                hart0 = sum(f.instructions[0] for f in steady) / len(steady)
+                hart1 = sum(f.instructions[1] for f in steady) / len(steady)
+                frame_time = (steady[-1].virtual_time_s - board.frames[0].virtual_time_s) / len(steady)
+                records.append({
+                    "scene": name, "mode": mode, "scale": scale,
+                    "instructions_hart0": round(hart0), "instructions_hart1": round(hart1),
+                    "draw_time_ms": hart0 / board.cpu_hz() * 1e3,
+                    "frame_time_ms": frame_time * 1e3, "fps": 1 / frame_time,
+                })
+    return records
+
+
+def write_renderer_table(records: list[dict], folder: Path) -> str:
+    lines = ["| scene | scale | mode | instructions hart 0 / frame | hart 1 / frame | draw time (ms) | "
+             "frame time (ms) | fps |", "|---|---|---|---|---|---|---|---|"]
+    for r in records:
+        lines.append(f"| {r['scene']} | {r['scale']:g} | {r['mode']} | {r['instructions_hart0']:,} | "
+                     f"{r['instructions_hart1']:,} | {r['draw_time_ms']:.2f} | {r['frame_time_ms']:.2f} | "
+                     f"{r['fps']:.1f} |")
+    table = "\n".join(lines) + "\n"
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "results.json").write_text(json.dumps(records, indent=2) + "\n")
+    (folder / "results.md").write_text(table)
+    return table
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--firmware", default=str(ROOT / "build" / "firmware.elf"))
     parser.add_argument("--card", default=str(ROOT / "build" / "card.img"))
     parser.add_argument("--frames", type=int, default=60)
     parser.add_argument("--loop-instructions", type=int, default=40_000_000)
+    parser.add_argument("--no-renderer", action="store_true", help="skip the per-scene renderer table")
     args = parser.parse_args()
     iterations = args.loop_instructions // 4
     with tempfile.TemporaryDirectory() as tmp:
@@ -162,6 +217,11 @@ def main() -> int:
     print(f"SD (virtual time; thesis in brackets): card set-up to root directory {sd['card_setup_to_root_ms']:.2f} ms "
           f"[32.35], model {sd['model_bytes']} bytes {sd['model_read_ms']:.2f} ms [43.05], "
           f"texture {sd['texture_bytes']} bytes {sd['texture_read_ms']:.2f} ms [200.75]")
+    if not args.no_renderer:
+        with tempfile.TemporaryDirectory() as tmp:
+            records = renderer_figures(Path(args.firmware), Path(tmp))
+        print(write_renderer_table(records, ROOT / "build" / "bench"))
+        print("renderer figures written to build/bench/results.json and build/bench/results.md")
     out = ROOT / "build" / "bench.json"
     out.parent.mkdir(exist_ok=True)
     out.write_text(json.dumps(results, indent=2) + "\n")

@@ -1,0 +1,762 @@
+# obj.S: the model, a Wavefront .obj, parsed into `scene`'s mesh fields
+# (MESH_*; scene.inc).
+#
+# Lines end in LF or CRLF; '#' starts a comment anywhere (to the end of the
+# line); blank lines are fine; tokens are separated by spaces and tabs.
+# Statements (keywords are case-sensitive, as in the OBJ spec):
+#   v x y z [w] [r g b]     a vertex: 3, 4, 6 or 7 numbers; x y z kept (w and
+#                           vertex colours accepted, ignored)
+#   vt u [v [w]]            a texture coordinate: 1 to 3 numbers; u v kept
+#                           (v = 0 when absent, w ignored)
+#   vn x y z                a normal: 3 numbers; stored only when the mode is
+#                           lit (textured, flat): in wireframe mode vn lines
+#                           are still parsed and checked as numbers, counted
+#                           for index checks, but not stored (MESH_NCOUNT 0,
+#                           MESH_N 0, every face's n index MESH_NO_INDEX)
+#   f c1 c2 c3 [c4 ...]     a face of 3 or more corners v, v/vt, v//vn or
+#                           v/vt/vn; a polygon (assumed convex) is fanned
+#                           into triangles (c1, ci, ci+1); corners of one
+#                           face may mix forms: a missing vt / vn index is
+#                           stored as MESH_NO_INDEX
+#   o g s mtllib usemtl     accepted and ignored (the whole line)
+# Numbers are parse.S's (sign, fraction, exponent), rounded to single
+# precision, which must be finite. Indices count from 1; a negative index -k
+# is the k-th latest element defined before its line. A positive index may
+# refer to an element defined further down (checked against the file's
+# total); 0 is an error. Stored indices are 0-based. Line continuation with
+# '\' is not supported.
+#
+# Two passes over the text: the first checks every line and counts vertices,
+# texture coordinates, normals and triangles (after fanning); then the
+# arrays are taken from the heap, sized from those counts; the second pass
+# fills them. Errors: 10, "error 10 bad model line N: <what>" (an unknown
+# statement, a malformed number, a wrong count of numbers, a malformed face
+# corner, a face with fewer than 3 vertices, an index 0 or out of range, a
+# number too large for single precision; a positive index past the file's
+# total is found in the second pass, so after any other error of the file),
+# "error 10 bad model: no faces" for a model without a face; 12 when the
+# arrays do not fit in the heap.
+
+    .option norelax
+    .include "k210.inc"
+    .include "errors.inc"
+    .include "scene.inc"
+    .include "text.inc"
+
+# obj_state (.bss): the pass in progress
+    .equ OBJ_STORE,             0           # 0 first pass (count), 1 second (store)
+    .equ OBJ_KEEP_NORMALS,      8           # 1 store normals (lit modes)
+    .equ OBJ_LINE,              16          # line being parsed, from 1
+    .equ OBJ_COUNTS,            24          # elements so far: v, vt, vn (8 bytes each)
+    .equ OBJ_NF,                48          # triangles so far
+    .equ OBJ_TOTALS,            56          # first pass's counts of v, vt, vn
+                                            # (all ones during the first pass)
+    .equ OBJ_FIRST,             80          # face corners: first,
+    .equ OBJ_PREV,              92          # latest,
+    .equ OBJ_CORNER,            104         # this one (MESH_CORNER_BYTES each)
+    .equ OBJ_STATE_BYTES,       120
+    .equ OBJ_COUNT_SHIFT,       3           # 8 bytes per count
+# index kinds (obj_index)
+    .equ OBJ_KIND_V,            0
+    .equ OBJ_KIND_T,            1
+    .equ OBJ_KIND_N,            2
+# obj_statements rows
+    .equ OBJ_STMT_NAME,         0
+    .equ OBJ_STMT_HANDLER,      8
+    .equ OBJ_STMT_AUX,          16          # obj_stmt_vector's row
+    .equ OBJ_STMT_BYTES,        24
+# obj_vectors rows (v, vt, vn)
+    .equ OBJ_VEC_COUNTS,        0           # bit n set: n numbers accepted
+    .equ OBJ_VEC_STORED,        1           # numbers stored (f32 each)
+    .equ OBJ_VEC_KIND,          2           # OBJ_KIND_*
+    .equ OBJ_VEC_NORMALS,       3           # 1: stored only when OBJ_KEEP_NORMALS
+    .equ OBJ_VEC_ARRAY,         4           # scene offset of its array pointer
+    .equ OBJ_VEC_MESSAGE,       8           # wrong count message
+    .equ OBJ_VEC_BYTES,         16
+    .equ OBJ_NUMBERS_MAX,       7           # most numbers a vector takes
+    .equ OBJ_DOUBLE_BYTES,      8
+    .equ OBJ_DOUBLE_SHIFT,      3           # log2 of OBJ_DOUBLE_BYTES
+    .equ OBJ_F32_SHIFT,         2           # log2 of OBJ_F32_BYTES
+    .equ OBJ_POINTER_SHIFT,     3           # 8-byte table entries
+    .equ OBJ_FACE_MIN_CORNERS,  3
+    .equ OBJ_F32_BYTES,         4
+    .equ OBJ_INDEX_LIMIT,       0x80000000  # indices saturate here (out of range)
+    .equ OBJ_V_COUNTS,          (1 << 3) | (1 << 4) | (1 << 6) | (1 << 7)
+    .equ OBJ_VT_COUNTS,         (1 << 1) | (1 << 2) | (1 << 3)
+    .equ OBJ_VN_COUNTS,         (1 << 3)
+
+    .section .rodata
+    .balign 8
+obj_statements:
+    .dword  kw_v, obj_stmt_vector, obj_vector_v
+    .dword  kw_vt, obj_stmt_vector, obj_vector_vt
+    .dword  kw_vn, obj_stmt_vector, obj_vector_vn
+    .dword  kw_f, obj_stmt_face, 0
+    .dword  kw_o, obj_stmt_ignore, 0
+    .dword  kw_g, obj_stmt_ignore, 0
+    .dword  kw_s, obj_stmt_ignore, 0
+    .dword  kw_mtllib, obj_stmt_ignore, 0
+    .dword  kw_usemtl, obj_stmt_ignore, 0
+obj_statements_end:
+
+obj_vector_v:
+    .byte   OBJ_V_COUNTS, 3, OBJ_KIND_V, 0
+    .word   MESH_V
+    .dword  msg_count_v
+obj_vector_vt:
+    .byte   OBJ_VT_COUNTS, 2, OBJ_KIND_T, 0
+    .word   MESH_T
+    .dword  msg_count_vt
+obj_vector_vn:
+    .byte   OBJ_VN_COUNTS, 3, OBJ_KIND_N, 1
+    .word   MESH_N
+    .dword  msg_count_vn
+
+# Messages for an out-of-range index, by kind.
+obj_range_messages:
+    .dword  msg_range_v, msg_range_t, msg_range_n
+
+kw_v:               .asciz "v"
+kw_vt:              .asciz "vt"
+kw_vn:              .asciz "vn"
+kw_f:               .asciz "f"
+kw_o:               .asciz "o"
+kw_g:               .asciz "g"
+kw_s:               .asciz "s"
+kw_mtllib:          .asciz "mtllib"
+kw_usemtl:          .asciz "usemtl"
+msg_bad_model:      .asciz "bad model line "
+msg_colon:          .asciz ": "
+msg_unknown:        .asciz "unknown statement"
+msg_number:         .asciz "malformed number"
+msg_f32_range:      .asciz "number out of range"
+msg_count_v:        .asciz "v takes 3, 4, 6 or 7 numbers"
+msg_count_vt:       .asciz "vt takes 1, 2 or 3 numbers"
+msg_count_vn:       .asciz "vn takes 3 numbers"
+msg_corner:         .asciz "malformed face corner (expected v, v/vt, v//vn or v/vt/vn)"
+msg_short_face:     .asciz "face with fewer than 3 vertices"
+msg_index_0:        .asciz "index 0 (indices start at 1)"
+msg_range_v:        .asciz "vertex index out of range"
+msg_range_t:        .asciz "texture coordinate index out of range"
+msg_range_n:        .asciz "normal index out of range"
+msg_no_faces:       .asciz "bad model: no faces"
+msg_too_large:      .asciz "model too large for memory: "
+msg_too_large_need: .asciz " bytes needed, "
+msg_too_large_free: .asciz " bytes free"
+msg_model:          .asciz "model: "
+msg_triangles:      .asciz " triangles, "
+msg_vertices:       .asciz " vertices, "
+msg_uv:             .asciz " uv, "
+msg_normals:        .asciz " normals\n"
+msg_normals_none:   .asciz " normals (not stored: wireframe)\n"
+
+    .text
+    .globl obj_parse_model
+# obj_parse_model
+#   What: parses the model file scene.S loaded (scene_model) into the mesh
+#         fields of `scene` (two passes, arrays from the heap; see the file
+#         comment) and prints "model: <f> triangles, <v> vertices, <t> uv,
+#         <n> normals". Needs scene_load (SCENE_MODE decides the normals).
+#   Arguments: none. Results: none (errors are fatal).
+#   Clobbers: only ABI temporaries.
+obj_parse_model:
+    addi    sp, sp, -64
+    sd      ra, 56(sp)
+    sd      s0, 48(sp)
+    sd      s1, 40(sp)
+    sd      s2, 32(sp)
+    sd      s3, 24(sp)
+    sd      s4, 16(sp)
+    sd      s5, 8(sp)
+    la      t0, scene_model
+    ld      s0, 0(t0)                   # s0 = text
+    ld      s1, 8(t0)
+    add     s1, s1, s0                  # s1 = end of the text
+    la      s2, obj_state               # s2 = state
+    la      s3, scene                   # s3 = scene
+    lwu     t0, SCENE_MODE(s3)
+    addi    t0, t0, -MODE_WIREFRAME
+    snez    t0, t0
+    sd      t0, OBJ_KEEP_NORMALS(s2)
+
+    # First pass: check and count.
+    sd      zero, OBJ_STORE(s2)
+    li      t0, -1
+    sd      t0, OBJ_TOTALS + (OBJ_KIND_V << OBJ_COUNT_SHIFT)(s2)
+    sd      t0, OBJ_TOTALS + (OBJ_KIND_T << OBJ_COUNT_SHIFT)(s2)
+    sd      t0, OBJ_TOTALS + (OBJ_KIND_N << OBJ_COUNT_SHIFT)(s2)
+    mv      a0, s0
+    mv      a1, s1
+    call    obj_pass
+    ld      t0, OBJ_NF(s2)
+    beqz    t0, 80f
+    ld      t0, OBJ_COUNTS + (OBJ_KIND_V << OBJ_COUNT_SHIFT)(s2)
+    sd      t0, OBJ_TOTALS + (OBJ_KIND_V << OBJ_COUNT_SHIFT)(s2)
+    sw      t0, MESH_VCOUNT(s3)
+    ld      t0, OBJ_COUNTS + (OBJ_KIND_T << OBJ_COUNT_SHIFT)(s2)
+    sd      t0, OBJ_TOTALS + (OBJ_KIND_T << OBJ_COUNT_SHIFT)(s2)
+    sw      t0, MESH_TCOUNT(s3)
+    ld      t0, OBJ_COUNTS + (OBJ_KIND_N << OBJ_COUNT_SHIFT)(s2)
+    sd      t0, OBJ_TOTALS + (OBJ_KIND_N << OBJ_COUNT_SHIFT)(s2)
+    ld      t1, OBJ_KEEP_NORMALS(s2)
+    neg     t1, t1
+    and     t0, t0, t1                  # 0 normals unless kept
+    sw      t0, MESH_NCOUNT(s3)
+    ld      t0, OBJ_NF(s2)
+    sw      t0, MESH_FCOUNT(s3)
+
+    # The arrays (none for a count of 0: its pointer stays 0).
+    call    heap_free_bytes
+    mv      s4, a0                      # s4 = free bytes before
+    lwu     a0, MESH_VCOUNT(s3)
+    li      a1, MESH_V_BYTES
+    li      a2, MESH_V
+    call    obj_alloc
+    lwu     a0, MESH_TCOUNT(s3)
+    li      a1, MESH_T_BYTES
+    li      a2, MESH_T
+    call    obj_alloc
+    lwu     a0, MESH_NCOUNT(s3)
+    li      a1, MESH_N_BYTES
+    li      a2, MESH_N
+    call    obj_alloc
+    lwu     a0, MESH_FCOUNT(s3)
+    li      a1, MESH_F_BYTES
+    li      a2, MESH_F
+    call    obj_alloc
+    bnez    a0, 81f                     # any failed: error 12
+
+    # Second pass: fill them.
+    li      t0, 1
+    sd      t0, OBJ_STORE(s2)
+    mv      a0, s0
+    mv      a1, s1
+    call    obj_pass
+
+    call    console_lock
+    la      a0, msg_model
+    call    console_puts
+    lwu     a0, MESH_FCOUNT(s3)
+    call    console_put_dec
+    la      a0, msg_triangles
+    call    console_puts
+    lwu     a0, MESH_VCOUNT(s3)
+    call    console_put_dec
+    la      a0, msg_vertices
+    call    console_puts
+    lwu     a0, MESH_TCOUNT(s3)
+    call    console_put_dec
+    la      a0, msg_uv
+    call    console_puts
+    lwu     a0, MESH_NCOUNT(s3)
+    call    console_put_dec
+    la      a0, msg_normals
+    ld      t0, OBJ_KEEP_NORMALS(s2)
+    bnez    t0, 1f
+    la      a0, msg_normals_none
+1:  call    console_puts
+    call    console_unlock
+    ld      s5, 8(sp)
+    ld      s4, 16(sp)
+    ld      s3, 24(sp)
+    ld      s2, 32(sp)
+    ld      s1, 40(sp)
+    ld      s0, 48(sp)
+    ld      ra, 56(sp)
+    addi    sp, sp, 64
+    ret
+
+80: li      a0, ERR_BAD_MODEL
+    la      a1, msg_no_faces
+    li      a2, 0
+    call    error_fatal
+
+    # Error 12: what the four arrays need, what was free.
+81: lwu     t0, MESH_VCOUNT(s3)
+    li      t1, MESH_V_BYTES
+    mul     s5, t0, t1
+    lwu     t0, MESH_TCOUNT(s3)
+    li      t1, MESH_T_BYTES
+    mul     t0, t0, t1
+    add     s5, s5, t0
+    lwu     t0, MESH_NCOUNT(s3)
+    li      t1, MESH_N_BYTES
+    mul     t0, t0, t1
+    add     s5, s5, t0
+    lwu     t0, MESH_FCOUNT(s3)
+    li      t1, MESH_F_BYTES
+    mul     t0, t0, t1
+    add     s5, s5, t0
+    li      a0, ERR_MODEL_TOO_LARGE
+    call    error_begin
+    la      a0, msg_too_large
+    call    console_puts
+    mv      a0, s5
+    call    console_put_dec
+    la      a0, msg_too_large_need
+    call    console_puts
+    mv      a0, s4
+    call    console_put_dec
+    la      a0, msg_too_large_free
+    call    console_puts
+    j       error_end
+
+# obj_alloc (file-local)
+#   What: takes count * size bytes from the heap for one mesh array and
+#         stores its address at scene + a2 (0 for a count of 0). Remembers a
+#         failure in obj_alloc_failed instead of stopping, so that the
+#         error can report what all the arrays need.
+#   Arguments: a0 = count, a1 = element bytes, a2 = scene offset of the
+#         pointer.
+#   Results: a0 = 1 when this or an earlier array did not fit, else 0.
+#   Clobbers: only ABI temporaries.
+obj_alloc:
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+    sd      s0, 0(sp)
+    la      s0, scene
+    add     s0, s0, a2                  # s0 = the pointer field
+    sd      zero, 0(s0)
+    beqz    a0, 1f
+    mul     a0, a0, a1
+    call    heap_alloc
+    sd      a0, 0(s0)
+    bnez    a0, 1f
+    la      t0, obj_alloc_failed
+    li      t1, 1
+    sd      t1, 0(t0)
+1:  la      t0, obj_alloc_failed
+    ld      a0, 0(t0)
+    ld      s0, 0(sp)
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
+    ret
+
+# obj_pass (file-local)
+#   What: one pass over the text: every line's statement is found in
+#         obj_statements and handed to its handler (a0 = after the keyword,
+#         a1 = end of the line's content, a2 = the row's aux). Resets and
+#         leaves the counts in obj_state.
+#   Arguments: a0 = text, a1 = end of the text.
+#   Results: none (errors are fatal).
+#   Clobbers: only ABI temporaries.
+obj_pass:
+    addi    sp, sp, -64
+    sd      ra, 56(sp)
+    sd      s0, 48(sp)
+    sd      s1, 40(sp)
+    sd      s2, 32(sp)
+    sd      s3, 24(sp)
+    sd      s4, 16(sp)
+    sd      s5, 8(sp)
+    mv      s0, a0                      # s0 = start of the line
+    mv      s1, a1                      # s1 = end of the text
+    la      s5, obj_state
+    sd      zero, OBJ_LINE(s5)
+    sd      zero, OBJ_COUNTS + (OBJ_KIND_V << OBJ_COUNT_SHIFT)(s5)
+    sd      zero, OBJ_COUNTS + (OBJ_KIND_T << OBJ_COUNT_SHIFT)(s5)
+    sd      zero, OBJ_COUNTS + (OBJ_KIND_N << OBJ_COUNT_SHIFT)(s5)
+    sd      zero, OBJ_NF(s5)
+1:  bgeu    s0, s1, 90f
+    ld      t0, OBJ_LINE(s5)
+    addi    t0, t0, 1
+    sd      t0, OBJ_LINE(s5)
+    # s2 = the line's LF (or the end of the text); s3 = end of its content
+    # (before a comment, before a CR ending the line)
+    mv      s2, s0
+    li      t1, CHAR_LF
+2:  bgeu    s2, s1, 3f
+    lbu     t0, 0(s2)
+    beq     t0, t1, 3f
+    addi    s2, s2, 1
+    j       2b
+3:  mv      s3, s2
+    bleu    s3, s0, 4f
+    lbu     t0, -1(s3)
+    li      t1, CHAR_CR
+    bne     t0, t1, 4f
+    addi    s3, s3, -1
+4:  mv      t2, s0
+    li      t1, CHAR_COMMENT
+5:  bgeu    t2, s3, 6f
+    lbu     t0, 0(t2)
+    beq     t0, t1, 51f
+    addi    t2, t2, 1
+    j       5b
+51: mv      s3, t2
+6:  mv      a0, s0
+    mv      a1, s3
+    call    parse_skip_blanks
+    beq     a0, s3, 60f                 # blank or comment only
+    mv      s4, a0                      # s4 = keyword
+    li      t1, CHAR_SPACE
+    li      t2, CHAR_TAB
+7:  bgeu    a0, s3, 8f                  # a0 = end of the keyword
+    lbu     t0, 0(a0)
+    beq     t0, t1, 8f
+    beq     t0, t2, 8f
+    addi    a0, a0, 1
+    j       7b
+8:  mv      a1, a0
+    mv      a0, s4
+    call    obj_find_statement
+    beqz    a0, 80f
+    ld      t0, OBJ_STMT_HANDLER(a0)
+    ld      a2, OBJ_STMT_AUX(a0)
+    mv      a0, a1
+    mv      a1, s3
+    jalr    t0
+60: addi    s0, s2, 1                   # next line
+    j       1b
+
+80: la      a0, msg_unknown
+    j       obj_error
+
+90: ld      s5, 8(sp)
+    ld      s4, 16(sp)
+    ld      s3, 24(sp)
+    ld      s2, 32(sp)
+    ld      s1, 40(sp)
+    ld      s0, 48(sp)
+    ld      ra, 56(sp)
+    addi    sp, sp, 64
+    ret
+
+# obj_find_statement (file-local)
+#   What: the obj_statements row whose keyword is exactly [a0, a1).
+#   Arguments: a0 = keyword start, a1 = keyword end.
+#   Results: a0 = row, or 0 when unknown; a1 = keyword end (unchanged).
+#   Clobbers: only ABI temporaries.
+obj_find_statement:
+    la      t0, obj_statements
+    la      t6, obj_statements_end
+1:  ld      t1, OBJ_STMT_NAME(t0)       # t1 = keyword of the row
+    mv      t2, a0                      # t2 = text
+2:  lbu     t3, 0(t1)
+    beqz    t3, 4f
+    beq     t2, a1, 5f
+    lbu     t4, 0(t2)
+    bne     t3, t4, 5f
+    addi    t1, t1, 1
+    addi    t2, t2, 1
+    j       2b
+4:  bne     t2, a1, 5f
+    mv      a0, t0
+    ret
+5:  addi    t0, t0, OBJ_STMT_BYTES
+    bltu    t0, t6, 1b
+    li      a0, 0
+    ret
+
+# obj_stmt_ignore (file-local)
+#   What: a statement accepted and ignored (o, g, s, mtllib, usemtl).
+#   Arguments: a0, a1, a2 as obj_pass hands them. Results: none.
+#   Clobbers: nothing.
+obj_stmt_ignore:
+    ret
+
+# obj_stmt_vector (file-local)
+#   What: v, vt or vn: checks its numbers, stores them in the second pass
+#         (vn only when normals are kept), counts it.
+#   Arguments: a0 = after the keyword, a1 = end of the content,
+#         a2 = obj_vectors row.
+#   Results: none (errors are fatal).
+#   Clobbers: only ABI temporaries.
+obj_stmt_vector:
+    addi    sp, sp, -96
+    sd      ra, 88(sp)
+    sd      s0, 80(sp)
+    sd      s1, 72(sp)
+    # 0(sp): OBJ_NUMBERS_MAX doubles
+    mv      s0, a2                      # s0 = row
+    sd      zero, OBJ_DOUBLE_BYTES(sp)  # vt: v = 0 when absent
+    addi    a2, sp, 0
+    li      a3, OBJ_NUMBERS_MAX
+    call    parse_numbers
+    bnez    a1, 81f
+    lbu     t0, OBJ_VEC_COUNTS(s0)
+    srl     t0, t0, a0
+    andi    t0, t0, 1
+    beqz    t0, 82f
+    lbu     s1, OBJ_VEC_STORED(s0)      # s1 = numbers kept
+    slli    s1, s1, OBJ_DOUBLE_SHIFT
+    add     s1, s1, sp                  # s1 = end of them
+    mv      t1, sp
+1:  fld     ft0, 0(t1)                  # each must be finite in single precision
+    fcvt.s.d ft0, ft0
+    fclass.s t3, ft0
+    andi    t3, t3, FCLASS_NOT_FINITE
+    bnez    t3, 83f
+    addi    t1, t1, OBJ_DOUBLE_BYTES
+    bltu    t1, s1, 1b
+
+    la      t5, obj_state
+    lbu     t4, OBJ_VEC_KIND(s0)
+    slli    t4, t4, OBJ_COUNT_SHIFT
+    add     t4, t4, t5
+    ld      t6, OBJ_COUNTS(t4)          # t6 = this kind's count so far
+    addi    t0, t6, 1
+    sd      t0, OBJ_COUNTS(t4)
+    ld      t0, OBJ_STORE(t5)
+    beqz    t0, 9f
+    lbu     t0, OBJ_VEC_NORMALS(s0)
+    beqz    t0, 2f
+    ld      t0, OBJ_KEEP_NORMALS(t5)
+    beqz    t0, 9f
+2:  lwu     t0, OBJ_VEC_ARRAY(s0)
+    la      t1, scene
+    add     t1, t1, t0
+    ld      t1, 0(t1)                   # t1 = the array
+    lbu     t2, OBJ_VEC_STORED(s0)
+    slli    t2, t2, OBJ_F32_SHIFT       # t2 = element bytes
+    mul     t2, t2, t6
+    add     t1, t1, t2                  # t1 = this element
+    mv      t2, sp
+3:  fld     ft0, 0(t2)
+    fcvt.s.d ft0, ft0
+    fsw     ft0, 0(t1)
+    addi    t1, t1, OBJ_F32_BYTES
+    addi    t2, t2, OBJ_DOUBLE_BYTES
+    bltu    t2, s1, 3b
+9:  ld      s1, 72(sp)
+    ld      s0, 80(sp)
+    ld      ra, 88(sp)
+    addi    sp, sp, 96
+    ret
+81: la      a0, msg_number
+    j       obj_error
+82: ld      a0, OBJ_VEC_MESSAGE(s0)
+    j       obj_error
+83: la      a0, msg_f32_range
+    j       obj_error
+
+# obj_stmt_face (file-local)
+#   What: f: reads its corners (obj_corner) and fans them into triangles
+#         (first, latest, this), stored in the second pass, counted always.
+#   Arguments: a0 = after the keyword, a1 = end of the content, a2 unused.
+#   Results: none (errors are fatal).
+#   Clobbers: only ABI temporaries.
+obj_stmt_face:
+    addi    sp, sp, -48
+    sd      ra, 40(sp)
+    sd      s0, 32(sp)
+    sd      s1, 24(sp)
+    sd      s2, 16(sp)
+    sd      s3, 8(sp)
+    mv      s0, a0                      # s0 = cursor
+    mv      s1, a1                      # s1 = end
+    li      s2, 0                       # s2 = corners so far
+    la      s3, obj_state
+1:  mv      a0, s0
+    mv      a1, s1
+    call    parse_skip_blanks
+    bgeu    a0, s1, 8f
+    mv      a1, s1
+    call    obj_corner
+    mv      s0, a0
+    beqz    s2, 4f
+    li      t0, 1
+    beq     s2, t0, 5f
+    # A triangle: first, latest, this.
+    ld      t0, OBJ_NF(s3)
+    addi    t1, t0, 1
+    sd      t1, OBJ_NF(s3)
+    ld      t1, OBJ_STORE(s3)
+    beqz    t1, 5f
+    la      t1, scene
+    ld      t1, MESH_F(t1)
+    li      t2, MESH_F_BYTES
+    mul     t0, t0, t2
+    add     t1, t1, t0                  # t1 = the triangle
+    addi    a0, s3, OBJ_FIRST
+    mv      a1, t1
+    call    obj_copy_corner
+    addi    a0, s3, OBJ_PREV
+    addi    a1, t1, MESH_CORNER_BYTES
+    call    obj_copy_corner
+    addi    a0, s3, OBJ_CORNER
+    addi    a1, t1, 2 * MESH_CORNER_BYTES
+    call    obj_copy_corner
+    j       5f
+4:  addi    a0, s3, OBJ_CORNER          # the first corner
+    addi    a1, s3, OBJ_FIRST
+    call    obj_copy_corner
+    j       6f
+5:  addi    a0, s3, OBJ_CORNER          # now the latest
+    addi    a1, s3, OBJ_PREV
+    call    obj_copy_corner
+6:  addi    s2, s2, 1
+    j       1b
+8:  li      t0, OBJ_FACE_MIN_CORNERS
+    bltu    s2, t0, 80f
+    ld      s3, 8(sp)
+    ld      s2, 16(sp)
+    ld      s1, 24(sp)
+    ld      s0, 32(sp)
+    ld      ra, 40(sp)
+    addi    sp, sp, 48
+    ret
+80: la      a0, msg_short_face
+    j       obj_error
+
+# obj_copy_corner (file-local)
+#   What: copies one corner (v, t, n: three u32).
+#   Arguments: a0 = from, a1 = to.
+#   Results: none.
+#   Clobbers: only ABI temporaries (t3 only: callers keep t0 .. t2).
+obj_copy_corner:
+    lw      t3, MESH_CORNER_V(a0)
+    sw      t3, MESH_CORNER_V(a1)
+    lw      t3, MESH_CORNER_T(a0)
+    sw      t3, MESH_CORNER_T(a1)
+    lw      t3, MESH_CORNER_N(a0)
+    sw      t3, MESH_CORNER_N(a1)
+    ret
+
+# obj_corner (file-local)
+#   What: one face corner, v, v/vt, v//vn or v/vt/vn, ending at a blank or
+#         the end, into obj_state's OBJ_CORNER (0-based indices,
+#         MESH_NO_INDEX for an absent one, and for vn when normals are not
+#         kept).
+#   Arguments: a0 = its first character, a1 = end of the content.
+#   Results: a0 = the byte after it.
+#   Clobbers: only ABI temporaries.
+obj_corner:
+    addi    sp, sp, -32
+    sd      ra, 24(sp)
+    sd      s0, 16(sp)
+    sd      s1, 8(sp)
+    mv      s1, a1                      # s1 = end
+    la      s0, obj_state
+    li      t0, MESH_NO_INDEX
+    sw      t0, OBJ_CORNER + MESH_CORNER_T(s0)
+    sw      t0, OBJ_CORNER + MESH_CORNER_N(s0)
+    li      a2, OBJ_KIND_V
+    call    obj_index
+    sw      a1, OBJ_CORNER + MESH_CORNER_V(s0)
+    li      t1, CHAR_SLASH
+    bgeu    a0, s1, 8f
+    lbu     t0, 0(a0)
+    bne     t0, t1, 8f
+    addi    a0, a0, 1
+    bgeu    a0, s1, 80f
+    lbu     t0, 0(a0)
+    beq     t0, t1, 2f                  # v//vn
+    mv      a1, s1
+    li      a2, OBJ_KIND_T
+    call    obj_index
+    sw      a1, OBJ_CORNER + MESH_CORNER_T(s0)
+    li      t1, CHAR_SLASH
+    bgeu    a0, s1, 8f
+    lbu     t0, 0(a0)
+    bne     t0, t1, 8f
+2:  addi    a0, a0, 1                   # vn
+    mv      a1, s1
+    li      a2, OBJ_KIND_N
+    call    obj_index
+    ld      t0, OBJ_KEEP_NORMALS(s0)
+    beqz    t0, 8f
+    sw      a1, OBJ_CORNER + MESH_CORNER_N(s0)
+8:  bgeu    a0, s1, 9f                  # the corner ends here
+    lbu     t0, 0(a0)
+    li      t1, CHAR_SPACE
+    beq     t0, t1, 9f
+    li      t1, CHAR_TAB
+    bne     t0, t1, 80f
+9:  ld      s1, 8(sp)
+    ld      s0, 16(sp)
+    ld      ra, 24(sp)
+    addi    sp, sp, 32
+    ret
+80: la      a0, msg_corner
+    j       obj_error
+
+# obj_index (file-local)
+#   What: one index of a face corner: [+|-] digits, resolved against the
+#         elements of its kind (1-based, or negative = counting back from the
+#         latest defined before this line) to a 0-based index.
+#   Arguments: a0 = its first character, a1 = end of the content,
+#         a2 = kind (OBJ_KIND_V, _T, _N).
+#   Results: a0 = the byte after its digits, a1 = 0-based index.
+#   Errors: 10 no digits (malformed corner), index 0, out of range.
+#   Clobbers: only ABI temporaries.
+obj_index:
+    li      t5, 0                       # t5 = 1 when negative
+    bgeu    a0, a1, 80f
+    lbu     t0, 0(a0)
+    li      t1, CHAR_MINUS
+    bne     t0, t1, 1f
+    li      t5, 1
+    addi    a0, a0, 1
+    j       2f
+1:  li      t1, CHAR_PLUS
+    bne     t0, t1, 2f
+    addi    a0, a0, 1
+2:  li      t2, 0                       # t2 = value (saturating)
+    li      t3, 0                       # t3 = digits
+    li      t4, DECIMAL_BASE
+    li      t6, OBJ_INDEX_LIMIT
+3:  bgeu    a0, a1, 4f
+    lbu     t0, 0(a0)
+    addi    t0, t0, -CHAR_DIGIT_0
+    bgeu    t0, t4, 4f
+    addi    t3, t3, 1
+    addi    a0, a0, 1
+    bgeu    t2, t6, 3b
+    mul     t2, t2, t4
+    add     t2, t2, t0
+    j       3b
+4:  beqz    t3, 80f
+    beqz    t2, 81f
+    la      t0, obj_state
+    slli    t1, a2, OBJ_COUNT_SHIFT
+    add     t0, t0, t1
+    beqz    t5, 5f
+    ld      t1, OBJ_COUNTS(t0)          # -k: the k-th latest so far
+    bgtu    t2, t1, 82f
+    sub     a1, t1, t2
+    ret
+5:  ld      t1, OBJ_TOTALS(t0)          # k: 1 .. the file's total
+    bgtu    t2, t1, 82f
+    addi    a1, t2, -1
+    ret
+80: la      a0, msg_corner
+    j       obj_error
+81: la      a0, msg_index_0
+    j       obj_error
+82: la      t0, obj_range_messages
+    slli    t1, a2, OBJ_POINTER_SHIFT
+    add     t0, t0, t1
+    ld      a0, 0(t0)
+    j       obj_error
+
+# obj_error (file-local)
+#   What: error 10, "bad model line <n>: <what>" (n = obj_state's line).
+#   Arguments: a0 = what (string).
+#   Results: never returns.
+#   Clobbers: everything.
+obj_error:
+    mv      s1, a0
+    la      t0, obj_state
+    ld      s0, OBJ_LINE(t0)
+    li      a0, ERR_BAD_MODEL
+    call    error_begin
+    la      a0, msg_bad_model
+    call    console_puts
+    mv      a0, s0
+    call    console_put_dec
+    la      a0, msg_colon
+    call    console_puts
+    mv      a0, s1
+    call    console_puts
+    j       error_end
+
+# ---------------------------------------------------------------------------
+    .bss
+    .balign 8
+# obj_state: the pass in progress (offsets OBJ_* above).
+obj_state:
+    .space  OBJ_STATE_BYTES
+# obj_alloc_failed: 1 once a mesh array did not fit in the heap.
+obj_alloc_failed:
+    .space  8

@@ -1,0 +1,692 @@
+# raster.S: triangle setup and rasterisation, lines, and the per-frame
+# clears, into a 320 x 240 RGB565 framebuffer laid out for the LCD (pixel
+# (x, y) is the halfword at fb + 2 (320 y + (x ^ 1)), main.S / pattern.S)
+# and the depth buffer (depth_buffer, below).
+#
+# Triangles (raster_triangle):
+#   - Vertices are in Q4 (1/16 pixel, render.inc), snapped once by
+#     project_clip, so a vertex shared by two triangles is bit-identical in
+#     both. Edge functions E(p) = (b - a) x (p - a) are exact 64-bit
+#     integers (Q8), evaluated at pixel centres (16 x + 8, 16 y + 8) and
+#     stepped by integer additions.
+#   - Orientation: with y down, a triangle that is counter-clockwise as the
+#     camera sees it (a front face) has a negative signed area. Back faces
+#     (positive area) are dropped when culling, else drawn like front faces;
+#     either way the corners are put in positive order first, so every edge
+#     of every drawn triangle runs one way round.
+#   - Tie rule (top-left): a pixel centre exactly on an edge belongs to the
+#     triangle when the edge is a top edge (horizontal, dy = 0, running
+#     right, dx > 0, in positive order) or a left edge (dy < 0); other edges
+#     get E - 1, so the test is E >= 0 everywhere. An edge shared by two
+#     triangles runs opposite ways in them, so exactly one of them owns its
+#     centres: no cracks and no pixel drawn twice.
+#   - The bounding box (pixel centres inside the corners' box), clipped to
+#     the screen, is scanned row by row: each row skips to its first inside
+#     pixel and stops at the first outside one after it (triangles are
+#     convex).
+#   - Depth: z / w interpolated linearly in screen space as a float and
+#     compared as a signed 32-bit integer (render.inc); a fragment is drawn
+#     when it is strictly nearer than what the buffer holds.
+#   - Textured fill: u / w, v / w and 1 / w are interpolated linearly in
+#     screen space; per pixel one fdiv.s gives w, hence the texel (nearest,
+#     repeating), which is lit by the triangle's intensity k / 64.
+#   - Attributes are planes: gradients per pixel from the snapped corners,
+#     re-anchored at the first inside pixel of every row.
+
+    .option norelax
+    .include "k210.inc"
+    .include "st7789v.inc"
+    .include "scene.inc"
+    .include "render.inc"
+
+# raster_triangle's stack frame
+    .equ RT_SAVE,               0           # s0 .. s11
+    .equ RT_FRAME,              96
+
+# EDGE xa, ya, xb, yb, E, A, B
+#   The edge function of the edge a -> b at the first pixel centre
+#   (a2, a3) = (16 xmin + 8, 16 ymin + 8), tie-rule bias included, and its
+#   steps per pixel: E += A to the right, E += B downwards.
+#   Clobbers t3.
+.macro EDGE xa, ya, xb, yb, E, A, B
+    sub     \B, \xb, \xa                # dx
+    sub     \A, \yb, \ya                # dy
+    sub     t3, a3, \ya
+    mul     \E, \B, t3                  # dx (py - ya)
+    sub     t3, a2, \xa
+    mul     t3, \A, t3                  # dy (px - xa)
+    sub     \E, \E, t3
+    bltz    \A, .Ltopleft\@             # dy < 0: a left edge
+    bnez    \A, .Lbias\@
+    bgtz    \B, .Ltopleft\@             # dy = 0, dx > 0: a top edge
+.Lbias\@:
+    addi    \E, \E, -1
+.Ltopleft\@:
+    neg     \A, \A
+    slli    \A, \A, SUBPIXEL_BITS
+    slli    \B, \B, SUBPIXEL_BITS
+.endm
+
+# GRADIENT v0, v1, v2, ddx, ddy, base
+#   The plane through an attribute's values v0, v1, v2 at the three corners:
+#   ddx, ddy = change per pixel right / down, base = value at the first
+#   pixel centre. Needs fa0..fa3 = x1 - x0, y1 - y0, x2 - x0, y2 - y0 (Q4)
+#   times 16 / area (Q8), ft9, ft10 = first pixel centre - corner 0 in
+#   pixels. v1 may be ddy and v2 may be base; ddx must be neither.
+#   Clobbers ft8, v1, v2.
+.macro GRADIENT v0, v1, v2, ddx, ddy, base
+    fsub.s  \v1, \v1, \v0               # d1
+    fsub.s  \v2, \v2, \v0               # d2
+    fmul.s  \ddx, \v1, fa3
+    fnmsub.s \ddx, \v2, fa1, \ddx       # (d1 dy2 - d2 dy1) / area
+    fmul.s  ft8, \v2, fa0
+    fnmsub.s \ddy, \v1, fa2, ft8        # (d2 dx1 - d1 dx2) / area
+    fmadd.s \base, \ddx, ft9, \v0
+    fmadd.s \base, \ddy, ft10, \base
+.endm
+
+    .text
+    .globl raster_begin
+# raster_begin
+#   What: sets the framebuffer that the following drawing goes to.
+#   Arguments: a0 = framebuffer (LCD_FB_BYTES, 64-aligned).
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+raster_begin:
+    la      t0, raster_fb
+    sd      a0, 0(t0)
+    ret
+
+    .globl raster_set_texture
+# raster_set_texture
+#   What: sets the texture of textured fills.
+#   Arguments: a0 = RGB565 texels (row-major, row 0 at the top), a1 = width,
+#              a2 = height (both > 0).
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+raster_set_texture:
+    la      t0, raster_texture
+    sd      a0, 0(t0)
+    la      t0, raster_tex_w
+    sd      a1, 0(t0)
+    la      t0, raster_tex_h
+    sd      a2, 0(t0)
+    ret
+
+    .globl raster_clear
+# raster_clear
+#   What: fills the framebuffer with one colour and, when asked, the depth
+#         buffer with DEPTH_CLEAR (the far plane).
+#   Arguments: a0 = RGB565 colour, a1 = 1 to clear the depth buffer too.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+raster_clear:
+    slli    t0, a0, 48                  # four pixels per doubleword
+    srli    t0, t0, 48
+    slli    t1, t0, 16
+    or      t0, t0, t1
+    slli    t1, t0, 32
+    or      t0, t0, t1
+    la      t2, raster_fb
+    ld      t2, 0(t2)
+    li      t3, LCD_FB_BYTES
+    add     t3, t3, t2
+1:  sd      t0, 0(t2)
+    sd      t0, 8(t2)
+    sd      t0, 16(t2)
+    sd      t0, 24(t2)
+    sd      t0, 32(t2)
+    sd      t0, 40(t2)
+    sd      t0, 48(t2)
+    sd      t0, 56(t2)
+    addi    t2, t2, CLEAR_UNROLL_BYTES
+    bltu    t2, t3, 1b
+    beqz    a1, 3f
+    li      t0, DEPTH_CLEAR
+    slli    t1, t0, 32
+    or      t0, t0, t1
+    la      t2, depth_buffer
+    li      t3, DEPTH_BUFFER_BYTES
+    add     t3, t3, t2
+2:  sd      t0, 0(t2)
+    sd      t0, 8(t2)
+    sd      t0, 16(t2)
+    sd      t0, 24(t2)
+    sd      t0, 32(t2)
+    sd      t0, 40(t2)
+    sd      t0, 48(t2)
+    sd      t0, 56(t2)
+    addi    t2, t2, CLEAR_UNROLL_BYTES
+    bltu    t2, t3, 2b
+3:  ret
+
+    .globl raster_triangle
+# raster_triangle
+#   What: draws one triangle, depth-tested (see the file comment).
+#   Arguments: a0 = three raster vertices in a row (RV_BYTES each,
+#              render.inc), a1 = 1 to drop back faces, a2 = RGB565 colour
+#              (RASTER_FLAT) or light intensity 0 .. LIGHT_ONE
+#              (RASTER_TEXTURED), a3 = RASTER_FLAT or RASTER_TEXTURED.
+#   Results: none.
+#   Clobbers: only ABI temporaries. The pixel loops use every integer
+#         register but sp, ra, gp and tp, and every temporary and argument
+#         float register.
+raster_triangle:
+    addi    sp, sp, -RT_FRAME
+    sd      s0, RT_SAVE + 0(sp)
+    sd      s1, RT_SAVE + 8(sp)
+    sd      s2, RT_SAVE + 16(sp)
+    sd      s3, RT_SAVE + 24(sp)
+    sd      s4, RT_SAVE + 32(sp)
+    sd      s5, RT_SAVE + 40(sp)
+    sd      s6, RT_SAVE + 48(sp)
+    sd      s7, RT_SAVE + 56(sp)
+    sd      s8, RT_SAVE + 64(sp)
+    sd      s9, RT_SAVE + 72(sp)
+    sd      s10, RT_SAVE + 80(sp)
+    sd      s11, RT_SAVE + 88(sp)
+    mv      t4, a2                      # t4 = colour / intensity (kept to the end)
+    mv      t5, a3                      # t5 = mode (until the loops)
+
+    # --- corners: t0, t1, t2 = records; s0..s5 = x0, y0, x1, y1, x2, y2
+    mv      t0, a0
+    addi    t1, a0, RV_BYTES
+    addi    t2, a0, 2 * RV_BYTES
+    lw      s0, RV_X(t0)
+    lw      s1, RV_Y(t0)
+    lw      s2, RV_X(t1)
+    lw      s3, RV_Y(t1)
+    lw      s4, RV_X(t2)
+    lw      s5, RV_Y(t2)
+    # s6 = signed area (Q8) = (x1 - x0)(y2 - y0) - (x2 - x0)(y1 - y0)
+    sub     a4, s2, s0
+    sub     a5, s5, s1
+    mul     a4, a4, a5
+    sub     a5, s4, s0
+    sub     a6, s3, s1
+    mul     a5, a5, a6
+    sub     s6, a4, a5
+    beqz    s6, 90f                     # degenerate
+    bltz    s6, 1f                      # counter-clockwise as seen: front
+    bnez    a1, 90f                     # back face, culled
+    j       2f
+1:  mv      t3, t1                      # front face: corners 1 and 2 swap
+    mv      t1, t2
+    mv      t2, t3
+    mv      t3, s2
+    mv      s2, s4
+    mv      s4, t3
+    mv      t3, s3
+    mv      s3, s5
+    mv      s5, t3
+    neg     s6, s6
+2:
+    # --- bounding box of the pixel centres: a4..a7 = xmin, xmax, ymin, ymax
+    mv      a4, s0                      # min x
+    ble     a4, s2, 3f
+    mv      a4, s2
+3:  ble     a4, s4, 3f
+    mv      a4, s4
+3:  mv      a5, s0                      # max x
+    bge     a5, s2, 3f
+    mv      a5, s2
+3:  bge     a5, s4, 3f
+    mv      a5, s4
+3:  mv      a6, s1                      # min y
+    ble     a6, s3, 3f
+    mv      a6, s3
+3:  ble     a6, s5, 3f
+    mv      a6, s5
+3:  mv      a7, s1                      # max y
+    bge     a7, s3, 3f
+    mv      a7, s3
+3:  bge     a7, s5, 3f
+    mv      a7, s5
+3:  addi    a4, a4, SUBPIXEL_CEIL       # first centre >= min: (min + 7) >> 4
+    srai    a4, a4, SUBPIXEL_BITS
+    addi    a5, a5, -SUBPIXEL_HALF      # last centre <= max: (max - 8) >> 4
+    srai    a5, a5, SUBPIXEL_BITS
+    addi    a6, a6, SUBPIXEL_CEIL
+    srai    a6, a6, SUBPIXEL_BITS
+    addi    a7, a7, -SUBPIXEL_HALF
+    srai    a7, a7, SUBPIXEL_BITS
+    bgez    a4, 4f                      # clip to the screen
+    li      a4, 0
+4:  bgez    a6, 4f
+    li      a6, 0
+4:  li      t3, LCD_WIDTH - 1
+    ble     a5, t3, 4f
+    mv      a5, t3
+4:  li      t3, LCD_HEIGHT - 1
+    ble     a7, t3, 4f
+    mv      a7, t3
+4:  bgt     a4, a5, 90f                 # nothing on screen
+    bgt     a6, a7, 90f
+    slli    a2, a4, SUBPIXEL_BITS       # a2, a3 = first pixel centre (Q4)
+    addi    a2, a2, SUBPIXEL_HALF
+    slli    a3, a6, SUBPIXEL_BITS
+    addi    a3, a3, SUBPIXEL_HALF
+
+    # --- attribute planes (float). fa0..fa3 = corner differences (Q4)
+    # times 16 / area, ft9, ft10 = first centre - corner 0 (pixels).
+    sub     t3, s2, s0
+    fcvt.s.l fa0, t3
+    sub     t3, s3, s1
+    fcvt.s.l fa1, t3
+    sub     t3, s4, s0
+    fcvt.s.l fa2, t3
+    sub     t3, s5, s1
+    fcvt.s.l fa3, t3
+    fcvt.s.l ft9, s6
+    li      t3, SUBPIXEL_ONE
+    fcvt.s.w ft10, t3
+    fdiv.s  ft9, ft10, ft9              # 16 / area
+    fmul.s  fa0, fa0, ft9
+    fmul.s  fa1, fa1, ft9
+    fmul.s  fa2, fa2, ft9
+    fmul.s  fa3, fa3, ft9
+    li      t3, F32_Q4_TO_PIXEL
+    fmv.w.x ft8, t3
+    sub     t3, a2, s0
+    fcvt.s.l ft9, t3
+    fmul.s  ft9, ft9, ft8
+    sub     t3, a3, s1
+    fcvt.s.l ft10, t3
+    fmul.s  ft10, ft10, ft8
+    # depth: fa4 = per pixel right, ft4 = per row, ft0 = at the first centre
+    flw     ft11, RV_Z(t0)
+    flw     ft4, RV_Z(t1)
+    flw     ft0, RV_Z(t2)
+    GRADIENT ft11, ft4, ft0, fa4, ft4, ft0
+    li      t3, RASTER_TEXTURED
+    bne     t5, t3, 5f
+    # textured: 1 / w (fa5, ft5, ft1), u / w (fa6, ft6, ft2), v / w (fa7, ft7, ft3)
+    flw     ft11, RV_Q(t0)
+    flw     ft5, RV_Q(t1)
+    flw     ft1, RV_Q(t2)
+    GRADIENT ft11, ft5, ft1, fa5, ft5, ft1
+    flw     ft11, RV_S(t0)
+    flw     ft8, RV_Q(t0)
+    fmul.s  ft11, ft11, ft8
+    flw     ft6, RV_S(t1)
+    flw     ft8, RV_Q(t1)
+    fmul.s  ft6, ft6, ft8
+    flw     ft2, RV_S(t2)
+    flw     ft8, RV_Q(t2)
+    fmul.s  ft2, ft2, ft8
+    GRADIENT ft11, ft6, ft2, fa6, ft6, ft2
+    flw     ft11, RV_T(t0)
+    flw     ft8, RV_Q(t0)
+    fmul.s  ft11, ft11, ft8
+    flw     ft7, RV_T(t1)
+    flw     ft8, RV_Q(t1)
+    fmul.s  ft7, ft7, ft8
+    flw     ft3, RV_T(t2)
+    flw     ft8, RV_Q(t2)
+    fmul.s  ft3, ft3, ft8
+    GRADIENT ft11, ft7, ft3, fa7, ft7, ft3
+    li      t3, F32_ONE
+    fmv.w.x ft8, t3                     # ft8 = 1 (for 1 / (1 / w))
+5:
+    # --- edge functions: s6..s8 = at the first centre of the row, s3..s5 =
+    # steps right, s9..s11 = steps down (edge k is opposite corner k)
+    EDGE    s2, s3, s4, s5, s6, t0, s9  # corner 1 -> corner 2
+    EDGE    s4, s5, s0, s1, s7, t1, s10 # corner 2 -> corner 0
+    EDGE    s0, s1, s2, s3, s8, t2, s11 # corner 0 -> corner 1
+    mv      s3, t0
+    mv      s4, t1
+    mv      s5, t2
+
+    # --- pointers: a3 = framebuffer at (xmin, row), a2 = its end of row
+    # (past xmax), t6 = depth at (xmin, row), a4 = rows left
+    la      t3, raster_fb
+    ld      t3, 0(t3)
+    li      t0, FB_ROW_BYTES
+    mul     t0, a6, t0
+    add     t3, t3, t0
+    slli    t0, a4, 1
+    add     a3, t3, t0
+    sub     t0, a5, a4
+    addi    t0, t0, 1
+    slli    t0, t0, 1
+    add     a2, a3, t0
+    la      t3, depth_buffer
+    li      t0, DEPTH_ROW_BYTES
+    mul     t0, a6, t0
+    add     t3, t3, t0
+    slli    t0, a4, 2
+    add     t6, t3, t0
+    sub     a4, a7, a6
+    addi    a4, a4, 1
+    li      t3, RASTER_TEXTURED
+    beq     t5, t3, 50f
+
+# --- flat fill (registers: see the textured fill; t4 = colour)
+10: mv      s0, s6
+    mv      s1, s7
+    mv      s2, s8
+    mv      a0, a3
+11: or      t0, s0, s1                  # skip to the first inside pixel
+    or      t0, t0, s2
+    bgez    t0, 12f
+    add     s0, s0, s3
+    add     s1, s1, s4
+    add     s2, s2, s5
+    addi    a0, a0, LCD_BYTES_PER_PIXEL
+    bltu    a0, a2, 11b
+    j       14f
+12: sub     t0, a0, a3                  # 2 (x - xmin)
+    slli    t1, t0, 1
+    add     a1, t6, t1                  # a1 = depth at x
+    srli    t0, t0, 1
+    fcvt.s.l ft9, t0
+    fmadd.s fa0, fa4, ft9, ft0          # fa0 = z / w at x
+13: lw      t1, 0(a1)
+    fmv.x.w t0, fa0
+    bge     t0, t1, 1f                  # not nearer
+    sw      t0, 0(a1)
+    xori    t2, a0, FB_PAIR_XOR
+    sh      t4, 0(t2)
+1:  fadd.s  fa0, fa0, fa4
+    add     s0, s0, s3
+    add     s1, s1, s4
+    add     s2, s2, s5
+    addi    a0, a0, LCD_BYTES_PER_PIXEL
+    addi    a1, a1, DEPTH_BYTES_PER_PIXEL
+    bgeu    a0, a2, 14f
+    or      t0, s0, s1
+    or      t0, t0, s2
+    bgez    t0, 13b
+14: add     s6, s6, s9                  # next row
+    add     s7, s7, s10
+    add     s8, s8, s11
+    addi    a3, a3, FB_ROW_BYTES
+    addi    a2, a2, FB_ROW_BYTES
+    addi    t6, t6, DEPTH_ROW_BYTES
+    fadd.s  ft0, ft0, ft4
+    addi    a4, a4, -1
+    bnez    a4, 10b
+    j       90f
+
+# --- textured fill. Hot loop registers:
+#   s0, s1, s2 edge functions at the pixel; s3, s4, s5 their steps right;
+#   s6, s7, s8 at the row's first pixel; s9, s10, s11 steps down;
+#   a0 framebuffer address of 2 x (the pixel is at a0 ^ 2), a1 its depth,
+#   a2 end of the row, a3 row start at xmin, t6 its depth, a4 rows left;
+#   a5 texels, a6 width, a7 height, t4 intensity, t5 RGB565_SPREAD_MASK;
+#   fa0..fa3 z/w, 1/w, u/w, v/w at the pixel, fa4..fa7 their steps right;
+#   ft0..ft3 at the row's first pixel, ft4..ft7 steps down; ft8 = 1.
+50: la      t0, raster_texture
+    ld      a5, 0(t0)
+    la      t0, raster_tex_w
+    ld      a6, 0(t0)
+    la      t0, raster_tex_h
+    ld      a7, 0(t0)
+    li      t5, RGB565_SPREAD_MASK
+51: mv      s0, s6
+    mv      s1, s7
+    mv      s2, s8
+    mv      a0, a3
+52: or      t0, s0, s1                  # skip to the first inside pixel
+    or      t0, t0, s2
+    bgez    t0, 53f
+    add     s0, s0, s3
+    add     s1, s1, s4
+    add     s2, s2, s5
+    addi    a0, a0, LCD_BYTES_PER_PIXEL
+    bltu    a0, a2, 52b
+    j       58f
+53: sub     t0, a0, a3                  # 2 (x - xmin)
+    slli    t1, t0, 1
+    add     a1, t6, t1
+    srli    t0, t0, 1
+    fcvt.s.l ft9, t0
+    fmadd.s fa0, fa4, ft9, ft0
+    fmadd.s fa1, fa5, ft9, ft1
+    fmadd.s fa2, fa6, ft9, ft2
+    fmadd.s fa3, fa7, ft9, ft3
+54: lw      t1, 0(a1)
+    fmv.x.w t0, fa0
+    bge     t0, t1, 57f                 # not nearer
+    sw      t0, 0(a1)
+    fdiv.s  ft9, ft8, fa1               # w
+    fmul.s  ft10, fa2, ft9              # texel column
+    fmul.s  ft11, fa3, ft9              # texel row
+    fcvt.lu.s t2, ft10, rtz             # (negative rounding noise -> 0)
+    fcvt.lu.s t3, ft11, rtz
+    bgeu    t2, a6, 55f                 # repeat
+551:bgeu    t3, a7, 56f
+561:mul     t3, t3, a6
+    add     t2, t2, t3
+    slli    t2, t2, 1
+    add     t2, t2, a5
+    lhu     t2, 0(t2)                   # texel
+    slli    t3, t2, RGB565_SPREAD_SHIFT # light: all channels times k / 64
+    or      t2, t2, t3
+    and     t2, t2, t5
+    mul     t2, t2, t4
+    srli    t2, t2, LIGHT_SHIFT
+    and     t2, t2, t5
+    srli    t3, t2, RGB565_SPREAD_SHIFT
+    or      t2, t2, t3
+    xori    t3, a0, FB_PAIR_XOR
+    sh      t2, 0(t3)
+57: fadd.s  fa0, fa0, fa4
+    fadd.s  fa1, fa1, fa5
+    fadd.s  fa2, fa2, fa6
+    fadd.s  fa3, fa3, fa7
+    add     s0, s0, s3
+    add     s1, s1, s4
+    add     s2, s2, s5
+    addi    a0, a0, LCD_BYTES_PER_PIXEL
+    addi    a1, a1, DEPTH_BYTES_PER_PIXEL
+    bgeu    a0, a2, 58f
+    or      t0, s0, s1
+    or      t0, t0, s2
+    bgez    t0, 54b
+58: add     s6, s6, s9                  # next row
+    add     s7, s7, s10
+    add     s8, s8, s11
+    addi    a3, a3, FB_ROW_BYTES
+    addi    a2, a2, FB_ROW_BYTES
+    addi    t6, t6, DEPTH_ROW_BYTES
+    fadd.s  ft0, ft0, ft4
+    fadd.s  ft1, ft1, ft5
+    fadd.s  ft2, ft2, ft6
+    fadd.s  ft3, ft3, ft7
+    addi    a4, a4, -1
+    bnez    a4, 51b
+    j       90f
+55: remu    t2, t2, a6                  # texel column past the width
+    j       551b
+56: remu    t3, t3, a7
+    j       561b
+
+90: ld      s0, RT_SAVE + 0(sp)
+    ld      s1, RT_SAVE + 8(sp)
+    ld      s2, RT_SAVE + 16(sp)
+    ld      s3, RT_SAVE + 24(sp)
+    ld      s4, RT_SAVE + 32(sp)
+    ld      s5, RT_SAVE + 40(sp)
+    ld      s6, RT_SAVE + 48(sp)
+    ld      s7, RT_SAVE + 56(sp)
+    ld      s8, RT_SAVE + 64(sp)
+    ld      s9, RT_SAVE + 72(sp)
+    ld      s10, RT_SAVE + 80(sp)
+    ld      s11, RT_SAVE + 88(sp)
+    addi    sp, sp, RT_FRAME
+    ret
+
+    .globl raster_segment
+# raster_segment
+#   What: draws the part of a line segment that lies on the screen: clipped
+#         to the screen rectangle [0, LCD_WIDTH] x [0, LCD_HEIGHT]
+#         (Liang-Barsky, in float), each end then drawn in the pixel it lies
+#         in (pixel (x, y) covers [x, x + 1) x [y, y + 1)), by raster_line.
+#   Arguments: fa0, fa1 = one end, fa2, fa3 = the other, screen positions in
+#              pixels (y down); a0 = RGB565 colour.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+raster_segment:
+    # both ends on the screen (the usual case): no clipping
+    fmv.w.x ft0, zero
+    li      t0, LCD_WIDTH
+    fcvt.s.w ft1, t0
+    li      t0, LCD_HEIGHT
+    fcvt.s.w ft2, t0
+    fle.s   t0, ft0, fa0
+    flt.s   t1, fa0, ft1
+    and     t0, t0, t1
+    fle.s   t1, ft0, fa2
+    and     t0, t0, t1
+    flt.s   t1, fa2, ft1
+    and     t0, t0, t1
+    fle.s   t1, ft0, fa1
+    and     t0, t0, t1
+    flt.s   t1, fa1, ft2
+    and     t0, t0, t1
+    fle.s   t1, ft0, fa3
+    and     t0, t0, t1
+    flt.s   t1, fa3, ft2
+    and     t0, t0, t1
+    beqz    t0, 10f
+    mv      a4, a0
+    fcvt.w.s a0, fa0, rdn
+    fcvt.w.s a1, fa1, rdn
+    fcvt.w.s a2, fa2, rdn
+    fcvt.w.s a3, fa3, rdn
+    j       raster_line
+10: fsub.s  ft0, fa2, fa0               # dx
+    fsub.s  ft1, fa3, fa1               # dy
+    fmv.w.x ft2, zero                   # ft2 = t entering (0)
+    li      t0, F32_ONE
+    fmv.w.x ft3, t0                     # ft3 = t leaving (1)
+    # four boundaries, each p t <= q: (p, q) = (-dx, x0), (dx, W - x0),
+    # (-dy, y0), (dy, H - y0)
+    fneg.s  ft4, ft0
+    fmv.s   ft5, fa0
+    jal     t6, 1f
+    fmv.s   ft4, ft0
+    li      t0, LCD_WIDTH
+    fcvt.s.w ft5, t0
+    fsub.s  ft5, ft5, fa0
+    jal     t6, 1f
+    fneg.s  ft4, ft1
+    fmv.s   ft5, fa1
+    jal     t6, 1f
+    fmv.s   ft4, ft1
+    li      t0, LCD_HEIGHT
+    fcvt.s.w ft5, t0
+    fsub.s  ft5, ft5, fa1
+    jal     t6, 1f
+    # the ends at t entering and t leaving, their pixels (clamped: an end
+    # on the right or bottom border belongs to the last column or row)
+    fmadd.s ft6, ft0, ft3, fa0
+    fmadd.s ft7, ft1, ft3, fa1
+    fmadd.s fa0, ft0, ft2, fa0
+    fmadd.s fa1, ft1, ft2, fa1
+    mv      a4, a0
+    fcvt.w.s a0, fa0, rdn
+    fcvt.w.s a1, fa1, rdn
+    fcvt.w.s a2, ft6, rdn
+    fcvt.w.s a3, ft7, rdn
+    li      t0, LCD_WIDTH - 1
+    li      t1, LCD_HEIGHT - 1
+    bgez    a0, 5f
+    li      a0, 0
+5:  ble     a0, t0, 5f
+    mv      a0, t0
+5:  bgez    a2, 5f
+    li      a2, 0
+5:  ble     a2, t0, 5f
+    mv      a2, t0
+5:  bgez    a1, 5f
+    li      a1, 0
+5:  ble     a1, t1, 5f
+    mv      a1, t1
+5:  bgez    a3, 5f
+    li      a3, 0
+5:  ble     a3, t1, 5f
+    mv      a3, t1
+5:  j       raster_line
+    # one boundary (ft4 = p, ft5 = q); returns through t6, or leaves
+    # raster_segment when nothing of the segment is left
+1:  fmv.w.x ft6, zero
+    feq.s   t0, ft4, ft6
+    beqz    t0, 2f
+    flt.s   t0, ft5, ft6                # parallel to the boundary: outside?
+    bnez    t0, 9f
+    jr      t6
+2:  fdiv.s  ft7, ft5, ft4               # r = q / p
+    flt.s   t0, ft4, ft6
+    beqz    t0, 3f
+    fmax.s  ft2, ft2, ft7               # p < 0: entering
+    j       4f
+3:  fmin.s  ft3, ft3, ft7               # p > 0: leaving
+4:  flt.s   t0, ft3, ft2
+    bnez    t0, 9f
+    jr      t6
+9:  ret
+
+    .globl raster_line
+# raster_line
+#   What: a line between two on-screen pixels, both ends included
+#         (Bresenham's integer algorithm, all octants). No depth test.
+#   Arguments: a0, a1 = x0, y0; a2, a3 = x1, y1 (0 <= x < LCD_WIDTH,
+#              0 <= y < LCD_HEIGHT); a4 = RGB565 colour.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+raster_line:
+    sub     t0, a2, a0                  # t0 = dx = |x1 - x0|, t2 = x step
+    li      t2, 1
+    bgez    t0, 1f
+    neg     t0, t0
+    li      t2, -1
+1:  sub     t1, a3, a1                  # t1 = dy = -|y1 - y0|, a6 = y step,
+    li      a6, 1                       # t3 = its address step
+    li      t3, FB_ROW_BYTES
+    bgez    t1, 2f
+    neg     t1, t1
+    li      a6, -1
+    li      t3, -FB_ROW_BYTES
+2:  neg     t1, t1
+    add     t4, t0, t1                  # t4 = error
+    la      t5, raster_fb
+    ld      t5, 0(t5)
+    li      t6, FB_ROW_BYTES
+    mul     t6, a1, t6
+    add     t5, t5, t6                  # t5 = row y0
+3:  xori    t6, a0, 1                   # plot (x0, y0)
+    slli    t6, t6, 1
+    add     t6, t6, t5
+    sh      a4, 0(t6)
+    bne     a0, a2, 4f
+    beq     a1, a3, 9f                  # at the far end
+4:  slli    t6, t4, 1                   # e2 = 2 error
+    blt     t6, t1, 5f
+    add     t4, t4, t1                  # e2 >= dy: step x
+    add     a0, a0, t2
+5:  bgt     t6, t0, 3b
+    add     t4, t4, t0                  # e2 <= dx: step y
+    add     t5, t5, t3
+    add     a1, a1, a6
+    j       3b
+9:  ret
+
+# ---------------------------------------------------------------------------
+    .bss
+    .balign 8
+# Where raster_* draw, and the texture of textured fills.
+raster_fb:
+    .space  8
+raster_texture:
+    .space  8
+raster_tex_w:
+    .space  8
+raster_tex_h:
+    .space  8
+    .balign 64
+    .globl depth_buffer
+# depth_buffer: one f32 z / w per pixel, row-major (no pair swap).
+depth_buffer:
+    .space  DEPTH_BUFFER_BYTES

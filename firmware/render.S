@@ -1,0 +1,803 @@
+# render.S: one frame of the scene: clear, then every triangle (textured or
+# flat) or every edge (wireframe).
+#
+# Per triangle (modes textured and flat):
+#   1. Trivial rejection: the three vertices outside the same frustum plane
+#      (their outcodes share a bit, vertex.S) -> skipped.
+#   2. Lighting per face: N = (w1 - w0) x (w2 - w0) from the world-space
+#      positions of the transformed vertices (never from vn), intensity
+#      I = max(SCENE_AMBIENT, N . L / |N|) with L = SCENE_LIGHT, as an integer
+#      k = round(64 I) in 0 .. 64 (render.inc). Flat mode draws
+#      FLAT_BASE_COLOUR (0xC618, light grey) with every RGB565 channel times
+#      k / 64; textured mode multiplies each texel the same way.
+#   3. Texture coordinates (textured): texel column s = u W, row
+#      t = (1 - v) H (OBJ's v = 0 is the bottom row), each shifted by the
+#      same whole number of texture repeats for the three corners so that
+#      the smallest is in [0, 1) repeats; the rasteriser wraps the rest.
+#      A corner without vt takes (u, v) = (0, 0).
+#   4. Near plane (clip z >= 0): a triangle with corners behind it is cut in
+#      homogeneous clip space (Sutherland-Hodgman against that one plane)
+#      into one or two triangles, the new corners interpolated linearly in
+#      clip space (x, y, z, w, s, t). An edge is always cut from its corner
+#      in front towards the one behind, so the two triangles sharing an edge
+#      compute bit-identical new corners (no cracks). The other planes are
+#      left to the rasteriser's bounding box (and the depth test, whose clear
+#      value 1.0 is the far plane).
+#   5. raster_triangle: back-face culling (SCENE_CULL), fill, depth test.
+#
+# Wireframe: the mesh's unique edges (each edge shared by two triangles
+# once: built at render_init by sorting (min, max) index pairs) are drawn in
+# WIRE_COLOUR over the background, without depth test or culling: trivially
+# rejected by outcodes, cut at the near plane in clip space, clipped to the
+# screen and drawn with Bresenham's algorithm (raster_segment).
+
+    .option norelax
+    .include "k210.inc"
+    .include "st7789v.inc"
+    .include "errors.inc"
+    .include "scene.inc"
+    .include "render.inc"
+
+    .text
+    .globl render_init
+# render_init
+#   What: prepares the renderer once the scene is loaded: vertex records,
+#         the texture (textured mode with a texture; else flat fills), and
+#         in wireframe mode the unique edge list. Running out of heap is
+#         fatal (ERR_MODEL_TOO_LARGE).
+#   Arguments: none. Results: none.
+#   Clobbers: only ABI temporaries.
+render_init:
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+    sd      s0, 0(sp)
+    la      s0, scene
+    call    vertex_init
+
+    la      t0, render_fill
+    li      t1, RASTER_FLAT
+    sw      t1, 0(t0)
+    lwu     t1, SCENE_MODE(s0)
+    li      t2, MODE_TEXTURED
+    bne     t1, t2, 1f
+    ld      a0, TEX_PIXELS(s0)
+    lwu     a1, TEX_W(s0)
+    lwu     a2, TEX_H(s0)
+    beqz    a0, 1f                      # no texture: flat
+    beqz    a1, 1f
+    beqz    a2, 1f
+    call    raster_set_texture
+    la      t0, render_fill
+    li      t1, RASTER_TEXTURED
+    sw      t1, 0(t0)
+1:  lwu     t1, SCENE_MODE(s0)
+    li      t2, MODE_WIREFRAME
+    bne     t1, t2, 2f
+    call    edges_build
+2:  ld      s0, 0(sp)
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
+    ret
+
+    .globl render_frame
+# render_frame
+#   What: draws frame n of the scene into a framebuffer (file comment).
+#   Arguments: a0 = framebuffer (LCD_FB_BYTES, 64-aligned), a1 = frame
+#              number.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+render_frame:
+    addi    sp, sp, -112
+    sd      ra, 104(sp)
+    sd      s0, 96(sp)
+    sd      s1, 88(sp)
+    sd      s2, 80(sp)
+    sd      s3, 72(sp)
+    sd      s4, 64(sp)
+    sd      s5, 56(sp)
+    sd      s6, 48(sp)
+    sd      s7, 40(sp)
+    sd      s8, 32(sp)
+    sd      s9, 24(sp)
+    sd      s10, 16(sp)
+    sd      s11, 8(sp)
+    mv      s0, a0                      # s0 = framebuffer
+    mv      a0, a1
+    call    vertex_transform
+    mv      s1, a0                      # s1 = vertex records
+    mv      a0, s0
+    call    raster_begin
+    la      s2, scene                   # s2 = scene
+    lwu     a0, SCENE_BACKGROUND(s2)
+    lwu     t0, SCENE_MODE(s2)
+    addi    a1, t0, -MODE_WIREFRAME
+    snez    a1, a1                      # depth only when not wireframe
+    call    raster_clear
+    lwu     t0, SCENE_MODE(s2)
+    li      t1, MODE_WIREFRAME
+    bne     t0, t1, 1f
+    mv      a0, s1
+    call    render_wireframe
+    j       9f
+
+1:  ld      s3, MESH_F(s2)              # s3 = face
+    lwu     s4, MESH_FCOUNT(s2)         # s4 = faces left
+    la      t0, render_fill
+    lwu     s10, 0(t0)                  # s10 = RASTER_FLAT / RASTER_TEXTURED
+    lwu     s11, SCENE_CULL(s2)         # s11 = cull
+    beqz    s4, 9f
+2:  # s5, s6, s7 = the corners' vertex records
+    lwu     t0, MESH_CORNER_V(s3)
+    lwu     t1, MESH_CORNER_BYTES + MESH_CORNER_V(s3)
+    lwu     t2, 2 * MESH_CORNER_BYTES + MESH_CORNER_V(s3)
+    li      t3, VTX_BYTES
+    mul     t0, t0, t3
+    add     s5, s1, t0
+    mul     t1, t1, t3
+    add     s6, s1, t1
+    mul     t2, t2, t3
+    add     s7, s1, t2
+    lw      t0, VTX_OUTCODE(s5)
+    lw      t1, VTX_OUTCODE(s6)
+    lw      t2, VTX_OUTCODE(s7)
+    and     t3, t0, t1
+    and     t3, t3, t2
+    bnez    t3, 8f                      # all outside one plane
+    or      s8, t0, t1
+    or      s8, s8, t2                  # s8 = outcodes of any corner
+    # A back face in front of the near plane is dropped before the work on
+    # it: the same signed area (from the same Q4 positions) raster_triangle
+    # would find.
+    beqz    s11, 1f
+    andi    t0, s8, OUT_NEAR
+    bnez    t0, 1f
+    lw      t0, VTX_SX(s5)
+    lw      t1, VTX_SY(s5)
+    lw      t2, VTX_SX(s6)
+    sub     t2, t2, t0
+    lw      t3, VTX_SY(s7)
+    sub     t3, t3, t1
+    mul     t2, t2, t3                  # (x1 - x0)(y2 - y0)
+    lw      t3, VTX_SX(s7)
+    sub     t3, t3, t0
+    lw      t4, VTX_SY(s6)
+    sub     t4, t4, t1
+    mul     t3, t3, t4                  # (x2 - x0)(y1 - y0)
+    bge     t2, t3, 8f                  # area >= 0: back face or degenerate
+1:  mv      a0, s5
+    mv      a1, s6
+    mv      a2, s7
+    call    face_light
+    mv      s9, a0                      # s9 = intensity, or the lit colour
+    li      t0, RASTER_TEXTURED
+    beq     s10, t0, 3f
+    mv      a1, a0
+    li      a0, FLAT_BASE_COLOUR
+    call    shade_rgb565
+    mv      s9, a0
+    j       4f
+3:  mv      a0, s3
+    call    face_texels                 # RV_S, RV_T of render_rv
+4:  andi    t0, s8, OUT_NEAR
+    bnez    t0, 6f
+    # in front of the near plane: the vertex records' projections
+    la      a0, render_rv
+    mv      t0, a0
+    mv      t1, s5                      # t1 = corner 0, then t4, then t5
+    mv      t4, s6
+    mv      t5, s7
+    li      t2, TRIANGLE_CORNERS
+5:  lw      t3, VTX_SX(t1)
+    sw      t3, RV_X(t0)
+    lw      t3, VTX_SY(t1)
+    sw      t3, RV_Y(t0)
+    lw      t3, VTX_ZW(t1)
+    sw      t3, RV_Z(t0)
+    lw      t3, VTX_Q(t1)
+    sw      t3, RV_Q(t0)
+    addi    t0, t0, RV_BYTES
+    mv      t1, t4
+    mv      t4, t5
+    addi    t2, t2, -1
+    bnez    t2, 5b
+    mv      a1, s11
+    mv      a2, s9
+    mv      a3, s10
+    call    raster_triangle
+    j       8f
+6:  mv      a0, s5
+    mv      a1, s6
+    mv      a2, s7
+    mv      a3, s11
+    mv      a4, s9
+    mv      a5, s10
+    call    clip_near_and_draw
+8:  addi    s3, s3, MESH_F_BYTES
+    addi    s4, s4, -1
+    bnez    s4, 2b
+
+9:  ld      s11, 8(sp)
+    ld      s10, 16(sp)
+    ld      s9, 24(sp)
+    ld      s8, 32(sp)
+    ld      s7, 40(sp)
+    ld      s6, 48(sp)
+    ld      s5, 56(sp)
+    ld      s4, 64(sp)
+    ld      s3, 72(sp)
+    ld      s2, 80(sp)
+    ld      s1, 88(sp)
+    ld      s0, 96(sp)
+    ld      ra, 104(sp)
+    addi    sp, sp, 112
+    ret
+
+    .globl shade_rgb565
+# shade_rgb565
+#   What: an RGB565 colour with each channel multiplied by k / 64 (the
+#         textured fill does the same inline): c is spread over 64 bits so
+#         that one multiplication scales R, G and B (RGB565_SPREAD_MASK).
+#   Arguments: a0 = colour, a1 = k (0 .. LIGHT_ONE).
+#   Results: a0 = lit colour.
+#   Clobbers: only ABI temporaries.
+shade_rgb565:
+    li      t0, RGB565_SPREAD_MASK
+    slli    t1, a0, RGB565_SPREAD_SHIFT
+    or      a0, a0, t1
+    and     a0, a0, t0
+    mul     a0, a0, a1
+    srli    a0, a0, LIGHT_SHIFT
+    and     a0, a0, t0
+    srli    t1, a0, RGB565_SPREAD_SHIFT
+    or      a0, a0, t1
+    slli    a0, a0, 48
+    srli    a0, a0, 48
+    ret
+
+# face_light (file-local)
+#   What: the face's light intensity (file comment, step 2).
+#   Arguments: a0, a1, a2 = the corners' vertex records.
+#   Results: a0 = k, 0 .. LIGHT_ONE.
+#   Clobbers: only ABI temporaries.
+face_light:
+    addi    sp, sp, -48
+    sd      ra, 40(sp)
+    sd      s0, 32(sp)
+    sd      s1, 24(sp)
+    mv      s0, a0
+    mv      s1, a1
+    addi    a0, a2, VTX_WORLD_X
+    addi    a1, s0, VTX_WORLD_X
+    call    vec3_sub                    # w2 - w0
+    fmv.s   fa3, fa0
+    fmv.s   fa4, fa1
+    fmv.s   fa5, fa2
+    addi    a0, s1, VTX_WORLD_X
+    addi    a1, s0, VTX_WORLD_X
+    call    vec3_sub                    # w1 - w0
+    call    vec3_cross                  # N
+    fsw     fa0, 0(sp)
+    fsw     fa1, 4(sp)
+    fsw     fa2, 8(sp)
+    call    vec3_length
+    fsw     fa0, 12(sp)                 # |N|
+    flw     fa0, 0(sp)
+    flw     fa1, 4(sp)
+    flw     fa2, 8(sp)
+    la      t0, scene
+    flw     fa3, SCENE_LIGHT(t0)
+    flw     fa4, SCENE_LIGHT + 4(t0)
+    flw     fa5, SCENE_LIGHT + 8(t0)
+    call    vec3_dot                    # N . L
+    flw     ft0, 12(sp)
+    fdiv.s  fa0, fa0, ft0               # cos; NaN when |N| = 0
+    la      t0, scene
+    flw     ft1, SCENE_AMBIENT(t0)
+    fmax.s  fa0, fa0, ft1               # (fmax of NaN and ambient = ambient)
+    li      t0, F32_LIGHT_ONE
+    fmv.w.x ft1, t0
+    fmul.s  fa0, fa0, ft1
+    fcvt.w.s a0, fa0, rne
+    bgez    a0, 1f
+    li      a0, 0
+1:  li      t0, LIGHT_ONE
+    ble     a0, t0, 2f
+    mv      a0, t0
+2:  ld      s1, 24(sp)
+    ld      s0, 32(sp)
+    ld      ra, 40(sp)
+    addi    sp, sp, 48
+    ret
+
+# face_texels (file-local)
+#   What: the texel coordinates of a face's three corners (file comment,
+#         step 3) into RV_S and RV_T of the three records of render_rv.
+#   Arguments: a0 = the face (MESH_F_BYTES).
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+face_texels:
+    la      t0, scene
+    ld      t1, MESH_T(t0)              # t1 = vt array
+    lwu     t2, MESH_TCOUNT(t0)         # t2 = vt count
+    la      t3, render_rv
+    li      t4, TRIANGLE_CORNERS
+    li      t5, F32_ONE
+    fmv.w.x ft3, t5                     # ft3 = 1
+1:  lwu     t5, MESH_CORNER_T(a0)
+    fmv.w.x ft0, zero                   # no vt (or out of range): (0, 0)
+    fmv.w.x ft1, zero
+    bgeu    t5, t2, 2f
+    slli    t5, t5, 3                   # MESH_T_BYTES
+    add     t5, t5, t1
+    flw     ft0, 0(t5)
+    flw     ft1, 4(t5)
+2:  fsub.s  ft1, ft3, ft1               # 1 - v
+    fsw     ft0, RV_S(t3)
+    fsw     ft1, RV_T(t3)
+    addi    a0, a0, MESH_CORNER_BYTES
+    addi    t3, t3, RV_BYTES
+    addi    t4, t4, -1
+    bnez    t4, 1b
+    # shift by whole repeats: the smallest of each into [0, 1), then scale
+    la      t3, render_rv
+    flw     ft0, RV_S(t3)
+    flw     ft1, RV_S + RV_BYTES(t3)
+    flw     ft2, RV_S + 2 * RV_BYTES(t3)
+    fmin.s  ft4, ft0, ft1
+    fmin.s  ft4, ft4, ft2
+    fcvt.l.s t5, ft4, rdn
+    fcvt.s.l ft4, t5                    # floor of the smallest
+    lwu     t5, TEX_W(t0)
+    fcvt.s.w ft5, t5
+    fsub.s  ft0, ft0, ft4
+    fmul.s  ft0, ft0, ft5
+    fsw     ft0, RV_S(t3)
+    fsub.s  ft1, ft1, ft4
+    fmul.s  ft1, ft1, ft5
+    fsw     ft1, RV_S + RV_BYTES(t3)
+    fsub.s  ft2, ft2, ft4
+    fmul.s  ft2, ft2, ft5
+    fsw     ft2, RV_S + 2 * RV_BYTES(t3)
+    flw     ft0, RV_T(t3)
+    flw     ft1, RV_T + RV_BYTES(t3)
+    flw     ft2, RV_T + 2 * RV_BYTES(t3)
+    fmin.s  ft4, ft0, ft1
+    fmin.s  ft4, ft4, ft2
+    fcvt.l.s t5, ft4, rdn
+    fcvt.s.l ft4, t5
+    lwu     t5, TEX_H(t0)
+    fcvt.s.w ft5, t5
+    fsub.s  ft0, ft0, ft4
+    fmul.s  ft0, ft0, ft5
+    fsw     ft0, RV_T(t3)
+    fsub.s  ft1, ft1, ft4
+    fmul.s  ft1, ft1, ft5
+    fsw     ft1, RV_T + RV_BYTES(t3)
+    fsub.s  ft2, ft2, ft4
+    fmul.s  ft2, ft2, ft5
+    fsw     ft2, RV_T + 2 * RV_BYTES(t3)
+    ret
+
+# clip_near_and_draw (file-local)
+#   What: a triangle with a corner behind the near plane (file comment,
+#         step 4): cut, projected and drawn as one or two triangles.
+#   Arguments: a0, a1, a2 = the corners' vertex records (texel coordinates
+#              in render_rv when textured), a3 = cull, a4 = colour or
+#              intensity, a5 = fill mode (raster_triangle's a1..a3).
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+clip_near_and_draw:
+    addi    sp, sp, -80
+    sd      ra, 72(sp)
+    sd      s0, 64(sp)
+    sd      s1, 56(sp)
+    sd      s2, 48(sp)
+    sd      s3, 40(sp)
+    sd      s4, 32(sp)
+    sd      s5, 24(sp)
+    sd      s6, 16(sp)
+    sd      s7, 8(sp)
+    sd      s8, 0(sp)
+    mv      s3, a3
+    mv      s4, a4
+    mv      s5, a5
+    # the corners as clip vertices
+    la      t0, render_cv
+    la      t1, render_rv
+    li      t2, TRIANGLE_CORNERS
+1:  lw      t3, VTX_CLIP_X(a0)
+    sw      t3, CV_X(t0)
+    lw      t3, VTX_CLIP_Y(a0)
+    sw      t3, CV_Y(t0)
+    lw      t3, VTX_CLIP_Z(a0)
+    sw      t3, CV_Z(t0)
+    lw      t3, VTX_CLIP_W(a0)
+    sw      t3, CV_W(t0)
+    lw      t3, RV_S(t1)
+    sw      t3, CV_S(t0)
+    lw      t3, RV_T(t1)
+    sw      t3, CV_T(t0)
+    addi    t0, t0, CV_BYTES
+    addi    t1, t1, RV_BYTES
+    mv      a0, a1                      # corner 1, then corner 2
+    mv      a1, a2
+    addi    t2, t2, -1
+    bnez    t2, 1b
+
+    # Sutherland-Hodgman against z >= 0: for each edge a -> b, a if it is in
+    # front, then the crossing point if exactly one of a, b is.
+    la      s0, render_cv               # s0 = a
+    la      s1, render_cv_out           # s1 = next output
+    li      s2, 0                       # s2 = edge number
+2:  addi    t0, s2, 1
+    li      t1, TRIANGLE_CORNERS
+    bne     t0, t1, 3f
+    li      t0, 0
+3:  li      t1, CV_BYTES
+    mul     t0, t0, t1
+    la      s6, render_cv
+    add     s6, s6, t0                  # s6 = b
+    fmv.w.x ft11, zero
+    flw     ft0, CV_Z(s0)
+    fle.s   s7, ft11, ft0               # s7 = a in front
+    flw     ft1, CV_Z(s6)
+    fle.s   s8, ft11, ft1               # s8 = b in front
+    beqz    s7, 4f
+    mv      a0, s1                      # a
+    mv      a1, s0
+    call    cv_copy
+    addi    s1, s1, CV_BYTES
+4:  beq     s7, s8, 5f                  # both on the same side
+    mv      a1, s0                      # cut from the corner in front
+    mv      a2, s6                      # towards the one behind
+    bnez    s7, 41f
+    mv      a1, s6
+    mv      a2, s0
+41: mv      a0, s1
+    call    cv_cut
+    addi    s1, s1, CV_BYTES
+5:  addi    s0, s0, CV_BYTES
+    addi    s2, s2, 1
+    li      t0, TRIANGLE_CORNERS
+    bne     s2, t0, 2b
+
+    # project the 3 or 4 corners into render_rv_out, corner 0 again after them
+    la      t0, render_cv_out
+    sub     s2, s1, t0
+    li      t0, CV_BYTES
+    divu    s2, s2, t0                  # s2 = corners (3 or 4)
+    mv      s6, s2                      # s6 = corners left
+    la      s0, render_cv_out
+    la      s1, render_rv_out
+6:  flw     fa0, CV_X(s0)
+    flw     fa1, CV_Y(s0)
+    flw     fa2, CV_Z(s0)
+    flw     fa3, CV_W(s0)
+    call    project_clip
+    sw      a0, RV_X(s1)
+    sw      a1, RV_Y(s1)
+    fsw     fa0, RV_Z(s1)
+    fsw     fa1, RV_Q(s1)
+    lw      t1, CV_S(s0)
+    sw      t1, RV_S(s1)
+    lw      t1, CV_T(s0)
+    sw      t1, RV_T(s1)
+    addi    s0, s0, CV_BYTES
+    addi    s1, s1, RV_BYTES
+    addi    s6, s6, -1
+    bnez    s6, 6b
+    mv      a0, s1                      # corner 0 once more after the last
+    la      a1, render_rv_out
+    li      a2, RV_BYTES
+    call    rv_copy
+    la      a0, render_rv_out
+    mv      a1, s3
+    mv      a2, s4
+    mv      a3, s5
+    call    raster_triangle             # corners 0, 1, 2
+    li      t0, CLIP_MAX_OUT
+    bne     s2, t0, 7f
+    la      a0, render_rv_out + 2 * RV_BYTES
+    mv      a1, s3
+    mv      a2, s4
+    mv      a3, s5
+    call    raster_triangle             # corners 2, 3, 0
+7:  ld      s8, 0(sp)
+    ld      s7, 8(sp)
+    ld      s6, 16(sp)
+    ld      s5, 24(sp)
+    ld      s4, 32(sp)
+    ld      s3, 40(sp)
+    ld      s2, 48(sp)
+    ld      s1, 56(sp)
+    ld      s0, 64(sp)
+    ld      ra, 72(sp)
+    addi    sp, sp, 80
+    ret
+
+# cv_copy (file-local)
+#   What: copies one clip vertex.
+#   Arguments: a0 = destination, a1 = source.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+cv_copy:
+    li      a2, CV_BYTES
+# rv_copy (file-local)
+#   What: copies a2 bytes (a multiple of 4).
+#   Arguments: a0 = destination, a1 = source, a2 = bytes.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+rv_copy:
+1:  lw      t5, 0(a1)
+    sw      t5, 0(a0)
+    addi    a0, a0, 4
+    addi    a1, a1, 4
+    addi    a2, a2, -4
+    bnez    a2, 1b
+    ret
+
+# cv_cut (file-local)
+#   What: the point where the segment from p (in front of the near plane)
+#         to q (behind it) crosses it: p + t (q - p), t = zp / (zp - zq),
+#         every field interpolated, z set to exactly 0.
+#   Arguments: a0 = output clip vertex, a1 = p, a2 = q.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+cv_cut:
+    flw     ft0, CV_Z(a1)
+    flw     ft1, CV_Z(a2)
+    fsub.s  ft1, ft0, ft1
+    fdiv.s  ft0, ft0, ft1               # ft0 = t
+    li      t0, CV_BYTES / 4
+1:  flw     ft1, 0(a1)
+    flw     ft2, 0(a2)
+    fsub.s  ft2, ft2, ft1
+    fmadd.s ft1, ft2, ft0, ft1
+    fsw     ft1, 0(a0)
+    addi    a0, a0, 4
+    addi    a1, a1, 4
+    addi    a2, a2, 4
+    addi    t0, t0, -1
+    bnez    t0, 1b
+    sw      zero, CV_Z - CV_BYTES(a0)
+    ret
+
+# render_wireframe (file-local)
+#   What: draws the unique edge list (file comment).
+#   Arguments: a0 = vertex records.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+render_wireframe:
+    addi    sp, sp, -64
+    sd      ra, 56(sp)
+    sd      s0, 48(sp)
+    sd      s1, 40(sp)
+    sd      s2, 32(sp)
+    sd      s3, 24(sp)
+    sd      s4, 16(sp)
+    mv      s0, a0                      # s0 = vertex records
+    la      t0, edge_list
+    ld      s1, 0(t0)                   # s1 = edge
+    la      t0, edge_count
+    ld      s2, 0(t0)                   # s2 = edges left
+    beqz    s2, 9f
+1:  ld      t0, 0(s1)
+    srli    t1, t0, EDGE_INDEX_SHIFT    # smaller index
+    slli    t0, t0, EDGE_INDEX_SHIFT
+    srli    t0, t0, EDGE_INDEX_SHIFT    # larger index
+    li      t2, VTX_BYTES
+    mul     t1, t1, t2
+    add     s3, s0, t1                  # s3 = a
+    mul     t0, t0, t2
+    add     s4, s0, t0                  # s4 = b
+    lw      t0, VTX_OUTCODE(s3)
+    lw      t1, VTX_OUTCODE(s4)
+    and     t2, t0, t1
+    bnez    t2, 8f                      # both outside one plane
+    or      t2, t0, t1
+    andi    t2, t2, OUT_NEAR
+    beqz    t2, 3f
+    # one end behind the near plane: s3 = the end in front; the other end
+    # becomes the crossing point, projected
+    andi    t0, t0, OUT_NEAR
+    beqz    t0, 2f
+    mv      t0, s3
+    mv      s3, s4
+    mv      s4, t0
+2:  flw     ft0, VTX_CLIP_Z(s3)
+    flw     ft1, VTX_CLIP_Z(s4)
+    fsub.s  ft1, ft0, ft1
+    fdiv.s  ft0, ft0, ft1               # t
+    flw     ft1, VTX_CLIP_X(s3)
+    flw     ft2, VTX_CLIP_X(s4)
+    fsub.s  ft2, ft2, ft1
+    fmadd.s fa0, ft2, ft0, ft1
+    flw     ft1, VTX_CLIP_Y(s3)
+    flw     ft2, VTX_CLIP_Y(s4)
+    fsub.s  ft2, ft2, ft1
+    fmadd.s fa1, ft2, ft0, ft1
+    flw     ft1, VTX_CLIP_W(s3)
+    flw     ft2, VTX_CLIP_W(s4)
+    fsub.s  ft2, ft2, ft1
+    fmadd.s fa3, ft2, ft0, ft1
+    fmv.w.x fa2, zero
+    call    project_clip
+    j       4f
+3:  lw      a0, VTX_SX(s4)
+    lw      a1, VTX_SY(s4)
+4:  li      t0, F32_Q4_TO_PIXEL
+    fmv.w.x ft0, t0
+    fcvt.s.w fa2, a0
+    fmul.s  fa2, fa2, ft0
+    fcvt.s.w fa3, a1
+    fmul.s  fa3, fa3, ft0
+    lw      t1, VTX_SX(s3)
+    fcvt.s.w fa0, t1
+    fmul.s  fa0, fa0, ft0
+    lw      t1, VTX_SY(s3)
+    fcvt.s.w fa1, t1
+    fmul.s  fa1, fa1, ft0
+    li      a0, WIRE_COLOUR
+    call    raster_segment
+8:  addi    s1, s1, EDGE_BYTES
+    addi    s2, s2, -1
+    bnez    s2, 1b
+9:  ld      s4, 16(sp)
+    ld      s3, 24(sp)
+    ld      s2, 32(sp)
+    ld      s1, 40(sp)
+    ld      s0, 48(sp)
+    ld      ra, 56(sp)
+    addi    sp, sp, 64
+    ret
+
+# edges_build (file-local)
+#   What: the unique edge list of the mesh into edge_list / edge_count:
+#         every triangle's three (min, max) vertex index pairs, sorted
+#         (Shell sort), duplicates removed. Fatal when the heap is short.
+#   Arguments: none. Results: none.
+#   Clobbers: only ABI temporaries.
+edges_build:
+    addi    sp, sp, -32
+    sd      ra, 24(sp)
+    sd      s0, 16(sp)
+    sd      s1, 8(sp)
+    la      t0, scene
+    lwu     s0, MESH_FCOUNT(t0)
+    li      t1, EDGES_PER_TRIANGLE
+    mul     s0, s0, t1                  # s0 = pairs
+    slli    a0, s0, 3                   # EDGE_BYTES each
+    call    heap_alloc
+    beqz    a0, 90f
+    mv      s1, a0                      # s1 = list
+    la      t0, edge_list
+    sd      a0, 0(t0)
+    la      t0, scene
+    ld      t1, MESH_F(t0)
+    lwu     t2, MESH_FCOUNT(t0)
+    mv      t3, s1
+    beqz    t2, 5f
+1:  lwu     a1, MESH_CORNER_V(t1)
+    lwu     a2, MESH_CORNER_BYTES + MESH_CORNER_V(t1)
+    lwu     a3, 2 * MESH_CORNER_BYTES + MESH_CORNER_V(t1)
+    mv      a4, a1                      # (v0, v1), (v1, v2), (v2, v0)
+    mv      a5, a2
+    jal     t6, 3f
+    mv      a4, a2
+    mv      a5, a3
+    jal     t6, 3f
+    mv      a4, a3
+    mv      a5, a1
+    jal     t6, 3f
+    addi    t1, t1, MESH_F_BYTES
+    addi    t2, t2, -1
+    bnez    t2, 1b
+    j       5f
+3:  bleu    a4, a5, 4f                  # store (min << 32) | max at t3
+    mv      t4, a4
+    mv      a4, a5
+    mv      a5, t4
+4:  slli    a4, a4, EDGE_INDEX_SHIFT
+    or      a4, a4, a5
+    sd      a4, 0(t3)
+    addi    t3, t3, EDGE_BYTES
+    jr      t6
+5:  mv      a0, s1
+    mv      a1, s0
+    call    sort_u64
+    # remove duplicates (now adjacent)
+    li      t0, 0                       # t0 = unique count
+    beqz    s0, 7f
+    li      t0, 1
+    li      t1, 1                       # t1 = next read
+    mv      t2, s1                      # t2 = last kept
+6:  bgeu    t1, s0, 7f
+    slli    t3, t1, 3
+    add     t3, t3, s1
+    ld      t3, 0(t3)
+    ld      t4, 0(t2)
+    addi    t1, t1, 1
+    beq     t3, t4, 6b
+    addi    t2, t2, EDGE_BYTES
+    sd      t3, 0(t2)
+    addi    t0, t0, 1
+    j       6b
+7:  la      t1, edge_count
+    sd      t0, 0(t1)
+    ld      s1, 8(sp)
+    ld      s0, 16(sp)
+    ld      ra, 24(sp)
+    addi    sp, sp, 32
+    ret
+90: li      a0, ERR_MODEL_TOO_LARGE
+    la      a1, msg_no_memory
+    li      a2, 0
+    j       error_fatal
+
+# sort_u64 (file-local)
+#   What: sorts unsigned 64-bit values in place, ascending (Shell sort with
+#         Knuth's gaps 1, 4, 13, 40, ...).
+#   Arguments: a0 = array, a1 = count.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+sort_u64:
+    li      t0, 1                       # t0 = gap h: largest 3h+1 below n / 3
+    li      t1, SHELL_GAP_FACTOR
+    divu    t2, a1, t1                  # n / 3
+1:  bgeu    t0, t2, 2f
+    mul     t0, t0, t1
+    addi    t0, t0, 1
+    j       1b
+2:  mv      t3, t0                      # t3 = i (from h)
+3:  bgeu    t3, a1, 6f
+    slli    t4, t3, 3
+    add     t4, t4, a0
+    ld      a2, 0(t4)                   # a2 = value to insert
+    mv      t5, t3                      # t5 = j
+4:  bltu    t5, t0, 5f
+    sub     a3, t5, t0
+    slli    a3, a3, 3
+    add     a3, a3, a0
+    ld      a4, 0(a3)                   # a[j - h]
+    bleu    a4, a2, 5f
+    slli    a5, t5, 3
+    add     a5, a5, a0
+    sd      a4, 0(a5)
+    sub     t5, t5, t0
+    j       4b
+5:  slli    a5, t5, 3
+    add     a5, a5, a0
+    sd      a2, 0(a5)
+    addi    t3, t3, 1
+    j       3b
+6:  divu    t0, t0, t1                  # next gap (h - 1) / 3 = h / 3
+    bnez    t0, 2b
+    ret
+
+# ---------------------------------------------------------------------------
+    .section .rodata
+msg_no_memory:      .asciz "model too large for memory (edge list)"
+
+# ---------------------------------------------------------------------------
+    .bss
+    .balign 8
+# render_fill: RASTER_TEXTURED, or RASTER_FLAT (flat mode, or no texture).
+render_fill:
+    .space  8
+# The wireframe's unique edges: address (heap) and count.
+edge_list:
+    .space  8
+edge_count:
+    .space  8
+# Scratch of one triangle: its corners for raster_triangle, as clip
+# vertices, after the near-plane cut (up to 4), and those projected (with
+# corner 0 repeated after the last, for the second triangle of a fan).
+    .balign 8
+render_rv:
+    .space  RV_TRIANGLE_BYTES
+render_cv:
+    .space  TRIANGLE_CORNERS * CV_BYTES
+render_cv_out:
+    .space  CLIP_MAX_OUT * CV_BYTES
+render_rv_out:
+    .space  (CLIP_MAX_OUT + 1) * RV_BYTES

@@ -1,0 +1,293 @@
+# vertex.S: the per-frame vertex stage. Once a frame it builds the model
+# matrix (scale, rotation by a quaternion about SCENE_AXIS by SCENE_ANGLE +
+# frame * SCENE_STEP, translation), the perspective projection (SCENE_FOV,
+# aspect LCD_WIDTH / LCD_HEIGHT, SCENE_NEAR, SCENE_FAR) and their product,
+# then transforms every mesh vertex once into a VTX_BYTES record (render.inc):
+#   clip-space position (x, y, z, w), world-space position (lighting),
+#   outcode (which frustum planes it is outside of), and, for vertices in
+#   front of the near plane, the projected screen position in Q4, z / w and
+#   1 / w (project_clip).
+# Triangles and edges then only look these records up (render.S).
+#
+# The camera sits at the origin looking down -z, so world space is also eye
+# space: no view matrix.
+
+    .option norelax
+    .include "k210.inc"
+    .include "st7789v.inc"
+    .include "errors.inc"
+    .include "scene.inc"
+    .include "render.inc"
+
+    .text
+    .globl vertex_init
+# vertex_init
+#   What: allocates the vertex records (MESH_VCOUNT of them) from the heap;
+#         not enough memory is fatal (ERR_MODEL_TOO_LARGE).
+#   Arguments: none. Results: none.
+#   Clobbers: only ABI temporaries.
+vertex_init:
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+    la      t0, scene
+    lwu     a0, MESH_VCOUNT(t0)
+    li      t1, VTX_BYTES
+    mul     a0, a0, t1
+    call    heap_alloc
+    beqz    a0, 1f
+    la      t0, vertex_records
+    sd      a0, 0(t0)
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
+    ret
+1:  li      a0, ERR_MODEL_TOO_LARGE
+    la      a1, msg_no_memory
+    li      a2, 0
+    j       error_fatal
+
+    .globl vertex_transform
+# vertex_transform
+#   What: builds this frame's matrices and fills every vertex record (see
+#         the file comment).
+#   Arguments: a0 = frame number (unsigned).
+#   Results: a0 = the vertex records (VTX_BYTES each, in mesh order).
+#   Clobbers: only ABI temporaries.
+vertex_transform:
+    addi    sp, sp, -64
+    sd      ra, 56(sp)
+    sd      s0, 48(sp)
+    sd      s1, 40(sp)
+    sd      s2, 32(sp)
+    sd      s3, 24(sp)
+    la      s0, scene
+
+    # angle = start + frame * step, in double so that long runs keep it exact
+    fcvt.d.lu ft0, a0
+    flw     ft1, SCENE_STEP(s0)
+    fcvt.d.s ft1, ft1
+    flw     ft2, SCENE_ANGLE(s0)
+    fcvt.d.s ft2, ft2
+    fmadd.d fa0, ft0, ft1, ft2
+    la      a0, vertex_quat
+    addi    a1, s0, SCENE_AXIS
+    call    quat_from_axis_angle
+    la      a0, vertex_rotation
+    la      a1, vertex_quat
+    call    quat_to_mat3
+    la      a0, vertex_model
+    la      a1, vertex_rotation
+    addi    a2, s0, SCENE_SCALE
+    addi    a3, s0, SCENE_TRANSLATE
+    call    mat4_model
+    li      t0, LCD_WIDTH
+    fcvt.s.w ft0, t0
+    li      t0, LCD_HEIGHT
+    fcvt.s.w ft1, t0
+    fdiv.s  fa1, ft0, ft1               # aspect
+    flw     fa0, SCENE_FOV(s0)
+    flw     fa2, SCENE_NEAR(s0)
+    flw     fa3, SCENE_FAR(s0)
+    la      a0, vertex_projection
+    call    mat4_perspective
+    la      a0, vertex_mvp
+    la      a1, vertex_projection
+    la      a2, vertex_model
+    call    mat4_mul
+
+    # --- every vertex: world = M p, clip = P M p, outcode, projection.
+    ld      s1, MESH_V(s0)              # s1 = mesh position
+    lwu     s2, MESH_VCOUNT(s0)         # s2 = vertices left
+    la      t0, vertex_records
+    ld      s3, 0(t0)                   # s3 = record
+    beqz    s2, 9f
+    # The model matrix's top three rows stay in fs0..fs11 (callee-saved:
+    # kept on the stack meanwhile); the MVP rows are loaded per vertex.
+    addi    sp, sp, -96
+    fsd     fs0, 0(sp)
+    fsd     fs1, 8(sp)
+    fsd     fs2, 16(sp)
+    fsd     fs3, 24(sp)
+    fsd     fs4, 32(sp)
+    fsd     fs5, 40(sp)
+    fsd     fs6, 48(sp)
+    fsd     fs7, 56(sp)
+    fsd     fs8, 64(sp)
+    fsd     fs9, 72(sp)
+    fsd     fs10, 80(sp)
+    fsd     fs11, 88(sp)
+    la      t0, vertex_model
+    flw     fs0, 0(t0)
+    flw     fs1, 4(t0)
+    flw     fs2, 8(t0)
+    flw     fs3, 12(t0)
+    flw     fs4, 16(t0)
+    flw     fs5, 20(t0)
+    flw     fs6, 24(t0)
+    flw     fs7, 28(t0)
+    flw     fs8, 32(t0)
+    flw     fs9, 36(t0)
+    flw     fs10, 40(t0)
+    flw     fs11, 44(t0)
+1:  flw     ft8, 0(s1)                  # ft8, ft9, ft10 = model-space p
+    flw     ft9, 4(s1)
+    flw     ft10, 8(s1)
+    fmadd.s ft0, fs0, ft8, fs3
+    fmadd.s ft0, fs1, ft9, ft0
+    fmadd.s ft0, fs2, ft10, ft0
+    fsw     ft0, VTX_WORLD_X(s3)
+    fmadd.s ft0, fs4, ft8, fs7
+    fmadd.s ft0, fs5, ft9, ft0
+    fmadd.s ft0, fs6, ft10, ft0
+    fsw     ft0, VTX_WORLD_Y(s3)
+    fmadd.s ft0, fs8, ft8, fs11
+    fmadd.s ft0, fs9, ft9, ft0
+    fmadd.s ft0, fs10, ft10, ft0
+    fsw     ft0, VTX_WORLD_Z(s3)
+    la      t0, vertex_mvp
+    flw     ft0, 0(t0)                  # clip x -> fa0
+    flw     ft1, 4(t0)
+    flw     ft2, 8(t0)
+    flw     ft3, 12(t0)
+    fmadd.s fa0, ft0, ft8, ft3
+    fmadd.s fa0, ft1, ft9, fa0
+    fmadd.s fa0, ft2, ft10, fa0
+    flw     ft0, 16(t0)                 # clip y -> fa1
+    flw     ft1, 20(t0)
+    flw     ft2, 24(t0)
+    flw     ft3, 28(t0)
+    fmadd.s fa1, ft0, ft8, ft3
+    fmadd.s fa1, ft1, ft9, fa1
+    fmadd.s fa1, ft2, ft10, fa1
+    flw     ft0, 32(t0)                 # clip z -> fa2
+    flw     ft1, 36(t0)
+    flw     ft2, 40(t0)
+    flw     ft3, 44(t0)
+    fmadd.s fa2, ft0, ft8, ft3
+    fmadd.s fa2, ft1, ft9, fa2
+    fmadd.s fa2, ft2, ft10, fa2
+    flw     ft0, 48(t0)                 # clip w -> fa3
+    flw     ft1, 52(t0)
+    flw     ft2, 56(t0)
+    flw     ft3, 60(t0)
+    fmadd.s fa3, ft0, ft8, ft3
+    fmadd.s fa3, ft1, ft9, fa3
+    fmadd.s fa3, ft2, ft10, fa3
+    fsw     fa0, VTX_CLIP_X(s3)
+    fsw     fa1, VTX_CLIP_Y(s3)
+    fsw     fa2, VTX_CLIP_Z(s3)
+    fsw     fa3, VTX_CLIP_W(s3)
+    # outcode
+    fneg.s  ft0, fa3                    # -w
+    flt.s   t0, fa0, ft0                # x < -w (OUT_LEFT_BIT = 0)
+    flt.s   t1, fa3, fa0                # x > w
+    slli    t1, t1, OUT_RIGHT_BIT
+    or      t0, t0, t1
+    flt.s   t1, fa1, ft0                # y < -w
+    slli    t1, t1, OUT_BOTTOM_BIT
+    or      t0, t0, t1
+    flt.s   t1, fa3, fa1                # y > w
+    slli    t1, t1, OUT_TOP_BIT
+    or      t0, t0, t1
+    fmv.w.x ft1, zero
+    flt.s   t1, fa2, ft1                # z < 0
+    slli    t1, t1, OUT_NEAR_BIT
+    or      t0, t0, t1
+    flt.s   t1, fa3, fa2                # z > w
+    slli    t1, t1, OUT_FAR_BIT
+    or      t0, t0, t1
+    sw      t0, VTX_OUTCODE(s3)
+    andi    t0, t0, OUT_NEAR
+    bnez    t0, 2f                      # behind the near plane: no projection
+    call    project_clip
+    sw      a0, VTX_SX(s3)
+    sw      a1, VTX_SY(s3)
+    fsw     fa0, VTX_ZW(s3)
+    fsw     fa1, VTX_Q(s3)
+2:  addi    s1, s1, MESH_V_BYTES
+    addi    s3, s3, VTX_BYTES
+    addi    s2, s2, -1
+    bnez    s2, 1b
+    fld     fs0, 0(sp)
+    fld     fs1, 8(sp)
+    fld     fs2, 16(sp)
+    fld     fs3, 24(sp)
+    fld     fs4, 32(sp)
+    fld     fs5, 40(sp)
+    fld     fs6, 48(sp)
+    fld     fs7, 56(sp)
+    fld     fs8, 64(sp)
+    fld     fs9, 72(sp)
+    fld     fs10, 80(sp)
+    fld     fs11, 88(sp)
+    addi    sp, sp, 96
+9:  la      t0, vertex_records
+    ld      a0, 0(t0)
+    ld      s3, 24(sp)
+    ld      s2, 32(sp)
+    ld      s1, 40(sp)
+    ld      s0, 48(sp)
+    ld      ra, 56(sp)
+    addi    sp, sp, 64
+    ret
+
+    .globl project_clip
+# project_clip
+#   What: perspective divide and viewport of a clip-space point in front of
+#         the near plane (w > 0): screen x = (x / w + 1) * LCD_WIDTH / 2,
+#         y = (1 - y / w) * LCD_HEIGHT / 2 (down), both rounded to the
+#         nearest 1/16 pixel (Q4, ties to even) after clamping to +-2^27.
+#         Every projected position goes through here, so a point projects to
+#         the same Q4 position whichever triangle or edge it belongs to.
+#   Arguments: fa0, fa1, fa2, fa3 = clip-space x, y, z, w.
+#   Results: a0 = screen x (Q4), a1 = screen y (Q4), fa0 = z / w,
+#            fa1 = 1 / w.
+#   Clobbers: only ABI temporaries.
+project_clip:
+    li      t0, F32_ONE
+    fmv.w.x ft0, t0
+    fdiv.s  ft0, ft0, fa3               # ft0 = 1 / w
+    fmul.s  ft1, fa0, ft0               # x / w
+    fmul.s  ft2, fa1, ft0               # y / w
+    li      t0, SCREEN_HALF_W_Q4
+    fcvt.s.w ft3, t0
+    fmadd.s ft1, ft1, ft3, ft3          # (x / w + 1) * half width
+    li      t0, SCREEN_HALF_H_Q4
+    fcvt.s.w ft3, t0
+    fnmsub.s ft2, ft2, ft3, ft3         # (1 - y / w) * half height
+    li      t0, F32_Q4_LIMIT
+    fmv.w.x ft3, t0
+    fneg.s  ft4, ft3
+    fmin.s  ft1, ft1, ft3               # clamp (a NaN becomes the limit)
+    fmax.s  ft1, ft1, ft4
+    fmin.s  ft2, ft2, ft3
+    fmax.s  ft2, ft2, ft4
+    fcvt.w.s a0, ft1, rne
+    fcvt.w.s a1, ft2, rne
+    fmul.s  fa0, fa2, ft0
+    fmv.s   fa1, ft0
+    ret
+
+# ---------------------------------------------------------------------------
+    .section .rodata
+msg_no_memory:      .asciz "model too large for memory (vertex records)"
+
+# ---------------------------------------------------------------------------
+    .bss
+    .balign 8
+    .globl vertex_records
+# vertex_records: address of the MESH_VCOUNT vertex records (heap).
+vertex_records:
+    .space  8
+    .balign 16
+# This frame's rotation, matrices (render.inc layouts).
+vertex_quat:
+    .space  QUAT_BYTES
+vertex_rotation:
+    .space  MAT3_BYTES
+    .balign 16
+vertex_model:
+    .space  MAT4_BYTES
+vertex_projection:
+    .space  MAT4_BYTES
+vertex_mvp:
+    .space  MAT4_BYTES

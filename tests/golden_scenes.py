@@ -1,0 +1,40 @@
+"""The scenes held against golden frames: the default card of `make flash-to-emulator`, and
+one scene per render mode built from the generated assets. Shared by the tests and by
+tools/regen_goldens.py, so goldens are always made exactly as the tests check them."""
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+GOLDEN = ROOT / "tests" / "golden"
+DEFAULT_CARD = ROOT / "build" / "card.img"
+
+# name -> (scene.ini keys, frames); None: the default card built by `make card`
+SCENES: dict[str, tuple[dict[str, str] | None, int]] = {
+    "default": (None, 4),
+    "gem-flat": ({"model": "models/gem.obj", "texture": "textures/gem.ppm", "mode": "flat",
+                  "translate": "0 0 -3", "axis": "0.2 1 0", "angle": "10", "step": "6", "ambient": "0.3",
+                  "light": "-0.4 0.6 1"}, 3),
+    "cube-textured": ({"model": "models/cube.obj", "texture": "textures/cube.ppm", "mode": "textured",
+                       "translate": "0 0 -3", "axis": "1 1 0", "angle": "20", "step": "5",
+                       "background": "40 40 80"}, 3),
+    "torus-wireframe": ({"model": "models/torus.obj", "texture": "textures/torus.ppm", "mode": "wireframe",
+                         "translate": "0 0 -2.8", "axis": "1 0.6 0.2", "angle": "40", "step": "4"}, 3),
+}
+
+
+def scene_card(name: str, folder: Path) -> Path:
+    """The card for a golden scene (built in `folder` unless it is the default card)."""
+    scene, _ = SCENES[name]
+    if scene is None:
+        subprocess.run(["make", "-s", "build/card.img"], cwd=ROOT, check=True)
+        return DEFAULT_CARD
+    from sdcard_image import build_image
+    assets = folder / "assets"
+    if not assets.exists():
+        subprocess.run([sys.executable, str(ROOT / "tools" / "make_assets.py"), str(assets)], check=True)
+    card = folder / f"{name}.img"
+    build_image(card, [assets / "models", assets / "textures"], scene=scene, force=True)
+    return card
