@@ -316,11 +316,6 @@ class _Planner:
         if ext == ".obj":
             stats = objcheck.check_obj(data, src)
             detail = f"OBJ checked: {stats.summary()}"
-            for keyword, line in stats.ignored.items():
-                self.plan.warnings.append(f"{src}:{line}: '{keyword}' statements are valid OBJ "
-                                          f"but not drawn by the renderer")
-            if stats.faces == 0:
-                self.plan.warnings.append(f"{src}: has no faces")
         elif ext == ".ppm":
             info = ppm.parse_ppm(data, src)
             detail = f"PPM {info.magic} {info.width}x{info.height} maxval {info.maxval}"

@@ -67,8 +67,9 @@ def check_obj(data: bytes, path: Path | str = "<obj>") -> ObjStats:
     """Parses an OBJ and raises `BadInputError` (file and line) on the first problem.
 
     Accepted: v/vt/vn/f with v, v/vt, v//vn and v/vt/vn corners, negative (relative) indices,
-    o/g/s/mtllib/usemtl, comments and blank lines. Other statements are valid OBJ the renderer
-    does not draw: they are recorded in `ObjStats.ignored` rather than rejected.
+    o/g/s/mtllib/usemtl, comments and blank lines. Anything else, and a model without faces,
+    is refused here as the firmware's parser refuses it (error 10), so a card never carries a
+    model the board would stop on.
     """
     stats = ObjStats()
     forward: list[tuple[int, int, str]] = []
@@ -118,7 +119,10 @@ def check_obj(data: bytes, path: Path | str = "<obj>") -> ObjStats:
             if keyword in ("mtllib", "usemtl") and not args:
                 raise BadInputError(path, f"'{keyword}' needs a name", lineno)
         else:
-            stats.ignored.setdefault(keyword, lineno)
+            raise BadInputError(path, f"unknown statement '{keyword}' (the renderer reads v, vt, vn and f, "
+                                      f"and accepts o, g, s, mtllib and usemtl)", lineno)
+    if stats.faces == 0:
+        raise BadInputError(path, "no faces: the model has nothing to draw")
     totals = {"vertex": stats.vertices, "texcoord": stats.texcoords, "normal": stats.normals}
     for idx, lineno, kind in forward:
         if idx > totals[kind]:

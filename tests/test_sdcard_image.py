@@ -511,7 +511,13 @@ BAD_OBJS = [
     (b"vt 0 x\n", 1, "malformed number 'x'"),
     (b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/a 2 3\n", 4, "malformed texcoord index 'a'"),
     (b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1// 2 3\n", 4, "malformed face corner '1//'"),
+    (b"v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\nf 1 2 3\n", 4, "unknown statement 'l'"),
 ]
+
+
+def test_a_model_without_faces_is_refused():
+    with pytest.raises(BadInputError, match="no faces"):
+        check_obj(b"v 0 0 0\nv 1 0 0\n", "m.obj")
 
 
 @pytest.mark.parametrize("text,line,message", BAD_OBJS)
@@ -667,8 +673,9 @@ def test_usage_errors_exit_2(tmp_path, inputs):
 def test_names_differing_only_in_case_are_refused_in_one_folder(tmp_path):
     (tmp_path / "a").mkdir()
     (tmp_path / "b").mkdir()
-    (tmp_path / "a" / "Cube.obj").write_bytes(b"v 0 0 0\n")
-    (tmp_path / "b" / "cube.OBJ").write_bytes(b"v 0 0 0\n")
+    triangle = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"
+    (tmp_path / "a" / "Cube.obj").write_bytes(triangle)
+    (tmp_path / "b" / "cube.OBJ").write_bytes(triangle)
     result = run_cli("build", tmp_path / "c.img", tmp_path / "a" / "Cube.obj",
                      tmp_path / "b" / "cube.OBJ")
     assert result.returncode == 2 and "case" in result.stderr
