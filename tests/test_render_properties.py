@@ -128,3 +128,18 @@ def test_frames_are_shown_in_order(firmware, assets, tmp_path):
     later = render(firmware, assets, tmp_path / "b", 2, angle="10", **scene)
     assert not np.array_equal(first[0], first[1])
     assert np.array_equal(later[0], first[1]) and np.array_equal(later[1], first[2])
+
+
+def test_camera_inside_a_closed_mesh_sees_it_everywhere(firmware, assets, tmp_path):
+    """With the camera inside the cube every triangle crosses the near plane or lies behind the
+    camera; clipped correctly, the inside faces (culling off) cover every pixel."""
+    frame = render(firmware, assets, tmp_path, 1, mode="flat", translate="0 0 0", step="0", angle="20",
+                   axis="0.3 1 0.1", cull="off", near="0.05", ambient="1")[0]
+    assert not np.all(frame == BACKGROUND, axis=2).any()
+
+
+def test_a_model_behind_the_camera_draws_nothing(firmware, assets, tmp_path):
+    """Nothing behind the camera may wrap around onto the screen."""
+    frame = render(firmware, assets, tmp_path, 1, mode="textured", translate="0 0 3", step="0",
+                   model="models/torus.obj", texture="textures/torus.ppm")[0]
+    assert np.all(frame == BACKGROUND)
