@@ -114,14 +114,7 @@ def loader_card(tmp_path_factory):
 def _scene_bytes(text: str) -> bytes:
     """scene.ini text padded with comment lines to SCENE_BYTES, so it fits the placeholder."""
     data = text.encode()
-    pad = SCENE_BYTES - len(data)
-    assert pad >= 0
-    lines = []
-    while pad:
-        take = min(pad, 64)
-        lines.append(b"#" * (take - 1) + b"\n" if take > 1 else b"\n")
-        pad -= take
-    return data + b"".join(lines)
+    return data + _padding(SCENE_BYTES - len(data))
 
 
 def _partition_geometry(image: Path) -> tuple[int, int, int, int, int]:
