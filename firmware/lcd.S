@@ -239,16 +239,16 @@ lcd_send_frame:
 # lcd_error_screen
 #   What: fills the whole screen with the error colour (lcd_error_colour:
 #         solid red for a trap unless errors.S chose the colour of a fatal
-#         error) by a polled SPI transfer, after letting any DMA in flight
-#         finish. For the trap handler and fatal errors: needs no framebuffer,
-#         no interrupts, no delays. Does nothing if the LCD was never brought
-#         up.
+#         error), after letting any DMA in flight finish: by a polled DMA
+#         fill once dma_init has run, else by a polled SPI transfer. For the
+#         trap handler and fatal errors: needs no framebuffer, no interrupts,
+#         no delays. Does nothing if the LCD was never brought up.
 #   Arguments: none. Results: none.
 #   Clobbers: only ABI temporaries.
 lcd_error_screen:
     la      t0, lcd_ready
     lw      t0, 0(t0)
-    beqz    t0, 1f
+    beqz    t0, 2f
     addi    sp, sp, -16
     sd      ra, 8(sp)
     call    dma_quiesce
@@ -258,10 +258,18 @@ lcd_error_screen:
     slli    t1, a0, 16
     or      a0, a0, t1                  # both pixels of each 32-bit frame
     li      a1, LCD_FB_WORDS
-    call    spi0_fill_words
-    ld      ra, 8(sp)
+    la      t0, dma_ready
+    lw      t0, 0(t0)
+    beqz    t0, 1f
+    la      t0, lcd_error_word          # the DMAC reads the colour from memory
+    sw      a0, 0(t0)
+    mv      a0, t0
+    call    spi0_dma_fill_words
+    j       3f
+1:  call    spi0_fill_words
+3:  ld      ra, 8(sp)
     addi    sp, sp, 16
-1:  ret
+2:  ret
 
 # ---------------------------------------------------------------------------
     .data
@@ -276,3 +284,6 @@ lcd_ready:
 # (a trap) unless errors.S stored the colour of a fatal error first.
 lcd_error_colour:
     .word   RGB565_RED
+# lcd_error_word: the error colour twice, the word a DMA fill sends over and over.
+lcd_error_word:
+    .word   0

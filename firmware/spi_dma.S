@@ -155,6 +155,9 @@ dma_init:
     ld      t1, DMAC_CFG(t0)
     ori     t1, t1, DMAC_CFG_EN | DMAC_CFG_INT_EN
     sd      t1, DMAC_CFG(t0)
+    la      t0, dma_ready
+    li      t1, 1
+    sw      t1, 0(t0)
     ret
 
     .globl dma_irq_init
@@ -256,12 +259,67 @@ dma_wait_channel:
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 spi0_dma_send_words:
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+    li      a2, DMAC_CTL_MEM_TO_SPI32
+    call    spi0_dma_start
+    li      a0, 0
+    call    dma_wait_channel
+    call    spi0_finish
+    li      t0, SPI0_BASE
+    sw      zero, SPI_DMACR(t0)
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
+    ret
+
+    .globl spi0_dma_fill_words
+# spi0_dma_fill_words
+#   What: sends the 32-bit word at a0, a1 times, to the LCD through DMAC
+#         channel 0 with a fixed source address, polling chen (no interrupts
+#         needed: the trap handler and fatal errors use it), at most
+#         DMA_POLL_LIMIT polls; then waits for SPI0 to drain. The caller sets
+#         D/C first and must have run dma_init.
+#   Arguments: a0 = address of the word, a1 = count (1 .. 2^22).
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+spi0_dma_fill_words:
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+    li      a2, DMAC_CTL_FILL_SPI32
+    call    spi0_dma_start
+    li      t0, DMAC_BASE
+    li      t2, DMA_POLL_LIMIT
+1:  ld      t1, DMAC_CHEN(t0)
+    andi    t1, t1, DMAC_CHEN_CH0
+    beqz    t1, 2f
+    addi    t2, t2, -1
+    bnez    t2, 1b
+2:  li      t1, DMAC_CH_INTCLEAR_ALL
+    sd      t1, DMAC_CH0 + DMAC_CH_INTCLEAR(t0)
+    call    spi0_finish
+    li      t0, SPI0_BASE
+    sw      zero, SPI_DMACR(t0)
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
+    ret
+
+# spi0_dma_start (file-local)
+#   What: starts DMAC channel 0 moving a1 32-bit words from a0 into SPI0's
+#         FIFO (32-bit octal frames, TX DMA requests) and selects the LCD.
+#         Returns at once; the caller waits for the channel.
+#   Arguments: a0 = source address, a1 = word count, a2 = channel ctl
+#         (DMAC_CTL_MEM_TO_SPI32 or DMAC_CTL_FILL_SPI32).
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+spi0_dma_start:
     addi    sp, sp, -32
     sd      ra, 24(sp)
     sd      s0, 16(sp)
     sd      s1, 8(sp)
+    sd      s2, 0(sp)
     mv      s0, a0
     mv      s1, a1
+    mv      s2, a2
 
     # SPI0: 32-bit frames, TX DMA requests when the FIFO is at or below dmatdlr.
     li      a0, SPI_CTRLR0_OCTAL_TX_32
@@ -295,8 +353,7 @@ spi0_dma_send_words:
     sd      t1, DMAC_CH0 + DMAC_CH_DAR(t0)
     addi    t1, s1, -1
     sd      t1, DMAC_CH0 + DMAC_CH_BLOCK_TS(t0)
-    li      t1, DMAC_CTL_MEM_TO_SPI32
-    sd      t1, DMAC_CH0 + DMAC_CH_CTL(t0)
+    sd      s2, DMAC_CH0 + DMAC_CH_CTL(t0)
     li      t1, DMAC_CH_INT_BLOCK_DONE
     sd      t1, DMAC_CH0 + DMAC_CH_INTSTATUS_EN(t0)
     sd      t1, DMAC_CH0 + DMAC_CH_INTSIGNAL_EN(t0)
@@ -312,13 +369,7 @@ spi0_dma_send_words:
     li      t1, SPI_SER_LCD
     sw      t1, SPI_SER(t2)
 
-    # Sleep until the block is done.
-    li      a0, 0
-    call    dma_wait_channel
-    call    spi0_finish
-    li      t0, SPI0_BASE
-    sw      zero, SPI_DMACR(t0)
-
+    ld      s2, 0(sp)
     ld      s1, 8(sp)
     ld      s0, 16(sp)
     ld      ra, 24(sp)
@@ -349,3 +400,11 @@ dma_quiesce:
     sw      zero, SPI_SER(t0)
     sw      zero, SPI_SSIENR(t0)
     ret
+
+    .data
+    .balign 4
+    .globl dma_ready
+# dma_ready: 1 once dma_init has run (in .data: valid before .bss is cleared),
+# so the error screen knows whether it can fill the screen by DMA.
+dma_ready:
+    .word   0
