@@ -29,7 +29,7 @@
 # light       x y z towards the light, not all zero   0 0 1         SCENE_LIGHT
 #             (stored normalised)
 # ambient     0 <= ambient <= 1                       0.2           SCENE_AMBIENT
-# background  R G B (integers 0..255) or #RRGGBB      #102010       SCENE_BACKGROUND
+# background  R G B (integers 0..255) or #RRGGBB      #101410       SCENE_BACKGROUND
 #                                                     (RGB565 0x10A2)
 #
 # Conventions (scene.inc): right-handed, camera at the origin looking down

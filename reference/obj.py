@@ -1,0 +1,134 @@
+"""Wavefront .obj models, the subset firmware/obj.S reads (README "Models and textures").
+
+Statements (keywords case-sensitive): ``v x y z [w] [r g b]`` (3, 4, 6 or 7 numbers, x y z
+kept), ``vt u [v [w]]`` (1 to 3 numbers, u v kept, v = 0 when absent), ``vn x y z``, and
+``f c1 c2 c3 ...`` with corners ``v``, ``v/vt``, ``v//vn`` or ``v/vt/vn`` (forms may mix);
+polygons are fanned into triangles (c1, ci, ci+1). ``o g s mtllib usemtl`` are ignored;
+``#`` starts a comment anywhere; blank lines and CRLF are fine. Indices count from 1; -k is
+the k-th latest element defined before the line; a positive index may point further down the
+file (checked against the file's totals after every other check, as the firmware's second
+pass does); 0 is an error. Errors raise `ModelError`: ``bad model line N: <what>``, or
+``bad model: no faces``.
+
+Numbers are kept as float64 (the firmware rounds them to single precision; a number that is
+not finite in single precision is an error in both).
+"""
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+NUMBER = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?\Z")
+CORNER = re.compile(r"(-?\d+)(?:/(-?\d+)?(?:/(-?\d+))?)?\Z")
+IGNORED = {"o", "g", "s", "mtllib", "usemtl"}
+NO_INDEX = -1
+
+
+class ModelError(ValueError):
+    """A bad model (the firmware's error 10)."""
+
+    def __init__(self, line: int | None, what: str):
+        super().__init__(f"bad model line {line}: {what}" if line is not None else f"bad model: {what}")
+        self.line = line
+        self.what = what
+
+
+@dataclass
+class Mesh:
+    vertices: np.ndarray      # (V, 3) float64
+    texcoords: np.ndarray     # (T, 2) float64: u, v
+    normals: np.ndarray       # (N, 3) float64 (parsed and kept; the renderer never uses them)
+    faces: np.ndarray         # (F, 3, 3) int64: per corner (v, vt, vn), 0-based, NO_INDEX = -1
+
+
+def _number(line: int, token: str) -> float:
+    if not NUMBER.match(token):
+        raise ModelError(line, "malformed number")
+    value = float(token)
+    with np.errstate(over="ignore"):
+        if not math.isfinite(float(np.float32(value))):
+            raise ModelError(line, "number out of range")
+    return value
+
+
+def _resolve(line: int, text: str, defined: int, kind: str) -> tuple[int, int | None]:
+    """(0-based index, or the 1-based index to check against the file's total later)."""
+    index = int(text)
+    if index == 0:
+        raise ModelError(line, "index 0 (indices start at 1)")
+    if index < 0:
+        if -index > defined:
+            raise ModelError(line, f"{kind} index out of range")
+        return defined + index, None
+    return index - 1, index
+
+
+def parse_obj(data: bytes | str) -> Mesh:
+    text = data.decode("latin-1") if isinstance(data, bytes) else data
+    vertices: list[tuple[float, float, float]] = []
+    texcoords: list[tuple[float, float]] = []
+    normals: list[tuple[float, float, float]] = []
+    faces: list[list[tuple[int, int, int]]] = []
+    forward: list[tuple[int, str, int]] = []      # (line, kind, 1-based index) checked at the end
+    for number, raw in enumerate(text.split("\n"), start=1):
+        raw = raw.split("#", 1)[0]
+        if raw.endswith("\r"):
+            raw = raw[:-1]
+        tokens = raw.replace("\t", " ").split(" ")
+        tokens = [t for t in tokens if t]
+        if not tokens:
+            continue
+        keyword, args = tokens[0], tokens[1:]
+        if keyword in IGNORED:
+            continue
+        if keyword == "v":
+            values = [_number(number, a) for a in args]
+            if len(values) not in (3, 4, 6, 7):
+                raise ModelError(number, "v takes 3, 4, 6 or 7 numbers")
+            vertices.append((values[0], values[1], values[2]))
+        elif keyword == "vt":
+            values = [_number(number, a) for a in args]
+            if not 1 <= len(values) <= 3:
+                raise ModelError(number, "vt takes 1, 2 or 3 numbers")
+            texcoords.append((values[0], values[1] if len(values) > 1 else 0.0))
+        elif keyword == "vn":
+            values = [_number(number, a) for a in args]
+            if len(values) != 3:
+                raise ModelError(number, "vn takes 3 numbers")
+            normals.append((values[0], values[1], values[2]))
+        elif keyword == "f":
+            corners = []
+            for arg in args:
+                match = CORNER.match(arg)
+                if not match or ("//" in arg and match.group(3) is None) or arg.endswith("/"):
+                    raise ModelError(number, "malformed face corner (expected v, v/vt, v//vn or v/vt/vn)")
+                corner = []
+                for text_index, defined, kind in zip(match.groups(), (len(vertices), len(texcoords), len(normals)),
+                                                     ("vertex", "texture coordinate", "normal")):
+                    if text_index is None:
+                        corner.append(NO_INDEX)
+                        continue
+                    index, later = _resolve(number, text_index, defined, kind)
+                    if later is not None:
+                        forward.append((number, kind, later))
+                    corner.append(index)
+                corners.append(tuple(corner))
+            if len(corners) < 3:
+                raise ModelError(number, "face with fewer than 3 vertices")
+            for i in range(1, len(corners) - 1):
+                faces.append([corners[0], corners[i], corners[i + 1]])
+        else:
+            raise ModelError(number, "unknown statement")
+    totals = {"vertex": len(vertices), "texture coordinate": len(texcoords), "normal": len(normals)}
+    for line, kind, index in forward:
+        if index > totals[kind]:
+            raise ModelError(line, f"{kind} index out of range")
+    if not faces:
+        raise ModelError(None, "no faces")
+    return Mesh(np.array(vertices, dtype=np.float64).reshape(-1, 3),
+                np.array(texcoords, dtype=np.float64).reshape(-1, 2),
+                np.array(normals, dtype=np.float64).reshape(-1, 3),
+                np.array(faces, dtype=np.int64).reshape(-1, 3, 3))

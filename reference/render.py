@@ -1,0 +1,355 @@
+"""One frame, rendered exactly (float64) with the firmware's documented conventions.
+
+Written for clarity, not speed: it is the yardstick for the firmware's trade-offs.
+
+Conventions (README "Rendering", firmware/vertex.S, render.S, raster.S, maths.S):
+- right-handed; the camera at the origin looking down -z; no view matrix (world = eye space);
+- model matrix M = T R S, R the rotation by the unit quaternion about the (normalised) axis by
+  angle + n * step degrees (right-hand rule);
+- projection (D3D-style depth, 0 at near, 1 at far), f = cot(fov / 2), aspect 320 / 240:
+  [[f/aspect, 0, 0, 0], [0, f, 0, 0], [0, 0, far/(near-far), near far/(near-far)], [0, 0, -1, 0]];
+- screen x = (x/w + 1) * 160, y = (1 - y/w) * 120 (y down); pixel (x, y) covers
+  [x, x+1) x [y, y+1) and is sampled at its centre (x + 0.5, y + 0.5);
+- trivial rejection by outcodes; triangles cut at the near plane (clip z >= 0) in homogeneous
+  clip space, attributes interpolated linearly in clip space;
+- signed area (x1-x0)(y2-y0) - (x2-x0)(y1-y0) < 0 (y down) = counter-clockwise as seen = front;
+  0 = degenerate (nothing drawn); > 0 = back, dropped when cull is on;
+- inside: every edge function (b - a) x (p - a) >= 0 once the corners are in positive order,
+  and a centre exactly on an edge belongs to the triangle only for a top edge (dy = 0, dx > 0)
+  or a left edge (dy < 0) -- the top-left rule;
+- depth z/w (affine in screen space), cleared to 1.0 (the far plane), nearer strictly wins;
+- lighting per face: N = (w1 - w0) x (w2 - w0) from the world-space corners, intensity
+  I = max(ambient, N.L / |N|) (ambient when |N| = 0);
+- flat mode: 0xC618 lit; textured: perspective-correct (u, v), texel column floor(u W) mod W,
+  row floor((1 - v) H) mod H (v = 0 is the bottom of the image), lit; a corner without vt
+  takes (0, 0);
+- wireframe: the unique (min, max) vertex index edges, white, no depth test or culling,
+  rejected by outcodes, cut at the near plane, clipped to the screen rectangle [0, 320] x [0, 240]
+  (Liang-Barsky), each end in the pixel it lies in (floor, clamped), Bresenham from the smaller
+  index (or from the end in front of the near plane when one end is cut).
+
+Where the reference is exact and the firmware is not (these are what the comparison measures):
+- float64 throughout, numbers as written in the files (the firmware: single precision, its own
+  sin/cos polynomials);
+- screen positions are not snapped to 1/16 pixel;
+- lighting: each RGB565 channel times I rounded to nearest (the firmware quantises I to
+  k = round(64 I) and truncates channel * k / 64);
+- texture coordinates: exact perspective-correct interpolation (the firmware interpolates
+  u/w, v/w, 1/w incrementally in single precision and divides once per pixel);
+- wireframe end points: exact projections (the firmware converts its Q4 positions to pixels).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .obj import Mesh
+from .scene import Scene
+
+WIDTH, HEIGHT = 320, 240
+FLAT_COLOUR = 0xC618
+WIRE_COLOUR = 0xFFFF
+
+# outcode bits (render.inc)
+OUT_LEFT, OUT_RIGHT, OUT_BOTTOM, OUT_TOP, OUT_NEAR, OUT_FAR = (1 << i for i in range(6))
+
+
+# --------------------------------------------------------------------------- matrices
+
+def rotation_matrix(axis, degrees: float) -> np.ndarray:
+    """The 3x3 rotation of the unit quaternion (cos(a/2), sin(a/2) axis)."""
+    axis = np.asarray(axis, dtype=np.float64)
+    axis = axis / np.linalg.norm(axis)
+    half = math.radians(degrees) / 2.0
+    w = math.cos(half)
+    x, y, z = math.sin(half) * axis
+    return np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+    ])
+
+
+def model_matrix(scene: Scene, n: int) -> np.ndarray:
+    """T R S for frame n."""
+    m = np.eye(4)
+    m[:3, :3] = rotation_matrix(scene.axis, scene.angle + n * scene.step) @ np.diag(scene.scale)
+    m[:3, 3] = scene.translate
+    return m
+
+
+def projection_matrix(scene: Scene) -> np.ndarray:
+    f = 1.0 / math.tan(math.radians(scene.fov) / 2.0)
+    aspect = WIDTH / HEIGHT
+    near, far = scene.near, scene.far
+    return np.array([
+        [f / aspect, 0, 0, 0],
+        [0, f, 0, 0],
+        [0, 0, far / (near - far), near * far / (near - far)],
+        [0, 0, -1, 0],
+    ], dtype=np.float64)
+
+
+def outcodes(clip: np.ndarray) -> np.ndarray:
+    x, y, z, w = clip.T
+    return ((x < -w) * OUT_LEFT | (x > w) * OUT_RIGHT | (y < -w) * OUT_BOTTOM | (y > w) * OUT_TOP
+            | (z < 0) * OUT_NEAR | (z > w) * OUT_FAR).astype(np.int64)
+
+
+def to_screen(clip: np.ndarray) -> np.ndarray:
+    """Screen positions in pixels (x right, y down) of clip-space points with w > 0."""
+    x, y, w = clip[..., 0], clip[..., 1], clip[..., 3]
+    return np.stack([(x / w + 1.0) * (WIDTH / 2), (1.0 - y / w) * (HEIGHT / 2)], axis=-1)
+
+
+# --------------------------------------------------------------------------- colours
+
+def rgb565_channels(colour: int) -> tuple[int, int, int]:
+    return (colour >> 11) & 31, (colour >> 5) & 63, colour & 31
+
+
+def shade(colours, intensity: float):
+    """RGB565 colour(s) with each channel times the intensity, rounded to nearest."""
+    c = np.asarray(colours, dtype=np.int64)
+    r = np.floor(((c >> 11) & 31) * intensity + 0.5).astype(np.int64)
+    g = np.floor(((c >> 5) & 63) * intensity + 0.5).astype(np.int64)
+    b = np.floor((c & 31) * intensity + 0.5).astype(np.int64)
+    out = (np.minimum(r, 31) << 11) | (np.minimum(g, 63) << 5) | np.minimum(b, 31)
+    return out.astype(np.uint16)
+
+
+def rgb565_to_rgb888(pixels: np.ndarray) -> np.ndarray:
+    """As the board model's LCD shows RGB565 (emulator/grab.py rgb565_image): 5 -> 6 bits by
+    r << 1 | r >> 4, then 6 -> 8 bits by c << 2 | c >> 4."""
+    pixels = np.asarray(pixels, dtype=np.uint16)
+    r5, g6, b5 = (pixels >> 11) & 31, (pixels >> 5) & 63, pixels & 31
+    image = np.empty(pixels.shape + (3,), dtype=np.uint8)
+    for channel, six in enumerate(((r5 << 1) | (r5 >> 4), g6, (b5 << 1) | (b5 >> 4))):
+        image[..., channel] = ((six << 2) | (six >> 4)).astype(np.uint8)
+    return image
+
+
+def face_intensity(world: np.ndarray, scene: Scene) -> float:
+    """max(ambient, N.L / |N|), N = (w1 - w0) x (w2 - w0); ambient for a degenerate face."""
+    normal = np.cross(world[1] - world[0], world[2] - world[0])
+    length = np.linalg.norm(normal)
+    if length == 0.0:
+        return scene.ambient
+    return max(scene.ambient, float(np.dot(normal, scene.light)) / length)
+
+
+# --------------------------------------------------------------------------- triangles
+
+def clip_near(corners: np.ndarray) -> np.ndarray:
+    """Sutherland-Hodgman against z >= 0 of rows (x, y, z, w, attributes...): 0, 3 or 4 rows.
+    An edge is cut from its corner in front towards the one behind, z set to exactly 0."""
+    out = []
+    for i in range(len(corners)):
+        a, b = corners[i], corners[(i + 1) % len(corners)]
+        a_in, b_in = a[2] >= 0, b[2] >= 0
+        if a_in:
+            out.append(a)
+        if a_in != b_in:
+            p, q = (a, b) if a_in else (b, a)
+            t = p[2] / (p[2] - q[2])
+            cut = p + t * (q - p)
+            cut[2] = 0.0
+            out.append(cut)
+    return np.array(out)
+
+
+def edge_function(a: np.ndarray, b: np.ndarray, px: np.ndarray, py: np.ndarray) -> np.ndarray:
+    """(b - a) x (p - a), computed with the end points in a canonical order and negated when
+    swapped, so that the two triangles sharing an edge get exactly opposite values (no crack,
+    no pixel drawn twice even where rounding would otherwise disagree)."""
+    if (a[0], a[1]) > (b[0], b[1]):
+        return -edge_function(b, a, px, py)
+    return (b[0] - a[0]) * (py - a[1]) - (b[1] - a[1]) * (px - a[0])
+
+
+def owns_ties(a: np.ndarray, b: np.ndarray) -> bool:
+    """Top-left rule for the edge a -> b of a triangle in positive order (y down)."""
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    return dy < 0 or (dy == 0 and dx > 0)
+
+
+class Target:
+    """The colour and depth buffers of one frame."""
+
+    def __init__(self, background: int):
+        self.colour = np.full((HEIGHT, WIDTH), background, dtype=np.uint16)
+        self.depth = np.ones((HEIGHT, WIDTH), dtype=np.float64)
+
+
+def raster_triangle(target: Target, screen: np.ndarray, zw: np.ndarray, q: np.ndarray,
+                    cull: bool, colour: int | None, uv: np.ndarray | None = None,
+                    texture: np.ndarray | None = None, intensity: float = 1.0) -> None:
+    """One triangle given by its screen corners (3, 2), z/w (3,), 1/w (3,): flat `colour`, or
+    textured (uv (3, 2) per corner, perspective-correct) and lit by `intensity`."""
+    (x0, y0), (x1, y1), (x2, y2) = screen
+    area = (x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0)
+    if area == 0 or not math.isfinite(area):
+        return
+    order = [0, 1, 2]
+    if area > 0:
+        if cull:
+            return                      # back face
+    else:
+        order = [0, 2, 1]               # front face: into positive order
+        area = -area
+    screen, zw, q = screen[order], zw[order], q[order]
+    if uv is not None:
+        uv = uv[order]
+    xmin = max(0, math.ceil(screen[:, 0].min() - 0.5))
+    xmax = min(WIDTH - 1, math.floor(screen[:, 0].max() - 0.5))
+    ymin = max(0, math.ceil(screen[:, 1].min() - 0.5))
+    ymax = min(HEIGHT - 1, math.floor(screen[:, 1].max() - 0.5))
+    if xmin > xmax or ymin > ymax:
+        return
+    px, py = np.meshgrid(np.arange(xmin, xmax + 1) + 0.5, np.arange(ymin, ymax + 1) + 0.5)
+    inside = np.ones(px.shape, dtype=bool)
+    weights = []                       # barycentric weight of corner i: edge opposite it / area
+    for i in range(3):
+        a, b = screen[(i + 1) % 3], screen[(i + 2) % 3]
+        e = edge_function(a, b, px, py)
+        inside &= (e >= 0) if owns_ties(a, b) else (e > 0)
+        weights.append(e / area)
+    if not inside.any():
+        return
+    l0, l1, l2 = (w[inside] for w in weights)
+    depth = l0 * zw[0] + l1 * zw[1] + l2 * zw[2]
+    ys, xs = np.nonzero(inside)
+    ys, xs = ys + ymin, xs + xmin
+    nearer = depth < target.depth[ys, xs]
+    if not nearer.any():
+        return
+    ys, xs, depth = ys[nearer], xs[nearer], depth[nearer]
+    l0, l1, l2 = l0[nearer], l1[nearer], l2[nearer]
+    target.depth[ys, xs] = depth
+    if texture is None or uv is None:
+        target.colour[ys, xs] = colour
+        return
+    # perspective-correct: u = sum(l_i u_i / w_i) / sum(l_i / w_i)
+    inv_w = l0 * q[0] + l1 * q[1] + l2 * q[2]
+    u = (l0 * uv[0, 0] * q[0] + l1 * uv[1, 0] * q[1] + l2 * uv[2, 0] * q[2]) / inv_w
+    v = (l0 * uv[0, 1] * q[0] + l1 * uv[1, 1] * q[1] + l2 * uv[2, 1] * q[2]) / inv_w
+    height, width = texture.shape
+    column = np.floor(u * width).astype(np.int64) % width
+    row = np.floor((1.0 - v) * height).astype(np.int64) % height
+    target.colour[ys, xs] = shade(texture[row, column], intensity)
+
+
+# --------------------------------------------------------------------------- lines
+
+def bresenham(x0: int, y0: int, x1: int, y1: int):
+    """raster_line's pixels, both ends included (the error-term form of all octants)."""
+    dx, sx = abs(x1 - x0), (1 if x1 >= x0 else -1)
+    dy, sy = -abs(y1 - y0), (1 if y1 >= y0 else -1)
+    error = dx + dy
+    while True:
+        yield x0, y0
+        if x0 == x1 and y0 == y1:
+            return
+        e2 = 2 * error
+        if e2 >= dy:
+            error += dy
+            x0 += sx
+        if e2 <= dx:
+            error += dx
+            y0 += sy
+
+
+def clip_segment(a, b):
+    """Liang-Barsky against [0, W] x [0, H]; None when nothing is left."""
+    (x0, y0), (x1, y1) = a, b
+    dx, dy = x1 - x0, y1 - y0
+    t0, t1 = 0.0, 1.0
+    for p, q in ((-dx, x0), (dx, WIDTH - x0), (-dy, y0), (dy, HEIGHT - y0)):
+        if p == 0:
+            if q < 0:
+                return None
+            continue
+        r = q / p
+        if p < 0:
+            t0 = max(t0, r)
+        else:
+            t1 = min(t1, r)
+        if t1 < t0:
+            return None
+    return (x0 + t0 * dx, y0 + t0 * dy), (x0 + t1 * dx, y0 + t1 * dy)
+
+
+def draw_segment(target: Target, a, b, colour: int) -> None:
+    clipped = clip_segment(a, b)
+    if clipped is None:
+        return
+    (xa, ya), (xb, yb) = clipped
+    ends = [min(max(math.floor(c), 0), limit - 1)
+            for c, limit in ((xa, WIDTH), (ya, HEIGHT), (xb, WIDTH), (yb, HEIGHT))]
+    for x, y in bresenham(*ends):
+        target.colour[y, x] = colour
+
+
+def unique_edges(faces: np.ndarray) -> np.ndarray:
+    v = faces[:, :, 0]
+    pairs = np.concatenate([v[:, [0, 1]], v[:, [1, 2]], v[:, [2, 0]]])
+    pairs.sort(axis=1)
+    return np.unique(pairs, axis=0)
+
+
+# --------------------------------------------------------------------------- a frame
+
+def render_frame(scene: Scene, mesh: Mesh, texture: np.ndarray | None, n: int) -> np.ndarray:
+    """Frame n as a (240, 320) uint16 RGB565 array, row 0 at the top."""
+    target = Target(scene.background)
+    points = np.hstack([mesh.vertices, np.ones((len(mesh.vertices), 1))])
+    model = model_matrix(scene, n)
+    world = (points @ model.T)[:, :3]
+    clip = points @ (projection_matrix(scene) @ model).T
+    codes = outcodes(clip)
+
+    if scene.mode == "wireframe":
+        for i, j in unique_edges(mesh.faces):
+            if codes[i] & codes[j]:
+                continue
+            a, b = clip[i], clip[j]
+            if (codes[i] | codes[j]) & OUT_NEAR:
+                if codes[i] & OUT_NEAR:
+                    a, b = b, a                      # a = the end in front
+                t = a[2] / (a[2] - b[2])
+                b = a + t * (b - a)
+                b[2] = 0.0
+            draw_segment(target, to_screen(a), to_screen(b), WIRE_COLOUR)
+        return target.colour
+
+    textured = scene.mode == "textured" and texture is not None and texture.size > 0
+    for face in mesh.faces:
+        corners = face[:, 0]
+        if np.bitwise_and.reduce(codes[corners]):
+            continue                                  # all outside one plane
+        intensity = face_intensity(world[corners], scene)
+        uv = np.zeros((3, 2))
+        if textured:
+            for k, t in enumerate(face[:, 1]):
+                if 0 <= t < len(mesh.texcoords):
+                    uv[k] = mesh.texcoords[t]
+        pieces = clip_near(np.hstack([clip[corners], uv]))
+        if len(pieces) < 3:
+            continue
+        screen = to_screen(pieces)
+        zw = pieces[:, 2] / pieces[:, 3]
+        q = 1.0 / pieces[:, 3]
+        for tri in ([0, 1, 2], [0, 2, 3])[:len(pieces) - 2]:
+            if textured:
+                raster_triangle(target, screen[tri], zw[tri], q[tri], scene.cull, None,
+                                uv=pieces[tri, 4:6], texture=texture, intensity=intensity)
+            else:
+                raster_triangle(target, screen[tri], zw[tri], q[tri], scene.cull,
+                                int(shade(FLAT_COLOUR, intensity)))
+    return target.colour
+
+
+def render_image(scene: Scene, mesh: Mesh, texture: np.ndarray | None, n: int) -> np.ndarray:
+    """Frame n as the LCD shows it: (240, 320, 3) uint8 RGB, row 0 at the top."""
+    return rgb565_to_rgb888(render_frame(scene, mesh, texture, n))

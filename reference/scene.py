@@ -1,0 +1,223 @@
+"""scene.ini, read as the firmware reads it (firmware/scene.S, README "scene.ini").
+
+One `key = value` per line; `#` starts a comment except as the first character of a value
+(`background = #203040`); blank lines, CRLF and a UTF-8 byte-order mark are fine; keys and the
+words of `mode` and `cull` ignore case. An unknown or repeated key, a malformed line or a bad
+value raises `SceneError` naming the line (counted from 1), with the firmware's wording:
+``bad scene.ini line N: <what>``.
+
+Unlike the firmware (which keeps single precision), numbers are kept as float64: the reference
+renders with the exact values written in the file. Range checks follow the firmware (a number
+must be finite in single precision, fov in (0, 180), near and far > 0, far > near, ambient in
+[0, 1], axis and light not zero, then normalised).
+"""
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .ppm import rgb565_from_samples
+
+MODES = {"textured": 0, "flat": 1, "wireframe": 2}
+CULL_WORDS = {"on": True, "off": False, "yes": True, "no": False, "true": True, "false": False,
+              "1": True, "0": False}
+KEYS = ("model", "texture", "mode", "cull", "scale", "axis", "angle", "step", "translate",
+        "fov", "near", "far", "light", "ambient", "background")
+VALUE_MAX = 256          # a path of this many bytes or more is too long (NUL included)
+
+NUMBER = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?\Z")
+
+
+class SceneError(ValueError):
+    """A bad scene.ini line (the firmware's error 9)."""
+
+    def __init__(self, line: int, what: str):
+        super().__init__(f"bad scene.ini line {line}: {what}")
+        self.line = line
+        self.what = what
+
+
+@dataclass
+class Scene:
+    model: str = "model.obj"
+    texture: str = "texture.ppm"
+    mode: str = "textured"                       # textured | flat | wireframe
+    cull: bool = True
+    scale: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    axis: tuple[float, float, float] = (0.0, 1.0, 0.0)       # unit
+    angle: float = 0.0                           # degrees at frame 0
+    step: float = 4.0                            # degrees per frame
+    translate: tuple[float, float, float] = (0.0, 0.0, -3.0)
+    fov: float = 60.0                            # vertical, degrees
+    near: float = 0.1
+    far: float = 100.0
+    light: tuple[float, float, float] = (0.0, 0.0, 1.0)      # unit, towards the light
+    ambient: float = 0.2
+    background: int = 0x10A2                     # RGB565 (RGB 16, 20, 16)
+    lines: dict[str, int] = field(default_factory=dict, repr=False)   # key -> line that set it
+
+
+def parse_number(text: str) -> float | None:
+    """parse.S's number grammar: [+|-] (digits [. digits] | . digits) [(e|E) [+|-] digits]."""
+    if not NUMBER.match(text):
+        return None
+    return float(text)
+
+
+def _numbers(line: int, value: str) -> list[float]:
+    numbers = []
+    for token in value.replace("\t", " ").split():
+        number = parse_number(token)
+        if number is None:
+            raise SceneError(line, "bad value (not a number)")
+        numbers.append(number)
+    return numbers
+
+
+def _finite_single(line: int, numbers: list[float]) -> None:
+    """Every number must stay finite when rounded to single precision (as the firmware stores it)."""
+    for number in numbers:
+        with np.errstate(over="ignore"):
+            single = float(np.float32(number))
+        if not math.isfinite(single):
+            raise SceneError(line, "bad value (number out of range)")
+
+
+def _count(line: int, key: str, numbers: list[float], count: int, broadcast: bool = False) -> list[float]:
+    if len(numbers) == count:
+        return numbers
+    if broadcast and len(numbers) == 1:
+        return numbers * count
+    if broadcast:
+        raise SceneError(line, "bad value (expected 1 or 3 numbers)")
+    raise SceneError(line, "bad value (expected 1 number)" if count == 1 else "bad value (expected 3 numbers)")
+
+
+def _direction(line: int, numbers: list[float]) -> tuple[float, float, float]:
+    length = math.sqrt(sum(c * c for c in numbers))
+    if length == 0.0:
+        raise SceneError(line, "bad value (zero vector)")
+    return tuple(c / length for c in numbers)  # type: ignore[return-value]
+
+
+def _colour(line: int, value: str) -> int:
+    bad = "bad value (expected R G B with 0..255 each, or #RRGGBB)"
+    if value.startswith("#"):
+        if not re.fullmatch(r"#[0-9A-Fa-f]{6}", value):
+            raise SceneError(line, bad)
+        rgb = [int(value[i:i + 2], 16) for i in (1, 3, 5)]
+    else:
+        numbers = []
+        for token in value.replace("\t", " ").split():
+            number = parse_number(token)
+            if number is None:
+                raise SceneError(line, bad)
+            numbers.append(number)
+        if len(numbers) != 3 or any(n != int(n) or not 0 <= n <= 255 for n in numbers):
+            raise SceneError(line, bad)
+        rgb = [int(n) for n in numbers]
+    return rgb565_from_samples(*rgb, maxval=255)
+
+
+def _split_line(raw: str, line: int) -> tuple[str, str] | None:
+    """(key, value) of one line, None for a blank or comment-only line (scene.S's scan)."""
+    scan = "key"          # key -> value_start (after the first '=') -> value
+    end = len(raw)
+    for i, ch in enumerate(raw):
+        if ch == "#":
+            if scan == "value_start":
+                scan = "value"          # '#' opening the value is kept
+                continue
+            end = i
+            break
+        if ch == "\t" or ch == " ":
+            continue
+        if ord(ch) < 0x20 or ord(ch) == 0x7F:
+            raise SceneError(line, "malformed line (control character)")
+        if ch == "=" and scan == "key":
+            scan = "value_start"
+        elif scan != "key":
+            scan = "value"
+    text = raw[:end].strip(" \t")
+    if not text:
+        return None
+    if "=" not in text:
+        raise SceneError(line, "malformed line (no '=')")
+    key, value = text.split("=", 1)
+    key, value = key.strip(" \t"), value.strip(" \t")
+    if not key:
+        raise SceneError(line, "malformed line (no key)")
+    return key, value
+
+
+def parse_scene(text: str | bytes | None) -> Scene:
+    """The scene of a scene.ini text (None: no scene.ini, every default)."""
+    scene = Scene()
+    if text is None:
+        return scene
+    if isinstance(text, bytes):
+        text = text.decode("latin-1")
+    if text.startswith("\ufeff"):
+        text = text[1:]
+    elif text.startswith("\xef\xbb\xbf"):
+        text = text[3:]
+    for number, raw in enumerate(text.split("\n"), start=1):
+        if raw.endswith("\r"):
+            raw = raw[:-1]
+        split = _split_line(raw, number)
+        if split is None:
+            continue
+        key, value = split
+        key = key.lower()
+        if key not in KEYS:
+            raise SceneError(number, "unknown key")
+        if key in scene.lines:
+            raise SceneError(number, "duplicate key")
+        scene.lines[key] = number
+        if not value:
+            raise SceneError(number, "malformed line (no value)")
+        _set(scene, key, value, number)
+    near_line = scene.lines.get("near", 0)
+    if not scene.far > scene.near:
+        raise SceneError(scene.lines.get("far", near_line), "bad value (far must be greater than near)")
+    return scene
+
+
+def _set(scene: Scene, key: str, value: str, line: int) -> None:
+    if key in ("model", "texture"):
+        if len(value.encode("latin-1")) >= VALUE_MAX:
+            raise SceneError(line, "malformed line (value too long)")
+        setattr(scene, key, value)
+    elif key == "mode":
+        if value.lower() not in MODES:
+            raise SceneError(line, "bad value (expected textured, flat or wireframe)")
+        scene.mode = value.lower()
+    elif key == "cull":
+        if value.lower() not in CULL_WORDS:
+            raise SceneError(line, "bad value (expected on, off, yes, no, true, false, 1 or 0)")
+        scene.cull = CULL_WORDS[value.lower()]
+    elif key == "background":
+        scene.background = _colour(line, value)
+    else:
+        numbers = _numbers(line, value)
+        if key == "scale":
+            numbers = _count(line, key, numbers, 3, broadcast=True)
+        elif key in ("axis", "light", "translate"):
+            numbers = _count(line, key, numbers, 3)
+        else:
+            numbers = _count(line, key, numbers, 1)
+        _finite_single(line, numbers)
+        if key in ("axis", "light"):
+            setattr(scene, key, _direction(line, numbers))
+            return
+        first = numbers[0]
+        if key == "fov" and not 0.0 < first < 180.0:
+            raise SceneError(line, "bad value (fov must be between 0 and 180 degrees)")
+        if key in ("near", "far") and not first > 0.0:
+            raise SceneError(line, "bad value (must be greater than 0)")
+        if key == "ambient" and not 0.0 <= first <= 1.0:
+            raise SceneError(line, "bad value (must be between 0 and 1)")
+        setattr(scene, key, tuple(numbers) if len(numbers) == 3 else first)

@@ -1,0 +1,394 @@
+"""The reference renderer (reference/): analytic cases that must hold exactly, its parsers'
+errors, and a loose agreement with the firmware's golden frames (a convention check)."""
+from __future__ import annotations
+
+import math
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+ROOT = Path(__file__).resolve().parent.parent
+if str(ROOT) not in sys.path:
+    sys.path.insert(0, str(ROOT))
+
+from golden_scenes import DEFAULT_CARD, GOLDEN, SCENES, scene_card  # noqa: E402
+from reference import (Mesh, ModelError, Scene, SceneError, TextureError, load_card_image,  # noqa: E402
+                       load_files, parse_obj, parse_ppm, parse_scene, render_frame, render_image)
+from reference.render import Target, raster_triangle  # noqa: E402
+
+W, H = 320, 240
+BG = 0x0000
+
+
+def _scene(**keys) -> Scene:
+    base = dict(mode="flat", cull=False, step=0.0, translate=(0.0, 0.0, 0.0), ambient=1.0, background=BG)
+    base.update(keys)
+    return Scene(**base)
+
+
+def _mesh(vertices, faces, texcoords=None) -> Mesh:
+    faces = np.array([[[v, t, -1] for v, t in zip(f, tf)] for f, tf in
+                      zip(faces, [[-1] * 3] * len(faces) if texcoords is None else faces)])
+    return Mesh(np.array(vertices, float), np.array(texcoords if texcoords is not None else [], float).reshape(-1, 2),
+                np.zeros((0, 3)), faces)
+
+
+def _to_world(sx, sy, z, fov=60.0):
+    """The world point at depth z (< 0) that projects to screen (sx, sy)."""
+    f = 1.0 / math.tan(math.radians(fov) / 2)
+    w = -z
+    return ((sx / 160.0 - 1.0) * w * (4 / 3) / f, (1.0 - sy / 120.0) * w / f, z)
+
+
+def _project(point, fov=60.0):
+    f = 1.0 / math.tan(math.radians(fov) / 2)
+    x, y, z = point
+    return ((f / (4 / 3) * x / -z + 1) * 160.0, (1 - f * y / -z) * 120.0)
+
+
+def _centres():
+    return np.meshgrid(np.arange(W) + 0.5, np.arange(H) + 0.5)
+
+
+# --------------------------------------------------------------------------- coverage
+
+def test_a_face_on_quad_covers_exactly_the_centres_inside_it():
+    z = -2.0
+    corners = [(-0.7, -0.3), (0.45, -0.3), (0.45, 0.55), (-0.7, 0.55)]
+    mesh = _mesh([(x, y, z) for x, y in corners], [(0, 1, 2), (0, 2, 3)])
+    frame = render_frame(_scene(), mesh, None, 0)
+    left, bottom = _project((-0.7, -0.3, z))
+    right, top = _project((0.45, 0.55, z))
+    cx, cy = _centres()
+    expected = (cx > left) & (cx < right) & (cy > top) & (cy < bottom)
+    assert expected.sum() > 1000
+    assert np.array_equal(frame != BG, expected)
+    assert set(np.unique(frame[expected])) == {0xC618}
+
+
+def _coverage(triangles):
+    count = np.zeros((H, W), int)
+    for tri in triangles:
+        target = Target(BG)
+        raster_triangle(target, np.array(tri, float), np.full(3, 0.5), np.ones(3), False, 0xFFFF)
+        count += target.colour != BG
+    return count
+
+
+@pytest.mark.parametrize("left, top, right, bottom", [(10.5, 20.5, 90.5, 70.5),      # corners on centres
+                                                       (30.0, 40.0, 130.0, 100.0),     # on pixel edges
+                                                       (12.37, 8.91, 211.13, 199.71)])  # generic
+def test_two_triangles_sharing_an_edge_cover_their_union_exactly_once(left, top, right, bottom):
+    a, b, c, d = (left, top), (right, top), (right, bottom), (left, bottom)
+    cx, cy = _centres()
+    # the top-left rule on an axis-aligned rectangle: left and top edges in, right and bottom out
+    expected = (cx >= left) & (cx < right) & (cy >= top) & (cy < bottom)
+    for pair in ([(a, b, c), (a, c, d)], [(a, b, d), (b, c, d)], [(a, c, b), (c, a, d)]):
+        count = _coverage(pair)
+        assert count.max() == 1
+        assert np.array_equal(count == 1, expected)
+
+
+def test_a_fan_of_triangles_around_a_point_has_no_cracks_or_overlaps():
+    rng = np.random.default_rng(5)
+    centre = (160.5, 120.5)                               # on a pixel centre, shared by every triangle
+    angles = np.sort(rng.uniform(0, 2 * np.pi, 11))
+    rim = [(160.5 + 100 * np.cos(t), 120.5 + 100 * np.sin(t)) for t in angles]
+    count = _coverage([(centre, rim[i], rim[(i + 1) % len(rim)]) for i in range(len(rim))])
+    assert count.max() == 1
+    # the union is the convex rim polygon: every centre strictly inside it is covered once
+    cx, cy = _centres()
+    inside = np.ones((H, W), bool)
+    for i in range(len(rim)):
+        (x0, y0), (x1, y1) = rim[i], rim[(i + 1) % len(rim)]
+        inside &= (x1 - x0) * (cy - y0) - (y1 - y0) * (cx - x0) > 1e-9
+    assert np.all(count[inside] == 1)
+
+
+def test_back_faces_are_culled_and_front_faces_are_counter_clockwise():
+    z = -2.0
+    ccw = _mesh([(-0.5, -0.5, z), (0.5, -0.5, z), (0.0, 0.5, z)], [(0, 1, 2)])
+    cw = _mesh([(-0.5, -0.5, z), (0.0, 0.5, z), (0.5, -0.5, z)], [(0, 1, 2)])
+    assert (render_frame(_scene(cull=True), ccw, None, 0) != BG).sum() > 1000
+    assert (render_frame(_scene(cull=True), cw, None, 0) != BG).sum() == 0
+    assert np.array_equal(render_frame(_scene(cull=False), cw, None, 0),
+                          render_frame(_scene(cull=False), ccw, None, 0))
+
+
+def test_the_nearer_triangle_wins():
+    far = [(-0.8, -0.8, -3.0), (0.8, -0.8, -3.0), (0.0, 0.8, -3.0)]
+    near = [(-0.3, -0.3, -2.0), (0.3, -0.3, -2.0), (0.0, 0.3, -2.0)]
+    for order in ([(0, 1, 2), (3, 4, 5)], [(3, 4, 5), (0, 1, 2)]):
+        scene = _scene(light=(0.0, 0.6, 0.8), ambient=0.0)
+        mesh = _mesh(far + near, order)
+        frame = render_frame(scene, mesh, None, 0)
+        # both faces lit the same; tell them apart by rendering the near one alone
+        alone = render_frame(scene, _mesh(near, [(0, 1, 2)]), None, 0) != BG
+        assert np.all(frame[alone] != BG)
+        assert (frame != BG).sum() > alone.sum()
+
+
+# --------------------------------------------------------------------------- texture and light
+
+def test_a_texture_mapped_one_to_one_comes_back_unchanged():
+    rng = np.random.default_rng(1)
+    tw, th, x0, y0 = 37, 23, 101, 57
+    texture = rng.integers(0, 65536, (th, tw)).astype(np.uint16)
+    z = -1.7
+    corners = [(x0, y0 + th), (x0 + tw, y0 + th), (x0 + tw, y0), (x0, y0)]   # screen: bottom-left first
+    vertices = [_to_world(sx, sy, z) for sx, sy in corners]
+    uv = [(0, 0), (1, 0), (1, 1), (0, 1)]
+    mesh = _mesh(vertices, [(0, 1, 2), (0, 2, 3)], texcoords=uv)
+    frame = render_frame(_scene(mode="textured", cull=True), mesh, texture, 0)
+    assert np.array_equal(frame[y0:y0 + th, x0:x0 + tw], texture)
+    mask = np.ones((H, W), bool)
+    mask[y0:y0 + th, x0:x0 + tw] = False
+    assert np.all(frame[mask] == BG)
+
+
+def test_texture_coordinates_repeat():
+    texture = np.arange(4 * 4, dtype=np.uint16).reshape(4, 4) + 1
+    z = -1.0
+    corners = [(40, 120), (120, 120), (120, 40), (40, 40)]
+    vertices = [_to_world(sx, sy, z) for sx, sy in corners]
+    once = _mesh(vertices, [(0, 1, 2), (0, 2, 3)], texcoords=[(0, 0), (1, 0), (1, 1), (0, 1)])
+    twice = _mesh(vertices, [(0, 1, 2), (0, 2, 3)], texcoords=[(-1, 3), (1, 3), (1, 5), (-1, 5)])
+    a = render_frame(_scene(mode="textured"), once, texture, 0)[40:120, 40:120]
+    b = render_frame(_scene(mode="textured"), twice, texture, 0)[40:120, 40:120]
+    assert np.array_equal(a.reshape(4, 20, 4, 20)[:, 0, :, 0], texture)     # 20 x 20 pixels a texel
+    for y in (0, 40):
+        for x in (0, 40):
+            assert np.array_equal(b[y:y + 40, x:x + 40], a[::2, ::2])
+
+
+@pytest.mark.parametrize("light, ambient", [((0.0, 0.0, 1.0), 0.2), ((0.0, 0.6, 0.8), 0.2),
+                                            ((0.36, 0.48, 0.8), 0.9), ((0.0, 1.0, 0.0), 0.3),
+                                            ((0.0, 0.0, -1.0), 0.25)])
+def test_lighting_of_a_face_on_quad_is_max_of_ambient_and_n_dot_l(light, ambient):
+    z = -2.0
+    mesh = _mesh([(-0.5, -0.5, z), (0.5, -0.5, z), (0.5, 0.5, z), (-0.5, 0.5, z)], [(0, 1, 2), (0, 2, 3)])
+    frame = render_frame(_scene(light=light, ambient=ambient), mesh, None, 0)
+    intensity = max(ambient, light[2])                    # the face normal is +z
+    expected = (int(math.floor(24 * intensity + 0.5)) << 11) | (int(math.floor(48 * intensity + 0.5)) << 5) \
+        | int(math.floor(24 * intensity + 0.5))
+    assert set(np.unique(frame[frame != BG])) == {expected}
+
+
+# --------------------------------------------------------------------------- near plane
+
+def test_near_plane_clipping_matches_the_analytic_intersection():
+    near = 0.5
+    a, b, c = (-0.05, -0.03, -0.3), (0.4, -0.3, -1.5), (-0.3, 0.35, -1.2)   # a is behind the near plane
+    mesh = _mesh([a, b, c], [(0, 1, 2)])
+    frame = render_frame(_scene(near=near), mesh, None, 0)
+
+    def cut(p, q):      # where p -> q crosses z = -near
+        t = (-near - p[2]) / (q[2] - p[2])
+        return tuple(p[i] + t * (q[i] - p[i]) for i in range(3))
+
+    polygon = [_project(p) for p in (cut(a, b), b, c, cut(a, c))]
+    cx, cy = _centres()
+    signs = []
+    for i in range(4):
+        (x0, y0), (x1, y1) = polygon[i], polygon[(i + 1) % 4]
+        signs.append((x1 - x0) * (cy - y0) - (y1 - y0) * (cx - x0))
+    expected = np.all(np.array(signs) > 0, axis=0) | np.all(np.array(signs) < 0, axis=0)
+    assert expected.sum() > 1000
+    assert np.array_equal(frame != BG, expected)
+    # and the cut is on screen: without it the corner behind would land elsewhere
+    assert (render_frame(_scene(near=0.1), mesh, None, 0) != BG).sum() != expected.sum()
+
+
+def test_a_triangle_behind_the_camera_draws_nothing():
+    for z in (0.5, 2.0):
+        mesh = _mesh([(-0.5, -0.5, z), (0.5, -0.5, z), (0.0, 0.5, z)], [(0, 1, 2)])
+        for mode in ("flat", "wireframe"):
+            assert np.all(render_frame(_scene(mode=mode), mesh, None, 0) == BG)
+
+
+def test_wireframe_draws_each_edge_once_in_white():
+    z = -2.0
+    mesh = _mesh([(-0.5, -0.5, z), (0.5, -0.5, z), (0.5, 0.5, z), (-0.5, 0.5, z)], [(0, 1, 2), (0, 2, 3)])
+    frame = render_frame(_scene(mode="wireframe"), mesh, None, 0)
+    assert set(np.unique(frame)) == {BG, 0xFFFF}
+    left, bottom = _project((-0.5, -0.5, z))
+    right, top = _project((0.5, 0.5, z))
+    x0, x1, y0, y1 = math.floor(left), math.floor(right), math.floor(top), math.floor(bottom)
+    assert np.all(frame[y0, x0:x1 + 1] == 0xFFFF) and np.all(frame[y0:y1 + 1, x1] == 0xFFFF)
+    lit = (frame == 0xFFFF).sum()
+    perimeter = 2 * (x1 - x0) + 2 * (y1 - y0)
+    assert lit == perimeter + max(x1 - x0, y1 - y0) - 1    # the diagonal shares its two end pixels
+
+
+# --------------------------------------------------------------------------- parsers
+
+@pytest.mark.parametrize("text, line, what", [
+    ("mode = flat\nbogus = 1\n", 2, "unknown key"),
+    ("fov = 60\n\n# c\nFOV = 70\n", 4, "duplicate key"),
+    ("scale 2\n", 1, "malformed line (no '=')"),
+    ("a=1\n", 1, "unknown key"),
+    (" = 3\n", 1, "malformed line (no key)"),
+    ("angle =  \t\n", 1, "malformed line (no value)"),
+    ("angle = # a '#' opening a value is kept\n", 1, "bad value (not a number)"),
+    ("mode = shaded\n", 1, "bad value (expected textured, flat or wireframe)"),
+    ("cull = maybe\n", 1, "bad value (expected on, off, yes, no, true, false, 1 or 0)"),
+    ("\n\nangle = ten\n", 3, "bad value (not a number)"),
+    ("scale = 1 2\n", 1, "bad value (expected 1 or 3 numbers)"),
+    ("translate = 1 2\n", 1, "bad value (expected 3 numbers)"),
+    ("step = 1 2\n", 1, "bad value (expected 1 number)"),
+    ("axis = 0 0 0\n", 1, "bad value (zero vector)"),
+    ("fov = 180\n", 1, "bad value (fov must be between 0 and 180 degrees)"),
+    ("near = 0\n", 1, "bad value (must be greater than 0)"),
+    ("ambient = 1.5\n", 1, "bad value (must be between 0 and 1)"),
+    ("background = 1 2 256\n", 1, "bad value (expected R G B with 0..255 each, or #RRGGBB)"),
+    ("background = #12345\n", 1, "bad value (expected R G B with 0..255 each, or #RRGGBB)"),
+    ("angle = 1e39\n", 1, "bad value (number out of range)"),
+    ("far = 5\nnear = 6\n", 1, "bad value (far must be greater than near)"),
+    ("near = 200\n", 1, "bad value (far must be greater than near)"),
+    ("mode = flat\x01\n", 1, "malformed line (control character)"),
+])
+def test_scene_errors_name_the_line(text, line, what):
+    with pytest.raises(SceneError) as error:
+        parse_scene(text)
+    assert (error.value.line, error.value.what) == (line, what)
+    assert str(error.value) == f"bad scene.ini line {line}: {what}"
+
+
+def test_scene_values_and_defaults():
+    scene = parse_scene("\ufeff# comment\r\nMODE = Wireframe\r\nscale = 2\r\naxis = 0 0 2  # z\r\n"
+                        "background = #203040\r\ncull = No\r\nmodel = Models/A.obj\r\n")
+    assert scene.mode == "wireframe" and scene.cull is False and scene.scale == (2.0, 2.0, 2.0)
+    assert scene.axis == (0.0, 0.0, 1.0) and scene.model == "Models/A.obj"
+    assert scene.background == ((0x20 * 31 + 127) // 255) << 11 | ((0x30 * 63 + 127) // 255) << 5 | (0x40 * 31 + 127) // 255
+    default = parse_scene(None)
+    assert (default.background, default.fov, default.translate, default.step) == (0x10A2, 60.0, (0, 0, -3), 4.0)
+    assert parse_scene("background = 16 20 16\n").background == 0x10A2
+
+
+@pytest.mark.parametrize("text, line, what", [
+    ("v 0 0 0\nvx 1\n", 2, "unknown statement"),
+    ("v 0 0 zero\n", 1, "malformed number"),
+    ("v 0 0\n", 1, "v takes 3, 4, 6 or 7 numbers"),
+    ("v 1 2 3 4 5\n", 1, "v takes 3, 4, 6 or 7 numbers"),
+    ("vt\n", 1, "vt takes 1, 2 or 3 numbers"),
+    ("vn 1 2\n", 1, "vn takes 3 numbers"),
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2/\n", 4, "malformed face corner (expected v, v/vt, v//vn or v/vt/vn)"),
+    ("v 0 0 0\nv 1 0 0\nf 1 2\n", 3, "face with fewer than 3 vertices"),
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n", 4, "index 0 (indices start at 1)"),
+    ("v 0 0 0\nv 1 0 0\nf -3 -2 -1\nv 0 1 0\n", 3, "vertex index out of range"),
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/1 2/1 3/1\n", 4, "texture coordinate index out of range"),
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1//2 2//1 3//1\nvn 0 0 1\n", 4, "normal index out of range"),
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n", 4, "vertex index out of range"),
+    ("v 1e39 0 0\n", 1, "number out of range"),
+])
+def test_model_errors_name_the_line(text, line, what):
+    with pytest.raises(ModelError) as error:
+        parse_obj(text.encode())
+    assert (error.value.line, error.value.what) == (line, what)
+    assert str(error.value) == f"bad model line {line}: {what}"
+
+
+def test_model_forms_negative_indices_and_fans():
+    mesh = parse_obj(b"# a quad\r\no q\nv 0 0 0\nv 1 0 0 1\nv 1 1 0 1 0.5 0.5\nv 0 1 0\nvt 0.5\nvt 0 1 0\n"
+                     b"vn 0 0 1\nf 1/1 2//1 -2/-1/-1 4\ns off\nf 3 2 1 # forward and back\n")
+    assert mesh.faces.shape == (3, 3, 3)
+    assert mesh.faces[0].tolist() == [[0, 0, -1], [1, -1, 0], [2, 1, 0]]
+    assert mesh.faces[1].tolist() == [[0, 0, -1], [2, 1, 0], [3, -1, -1]]
+    assert mesh.texcoords.tolist() == [[0.5, 0.0], [0.0, 1.0]]
+    with pytest.raises(ModelError, match="bad model: no faces"):
+        parse_obj(b"v 0 0 0\n")
+
+
+def test_ppm_reading_and_rounding():
+    p6 = b"P6\n# c\n2 1\n65535\n" + bytes([0xFF, 0xFF, 0x80, 0x00, 0x00, 0x00, 0x7F, 0xFF, 0x00, 0x01, 0x00, 0x00])
+    texture = parse_ppm(p6)
+    expected = [((65535 * 31 + 32767) // 65535) << 11 | ((0x8000 * 63 + 32767) // 65535) << 5,
+                ((0x7FFF * 31 + 32767) // 65535) << 11 | ((1 * 63 + 32767) // 65535) << 5]
+    assert texture.tolist() == [expected]
+    assert parse_ppm(b"P3 1 1 1 1 0 1").tolist() == [[0xF81F]]
+    assert parse_ppm(b"P3 1 2 255 16 20 16 #x\n 255 255 255").tolist() == [[0x10A2], [0xFFFF]]
+    for data, what in [(b"P5 1 1 255 \0", "not a PPM (magic is not P6 or P3)"),
+                       (b"P6 1 1", "truncated header"),
+                       (b"P6 1 0 255 ", "bad header (width or height 0)"),
+                       (b"P6 1 1 65536 ", "bad maxval (not 1..65535)"),
+                       (b"P6 1 1 255 \0\0", "truncated raster (fewer samples than width x height x 3)"),
+                       (b"P3 1 1 255 1 x 3", "bad sample (not a decimal number)"),
+                       (b"P3 1 1 7 1 8 3", "sample above maxval")]:
+        with pytest.raises(TextureError) as error:
+            parse_ppm(data)
+        assert error.value.what == what, data
+
+
+def test_load_files_skips_the_texture_in_wireframe_mode():
+    obj = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"
+    scene, mesh, texture = load_files("mode = wireframe\n", obj, b"not a ppm")
+    assert texture is None and len(mesh.faces) == 1
+    with pytest.raises(TextureError):
+        load_files(None, obj, b"not a ppm")
+
+
+# --------------------------------------------------------------------------- the firmware's goldens
+
+@pytest.fixture(scope="module")
+def golden_cards(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("reference-cards")
+    assets = ROOT / "build" / "assets"
+    if (assets / "models").is_dir() and (assets / "textures").is_dir():
+        shutil.copytree(assets, folder / "assets")
+    return folder
+
+
+@pytest.mark.parametrize("name", sorted(SCENES))
+def test_first_golden_frame_agrees_loosely_with_the_firmware(name, golden_cards):
+    if SCENES[name][0] is None:
+        if not DEFAULT_CARD.exists():
+            pytest.skip("no build/card.img (make card)")
+        card = DEFAULT_CARD
+    else:
+        card = scene_card(name, golden_cards)
+    scene, mesh, texture = load_card_image(card)
+    mine = render_image(scene, mesh, texture, 0).astype(int)
+    golden = np.asarray(Image.open(GOLDEN / name / "frame_0000.png").convert("RGB")).astype(int)
+    difference = np.abs(mine - golden).max(axis=2)
+    identical = float((difference == 0).mean())
+    close = float((difference <= 8).mean())
+    mse = float(((mine - golden) ** 2).mean())
+    psnr = 10 * math.log10(255 ** 2 / mse) if mse else math.inf
+    print(f"\n{name} ({scene.mode}): identical {identical:.2%}, within 8 levels {close:.2%}, PSNR {psnr:.1f} dB")
+    if scene.mode == "wireframe":
+        assert identical >= 0.98
+    else:
+        assert close >= 0.97 and identical >= 0.80 and psnr >= 35
+
+
+# --------------------------------------------------------------------------- command line
+
+def test_cli_renders_a_folder_and_a_card(tmp_path):
+    folder = tmp_path / "card"
+    (folder / "Models").mkdir(parents=True)
+    (folder / "scene.ini").write_text("model = models/tri.OBJ\nmode = flat\ncull = off\n")
+    (folder / "Models" / "tri.obj").write_text("v -1 -1 0\nv 1 -1 0\nv 0 1 0\nf 1 2 3\n")
+    (folder / "texture.ppm").write_bytes(b"P3 1 1 1 1 1 1")
+    out = tmp_path / "out"
+    result = subprocess.run([sys.executable, "-m", "reference", "render", str(folder), "--frames", "2",
+                             "--out", str(out), "--quiet"], cwd=ROOT, capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    frames = sorted(p.name for p in out.iterdir())
+    assert frames == ["frame_0000.png", "frame_0001.png"]
+    image = np.asarray(Image.open(out / "frame_0000.png"))
+    assert image.shape == (240, 320, 3) and (image != image[0, 0]).any()
+    (folder / "scene.ini").write_text("mode = flat\nnear = -1\n")
+    result = subprocess.run([sys.executable, "-m", "reference", "render", str(folder), "--out", str(out)],
+                            cwd=ROOT, capture_output=True, text=True)
+    assert result.returncode == 3 and "bad scene.ini line 2: bad value (must be greater than 0)" in result.stderr
+    if DEFAULT_CARD.exists():
+        result = subprocess.run([sys.executable, "-m", "reference", "render-card", str(DEFAULT_CARD),
+                                 "--out", str(tmp_path / "card-out"), "--quiet"], cwd=ROOT,
+                                capture_output=True, text=True)
+        assert result.returncode == 0, result.stderr
+        assert (tmp_path / "card-out" / "frame_0000.png").exists()
