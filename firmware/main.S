@@ -219,7 +219,8 @@ msg_frame:          .asciz "frame "
     .bss
     .balign 64
     .globl framebuffers
-# framebuffers: two 320 x 240 RGB565 frames, pixel pairs packed per pattern.S.
+# framebuffers: two 320 x 240 RGB565 frames; each 32-bit word holds a pixel pair with the first
+# pixel in its upper half (the LCD takes 32-bit SPI frames most significant byte first).
 framebuffers:
     .space  NUM_FRAMEBUFFERS * LCD_FB_BYTES
     .balign 8

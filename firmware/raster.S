@@ -1,6 +1,6 @@
 # raster.S: triangle setup and rasterisation, lines, and the per-frame
 # clears, into a 320 x 240 RGB565 framebuffer laid out for the LCD (pixel
-# (x, y) is the halfword at fb + 2 (320 y + (x ^ 1)), main.S / pattern.S)
+# (x, y) is the halfword at fb + 2 (320 y + (x ^ 1)), see framebuffers in main.S)
 # and the depth buffer (depth_buffer, below).
 #
 # Triangles (raster_triangle):
