@@ -17,6 +17,7 @@ import tempfile
 import time
 from pathlib import Path
 
+import numpy as np
 import unicorn
 from unicorn import riscv_const as rv
 
@@ -151,9 +152,11 @@ def renderer_figures(firmware: Path, folder: Path) -> list[dict]:
                          "translate": "0 0 -3", "step": "4"}
                 build_image(card, [folder / "assets" / "models", folder / "assets" / "textures"], scene=scene,
                             force=True)
-                board = Board(str(firmware), sd_image=str(card))
+                frame_images: list[np.ndarray] = []
+                board = Board(str(firmware), sd_image=str(card), on_frame=lambda record, image: frame_images.append(image))
                 board.run(BENCH_FRAMES)
                 board.close()
+                quality = compare_with_reference(card, frame_images)
                 steady = board.frames[1:]
                 hart0 = sum(f.instructions[0] for f in steady) / len(steady)
                 hart1 = sum(f.instructions[1] for f in steady) / len(steady)
@@ -163,17 +166,37 @@ def renderer_figures(firmware: Path, folder: Path) -> list[dict]:
                     "instructions_hart0": round(hart0), "instructions_hart1": round(hart1),
                     "draw_time_ms": hart0 / board.cpu_hz() * 1e3,
                     "frame_time_ms": frame_time * 1e3, "fps": 1 / frame_time,
+                    **quality,
                 })
     return records
 
 
+def compare_with_reference(card: Path, frames: list[np.ndarray]) -> dict:
+    """How far the firmware's frames are from the float64 reference renderer's (reference/):
+    PSNR over all frames, the largest channel error and the share of pixels that differ."""
+    import reference
+    scene, mesh, texture = reference.load_card_image(card)
+    squared, largest, differing, pixels = 0.0, 0, 0, 0
+    for n, shown in enumerate(frames):
+        expected = reference.render_image(scene, mesh, texture, n).astype(np.int32)
+        error = np.abs(shown.astype(np.int32) - expected)
+        squared += float((error.astype(np.float64) ** 2).sum())
+        largest = max(largest, int(error.max()))
+        differing += int(np.any(error, axis=2).sum())
+        pixels += error.shape[0] * error.shape[1]
+    mse = squared / (pixels * 3)
+    return {"psnr_db": float("inf") if mse == 0 else 10 * np.log10(255 ** 2 / mse),
+            "max_error": largest, "pixels_differ": differing / pixels}
+
+
 def write_renderer_table(records: list[dict], folder: Path) -> str:
     lines = ["| scene | scale | mode | instructions hart 0 / frame | hart 1 / frame | draw time (ms) | "
-             "frame time (ms) | fps |", "|---|---|---|---|---|---|---|---|"]
+             "frame time (ms) | fps | PSNR vs reference (dB) | max error | pixels differ |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in records:
         lines.append(f"| {r['scene']} | {r['scale']:g} | {r['mode']} | {r['instructions_hart0']:,} | "
                      f"{r['instructions_hart1']:,} | {r['draw_time_ms']:.2f} | {r['frame_time_ms']:.2f} | "
-                     f"{r['fps']:.1f} |")
+                     f"{r['fps']:.1f} | {r['psnr_db']:.1f} | {r['max_error']} | {100 * r['pixels_differ']:.2f} % |")
     table = "\n".join(lines) + "\n"
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "results.json").write_text(json.dumps(records, indent=2) + "\n")
