@@ -138,7 +138,7 @@ class LcdPort:
 
     def spi_transfer(self, data: np.ndarray, lanes: int, now: float) -> np.ndarray:
         board = self.board
-        if not board.fpioa.pads_with_function(FUNC_SPI0_SCLK) or board.fpioa.function_of_pad(PAD_LCD_SCLK) != FUNC_SPI0_SCLK:
+        if board.fpioa.function_of_pad(PAD_LCD_SCLK) != FUNC_SPI0_SCLK:
             raise HardwareMisuse("SPI0 sends to the LCD but pad 39 (LCD WRX/clock) is not routed to SPI0_SCLK")
         if lanes != 8:
             raise HardwareMisuse(f"SPI0 sends to the LCD in a {lanes}-line format; the Dock's LCD takes SPI0's "

@@ -137,7 +137,6 @@ class SpiController(Peripheral):
         self._train: _Train | None = None
         self._held: list[int] = []               # frames written while no slave is selected
         self._rx: list[int] = []
-        self._rx_remaining = 0                   # receive-only frames still to clock in
         self._raw_int = 0
         self._selected: SpiDevice | None = None
         self.tx_dma: "DmaChannel | None" = None
@@ -156,7 +155,6 @@ class SpiController(Peripheral):
         self._train = None
         self._held.clear()
         self._rx.clear()
-        self._rx_remaining = 0
         self._raw_int = 0
         self.tx_dma = self.rx_dma = None
 
@@ -433,7 +431,7 @@ class SpiController(Peripheral):
         if offset == SR:
             level = self.tx_level(now)
             value = 0
-            if self.busy(now) or self._rx_remaining:
+            if self.busy(now):
                 value |= SR_BUSY
             if level < FIFO_DEPTH:
                 value |= SR_TFNF
@@ -472,7 +470,6 @@ class SpiController(Peripheral):
                 self._train = None
                 self._held.clear()
                 self._rx.clear()
-                self._rx_remaining = 0
                 self._raw_int = 0
             self._update_selection(now)
             return

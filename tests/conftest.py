@@ -3,7 +3,6 @@ first) and one board-model run of it is shared by every test that looks at its o
 from __future__ import annotations
 
 import json
-import os
 import subprocess
 import sys
 from pathlib import Path
@@ -45,6 +44,21 @@ def firmware_run(firmware, card, tmp_path_factory):
                           "--out", str(out), "--quiet")
     summary = json.loads((out / "run.json").read_text()) if (out / "run.json").exists() else None
     return result, out, summary
+
+
+def make_card(folder: Path, files: dict[str, bytes]) -> Path:
+    """A card holding exactly these files (card path -> bytes), written without the card
+    builder's checks, so that malformed files reach the firmware as they are."""
+    from sdcard_image.fat32 import CardWriter
+    folder.mkdir(parents=True, exist_ok=True)
+    card = folder / "card.img"
+    with CardWriter.create(card, 64) as writer:
+        for path, data in files.items():
+            parent = path.rpartition("/")[0]
+            if parent:
+                writer.makedirs(parent)
+            writer.write(path, data)
+    return card
 
 
 @pytest.fixture(scope="session")

@@ -11,8 +11,7 @@ import pytest
 from PIL import Image
 
 import reference
-from conftest import run_emulator
-from sdcard_image.fat32 import CardWriter
+from conftest import make_card, run_emulator
 
 TEXTURE = b"P6\n1 1\n255\n\x80\x40\x20"
 TRIANGLE = "v 0 0 -1\nv 1 0 -1\nv 0 1 -1\nf 1 2 3\n"
@@ -36,13 +35,7 @@ REFUSED = {
 
 
 def _card(folder: Path, model: str, scene: str) -> Path:
-    folder.mkdir(parents=True, exist_ok=True)
-    card = folder / "card.img"
-    with CardWriter.create(card, 64) as writer:
-        writer.write("/model.obj", model.encode())
-        writer.write("/texture.ppm", TEXTURE)
-        writer.write("/scene.ini", scene.encode())
-    return card
+    return make_card(folder, {"/model.obj": model.encode(), "/texture.ppm": TEXTURE, "/scene.ini": scene.encode()})
 
 
 @pytest.mark.parametrize("name", AGREEING)

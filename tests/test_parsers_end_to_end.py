@@ -7,12 +7,10 @@ import re
 import struct
 from pathlib import Path
 
-import numpy as np
 import pytest
 
-from conftest import run_emulator
+from conftest import make_card, run_emulator
 from emulator.board import Board
-from sdcard_image.fat32 import CardWriter
 
 TRIANGLE = "v 0 0 -1\nv 1 0 -1\nv 0 1 -1\nf 1 2 3\n"
 TEXTURE = b"P6\n1 1\n255\n\x10\x20\x30"
@@ -24,19 +22,6 @@ SCENE_TRANSLATE, SCENE_FOV, SCENE_NEAR, SCENE_FAR, SCENE_LIGHT, SCENE_AMBIENT, S
     40, 52, 56, 60, 64, 76, 80
 MESH_VCOUNT, MESH_TCOUNT, MESH_NCOUNT, MESH_FCOUNT = 84, 88, 92, 96
 MESH_V, MESH_T, MESH_N, MESH_F, TEX_W, TEX_H, TEX_PIXELS = 104, 112, 120, 128, 136, 140, 144
-
-
-def make_card(folder: Path, files: dict[str, bytes]) -> Path:
-    """A card with exactly these files (no host-side checks: bad files must reach the firmware)."""
-    folder.mkdir(parents=True, exist_ok=True)
-    card = folder / "card.img"
-    with CardWriter.create(card, 64) as writer:
-        for path, data in files.items():
-            parent = path.rpartition("/")[0]
-            if parent:
-                writer.makedirs(parent)
-            writer.write(path, data)
-    return card
 
 
 def boot(folder: Path, files: dict[str, bytes]) -> Board:

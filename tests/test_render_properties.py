@@ -2,7 +2,6 @@
 frames the firmware renders on the board model (independent of the golden frames)."""
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 

@@ -1,8 +1,6 @@
 """The SD card model against the SPI-mode protocol: exact bytes for each command."""
 from __future__ import annotations
 
-import zlib
-
 import numpy as np
 import pytest
 

@@ -19,7 +19,6 @@ from pathlib import Path
 
 import numpy as np
 import unicorn
-from unicorn import riscv_const as rv
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
