@@ -87,12 +87,69 @@ sincos_deg:
     fmv.s   fa1, ft3
     ret
 
+    .globl angle_table_build
+# angle_table_build
+#   What: fills angle_table with cos(n degrees), n = 0 .. ANGLE_TABLE_ENTRIES
+#         - 1 (sincos_deg), for angles = table: the thesis's table of the
+#         rotation in 2-degree steps, as the half angles of quaternions.
+#   Arguments: none. Results: none.
+#   Clobbers: only ABI temporaries.
+angle_table_build:
+    addi    sp, sp, -32
+    sd      ra, 24(sp)
+    sd      s0, 16(sp)
+    sd      s1, 8(sp)
+    la      s0, angle_table
+    li      s1, 0                       # s1 = n
+1:  fcvt.d.w fa0, s1
+    call    sincos_deg
+    fsw     fa1, 0(s0)
+    addi    s0, s0, ANGLE_TABLE_ENTRY_BYTES
+    addi    s1, s1, 1
+    li      t0, ANGLE_TABLE_ENTRIES
+    bne     s1, t0, 1b
+    ld      s1, 8(sp)
+    ld      s0, 16(sp)
+    ld      ra, 24(sp)
+    addi    sp, sp, 32
+    ret
+
+    .globl sincos_deg_table
+# sincos_deg_table
+#   What: sine and cosine of an angle rounded to whole degrees (ties to
+#         even), read from angle_table (angle_table_build first): cos n =
+#         angle_table[n mod 360], sin n = cos(n - 90).
+#   Arguments: fa0 = angle in degrees (double; beyond +-2^63 it saturates,
+#              still giving a table entry).
+#   Results: fa0 = sin, fa1 = cos (single).
+#   Clobbers: only ABI temporaries.
+sincos_deg_table:
+    fcvt.l.d t0, fa0, rne
+    li      t1, ANGLE_TABLE_ENTRIES
+    rem     t0, t0, t1
+    bgez    t0, 1f
+    add     t0, t0, t1                  # n mod 360 in 0 .. 359
+1:  addi    t2, t0, ANGLE_TABLE_ENTRIES - ANGLE_QUARTER
+    bltu    t2, t1, 2f
+    sub     t2, t2, t1                  # (n - 90) mod 360
+2:  la      t3, angle_table
+    slli    t0, t0, ANGLE_TABLE_ENTRY_SHIFT
+    add     t0, t0, t3
+    flw     fa1, 0(t0)
+    slli    t2, t2, ANGLE_TABLE_ENTRY_SHIFT
+    add     t2, t2, t3
+    flw     fa0, 0(t2)
+    ret
+
     .globl quat_from_axis_angle
 # quat_from_axis_angle
 #   What: the unit quaternion of a rotation by an angle about a unit axis
-#         (right-hand rule): (cos(a/2), sin(a/2) axis).
+#         (right-hand rule): (cos(a/2), sin(a/2) axis), sine and cosine from
+#         sincos_deg, or with ANGLES_TABLE from sincos_deg_table (the angle
+#         then in effect rounded to 2 degrees).
 #   Arguments: a0 = quaternion out (QUAT_BYTES), a1 = axis (3 x f32, unit),
-#              fa0 = angle in degrees (double).
+#              a2 = ANGLES_POLYNOMIAL or ANGLES_TABLE, fa0 = angle in
+#              degrees (double).
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 quat_from_axis_angle:
@@ -105,8 +162,11 @@ quat_from_axis_angle:
     li      t0, F64_HALF
     fmv.d.x ft0, t0
     fmul.d  fa0, fa0, ft0
+    bnez    a2, 1f
     call    sincos_deg
-    fsw     fa1, QUAT_W(s0)
+    j       2f
+1:  call    sincos_deg_table
+2:  fsw     fa1, QUAT_W(s0)
     flw     ft0, 0(s1)
     fmul.s  ft0, ft0, fa0
     fsw     ft0, QUAT_X(s0)
@@ -373,3 +433,10 @@ vec3_length:
     fmadd.s fa0, fa2, fa2, fa0
     fsqrt.s fa0, fa0
     ret
+
+# ---------------------------------------------------------------------------
+    .bss
+    .balign 4
+# angle_table: cos(n degrees), n = 0 .. 359 (angle_table_build).
+angle_table:
+    .space  ANGLE_TABLE_ENTRIES * ANGLE_TABLE_ENTRY_BYTES

@@ -41,7 +41,9 @@
 
 # raster_triangle's stack frame
     .equ RT_SAVE,               0           # s0 .. s11
-    .equ RT_FRAME,              96
+    .equ RT_FSAVE,              96          # fs0 .. fs3 (the Gouraud intensity)
+    .equ RT_RA,                 128         # ra (the lit fills' rounding constant)
+    .equ RT_FRAME,              144
 
 # EDGE xa, ya, xb, yb, E, A, B
 #   The edge function of the edge a -> b at the first pixel centre
@@ -85,6 +87,172 @@
     fmadd.s \base, \ddy, ft10, \base
 .endm
 
+# FILL textured, gouraud, affine, depth16
+#   One fill loop (registers: see raster_fills): every row of the bounding
+#   box from the first inside pixel to the first outside one after it;
+#   per pixel the depth test, then the colour: the flat colour t4, the base
+#   colour a5 times the Gouraud intensity, or the texel (perspective-correct
+#   or affine, nearest, repeating) times the face's or the Gouraud
+#   intensity. Ends at 90 (raster_triangle's epilogue).
+.macro FILL textured, gouraud, affine, depth16
+    .if \textured
+    la      t0, raster_texture
+    ld      a5, 0(t0)
+    la      t0, raster_tex_w
+    ld      a6, 0(t0)
+    la      t0, raster_tex_h
+    ld      a7, 0(t0)
+    .endif
+    li      t5, RGB565_SPREAD_MASK
+    .if \textured || \gouraud
+    li      ra, LIGHT_ROUND_SPREAD
+    .endif
+    .if \gouraud && !\textured
+    slli    t0, t4, RGB565_SPREAD_SHIFT
+    or      a5, t4, t0
+    and     a5, a5, t5
+    .endif
+1:  mv      s0, s6
+    mv      s1, s7
+    mv      s2, s8
+    mv      a0, a3
+2:  or      t0, s0, s1                  # skip to the first inside pixel
+    or      t0, t0, s2
+    bgez    t0, 3f
+    add     s0, s0, s3
+    add     s1, s1, s4
+    add     s2, s2, s5
+    addi    a0, a0, LCD_BYTES_PER_PIXEL
+    bltu    a0, a2, 2b
+    j       8f
+3:  sub     t0, a0, a3                  # 2 (x - xmin)
+    .if \depth16
+    add     a1, t6, t0
+    .else
+    slli    t1, t0, 1
+    add     a1, t6, t1
+    .endif
+    srli    t0, t0, 1
+    fcvt.s.l ft9, t0
+    fmadd.s fa0, fa4, ft9, ft0
+    .if \textured
+    .if !\affine
+    fmadd.s fa1, fa5, ft9, ft1
+    .endif
+    fmadd.s fa2, fa6, ft9, ft2
+    fmadd.s fa3, fa7, ft9, ft3
+    .endif
+    .if \gouraud
+    fmadd.s fs0, fs1, ft9, fs2
+    .endif
+4:
+    .if \depth16
+    lhu     t1, 0(a1)
+    fcvt.w.s t0, fa0, rtz
+    bge     t0, t1, 7f                  # not nearer
+    sh      t0, 0(a1)
+    .else
+    lw      t1, 0(a1)
+    fmv.x.w t0, fa0
+    bge     t0, t1, 7f                  # not nearer
+    sw      t0, 0(a1)
+    .endif
+    .if \gouraud
+    fcvt.wu.s t4, fs0, rne              # k (a rounding-noise negative -> 0)
+    .endif
+    .if \textured
+    .if \affine
+    fcvt.lu.s t2, fa2, rtz              # texel column, row
+    fcvt.lu.s t3, fa3, rtz
+    .else
+    fdiv.s  ft9, ft8, fa1               # w
+    fmul.s  ft10, fa2, ft9              # texel column
+    fmul.s  ft11, fa3, ft9              # texel row
+    fcvt.lu.s t2, ft10, rtz             # (negative rounding noise -> 0)
+    fcvt.lu.s t3, ft11, rtz
+    .endif
+    bgeu    t2, a6, 10f                 # repeat
+5:  bgeu    t3, a7, 11f
+6:  mul     t3, t3, a6
+    add     t2, t2, t3
+    slli    t2, t2, 1
+    add     t2, t2, a5
+    lhu     t2, 0(t2)                   # texel
+    slli    t3, t2, RGB565_SPREAD_SHIFT # light: all channels times k / 64
+    or      t2, t2, t3
+    and     t2, t2, t5
+    mul     t2, t2, t4
+    .elseif \gouraud
+    mul     t2, a5, t4                  # the base colour times k / 64
+    .endif
+    .if \textured || \gouraud
+    add     t2, t2, ra                  # rounded to nearest
+    srli    t2, t2, LIGHT_SHIFT
+    and     t2, t2, t5
+    srli    t3, t2, RGB565_SPREAD_SHIFT
+    or      t2, t2, t3
+    xori    t3, a0, FB_PAIR_XOR
+    sh      t2, 0(t3)
+    .else
+    xori    t2, a0, FB_PAIR_XOR
+    sh      t4, 0(t2)
+    .endif
+7:  fadd.s  fa0, fa0, fa4
+    .if \textured
+    .if !\affine
+    fadd.s  fa1, fa1, fa5
+    .endif
+    fadd.s  fa2, fa2, fa6
+    fadd.s  fa3, fa3, fa7
+    .endif
+    .if \gouraud
+    fadd.s  fs0, fs0, fs1
+    .endif
+    add     s0, s0, s3
+    add     s1, s1, s4
+    add     s2, s2, s5
+    addi    a0, a0, LCD_BYTES_PER_PIXEL
+    .if \depth16
+    addi    a1, a1, DEPTH16_BYTES_PER_PIXEL
+    .else
+    addi    a1, a1, DEPTH_BYTES_PER_PIXEL
+    .endif
+    bgeu    a0, a2, 8f
+    or      t0, s0, s1
+    or      t0, t0, s2
+    bgez    t0, 4b
+8:  add     s6, s6, s9                  # next row
+    add     s7, s7, s10
+    add     s8, s8, s11
+    addi    a3, a3, FB_ROW_BYTES
+    addi    a2, a2, FB_ROW_BYTES
+    .if \depth16
+    addi    t6, t6, DEPTH16_ROW_BYTES
+    .else
+    addi    t6, t6, DEPTH_ROW_BYTES
+    .endif
+    fadd.s  ft0, ft0, ft4
+    .if \textured
+    .if !\affine
+    fadd.s  ft1, ft1, ft5
+    .endif
+    fadd.s  ft2, ft2, ft6
+    fadd.s  ft3, ft3, ft7
+    .endif
+    .if \gouraud
+    fadd.s  fs2, fs2, fs3
+    .endif
+    addi    a4, a4, -1
+    bnez    a4, 1b
+    j       90f
+    .if \textured
+10: remu    t2, t2, a6                  # texel column past the width
+    j       5b
+11: remu    t3, t3, a7
+    j       6b
+    .endif
+.endm
+
     .text
     .globl raster_begin
 # raster_begin
@@ -113,10 +281,24 @@ raster_set_texture:
     sd      a2, 0(t0)
     ret
 
+    .globl raster_set_depth
+# raster_set_depth
+#   What: sets the depth buffer and its format for the following frames.
+#   Arguments: a0 = the buffer (LCD_PIXELS entries, 64-aligned), a1 =
+#              DEPTH_FLOAT32 (f32 z / w) or DEPTH_INT16 (u16, render.inc).
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+raster_set_depth:
+    la      t0, raster_depth
+    sd      a0, 0(t0)
+    la      t0, raster_depth_mode
+    sd      a1, 0(t0)
+    ret
+
     .globl raster_clear
 # raster_clear
 #   What: fills the framebuffer with one colour and, when asked, the depth
-#         buffer with DEPTH_CLEAR (the far plane).
+#         buffer with the far plane (DEPTH_CLEAR or DEPTH16_CLEAR).
 #   Arguments: a0 = RGB565 colour, a1 = 1 to clear the depth buffer too.
 #   Results: none.
 #   Clobbers: only ABI temporaries.
@@ -142,12 +324,19 @@ raster_clear:
     addi    t2, t2, CLEAR_UNROLL_BYTES
     bltu    t2, t3, 1b
     beqz    a1, 3f
-    li      t0, DEPTH_CLEAR
+    la      t2, raster_depth
+    ld      t2, 0(t2)
+    la      t0, raster_depth_mode
+    ld      t0, 0(t0)
+    bnez    t0, 4f
+    li      t0, DEPTH_CLEAR             # two f32 per doubleword
     slli    t1, t0, 32
     or      t0, t0, t1
-    la      t2, depth_buffer
     li      t3, DEPTH_BUFFER_BYTES
-    add     t3, t3, t2
+    j       5f
+4:  li      t0, DEPTH16_CLEAR_DWORD     # four u16 per doubleword
+    li      t3, DEPTH16_BUFFER_BYTES
+5:  add     t3, t3, t2
 2:  sd      t0, 0(t2)
     sd      t0, 8(t2)
     sd      t0, 16(t2)
@@ -164,13 +353,16 @@ raster_clear:
 # raster_triangle
 #   What: draws one triangle, depth-tested (see the file comment).
 #   Arguments: a0 = three raster vertices in a row (RV_BYTES each,
-#              render.inc), a1 = 1 to drop back faces, a2 = RGB565 colour
-#              (RASTER_FLAT) or light intensity 0 .. LIGHT_ONE
-#              (RASTER_TEXTURED), a3 = RASTER_FLAT or RASTER_TEXTURED.
+#              render.inc; RV_K only read with RASTER_GOURAUD, RV_S, RV_T
+#              only with RASTER_TEXTURED), a1 = 1 to drop back faces,
+#              a2 = the colour: flat fill, RGB565 as drawn (or, with
+#              RASTER_GOURAUD, before lighting); textured, the intensity k
+#              0 .. LIGHT_ONE (unused with RASTER_GOURAUD), a3 = RASTER_*
+#              flags (render.inc). The depth format is raster_set_depth's.
 #   Results: none.
 #   Clobbers: only ABI temporaries. The pixel loops use every integer
-#         register but sp, ra, gp and tp, and every temporary and argument
-#         float register.
+#         register but sp, ra, gp and tp, every temporary and argument
+#         float register, and fs0..fs3 (saved here).
 raster_triangle:
     addi    sp, sp, -RT_FRAME
     sd      s0, RT_SAVE + 0(sp)
@@ -185,8 +377,13 @@ raster_triangle:
     sd      s9, RT_SAVE + 72(sp)
     sd      s10, RT_SAVE + 80(sp)
     sd      s11, RT_SAVE + 88(sp)
+    fsd     fs0, RT_FSAVE + 0(sp)
+    fsd     fs1, RT_FSAVE + 8(sp)
+    fsd     fs2, RT_FSAVE + 16(sp)
+    fsd     fs3, RT_FSAVE + 24(sp)
+    sd      ra, RT_RA(sp)
     mv      t4, a2                      # t4 = colour / intensity (kept to the end)
-    mv      t5, a3                      # t5 = mode (until the loops)
+    mv      t5, a3                      # t5 = RASTER_* flags (until the loops)
 
     # --- corners: t0, t1, t2 = records; s0..s5 = x0, y0, x1, y1, x2, y2
     mv      t0, a0
@@ -293,15 +490,48 @@ raster_triangle:
     sub     t3, a3, s1
     fcvt.s.l ft10, t3
     fmul.s  ft10, ft10, ft8
-    # depth: fa4 = per pixel right, ft4 = per row, ft0 = at the first centre
+    # depth: fa4 = per pixel right, ft4 = per row, ft0 = at the first centre;
+    # z / w itself, or DEPTH16_NEAR + z / w * DEPTH16_SPAN for 16-bit depth
     flw     ft11, RV_Z(t0)
     flw     ft4, RV_Z(t1)
     flw     ft0, RV_Z(t2)
-    GRADIENT ft11, ft4, ft0, fa4, ft4, ft0
-    li      t3, RASTER_TEXTURED
-    bne     t5, t3, 5f
-    # textured: 1 / w (fa5, ft5, ft1), u / w (fa6, ft6, ft2), v / w (fa7, ft7, ft3)
-    flw     ft11, RV_Q(t0)
+    la      t3, raster_depth_mode
+    ld      t3, 0(t3)
+    beqz    t3, 5f
+    li      t3, F32_DEPTH16_SPAN
+    fmv.w.x ft5, t3
+    li      t3, F32_DEPTH16_NEAR
+    fmv.w.x ft6, t3
+    fmadd.s ft11, ft11, ft5, ft6
+    fmadd.s ft4, ft4, ft5, ft6
+    fmadd.s ft0, ft0, ft5, ft6
+5:  GRADIENT ft11, ft4, ft0, fa4, ft4, ft0
+    andi    t3, t5, RASTER_GOURAUD
+    beqz    t3, 5f
+    # Gouraud: the intensity k (fs0 at the pixel, fs1 per pixel right, fs2 at
+    # the row's first pixel, fs3 per row)
+    flw     ft11, RV_K(t0)
+    flw     fs3, RV_K(t1)
+    flw     fs2, RV_K(t2)
+    GRADIENT ft11, fs3, fs2, fs1, fs3, fs2
+5:  andi    t3, t5, RASTER_TEXTURED
+    beqz    t3, 6f
+    andi    t3, t5, RASTER_AFFINE
+    beqz    t3, 5f
+    # affine: the texel column (fa6, ft6, ft2) and row (fa7, ft7, ft3) are
+    # planes in screen space themselves
+    flw     ft11, RV_S(t0)
+    flw     ft6, RV_S(t1)
+    flw     ft2, RV_S(t2)
+    GRADIENT ft11, ft6, ft2, fa6, ft6, ft2
+    flw     ft11, RV_T(t0)
+    flw     ft7, RV_T(t1)
+    flw     ft3, RV_T(t2)
+    GRADIENT ft11, ft7, ft3, fa7, ft7, ft3
+    j       6f
+    # perspective-correct: 1 / w (fa5, ft5, ft1), u / w (fa6, ft6, ft2),
+    # v / w (fa7, ft7, ft3)
+5:  flw     ft11, RV_Q(t0)
     flw     ft5, RV_Q(t1)
     flw     ft1, RV_Q(t2)
     GRADIENT ft11, ft5, ft1, fa5, ft5, ft1
@@ -327,7 +557,7 @@ raster_triangle:
     GRADIENT ft11, ft7, ft3, fa7, ft7, ft3
     li      t3, F32_ONE
     fmv.w.x ft8, t3                     # ft8 = 1 (for 1 / (1 / w))
-5:
+6:
     # --- edge functions: s6..s8 = at the first centre of the row, s3..s5 =
     # steps right, s9..s11 = steps down (edge k is opposite corner k)
     EDGE    s2, s3, s4, s5, s6, t0, s9  # corner 1 -> corner 2
@@ -350,157 +580,54 @@ raster_triangle:
     addi    t0, t0, 1
     slli    t0, t0, 1
     add     a2, a3, t0
-    la      t3, depth_buffer
-    li      t0, DEPTH_ROW_BYTES
+    li      t0, LCD_WIDTH               # t6 = depth + (W ymin + xmin) << shift
     mul     t0, a6, t0
-    add     t3, t3, t0
-    slli    t0, a4, 2
-    add     t6, t3, t0
+    add     t0, t0, a4
+    la      t3, raster_depth_mode
+    ld      t1, 0(t3)                   # t1 = 16-bit depth
+    li      t3, DEPTH_SHIFT
+    sub     t3, t3, t1                  # (DEPTH16_SHIFT = DEPTH_SHIFT - 1)
+    sll     t0, t0, t3
+    la      t3, raster_depth
+    ld      t6, 0(t3)
+    add     t6, t6, t0
     sub     a4, a7, a6
     addi    a4, a4, 1
-    li      t3, RASTER_TEXTURED
-    beq     t5, t3, 50f
+    # --- the fill loop for these settings: raster_fills[flags | depth16 << 3]
+    slli    t1, t1, RASTER_DEPTH16_SHIFT
+    or      t0, t5, t1
+    slli    t0, t0, 3
+    la      t3, raster_fills
+    add     t3, t3, t0
+    ld      t3, 0(t3)
+    jr      t3
 
-# --- flat fill (registers: see the textured fill; t4 = colour)
-10: mv      s0, s6
-    mv      s1, s7
-    mv      s2, s8
-    mv      a0, a3
-11: or      t0, s0, s1                  # skip to the first inside pixel
-    or      t0, t0, s2
-    bgez    t0, 12f
-    add     s0, s0, s3
-    add     s1, s1, s4
-    add     s2, s2, s5
-    addi    a0, a0, LCD_BYTES_PER_PIXEL
-    bltu    a0, a2, 11b
-    j       14f
-12: sub     t0, a0, a3                  # 2 (x - xmin)
-    slli    t1, t0, 1
-    add     a1, t6, t1                  # a1 = depth at x
-    srli    t0, t0, 1
-    fcvt.s.l ft9, t0
-    fmadd.s fa0, fa4, ft9, ft0          # fa0 = z / w at x
-13: lw      t1, 0(a1)
-    fmv.x.w t0, fa0
-    bge     t0, t1, 1f                  # not nearer
-    sw      t0, 0(a1)
-    xori    t2, a0, FB_PAIR_XOR
-    sh      t4, 0(t2)
-1:  fadd.s  fa0, fa0, fa4
-    add     s0, s0, s3
-    add     s1, s1, s4
-    add     s2, s2, s5
-    addi    a0, a0, LCD_BYTES_PER_PIXEL
-    addi    a1, a1, DEPTH_BYTES_PER_PIXEL
-    bgeu    a0, a2, 14f
-    or      t0, s0, s1
-    or      t0, t0, s2
-    bgez    t0, 13b
-14: add     s6, s6, s9                  # next row
-    add     s7, s7, s10
-    add     s8, s8, s11
-    addi    a3, a3, FB_ROW_BYTES
-    addi    a2, a2, FB_ROW_BYTES
-    addi    t6, t6, DEPTH_ROW_BYTES
-    fadd.s  ft0, ft0, ft4
-    addi    a4, a4, -1
-    bnez    a4, 10b
-    j       90f
-
-# --- textured fill. Hot loop registers:
+# The fill loops, one per combination of settings (FILL expands each).
+# Registers of the hot loops:
 #   s0, s1, s2 edge functions at the pixel; s3, s4, s5 their steps right;
 #   s6, s7, s8 at the row's first pixel; s9, s10, s11 steps down;
 #   a0 framebuffer address of 2 x (the pixel is at a0 ^ 2), a1 its depth,
 #   a2 end of the row, a3 row start at xmin, t6 its depth, a4 rows left;
-#   a5 texels, a6 width, a7 height, t4 intensity, t5 RGB565_SPREAD_MASK;
-#   fa0..fa3 z/w, 1/w, u/w, v/w at the pixel, fa4..fa7 their steps right;
-#   ft0..ft3 at the row's first pixel, ft4..ft7 steps down; ft8 = 1.
-50: la      t0, raster_texture
-    ld      a5, 0(t0)
-    la      t0, raster_tex_w
-    ld      a6, 0(t0)
-    la      t0, raster_tex_h
-    ld      a7, 0(t0)
-    li      t5, RGB565_SPREAD_MASK
-51: mv      s0, s6
-    mv      s1, s7
-    mv      s2, s8
-    mv      a0, a3
-52: or      t0, s0, s1                  # skip to the first inside pixel
-    or      t0, t0, s2
-    bgez    t0, 53f
-    add     s0, s0, s3
-    add     s1, s1, s4
-    add     s2, s2, s5
-    addi    a0, a0, LCD_BYTES_PER_PIXEL
-    bltu    a0, a2, 52b
-    j       58f
-53: sub     t0, a0, a3                  # 2 (x - xmin)
-    slli    t1, t0, 1
-    add     a1, t6, t1
-    srli    t0, t0, 1
-    fcvt.s.l ft9, t0
-    fmadd.s fa0, fa4, ft9, ft0
-    fmadd.s fa1, fa5, ft9, ft1
-    fmadd.s fa2, fa6, ft9, ft2
-    fmadd.s fa3, fa7, ft9, ft3
-54: lw      t1, 0(a1)
-    fmv.x.w t0, fa0
-    bge     t0, t1, 57f                 # not nearer
-    sw      t0, 0(a1)
-    fdiv.s  ft9, ft8, fa1               # w
-    fmul.s  ft10, fa2, ft9              # texel column
-    fmul.s  ft11, fa3, ft9              # texel row
-    fcvt.lu.s t2, ft10, rtz             # (negative rounding noise -> 0)
-    fcvt.lu.s t3, ft11, rtz
-    bgeu    t2, a6, 55f                 # repeat
-551:bgeu    t3, a7, 56f
-561:mul     t3, t3, a6
-    add     t2, t2, t3
-    slli    t2, t2, 1
-    add     t2, t2, a5
-    lhu     t2, 0(t2)                   # texel
-    slli    t3, t2, RGB565_SPREAD_SHIFT # light: all channels times k / 64
-    or      t2, t2, t3
-    and     t2, t2, t5
-    mul     t2, t2, t4
-    srli    t2, t2, LIGHT_SHIFT
-    and     t2, t2, t5
-    srli    t3, t2, RGB565_SPREAD_SHIFT
-    or      t2, t2, t3
-    xori    t3, a0, FB_PAIR_XOR
-    sh      t2, 0(t3)
-57: fadd.s  fa0, fa0, fa4
-    fadd.s  fa1, fa1, fa5
-    fadd.s  fa2, fa2, fa6
-    fadd.s  fa3, fa3, fa7
-    add     s0, s0, s3
-    add     s1, s1, s4
-    add     s2, s2, s5
-    addi    a0, a0, LCD_BYTES_PER_PIXEL
-    addi    a1, a1, DEPTH_BYTES_PER_PIXEL
-    bgeu    a0, a2, 58f
-    or      t0, s0, s1
-    or      t0, t0, s2
-    bgez    t0, 54b
-58: add     s6, s6, s9                  # next row
-    add     s7, s7, s10
-    add     s8, s8, s11
-    addi    a3, a3, FB_ROW_BYTES
-    addi    a2, a2, FB_ROW_BYTES
-    addi    t6, t6, DEPTH_ROW_BYTES
-    fadd.s  ft0, ft0, ft4
-    fadd.s  ft1, ft1, ft5
-    fadd.s  ft2, ft2, ft6
-    fadd.s  ft3, ft3, ft7
-    addi    a4, a4, -1
-    bnez    a4, 51b
-    j       90f
-55: remu    t2, t2, a6                  # texel column past the width
-    j       551b
-56: remu    t3, t3, a7
-    j       561b
+#   a5 texels (textured) or the spread base colour (flat Gouraud), a6 width,
+#   a7 height; t4 colour (flat) or intensity k; t5 RGB565_SPREAD_MASK;
+#   ra LIGHT_ROUND_SPREAD (lit fills; ra is saved on the stack meanwhile);
+#   fa0 depth, fa1 1 / w, fa2, fa3 texel column and row (affine) or u / w,
+#   v / w (perspective) at the pixel, fa4..fa7 their steps right; ft0..ft3
+#   at the row's first pixel, ft4..ft7 their steps down; ft8 = 1;
+#   fs0..fs3 the Gouraud intensity: at the pixel, step right, at the row's
+#   first pixel, step down.
+fill_flat:              FILL 0, 0, 0, 0
+fill_flat_gouraud:      FILL 0, 1, 0, 0
+fill_textured:          FILL 1, 0, 0, 0
+fill_textured_gouraud:  FILL 1, 1, 0, 0
+fill_affine:            FILL 1, 0, 1, 0
+fill_affine_gouraud:    FILL 1, 1, 1, 0
+fill_flat_d16:          FILL 0, 0, 0, 1
+fill_flat_gouraud_d16:  FILL 0, 1, 0, 1
+fill_textured_d16:      FILL 1, 0, 0, 1
+fill_textured_gouraud_d16: FILL 1, 1, 0, 1
+fill_affine_d16:        FILL 1, 0, 1, 1
+fill_affine_gouraud_d16: FILL 1, 1, 1, 1
 
 90: ld      s0, RT_SAVE + 0(sp)
     ld      s1, RT_SAVE + 8(sp)
@@ -514,6 +641,11 @@ raster_triangle:
     ld      s9, RT_SAVE + 72(sp)
     ld      s10, RT_SAVE + 80(sp)
     ld      s11, RT_SAVE + 88(sp)
+    fld     fs0, RT_FSAVE + 0(sp)
+    fld     fs1, RT_FSAVE + 8(sp)
+    fld     fs2, RT_FSAVE + 16(sp)
+    fld     fs3, RT_FSAVE + 24(sp)
+    ld      ra, RT_RA(sp)
     addi    sp, sp, RT_FRAME
     ret
 
@@ -685,8 +817,17 @@ raster_tex_w:
     .space  8
 raster_tex_h:
     .space  8
-    .balign 64
-    .globl depth_buffer
-# depth_buffer: one f32 z / w per pixel, row-major (no pair swap).
-depth_buffer:
-    .space  DEPTH_BUFFER_BYTES
+raster_depth:
+    .space  8
+raster_depth_mode:
+    .space  8
+
+    .section .rodata
+    .balign 8
+# raster_fills: the fill loop for RASTER_* flags | 16-bit depth << 3
+# (RASTER_AFFINE means nothing without RASTER_TEXTURED).
+raster_fills:
+    .dword  fill_flat, fill_textured, fill_flat_gouraud, fill_textured_gouraud
+    .dword  fill_flat, fill_affine, fill_flat_gouraud, fill_affine_gouraud
+    .dword  fill_flat_d16, fill_textured_d16, fill_flat_gouraud_d16, fill_textured_gouraud_d16
+    .dword  fill_flat_d16, fill_affine_d16, fill_flat_gouraud_d16, fill_affine_gouraud_d16

@@ -53,31 +53,75 @@ render_init:
     sd      s0, 0(sp)
     la      s0, scene
     call    vertex_init
-
-    la      t0, render_fill
-    li      t1, RASTER_FLAT
-    sw      t1, 0(t0)
-    lwu     t1, SCENE_MODE(s0)
-    li      t2, MODE_TEXTURED
+    lwu     t1, SCENE_ANGLES(s0)
+    li      t2, ANGLES_TABLE
     bne     t1, t2, 1f
+    call    angle_table_build
+
+    # The fill: textured (with a texture) or flat; affine or perspective;
+    # Gouraud or one intensity per face.
+1:  li      t1, RASTER_FLAT
+    lwu     t0, SCENE_SHADING(s0)
+    li      t2, SHADING_GOURAUD
+    bne     t0, t2, 2f
+    ori     t1, t1, RASTER_GOURAUD
+2:  lwu     t0, SCENE_MODE(s0)
+    li      t2, MODE_TEXTURED
+    bne     t0, t2, 3f
     ld      a0, TEX_PIXELS(s0)
     lwu     a1, TEX_W(s0)
     lwu     a2, TEX_H(s0)
-    beqz    a0, 1f                      # no texture: flat
-    beqz    a1, 1f
-    beqz    a2, 1f
+    beqz    a0, 3f                      # no texture: flat
+    beqz    a1, 3f
+    beqz    a2, 3f
+    ori     t1, t1, RASTER_TEXTURED
+    lwu     t0, SCENE_INTERPOLATION(s0)
+    li      t2, INTERP_AFFINE
+    bne     t0, t2, 21f
+    ori     t1, t1, RASTER_AFFINE
+21: la      t0, render_fill
+    sw      t1, 0(t0)
     call    raster_set_texture
     la      t0, render_fill
-    li      t1, RASTER_TEXTURED
+    lwu     t1, 0(t0)
+3:  la      t0, render_fill
     sw      t1, 0(t0)
-1:  lwu     t1, SCENE_MODE(s0)
+
+    lwu     t1, SCENE_MODE(s0)
     li      t2, MODE_WIREFRAME
-    bne     t1, t2, 2f
+    bne     t1, t2, 4f
     call    edges_build
-2:  ld      s0, 0(sp)
+    j       9f
+    # Triangles: the depth buffer, and the Gouraud intensities of the normals.
+4:  li      a0, DEPTH_BUFFER_BYTES
+    lwu     t0, SCENE_DEPTH(s0)
+    li      t1, DEPTH_INT16
+    bne     t0, t1, 5f
+    li      a0, DEPTH16_BUFFER_BYTES
+5:  call    heap_alloc
+    beqz    a0, 8f
+    lwu     a1, SCENE_DEPTH(s0)
+    call    raster_set_depth
+    la      t0, render_fill
+    lwu     t0, 0(t0)
+    andi    t0, t0, RASTER_GOURAUD
+    beqz    t0, 9f
+    lwu     a0, MESH_NCOUNT(s0)
+    slli    a0, a0, NORMAL_LIGHT_SHIFT
+    call    heap_alloc
+    beqz    a0, 7f
+    la      t0, normal_light
+    sd      a0, 0(t0)
+9:  ld      s0, 0(sp)
     ld      ra, 8(sp)
     addi    sp, sp, 16
     ret
+7:  la      a1, msg_no_memory_normals
+    j       89f
+8:  la      a1, msg_no_memory_depth
+89: li      a0, ERR_MODEL_TOO_LARGE
+    li      a2, 0
+    j       error_fatal
 
     .globl render_frame
 # render_frame
@@ -105,6 +149,12 @@ render_frame:
     mv      a0, a1
     call    vertex_transform
     mv      s1, a0                      # s1 = vertex records
+    la      t0, render_fill
+    lwu     t0, 0(t0)
+    andi    t0, t0, RASTER_GOURAUD
+    beqz    t0, 1f
+    call    normals_light
+1:
     mv      a0, s0
     call    raster_begin
     la      s2, scene                   # s2 = scene
@@ -164,18 +214,28 @@ render_frame:
     sub     t4, t4, t1
     mul     t3, t3, t4                  # (x2 - x0)(y1 - y0)
     bge     t2, t3, 8f                  # area >= 0: back face or degenerate
-1:  mv      a0, s5
+1:  andi    t0, s10, RASTER_GOURAUD
+    bnez    t0, 20f
+    mv      a0, s5
     mv      a1, s6
     mv      a2, s7
     call    face_light
     mv      s9, a0                      # s9 = intensity, or the lit colour
-    li      t0, RASTER_TEXTURED
-    beq     s10, t0, 3f
+    andi    t0, s10, RASTER_TEXTURED
+    bnez    t0, 3f
     mv      a1, a0
     li      a0, FLAT_BASE_COLOUR
     call    shade_rgb565
     mv      s9, a0
     j       4f
+20: mv      a0, s3                      # Gouraud: RV_K of render_rv
+    mv      a1, s5
+    mv      a2, s6
+    mv      a3, s7
+    call    corner_light
+    li      s9, FLAT_BASE_COLOUR        # (flat fill: lit per pixel)
+    andi    t0, s10, RASTER_TEXTURED
+    beqz    t0, 4f
 3:  mv      a0, s3
     call    face_texels                 # RV_S, RV_T of render_rv
 4:  andi    t0, s8, OUT_NEAR
@@ -234,8 +294,8 @@ render_frame:
 
     .globl shade_rgb565
 # shade_rgb565
-#   What: an RGB565 colour with each channel multiplied by k / 64 (the
-#         textured fill does the same inline): c is spread over 64 bits so
+#   What: an RGB565 colour with each channel multiplied by k / 64 and
+#         rounded to nearest (ties up; the lit fills do the same inline): c is spread over 64 bits so
 #         that one multiplication scales R, G and B (RGB565_SPREAD_MASK).
 #   Arguments: a0 = colour, a1 = k (0 .. LIGHT_ONE).
 #   Results: a0 = lit colour.
@@ -246,6 +306,8 @@ shade_rgb565:
     or      a0, a0, t1
     and     a0, a0, t0
     mul     a0, a0, a1
+    li      t1, LIGHT_ROUND_SPREAD
+    add     a0, a0, t1                  # rounded to nearest
     srli    a0, a0, LIGHT_SHIFT
     and     a0, a0, t0
     srli    t1, a0, RGB565_SPREAD_SHIFT
@@ -257,7 +319,8 @@ shade_rgb565:
 # face_light (file-local)
 #   What: the face's light intensity (file comment, step 2).
 #   Arguments: a0, a1, a2 = the corners' vertex records.
-#   Results: a0 = k, 0 .. LIGHT_ONE.
+#   Results: a0 = k, 0 .. LIGHT_ONE; fa0 = the same before rounding to a
+#            whole k (light_level).
 #   Clobbers: only ABI temporaries.
 face_light:
     addi    sp, sp, -48
@@ -291,22 +354,176 @@ face_light:
     call    vec3_dot                    # N . L
     flw     ft0, 12(sp)
     fdiv.s  fa0, fa0, ft0               # cos; NaN when |N| = 0
-    la      t0, scene
-    flw     ft1, SCENE_AMBIENT(t0)
-    fmax.s  fa0, fa0, ft1               # (fmax of NaN and ambient = ambient)
-    li      t0, F32_LIGHT_ONE
-    fmv.w.x ft1, t0
-    fmul.s  fa0, fa0, ft1
-    fcvt.w.s a0, fa0, rne
-    bgez    a0, 1f
-    li      a0, 0
-1:  li      t0, LIGHT_ONE
-    ble     a0, t0, 2f
-    mv      a0, t0
-2:  ld      s1, 24(sp)
+    call    light_level
+    ld      s1, 24(sp)
     ld      s0, 32(sp)
     ld      ra, 40(sp)
     addi    sp, sp, 48
+    ret
+
+# light_level (file-local)
+#   What: the intensity of a surface whose normal makes an angle with the
+#         light: I = max(SCENE_AMBIENT, cos), quantised to SCENE_LIGHT_LEVELS
+#         evenly spaced levels from 0 to 1 (level = round(I (levels - 1))),
+#         in units of 1 / LIGHT_ONE: kf = level LIGHT_ONE / (levels - 1).
+#         With 65 levels (the default) kf = round(64 I) exactly.
+#   Arguments: fa0 = cos (NaN, for a zero normal, gives the ambient).
+#   Results: fa0 = kf; a0 = kf rounded to a whole k, 0 .. LIGHT_ONE.
+#   Clobbers: only ft0..ft2, t0 and t1 (normals_light keeps its matrix in
+#         the other temporaries).
+light_level:
+    la      t0, scene
+    flw     ft1, SCENE_AMBIENT(t0)
+    fmax.s  fa0, fa0, ft1               # (fmax of NaN and ambient = ambient)
+    flw     ft1, SCENE_LIGHT_LEVELS(t0)
+    li      t1, F32_ONE
+    fmv.w.x ft2, t1
+    fsub.s  ft1, ft1, ft2               # levels - 1
+    fmul.s  fa0, fa0, ft1
+    fcvt.w.s t1, fa0, rne               # the level
+    fcvt.s.w fa0, t1
+    li      t1, F32_LIGHT_ONE
+    fmv.w.x ft2, t1
+    fmul.s  fa0, fa0, ft2
+    fdiv.s  fa0, fa0, ft1               # kf
+    fmv.w.x ft2, zero                   # 0 <= kf <= LIGHT_ONE (cos just above 1)
+    fmax.s  fa0, fa0, ft2
+    li      t1, F32_LIGHT_ONE
+    fmv.w.x ft2, t1
+    fmin.s  fa0, fa0, ft2
+    fcvt.w.s a0, fa0, rne
+    ret
+
+# corner_light (file-local)
+#   What: Gouraud: the intensity of each corner of a face into RV_K of the
+#         three records of render_rv: normal_light of the corner's vn, or,
+#         when any corner has none, the face's own intensity (face_light)
+#         at all three, so that a model without normals looks as with flat
+#         shading.
+#   Arguments: a0 = the face (MESH_F_BYTES), a1, a2, a3 = its corners'
+#              vertex records.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+corner_light:
+    la      t0, scene
+    lwu     t1, MESH_NCOUNT(t0)
+    lwu     t2, MESH_CORNER_N(a0)
+    bgeu    t2, t1, 2f
+    lwu     t3, MESH_CORNER_BYTES + MESH_CORNER_N(a0)
+    bgeu    t3, t1, 2f
+    lwu     t4, 2 * MESH_CORNER_BYTES + MESH_CORNER_N(a0)
+    bgeu    t4, t1, 2f
+    la      t0, normal_light
+    ld      t0, 0(t0)
+    la      t1, render_rv
+    slli    t2, t2, NORMAL_LIGHT_SHIFT
+    add     t2, t2, t0
+    lw      t2, 0(t2)
+    sw      t2, RV_K(t1)
+    slli    t3, t3, NORMAL_LIGHT_SHIFT
+    add     t3, t3, t0
+    lw      t3, 0(t3)
+    sw      t3, RV_BYTES + RV_K(t1)
+    slli    t4, t4, NORMAL_LIGHT_SHIFT
+    add     t4, t4, t0
+    lw      t4, 0(t4)
+    sw      t4, 2 * RV_BYTES + RV_K(t1)
+    ret
+2:  addi    sp, sp, -16
+    sd      ra, 8(sp)
+    mv      a0, a1
+    mv      a1, a2
+    mv      a2, a3
+    call    face_light
+    la      t1, render_rv
+    fsw     fa0, RV_K(t1)
+    fsw     fa0, RV_BYTES + RV_K(t1)
+    fsw     fa0, 2 * RV_BYTES + RV_K(t1)
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
+    ret
+
+# normals_light (file-local)
+#   What: Gouraud: this frame's intensity of every mesh normal into
+#         normal_light: n' = R C n, with R the frame's rotation
+#         (vertex_rotation) and C = diag(sy sz, sx sz, sx sy) the cofactor
+#         matrix of the scale (det(S) S^-T: normals stay perpendicular to
+#         the scaled surface, and a zero scale gives a zero normal, hence
+#         the ambient), then light_level(n' . L / |n'|).
+#   Arguments: none. Results: none.
+#   Clobbers: only ABI temporaries. The loop keeps M = R C in ft3..ft11
+#         and L in fa4..fa6.
+normals_light:
+    addi    sp, sp, -32
+    sd      ra, 24(sp)
+    sd      s0, 16(sp)
+    sd      s1, 8(sp)
+    sd      s2, 0(sp)
+    la      t0, scene
+    ld      s0, MESH_N(t0)              # s0 = normal
+    lwu     s1, MESH_NCOUNT(t0)         # s1 = normals left
+    la      t1, normal_light
+    ld      s2, 0(t1)                   # s2 = its intensity
+    beqz    s1, 9f
+    flw     fa0, SCENE_SCALE(t0)        # C = fa1, fa2, fa3
+    flw     fa1, SCENE_SCALE + 4(t0)
+    flw     fa2, SCENE_SCALE + 8(t0)
+    fmul.s  fa3, fa0, fa1               # sx sy
+    fmul.s  fa1, fa1, fa2               # sy sz
+    fmul.s  fa2, fa0, fa2               # sx sz
+    flw     fa4, SCENE_LIGHT(t0)
+    flw     fa5, SCENE_LIGHT + 4(t0)
+    flw     fa6, SCENE_LIGHT + 8(t0)
+    la      t1, vertex_rotation         # M = R C: column c of R times C[c]
+    flw     ft3, 0(t1)
+    fmul.s  ft3, ft3, fa1
+    flw     ft4, 4(t1)
+    fmul.s  ft4, ft4, fa2
+    flw     ft5, 8(t1)
+    fmul.s  ft5, ft5, fa3
+    flw     ft6, 12(t1)
+    fmul.s  ft6, ft6, fa1
+    flw     ft7, 16(t1)
+    fmul.s  ft7, ft7, fa2
+    flw     ft8, 20(t1)
+    fmul.s  ft8, ft8, fa3
+    flw     ft9, 24(t1)
+    fmul.s  ft9, ft9, fa1
+    flw     ft10, 28(t1)
+    fmul.s  ft10, ft10, fa2
+    flw     ft11, 32(t1)
+    fmul.s  ft11, ft11, fa3
+1:  flw     ft0, 0(s0)
+    flw     ft1, 4(s0)
+    flw     ft2, 8(s0)
+    fmul.s  fa0, ft3, ft0               # n' = M n
+    fmadd.s fa0, ft4, ft1, fa0
+    fmadd.s fa0, ft5, ft2, fa0
+    fmul.s  fa1, ft6, ft0
+    fmadd.s fa1, ft7, ft1, fa1
+    fmadd.s fa1, ft8, ft2, fa1
+    fmul.s  fa2, ft9, ft0
+    fmadd.s fa2, ft10, ft1, fa2
+    fmadd.s fa2, ft11, ft2, fa2
+    fmul.s  fa3, fa0, fa0               # |n'|
+    fmadd.s fa3, fa1, fa1, fa3
+    fmadd.s fa3, fa2, fa2, fa3
+    fsqrt.s fa3, fa3
+    fmul.s  fa0, fa0, fa4               # n' . L / |n'| (NaN when n' = 0)
+    fmadd.s fa0, fa1, fa5, fa0
+    fmadd.s fa0, fa2, fa6, fa0
+    fdiv.s  fa0, fa0, fa3
+    call    light_level
+    fsw     fa0, 0(s2)
+    addi    s0, s0, MESH_N_BYTES
+    addi    s2, s2, NORMAL_LIGHT_BYTES
+    addi    s1, s1, -1
+    bnez    s1, 1b
+9:  ld      s2, 0(sp)
+    ld      s1, 8(sp)
+    ld      s0, 16(sp)
+    ld      ra, 24(sp)
+    addi    sp, sp, 32
     ret
 
 # face_texels (file-local)
@@ -417,6 +634,8 @@ clip_near_and_draw:
     sw      t3, CV_S(t0)
     lw      t3, RV_T(t1)
     sw      t3, CV_T(t0)
+    lw      t3, RV_K(t1)
+    sw      t3, CV_K(t0)
     addi    t0, t0, CV_BYTES
     addi    t1, t1, RV_BYTES
     mv      a0, a1                      # corner 1, then corner 2
@@ -482,6 +701,8 @@ clip_near_and_draw:
     sw      t1, RV_S(s1)
     lw      t1, CV_T(s0)
     sw      t1, RV_T(s1)
+    lw      t1, CV_K(s0)
+    sw      t1, RV_K(s1)
     addi    s0, s0, CV_BYTES
     addi    s1, s1, RV_BYTES
     addi    s6, s6, -1
@@ -777,12 +998,18 @@ sort_u64:
 # ---------------------------------------------------------------------------
     .section .rodata
 msg_no_memory:      .asciz "model too large for memory (edge list)"
+msg_no_memory_depth: .asciz "model too large for memory (depth buffer)"
+msg_no_memory_normals: .asciz "model too large for memory (normal intensities)"
 
 # ---------------------------------------------------------------------------
     .bss
     .balign 8
-# render_fill: RASTER_TEXTURED, or RASTER_FLAT (flat mode, or no texture).
+# render_fill: the RASTER_* flags of every triangle (render_init).
 render_fill:
+    .space  8
+# normal_light: address (heap) of one f32 intensity (0 .. LIGHT_ONE) per
+# mesh normal, this frame's (Gouraud only).
+normal_light:
     .space  8
 # The wireframe's unique edges: address (heap) and count.
 edge_list:
@@ -794,7 +1021,7 @@ edge_count:
 # corner 0 repeated after the last, for the second triangle of a fan).
     .balign 8
 render_rv:
-    .space  RV_TRIANGLE_BYTES
+    .space  TRIANGLE_CORNERS * RV_BYTES
 render_cv:
     .space  TRIANGLE_CORNERS * CV_BYTES
 render_cv_out:

@@ -32,6 +32,15 @@
 # background  R G B (integers 0..255) or #RRGGBB      #101410       SCENE_BACKGROUND
 #                                                     (RGB565 0x10A2)
 #
+# Precision settings (what the renderer approximates; README "Precision
+# settings" has what each costs and loses):
+# interpolation  perspective | affine                 perspective   SCENE_INTERPOLATION
+# shading     flat | gouraud                          flat          SCENE_SHADING
+# light_levels   whole number 2..65                   65            SCENE_LIGHT_LEVELS
+# angles      polynomial | table                      polynomial    SCENE_ANGLES
+# depth       int16 | float32                         int16         SCENE_DEPTH
+# snap        subpixel | pixel                        subpixel      SCENE_SNAP
+#
 # Conventions (scene.inc): right-handed, camera at the origin looking down
 # -z (a model in view has negative z), angles in degrees about the axis.
 #
@@ -72,6 +81,7 @@
     .equ SCENE_CHECK_FOV,       3           # 0 < x < SCENE_FOV_LIMIT
     .equ SCENE_CHECK_POSITIVE,  4           # x > 0
     .equ SCENE_CHECK_UNIT,      5           # 0 <= x <= 1
+    .equ SCENE_CHECK_LEVELS,    6           # whole, LIGHT_LEVELS_MIN .. LIGHT_LEVELS_MAX
 # When a SCENE_KIND_FILE file is loaded (its SCENE_KEY_CHECK)
     .equ SCENE_FILE_ALWAYS,     0
     .equ SCENE_FILE_SURFACE,    1           # not in wireframe mode
@@ -150,6 +160,12 @@ scene_keys:
     SCENE_KEY light, SCENE_KIND_NUMBERS, 3, SCENE_CHECK_DIRECTION, scene + SCENE_LIGHT
     SCENE_KEY ambient, SCENE_KIND_NUMBERS, 1, SCENE_CHECK_UNIT, scene + SCENE_AMBIENT
     SCENE_KEY background, SCENE_KIND_COLOUR, 0, 0, scene + SCENE_BACKGROUND
+    SCENE_KEY interpolation, SCENE_KIND_WORD, 0, 0, scene + SCENE_INTERPOLATION, words_interpolation, msg_expect_interpolation
+    SCENE_KEY shading, SCENE_KIND_WORD, 0, 0, scene + SCENE_SHADING, words_shading, msg_expect_shading
+    SCENE_KEY light_levels, SCENE_KIND_NUMBERS, 1, SCENE_CHECK_LEVELS, scene + SCENE_LIGHT_LEVELS
+    SCENE_KEY angles, SCENE_KIND_WORD, 0, 0, scene + SCENE_ANGLES, words_angles, msg_expect_angles
+    SCENE_KEY depth, SCENE_KIND_WORD, 0, 0, scene + SCENE_DEPTH, words_depth, msg_expect_depth
+    SCENE_KEY snap, SCENE_KIND_WORD, 0, 0, scene + SCENE_SNAP, words_snap, msg_expect_snap
 scene_keys_end:
 
     .balign 8
@@ -167,6 +183,26 @@ words_cull:
     .dword  word_false, CULL_OFF
     .dword  word_1, CULL_ON
     .dword  word_0, CULL_OFF
+    .dword  0
+words_interpolation:
+    .dword  word_perspective, INTERP_PERSPECTIVE
+    .dword  word_affine, INTERP_AFFINE
+    .dword  0
+words_shading:
+    .dword  word_flat, SHADING_FLAT
+    .dword  word_gouraud, SHADING_GOURAUD
+    .dword  0
+words_angles:
+    .dword  word_polynomial, ANGLES_POLYNOMIAL
+    .dword  word_table, ANGLES_TABLE
+    .dword  0
+words_depth:
+    .dword  word_float32, DEPTH_FLOAT32
+    .dword  word_int16, DEPTH_INT16
+    .dword  0
+words_snap:
+    .dword  word_subpixel, SNAP_SUBPIXEL
+    .dword  word_pixel, SNAP_PIXEL
     .dword  0
 
     .balign 4
@@ -186,9 +222,15 @@ scene_default_values:
     .float  0.0, 0.0, 1.0               # SCENE_LIGHT
     .float  0.2                         # SCENE_AMBIENT
     .word   0x10A2                      # SCENE_BACKGROUND: RGB 16, 20, 16
+    .word   INTERP_PERSPECTIVE          # SCENE_INTERPOLATION
+    .word   SHADING_FLAT                # SCENE_SHADING
+    .float  65.0                        # SCENE_LIGHT_LEVELS (LIGHT_LEVELS_MAX)
+    .word   ANGLES_POLYNOMIAL           # SCENE_ANGLES
+    .word   DEPTH_INT16                 # SCENE_DEPTH
+    .word   SNAP_SUBPIXEL               # SCENE_SNAP
 scene_default_values_end:
     .if (scene_default_values_end - scene_default_values) != MESH_VCOUNT
-    .error "scene_default_values must cover SCENE_MODE .. SCENE_BACKGROUND"
+    .error "scene_default_values must cover SCENE_MODE .. SCENE_SNAP"
     .endif
 
 default_model_path:     .asciz "model.obj"
@@ -204,6 +246,15 @@ word_true:          .asciz "true"
 word_false:         .asciz "false"
 word_1:             .asciz "1"
 word_0:             .asciz "0"
+word_perspective:   .asciz "perspective"
+word_affine:        .asciz "affine"
+word_gouraud:       .asciz "gouraud"
+word_polynomial:    .asciz "polynomial"
+word_table:         .asciz "table"
+word_float32:       .asciz "float32"
+word_int16:         .asciz "int16"
+word_subpixel:      .asciz "subpixel"
+word_pixel:         .asciz "pixel"
 path_scene_ini:     .asciz "scene.ini"
 msg_load:           .asciz "load "
 msg_crc32:          .asciz " crc32="
@@ -230,6 +281,12 @@ msg_positive:       .asciz "bad value (must be greater than 0)"
 msg_unit_range:     .asciz "bad value (must be between 0 and 1)"
 msg_colour:         .asciz "bad value (expected R G B with 0..255 each, or #RRGGBB)"
 msg_far_near:       .asciz "bad value (far must be greater than near)"
+msg_expect_interpolation: .asciz "bad value (expected perspective or affine)"
+msg_expect_shading: .asciz "bad value (expected flat or gouraud)"
+msg_expect_angles:  .asciz "bad value (expected polynomial or table)"
+msg_expect_depth:   .asciz "bad value (expected int16 or float32)"
+msg_expect_snap:    .asciz "bad value (expected subpixel or pixel)"
+msg_levels:         .asciz "bad value (must be a whole number from 2 to 65)"
 
     .text
     .globl scene_load
@@ -637,6 +694,8 @@ scene_set_value:
     beq     s5, t0, 42f
     li      t0, SCENE_CHECK_UNIT
     beq     s5, t0, 43f
+    li      t0, SCENE_CHECK_LEVELS
+    beq     s5, t0, 44f
     j       48f
 40: fld     ft2, 0(sp)                  # direction: normalised in double
     fld     ft3, SCENE_DOUBLE_BYTES(sp)
@@ -671,6 +730,15 @@ scene_set_value:
     fcvt.s.w ft2, t0
     flt.s   t0, ft2, ft0
     bnez    t0, 79f
+    j       48f
+44: fcvt.w.s t0, ft0, rtz              # light levels: whole, in range
+    fcvt.s.w ft2, t0
+    feq.s   t1, ft2, ft0
+    beqz    t1, 78f
+    li      t1, LIGHT_LEVELS_MIN
+    blt     t0, t1, 78f
+    li      t1, LIGHT_LEVELS_MAX
+    bgt     t0, t1, 78f
     # Store them, single precision.
 48: ld      t0, SCENE_KEY_TARGET(s0)
     mv      t1, sp
@@ -742,6 +810,8 @@ scene_set_value:
     sw      a0, 0(t0)
     j       90f
 
+78: la      a1, msg_levels
+    j       89f
 79: la      a1, msg_unit_range
     j       89f
 81: la      a1, msg_not_number

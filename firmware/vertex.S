@@ -70,6 +70,7 @@ vertex_transform:
     fmadd.d fa0, ft0, ft1, ft2
     la      a0, vertex_quat
     addi    a1, s0, SCENE_AXIS
+    lwu     a2, SCENE_ANGLES(s0)
     call    quat_from_axis_angle
     la      a0, vertex_rotation
     la      a1, vertex_quat
@@ -235,7 +236,9 @@ vertex_transform:
 #   What: perspective divide and viewport of a clip-space point in front of
 #         the near plane (w > 0): screen x = (x / w + 1) * LCD_WIDTH / 2,
 #         y = (1 - y / w) * LCD_HEIGHT / 2 (down), both rounded to the
-#         nearest 1/16 pixel (Q4, ties to even) after clamping to +-2^27.
+#         nearest 1/16 pixel (Q4, ties to even) after clamping to +-2^27;
+#         with SCENE_SNAP = SNAP_PIXEL then to the nearest whole pixel
+#         (a multiple of 16, ties up), as the thesis's integer positions.
 #         Every projected position goes through here, so a point projects to
 #         the same Q4 position whichever triangle or edge it belongs to.
 #   Arguments: fa0, fa1, fa2, fa3 = clip-space x, y, z, w.
@@ -265,6 +268,14 @@ project_clip:
     fcvt.w.s a1, ft2, rne
     fmul.s  fa0, fa2, ft0
     fmv.s   fa1, ft0
+    la      t0, scene
+    lwu     t0, SCENE_SNAP(t0)
+    bnez    t0, 1f
+    ret
+1:  addi    a0, a0, SUBPIXEL_HALF       # snap = pixel: the nearest whole pixel
+    andi    a0, a0, -SUBPIXEL_ONE
+    addi    a1, a1, SUBPIXEL_HALF
+    andi    a1, a1, -SUBPIXEL_ONE
     ret
 
 # ---------------------------------------------------------------------------
@@ -282,6 +293,7 @@ vertex_records:
 # This frame's rotation, matrices (render.inc layouts).
 vertex_quat:
     .space  QUAT_BYTES
+    .globl vertex_rotation
 vertex_rotation:
     .space  MAT3_BYTES
     .balign 16

@@ -40,7 +40,7 @@ class ModelError(ValueError):
 class Mesh:
     vertices: np.ndarray      # (V, 3) float64
     texcoords: np.ndarray     # (T, 2) float64: u, v
-    normals: np.ndarray       # (N, 3) float64 (parsed and kept; the renderer never uses them)
+    normals: np.ndarray       # (N, 3) float64: vn, lighting faces whose three corners have one
     faces: np.ndarray         # (F, 3, 3) int64: per corner (v, vt, vn), 0-based, NO_INDEX = -1
 
 

@@ -18,11 +18,16 @@ Conventions (README "Rendering", firmware/vertex.S, render.S, raster.S, maths.S)
   and a centre exactly on an edge belongs to the triangle only for a top edge (dy = 0, dx > 0)
   or a left edge (dy < 0) -- the top-left rule;
 - depth z/w (affine in screen space), cleared to 1.0 (the far plane), nearer strictly wins;
-- lighting per face: N = (w1 - w0) x (w2 - w0) from the world-space corners, intensity
-  I = max(ambient, N.L / |N|) (ambient when |N| = 0);
+- lighting, I = max(ambient, N.L / |N|) with L = `light` (ambient where |N| = 0):
+  - a face whose three corners have a normal (vn): per pixel (Phong), N the perspective-correct
+    interpolation (as u, v) of the corners' world normals R C n / |R C n|, R the frame's
+    rotation and C = diag(sy sz, sx sz, sx sy) the cofactor matrix of the scale (det(S) S^-T,
+    finite at scale 0; a corner whose normal comes out zero contributes nothing);
+  - any other face: per face from its geometric normal N = (w1 - w0) x (w2 - w0), the
+    world-space corners (so a model without vn is lit per face throughout);
 - flat mode: 0xC618 lit; textured: perspective-correct (u, v), texel column floor(u W) mod W,
   row floor((1 - v) H) mod H (v = 0 is the bottom of the image), lit; a corner without vt
-  takes (0, 0);
+  takes (0, 0); each pixel's channels are multiplied by that pixel's I;
 - wireframe: the unique (min, max) vertex index edges, white, no depth test or culling,
   rejected by outcodes, cut at the near plane, clipped to the screen rectangle [0, 320] x [0, 240]
   (Liang-Barsky), each end in the pixel it lies in (floor, clamped), Bresenham from the smaller
@@ -32,8 +37,12 @@ Where the reference is exact and the firmware is not (these are what the compari
 - float64 throughout, numbers as written in the files (the firmware: single precision, its own
   sin/cos polynomials);
 - screen positions are not snapped to 1/16 pixel;
-- lighting: each RGB565 channel times I rounded to nearest (the firmware quantises I to
-  k = round(64 I) and truncates channel * k / 64);
+- lighting from the vertex normals per pixel, which describe the surface the model's author
+  meant: the firmware's flat shading (one I per face, from the geometric normal) and Gouraud
+  shading (I per corner, interpolated) both approximate it; the two agree with the reference
+  only on faces whose corner normals equal the face normal, or without vn;
+- each RGB565 channel times I rounded to nearest (the firmware quantises I to
+  k = round(64 I), or to its `light_levels`, and truncates channel * k / 64);
 - texture coordinates: exact perspective-correct interpolation (the firmware interpolates
   u/w, v/w, 1/w incrementally in single precision and divides once per pixel);
 - wireframe end points: exact projections (the firmware converts its Q4 positions to pixels).
@@ -41,6 +50,7 @@ Where the reference is exact and the firmware is not (these are what the compari
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -130,6 +140,38 @@ def rgb565_to_rgb888(pixels: np.ndarray) -> np.ndarray:
     return image
 
 
+def normal_matrix(scene: Scene, n: int) -> np.ndarray:
+    """R C for frame n: R the rotation, C = diag(sy sz, sx sz, sx sy) the cofactor matrix of the
+    scale S (det(S) S^-T: normals transform by it, and it stays finite when a scale is 0). A
+    mirroring scale (det(S) < 0) turns the normals round, as it does the face normal
+    (w1 - w0) x (w2 - w0) of the mirrored corners, so the two keep agreeing."""
+    sx, sy, sz = scene.scale
+    cofactor = np.diag([sy * sz, sx * sz, sx * sy])
+    return rotation_matrix(scene.axis, scene.angle + n * scene.step) @ cofactor
+
+
+def unit_rows(vectors: np.ndarray) -> np.ndarray:
+    """Each row divided by its length; a row of length 0 stays zero."""
+    vectors = np.asarray(vectors, dtype=np.float64)
+    length = np.linalg.norm(vectors, axis=-1, keepdims=True)
+    return np.divide(vectors, length, out=np.zeros_like(vectors), where=length > 0)
+
+
+def world_normals(mesh: Mesh, scene: Scene, n: int) -> np.ndarray:
+    """The mesh's normals (vn) in world space for frame n, unit length (zero rows where the
+    transformed normal is zero: a zero vn, or a scale of 0 on two axes)."""
+    return unit_rows(mesh.normals @ normal_matrix(scene, n).T)
+
+
+def corner_normals(face: np.ndarray, normals: np.ndarray) -> np.ndarray | None:
+    """The world normals (3, 3) of a face's corners, or None when a corner has no normal
+    (no vn index, or one out of range): such a face is lit per face."""
+    indices = face[:, 2]
+    if not np.all((indices >= 0) & (indices < len(normals))):
+        return None
+    return normals[indices]
+
+
 def face_intensity(world: np.ndarray, scene: Scene) -> float:
     """max(ambient, N.L / |N|), N = (w1 - w0) x (w2 - w0); ambient for a degenerate face."""
     normal = np.cross(world[1] - world[0], world[2] - world[0])
@@ -174,6 +216,33 @@ def owns_ties(a: np.ndarray, b: np.ndarray) -> bool:
     return dy < 0 or (dy == 0 and dx > 0)
 
 
+@dataclass(frozen=True)
+class Lighting:
+    """How a triangle is lit: with `normals` None, by `intensity` at every pixel (face
+    lighting); otherwise per pixel, I = max(ambient, N.L / |N|) with N the perspective-correct
+    interpolation of the corners' world normals `normals` (3, 3), and ambient where |N| = 0."""
+    intensity: float = 1.0
+    normals: np.ndarray | None = None
+    light: tuple[float, float, float] = (0.0, 0.0, 1.0)     # unit, towards the light
+    ambient: float = 0.0
+
+    def at(self, weights: np.ndarray) -> float | np.ndarray:
+        """The intensity at pixels whose perspective-correct corner weights are `weights`
+        (3, P), each column summing to 1: a number (face lighting) or one per pixel (P,)."""
+        if self.normals is None:
+            return self.intensity
+        normal = weights.T @ self.normals                       # (P, 3)
+        length = np.linalg.norm(normal, axis=1)
+        lit = length > 0
+        intensity = np.full(len(length), float(self.ambient))
+        cosine = (normal[lit] @ np.asarray(self.light, dtype=np.float64)) / length[lit]
+        intensity[lit] = np.maximum(self.ambient, cosine)
+        return intensity
+
+
+UNLIT = Lighting()                 # intensity 1: the colour as given
+
+
 class Target:
     """The colour and depth buffers of one frame."""
 
@@ -184,9 +253,9 @@ class Target:
 
 def raster_triangle(target: Target, screen: np.ndarray, zw: np.ndarray, q: np.ndarray,
                     cull: bool, colour: int | None, uv: np.ndarray | None = None,
-                    texture: np.ndarray | None = None, intensity: float = 1.0) -> None:
-    """One triangle given by its screen corners (3, 2), z/w (3,), 1/w (3,): flat `colour`, or
-    textured (uv (3, 2) per corner, perspective-correct) and lit by `intensity`."""
+                    texture: np.ndarray | None = None, lighting: Lighting = UNLIT) -> None:
+    """One triangle given by its screen corners (3, 2), z/w (3,), 1/w (3,): `colour`, or
+    textured (uv (3, 2) per corner, perspective-correct), each pixel lit by `lighting`."""
     (x0, y0), (x1, y1), (x2, y2) = screen
     area = (x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0)
     if area == 0 or not math.isfinite(area):
@@ -201,6 +270,8 @@ def raster_triangle(target: Target, screen: np.ndarray, zw: np.ndarray, q: np.nd
     screen, zw, q = screen[order], zw[order], q[order]
     if uv is not None:
         uv = uv[order]
+    if lighting.normals is not None:
+        lighting = replace(lighting, normals=lighting.normals[order])
     xmin = max(0, math.ceil(screen[:, 0].min() - 0.5))
     xmax = min(WIDTH - 1, math.floor(screen[:, 0].max() - 0.5))
     ymin = max(0, math.ceil(screen[:, 1].min() - 0.5))
@@ -227,11 +298,13 @@ def raster_triangle(target: Target, screen: np.ndarray, zw: np.ndarray, q: np.nd
     ys, xs, depth = ys[nearer], xs[nearer], depth[nearer]
     l0, l1, l2 = l0[nearer], l1[nearer], l2[nearer]
     target.depth[ys, xs] = depth
-    if texture is None or uv is None:
-        target.colour[ys, xs] = colour
-        return
-    # perspective-correct: u = sum(l_i u_i / w_i) / sum(l_i / w_i)
+    # perspective-correct weights: attribute = sum(l_i a_i / w_i) / sum(l_i / w_i)
     inv_w = l0 * q[0] + l1 * q[1] + l2 * q[2]
+    weights = np.stack([l0 * q[0], l1 * q[1], l2 * q[2]]) / inv_w          # (3, P)
+    intensity = lighting.at(weights)
+    if texture is None or uv is None:
+        target.colour[ys, xs] = shade(colour, intensity)
+        return
     u = (l0 * uv[0, 0] * q[0] + l1 * uv[1, 0] * q[1] + l2 * uv[2, 0] * q[2]) / inv_w
     v = (l0 * uv[0, 1] * q[0] + l1 * uv[1, 1] * q[1] + l2 * uv[2, 1] * q[2]) / inv_w
     height, width = texture.shape
@@ -324,29 +397,39 @@ def render_frame(scene: Scene, mesh: Mesh, texture: np.ndarray | None, n: int) -
         return target.colour
 
     textured = scene.mode == "textured" and texture is not None and texture.size > 0
+    normals = world_normals(mesh, scene, n)
     for face in mesh.faces:
         corners = face[:, 0]
         if np.bitwise_and.reduce(codes[corners]):
             continue                                  # all outside one plane
-        intensity = face_intensity(world[corners], scene)
         uv = np.zeros((3, 2))
         if textured:
             for k, t in enumerate(face[:, 1]):
                 if 0 <= t < len(mesh.texcoords):
                     uv[k] = mesh.texcoords[t]
-        pieces = clip_near(np.hstack([clip[corners], uv]))
+        smooth = corner_normals(face, normals)       # None: lit per face
+        face_lighting = Lighting(intensity=face_intensity(world[corners], scene)) if smooth is None else None
+        # rows x y z w | u v | nx ny nz: the near-plane cut interpolates every column linearly
+        # in clip space (the cut corners' normals are not renormalised, so that interpolating
+        # over the pieces equals interpolating over the whole triangle)
+        attributes = np.hstack([clip[corners], uv, np.zeros((3, 3)) if smooth is None else smooth])
+        pieces = clip_near(attributes)
         if len(pieces) < 3:
             continue
         screen = to_screen(pieces)
         zw = pieces[:, 2] / pieces[:, 3]
         q = 1.0 / pieces[:, 3]
         for tri in ([0, 1, 2], [0, 2, 3])[:len(pieces) - 2]:
+            if face_lighting is not None:
+                lighting = face_lighting
+            else:
+                lighting = Lighting(normals=pieces[tri, 6:9], light=scene.light, ambient=scene.ambient)
             if textured:
                 raster_triangle(target, screen[tri], zw[tri], q[tri], scene.cull, None,
-                                uv=pieces[tri, 4:6], texture=texture, intensity=intensity)
+                                uv=pieces[tri, 4:6], texture=texture, lighting=lighting)
             else:
-                raster_triangle(target, screen[tri], zw[tri], q[tri], scene.cull,
-                                int(shade(FLAT_COLOUR, intensity)))
+                raster_triangle(target, screen[tri], zw[tri], q[tri], scene.cull, FLAT_COLOUR,
+                                lighting=lighting)
     return target.colour
 
 

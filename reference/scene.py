@@ -2,7 +2,7 @@
 
 One `key = value` per line; `#` starts a comment except as the first character of a value
 (`background = #203040`); blank lines, CRLF and a UTF-8 byte-order mark are fine; keys and the
-words of `mode` and `cull` ignore case. An unknown or repeated key, a malformed line or a bad
+words of `mode`, `cull` and the precision keys ignore case. An unknown or repeated key, a malformed line or a bad
 value raises `SceneError` naming the line (counted from 1), with the firmware's wording:
 ``bad scene.ini line N: <what>``.
 
@@ -10,6 +10,11 @@ Unlike the firmware (which keeps single precision), numbers are kept as float64:
 renders with the exact values written in the file. Range checks follow the firmware (a number
 must be finite in single precision, fov in (0, 180), near and far > 0, far > near, ambient in
 [0, 1], axis and light not zero, then normalised).
+
+The precision keys (`interpolation`, `shading`, `light_levels`, `angles`, `depth`, `snap`) select
+the firmware's approximations. They are read and checked here exactly as the firmware reads them
+and kept on the `Scene`, but the reference ignores them: it renders one ideal image per scene,
+the yardstick every setting is measured against.
 """
 from __future__ import annotations
 
@@ -24,8 +29,18 @@ from .ppm import rgb565_from_samples
 MODES = {"textured": 0, "flat": 1, "wireframe": 2}
 CULL_WORDS = {"on": True, "off": False, "yes": True, "no": False, "true": True, "false": False,
               "1": True, "0": False}
+# The precision keys taking one word: key -> the words allowed, the default first.
+PRECISION_WORDS: dict[str, tuple[str, ...]] = {
+    "interpolation": ("perspective", "affine"),
+    "shading": ("flat", "gouraud"),
+    "angles": ("polynomial", "table"),
+    "depth": ("int16", "float32"),
+    "snap": ("subpixel", "pixel"),
+}
+LIGHT_LEVELS_MIN, LIGHT_LEVELS_MAX = 2, 65
 KEYS = ("model", "texture", "mode", "cull", "scale", "axis", "angle", "step", "translate",
-        "fov", "near", "far", "light", "ambient", "background")
+        "fov", "near", "far", "light", "ambient", "background",
+        "interpolation", "shading", "light_levels", "angles", "depth", "snap")
 VALUE_MAX = 256          # a path of this many bytes or more is too long (NUL included)
 
 NUMBER = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?\Z")
@@ -57,6 +72,13 @@ class Scene:
     light: tuple[float, float, float] = (0.0, 0.0, 1.0)      # unit, towards the light
     ambient: float = 0.2
     background: int = 0x10A2                     # RGB565 (RGB 16, 20, 16)
+    # precision keys: what the firmware approximates (the reference ignores them)
+    interpolation: str = "perspective"           # perspective | affine
+    shading: str = "flat"                        # flat | gouraud
+    light_levels: int = 65                       # 2 .. 65
+    angles: str = "polynomial"                   # polynomial | table
+    depth: str = "int16"                         # int16 | float32
+    snap: str = "subpixel"                       # subpixel | pixel
     lines: dict[str, int] = field(default_factory=dict, repr=False)   # key -> line that set it
 
 
@@ -120,6 +142,24 @@ def _colour(line: int, value: str) -> int:
             raise SceneError(line, bad)
         rgb = [int(n) for n in numbers]
     return rgb565_from_samples(*rgb, maxval=255)
+
+
+def _expected_words(words: tuple[str, ...]) -> str:
+    """The error for a word that is not one of `words`: "bad value (expected a, b or c)"."""
+    listed = words[0] if len(words) == 1 else ", ".join(words[:-1]) + " or " + words[-1]
+    return f"bad value (expected {listed})"
+
+
+def _light_levels(line: int, value: str) -> int:
+    """light_levels: one number (parse.S's grammar), finite in single precision, whose single-
+    precision value is a whole number from LIGHT_LEVELS_MIN to LIGHT_LEVELS_MAX (the firmware
+    keeps the number in single precision, so it is checked as such: 6.5e1 is 65)."""
+    numbers = _count(line, "light_levels", _numbers(line, value), 1)
+    _finite_single(line, numbers)
+    single = float(np.float32(numbers[0]))
+    if single != math.floor(single) or not LIGHT_LEVELS_MIN <= single <= LIGHT_LEVELS_MAX:
+        raise SceneError(line, f"bad value (must be a whole number from {LIGHT_LEVELS_MIN} to {LIGHT_LEVELS_MAX})")
+    return int(single)
 
 
 def _split_line(raw: str, line: int) -> tuple[str, str] | None:
@@ -199,6 +239,13 @@ def _set(scene: Scene, key: str, value: str, line: int) -> None:
         if value.lower() not in CULL_WORDS:
             raise SceneError(line, "bad value (expected on, off, yes, no, true, false, 1 or 0)")
         scene.cull = CULL_WORDS[value.lower()]
+    elif key in PRECISION_WORDS:
+        words = PRECISION_WORDS[key]
+        if value.lower() not in words:
+            raise SceneError(line, _expected_words(words))
+        setattr(scene, key, value.lower())
+    elif key == "light_levels":
+        scene.light_levels = _light_levels(line, value)
     elif key == "background":
         scene.background = _colour(line, value)
     else:

@@ -165,7 +165,8 @@ def parse_scene_args(items: list[str]) -> dict[str, str]:
 # by the firmware only).
 KNOWN_SCENE_KEYS = ("model", "texture", "mode", "cull", "scale", "axis", "angle", "step",
                     "translate", "fov", "near", "far", "light", "ambient",
-                    "background")  # scene_keys in firmware/scene.S
+                    "background", "interpolation", "shading", "light_levels", "angles", "depth",
+                    "snap")  # scene_keys in firmware/scene.S
 SCENE_FILE_KEYS = ("model", "texture")  # keys whose value is a path on the card
 SCENE_VALUE_MAX = 255
 _SCENE_KEY = re.compile(r"[A-Za-z0-9_.\-]+\Z")

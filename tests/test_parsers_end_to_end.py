@@ -20,8 +20,11 @@ ERROR = re.compile(r"^error (\d+) (.*)$", re.M)
 SCENE_MODE, SCENE_CULL, SCENE_SCALE, SCENE_AXIS, SCENE_ANGLE, SCENE_STEP = 0, 4, 8, 20, 32, 36
 SCENE_TRANSLATE, SCENE_FOV, SCENE_NEAR, SCENE_FAR, SCENE_LIGHT, SCENE_AMBIENT, SCENE_BACKGROUND = \
     40, 52, 56, 60, 64, 76, 80
-MESH_VCOUNT, MESH_TCOUNT, MESH_NCOUNT, MESH_FCOUNT = 84, 88, 92, 96
-MESH_V, MESH_T, MESH_N, MESH_F, TEX_W, TEX_H, TEX_PIXELS = 104, 112, 120, 128, 136, 140, 144
+SCENE_INTERPOLATION, SCENE_SHADING, SCENE_LIGHT_LEVELS, SCENE_ANGLES, SCENE_DEPTH, SCENE_SNAP = \
+    84, 88, 92, 96, 100, 104
+SCENE_SIZE = 176
+MESH_VCOUNT, MESH_TCOUNT, MESH_NCOUNT, MESH_FCOUNT = 108, 112, 116, 120
+MESH_V, MESH_T, MESH_N, MESH_F, TEX_W, TEX_H, TEX_PIXELS = 128, 136, 144, 152, 160, 164, 168
 
 
 def boot(folder: Path, files: dict[str, bytes]) -> Board:
@@ -34,7 +37,7 @@ def boot(folder: Path, files: dict[str, bytes]) -> Board:
 
 def scene_bytes(board: Board) -> bytes:
     address = next(a for a, name in board.image.symbols.items() if name == "scene")
-    return board.memory.read(address, 152)
+    return board.memory.read(address, SCENE_SIZE)
 
 
 def f32s(board: Board, raw: bytes, offset: int, count: int) -> list[float]:
@@ -62,6 +65,10 @@ def test_defaults_without_scene_ini(firmware, tmp_path):
     assert f32s(board, raw, SCENE_TRANSLATE, 3) == [0, 0, -3]
     assert f32s(board, raw, SCENE_STEP, 1) == [4] and f32s(board, raw, SCENE_FOV, 1) == [60]
     assert u32(raw, TEX_W) == 1 and u32(raw, TEX_H) == 1
+    # the precision settings: perspective, flat, 65 levels, polynomial, int16, subpixel
+    assert [u32(raw, o) for o in (SCENE_INTERPOLATION, SCENE_SHADING, SCENE_ANGLES, SCENE_DEPTH, SCENE_SNAP)] \
+        == [0, 0, 0, 1, 0]
+    assert f32s(board, raw, SCENE_LIGHT_LEVELS, 1) == [65]
 
 
 def test_every_key_and_an_obj_using_every_feature(firmware, tmp_path):
@@ -71,7 +78,9 @@ def test_every_key_and_an_obj_using_every_feature(firmware, tmp_path):
            "f 1 2 3\r\nf -5/1 -4/2 -3/1 -2/2\r\nf 1//1 2//2 3//1 4//2 5//1\r\nf 1/1/1 2/2/2 3/1/1\r\n")
     scene = ("model = m/thing.obj\ntexture = t/tex.ppm\nmode = flat\ncull = off\nscale = 2\n"
              "axis = 0 0 5\nangle = -30\nstep = 2.5\ntranslate = 1 -1 -4\nfov = 45\nnear = 0.5\n"
-             "far = 50\nlight = 0 3 4\nambient = 0.1\nbackground = #FF8000\n")
+             "far = 50\nlight = 0 3 4\nambient = 0.1\nbackground = #FF8000\n"
+             "interpolation = Affine\nshading = gouraud\nlight_levels = 33\nangles = table\ndepth = float32\n"
+             "snap = pixel\n")
     board = boot(tmp_path, {"/scene.ini": scene.encode(), "/m/thing.obj": obj.encode(), "/t/tex.ppm": TEXTURE})
     raw = scene_bytes(board)
     assert u32(raw, SCENE_MODE) == 1 and u32(raw, SCENE_CULL) == 0
@@ -82,6 +91,9 @@ def test_every_key_and_an_obj_using_every_feature(firmware, tmp_path):
     assert f32s(board, raw, SCENE_LIGHT, 3) == pytest.approx([0, 0.6, 0.8])
     assert f32s(board, raw, SCENE_AMBIENT, 1) == pytest.approx([0.1])
     assert u32(raw, SCENE_BACKGROUND) == 0xFC00                       # #FF8000 in RGB565
+    assert [u32(raw, o) for o in (SCENE_INTERPOLATION, SCENE_SHADING, SCENE_ANGLES, SCENE_DEPTH, SCENE_SNAP)] \
+        == [1, 1, 1, 0, 1]
+    assert f32s(board, raw, SCENE_LIGHT_LEVELS, 1) == [33]
     assert [u32(raw, o) for o in (MESH_VCOUNT, MESH_TCOUNT, MESH_NCOUNT, MESH_FCOUNT)] == [5, 2, 2, 1 + 2 + 3 + 1]
     vertices = array(board, raw, MESH_V, 5, "<3f")
     assert vertices[1] == pytest.approx((-1.5, 2.25, -0.3)) and vertices[4] == (7, 8, 9)
@@ -136,6 +148,9 @@ BAD_FILES = {
     "scene-zero-axis": ({"/scene.ini": b"axis = 0 0 0\n"}, 9, "line 1"),
     "scene-far-before-near": ({"/scene.ini": b"near = 5\nfar = 2\n"}, 9, "line 2"),
     "scene-bad-number": ({"/scene.ini": b"scale = 1e\n"}, 9, "line 1"),
+    "scene-light-levels-fraction": ({"/scene.ini": b"light_levels = 3.5\n"}, 9, "line 1: bad value (must be a whole"),
+    "scene-light-levels-too-many": ({"/scene.ini": b"\nlight_levels = 66\n"}, 9, "line 2: bad value (must be a whole"),
+    "scene-bad-depth": ({"/scene.ini": b"depth = 24\n"}, 9, "line 1: bad value (expected int16 or float32)"),
 }
 
 

@@ -1,11 +1,21 @@
-"""Benchmark (not a test): how fast the board model runs compared with raw Unicorn.
+"""Benchmark (not a test): how fast the board model runs, and what each frame costs and how good it is.
 
 Measured in one run on one host, so the ratios are meaningful even on a noisy machine:
   1. raw Unicorn on a tight 4-instruction loop, run with no instruction limit;
   2. the same loop on a board hart (native instruction counter, 20,000-instruction quanta);
   3. the board model running the project's firmware: emulated instructions per host second
      over both harts, frames per host second, and virtual frames per second.
-Results are printed and written to build/bench.json.
+Those are printed and written to build/bench.json. Then, per thesis scene and mode, runs of the
+firmware measured against the float64 reference renderer (instructions per frame, PSNR, largest
+channel error, share of pixels that differ), written to build/bench/:
+  - the renderer table: every scene, scale and mode with the default settings;
+  - the precision sweep: every scene at its first scale, every mode, every precision setting of
+    tools/quality.py's SETTINGS, with the Pareto front of instructions against PSNR:
+    quality.csv, quality.md and quality.svg;
+  - results.json holds every record (each names its `setting`), results.md both tables.
+
+    python tools/bench.py                        (what `make bench` runs: everything)
+    python tools/bench.py --quality-only --scenes cube --modes flat --settings default,gouraud
 """
 from __future__ import annotations
 
@@ -25,6 +35,7 @@ sys.path.insert(0, str(ROOT))
 
 from emulator.board import Board  # noqa: E402
 from emulator.hart import CsrContext, Hart  # noqa: E402
+from tools import quality  # noqa: E402
 
 LOOP_SOURCE = """
     .globl _start
@@ -127,7 +138,8 @@ def sd_figures(firmware: Path, folder: Path) -> dict:
     }
 
 
-# The thesis's three test models, at the two scales it measured each at (the `scale` key)
+# The thesis's three test models, at the two scales it measured each at (the `scale` key); the
+# precision sweep uses the first scale of each
 THESIS_SCENES = [
     ("A torus 400 tri, 250x250", "models/torus.obj", "textures/torus.ppm", (0.35, 0.175)),
     ("B gem 64 tri, 100x78", "models/gem.obj", "textures/gem.ppm", (0.9, 0.45)),
@@ -137,37 +149,98 @@ MODES = ("textured", "flat", "wireframe")
 BENCH_FRAMES = 6
 
 
-def renderer_figures(firmware: Path, folder: Path) -> list[dict]:
-    """Instructions per frame per hart, virtual frame time and frame rate for every thesis scene,
-    scale and mode (steady state: the first frame, which includes loading, is left out)."""
-    from sdcard_image import build_image
-    subprocess.run([sys.executable, str(ROOT / "tools" / "make_assets.py"), str(folder / "assets")], check=True)
-    records = []
+def scene_id(model: str) -> str:
+    """The short name --scenes takes: the model's file name without extension (torus, gem, cube)."""
+    return Path(model).stem
+
+
+def planned_runs(scenes: list[str], modes: list[str], settings: list[str] | None,
+                 renderer: bool, sweep: bool) -> list[tuple]:
+    """(scene name, model, texture, scale, mode, setting) of every run, once each, in table order:
+    the renderer table is every scale and mode with the default setting; the precision sweep is
+    each scene's first scale, every mode, every setting of that mode (limited to `settings`)."""
+    runs = []
     for name, model, texture, scales in THESIS_SCENES:
+        if scene_id(model) not in scenes:
+            continue
         for scale in scales:
-            for mode in MODES:
-                card = folder / "card.img"
-                scene = {"model": model, "texture": texture, "mode": mode, "scale": str(scale),
-                         "translate": "0 0 -3", "step": "4"}
-                build_image(card, [folder / "assets" / "models", folder / "assets" / "textures"], scene=scene,
-                            force=True)
-                frame_images: list[np.ndarray] = []
-                board = Board(str(firmware), sd_image=str(card), on_frame=lambda record, image: frame_images.append(image))
-                board.run(BENCH_FRAMES)
-                board.close()
-                quality = compare_with_reference(card, frame_images)
-                steady = board.frames[1:]
-                hart0 = sum(f.instructions[0] for f in steady) / len(steady)
-                hart1 = sum(f.instructions[1] for f in steady) / len(steady)
-                frame_time = (steady[-1].virtual_time_s - board.frames[0].virtual_time_s) / len(steady)
-                records.append({
-                    "scene": name, "mode": mode, "scale": scale,
-                    "instructions_hart0": round(hart0), "instructions_hart1": round(hart1),
-                    "draw_time_ms": hart0 / board.cpu_hz() * 1e3,
-                    "frame_time_ms": frame_time * 1e3, "fps": 1 / frame_time,
-                    **quality,
-                })
-    return records
+            for mode in modes:
+                wanted = []
+                if renderer:
+                    wanted.append(quality.DEFAULT_SETTING)
+                if sweep and scale == scales[0]:
+                    wanted += quality.settings_for_mode(mode, settings)
+                for setting in quality.settings_for_mode(mode, set(wanted)):
+                    runs.append((name, model, texture, scale, mode, setting))
+    return runs
+
+
+def in_sweep(record: dict) -> bool:
+    """Whether a record is at its scene's sweep scale (so belongs in the precision tables)."""
+    return any(record["scene"] == name and record["scale"] == scales[0] for name, _, _, scales in THESIS_SCENES)
+
+
+_warned: set[str] = set()
+
+
+def _warn_once(message: str) -> None:
+    """The card builder's notes (such as a scene key it does not know yet), each printed once."""
+    if message not in _warned:
+        _warned.add(message)
+        print(f"bench: card: {message}", file=sys.stderr, flush=True)
+
+
+def measure(firmware: Path, folder: Path, name: str, model: str, texture: str, scale: float, mode: str,
+            setting: str) -> dict:
+    """One scene, mode and precision setting on the board model for BENCH_FRAMES frames: instructions
+    per frame per hart, virtual frame time and frame rate (steady state: the first frame, which
+    includes loading, is left out) and the distance of all frames from the reference renderer's."""
+    from sdcard_image import build_image
+    started = time.perf_counter()
+    keys = quality.SETTINGS[setting]
+    card = folder / "card.img"
+    scene = {"model": model, "texture": texture, "mode": mode, "scale": str(scale),
+             "translate": "0 0 -3", "step": "4", **keys}
+    build_image(card, [folder / "assets" / "models", folder / "assets" / "textures"], scene=scene, force=True,
+                on_warning=_warn_once)
+    frame_images: list[np.ndarray] = []
+    board = Board(str(firmware), sd_image=str(card), on_frame=lambda record, image: frame_images.append(image))
+    try:
+        board.run(BENCH_FRAMES)
+    finally:
+        board.close()
+    compared = compare_with_reference(card, frame_images)
+    steady = board.frames[1:]
+    hart0 = sum(f.instructions[0] for f in steady) / len(steady)
+    hart1 = sum(f.instructions[1] for f in steady) / len(steady)
+    frame_time = (steady[-1].virtual_time_s - board.frames[0].virtual_time_s) / len(steady)
+    return {
+        "scene": name, "mode": mode, "scale": scale, "setting": setting, "setting_keys": dict(keys),
+        "instructions_hart0": round(hart0), "instructions_hart1": round(hart1),
+        "draw_time_ms": hart0 / board.cpu_hz() * 1e3,
+        "frame_time_ms": frame_time * 1e3, "fps": 1 / frame_time,
+        **compared,
+        "host_time_s": time.perf_counter() - started,
+    }
+
+
+def scene_figures(firmware: Path, folder: Path, runs: list[tuple]) -> tuple[list[dict], list[str]]:
+    """Every planned run (see planned_runs); returns the records and, for the runs that failed
+    (a firmware that rejects a setting, a reference that cannot render it), what went wrong."""
+    subprocess.run([sys.executable, str(ROOT / "tools" / "make_assets.py"), str(folder / "assets")], check=True)
+    records, failures = [], []
+    for n, (name, model, texture, scale, mode, setting) in enumerate(runs, 1):
+        what = f"{name}, scale {scale:g}, {mode}, {setting}"
+        try:
+            records.append(measure(firmware, folder, name, model, texture, scale, mode, setting))
+        except Exception as error:     # noqa: BLE001  (reported, and the bench exits with status 1)
+            failures.append(f"{what}: {type(error).__name__}: {error}")
+            print(f"[{n}/{len(runs)}] {what}: FAILED: {type(error).__name__}: {error}", file=sys.stderr, flush=True)
+            continue
+        print(f"[{n}/{len(runs)}] {what}: {records[-1]['instructions_hart0']:,} instructions/frame, "
+              f"PSNR {records[-1]['psnr_db']:.2f} dB, {records[-1]['host_time_s']:.1f} s",
+              file=sys.stderr, flush=True)
+    return records, failures
 
 
 def compare_with_reference(card: Path, frames: list[np.ndarray]) -> dict:
@@ -188,19 +261,48 @@ def compare_with_reference(card: Path, frames: list[np.ndarray]) -> dict:
             "max_error": largest, "pixels_differ": differing / pixels}
 
 
-def write_renderer_table(records: list[dict], folder: Path) -> str:
+def renderer_table(records: list[dict]) -> str:
+    """The renderer table: the default setting at every scene, scale and mode."""
     lines = ["| scene | scale | mode | instructions hart 0 / frame | hart 1 / frame | draw time (ms) | "
              "frame time (ms) | fps | PSNR vs reference (dB) | max error | pixels differ |",
              "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in records:
+        if r["setting"] != quality.DEFAULT_SETTING:
+            continue
         lines.append(f"| {r['scene']} | {r['scale']:g} | {r['mode']} | {r['instructions_hart0']:,} | "
                      f"{r['instructions_hart1']:,} | {r['draw_time_ms']:.2f} | {r['frame_time_ms']:.2f} | "
                      f"{r['fps']:.1f} | {r['psnr_db']:.1f} | {r['max_error']} | {100 * r['pixels_differ']:.2f} % |")
-    table = "\n".join(lines) + "\n"
+    return "\n".join(lines) + "\n"
+
+
+def write_results(records: list[dict], folder: Path, renderer: bool, sweep: bool) -> str:
+    """results.json (every record, each with its `setting`), results.md (the renderer table and the
+    precision table), and quality.csv, quality.md, quality.svg; returns what to print."""
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "results.json").write_text(json.dumps(records, indent=2) + "\n")
-    (folder / "results.md").write_text(table)
-    return table
+    printed, md = "", ""
+    if renderer:
+        table = renderer_table(records)
+        md += "## Renderer: every thesis scene, scale and mode, default settings\n\n" + table
+        printed += table
+    if sweep:
+        swept = [r for r in records if in_sweep(r)]
+        report = quality.write_quality(swept, folder)
+        md += (("\n" if md else "") + "## Precision settings: instructions against error "
+               "(also quality.csv, quality.md, quality.svg)\n\n" + report)
+        printed += ("\n" if printed else "") + report
+    (folder / "results.md").write_text(md)
+    return printed
+
+
+def _names(text: str | None, allowed: list[str], what: str) -> list[str] | None:
+    if text is None:
+        return None
+    names = [n.strip() for n in text.split(",") if n.strip()]
+    unknown = [n for n in names if n not in allowed]
+    if unknown:
+        raise SystemExit(f"bench: unknown {what} {', '.join(unknown)} (known: {', '.join(allowed)})")
+    return names
 
 
 def main() -> int:
@@ -209,8 +311,46 @@ def main() -> int:
     parser.add_argument("--card", default=str(ROOT / "build" / "card.img"))
     parser.add_argument("--frames", type=int, default=60)
     parser.add_argument("--loop-instructions", type=int, default=40_000_000)
-    parser.add_argument("--no-renderer", action="store_true", help="skip the per-scene renderer table")
+    parser.add_argument("--out", default=str(ROOT / "build" / "bench"),
+                        help="folder for results.json, results.md, quality.csv/.md/.svg (default build/bench)")
+    parser.add_argument("--no-speed", action="store_true",
+                        help="skip the speed figures (raw Unicorn, board hart, firmware, SD) and build/bench.json")
+    parser.add_argument("--no-renderer", action="store_true",
+                        help="no per-scene runs at all (neither the renderer table nor the precision sweep)")
+    parser.add_argument("--no-quality", action="store_true", help="skip the precision sweep")
+    parser.add_argument("--quality-only", action="store_true",
+                        help="only the precision sweep: no speed figures, no renderer table")
+    parser.add_argument("--settings", help="comma-separated settings for the sweep (default: all): "
+                        + ", ".join(quality.SETTINGS))
+    parser.add_argument("--scenes", help="comma-separated scenes (default: all): "
+                        + ", ".join(scene_id(model) for _, model, _, _ in THESIS_SCENES))
+    parser.add_argument("--modes", help="comma-separated modes (default: all): " + ", ".join(MODES))
     args = parser.parse_args()
+    settings = _names(args.settings, list(quality.SETTINGS), "setting")
+    scenes = _names(args.scenes, [scene_id(model) for _, model, _, _ in THESIS_SCENES], "scene") \
+        or [scene_id(model) for _, model, _, _ in THESIS_SCENES]
+    modes = _names(args.modes, list(MODES), "mode") or list(MODES)
+    renderer = not args.no_renderer and not args.quality_only
+    sweep = not args.no_renderer and not args.no_quality
+    if not args.quality_only and not args.no_speed:
+        speed_figures(args)
+    failures: list[str] = []
+    if renderer or sweep:
+        runs = planned_runs(scenes, modes, settings, renderer, sweep)
+        with tempfile.TemporaryDirectory() as tmp:
+            records, failures = scene_figures(Path(args.firmware), Path(tmp), runs)
+        out = Path(args.out)
+        print(write_results(records, out, renderer, sweep))
+        print(f"{len(records)} runs of {len(runs)} written to {out}: results.json, results.md"
+              + (", quality.csv, quality.md, quality.svg" if sweep else ""))
+    for failure in failures:
+        print(f"FAILED: {failure}")
+    return 1 if failures else 0
+
+
+def speed_figures(args: argparse.Namespace) -> None:
+    """Raw Unicorn, a board hart and the board model running the firmware; SD timings. Printed and
+    written to build/bench.json."""
     iterations = args.loop_instructions // 4
     with tempfile.TemporaryDirectory() as tmp:
         code = assemble_loop(iterations, Path(tmp))
@@ -239,16 +379,10 @@ def main() -> int:
     print(f"SD (virtual time; thesis in brackets): card set-up to root directory {sd['card_setup_to_root_ms']:.2f} ms "
           f"[32.35], model {sd['model_bytes']} bytes {sd['model_read_ms']:.2f} ms [43.05], "
           f"texture {sd['texture_bytes']} bytes {sd['texture_read_ms']:.2f} ms [200.75]")
-    if not args.no_renderer:
-        with tempfile.TemporaryDirectory() as tmp:
-            records = renderer_figures(Path(args.firmware), Path(tmp))
-        print(write_renderer_table(records, ROOT / "build" / "bench"))
-        print("renderer figures written to build/bench/results.json and build/bench/results.md")
     out = ROOT / "build" / "bench.json"
     out.parent.mkdir(exist_ok=True)
     out.write_text(json.dumps(results, indent=2) + "\n")
     print(f"written to {out.relative_to(ROOT)}")
-    return 0
 
 
 if __name__ == "__main__":

@@ -4,7 +4,7 @@
 
 writes, like the thesis's three test models:
   models/torus.obj     400 triangles with normals and texture coordinates  + textures/torus.png 250x250
-  models/gem.obj       64 triangles                                         + textures/gem.png   100x78
+  models/gem.obj       64 triangles, one normal per facet                   + textures/gem.png   100x78
   models/cube.obj      6 quad faces                                         + textures/cube.png  8x8
 The textures are PNGs: the card builder turns them into PPM, as it does for users' images.
 """
@@ -52,7 +52,12 @@ def torus(rings: int = 20, sides: int = 10, major: float = 0.7, minor: float = 0
 
 
 def gem(segments: int = 16) -> str:
-    """A faceted gem: 64 triangles (crown, girdle band, pavilion), normals per vertex."""
+    """A faceted gem: 64 triangles (crown, girdle band, pavilion), one normal per facet.
+
+    Each triangle gets its own vn, the outward unit normal of its plane, and all three of its
+    corners use it (f v/vt/vn with vn != v), so a renderer that lights from vertex normals shows
+    flat facets, as a gem has. The vertices, uvs, face order and winding are those the earlier
+    smooth-normal gem had, so renderers that ignore vn draw the same frames."""
     vertices, uvs, normals, faces = [], [], [], []
     top, bottom = (0.0, 0.9, 0.0), (0.0, -0.9, 0.0)
     upper = [(0.9 * math.cos(2 * math.pi * k / segments), 0.25, 0.9 * math.sin(2 * math.pi * k / segments))
@@ -60,16 +65,21 @@ def gem(segments: int = 16) -> str:
     lower = [(x, -0.25, z) for x, _, z in upper]
     vertices = [top, bottom] + upper + lower
     for x, y, z in vertices:
-        length = math.sqrt(x * x + y * y + z * z) or 1.0
-        normals.append((x / length, y / length, z / length))
         uvs.append((0.5 + 0.5 * math.atan2(z, x) / math.pi * 0.5 + 0.25, 0.5 + y / 1.8))
+    triangles = []                      # 1-based vertex (and uv) indices, counter-clockwise from outside
     for k in range(segments):
         u0, u1 = 3 + k, 3 + (k + 1) % segments
         l0, l1 = 3 + segments + k, 3 + segments + (k + 1) % segments
-        faces.append([(1, 1, 1), (u1, u1, u1), (u0, u0, u0)])
-        faces.append([(u0, u0, u0), (u1, u1, u1), (l1, l1, l1)])
-        faces.append([(u0, u0, u0), (l1, l1, l1), (l0, l0, l0)])
-        faces.append([(2, 2, 2), (l0, l0, l0), (l1, l1, l1)])
+        triangles += [(1, u1, u0), (u0, u1, l1), (u0, l1, l0), (2, l0, l1)]
+    written = [tuple(float(f"{x:.6f}") for x in vertex) for vertex in vertices]   # as _obj writes them
+    for triangle in triangles:
+        a, b, c = (np.array(written[i - 1]) for i in triangle)
+        normal = np.cross(b - a, c - a)
+        normal /= np.linalg.norm(normal)
+        assert np.dot(normal, a + b + c) > 0, "the gem is convex about the origin: facets face outward"
+        normals.append(tuple(float(x) for x in normal))
+        n = len(normals)
+        faces.append([(i, i, n) for i in triangle])
     return _obj("gem", vertices, uvs, normals, faces)
 
 

@@ -1,0 +1,416 @@
+"""The precision settings the bench sweeps, and what it makes of the results: which settings are
+on the Pareto front of instructions per frame against PSNR, a table (CSV and Markdown) and a
+plot (hand-written SVG, small multiples, one panel per scene and mode).
+
+Pure functions over records (dicts) with no emulator in sight, so they are tested quickly
+(tests/test_bench_quality.py). A record has at least `scene`, `scale`, `mode`, `setting`,
+`instructions_hart0`, `psnr_db`, `max_error` and `pixels_differ` (a share, 0 to 1).
+"""
+from __future__ import annotations
+
+import csv
+import io
+import math
+from collections.abc import Iterable
+from pathlib import Path
+from xml.sax.saxutils import escape
+
+# --- the settings ---------------------------------------------------------------------------------
+
+# The firmware's precision keys in scene.ini, default first.
+PRECISION_KEYS = {
+    "interpolation": ("perspective", "affine"),           # texture coordinates per pixel
+    "shading": ("flat", "gouraud"),
+    "light_levels": tuple(str(n) for n in range(65, 1, -1)),   # 65 by default, the thesis used 33
+    "angles": ("polynomial", "table"),                    # table = the thesis's 2-degree table
+    "depth": ("float32", "int16"),
+    "snap": ("subpixel", "pixel"),
+}
+
+# Every setting the bench sweeps, in the order the tables list them: name -> scene.ini keys added
+# to the scene's own. "default" is the firmware as it ships; then one knob at a time; then presets.
+SETTINGS: dict[str, dict[str, str]] = {
+    "default":     {},
+    "affine":      {"interpolation": "affine"},
+    "gouraud":     {"shading": "gouraud"},
+    "light-33":    {"light_levels": "33"},
+    "light-9":     {"light_levels": "9"},
+    "angle-table": {"angles": "table"},
+    "depth-int16": {"depth": "int16"},
+    "pixel-snap":  {"snap": "pixel"},
+    "thesis":      {"interpolation": "affine", "shading": "flat", "light_levels": "33", "angles": "table",
+                    "depth": "int16", "snap": "pixel"},
+    "fast":        {"interpolation": "affine", "depth": "int16"},
+    "best":        {"interpolation": "perspective", "shading": "gouraud"},
+}
+DEFAULT_SETTING = "default"
+# Wireframe has no texture, light or depth buffer: only the angles and the snapping change it.
+WIREFRAME_SETTINGS = ("default", "angle-table", "pixel-snap")
+
+
+def settings_for_mode(mode: str, wanted: Iterable[str] | None = None) -> list[str]:
+    """The settings swept in this mode (in SETTINGS order), limited to `wanted` if given."""
+    names = list(SETTINGS) if mode != "wireframe" else [n for n in SETTINGS if n in WIREFRAME_SETTINGS]
+    if wanted is not None:
+        wanted = set(wanted)
+        names = [n for n in names if n in wanted]
+    return names
+
+
+# --- the Pareto front -----------------------------------------------------------------------------
+
+def _quality(record: dict) -> float:
+    q = float(record["psnr_db"])
+    return -math.inf if math.isnan(q) else q
+
+
+def dominates(a: dict, b: dict) -> bool:
+    """a is at least as cheap and at least as good as b, and strictly better in one of them."""
+    ca, cb, qa, qb = a["instructions_hart0"], b["instructions_hart0"], _quality(a), _quality(b)
+    return ca <= cb and qa >= qb and (ca < cb or qa > qb)
+
+
+def pareto_front(records: Iterable[dict]) -> set[str]:
+    """Names (`setting`) of the records no other record dominates, fewer instructions per frame
+    and higher PSNR being better. Equal points do not dominate each other: both are on the front.
+    Infinite PSNR (frames identical to the reference) is better than any finite one."""
+    records = list(records)
+    return {r["setting"] for r in records if not any(dominates(o, r) for o in records if o is not r)}
+
+
+def dominated_by(records: Iterable[dict], name: str) -> list[str]:
+    """The settings that dominate the one called `name`."""
+    records = list(records)
+    target = [r for r in records if r["setting"] == name]
+    return [o["setting"] for o in records for t in target if o is not t and dominates(o, t)]
+
+
+def panel_key(record: dict) -> tuple:
+    return record["scene"], record["scale"], record["mode"]
+
+
+def panels(records: Iterable[dict]) -> dict[tuple, list[dict]]:
+    """Records grouped by (scene, scale, mode), in order of first appearance."""
+    groups: dict[tuple, list[dict]] = {}
+    for r in records:
+        groups.setdefault(panel_key(r), []).append(r)
+    return groups
+
+
+def front_report(records: Iterable[dict]) -> list[str]:
+    """One line per panel: is the default setting on the Pareto front?"""
+    lines = []
+    for (scene, scale, mode), group in panels(records).items():
+        where = f"{scene}, scale {scale:g}, {mode}"
+        if not any(r["setting"] == DEFAULT_SETTING for r in group):
+            lines.append(f"{where}: no '{DEFAULT_SETTING}' run")
+        elif DEFAULT_SETTING in pareto_front(group):
+            lines.append(f"{where}: default is on the Pareto front")
+        else:
+            lines.append(f"{where}: default is NOT on the Pareto front "
+                         f"(dominated by {', '.join(dominated_by(group, DEFAULT_SETTING))})")
+    return lines
+
+
+# --- the table ------------------------------------------------------------------------------------
+
+TABLE_COLUMNS = [  # (CSV header, Markdown header)
+    ("scene", "scene"), ("scale", "scale"), ("mode", "mode"), ("setting", "setting"),
+    ("instructions_per_frame", "instructions / frame"), ("relative_to_default", "relative to default"),
+    ("psnr_db", "PSNR (dB)"), ("max_error", "max error"), ("pixels_differ_percent", "pixels differ (%)"),
+    ("on_front", "on front"),
+]
+
+
+def table_rows(records: Iterable[dict]) -> list[dict]:
+    """One row per record (grouped by panel, settings in record order) with the table's columns:
+    instructions relative to the same panel's default (None without one) and front membership."""
+    rows = []
+    for group in panels(records).values():
+        front = pareto_front(group)
+        default = next((r for r in group if r["setting"] == DEFAULT_SETTING), None)
+        for r in group:
+            rows.append({
+                "scene": r["scene"], "scale": r["scale"], "mode": r["mode"], "setting": r["setting"],
+                "instructions_per_frame": int(round(r["instructions_hart0"])),
+                "relative_to_default": (r["instructions_hart0"] / default["instructions_hart0"]
+                                        if default and default["instructions_hart0"] else None),
+                "psnr_db": float(r["psnr_db"]), "max_error": int(r["max_error"]),
+                "pixels_differ_percent": 100 * float(r["pixels_differ"]),
+                "on_front": r["setting"] in front,
+            })
+    return rows
+
+
+def csv_text(records: Iterable[dict]) -> str:
+    """The table as CSV: plain numbers (PSNR `inf` for identical frames, relative empty without a
+    default run), on_front yes/no."""
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\n")
+    writer.writerow([c for c, _ in TABLE_COLUMNS])
+    for row in table_rows(records):
+        writer.writerow([
+            row["scene"], f"{row['scale']:g}", row["mode"], row["setting"], row["instructions_per_frame"],
+            "" if row["relative_to_default"] is None else f"{row['relative_to_default']:.4f}",
+            "inf" if math.isinf(row["psnr_db"]) else f"{row['psnr_db']:.3f}",
+            row["max_error"], f"{row['pixels_differ_percent']:.4f}", "yes" if row["on_front"] else "no",
+        ])
+    return out.getvalue()
+
+
+def _psnr_text(psnr: float) -> str:
+    return "exact" if math.isinf(psnr) and psnr > 0 else f"{psnr:.2f}"
+
+
+def markdown_table(records: Iterable[dict]) -> str:
+    """The table in Markdown (thousands separated, PSNR `exact` for identical frames)."""
+    lines = ["| " + " | ".join(h for _, h in TABLE_COLUMNS) + " |",
+             "|" + "---|" * 3 + "---|" + "---:|" * 5 + "---|"]
+    for row in table_rows(records):
+        relative = "" if row["relative_to_default"] is None else f"{row['relative_to_default']:.3f}"
+        setting = f"**{row['setting']}**" if row["setting"] == DEFAULT_SETTING else row["setting"]
+        lines.append(f"| {row['scene']} | {row['scale']:g} | {row['mode']} | {setting} | "
+                     f"{row['instructions_per_frame']:,} | {relative} | {_psnr_text(row['psnr_db'])} | "
+                     f"{row['max_error']} | {row['pixels_differ_percent']:.2f} | "
+                     f"{'yes' if row['on_front'] else 'no'} |")
+    return "\n".join(lines) + "\n"
+
+
+# --- the plot -------------------------------------------------------------------------------------
+
+# Identical frames have an infinite PSNR; the plot puts them at this ceiling, on a row of its own
+# labelled "exact" above a break in the axis. No finite PSNR reaches it: one channel of one pixel
+# off by one in 64 frames of 320 x 240 is 119.9 dB.
+PSNR_CEILING_DB = 120.0
+
+PANEL_W, PANEL_H = 400, 290
+PAD_L, PAD_R, PAD_T, PAD_B = 64, 16, 34, 46      # plot area inside a panel
+EXACT_BAND = 26                                  # height of the "exact" row
+EXACT_GAP = 10                                   # and the gap between it and the finite scale
+FONT = "font-family=\"DejaVu Sans, Helvetica, Arial, sans-serif\""
+FRONT_COLOUR, DOMINATED_COLOUR, DEFAULT_COLOUR = "#1f6fb4", "#8c8c8c", "#e8590c"
+
+
+def nice_ticks(lo: float, hi: float, count: int = 5) -> list[float]:
+    """Round tick values (1, 2 or 5 times a power of ten apart) covering [lo, hi]."""
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        raise ValueError("ticks need finite bounds")
+    if hi <= lo:
+        hi = lo + (abs(lo) * 0.1 or 1.0)
+    raw = (hi - lo) / max(1, count - 1)
+    power = 10 ** math.floor(math.log10(raw))
+    step = next(m * power for m in (1, 2, 5, 10) if m * power >= raw)
+    first = math.floor(lo / step + 1e-9) * step
+    ticks = []
+    value = first
+    while value < hi + step * 1e-9:
+        ticks.append(round(value, 10))
+        value += step
+    if ticks[-1] < hi - step * 1e-9 or len(ticks) < 2:
+        ticks.append(round(value, 10))
+    return ticks
+
+
+def _instructions_text(value: float, largest: float) -> str:
+    if largest >= 10_000:
+        return f"{value / 1000:g}k"
+    return f"{value:g}"
+
+
+def _text(x: float, y: float, body: str, size: int = 10, anchor: str = "start", extra: str = "") -> str:
+    return (f'<text x="{x:.1f}" y="{y:.1f}" font-size="{size}" text-anchor="{anchor}"{extra}>'
+            f"{escape(body)}</text>")
+
+
+def _text_width(body: str, size: int = 10) -> float:
+    return 0.58 * size * len(body)
+
+
+def _overlap(a: tuple, b: tuple) -> float:
+    dx = min(a[2], b[2]) - max(a[0], b[0])
+    dy = min(a[3], b[3]) - max(a[1], b[1])
+    return dx * dy if dx > 0 and dy > 0 else 0.0
+
+
+def _place_labels(points: list[tuple[float, float, str]], bounds: tuple) -> list[tuple[float, float, str, str]]:
+    """Greedy placement of one label per point (x, y, text) beside it, avoiding the other labels and
+    points and staying inside bounds (x0, y0, x1, y1). Returns (x, y, anchor, text)."""
+    marks = [(x - 5, y - 5, x + 5, y + 5) for x, y, _ in points]
+    placed: list[tuple] = []
+    out = []
+    for x, y, body in sorted(points, key=lambda p: (p[1], p[0])):
+        w, h = _text_width(body), 11
+        candidates = [(x + 8, y + 4, "start"), (x - 8, y + 4, "end"), (x + 6, y - 8, "start"),
+                      (x + 6, y + 15, "start"), (x - 6, y - 8, "end"), (x - 6, y + 15, "end")]
+        best, best_cost = None, math.inf
+        for tx, ty, anchor in candidates:
+            box = (tx if anchor == "start" else tx - w, ty - h + 2, tx + w if anchor == "start" else tx, ty + 2)
+            cost = sum(_overlap(box, other) for other in placed) + sum(_overlap(box, m) for m in marks)
+            outside = (max(0, bounds[0] - box[0]) + max(0, box[2] - bounds[2]) +
+                       max(0, bounds[1] - box[1]) + max(0, box[3] - bounds[3]))
+            cost += outside * 50
+            if cost < best_cost:
+                best, best_cost = (tx, ty, anchor, box), cost
+            if cost == 0:
+                break
+        tx, ty, anchor, box = best
+        placed.append(box)
+        out.append((tx, ty, anchor, body))
+    return out
+
+
+def _panel_svg(group: list[dict], title: str, ox: float, oy: float) -> list[str]:
+    """One panel at (ox, oy): axes, ticks, the front's step line, one point per record, labels."""
+    left, top = ox + PAD_L, oy + PAD_T
+    right, bottom = ox + PANEL_W - PAD_R, oy + PANEL_H - PAD_B
+    front = pareto_front(group)
+    costs = [float(r["instructions_hart0"]) for r in group]
+    exact = [r for r in group if _quality(r) >= PSNR_CEILING_DB]
+    finite = [_quality(r) for r in group if _quality(r) < PSNR_CEILING_DB and math.isfinite(_quality(r))]
+    # axes ranges: a little room around the points, then out to round ticks
+    span = max(costs) - min(costs)
+    pad = span * 0.06 if span else max(1.0, max(costs) * 0.05)
+    xticks = nice_ticks(max(0.0, min(costs) - pad), max(costs) + pad)
+    x0, x1 = xticks[0], xticks[-1]
+    if finite:
+        span = max(finite) - min(finite)
+        pad = span * 0.08 if span else 1.0
+        yticks = nice_ticks(min(finite) - pad, max(finite) + pad)
+    else:
+        yticks = []
+    y_lo, y_hi = (yticks[0], yticks[-1]) if yticks else (0.0, 1.0)
+    finite_top = top + EXACT_BAND + EXACT_GAP if exact else top
+
+    def px(cost: float) -> float:
+        return left + (cost - x0) / (x1 - x0) * (right - left)
+
+    def py(psnr: float) -> float:
+        if psnr >= PSNR_CEILING_DB:
+            return top + EXACT_BAND / 2
+        if not math.isfinite(psnr):          # -inf (NaN): at the bottom edge
+            return bottom
+        return bottom - (psnr - y_lo) / (y_hi - y_lo) * (bottom - finite_top)
+
+    s = ['<g class="panel">',
+         f'<rect x="{ox + 4:.1f}" y="{oy + 4:.1f}" width="{PANEL_W - 8}" height="{PANEL_H - 8}" '
+         f'fill="#ffffff" stroke="#d0d0d0"/>',
+         _text(ox + PANEL_W / 2, oy + 21, title, 12, "middle", ' font-weight="bold"'),
+         f'<rect x="{left:.1f}" y="{top:.1f}" width="{right - left:.1f}" height="{bottom - top:.1f}" '
+         f'fill="#fafafa" stroke="#444444"/>']
+    for t in xticks:
+        x = px(t)
+        s.append(f'<line x1="{x:.1f}" y1="{top:.1f}" x2="{x:.1f}" y2="{bottom:.1f}" stroke="#e4e4e4"/>')
+        s.append(f'<line x1="{x:.1f}" y1="{bottom:.1f}" x2="{x:.1f}" y2="{bottom + 4:.1f}" stroke="#444444"/>')
+        s.append(_text(x, bottom + 15, _instructions_text(t, xticks[-1]), 10, "middle"))
+    for t in yticks:
+        y = py(t)
+        s.append(f'<line x1="{left:.1f}" y1="{y:.1f}" x2="{right:.1f}" y2="{y:.1f}" stroke="#e4e4e4"/>')
+        s.append(f'<line x1="{left - 4:.1f}" y1="{y:.1f}" x2="{left:.1f}" y2="{y:.1f}" stroke="#444444"/>')
+        s.append(_text(left - 6, y + 3.5, f"{t:g}", 10, "end"))
+    if exact:
+        y = top + EXACT_BAND
+        s.append(f'<line x1="{left:.1f}" y1="{y:.1f}" x2="{right:.1f}" y2="{y:.1f}" stroke="#444444" '
+                 f'stroke-dasharray="4 3"/>')
+        s.append(_text(left - 6, top + EXACT_BAND / 2 + 3.5, "exact", 10, "end", ' font-style="italic"'))
+    s.append(_text((left + right) / 2, bottom + 32, "instructions / frame (hart 0)", 11, "middle"))
+    s.append(_text(ox + 16, (top + bottom) / 2, "PSNR vs reference (dB)", 11, "middle",
+                   f' transform="rotate(-90 {ox + 16:.1f} {(top + bottom) / 2:.1f})"'))
+    # the front as a step line: the best PSNR available at each budget of instructions
+    steps = sorted((r for r in group if r["setting"] in front), key=lambda r: (r["instructions_hart0"], _quality(r)))
+    if steps:
+        d = f"M{px(steps[0]['instructions_hart0']):.1f},{py(_quality(steps[0])):.1f}"
+        for r in steps[1:]:
+            d += f" H{px(r['instructions_hart0']):.1f} V{py(_quality(r)):.1f}"
+        d += f" H{right:.1f}"
+        s.append(f'<path class="front" d="{d}" fill="none" stroke="{FRONT_COLOUR}" stroke-width="2" '
+                 f'stroke-opacity="0.55"/>')
+    # the points, the default last so that it is drawn on top
+    labels: dict[tuple[int, int], list[str]] = {}
+    for r in sorted(group, key=lambda r: r["setting"] == DEFAULT_SETTING):
+        x, y = px(r["instructions_hart0"]), py(_quality(r))
+        on_front = r["setting"] in front
+        psnr = _psnr_text(float(r["psnr_db"]))
+        tip = (f"{r['setting']}: {int(round(r['instructions_hart0'])):,} instructions/frame, PSNR {psnr} dB, "
+               f"max error {r['max_error']}, {100 * float(r['pixels_differ']):.2f} % of pixels differ"
+               f"{', on the front' if on_front else ''}")
+        s.append(f'<g class="point" data-setting="{escape(r["setting"])}">')
+        s.append(f"<title>{escape(tip)}</title>")
+        if r["setting"] == DEFAULT_SETTING:
+            s.append(f'<circle cx="{x:.1f}" cy="{y:.1f}" r="8" fill="none" stroke="{DEFAULT_COLOUR}" '
+                     f'stroke-width="2.5"/>')
+        colour = FRONT_COLOUR if on_front else DOMINATED_COLOUR
+        fill = colour if on_front else "#ffffff"
+        s.append(f'<circle cx="{x:.1f}" cy="{y:.1f}" r="4" fill="{fill}" stroke="{colour}" stroke-width="1.5"/>')
+        s.append("</g>")
+        labels.setdefault((round(x), round(y)), []).append(r["setting"])
+    placed = _place_labels([(x, y, ", ".join(sorted(names, key=lambda n: n != DEFAULT_SETTING)))
+                            for (x, y), names in labels.items()],
+                           (left + 1, top + 1, right - 1, bottom - 1))
+    for tx, ty, anchor, body in placed:
+        weight = ' font-weight="bold"' if DEFAULT_SETTING in body.split(", ") else ""
+        s.append(_text(tx, ty, body, 10, anchor, f' class="label"{weight}'))
+    if any(r["setting"] == DEFAULT_SETTING for r in group):
+        verdict = "default on the front" if DEFAULT_SETTING in front else "default dominated"
+        s.append(_text(right - 4, bottom - 6, verdict, 9, "end",
+                       f' fill="{DEFAULT_COLOUR if DEFAULT_SETTING not in front else "#555555"}"'))
+    s.append("</g>")
+    return s
+
+
+def svg_text(records: Iterable[dict], title: str = "Instructions per frame against PSNR, per precision setting") -> str:
+    """The plot: a grid of panels, one row per scene (and scale), one column per mode."""
+    groups = panels(records)
+    rows = list(dict.fromkeys((scene, scale) for scene, scale, _ in groups))
+    cols = list(dict.fromkeys(mode for _, _, mode in groups))
+    header = 78
+    width = max(860, max(1, len(cols)) * PANEL_W + 20)
+    height = header + max(1, len(rows)) * PANEL_H + 52
+    s = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" '
+         f'viewBox="0 0 {width} {height}" {FONT}>',
+         f'<rect width="{width}" height="{height}" fill="#f4f4f4"/>',
+         _text(width / 2, 26, title, 16, "middle", ' font-weight="bold"')]
+    # the legend
+    lx, ly = 20, 52
+    s += [f'<circle cx="{lx + 6}" cy="{ly}" r="4" fill="{FRONT_COLOUR}" stroke="{FRONT_COLOUR}"/>',
+          _text(lx + 16, ly + 4, "on the Pareto front", 11),
+          f'<circle cx="{lx + 166}" cy="{ly}" r="4" fill="#ffffff" stroke="{DOMINATED_COLOUR}" stroke-width="1.5"/>',
+          _text(lx + 176, ly + 4, "dominated", 11),
+          f'<circle cx="{lx + 266}" cy="{ly}" r="8" fill="none" stroke="{DEFAULT_COLOUR}" stroke-width="2.5"/>',
+          _text(lx + 280, ly + 4, "default setting", 11),
+          f'<line x1="{lx + 390}" y1="{ly}" x2="{lx + 420}" y2="{ly}" stroke="{FRONT_COLOUR}" stroke-width="2" '
+          f'stroke-opacity="0.55"/>',
+          _text(lx + 426, ly + 4, "best PSNR within a budget of instructions (the front)", 11)]
+    for (scene, scale, mode), group in groups.items():
+        ox = 10 + cols.index(mode) * PANEL_W
+        oy = header + rows.index((scene, scale)) * PANEL_H
+        s += _panel_svg(group, f"{scene}, scale {scale:g}, {mode}", ox, oy)
+    s.append(_text(20, height - 32, "Fewer instructions (left) and higher PSNR against the float64 reference renderer "
+                   "(up) are better; hover a point for its maximum error and share of differing pixels.", 11))
+    s.append(_text(20, height - 14, f"Frames identical to the reference (infinite PSNR) sit on the row 'exact', "
+                   f"plotted at a ceiling of {PSNR_CEILING_DB:g} dB above a break in the axis.", 11))
+    s.append("</svg>")
+    return "\n".join(s) + "\n"
+
+
+# --- all of it ------------------------------------------------------------------------------------
+
+def write_quality(records: list[dict], folder: Path) -> str:
+    """Writes quality.csv, quality.md and quality.svg into folder; returns the Markdown report
+    (the table and one line per panel on whether the default is on the front)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    table = markdown_table(records)
+    report = "\n".join(front_report(records)) + "\n"
+    (folder / "quality.csv").write_text(csv_text(records))
+    (folder / "quality.md").write_text(
+        "# Precision settings: instructions per frame against error\n\n"
+        "Per scene and mode, each precision setting's instructions per frame on hart 0 (steady state) and "
+        "how far its frames are from the float64 reference renderer: PSNR over all frames, the largest "
+        "per-channel error and the share of pixels that differ. `on front`: no other setting of the same "
+        "scene and mode needs no more instructions and reaches at least the PSNR, being better in one. "
+        "Plot: quality.svg.\n\n"
+        "| setting | scene.ini keys |\n|---|---|\n"
+        + "".join(f"| {name} | {' '.join(f'`{k} = {v}`' for k, v in keys.items()) or '(firmware defaults)'} |\n"
+                  for name, keys in SETTINGS.items())
+        + "\n" + table + "\n" + "".join(f"- {line}\n" for line in report.splitlines()))
+    (folder / "quality.svg").write_text(svg_text(records))
+    return table + "\n" + report
