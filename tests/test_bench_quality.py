@@ -32,8 +32,8 @@ def rec(setting: str, instructions: float, psnr: float, *, scene: str = "A torus
 def test_settings_are_ordered_default_first_and_use_known_keys_and_values():
     names = list(quality.SETTINGS)
     assert names[0] == quality.DEFAULT_SETTING == "default" and quality.SETTINGS["default"] == {}
-    assert names == ["default", "affine", "gouraud", "light-33", "light-9", "angle-table", "depth-int16",
-                     "pixel-snap", "thesis", "fast", "best"]
+    assert names == ["default", "affine", "gouraud", "light-33", "light-9", "angle-table", "depth-float32",
+                     "pixel-snap", "thesis", "best"]
     for name, keys in quality.SETTINGS.items():
         for key, value in keys.items():
             assert value in quality.PRECISION_KEYS[key], (name, key, value)
@@ -183,15 +183,17 @@ def test_nice_ticks_cover_the_range_with_round_steps():
 def test_bench_plans_each_run_once():
     pytest.importorskip("unicorn")
     from tools import bench
-    runs = bench.planned_runs(["torus", "gem", "cube"], list(bench.MODES), None, renderer=True, sweep=True)
+    runs = bench.planned_runs(["torus", "gem", "cube", "decal"], list(bench.MODES), None, renderer=True,
+                              sweep=True)
     assert len(runs) == len(set(runs))
     keys = {(r[0], r[3], r[4], r[5]) for r in runs}
     # renderer table: every scale and mode, default settings
     assert all((name, scale, mode, "default") in keys
-               for name, _, _, scales in bench.THESIS_SCENES for scale in scales for mode in bench.MODES)
+               for name, _, _, scales in bench.BENCH_SCENES for scale in scales for mode in bench.MODES)
     # sweep: first scale only; wireframe only its three settings
     per_scene = 2 * len(quality.SETTINGS) + len(quality.WIREFRAME_SETTINGS)
-    assert len(runs) == 3 * (per_scene + len(bench.MODES))      # plus the second scale's defaults
+    second_scales = sum(len(scales) - 1 for _, _, _, scales in bench.BENCH_SCENES)
+    assert len(runs) == len(bench.BENCH_SCENES) * per_scene + second_scales * len(bench.MODES)
     assert not any(mode == "wireframe" and setting == "affine" for _, _, _, _, mode, setting in runs)
     only = bench.planned_runs(["cube"], ["flat"], ["default"], renderer=False, sweep=True)
     assert only == [("C cube 6 faces, 8x8", "models/cube.obj", "textures/cube.ppm", 0.9, "flat", "default")]
@@ -203,7 +205,7 @@ def test_bench_writes_every_record_and_both_tables(tmp_path):
     pytest.importorskip("unicorn")
     import json
     from tools import bench
-    name = bench.THESIS_SCENES[2][0]
+    name = bench.BENCH_SCENES[2][0]
     extra = {"instructions_hart1": 910, "draw_time_ms": 0.5, "frame_time_ms": 7.6, "fps": 131.0}
     records = [{**rec("default", 200_000, 45.0, scene=name, scale=0.9), **extra},
                {**rec("gouraud", 220_000, math.inf, scene=name, scale=0.9), **extra},

@@ -138,13 +138,18 @@ def sd_figures(firmware: Path, folder: Path) -> dict:
     }
 
 
-# The thesis's three test models, at the two scales it measured each at (the `scale` key); the
-# precision sweep uses the first scale of each
-THESIS_SCENES = [
+# The bench's scenes; the renderer table has every scale, the precision sweep each first scale.
+BENCH_SCENES = [
+    # the thesis's three test models, at the two scales it measured each at (the `scale` key)
     ("A torus 400 tri, 250x250", "models/torus.obj", "textures/torus.ppm", (0.35, 0.175)),
     ("B gem 64 tri, 100x78", "models/gem.obj", "textures/gem.ppm", (0.9, 0.45)),
     ("C cube 6 faces, 8x8", "models/cube.obj", "textures/cube.ppm", (0.9, 0.45)),
+    # where depth precision shows: a label 0.0005 in front of a wall, 3 units from the camera
+    ("D decal 2 quads 0.0005 apart, 64x64", "models/decal.obj", "textures/decal.ppm", (1.0,)),
 ]
+# The motion of every bench scene: angles that are not multiples of 2 degrees, so that the angle
+# table's rounding shows as it would in a user's scene (with 2-degree multiples it is exact).
+BENCH_MOTION = {"translate": "0 0 -3", "angle": "17", "step": "3"}
 MODES = ("textured", "flat", "wireframe")
 BENCH_FRAMES = 6
 
@@ -160,7 +165,7 @@ def planned_runs(scenes: list[str], modes: list[str], settings: list[str] | None
     the renderer table is every scale and mode with the default setting; the precision sweep is
     each scene's first scale, every mode, every setting of that mode (limited to `settings`)."""
     runs = []
-    for name, model, texture, scales in THESIS_SCENES:
+    for name, model, texture, scales in BENCH_SCENES:
         if scene_id(model) not in scenes:
             continue
         for scale in scales:
@@ -177,7 +182,7 @@ def planned_runs(scenes: list[str], modes: list[str], settings: list[str] | None
 
 def in_sweep(record: dict) -> bool:
     """Whether a record is at its scene's sweep scale (so belongs in the precision tables)."""
-    return any(record["scene"] == name and record["scale"] == scales[0] for name, _, _, scales in THESIS_SCENES)
+    return any(record["scene"] == name and record["scale"] == scales[0] for name, _, _, scales in BENCH_SCENES)
 
 
 _warned: set[str] = set()
@@ -199,8 +204,7 @@ def measure(firmware: Path, folder: Path, name: str, model: str, texture: str, s
     started = time.perf_counter()
     keys = quality.SETTINGS[setting]
     card = folder / "card.img"
-    scene = {"model": model, "texture": texture, "mode": mode, "scale": str(scale),
-             "translate": "0 0 -3", "step": "4", **keys}
+    scene = {"model": model, "texture": texture, "mode": mode, "scale": str(scale), **BENCH_MOTION, **keys}
     build_image(card, [folder / "assets" / "models", folder / "assets" / "textures"], scene=scene, force=True,
                 on_warning=_warn_once)
     frame_images: list[np.ndarray] = []
@@ -323,12 +327,12 @@ def main() -> int:
     parser.add_argument("--settings", help="comma-separated settings for the sweep (default: all): "
                         + ", ".join(quality.SETTINGS))
     parser.add_argument("--scenes", help="comma-separated scenes (default: all): "
-                        + ", ".join(scene_id(model) for _, model, _, _ in THESIS_SCENES))
+                        + ", ".join(scene_id(model) for _, model, _, _ in BENCH_SCENES))
     parser.add_argument("--modes", help="comma-separated modes (default: all): " + ", ".join(MODES))
     args = parser.parse_args()
     settings = _names(args.settings, list(quality.SETTINGS), "setting")
-    scenes = _names(args.scenes, [scene_id(model) for _, model, _, _ in THESIS_SCENES], "scene") \
-        or [scene_id(model) for _, model, _, _ in THESIS_SCENES]
+    scenes = _names(args.scenes, [scene_id(model) for _, model, _, _ in BENCH_SCENES], "scene") \
+        or [scene_id(model) for _, model, _, _ in BENCH_SCENES]
     modes = _names(args.modes, list(MODES), "mode") or list(MODES)
     renderer = not args.no_renderer and not args.quality_only
     sweep = not args.no_renderer and not args.no_quality

@@ -6,6 +6,8 @@ writes, like the thesis's three test models:
   models/torus.obj     400 triangles with normals and texture coordinates  + textures/torus.png 250x250
   models/gem.obj       64 triangles, one normal per facet                   + textures/gem.png   100x78
   models/cube.obj      6 quad faces                                         + textures/cube.png  8x8
+and, for the depth precision measurements (not a thesis model):
+  models/decal.obj     2 parallel quads 0.0005 apart, the far one first     + textures/decal.png 64x64
 The textures are PNGs: the card builder turns them into PPM, as it does for users' images.
 """
 from __future__ import annotations
@@ -94,6 +96,32 @@ def cube() -> str:
     return _obj("cube", corners, uvs, normals, faces)
 
 
+def decal(gap: float = 0.0005, half: float = 0.6) -> str:
+    """A label on a wall: two parallel squares facing +z, the front one `gap` nearer the camera.
+    The far one comes first in the file, so it is drawn first: wherever the depth buffer cannot
+    tell the two apart (equal depth values), the far one stays visible. The far square shows the
+    left half of the texture, the front one the right half."""
+    vertices, uvs, faces = [], [], []
+    for z, u0 in ((0.0, 0.0), (gap, 0.5)):
+        base = len(vertices)
+        vertices += [(-half, -half, z), (half, -half, z), (half, half, z), (-half, half, z)]
+        uvs += [(u0, 0.0), (u0 + 0.5, 0.0), (u0 + 0.5, 1.0), (u0, 1.0)]
+        a, b, c, d = (base + k + 1 for k in range(4))
+        faces.append([(a, a, 1), (b, b, 1), (c, c, 1)])
+        faces.append([(a, a, 1), (c, c, 1), (d, d, 1)])
+    return _obj("decal", vertices, uvs, [(0.0, 0.0, 1.0)], faces)
+
+
+def decal_texture(size: int = 64) -> Image.Image:
+    """Left half red (the wall), right half blue (the label), both with a grey grid so that
+    texture addressing errors show."""
+    image = np.zeros((size, size, 3), dtype=np.uint8)
+    image[:, : size // 2] = (200, 40, 40)
+    image[:, size // 2:] = (40, 60, 210)
+    image[:: size // 8, :] = image[:, :: size // 8] = (128, 128, 128)
+    return Image.fromarray(image, "RGB")
+
+
 def texture(width: int, height: int, seed: int) -> Image.Image:
     """A colourful texture with a checker, a gradient and a border, so that orientation,
     wrapping and filtering mistakes show."""
@@ -123,6 +151,8 @@ def main(argv: list[str]) -> int:
     texture(250, 250, 1).save(out / "textures" / "torus.png")
     texture(100, 78, 2).save(out / "textures" / "gem.png")
     texture(8, 8, 3).save(out / "textures" / "cube.png")
+    (out / "models" / "decal.obj").write_text(decal())
+    decal_texture().save(out / "textures" / "decal.png")
     return 0
 
 

@@ -23,25 +23,24 @@ PRECISION_KEYS = {
     "shading": ("flat", "gouraud"),
     "light_levels": tuple(str(n) for n in range(65, 1, -1)),   # 65 by default, the thesis used 33
     "angles": ("polynomial", "table"),                    # table = the thesis's 2-degree table
-    "depth": ("float32", "int16"),
+    "depth": ("int16", "float32"),
     "snap": ("subpixel", "pixel"),
 }
 
 # Every setting the bench sweeps, in the order the tables list them: name -> scene.ini keys added
 # to the scene's own. "default" is the firmware as it ships; then one knob at a time; then presets.
 SETTINGS: dict[str, dict[str, str]] = {
-    "default":     {},
-    "affine":      {"interpolation": "affine"},
-    "gouraud":     {"shading": "gouraud"},
-    "light-33":    {"light_levels": "33"},
-    "light-9":     {"light_levels": "9"},
-    "angle-table": {"angles": "table"},
-    "depth-int16": {"depth": "int16"},
-    "pixel-snap":  {"snap": "pixel"},
-    "thesis":      {"interpolation": "affine", "shading": "flat", "light_levels": "33", "angles": "table",
-                    "depth": "int16", "snap": "pixel"},
-    "fast":        {"interpolation": "affine", "depth": "int16"},
-    "best":        {"interpolation": "perspective", "shading": "gouraud"},
+    "default":       {},
+    "affine":        {"interpolation": "affine"},
+    "gouraud":       {"shading": "gouraud"},
+    "light-33":      {"light_levels": "33"},
+    "light-9":       {"light_levels": "9"},
+    "angle-table":   {"angles": "table"},
+    "depth-float32": {"depth": "float32"},
+    "pixel-snap":    {"snap": "pixel"},
+    "thesis":        {"interpolation": "affine", "shading": "flat", "light_levels": "33", "angles": "table",
+                      "depth": "int16", "snap": "pixel"},
+    "best":          {"interpolation": "perspective", "shading": "gouraud", "depth": "float32"},
 }
 DEFAULT_SETTING = "default"
 # Wireframe has no texture, light or depth buffer: only the angles and the snapping change it.
