@@ -17,6 +17,7 @@ from conftest import ROOT, make_card, run_emulator
 
 sys.path.insert(0, str(ROOT / "tools"))
 import make_assets  # noqa: E402  (tools/ is not a package on the path)
+import quality  # noqa: E402
 
 FRAMES = 2
 
@@ -48,14 +49,9 @@ def torus_files() -> tuple[str, bytes]:
 
 TORUS_SCENE = {"mode": "textured", "scale": "0.9", "translate": "0 0 -3", "axis": "1 1 0", "angle": "17",
                "step": "3"}
-SINGLE_KNOBS = {
-    "affine": {"interpolation": "affine"},
-    "gouraud": {"shading": "gouraud"},
-    "light-9": {"light_levels": "9"},
-    "angle-table": {"angles": "table"},
-    "depth-float32": {"depth": "float32"},
-    "pixel-snap": {"snap": "pixel"},
-}
+# the bench's one-knob settings (tools/quality.py), one per key
+SINGLE_KNOBS = {name: quality.SETTINGS[name]
+                for name in ("affine", "gouraud", "light-9", "angle-table", "depth-float32", "pixel-snap")}
 
 
 @pytest.fixture(scope="module")
