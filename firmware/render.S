@@ -82,10 +82,22 @@ render_init:
 21: la      t0, render_fill
     sw      t1, 0(t0)
     call    raster_set_texture
-    la      t0, render_fill
-    lwu     t1, 0(t0)
+    j       31f
 3:  la      t0, render_fill
     sw      t1, 0(t0)
+31:
+
+    # The light quantisation: levels - 1 and LIGHT_ONE / (levels - 1).
+    la      t0, light_quantum
+    flw     ft0, SCENE_LIGHT_LEVELS(s0)
+    li      t1, F32_ONE
+    fmv.w.x ft1, t1
+    fsub.s  ft0, ft0, ft1
+    fsw     ft0, LIGHT_QUANTUM_LEVELS(t0)
+    li      t1, F32_LIGHT_ONE
+    fmv.w.x ft1, t1
+    fdiv.s  ft1, ft1, ft0
+    fsw     ft1, LIGHT_QUANTUM_STEP(t0)
 
     lwu     t1, SCENE_MODE(s0)
     li      t2, MODE_WIREFRAME
@@ -365,8 +377,9 @@ face_light:
 #   What: the intensity of a surface whose normal makes an angle with the
 #         light: I = max(SCENE_AMBIENT, cos), quantised to SCENE_LIGHT_LEVELS
 #         evenly spaced levels from 0 to 1 (level = round(I (levels - 1))),
-#         in units of 1 / LIGHT_ONE: kf = level LIGHT_ONE / (levels - 1).
-#         With 65 levels (the default) kf = round(64 I) exactly.
+#         in units of 1 / LIGHT_ONE: kf = level (LIGHT_ONE / (levels - 1))
+#         (light_quantum, set by render_init). With 65, 33, 17, 9, 5, 3 or 2
+#         levels the step is exact; with 65 (the default) kf = round(64 I).
 #   Arguments: fa0 = cos (NaN, for a zero normal, gives the ambient).
 #   Results: fa0 = kf; a0 = kf rounded to a whole k, 0 .. LIGHT_ONE.
 #   Clobbers: only ft0..ft2, t0 and t1 (normals_light keeps its matrix in
@@ -375,17 +388,13 @@ light_level:
     la      t0, scene
     flw     ft1, SCENE_AMBIENT(t0)
     fmax.s  fa0, fa0, ft1               # (fmax of NaN and ambient = ambient)
-    flw     ft1, SCENE_LIGHT_LEVELS(t0)
-    li      t1, F32_ONE
-    fmv.w.x ft2, t1
-    fsub.s  ft1, ft1, ft2               # levels - 1
+    la      t0, light_quantum
+    flw     ft1, LIGHT_QUANTUM_LEVELS(t0)   # levels - 1
     fmul.s  fa0, fa0, ft1
     fcvt.w.s t1, fa0, rne               # the level
     fcvt.s.w fa0, t1
-    li      t1, F32_LIGHT_ONE
-    fmv.w.x ft2, t1
-    fmul.s  fa0, fa0, ft2
-    fdiv.s  fa0, fa0, ft1               # kf
+    flw     ft1, LIGHT_QUANTUM_STEP(t0)     # LIGHT_ONE / (levels - 1)
+    fmul.s  fa0, fa0, ft1               # kf
     fmv.w.x ft2, zero                   # 0 <= kf <= LIGHT_ONE (cos just above 1)
     fmax.s  fa0, fa0, ft2
     li      t1, F32_LIGHT_ONE
@@ -1011,6 +1020,10 @@ render_fill:
 # mesh normal, this frame's (Gouraud only).
 normal_light:
     .space  8
+# light_quantum: f32 levels - 1, then f32 LIGHT_ONE / (levels - 1)
+# (light_level; render_init).
+light_quantum:
+    .space  LIGHT_QUANTUM_BYTES
 # The wireframe's unique edges: address (heap) and count.
 edge_list:
     .space  8

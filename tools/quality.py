@@ -15,17 +15,14 @@ from collections.abc import Iterable
 from pathlib import Path
 from xml.sax.saxutils import escape
 
+from reference.scene import LIGHT_LEVELS_MAX, LIGHT_LEVELS_MIN, PRECISION_WORDS
+
 # --- the settings ---------------------------------------------------------------------------------
 
-# The firmware's precision keys in scene.ini, default first.
-PRECISION_KEYS = {
-    "interpolation": ("perspective", "affine"),           # texture coordinates per pixel
-    "shading": ("flat", "gouraud"),
-    "light_levels": tuple(str(n) for n in range(65, 1, -1)),   # 65 by default, the thesis used 33
-    "angles": ("polynomial", "table"),                    # table = the thesis's 2-degree table
-    "depth": ("int16", "float32"),
-    "snap": ("subpixel", "pixel"),
-}
+# The firmware's precision keys in scene.ini and the values each takes, default first (the
+# reference renderer checks them exactly as the firmware does, so its tables serve here).
+PRECISION_KEYS = {**PRECISION_WORDS,
+                  "light_levels": tuple(str(n) for n in range(LIGHT_LEVELS_MAX, LIGHT_LEVELS_MIN - 1, -1))}
 
 # Every setting the bench sweeps, in the order the tables list them: name -> scene.ini keys added
 # to the scene's own. "default" is the firmware as it ships; then one knob at a time; then presets.
