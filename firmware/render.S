@@ -15,21 +15,27 @@
 #      same whole number of texture repeats for the three corners so that
 #      the smallest is in [0, 1) repeats; the rasteriser wraps the rest.
 #      A corner without vt takes (u, v) = (0, 0).
-#   4. Near plane (clip z >= 0): a triangle with corners behind it is cut in
-#      homogeneous clip space (Sutherland-Hodgman against that one plane)
-#      into one or two triangles, the new corners interpolated linearly in
-#      clip space (x, y, z, w, s, t). An edge is always cut from its corner
-#      in front towards the one behind, so the two triangles sharing an edge
-#      compute bit-identical new corners (no cracks). The other planes are
-#      left to the rasteriser's bounding box (and the depth test, whose clear
-#      value 1.0 is the far plane).
+#   4. Clipping in homogeneous clip space, only where it is needed: a
+#      triangle with a corner behind the near plane (clip z >= 0) or beyond
+#      the guard band (|x|, |y| <= 16 w, render.inc GUARD_BAND) is cut
+#      against each of those planes one of its corners is outside of
+#      (Sutherland-Hodgman), the new corners interpolated linearly in clip
+#      space (x, y, z, w, s, t, k), and drawn as a fan. An edge is always
+#      cut from its corner inside towards the one outside, so the two
+#      triangles sharing an edge compute bit-identical new corners (no
+#      cracks). The screen's own sides are left to the rasteriser's bounding
+#      box, the far plane to the depth test (whose clear value is the far
+#      plane): the guard band only keeps projected positions small enough
+#      to be exact in Q4 and in the attribute planes. Without it, a corner
+#      projecting beyond 2^23 pixels would be clamped, bending the triangle.
 #   5. raster_triangle: back-face culling (SCENE_CULL), fill, depth test.
 #
 # Wireframe: the mesh's unique edges (each edge shared by two triangles
 # once: built at render_init by sorting (min, max) index pairs) are drawn in
 # WIRE_COLOUR over the background, without depth test or culling: trivially
-# rejected by outcodes, cut at the near plane in clip space, clipped to the
-# screen and drawn with Bresenham's algorithm (raster_segment).
+# rejected by outcodes, cut at the near plane and the guard band in clip
+# space (Liang-Barsky), clipped to the screen and drawn with Bresenham's
+# algorithm (raster_segment).
 
     .option norelax
     .include "k210.inc"
@@ -204,6 +210,7 @@ render_frame:
     lw      t2, VTX_OUTCODE(s7)
     and     t3, t0, t1
     and     t3, t3, t2
+    andi    t3, t3, OUT_FRUSTUM
     bnez    t3, 8f                      # all outside one plane
     or      s8, t0, t1
     or      s8, s8, t2                  # s8 = outcodes of any corner
@@ -211,7 +218,7 @@ render_frame:
     # it: the same signed area (from the same Q4 positions) raster_triangle
     # would find.
     beqz    s11, 1f
-    andi    t0, s8, OUT_NEAR
+    andi    t0, s8, OUT_CLIP
     bnez    t0, 1f
     lw      t0, VTX_SX(s5)
     lw      t1, VTX_SY(s5)
@@ -250,9 +257,10 @@ render_frame:
     beqz    t0, 4f
 3:  mv      a0, s3
     call    face_texels                 # RV_S, RV_T of render_rv
-4:  andi    t0, s8, OUT_NEAR
+4:  andi    t0, s8, OUT_CLIP
     bnez    t0, 6f
-    # in front of the near plane: the vertex records' projections
+    # in front of the near plane and inside the guard band: the vertex
+    # records' projections
     la      a0, render_rv
     mv      t0, a0
     mv      t1, s5                      # t1 = corner 0, then t4, then t5
@@ -283,7 +291,8 @@ render_frame:
     mv      a3, s11
     mv      a4, s9
     mv      a5, s10
-    call    clip_near_and_draw
+    mv      a6, s8
+    call    clip_and_draw
 8:  addi    s3, s3, MESH_F_BYTES
     addi    s4, s4, -1
     bnez    s4, 2b
@@ -604,15 +613,18 @@ face_texels:
     fsw     ft2, RV_T + 2 * RV_BYTES(t3)
     ret
 
-# clip_near_and_draw (file-local)
-#   What: a triangle with a corner behind the near plane (file comment,
-#         step 4): cut, projected and drawn as one or two triangles.
+# clip_and_draw (file-local)
+#   What: a triangle with a corner behind the near plane or beyond the guard
+#         band (file comment, step 4): cut in clip space against each plane
+#         one of its corners is outside of, projected, and drawn as a fan of
+#         triangles (0, 1, 2), then (i, i + 1, 0) for i = 2, 3, ...
 #   Arguments: a0, a1, a2 = the corners' vertex records (texel coordinates
-#              in render_rv when textured), a3 = cull, a4 = colour or
-#              intensity, a5 = fill mode (raster_triangle's a1..a3).
+#              and intensities in render_rv), a3 = cull, a4 = colour or
+#              intensity, a5 = fill mode (raster_triangle's a1..a3), a6 =
+#              the corners' outcodes ORed.
 #   Results: none.
 #   Clobbers: only ABI temporaries.
-clip_near_and_draw:
+clip_and_draw:
     addi    sp, sp, -80
     sd      ra, 72(sp)
     sd      s0, 64(sp)
@@ -623,12 +635,12 @@ clip_near_and_draw:
     sd      s5, 24(sp)
     sd      s6, 16(sp)
     sd      s7, 8(sp)
-    sd      s8, 0(sp)
     mv      s3, a3
     mv      s4, a4
     mv      s5, a5
+    mv      s6, a6                      # s6 = outcodes
     # the corners as clip vertices
-    la      t0, render_cv
+    la      t0, clip_polygon_a
     la      t1, render_rv
     li      t2, TRIANGLE_CORNERS
 1:  lw      t3, VTX_CLIP_X(a0)
@@ -652,52 +664,35 @@ clip_near_and_draw:
     addi    t2, t2, -1
     bnez    t2, 1b
 
-    # Sutherland-Hodgman against z >= 0: for each edge a -> b, a if it is in
-    # front, then the crossing point if exactly one of a, b is.
-    la      s0, render_cv               # s0 = a
-    la      s1, render_cv_out           # s1 = next output
-    li      s2, 0                       # s2 = edge number
-2:  addi    t0, s2, 1
-    li      t1, TRIANGLE_CORNERS
-    bne     t0, t1, 3f
-    li      t0, 0
-3:  li      t1, CV_BYTES
-    mul     t0, t0, t1
-    la      s6, render_cv
-    add     s6, s6, t0                  # s6 = b
-    fmv.w.x ft11, zero
-    flw     ft0, CV_Z(s0)
-    fle.s   s7, ft11, ft0               # s7 = a in front
-    flw     ft1, CV_Z(s6)
-    fle.s   s8, ft11, ft1               # s8 = b in front
-    beqz    s7, 4f
-    mv      a0, s1                      # a
-    mv      a1, s0
-    call    cv_copy
-    addi    s1, s1, CV_BYTES
-4:  beq     s7, s8, 5f                  # both on the same side
-    mv      a1, s0                      # cut from the corner in front
-    mv      a2, s6                      # towards the one behind
-    bnez    s7, 41f
-    mv      a1, s6
-    mv      a2, s0
-41: mv      a0, s1
-    call    cv_cut
-    addi    s1, s1, CV_BYTES
-5:  addi    s0, s0, CV_BYTES
-    addi    s2, s2, 1
+    # each plane in turn, the output of one the input of the next
+    la      s0, clip_polygon_a          # s0 = the polygon
+    la      s1, clip_polygon_b          # s1 = the other buffer
+    li      s2, TRIANGLE_CORNERS        # s2 = its corners
+    li      s7, 0                       # s7 = plane number (clip_planes)
+2:  li      t0, OUT_NEAR                # plane 0: the near plane; 1..4: the
+    beqz    s7, 3f                      # guard band's sides
+    li      t0, OUT_GUARD
+3:  and     t0, t0, s6
+    beqz    t0, 4f                      # no corner outside: nothing to cut
+    mv      a0, s0
+    mv      a1, s2
+    mv      a2, s1
+    mv      a3, s7
+    call    clip_polygon
+    mv      s2, a0
+    mv      t0, s0
+    mv      s0, s1
+    mv      s1, t0
     li      t0, TRIANGLE_CORNERS
-    bne     s2, t0, 2b
+    blt     s2, t0, 9f                  # nothing left
+4:  addi    s7, s7, 1
+    li      t0, CLIP_PLANES
+    bne     s7, t0, 2b
 
-    # project the 3 or 4 corners into render_rv_out, corner 0 again after them
-    la      t0, render_cv_out
-    sub     s2, s1, t0
-    li      t0, CV_BYTES
-    divu    s2, s2, t0                  # s2 = corners (3 or 4)
-    mv      s6, s2                      # s6 = corners left
-    la      s0, render_cv_out
+    # project the corners into render_rv_out
+    mv      s7, s2                      # s7 = corners left
     la      s1, render_rv_out
-6:  flw     fa0, CV_X(s0)
+5:  flw     fa0, CV_X(s0)
     flw     fa1, CV_Y(s0)
     flw     fa2, CV_Z(s0)
     flw     fa3, CV_W(s0)
@@ -714,26 +709,37 @@ clip_near_and_draw:
     sw      t1, RV_K(s1)
     addi    s0, s0, CV_BYTES
     addi    s1, s1, RV_BYTES
-    addi    s6, s6, -1
-    bnez    s6, 6b
-    mv      a0, s1                      # corner 0 once more after the last
-    la      a1, render_rv_out
-    li      a2, RV_BYTES
-    call    rv_copy
+    addi    s7, s7, -1
+    bnez    s7, 5b
+
+    # the fan
     la      a0, render_rv_out
     mv      a1, s3
     mv      a2, s4
     mv      a3, s5
     call    raster_triangle             # corners 0, 1, 2
-    li      t0, CLIP_MAX_OUT
-    bne     s2, t0, 7f
-    la      a0, render_rv_out + 2 * RV_BYTES
+    li      s7, 2                       # s7 = i
+6:  addi    t0, s7, 2
+    bgt     t0, s2, 9f                  # i + 1 is past the last corner
+    la      a0, render_rv_fan
+    li      t0, RV_BYTES
+    mul     t0, t0, s7
+    la      a1, render_rv_out
+    add     a1, a1, t0
+    li      a2, 2 * RV_BYTES
+    call    rv_copy                     # corners i, i + 1
+    la      a0, render_rv_fan + 2 * RV_BYTES
+    la      a1, render_rv_out
+    li      a2, RV_BYTES
+    call    rv_copy                     # corner 0
+    la      a0, render_rv_fan
     mv      a1, s3
     mv      a2, s4
     mv      a3, s5
-    call    raster_triangle             # corners 2, 3, 0
-7:  ld      s8, 0(sp)
-    ld      s7, 8(sp)
+    call    raster_triangle
+    addi    s7, s7, 1
+    j       6b
+9:  ld      s7, 8(sp)
     ld      s6, 16(sp)
     ld      s5, 24(sp)
     ld      s4, 32(sp)
@@ -743,6 +749,126 @@ clip_near_and_draw:
     ld      s0, 64(sp)
     ld      ra, 72(sp)
     addi    sp, sp, 80
+    ret
+
+# clip_polygon (file-local)
+#   What: one Sutherland-Hodgman step: the part of a convex polygon inside
+#         one clip plane. For each edge a -> b: a when it is inside, then
+#         the crossing point when exactly one of a, b is, always cut from the
+#         inside corner towards the outside one, so that two triangles
+#         sharing an edge cut it into bit-identical corners (no cracks). A
+#         cut on the near plane gets z = 0 exactly (its depth is the near
+#         plane's).
+#   Arguments: a0 = corners (clip vertices), a1 = their count (at least
+#              3), a2 = output (room for a1 + 1), a3 = plane number
+#              (clip_planes; 0 is the near plane).
+#   Results: a0 = the output's corner count.
+#   Clobbers: only ABI temporaries.
+clip_polygon:
+    addi    sp, sp, -96
+    sd      ra, 88(sp)
+    sd      s0, 80(sp)
+    sd      s1, 72(sp)
+    sd      s2, 64(sp)
+    sd      s3, 56(sp)
+    sd      s4, 48(sp)
+    sd      s5, 40(sp)
+    sd      s6, 32(sp)
+    sd      s7, 24(sp)
+    sd      s8, 16(sp)
+    fsd     fs0, 8(sp)
+    fsd     fs1, 0(sp)
+    mv      s0, a0                      # s0 = a
+    mv      s1, a2                      # s1 = next output
+    mv      s2, a2                      # s2 = output start
+    li      t0, CV_BYTES
+    mul     t0, t0, a1
+    add     s3, a0, t0                  # s3 = end of the corners
+    mv      s4, a0                      # s4 = first corner (b of the last edge)
+    li      t0, PLANE_BYTES
+    mul     t0, t0, a3
+    la      s5, clip_planes
+    add     s5, s5, t0                  # s5 = plane
+    mv      s6, a3                      # s6 = plane number
+    mv      a1, s5
+    call    plane_distance
+    fmv.s   fs0, fa0                    # fs0 = d(a)
+1:  addi    s7, s0, CV_BYTES            # s7 = b
+    bltu    s7, s3, 2f
+    mv      s7, s4
+2:  mv      a0, s7
+    mv      a1, s5
+    call    plane_distance
+    fmv.s   fs1, fa0                    # fs1 = d(b)
+    fmv.w.x ft0, zero
+    fle.s   s8, ft0, fs0                # s8 = a inside
+    beqz    s8, 3f
+    mv      a0, s1
+    mv      a1, s0
+    call    cv_copy
+    addi    s1, s1, CV_BYTES
+3:  fmv.w.x ft0, zero
+    fle.s   t1, ft0, fs1                # b inside
+    beq     s8, t1, 5f                  # both on the same side
+    mv      a1, s0                      # cut from the corner inside
+    mv      a2, s7
+    fmv.s   fa0, fs0
+    fmv.s   fa1, fs1
+    bnez    s8, 4f
+    mv      a1, s7
+    mv      a2, s0
+    fmv.s   fa0, fs1
+    fmv.s   fa1, fs0
+4:  mv      a0, s1
+    call    cv_cut
+    bnez    s6, 41f
+    sw      zero, CV_Z(s1)              # on the near plane
+41: addi    s1, s1, CV_BYTES
+5:  fmv.s   fs0, fs1                    # b is the next edge's a
+    addi    s0, s0, CV_BYTES
+    bltu    s0, s3, 1b
+    sub     a0, s1, s2
+    li      t0, CV_BYTES
+    divu    a0, a0, t0
+    fld     fs1, 0(sp)
+    fld     fs0, 8(sp)
+    ld      s8, 16(sp)
+    ld      s7, 24(sp)
+    ld      s6, 32(sp)
+    ld      s5, 40(sp)
+    ld      s4, 48(sp)
+    ld      s3, 56(sp)
+    ld      s2, 64(sp)
+    ld      s1, 72(sp)
+    ld      s0, 80(sp)
+    ld      ra, 88(sp)
+    addi    sp, sp, 96
+    ret
+
+# plane_distance (file-local)
+#   What: d = a x + b y + c z + e w of a clip-space point and a plane of
+#         clip_planes; the point is inside when d >= 0. For the near plane
+#         d is z itself, exactly (the other products are 0).
+#   Arguments: a0 = clip vertex or vertex record (both begin with clip x,
+#              y, z, w), a1 = plane.
+#   Results: fa0 = d.
+#   Clobbers: only ABI temporaries.
+.if (CV_X != VTX_CLIP_X) || (CV_Y != VTX_CLIP_Y) || (CV_Z != VTX_CLIP_Z) || (CV_W != VTX_CLIP_W)
+    .error "plane_distance reads clip vertices and vertex records alike"
+.endif
+plane_distance:
+    flw     ft0, PLANE_E(a1)
+    flw     ft1, CV_W(a0)
+    fmul.s  fa0, ft0, ft1
+    flw     ft0, PLANE_C(a1)
+    flw     ft1, CV_Z(a0)
+    fmadd.s fa0, ft0, ft1, fa0
+    flw     ft0, PLANE_B(a1)
+    flw     ft1, CV_Y(a0)
+    fmadd.s fa0, ft0, ft1, fa0
+    flw     ft0, PLANE_A(a1)
+    flw     ft1, CV_X(a0)
+    fmadd.s fa0, ft0, ft1, fa0
     ret
 
 # cv_copy (file-local)
@@ -767,17 +893,16 @@ rv_copy:
     ret
 
 # cv_cut (file-local)
-#   What: the point where the segment from p (in front of the near plane)
-#         to q (behind it) crosses it: p + t (q - p), t = zp / (zp - zq),
-#         every field interpolated, z set to exactly 0.
-#   Arguments: a0 = output clip vertex, a1 = p, a2 = q.
+#   What: the point where the segment from p (inside a clip plane) to q
+#         (outside it) crosses the plane: p + t (q - p), t = dp / (dp - dq),
+#         every field interpolated.
+#   Arguments: a0 = output clip vertex, a1 = p, a2 = q; fa0, fa1 = the
+#              plane distances dp, dq (plane_distance).
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 cv_cut:
-    flw     ft0, CV_Z(a1)
-    flw     ft1, CV_Z(a2)
-    fsub.s  ft1, ft0, ft1
-    fdiv.s  ft0, ft0, ft1               # ft0 = t
+    fsub.s  ft1, fa0, fa1
+    fdiv.s  ft0, fa0, ft1               # ft0 = t
     li      t0, CV_BYTES / 4
 1:  flw     ft1, 0(a1)
     flw     ft2, 0(a2)
@@ -789,7 +914,6 @@ cv_cut:
     addi    a2, a2, 4
     addi    t0, t0, -1
     bnez    t0, 1b
-    sw      zero, CV_Z - CV_BYTES(a0)
     ret
 
 # render_wireframe (file-local)
@@ -823,50 +947,41 @@ render_wireframe:
     lw      t0, VTX_OUTCODE(s3)
     lw      t1, VTX_OUTCODE(s4)
     and     t2, t0, t1
+    andi    t2, t2, OUT_FRUSTUM
     bnez    t2, 8f                      # both outside one plane
-    or      t2, t0, t1
-    andi    t2, t2, OUT_NEAR
+    or      a2, t0, t1
+    andi    t2, a2, OUT_CLIP
     beqz    t2, 3f
-    # one end behind the near plane: s3 = the end in front; the other end
-    # becomes the crossing point, projected
+    # an end behind the near plane or beyond the guard band: cut in clip
+    # space, from the end in front of the near plane (s3) when one is behind
     andi    t0, t0, OUT_NEAR
     beqz    t0, 2f
     mv      t0, s3
     mv      s3, s4
     mv      s4, t0
-2:  flw     ft0, VTX_CLIP_Z(s3)
-    flw     ft1, VTX_CLIP_Z(s4)
-    fsub.s  ft1, ft0, ft1
-    fdiv.s  ft0, ft0, ft1               # t
-    flw     ft1, VTX_CLIP_X(s3)
-    flw     ft2, VTX_CLIP_X(s4)
-    fsub.s  ft2, ft2, ft1
-    fmadd.s fa0, ft2, ft0, ft1
-    flw     ft1, VTX_CLIP_Y(s3)
-    flw     ft2, VTX_CLIP_Y(s4)
-    fsub.s  ft2, ft2, ft1
-    fmadd.s fa1, ft2, ft0, ft1
-    flw     ft1, VTX_CLIP_W(s3)
-    flw     ft2, VTX_CLIP_W(s4)
-    fsub.s  ft2, ft2, ft1
-    fmadd.s fa3, ft2, ft0, ft1
-    fmv.w.x fa2, zero
-    call    project_clip
+2:  mv      a0, s3
+    mv      a1, s4
+    call    clip_segment
+    beqz    a0, 8f                      # nothing left
+    mv      a0, a1
+    mv      a1, a2
+    mv      a2, a3
+    mv      a3, a4
     j       4f
-3:  lw      a0, VTX_SX(s4)
-    lw      a1, VTX_SY(s4)
-4:  li      t0, F32_Q4_TO_PIXEL
+3:  lw      a0, VTX_SX(s3)
+    lw      a1, VTX_SY(s3)
+    lw      a2, VTX_SX(s4)
+    lw      a3, VTX_SY(s4)
+4:  li      t0, F32_Q4_TO_PIXEL         # Q4 to pixels
     fmv.w.x ft0, t0
-    fcvt.s.w fa2, a0
-    fmul.s  fa2, fa2, ft0
-    fcvt.s.w fa3, a1
-    fmul.s  fa3, fa3, ft0
-    lw      t1, VTX_SX(s3)
-    fcvt.s.w fa0, t1
+    fcvt.s.w fa0, a0
     fmul.s  fa0, fa0, ft0
-    lw      t1, VTX_SY(s3)
-    fcvt.s.w fa1, t1
+    fcvt.s.w fa1, a1
     fmul.s  fa1, fa1, ft0
+    fcvt.s.w fa2, a2
+    fmul.s  fa2, fa2, ft0
+    fcvt.s.w fa3, a3
+    fmul.s  fa3, fa3, ft0
     li      a0, WIRE_COLOUR
     call    raster_segment
 8:  addi    s1, s1, EDGE_BYTES
@@ -879,6 +994,135 @@ render_wireframe:
     ld      s0, 48(sp)
     ld      ra, 56(sp)
     addi    sp, sp, 64
+    ret
+
+# clip_segment (file-local)
+#   What: the part of an edge a -> b in front of the near plane and inside
+#         the guard band (Liang-Barsky in clip space, against the planes an
+#         end is outside of: t from 0 to 1 narrowed at each crossing), its
+#         ends projected (project_clip). An end that is not cut off is the
+#         vertex itself, exactly.
+#   Arguments: a0 = a's vertex record, a1 = b's, a2 = their outcodes ORed.
+#   Results: a0 = 1 when a part is left, else 0; then a1, a2 = its end
+#            towards a (screen x, y in Q4), a3, a4 = its end towards b.
+#   Clobbers: only ABI temporaries.
+clip_segment:
+    addi    sp, sp, -80
+    sd      ra, 72(sp)
+    sd      s0, 64(sp)
+    sd      s1, 56(sp)
+    sd      s2, 48(sp)
+    sd      s3, 40(sp)
+    sd      s4, 32(sp)
+    fsd     fs0, 24(sp)
+    fsd     fs1, 16(sp)
+    fsd     fs2, 8(sp)
+    mv      s0, a0                      # s0 = a
+    mv      s1, a1                      # s1 = b
+    mv      s2, a2                      # s2 = outcodes
+    fmv.w.x fs0, zero                   # fs0 = t entering
+    li      t0, F32_ONE
+    fmv.w.x fs1, t0                     # fs1 = t leaving
+    li      s3, 0                       # s3 = plane number
+1:  li      t0, OUT_NEAR                # as clip_and_draw
+    beqz    s3, 2f
+    li      t0, OUT_GUARD
+2:  and     t0, t0, s2
+    beqz    t0, 5f
+    li      t0, PLANE_BYTES
+    mul     t0, t0, s3
+    la      s4, clip_planes
+    add     s4, s4, t0                  # s4 = plane
+    mv      a0, s0
+    mv      a1, s4
+    call    plane_distance
+    fmv.s   fs2, fa0                    # fs2 = d(a)
+    mv      a0, s1
+    mv      a1, s4
+    call    plane_distance              # fa0 = d(b)
+    fmv.w.x ft0, zero
+    fle.s   t0, ft0, fs2
+    xori    t0, t0, 1                   # t0 = a outside
+    fle.s   t1, ft0, fa0
+    xori    t1, t1, 1                   # t1 = b outside
+    and     t2, t0, t1
+    bnez    t2, 8f                      # both outside: nothing left
+    or      t2, t0, t1
+    beqz    t2, 5f
+    fsub.s  ft1, fs2, fa0
+    fdiv.s  ft1, fs2, ft1               # the crossing, d(a) / (d(a) - d(b))
+    beqz    t0, 3f
+    fmax.s  fs0, fs0, ft1               # a outside: enters there
+    j       5f
+3:  fmin.s  fs1, fs1, ft1               # b outside: leaves there
+5:  addi    s3, s3, 1
+    li      t0, CLIP_PLANES
+    bne     s3, t0, 1b
+    flt.s   t0, fs1, fs0
+    bnez    t0, 8f                      # leaves before it enters
+    mv      a0, s0
+    mv      a1, s1
+    fmv.s   fa0, fs0
+    call    segment_point
+    call    project_clip
+    mv      s3, a0
+    mv      s4, a1
+    mv      a0, s0
+    mv      a1, s1
+    fmv.s   fa0, fs1
+    call    segment_point
+    call    project_clip
+    mv      a3, a0
+    mv      a4, a1
+    mv      a1, s3
+    mv      a2, s4
+    li      a0, 1
+    j       9f
+8:  li      a0, 0
+9:  fld     fs2, 8(sp)
+    fld     fs1, 16(sp)
+    fld     fs0, 24(sp)
+    ld      s4, 32(sp)
+    ld      s3, 40(sp)
+    ld      s2, 48(sp)
+    ld      s1, 56(sp)
+    ld      s0, 64(sp)
+    ld      ra, 72(sp)
+    addi    sp, sp, 80
+    ret
+
+# segment_point (file-local)
+#   What: the clip-space point a + t (b - a) of an edge; at t = 1, b itself
+#         (as b + 0 (a - b)), so that an end not cut off is the vertex.
+#   Arguments: a0 = a's vertex record, a1 = b's, fa0 = t (0 .. 1).
+#   Results: fa0, fa1, fa2, fa3 = clip x, y, z, w (project_clip's arguments).
+#   Clobbers: only ABI temporaries.
+segment_point:
+    li      t0, F32_ONE
+    fmv.w.x ft0, t0
+    feq.s   t0, fa0, ft0
+    fmv.s   ft0, fa0                    # ft0 = t from a0's end towards a1's
+    beqz    t0, 1f
+    mv      t0, a0
+    mv      a0, a1
+    mv      a1, t0
+    fmv.w.x ft0, zero
+1:  flw     ft1, VTX_CLIP_X(a0)
+    flw     ft2, VTX_CLIP_X(a1)
+    fsub.s  ft2, ft2, ft1
+    fmadd.s fa0, ft2, ft0, ft1
+    flw     ft1, VTX_CLIP_Y(a0)
+    flw     ft2, VTX_CLIP_Y(a1)
+    fsub.s  ft2, ft2, ft1
+    fmadd.s fa1, ft2, ft0, ft1
+    flw     ft1, VTX_CLIP_Z(a0)
+    flw     ft2, VTX_CLIP_Z(a1)
+    fsub.s  ft2, ft2, ft1
+    fmadd.s fa2, ft2, ft0, ft1
+    flw     ft1, VTX_CLIP_W(a0)
+    flw     ft2, VTX_CLIP_W(a1)
+    fsub.s  ft2, ft2, ft1
+    fmadd.s fa3, ft2, ft0, ft1
     ret
 
 # edges_build (file-local)
@@ -1006,6 +1250,18 @@ sort_u64:
 
 # ---------------------------------------------------------------------------
     .section .rodata
+    .balign 4
+# The clip planes, d = a x + b y + c z + e w >= 0 inside (render.inc
+# PLANE_*): the near plane, then the guard band's sides.
+clip_planes:
+    .word   0, 0, F32_ONE, 0                            # z >= 0
+    .word   F32_ONE, 0, 0, F32_GUARD_BAND               # x >= -G w
+    .word   F32_MINUS_ONE, 0, 0, F32_GUARD_BAND         # x <= G w
+    .word   0, F32_ONE, 0, F32_GUARD_BAND               # y >= -G w
+    .word   0, F32_MINUS_ONE, 0, F32_GUARD_BAND         # y <= G w
+.if CLIP_PLANES != 5
+    .error "clip_planes lists five planes"
+.endif
 msg_no_memory:      .asciz "model too large for memory (edge list)"
 msg_no_memory_depth: .asciz "model too large for memory (depth buffer)"
 msg_no_memory_normals: .asciz "model too large for memory (normal intensities)"
@@ -1029,15 +1285,17 @@ edge_list:
     .space  8
 edge_count:
     .space  8
-# Scratch of one triangle: its corners for raster_triangle, as clip
-# vertices, after the near-plane cut (up to 4), and those projected (with
-# corner 0 repeated after the last, for the second triangle of a fan).
+# Scratch of one triangle: its corners for raster_triangle; when it is
+# clipped, the polygon as clip vertices (two buffers: each plane's output is
+# the next one's input), projected, and one triangle of its fan.
     .balign 8
 render_rv:
     .space  TRIANGLE_CORNERS * RV_BYTES
-render_cv:
-    .space  TRIANGLE_CORNERS * CV_BYTES
-render_cv_out:
+clip_polygon_a:
+    .space  CLIP_MAX_OUT * CV_BYTES
+clip_polygon_b:
     .space  CLIP_MAX_OUT * CV_BYTES
 render_rv_out:
-    .space  (CLIP_MAX_OUT + 1) * RV_BYTES
+    .space  CLIP_MAX_OUT * RV_BYTES
+render_rv_fan:
+    .space  TRIANGLE_CORNERS * RV_BYTES

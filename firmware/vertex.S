@@ -4,8 +4,9 @@
 # aspect LCD_WIDTH / LCD_HEIGHT, SCENE_NEAR, SCENE_FAR) and their product,
 # then transforms every mesh vertex once into a VTX_BYTES record (render.inc):
 #   clip-space position (x, y, z, w), world-space position (lighting),
-#   outcode (which frustum planes it is outside of), and, for vertices in
-#   front of the near plane, the projected screen position in Q4, z / w and
+#   outcode (which frustum planes it is outside of, and whether it lies
+#   beyond the guard band), and, for vertices in front of the near plane and
+#   inside the guard band, the projected screen position in Q4, z / w and
 #   1 / w (project_clip).
 # Triangles and edges then only look these records up (render.S).
 #
@@ -196,9 +197,18 @@ vertex_transform:
     flt.s   t1, fa3, fa2                # z > w
     slli    t1, t1, OUT_FAR_BIT
     or      t0, t0, t1
+    li      t1, F32_GUARD_BAND
+    fmv.w.x ft1, t1
+    fmul.s  ft1, ft1, fa3               # guard band G w
+    fabs.s  ft2, fa0
+    fabs.s  ft3, fa1
+    fmax.s  ft2, ft2, ft3
+    flt.s   t1, ft1, ft2                # max(|x|, |y|) > G w
+    slli    t1, t1, OUT_GUARD_BIT
+    or      t0, t0, t1
     sw      t0, VTX_OUTCODE(s3)
-    andi    t0, t0, OUT_NEAR
-    bnez    t0, 2f                      # behind the near plane: no projection
+    andi    t0, t0, OUT_CLIP
+    bnez    t0, 2f                      # to be cut in clip space: no projection
     call    project_clip
     sw      a0, VTX_SX(s3)
     sw      a1, VTX_SY(s3)
@@ -236,7 +246,9 @@ vertex_transform:
 #   What: perspective divide and viewport of a clip-space point in front of
 #         the near plane (w > 0): screen x = (x / w + 1) * LCD_WIDTH / 2,
 #         y = (1 - y / w) * LCD_HEIGHT / 2 (down), both rounded to the
-#         nearest 1/16 pixel (Q4, ties to even) after clamping to +-2^27;
+#         nearest 1/16 pixel (Q4, ties to even) after clamping to +-2^27
+#         (a safety net for NaN: points inside the guard band, the only
+#         ones drawn, are far inside it);
 #         with SCENE_SNAP = SNAP_PIXEL then to the nearest whole pixel
 #         (a multiple of 16, ties up), as the thesis's integer positions.
 #         Every projected position goes through here, so a point projects to
