@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import subprocess
 import sys
 import tempfile
@@ -279,11 +280,19 @@ def renderer_table(records: list[dict]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def strict_json_record(record: dict) -> dict:
+    """The record as strict JSON holds it: an infinite PSNR (frames equal to the reference's) is
+    written as null, since JSON has no Infinity and strict readers reject Python's extension."""
+    psnr = record.get("psnr_db")
+    return {**record, "psnr_db": None} if psnr is not None and math.isinf(psnr) else record
+
+
 def write_results(records: list[dict], folder: Path, renderer: bool, sweep: bool) -> str:
     """results.json (every record, each with its `setting`), results.md (the renderer table and the
     precision table), and quality.csv, quality.md, quality.svg; returns what to print."""
     folder.mkdir(parents=True, exist_ok=True)
-    (folder / "results.json").write_text(json.dumps(records, indent=2) + "\n")
+    (folder / "results.json").write_text(json.dumps([strict_json_record(r) for r in records], indent=2,
+                                                    allow_nan=False) + "\n")
     printed, md = "", ""
     if renderer:
         table = renderer_table(records)
