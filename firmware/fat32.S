@@ -136,7 +136,8 @@ msg_chain_short:    .asciz "chain ends before the file's size"
 msg_chain_long:     .asciz "chain does not end at the file's size"
 msg_too_large:      .asciz "file too large for memory: "
 msg_too_large_size: .asciz " ("
-msg_too_large_free: .asciz " bytes, "
+msg_too_large_sectors: .asciz " bytes, "
+msg_too_large_free: .asciz " in whole sectors, "
 msg_too_large_tail: .asciz " bytes free)"
 msg_mount:          .asciz "fat32: partition at block "
 msg_mount_cluster:  .asciz ", "
@@ -359,6 +360,11 @@ fat32_load:
     la      a0, msg_too_large_size
     call    console_puts
     mv      a0, s2
+    call    console_put_dec
+    la      a0, msg_too_large_sectors
+    call    console_puts
+    addi    a0, s2, FAT_SECTOR_BYTES - 1  # what the heap was asked for
+    andi    a0, a0, -FAT_SECTOR_BYTES
     call    console_put_dec
     la      a0, msg_too_large_free
     call    console_puts

@@ -6,8 +6,8 @@
 
     .option norelax
     .include "k210.inc"
-
-    .equ HEAP_ALIGN,            64          # one cache line: DMA targets start on a line
+    .include "errors.inc"
+    .include "heap.inc"
 
     .text
     .globl heap_init
@@ -45,6 +45,48 @@ heap_alloc:
 1:  li      a0, 0
     ret
 
+    .globl heap_alloc_or_fail
+# heap_alloc_or_fail
+#   What: heap_alloc for the renderer's working memory: when the block does
+#         not fit, fatal error 12, "model too large for memory (<block>: <n>
+#         bytes needed, <m> bytes free)". A block fits exactly when n <= m
+#         (the heap's start and end are HEAP_ALIGN-aligned), so the two
+#         figures say by how much it failed.
+#   Arguments: a0 = bytes, a1 = the block's name (string).
+#   Results: a0 = address (never 0).
+#   Clobbers: only ABI temporaries.
+heap_alloc_or_fail:
+    addi    sp, sp, -32
+    sd      ra, 24(sp)
+    sd      s0, 16(sp)
+    sd      s1, 8(sp)
+    mv      s0, a0                      # s0 = bytes
+    mv      s1, a1                      # s1 = name
+    call    heap_alloc
+    beqz    a0, 1f
+    ld      s1, 8(sp)
+    ld      s0, 16(sp)
+    ld      ra, 24(sp)
+    addi    sp, sp, 32
+    ret
+1:  li      a0, ERR_MODEL_TOO_LARGE
+    call    error_begin
+    la      a0, msg_too_large
+    call    console_puts
+    mv      a0, s1
+    call    console_puts
+    la      a0, msg_too_large_need
+    call    console_puts
+    mv      a0, s0
+    call    console_put_dec
+    la      a0, msg_too_large_free
+    call    console_puts
+    call    heap_free_bytes
+    call    console_put_dec
+    la      a0, msg_too_large_tail
+    call    console_puts
+    j       error_end
+
     .globl heap_free_bytes
 # heap_free_bytes
 #   What: how many bytes the heap can still hand out.
@@ -57,6 +99,13 @@ heap_free_bytes:
     la      a0, __heap_end
     sub     a0, a0, t1
     ret
+
+# ---------------------------------------------------------------------------
+    .section .rodata
+msg_too_large:      .asciz "model too large for memory ("
+msg_too_large_need: .asciz ": "
+msg_too_large_free: .asciz " bytes needed, "
+msg_too_large_tail: .asciz " bytes free)"
 
 # ---------------------------------------------------------------------------
     .bss

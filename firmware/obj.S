@@ -40,6 +40,7 @@
     .option norelax
     .include "k210.inc"
     .include "errors.inc"
+    .include "heap.inc"
     .include "scene.inc"
     .include "text.inc"
 
@@ -271,22 +272,29 @@ obj_parse_model:
     li      a2, 0
     call    error_fatal
 
-    # Error 12: what the four arrays need, what was free.
-81: lwu     t0, MESH_VCOUNT(s3)
+    # Error 12: what the four arrays take from the heap (each rounded up to
+    # HEAP_ALIGN, as heap_alloc hands them out: they fit exactly when this
+    # is at most the bytes that were free), and what was free.
+81: li      s5, 0
+    lwu     t0, MESH_VCOUNT(s3)
     li      t1, MESH_V_BYTES
-    mul     s5, t0, t1
+    jal     t6, 82f
     lwu     t0, MESH_TCOUNT(s3)
     li      t1, MESH_T_BYTES
-    mul     t0, t0, t1
-    add     s5, s5, t0
+    jal     t6, 82f
     lwu     t0, MESH_NCOUNT(s3)
     li      t1, MESH_N_BYTES
-    mul     t0, t0, t1
-    add     s5, s5, t0
+    jal     t6, 82f
     lwu     t0, MESH_FCOUNT(s3)
     li      t1, MESH_F_BYTES
-    mul     t0, t0, t1
+    jal     t6, 82f
+    j       83f
+82: mul     t0, t0, t1                  # s5 += count * size, rounded up
+    addi    t0, t0, HEAP_ALIGN - 1
+    andi    t0, t0, -HEAP_ALIGN
     add     s5, s5, t0
+    jr      t6
+83:
     li      a0, ERR_MODEL_TOO_LARGE
     call    error_begin
     la      a0, msg_too_large

@@ -40,7 +40,6 @@
     .option norelax
     .include "k210.inc"
     .include "st7789v.inc"
-    .include "errors.inc"
     .include "scene.inc"
     .include "render.inc"
 
@@ -50,7 +49,7 @@
 #   What: prepares the renderer once the scene is loaded: vertex records,
 #         the texture (textured mode with a texture; else flat fills), and
 #         in wireframe mode the unique edge list. Running out of heap is
-#         fatal (ERR_MODEL_TOO_LARGE).
+#         fatal (heap_alloc_or_fail).
 #   Arguments: none. Results: none.
 #   Clobbers: only ABI temporaries.
 render_init:
@@ -116,8 +115,8 @@ render_init:
     li      t1, DEPTH_INT16
     bne     t0, t1, 5f
     li      a0, DEPTH16_BUFFER_BYTES
-5:  call    heap_alloc
-    beqz    a0, 8f
+5:  la      a1, msg_depth_buffer
+    call    heap_alloc_or_fail
     lwu     a1, SCENE_DEPTH(s0)
     call    raster_set_depth
     la      t0, render_fill
@@ -126,20 +125,14 @@ render_init:
     beqz    t0, 9f
     lwu     a0, MESH_NCOUNT(s0)
     slli    a0, a0, NORMAL_LIGHT_SHIFT
-    call    heap_alloc
-    beqz    a0, 7f
+    la      a1, msg_normal_intensities
+    call    heap_alloc_or_fail
     la      t0, normal_light
     sd      a0, 0(t0)
 9:  ld      s0, 0(sp)
     ld      ra, 8(sp)
     addi    sp, sp, 16
     ret
-7:  la      a1, msg_no_memory_normals
-    j       89f
-8:  la      a1, msg_no_memory_depth
-89: li      a0, ERR_MODEL_TOO_LARGE
-    li      a2, 0
-    j       error_fatal
 
     .globl render_frame
 # render_frame
@@ -1128,7 +1121,8 @@ segment_point:
 # edges_build (file-local)
 #   What: the unique edge list of the mesh into edge_list / edge_count:
 #         every triangle's three (min, max) vertex index pairs, sorted
-#         (Shell sort), duplicates removed. Fatal when the heap is short.
+#         (Shell sort), duplicates removed. Fatal when the heap is short
+#         (heap_alloc_or_fail).
 #   Arguments: none. Results: none.
 #   Clobbers: only ABI temporaries.
 edges_build:
@@ -1141,8 +1135,8 @@ edges_build:
     li      t1, EDGES_PER_TRIANGLE
     mul     s0, s0, t1                  # s0 = pairs
     slli    a0, s0, 3                   # EDGE_BYTES each
-    call    heap_alloc
-    beqz    a0, 90f
+    la      a1, msg_edge_list
+    call    heap_alloc_or_fail
     mv      s1, a0                      # s1 = list
     la      t0, edge_list
     sd      a0, 0(t0)
@@ -1203,10 +1197,6 @@ edges_build:
     ld      ra, 24(sp)
     addi    sp, sp, 32
     ret
-90: li      a0, ERR_MODEL_TOO_LARGE
-    la      a1, msg_no_memory
-    li      a2, 0
-    j       error_fatal
 
 # sort_u64 (file-local)
 #   What: sorts unsigned 64-bit values in place, ascending (Shell sort with
@@ -1262,9 +1252,9 @@ clip_planes:
 .if CLIP_PLANES != 5
     .error "clip_planes lists five planes"
 .endif
-msg_no_memory:      .asciz "model too large for memory (edge list)"
-msg_no_memory_depth: .asciz "model too large for memory (depth buffer)"
-msg_no_memory_normals: .asciz "model too large for memory (normal intensities)"
+msg_edge_list:      .asciz "edge list"
+msg_depth_buffer:   .asciz "depth buffer"
+msg_normal_intensities: .asciz "normal intensities"
 
 # ---------------------------------------------------------------------------
     .bss

@@ -16,7 +16,6 @@
     .option norelax
     .include "k210.inc"
     .include "st7789v.inc"
-    .include "errors.inc"
     .include "scene.inc"
     .include "render.inc"
 
@@ -24,7 +23,7 @@
     .globl vertex_init
 # vertex_init
 #   What: allocates the vertex records (MESH_VCOUNT of them) from the heap;
-#         not enough memory is fatal (ERR_MODEL_TOO_LARGE).
+#         not enough memory is fatal (heap_alloc_or_fail).
 #   Arguments: none. Results: none.
 #   Clobbers: only ABI temporaries.
 vertex_init:
@@ -34,17 +33,13 @@ vertex_init:
     lwu     a0, MESH_VCOUNT(t0)
     li      t1, VTX_BYTES
     mul     a0, a0, t1
-    call    heap_alloc
-    beqz    a0, 1f
+    la      a1, msg_vertex_records
+    call    heap_alloc_or_fail
     la      t0, vertex_records
     sd      a0, 0(t0)
     ld      ra, 8(sp)
     addi    sp, sp, 16
     ret
-1:  li      a0, ERR_MODEL_TOO_LARGE
-    la      a1, msg_no_memory
-    li      a2, 0
-    j       error_fatal
 
     .globl vertex_transform
 # vertex_transform
@@ -292,7 +287,7 @@ project_clip:
 
 # ---------------------------------------------------------------------------
     .section .rodata
-msg_no_memory:      .asciz "model too large for memory (vertex records)"
+msg_vertex_records: .asciz "vertex records"
 
 # ---------------------------------------------------------------------------
     .bss

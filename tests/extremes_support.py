@@ -261,10 +261,10 @@ def boot_allocations(layout: HeapLayout, files: list[int], vertices: int, texcoo
     tried before failing), render.S render_init: vertex.S vertex_init's vertex records, then
     the wireframe edge list, or else the depth buffer (DEPTH16_BUFFER_BYTES for `depth = int16`,
     the default; DEPTH_BUFFER_BYTES for float32; error 12 "model too large for memory (depth
-    buffer)") and, with `shading = gouraud`, one f32 per normal (MESH_NCOUNT << NORMAL_LIGHT_SHIFT;
-    heap.S's heap_alloc of 0 bytes always succeeds).
-    Returns ("ok" | "error 7" | "error 12", heap); heap.failed is the console message's start
-    for the block that did not fit."""
+    buffer: n bytes needed, m bytes free)") and, with `shading = gouraud`, one f32 per normal
+    (MESH_NCOUNT << NORMAL_LIGHT_SHIFT; heap.S's heap_alloc of 0 bytes always succeeds).
+    Returns ("ok" | "error 7" | "error 12", heap); heap.failed is the console line for the block
+    that did not fit (for error 7 its start: the line goes on with the file's name and sizes)."""
     heap = Heap(layout)
     heap.failed = None
     sector = layout.FAT_SECTOR_BYTES
@@ -272,13 +272,14 @@ def boot_allocations(layout: HeapLayout, files: list[int], vertices: int, texcoo
         if not heap.alloc(-(-size // sector) * sector):
             heap.failed = "error 7 file too large for memory: "
             return "error 7", heap
-    ok = True
+    ok, free, needed, align = True, heap.free, 0, layout.HEAP_ALIGN
     for count, each in ((vertices, layout.MESH_V_BYTES), (texcoords, layout.MESH_T_BYTES),
                         (normals, 0 if wireframe else layout.MESH_N_BYTES), (triangles, layout.MESH_F_BYTES)):
         if count and each:
             ok = heap.alloc(count * each) and ok
+            needed += -(-count * each // align) * align
     if not ok:
-        heap.failed = "error 12 model too large for memory: "
+        heap.failed = f"error 12 model too large for memory: {needed} bytes needed, {free} bytes free"
         return "error 12", heap
     blocks = [("vertex records", vertices * layout.VTX_BYTES)]
     if wireframe:
@@ -290,7 +291,7 @@ def boot_allocations(layout: HeapLayout, files: list[int], vertices: int, texcoo
             blocks.append(("normal intensities", normals << layout.NORMAL_LIGHT_SHIFT))
     for name, size in blocks:
         if not heap.alloc(size):
-            heap.failed = f"error 12 model too large for memory ({name})"
+            heap.failed = f"error 12 model too large for memory ({name}: {size} bytes needed, {heap.free} bytes free)"
             return "error 12", heap
     return "ok", heap
 

@@ -49,11 +49,11 @@ The root causes of the discrepancies found with 3-frame runs, each pinned by a t
   (extremes_support.firmware_lighting_in_reference) leaves only outline and texel-boundary
   pixels (test_angles_beyond_a_turn_and_negative_are_exact).
 
-Figures (today's heap: 5,911,616 bytes between __heap_start and __heap_end, the depth buffer now
+Figures (today's heap: 5,910,336 bytes between __heap_start and __heap_end, the depth buffer now
 one of its blocks, after the vertex records: 153,600 bytes for int16; the tests derive every limit
 from the ELF's symbols and the firmware's allocation sequence, so they follow the heap when it
-changes): the largest model is 151,504 triangles (one more: error 12, "(depth buffer)"); the
-largest texture 1,918,970 texels (1,385 x 1,385 as a square; one texel more: error 12, the depth
+changes): the largest model is 151,468 triangles (one more: error 12, "(depth buffer)"); the
+largest texture 1,918,458 texels (1,385 x 1,385 as a square; one texel more: error 12, the depth
 buffer; 51,372 more: error 7); beside a model filling the rest, 32,933 texels.
 
 Corners projecting beyond +-2^23 pixels (the Q4 range) are cut at the guard band in clip space
@@ -72,9 +72,9 @@ from PIL import Image
 
 import reference
 from conftest import make_card, run_emulator
-from extremes_support import (TEXTURE_1X1, boot_allocations, boot_outcomes, compare, compare_texels, heap_layout, limits,
-                              lighting_ok, outline_mask, reference_depth, run_scene, texel_index, unique_texture,
-                              within_one_pixel)
+from extremes_support import (TEXTURE_1X1, boot_allocations, boot_outcomes, compare, compare_texels, heap_layout,
+                              largest, limits, lighting_ok, outline_mask, reference_depth, run_scene, texel_index,
+                              unique_texture, within_one_pixel)
 
 TEXTURE = TEXTURE_1X1
 TRIANGLE = "v 0 0 -1\nv 1 0 -1\nv 0 1 -1\nf 1 2 3\n"
@@ -119,7 +119,7 @@ def layout(firmware):
 
 @pytest.mark.parametrize("case", ["largest", "one-more-triangle"])
 def test_largest_model(firmware, layout, tmp_path, case):
-    """The largest model that fits: 151,504 triangles with today's heap of 5,911,616 bytes
+    """The largest model that fits: 151,468 triangles with today's heap of 5,910,336 bytes
     (__heap_start..__heap_end), derived from the ELF and the firmware's allocation sequence
     (extremes_support.boot_allocations: files, mesh arrays, vertex records, then the 16-bit depth
     buffer), not a constant. One more is error 12, the block the replay says did not fit ("model
@@ -141,6 +141,26 @@ def test_largest_model(firmware, layout, tmp_path, case):
         assert (run.error_line() or "").startswith(failed), (failed, run.console)
 
 
+def test_mesh_arrays_that_do_not_fit(firmware, layout, tmp_path):
+    """A model whose file loads but whose arrays do not fit: error 12 from obj.S with what the
+    arrays take from the heap, each rounded up to HEAP_ALIGN as the heap hands them out, and what
+    was free: "needed" exceeds "free" exactly when they do not fit (the smallest such model)."""
+    def failed_line(n: int) -> str:
+        return boot_allocations(layout, [len(fan_model(n)), len(TEXTURE)], 3, 0, 0, n)[1].failed or ""
+
+    def arrays_fit(n: int) -> bool:
+        return not failed_line(n).startswith("error 12 model too large for memory:")
+
+    triangles = largest(arrays_fit, 1, layout.size // layout.MESH_F_BYTES + 1) + 1
+    run = run_scene(firmware, tmp_path, fan_model(triangles), None, frames=1)
+    assert run.returncode == 8, run.stderr + run.console
+    found = re.fullmatch(r"error 12 model too large for memory: (\d+) bytes needed, (\d+) bytes free",
+                         run.error_line() or "")
+    assert found and run.error_line() == failed_line(triangles), run.console
+    needed, free = (int(g) for g in found.groups())
+    assert free < needed <= free + layout.HEAP_ALIGN, run.console        # one triangle fewer fits
+
+
 TEXTURE_TARGET = 32_768     # texels of the largest-texture case (1 row): what is left beside the filler
 # the visible triangle maps the last ~330 texels (addresses at the end of the big texture)
 FILLED_HEAD = FAN_HEAD + "vt 0.99 0\nvt 1 0\nvt 0.995 1\n"
@@ -157,7 +177,7 @@ def test_largest_texture_beside_a_model(firmware, layout, tmp_path, case):
     more. The limit a texture meets is one inequality, the same whatever else is in the heap: its
     file rounded up to whole sectors, after the files before it, with the mesh arrays and vertex
     records and the depth buffer after it (ppm.S converts in place: a texture needs no memory
-    beyond its file). On its own (a 1-triangle model) that is 1,918,970 texels (1,385 x 1,385 as
+    beyond its file). On its own (a 1-triangle model) that is 1,918,458 texels (1,385 x 1,385 as
     a square), 5.8 MB:
     loading that on the board model takes about 30 s a run (test_largest_texture_alone, opt-in),
     so here a fan model (the cheapest bytes of heap to fill: 36 per 2 bytes of text) takes all
@@ -188,9 +208,9 @@ def test_largest_texture_beside_a_model(firmware, layout, tmp_path, case):
 def test_texture_file_larger_than_the_free_heap_is_error_7(firmware, layout, tmp_path):
     """The smallest texture whose file cannot be loaded at all: error 7 from fat32_load, before
     reading any of it (so this is quick despite the 5.9 MB file). The console line today:
-    "error 7 file too large for memory: texture.ppm (5911043 bytes, 5911104 bytes free)": the
-    file is taken in whole sectors (5,911,552 bytes), which the message does not say, so it
-    reads as if the file fitted."""
+    "error 7 file too large for memory: texture.ppm (5911043 bytes, 5911552 in whole sectors,
+    5911104 bytes free)": the file is taken in whole sectors, so its size alone would read as if
+    it fitted."""
     small = "v -1 -1 0\nv 1 -1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0.5 1\nf 1/1 2/2 3/3\n"
 
     def outcomes(texels):
@@ -203,15 +223,17 @@ def test_texture_file_larger_than_the_free_heap_is_error_7(firmware, layout, tmp
     free = layout.size - -(-len(small) // sector) * sector      # when the texture is loaded
     run = run_scene(firmware, tmp_path, small, None, texture=data, frames=1)
     assert run.returncode == 8, run.stderr + run.console
-    found = re.fullmatch(r"error 7 file too large for memory: texture\.ppm \((\d+) bytes, (\d+) bytes free\)",
-                         run.error_line() or "")
-    assert found and int(found.group(1)) == len(data) and int(found.group(2)) == free, run.console
+    found = re.fullmatch(r"error 7 file too large for memory: texture\.ppm \((\d+) bytes, (\d+) in whole sectors, "
+                         r"(\d+) bytes free\)", run.error_line() or "")
+    assert found, run.console
+    size, taken, shown_free = (int(g) for g in found.groups())
+    assert size == len(data) and taken == -(-size // sector) * sector and shown_free == free < taken, run.console
 
 
 @pytest.mark.skipif(not os.environ.get("EXTREMES_FULL"), reason="about 50 s: set EXTREMES_FULL=1")
 @pytest.mark.parametrize("case", ["largest", "one-more-texel"])
 def test_largest_texture_alone(firmware, layout, tmp_path, case):
-    """The largest texture of all (a 1-triangle model): 1,918,970 x 1 today (about 25 s on the
+    """The largest texture of all (a 1-triangle model): 1,918,458 x 1 today (about 25 s on the
     board model). One texel more still loads (its
     file fits) but leaves too little for the depth buffer: error 12 "model too large for memory
     (depth buffer)"; from 51,372 texels more (the depth buffer's 153,600 bytes / 3, as the depth
