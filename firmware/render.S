@@ -3,7 +3,8 @@
 #
 # Per triangle (modes textured and flat):
 #   1. Trivial rejection: the three vertices outside the same frustum plane
-#      (their outcodes share a bit, vertex.S) -> skipped.
+#      (their outcodes share one of the six OUT_FRUSTUM bits, vertex.S) ->
+#      skipped.
 #   2. Lighting per face: N = (w1 - w0) x (w2 - w0) from the world-space
 #      positions of the transformed vertices (never from vn), intensity
 #      I = max(SCENE_AMBIENT, N . L / |N|) with L = SCENE_LIGHT, as an integer
