@@ -27,7 +27,8 @@ from .clint import Clint
 from .disasm import disassemble_one
 from .dmac import Dmac
 from .elf import RESET_PC, LoadedImage, load_elf, symbolize
-from .errors import BoardStop, FirmwareReportedError, FirmwareTrap, HangDetected, HardwareMisuse, UnmodelledAccess
+from .errors import (BoardStop, FirmwareReportedError, FirmwareTrap, HangDetected, HardwareMisuse, StrayWrite,
+                     UnmodelledAccess)
 from .fpioa import (FUNC_GPIOHS0, FUNC_SPI0_SCLK, FUNC_SPI0_SS0, FUNC_SPI1_D0, FUNC_SPI1_D1, FUNC_SPI1_SCLK,
                     FUNC_SPI1_SS0, Fpioa)
 from .gpiohs import Gpiohs
@@ -40,6 +41,7 @@ from .spi import SpiController
 from .st7789v import ST7789V
 from .sysctl import Sysctl
 from .uarths import Uarths
+from .write_watch import WriteWatch, describe as describe_stray
 
 HARTS = 2
 DEFAULT_QUANTUM = 20_000          # instructions per hart per turn
@@ -206,7 +208,9 @@ class Board:
                  on_frame: Callable[[FrameRecord, np.ndarray], None] | None = None,
                  on_warning: Callable[[str], None] | None = None, permissive: bool = False,
                  sd_image: str | None = None, sd_writable: bool = False,
-                 sd_faults: frozenset[str] = frozenset()) -> None:
+                 sd_faults: frozenset[str] = frozenset(), check_writes: bool = False) -> None:
+        """check_writes: stop with StrayWrite at the first store (a hart's or a DMA channel's) into
+        SRAM outside the firmware's buffers (write_watch.py; a checker, not hardware behaviour)."""
         self.quantum = quantum
         self.permissive = permissive   # unimplemented registers of modelled devices warn instead of stopping
         self.hang_budget_s = hang_budget_s
@@ -277,6 +281,15 @@ class Board:
             self._map(hart)
             hart.intercept_csr_sites(sites)
             hart.pc = RESET_PC
+        self.write_watch: WriteWatch | None = None
+        if check_writes:
+            self.write_watch = WriteWatch(self.image, self.memory, HARTS, firmware)
+            for hart in self.harts:
+                self.write_watch.attach(hart)
+            self.memory.write_check = self._check_dma_write
+            if not self.write_watch.complete:
+                self.warn(f"--check-writes: {firmware} has no {', '.join(self.write_watch.layout.missing)}: "
+                          f"only stores into code and constants (its read-only segments) are checked")
 
     # --- construction -----------------------------------------------------------------
 
@@ -453,8 +466,11 @@ class Board:
 
     # --- memory-mapped I/O dispatch --------------------------------------------------------
 
-    def _describe_access(self, hart: Hart, address: int, size: int, direction: str) -> str:
-        pc = hart.uc.reg_read(rv.UC_RISCV_REG_PC)
+    def _describe_access(self, hart: Hart, address: int, size: int, direction: str, pc: int | None = None) -> str:
+        """'hart H at pc P <symbol> (instruction): <direction> of N bytes at A'; the pc is the
+        hart's current one unless given (a store the run has already gone past)."""
+        if pc is None:
+            pc = hart.uc.reg_read(rv.UC_RISCV_REG_PC)
         code = bytes(hart.uc.mem_read(pc, 4)) if self._is_sram(pc) else b""
         where = symbolize(self.image.symbols, pc)
         where = f" <{where}>" if where else ""
@@ -477,6 +493,17 @@ class Board:
             error.args = (f"{self._describe_access(hart, address, size, direction)}: {error.args[0]}",)
             self._stop = error
         hart.request_stop()
+
+    def _check_dma_write(self, address: int, length: int, writer: str) -> None:
+        """--check-writes for the DMAC: a write outside the firmware's buffers ends the run (the
+        current hart's turn ends after its instruction; between turns, _step raises)."""
+        stray = self.write_watch.check_dma(address, length)
+        if stray is None or self._stop is not None:
+            return
+        self._stop = StrayWrite(f"{writer}: write of {length} bytes at 0x{address:08x}..0x{address + length - 1:08x}: "
+                                f"{describe_stray(stray)}")
+        if self._current is not None:
+            self._current.request_stop()
 
     def _gate_check(self, peripheral: Peripheral) -> None:
         gate = getattr(peripheral, "GATE", None)
@@ -656,6 +683,13 @@ class Board:
                          self.warnings)
 
     def _step(self) -> None:
+        """One turn (see _turn); a stop recorded by a device outside a hart's turn (a stray
+        DMA write while every hart sleeps) ends the run here."""
+        self._turn()
+        if self._stop is not None:
+            raise self._stop
+
+    def _turn(self) -> None:
         """One turn: the running hart that is furthest behind in virtual time runs until
         its quantum ends, the next device event, or one quantum past the other hart."""
         running = [h for h in self.harts if h.state is HartState.RUNNING]
@@ -756,6 +790,12 @@ class Board:
         finally:
             self._current = None
             self.host_time_in_harts += host_time.perf_counter() - started
+        stray = self.write_watch.stray_store(hart) if self.write_watch is not None else None
+        if stray is not None:
+            # the hart stopped right after the stray store, so nothing it did later this turn
+            # can have been recorded: the store is what ends the run
+            access = self._describe_access(hart, stray.address, stray.size, "store", stray.pc)
+            self._stop = StrayWrite(f"{access}: {describe_stray(stray)}")
         ran = hart.executed - before
         if self._stop is None:
             if end is RunEnd.WFI:

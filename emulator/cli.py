@@ -20,6 +20,7 @@ EXIT_STATUS_HELP = """exit status:
   7  hardware misuse: something the real K210 would not do (e.g. CPU on an unlocked PLL)
   8  the firmware reported a fatal error on its console ("error <code> <words>")
   9  --golden: a shown frame differs from its golden PNG (diff images are in the output folder)
+ 10  --check-writes: a store (a hart's or a DMA channel's) landed in SRAM outside the firmware's buffers
 """
 
 
@@ -52,6 +53,10 @@ def build_parser() -> argparse.ArgumentParser:
                           "WHAT is 'gram' (the LCD's memory), a firmware symbol or a 0x address of a 320x240 "
                           "RGB565 buffer in SRAM; add ':pairs' for the project's pixel-pair order or "
                           ":WxH for another size, e.g. --grab framebuffers@0.45:pairs; repeatable")
+    run.add_argument("--check-writes", action="store_true",
+                     help="stop with exit status 10 at the first store into SRAM outside the firmware's buffers "
+                          "(.data/.bss, the heap handed out so far, the storing hart's own stack): a checker "
+                          "of the board model, like a watchpoint; the real K210 lets such stores through")
     run.add_argument("--quiet", action="store_true", help="do not echo the console or show progress")
     run.add_argument("--permissive", action="store_true",
                      help="an access to a register a modelled device does not implement warns (loads read 0, "
@@ -103,7 +108,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         board = Board(args.firmware, quantum=args.quantum, hang_budget_s=args.budget, console=console,
                       on_frame=output.frame, on_warning=warning, permissive=args.permissive,
-                      sd_image=args.sd, sd_writable=args.sd_writable, sd_faults=frozenset(args.sd_fault))
+                      sd_image=args.sd, sd_writable=args.sd_writable, sd_faults=frozenset(args.sd_fault),
+                      check_writes=args.check_writes)
         for request in grabs:
             board.grab_at(request.at_s, lambda b, request=request: output.grab(request, b))
         result = board.run(args.frames, progress=None if args.quiet or not sys.stderr.isatty() else _progress)
@@ -136,6 +142,7 @@ def main(argv: list[str] | None = None) -> int:
         elif status == EXIT_OK:
             print(f"[golden] all {len(comparisons)} frames match {args.golden}", file=sys.stderr)
     summary["grabs"] = output.grabs
+    summary["writes_checked"] = args.check_writes
     output.finish(summary)
     if not args.quiet and sys.stderr.isatty():
         sys.stderr.write("\n")

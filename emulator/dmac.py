@@ -98,7 +98,7 @@ class DmaChannel:
         if t is None:
             return
         take = values[: self.remaining()]
-        self.dmac.board.memory.write_items(t.dst, t.dst_width, take, t.dst_fixed)
+        self.dmac.board.memory.write_items(t.dst, t.dst_width, take, t.dst_fixed, f"DMAC channel {self.index}")
         if not t.dst_fixed:
             t.dst += len(take) * t.dst_width
         t.done_items += len(take)
@@ -252,7 +252,7 @@ class Dmac(Peripheral):
             if src_width != dst_width:
                 raise UnmodelledAccess(f"DMAC channel {n}: memory-to-memory with different widths is not modelled")
             values = memory.read_items(transfer.src, src_width, items, transfer.src_fixed)
-            memory.write_items(transfer.dst, dst_width, values, transfer.dst_fixed)
+            memory.write_items(transfer.dst, dst_width, values, transfer.dst_fixed, f"DMAC channel {n}")
             transfer.done_items = items
             transfer.done_at = now + items * src_width / MEM2MEM_BYTES_PER_CYCLE / self.board.cpu_hz()
             return

@@ -3,7 +3,7 @@ segment's bytes at its physical address in SRAM; both harts then start at
 0x8000_0000 whatever the ELF's entry field says."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from elftools.common.exceptions import ELFError
@@ -17,12 +17,23 @@ EM_RISCV = "EM_RISCV"
 RESET_PC = SRAM_BASE
 
 
+@dataclass(frozen=True)
+class Segment:
+    """A PT_LOAD segment as it sits in SRAM: `size` is p_memsz (.bss included)."""
+    address: int
+    size: int
+    writable: bool
+    executable: bool
+
+
 @dataclass
 class LoadedImage:
     entry: int
     code_ranges: list[tuple[int, bytes]]   # executable segments (address, bytes) for CSR scanning
     symbols: dict[int, str]
     image_bytes: int
+    segments: list[Segment] = field(default_factory=list)          # every PT_LOAD with p_memsz > 0
+    symbol_values: dict[str, int] = field(default_factory=dict)    # every named symbol (linker ones too)
 
 
 def _in_sram(address: int, length: int) -> bool:
@@ -40,8 +51,12 @@ def load_elf(path: str | Path, memory: Sram) -> LoadedImage:
             if elf.header["e_machine"] != EM_RISCV or elf.elfclass != 64:
                 raise BadInput(f"{path}: not a 64-bit RISC-V ELF (machine {elf.header['e_machine']}, "
                                f"class {elf.elfclass})")
-            code_ranges, total = [], 0
+            code_ranges, segments, total = [], [], 0
             for segment in elf.iter_segments():
+                if segment["p_type"] == "PT_LOAD" and segment["p_memsz"] > 0:
+                    segments.append(Segment(segment["p_paddr"], segment["p_memsz"],
+                                            bool(segment["p_flags"] & P_FLAGS.PF_W),
+                                            bool(segment["p_flags"] & P_FLAGS.PF_X)))
                 if segment["p_type"] != "PT_LOAD" or segment["p_filesz"] == 0:
                     continue
                 address, data = segment["p_paddr"], segment.data()
@@ -54,14 +69,16 @@ def load_elf(path: str | Path, memory: Sram) -> LoadedImage:
                     code_ranges.append((address, data))
             if not code_ranges:
                 raise BadInput(f"{path}: no executable segment to run")
-            symbols = {}
+            symbols, values = {}, {}
             symtab = elf.get_section_by_name(".symtab")
             if symtab is not None:
                 for symbol in symtab.iter_symbols():
+                    if symbol.name and not symbol.name.startswith("$"):
+                        values.setdefault(symbol.name, symbol["st_value"])
                     if symbol["st_info"]["type"] in ("STT_FUNC", "STT_NOTYPE") and symbol.name \
                             and not symbol.name.startswith("$") and symbol["st_value"]:
                         symbols.setdefault(symbol["st_value"], symbol.name)
-            return LoadedImage(elf.header["e_entry"], code_ranges, symbols, total)
+            return LoadedImage(elf.header["e_entry"], code_ranges, symbols, total, segments, values)
     except (ELFError, ValueError) as error:
         raise BadInput(f"{path}: not a valid ELF file ({error})") from None
 

@@ -16,6 +16,7 @@ EXIT_BAD_INPUT = 6
 EXIT_MISUSE = 7
 EXIT_FIRMWARE_ERROR = 8
 EXIT_GOLDEN_MISMATCH = 9
+EXIT_STRAY_WRITE = 10
 
 
 class BoardStop(Exception):
@@ -72,3 +73,12 @@ class FirmwareReportedError(BoardStop):
     def __init__(self, message: str, code: int) -> None:
         super().__init__(message)
         self.code = code
+
+
+class StrayWrite(BoardStop):
+    """With --check-writes: a store (a hart's, or a DMA channel's) landed in SRAM outside the
+    firmware's buffers (see write_watch.py). Not a hardware fault: the K210 would have let it
+    through; the board model's checker reports it."""
+
+    exit_status = EXIT_STRAY_WRITE
+    kind = "stray-write"

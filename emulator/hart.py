@@ -115,16 +115,27 @@ class Hart:
         self.minstret_offset = 0  # set by firmware writes to minstret
         self.mcycle_offset = 0
         self._counter = _Counter(0, 0, _UC_EMU_STOP)
-        handle = ctypes.c_size_t()
-        status = _ucpy.uclib.uc_hook_add(
-            self.uc._uch, ctypes.byref(handle), unicorn.UC_HOOK_CODE, _COUNT_HOOK,
-            ctypes.byref(self._counter), ctypes.c_uint64(1), ctypes.c_uint64(0),
-        )
-        if status != 0:
-            raise RuntimeError(f"cannot install the instruction counter: unicorn status {status}")
+        self.add_native_hook(unicorn.UC_HOOK_CODE, _COUNT_HOOK, self._counter, 1, 0, "the instruction counter")
         self.uc.hook_add(unicorn.UC_HOOK_INTR, self._on_exception)
         self._reg_value = ctypes.c_uint64()
         self._reg_ref = ctypes.byref(self._reg_value)
+
+    def add_native_hook(self, kind: int, callback: int, user_data: ctypes.Structure, begin: int, end: int,
+                        what: str) -> None:
+        """Installs a C function (its address) as a Unicorn hook of `kind` for addresses
+        begin..end (inclusive; begin > end: everywhere), called with a pointer to `user_data`,
+        which the caller keeps alive as long as the hart. `what` names it in the error."""
+        handle = ctypes.c_size_t()
+        status = _ucpy.uclib.uc_hook_add(self.uc._uch, ctypes.byref(handle), kind, callback,
+                                         ctypes.byref(user_data), ctypes.c_uint64(begin), ctypes.c_uint64(end))
+        if status != 0:
+            raise RuntimeError(f"cannot install {what} on hart {self.hart_id}: unicorn status {status}")
+
+    @property
+    def counter_address(self) -> int:
+        """Host address of the native instruction counter (u64 executed, then u64 limit): a
+        native hook ends the run after the current instruction by setting limit = executed."""
+        return ctypes.addressof(self._counter)
 
     def reg(self, register: int) -> int:
         """A register's value, read straight through Unicorn's C API (the MMIO paths call

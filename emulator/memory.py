@@ -9,6 +9,7 @@ too, yet every run is the same.
 from __future__ import annotations
 
 import ctypes
+from typing import Callable
 
 import numpy as np
 
@@ -27,6 +28,8 @@ class Sram:
         self.bytes = np.frombuffer(self.buffer, dtype=np.uint8)
         if fill_seed is not None:
             self.bytes[:] = np.random.default_rng(fill_seed).integers(0, 256, SRAM_SIZE, dtype=np.uint8)
+        # --check-writes: called as write_check(address, length, writer) before a DMA write lands
+        self.write_check: Callable[[int, int, str], None] | None = None
 
     @property
     def address(self) -> int:
@@ -59,10 +62,16 @@ class Sram:
         raw = self.bytes[offset:offset + width * count].view(dtype)
         return raw.astype(np.uint64 if width == 8 else np.uint32)
 
-    def write_items(self, address: int, width: int, values: np.ndarray, fixed: bool) -> None:
+    def write_items(self, address: int, width: int, values: np.ndarray, fixed: bool, writer: str = "DMA") -> None:
+        """Writes items of `width` bytes to consecutive addresses, or all to one when `fixed`
+        (only the last one stays). `writer` names who writes, for the write checker."""
         dtype = {1: np.uint8, 2: "<u2", 4: "<u4", 8: "<u8"}[width]
         if len(values) == 0:
             return
+        if self.write_check is not None:
+            length = width if fixed else width * len(values)
+            self.offset_of(address, length)          # not SRAM at all: that error comes first
+            self.write_check(address, length, writer)
         if fixed:
             offset = self.offset_of(address, width)
             self.bytes[offset:offset + width] = np.array([values[-1]], dtype=dtype).view(np.uint8)

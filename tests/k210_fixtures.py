@@ -55,11 +55,13 @@ def _build_dir() -> Path:
     return _DIR[0]
 
 
-def build_elf(source: str) -> str:
+def build_elf(source: str, linker_script: Path | None = None) -> str:
     """Assembles and links a complete program (with its own _start); returns the ELF
-    path. Cached by source text for the whole test session."""
+    path. Cached by source text (and script) for the whole test session. Without a linker
+    script the program is one read-write-execute segment at 0x8000_0000; with one (the
+    firmware's k210.ld) it gets the firmware's segments and heap and stack symbols."""
     source = textwrap.dedent(source)
-    key = hashlib.sha1(source.encode()).hexdigest()[:16]
+    key = hashlib.sha1(f"{source}\0{linker_script}".encode()).hexdigest()[:16]
     path = _CACHE.get(key)
     if path is not None:
         return path
@@ -71,8 +73,8 @@ def build_elf(source: str) -> str:
     subprocess.run([AS, "-march=rv64gc", "-mabi=lp64d", "-o", str(obj), str(src)],
                    check=True, capture_output=True, text=True)
     # -N: one segment starting exactly at 0x8000_0000 (no ELF header paged in below SRAM)
-    subprocess.run([LD, "-N", "--no-relax", "-Ttext=0x80000000", "-o", str(elf), str(obj)],
-                   check=True, capture_output=True, text=True)
+    layout = ["-T", str(linker_script)] if linker_script else ["-N", "-Ttext=0x80000000"]
+    subprocess.run([LD, *layout, "--no-relax", "-o", str(elf), str(obj)], check=True, capture_output=True, text=True)
     _CACHE[key] = str(elf)
     return str(elf)
 

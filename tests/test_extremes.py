@@ -290,7 +290,7 @@ def test_extreme_scene_matches_the_reference(firmware, tmp_path, name):
     card = _card(tmp_path, model, scene)
     out = tmp_path / "out"
     result = run_emulator("run", str(firmware), "--sd", str(card), "--frames", str(FRAMES), "--out", str(out),
-                          "--quiet")
+                          "--quiet", "--check-writes")
     assert result.returncode == 0, result.stderr            # no trap, no hang, no error
     ref_scene, mesh, texture = reference.load_card_image(card)
     for n in range(FRAMES):
@@ -305,7 +305,8 @@ def test_non_finite_numbers_are_a_clear_error(firmware, tmp_path, name):
     model, words = REFUSED[name]
     card = _card(tmp_path, model, "mode = flat\n")
     out = tmp_path / "out"
-    result = run_emulator("run", str(firmware), "--sd", str(card), "--frames", "1", "--out", str(out), "--quiet")
+    result = run_emulator("run", str(firmware), "--sd", str(card), "--frames", "1", "--out", str(out), "--quiet",
+                          "--check-writes")
     console = (out / "console.log").read_text()
     assert result.returncode == 8, result.stderr + console
     assert re.search(rf"^error 10 bad model line 1: .*{words}", console, re.M), console

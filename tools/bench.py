@@ -4,7 +4,10 @@ Measured in one run on one host, so the ratios are meaningful even on a noisy ma
   1. raw Unicorn on a tight 4-instruction loop, run with no instruction limit;
   2. the same loop on a board hart (native instruction counter, 20,000-instruction quanta);
   3. the board model running the project's firmware: emulated instructions per host second
-     over both harts, frames per host second, and virtual frames per second.
+     over both harts, frames per host second, and virtual frames per second;
+  4. the same with --check-writes (the native store checker), as a ratio to 3 (runs of both
+     alternate, and the fastest of each counts, so that a busy moment of the host does not
+     decide the ratio).
 Those are printed and written to build/bench.json. Then, per thesis scene and mode, runs of the
 firmware measured against the float64 reference renderer (instructions per frame, PSNR, largest
 channel error, share of pixels that differ), written to build/bench/:
@@ -82,8 +85,8 @@ def hart_mips(code: bytes, instructions: int, quantum: int) -> float:
     return hart.executed / (time.perf_counter() - start) / 1e6
 
 
-def firmware_figures(firmware: Path, card: Path, frames: int) -> dict:
-    board = Board(str(firmware), sd_image=str(card))
+def firmware_figures(firmware: Path, card: Path, frames: int, check_writes: bool = False) -> dict:
+    board = Board(str(firmware), sd_image=str(card), check_writes=check_writes)
     start = time.perf_counter()
     board.run(frames)
     host = time.perf_counter() - start
@@ -361,6 +364,24 @@ def main() -> int:
     return 1 if failures else 0
 
 
+def write_check_figures(firmware: Path, card: Path, frames: int, unchecked: dict, rounds: int = 2) -> dict:
+    """The board with --check-writes against the board without: `rounds` runs of each, alternating
+    (the first unchecked one is `unchecked`), compared fastest to fastest."""
+    plain, checked = [unchecked], []
+    for n in range(rounds):
+        checked.append(firmware_figures(firmware, card, frames, check_writes=True))
+        if n + 1 < rounds:
+            plain.append(firmware_figures(firmware, card, frames))
+    best_plain = max(plain, key=lambda figures: figures["effective_mips"])
+    best = max(checked, key=lambda figures: figures["effective_mips"])
+    if best["instructions"] != best_plain["instructions"]:
+        raise SystemExit(f"bench: --check-writes changed the firmware's run: {best['instructions']} instructions "
+                         f"against {best_plain['instructions']}")
+    return {**best, "rounds": rounds,
+            "ratio_to_unchecked": best["effective_mips"] / best_plain["effective_mips"],
+            "ratio_while_executing": best["mips_while_executing"] / max(p["mips_while_executing"] for p in plain)}
+
+
 def speed_figures(args: argparse.Namespace) -> None:
     """Raw Unicorn, a board hart and the board model running the firmware; SD timings. Printed and
     written to build/bench.json."""
@@ -371,6 +392,7 @@ def speed_figures(args: argparse.Namespace) -> None:
     raw = raw_unicorn_mips(code, total)
     counted = hart_mips(code, total, 20_000)
     board = firmware_figures(Path(args.firmware), Path(args.card), args.frames)
+    checked = write_check_figures(Path(args.firmware), Path(args.card), args.frames, board)
     with tempfile.TemporaryDirectory() as tmp:
         sd = sd_figures(Path(args.firmware), Path(tmp))
     results = {
@@ -379,6 +401,7 @@ def speed_figures(args: argparse.Namespace) -> None:
         "firmware": board,
         "ratio_hart_to_raw": counted / raw,
         "ratio_board_to_raw": board["effective_mips"] / raw,
+        "firmware_check_writes": checked,
         "sd": sd,
     }
     print(f"raw Unicorn, tight loop, no limit:         {raw:8.1f} MIPS")
@@ -389,6 +412,9 @@ def speed_figures(args: argparse.Namespace) -> None:
           f"{100 * board['share_of_host_time_executing']:.0f} % of host time is spent executing")
     print(f"  {board['frames']} frames in {board['host_time_s']:.2f} s host = {board['frames_per_host_second']:.1f} frames/s; "
           f"virtual {board['virtual_fps']:.1f} frames/s; instructions per hart {board['instructions']}")
+    print(f"board with --check-writes:                 {checked['effective_mips']:8.1f} MIPS  "
+          f"({checked['ratio_to_unchecked']:.3f} x the board without; fastest of {checked['rounds']} alternating "
+          f"runs each; {checked['ratio_while_executing']:.3f} x while harts execute)")
     print(f"SD (virtual time; thesis in brackets): card set-up to root directory {sd['card_setup_to_root_ms']:.2f} ms "
           f"[32.35], model {sd['model_bytes']} bytes {sd['model_read_ms']:.2f} ms [43.05], "
           f"texture {sd['texture_bytes']} bytes {sd['texture_read_ms']:.2f} ms [200.75]")

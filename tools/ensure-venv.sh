@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Creates the project's virtual environment and installs the project (with its native
-# instruction counter, which needs a C compiler and the Python headers) and test tools.
+# hooks, the instruction counter and the store checker, which need a C compiler and the
+# Python headers) and test tools.
 set -euo pipefail
 venv=${1:-.venv}
 python=${PYTHON:-python3}
