@@ -754,7 +754,8 @@ clip_and_draw:
 #         cut on the near plane gets z = 0 exactly (its depth is the near
 #         plane's).
 #   Arguments: a0 = corners (clip vertices), a1 = their count (at least
-#              3), a2 = output (room for a1 + 1), a3 = plane number
+#              3), a2 = output (room for a1 + a1 / 2: see CLIP_MAX_OUT),
+#              a3 = plane number
 #              (clip_planes; 0 is the near plane).
 #   Results: a0 = the output's corner count.
 #   Clobbers: only ABI temporaries.

@@ -49,12 +49,12 @@ The root causes of the discrepancies found with 3-frame runs, each pinned by a t
   (extremes_support.firmware_lighting_in_reference) leaves only outline and texel-boundary
   pixels (test_angles_beyond_a_turn_and_negative_are_exact).
 
-Figures (today's heap: 5,910,336 bytes between __heap_start and __heap_end, the depth buffer now
+Figures (today's heap: 5,909,440 bytes between __heap_start and __heap_end, the depth buffer now
 one of its blocks, after the vertex records: 153,600 bytes for int16; the tests derive every limit
 from the ELF's symbols and the firmware's allocation sequence, so they follow the heap when it
-changes): the largest model is 151,468 triangles (one more: error 12, "(depth buffer)"); the
-largest texture 1,918,458 texels (1,385 x 1,385 as a square; one texel more: error 12, the depth
-buffer; 51,372 more: error 7); beside a model filling the rest, 32,933 texels.
+changes): the largest model is 151,443 triangles (one more: error 12, "(depth buffer)"); the
+largest texture 1,918,287 texels (1,385 x 1,385 as a square; one texel more: error 12, the depth
+buffer; 51,201 more: error 7); beside a model filling the rest, 32,933 texels.
 
 Corners projecting beyond +-2^23 pixels (the Q4 range) are cut at the guard band in clip space
 (test_beyond_the_q4_range). Known limit found on the way (left as it is): the error 7 and 12
@@ -119,7 +119,7 @@ def layout(firmware):
 
 @pytest.mark.parametrize("case", ["largest", "one-more-triangle"])
 def test_largest_model(firmware, layout, tmp_path, case):
-    """The largest model that fits: 151,468 triangles with today's heap of 5,910,336 bytes
+    """The largest model that fits: 151,443 triangles with today's heap of 5,909,440 bytes
     (__heap_start..__heap_end), derived from the ELF and the firmware's allocation sequence
     (extremes_support.boot_allocations: files, mesh arrays, vertex records, then the 16-bit depth
     buffer), not a constant. One more is error 12, the block the replay says did not fit ("model
@@ -177,7 +177,7 @@ def test_largest_texture_beside_a_model(firmware, layout, tmp_path, case):
     more. The limit a texture meets is one inequality, the same whatever else is in the heap: its
     file rounded up to whole sectors, after the files before it, with the mesh arrays and vertex
     records and the depth buffer after it (ppm.S converts in place: a texture needs no memory
-    beyond its file). On its own (a 1-triangle model) that is 1,918,458 texels (1,385 x 1,385 as
+    beyond its file). On its own (a 1-triangle model) that is 1,918,287 texels (1,385 x 1,385 as
     a square), 5.8 MB:
     loading that on the board model takes about 30 s a run (test_largest_texture_alone, opt-in),
     so here a fan model (the cheapest bytes of heap to fill: 36 per 2 bytes of text) takes all
@@ -208,8 +208,8 @@ def test_largest_texture_beside_a_model(firmware, layout, tmp_path, case):
 def test_texture_file_larger_than_the_free_heap_is_error_7(firmware, layout, tmp_path):
     """The smallest texture whose file cannot be loaded at all: error 7 from fat32_load, before
     reading any of it (so this is quick despite the 5.9 MB file). The console line today:
-    "error 7 file too large for memory: texture.ppm (5911043 bytes, 5911552 in whole sectors,
-    5911104 bytes free)": the file is taken in whole sectors, so its size alone would read as if
+    "error 7 file too large for memory: texture.ppm (5908481 bytes, 5908992 in whole sectors,
+    5908928 bytes free)": the file is taken in whole sectors, so its size alone would read as if
     it fitted."""
     small = "v -1 -1 0\nv 1 -1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0.5 1\nf 1/1 2/2 3/3\n"
 
@@ -233,10 +233,10 @@ def test_texture_file_larger_than_the_free_heap_is_error_7(firmware, layout, tmp
 @pytest.mark.skipif(not os.environ.get("EXTREMES_FULL"), reason="about 50 s: set EXTREMES_FULL=1")
 @pytest.mark.parametrize("case", ["largest", "one-more-texel"])
 def test_largest_texture_alone(firmware, layout, tmp_path, case):
-    """The largest texture of all (a 1-triangle model): 1,918,458 x 1 today (about 25 s on the
+    """The largest texture of all (a 1-triangle model): 1,918,287 x 1 today (about 25 s on the
     board model). One texel more still loads (its
     file fits) but leaves too little for the depth buffer: error 12 "model too large for memory
-    (depth buffer)"; from 51,372 texels more (the depth buffer's 153,600 bytes / 3, as the depth
+    (depth buffer)"; from 51,201 texels more (the depth buffer's 153,600 bytes / 3, as the depth
     buffer is now the last block) it is error 7
     (test_texture_file_larger_than_the_free_heap_is_error_7)."""
     small = "v -1 -1 0\nv 1 -1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0.5 1\nf 1/1 2/2 3/3\n"
