@@ -663,15 +663,14 @@ clip_and_draw:
     la      s1, clip_polygon_b          # s1 = the other buffer
     li      s2, TRIANGLE_CORNERS        # s2 = its corners
     li      s7, 0                       # s7 = plane number (clip_planes)
-2:  li      t0, OUT_NEAR                # plane 0: the near plane; 1..4: the
-    beqz    s7, 3f                      # guard band's sides
-    li      t0, OUT_GUARD
-3:  and     t0, t0, s6
-    beqz    t0, 4f                      # no corner outside: nothing to cut
+2:  mv      a0, s7
+    mv      a1, s6
+    call    clip_plane
+    beqz    a0, 4f                      # no corner outside: nothing to cut
+    mv      a3, a0
     mv      a0, s0
     mv      a1, s2
     mv      a2, s1
-    mv      a3, s7
     call    clip_polygon
     mv      s2, a0
     mv      t0, s0
@@ -755,8 +754,8 @@ clip_and_draw:
 #         plane's).
 #   Arguments: a0 = corners (clip vertices), a1 = their count (at least
 #              3), a2 = output (room for a1 + a1 / 2: see CLIP_MAX_OUT),
-#              a3 = plane number
-#              (clip_planes; 0 is the near plane).
+#              a3 = the plane (in clip_planes, whose first is the near
+#              plane).
 #   Results: a0 = the output's corner count.
 #   Clobbers: only ABI temporaries.
 clip_polygon:
@@ -780,11 +779,8 @@ clip_polygon:
     mul     t0, t0, a1
     add     s3, a0, t0                  # s3 = end of the corners
     mv      s4, a0                      # s4 = first corner (b of the last edge)
-    li      t0, PLANE_BYTES
-    mul     t0, t0, a3
-    la      s5, clip_planes
-    add     s5, s5, t0                  # s5 = plane
-    mv      s6, a3                      # s6 = plane number
+    mv      s5, a3                      # s5 = plane
+    la      s6, clip_planes             # s6 = the near plane
     mv      a1, s5
     call    plane_distance
     fmv.s   fs0, fa0                    # fs0 = d(a)
@@ -816,7 +812,7 @@ clip_polygon:
     fmv.s   fa1, fs0
 4:  mv      a0, s1
     call    cv_cut
-    bnez    s6, 41f
+    bne     s5, s6, 41f
     sw      zero, CV_Z(s1)              # on the near plane
 41: addi    s1, s1, CV_BYTES
 5:  fmv.s   fs0, fs1                    # b is the next edge's a
@@ -838,6 +834,28 @@ clip_polygon:
     ld      s0, 80(sp)
     ld      ra, 88(sp)
     addi    sp, sp, 96
+    ret
+
+# clip_plane (file-local)
+#   What: plane n of clip_planes if a shape with these corners must be cut
+#         against it: the near plane (n = 0) when a corner is behind it
+#         (OUT_NEAR), a side of the guard band (n = 1 .. 4) when a corner is
+#         beyond the band (OUT_GUARD).
+#   Arguments: a0 = n, a1 = the corners' outcodes ORed.
+#   Results: a0 = the plane's address, or 0 when no corner is outside it.
+#   Clobbers: only ABI temporaries.
+clip_plane:
+    li      t0, OUT_NEAR
+    beqz    a0, 1f
+    li      t0, OUT_GUARD
+1:  and     t0, t0, a1
+    beqz    t0, 2f
+    li      t0, PLANE_BYTES
+    mul     t0, t0, a0
+    la      a0, clip_planes
+    add     a0, a0, t0
+    ret
+2:  li      a0, 0
     ret
 
 # plane_distance (file-local)
@@ -1019,15 +1037,11 @@ clip_segment:
     li      t0, F32_ONE
     fmv.w.x fs1, t0                     # fs1 = t leaving
     li      s3, 0                       # s3 = plane number
-1:  li      t0, OUT_NEAR                # as clip_and_draw
-    beqz    s3, 2f
-    li      t0, OUT_GUARD
-2:  and     t0, t0, s2
-    beqz    t0, 5f
-    li      t0, PLANE_BYTES
-    mul     t0, t0, s3
-    la      s4, clip_planes
-    add     s4, s4, t0                  # s4 = plane
+1:  mv      a0, s3
+    mv      a1, s2
+    call    clip_plane
+    beqz    a0, 5f                      # no end outside it
+    mv      s4, a0                      # s4 = plane
     mv      a0, s0
     mv      a1, s4
     call    plane_distance

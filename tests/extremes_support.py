@@ -28,6 +28,7 @@ from PIL import Image
 import reference
 import reference.render as reference_render
 from conftest import make_card, run_emulator
+from firmware_calls import elf_symbols
 
 TEXTURE_1X1 = b"P6\n1 1\n255\n\x80\x40\x20"
 
@@ -219,14 +220,10 @@ NEEDED = ("HEAP_ALIGN", "FAT_SECTOR_BYTES", "MESH_V_BYTES", "MESH_T_BYTES", "MES
 
 
 def heap_layout(elf: Path) -> HeapLayout:
-    from elftools.elf.elffile import ELFFile
-    with open(elf, "rb") as handle:
-        symbols = {}
-        for sym in ELFFile(handle).get_section_by_name(".symtab").iter_symbols():
-            if sym.entry.st_shndx == "SHN_ABS":
-                symbols.setdefault(sym.name, sym.entry.st_value)
-            else:
-                symbols[sym.name] = sym.entry.st_value
+    values = elf_symbols(elf)
+    symbols = {name: min(found) for name, found in values.items()}
+    clashing = [name for name in NEEDED + ("__heap_start", "__heap_end") if len(values.get(name, ())) > 1]
+    assert not clashing, f"{clashing} have several values in the firmware's ELF"
     missing = [name for name in NEEDED + ("__heap_start", "__heap_end") if name not in symbols]
     assert not missing, f"the firmware's ELF no longer has {missing}: update extremes_support.heap_layout"
     assert "depth_buffer" not in symbols, "a static depth buffer again: update extremes_support.boot_allocations"

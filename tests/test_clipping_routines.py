@@ -173,7 +173,7 @@ def fw_clip_polygon(fw: FirmwareCaller, corners: np.ndarray, plane: int, source:
     (asserting the count is at most `room`)."""
     corners = np.asarray(corners, dtype=np.float32)
     fw.write_f32(source, corners.ravel())
-    count = fw.call("clip_polygon", [source, len(corners), output, plane]).a[0]
+    count = fw.call("clip_polygon", [source, len(corners), output, plane_address(fw, plane)]).a[0]
     assert count <= room, f"clip_polygon returned {count} corners, room for {room}"
     return fw.read_f32(output, len(FIELDS) * count).reshape(count, len(FIELDS))
 
@@ -386,7 +386,7 @@ def test_rounding_cannot_overflow_the_clip_buffers(fw):
     source, output, count = buffer_a, fw.symbol("clip_polygon_b"), len(corners)
     fw.write_f32(source, corners.ravel())
     for plane in range(len(PLANE_NAMES)):
-        count = fw.call("clip_polygon", [source, count, output, plane]).a[0]
+        count = fw.call("clip_polygon", [source, count, output, plane_address(fw, plane)]).a[0]
         source, output = output, source
     assert count == 9 > 8, f"{count} corners: no longer the rounding case this test is about"
     assert count <= max_out and fw.read(after_b, CV_BYTES) == CANARY[:CV_BYTES], \
