@@ -1,9 +1,9 @@
-"""python -m reference render FOLDER --frames N --out DIR [--first K]
-   python -m reference render-card CARD.img --frames N --out DIR [--first K]
+"""python -m reference render FOLDER --out DIR [--frames N] [--first K] [--quiet]
+   python -m reference render-card CARD.img --out DIR [--frames N] [--first K] [--quiet]
 
 Renders frames K .. K+N-1 of the scene (scene.ini, model and texture from a folder laid out
 like a card, or from a card image) and writes DIR/frame_NNNN.png as the LCD would show them.
-Exit status 0, 2 for bad usage or a missing file, 3 for a bad scene.ini, model or texture."""
+Exit statuses: see EXIT_STATUS_HELP."""
 from __future__ import annotations
 
 import argparse
@@ -19,36 +19,107 @@ from .ppm import TextureError
 from .render import render_image
 from .scene import SceneError
 
+EXIT_OK = 0
+EXIT_OUTPUT = 1
+EXIT_USAGE = 2
+EXIT_BAD_FILE = 3
+EXIT_BAD_CARD = 4
+
+EXIT_STATUS_HELP = """exit status:
+  0  the frames were written
+  1  the output folder or a frame could not be written (not a folder, permissions, disk full)
+  2  bad command line, or a missing input: FOLDER, CARD, or a file the scene names
+  3  a bad scene.ini, model or texture, with the firmware's error text (errors 9, 10, 11)
+  4  render-card: the card image is not an MBR-partitioned FAT32 card, or is damaged (the
+     message names the broken structure)
+"""
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="python -m reference",
+        description="The float64 reference renderer: renders a card's scene as the firmware "
+                    "should, without its approximations, to PNG frames.",
+        epilog=EXIT_STATUS_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
+    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for name, source, what in (
+            ("render", "FOLDER", "a folder laid out like a card (scene.ini, the model and the "
+                                 "texture it names; names match case-insensitively, as on FAT)"),
+            ("render-card", "CARD", "an SD card image built by python -m sdcard_image")):
+        sub = commands.add_parser(name, help=f"render the scene of {what.split(' (')[0]}",
+                                  description=f"Renders the scene of {what}.",
+                                  epilog=EXIT_STATUS_HELP,
+                                  formatter_class=argparse.RawDescriptionHelpFormatter)
+        sub.add_argument("source", metavar=source, help=what)
+        sub.add_argument("--out", type=Path, required=True, metavar="DIR",
+                         help="folder for frame_NNNN.png (created if needed)")
+        sub.add_argument("--frames", type=int, default=1, metavar="N",
+                         help="how many frames to render (default 1)")
+        sub.add_argument("--first", type=int, default=0, metavar="K",
+                         help="number of the first frame: the model turns K * step degrees "
+                              "before it (default 0)")
+        sub.add_argument("--quiet", action="store_true",
+                         help="do not print each frame's path and render time")
+    return parser
+
+
+def _prepare_output(folder: Path) -> str | None:
+    """Creates the output folder; returns why it cannot be used, or None."""
+    if folder.exists() and not folder.is_dir():
+        return f"--out {folder}: exists and is not a folder"
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        return f"--out {folder}: cannot create the folder: {exc.strerror}"
+    return None
+
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m reference", description=__doc__.split("\n\n")[0])
-    commands = parser.add_subparsers(dest="command", required=True)
-    for name, what in (("render", "FOLDER"), ("render-card", "CARD")):
-        sub = commands.add_parser(name)
-        sub.add_argument("source", metavar=what)
-        sub.add_argument("--frames", type=int, default=1)
-        sub.add_argument("--first", type=int, default=0, help="number of the first frame (0)")
-        sub.add_argument("--out", type=Path, required=True)
-        sub.add_argument("--quiet", action="store_true")
+    """Runs the command line; returns the exit status."""
+    parser = _parser()
     args = parser.parse_args(argv)
     if args.frames < 1 or args.first < 0:
         parser.error("--frames must be at least 1 and --first not negative")
+    from sdcard_image import SdImageError, UsageError
     try:
+        source = Path(args.source)
         if args.command == "render":
-            scene, mesh, texture = load_card_folder(args.source)
+            if not source.is_dir():
+                print(f"error: {source}: no such folder", file=sys.stderr)
+                return EXIT_USAGE
+            scene, mesh, texture = load_card_folder(source)
         else:
-            scene, mesh, texture = load_card_image(args.source)
+            if not source.is_file():
+                print(f"error: {source}: no such image file", file=sys.stderr)
+                return EXIT_USAGE
+            scene, mesh, texture = load_card_image(source)
     except (SceneError, ModelError, TextureError) as exc:
         print(f"error: {exc}", file=sys.stderr)
-        return 3
-    except (OSError, ValueError) as exc:
+        return EXIT_BAD_FILE
+    except UsageError as exc:          # a file the scene names is not on the card
         print(f"error: {exc}", file=sys.stderr)
-        return 2
-    args.out.mkdir(parents=True, exist_ok=True)
+        return EXIT_USAGE
+    except SdImageError as exc:
+        print(f"error: {args.source}: not a readable card image: {exc}", file=sys.stderr)
+        return EXIT_BAD_CARD
+    except FileNotFoundError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except OSError as exc:
+        print(f"error: {args.source}: cannot read: {exc.strerror}", file=sys.stderr)
+        return EXIT_USAGE
+    problem = _prepare_output(args.out)
+    if problem:
+        print(f"error: {problem}", file=sys.stderr)
+        return EXIT_OUTPUT
     for n in range(args.first, args.first + args.frames):
         start = time.perf_counter()
         path = args.out / f"frame_{n:04d}.png"
-        Image.fromarray(render_image(scene, mesh, texture, n)).save(path)
+        try:
+            Image.fromarray(render_image(scene, mesh, texture, n)).save(path)
+        except OSError as exc:
+            print(f"error: cannot write {path}: {exc.strerror or exc}", file=sys.stderr)
+            return EXIT_OUTPUT
         if not args.quiet:
             print(f"{path} ({time.perf_counter() - start:.2f} s)")
-    return 0
+    return EXIT_OK

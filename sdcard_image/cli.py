@@ -1,7 +1,7 @@
 """Command line: `python -m sdcard_image build|list|extract ...`.
 
-Exit statuses: 0 ok, 2 usage, 3 bad input file, 4 output exists (no --force), 5 image too
-small, 6 corrupt image. Messages go to stderr; the build report and listings to stdout.
+Exit statuses: EXIT_STATUS_HELP. Messages go to stderr; the build report and listings to
+stdout.
 """
 from __future__ import annotations
 
@@ -11,10 +11,26 @@ from pathlib import Path
 
 from . import fat32
 from .convert import parse_scene_args, parse_texture_size
-from .errors import EXIT_USAGE, OutputExistsError, SdImageError, UsageError
+from .errors import (EXIT_USAGE, OutputExistsError, OutputWriteError,
+                     SdImageError, UsageError)
 from .image import DEFAULT_SIZE_MIB, build_image, extract_all, list_image, read_file
 
 PROG = "python -m sdcard_image"
+
+EXIT_STATUS_HELP = """exit status:
+  0  done
+  1  internal error of this tool (a bug: please report it with the command line)
+  2  bad command line: an unknown option or bad value, a missing input, names that collide on
+     the card, the output among the inputs, a --scene value the firmware would refuse, no such
+     file on the card
+  3  build: a bad input file (.obj, .ppm, image, scene.ini), named with its line
+  4  the output exists: add --force to replace it
+  5  build: the content does not fit in the --size given (or in the largest card)
+  6  list, extract: the image is not an MBR-partitioned FAT32 card, or is damaged (the message
+     names the broken structure)
+  7  an output could not be written (disk full, permissions): nothing is left half-written
+     for build; extract names the file it stopped at
+"""
 
 
 class _Parser(argparse.ArgumentParser):
@@ -25,13 +41,17 @@ class _Parser(argparse.ArgumentParser):
 
 def _parser() -> argparse.ArgumentParser:
     parser = _Parser(prog=PROG, description="Build and read SD card images (MBR + FAT32) for "
-                                            "the K210 renderer.")
+                                            "the K210 renderer.",
+                     epilog=EXIT_STATUS_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    sub_options = {"epilog": EXIT_STATUS_HELP,
+                   "formatter_class": argparse.RawDescriptionHelpFormatter}
 
     b = sub.add_parser("build", help="build a card image from files and folders",
                        description="Each PATH (file, or folder copied with its subfolders) "
                                    "lands at the card root under its own name. .obj files are "
-                                   "checked, images converted to binary PPM, .ppm validated.")
+                                   "checked, images converted to binary PPM, .ppm validated.",
+                       **sub_options)
     b.add_argument("out", type=Path, metavar="OUT.img")
     b.add_argument("paths", type=Path, nargs="*", metavar="PATH")
     b.add_argument("--size", type=int, metavar="MiB",
@@ -44,13 +64,14 @@ def _parser() -> argparse.ArgumentParser:
                    help="write /scene.ini with one 'key = value' line per option")
     b.add_argument("--quiet", "-q", action="store_true", help="no report on stdout")
 
-    ls = sub.add_parser("list", help="list the folders and files on a card image")
+    ls = sub.add_parser("list", help="list the folders and files on a card image", **sub_options)
     ls.add_argument("image", type=Path, metavar="IMG")
 
     ex = sub.add_parser("extract", help="copy files from a card image",
                         description="extract IMG CARD_PATH OUT copies one file ('-' as OUT "
                                     "writes to stdout; an existing folder as OUT receives it "
-                                    "under its name); extract IMG --all DIR copies everything.")
+                                    "under its name); extract IMG --all DIR copies everything.",
+                        **sub_options)
     ex.add_argument("image", type=Path, metavar="IMG")
     ex.add_argument("card_path", nargs="?", metavar="CARD_PATH")
     ex.add_argument("out", nargs="?", metavar="OUT")
@@ -101,7 +122,10 @@ def _extract(args: argparse.Namespace) -> None:
         raise OutputExistsError(f"{out} exists; use --force to overwrite it")
     if not out.parent.is_dir():
         raise UsageError(f"{out.parent}: folder does not exist")
-    out.write_bytes(data)
+    try:
+        out.write_bytes(data)
+    except OSError as exc:
+        raise OutputWriteError(f"cannot write {out}: {exc.strerror or exc}") from None
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -121,7 +145,8 @@ def main(argv: list[str] | None = None) -> int:
         return exc.exit_status
     except BrokenPipeError:
         return 0
-    except OSError as exc:  # disk full, permissions: not a bug, but no distinct status either
-        print(f"{PROG} {args.command}: error: {exc}", file=sys.stderr)
-        return 1
+    except OSError as exc:  # an input or the image could not be read
+        what = f"{exc.filename}: " if exc.filename else ""
+        print(f"{PROG} {args.command}: error: {what}{exc.strerror or exc}", file=sys.stderr)
+        return EXIT_USAGE
     return 0

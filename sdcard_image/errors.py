@@ -13,6 +13,7 @@ EXIT_BAD_INPUT = 3
 EXIT_OUTPUT_EXISTS = 4
 EXIT_TOO_SMALL = 5
 EXIT_CORRUPT_IMAGE = 6
+EXIT_WRITE_FAILED = 7
 
 
 class SdImageError(Exception):
@@ -56,3 +57,10 @@ class CorruptImageError(SdImageError):
     """An image to read is not an MBR-partitioned FAT32 card, or its FAT32 is damaged."""
 
     exit_status = EXIT_CORRUPT_IMAGE
+
+
+class OutputWriteError(SdImageError):
+    """An output (the image, or an extracted file) could not be written: disk full,
+    permissions, a read-only file system. Names the output, never a temporary file."""
+
+    exit_status = EXIT_WRITE_FAILED

@@ -11,7 +11,8 @@ from typing import Callable
 
 from . import fat32, rawfat
 from .convert import CardPlan, PlacedFile, plan_card
-from .errors import CorruptImageError, ImageTooSmallError, OutputExistsError, UsageError
+from .errors import (CorruptImageError, ImageTooSmallError, OutputExistsError, OutputWriteError,
+                     UsageError)
 
 #: Default card size. 64 MiB is the smallest round size whose partition pyfatfs formats as a
 #: proper FAT32 (126 990 clusters of 512 bytes, well above FAT32's 65 525 minimum) and still
@@ -147,6 +148,7 @@ def build_image(out: Path, inputs: list[Path], size_mib: int | None = None, forc
         raise OutputExistsError(f"{out} exists; use --force to overwrite it")
     if not inputs and not scene:
         raise UsageError("nothing to put on the card: give files or folders (or --scene)")
+    _refuse_output_among_inputs(out, [Path(p) for p in inputs])
     plan = plan_card([Path(p) for p in inputs], scene=scene, texture_size=texture_size)
     for message in plan.warnings:
         if on_warning is not None:
@@ -154,7 +156,11 @@ def build_image(out: Path, inputs: list[Path], size_mib: int | None = None, forc
         else:
             warnings.warn(message, stacklevel=2)
     size = choose_size(plan, size_mib)
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
+    try:
+        fd, tmp_name = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
+    except OSError as exc:
+        raise OutputWriteError(f"cannot write {out}: cannot create a file in {out.parent}: "
+                               f"{exc.strerror}") from None
     os.close(fd)
     tmp = Path(tmp_name)
     try:
@@ -168,10 +174,32 @@ def build_image(out: Path, inputs: list[Path], size_mib: int | None = None, forc
             raise OutputExistsError(f"{out} appeared while building; use --force to overwrite")
         os.chmod(tmp, 0o666 & ~_umask())  # as a plain open() would create it
         os.replace(tmp, out)
+    except OSError as exc:
+        # The user named `out`; the temporary file next to it is an implementation detail
+        tmp.unlink(missing_ok=True)
+        raise OutputWriteError(f"cannot write {out} ({size} MiB): {exc.strerror or exc}; "
+                               f"nothing was written") from None
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
     return sorted((p for p, _ in plan.files), key=lambda p: p.card_path)
+
+
+def _refuse_output_among_inputs(out: Path, inputs: list[Path]) -> None:
+    """Refuses an output that is one of the inputs or lies inside an input folder: the build
+    would replace an input with the image, or put the previous image on the new card."""
+    target = out.resolve()
+    for src in inputs:
+        if not (src.exists() or src.is_symlink()):
+            continue  # reported as missing by the planner
+        real = src.resolve()
+        same = real == target or (out.exists() and os.path.samefile(src, out))
+        if same:
+            raise UsageError(f"{out} is also an input: the image would replace it (give the "
+                             f"image another name)")
+        if src.is_dir() and target.is_relative_to(real):
+            raise UsageError(f"{out} lies inside the input folder {src}: the card would hold "
+                             f"its own image (write the image outside {src})")
 
 
 def _umask() -> int:
@@ -253,15 +281,23 @@ def extract_all(image: Path, dest: Path, force: bool = False) -> list[CardEntry]
                 target = dest / f.path.lstrip("/")
                 if not f.is_dir and (target.exists() or target.is_symlink()):
                     raise OutputExistsError(f"{target} exists; use --force to overwrite")
-        dest.mkdir(parents=True, exist_ok=True)
+        if dest.exists() and not dest.is_dir():
+            raise UsageError(f"{dest} exists and is not a folder")
         done = []
-        for f in files:
-            target = dest / f.path.lstrip("/")
-            if f.is_dir:
-                target.mkdir(parents=True, exist_ok=True)
-            else:
-                target.parent.mkdir(parents=True, exist_ok=True)
-                target.write_bytes(vol.read(f.entry, f.path))
-            done.append(CardEntry(path=f.path, size=f.size, is_dir=f.is_dir,
-                                  short_name=f.entry.short_name_str))
+        target = dest
+        try:
+            dest.mkdir(parents=True, exist_ok=True)
+            for f in files:
+                target = dest / f.path.lstrip("/")
+                if f.is_dir:
+                    target.mkdir(parents=True, exist_ok=True)
+                else:
+                    data = vol.read(f.entry, f.path)
+                    target.parent.mkdir(parents=True, exist_ok=True)
+                    target.write_bytes(data)
+                done.append(CardEntry(path=f.path, size=f.size, is_dir=f.is_dir,
+                                      short_name=f.entry.short_name_str))
+        except OSError as exc:
+            raise OutputWriteError(f"cannot write {target}: {exc.strerror or exc} ({len(done)} "
+                                   f"of {len(files)} entries extracted)") from None
         return done
