@@ -32,6 +32,10 @@ ATTR_ARCHIVE = 0x20
 ATTR_LONG_NAME = 0x0F
 DELETED_MARK = 0xE5
 DIR_ENTRY_SIZE = 32
+#: Characters the FAT specification allows in neither long nor 8.3 names. A name holding one
+#: (or a NUL, or "." / ".." outside the dot entries) can only come from damage, and must not
+#: become a path on the host (extract would write outside its folder, or fail on the NUL).
+_FORBIDDEN_NAME_CHARS = frozenset('"*/:<>?\\|') | frozenset(chr(c) for c in range(0x20))
 
 
 @dataclass(frozen=True)
@@ -361,7 +365,12 @@ class Fat32Volume:
         for entry in self.dir_entries(cluster, what=prefix or "/"):
             if entry.is_dot or entry.is_volume_label:
                 continue
-            path = f"{prefix}/{entry.name}"
+            name = entry.name
+            if name in ("", ".", "..") or any(c in _FORBIDDEN_NAME_CHARS for c in name):
+                raise CorruptImageError(f"{prefix or '/'}: the entry at image byte "
+                                        f"{entry.offset:#x} has a name FAT does not allow: "
+                                        f"{name!r}")
+            path = f"{prefix}/{name}"
             yield CardFile(path, entry)
             if entry.is_dir:
                 if entry.first_cluster < 2:
