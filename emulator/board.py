@@ -48,6 +48,13 @@ DEFAULT_QUANTUM = 20_000          # instructions per hart per turn
 DEFAULT_HANG_BUDGET_S = 5.0       # virtual seconds without a new frame before a run counts as hung
 TRAP_GRACE_S = 0.5                # virtual time the firmware's trap handler gets to report
 POLL_REPEATS = 8                  # identical reads at one pc before a hart counts as polling
+# After the last requested frame the run goes on this long at most, so that the console line
+# the firmware begins after that frame (this firmware's "frame N") is not cut off.
+CONSOLE_DRAIN_S = 5e-3
+# Distinct warnings kept in a run's list: a firmware that keeps doing something new and wrong
+# must not flood the console and run.json; those beyond are only counted.
+MAX_DISTINCT_WARNINGS = 100
+WARNINGS_IN_HANG_REPORT = 6       # the most recent distinct warnings a hang report repeats
 MTIME_DIVIDER = 50                # mtime ticks at CPU clock / 50
 
 # Maix Dock pads
@@ -77,6 +84,21 @@ class FrameRecord:
     instructions: list[int]          # per hart, since the previous frame
     instructions_total: list[int]    # per hart, since reset
     host_time_s: float
+
+
+@dataclass
+class WarningRecord:
+    """One distinct warning of a run: what, when it was first and last given, how often."""
+    text: str
+    first_s: float
+    last_s: float
+    count: int = 1
+
+    def describe(self) -> str:
+        line = f"[{self.first_s * 1e3:10.3f} ms] {self.text}"
+        if self.count > 1:
+            line += f" ({self.count} times in all, the last at {self.last_s * 1e3:.3f} ms)"
+        return line
 
 
 @dataclass
@@ -216,7 +238,8 @@ class Board:
         self.hang_budget_s = hang_budget_s
         self.on_frame = on_frame or (lambda record, image: None)
         self.on_warning = on_warning or (lambda text: None)
-        self.warnings: list[str] = []
+        self._warning_records: dict[str, WarningRecord] = {}
+        self._warnings_unlisted = 0
         self.time = 0.0
         self.delivery_time = 0.0
         self.memory = Sram()
@@ -225,6 +248,8 @@ class Board:
         self.gpiohs = Gpiohs(self)
         self._console = console or (lambda byte: None)
         self._console_line = bytearray()
+        self._line_began = 0.0                             # when the line under way began
+        self._completed_line_began = float("-inf")         # when the last complete line began
         self.console_lines: list[tuple[float, str]] = []   # (virtual time the line ended, text)
         self.uarths = Uarths(self, on_byte=self._console_byte)
         self.clint = Clint(self)
@@ -236,7 +261,8 @@ class Board:
                                               self.plic, self.dmac, self.spi0, self.spi1]
         self.timed_devices = [self.uarths, self.spi0, self.spi1, self.dmac, self.sysctl, self.clint]
         self._timed_set = set(self.timed_devices)
-        self.lcd = ST7789V(on_frame=self._frame_captured)
+        self.lcd = ST7789V(on_frame=self._frame_captured,
+                           on_warning=lambda now, text: self.warn(f"ST7789V: {text}", now))
         self.lcd_port = LcdPort(self, self.lcd)
         self.spi0.device_for_ss = self._spi0_device
         self.sd_image = SdImage(sd_image, writable=sd_writable) if sd_image else None
@@ -255,6 +281,8 @@ class Board:
         self._last_frame_instret = [0] * HARTS
         self._host_start = host_time.perf_counter()
         self._stop: BoardStop | None = None
+        self._draining = False                            # finish_console_line is running
+        self._frame_while_draining = False
         self._current: Hart | None = None
         self._quantum_t0 = 0.0
         self._turn_hz = self._hz
@@ -395,11 +423,14 @@ class Board:
     def _console_byte(self, byte: int) -> None:
         """Console output; a line `error <code> ...` is the firmware's fatal error report."""
         self._console(byte)
+        if not self._console_line:
+            self._line_began = self.uarths.last_byte_time
         if byte != 10:
             self._console_line.append(byte)
             return
         line = bytes(self._console_line).rstrip(b"\r")
         self._console_line.clear()
+        self._completed_line_began = self._line_began
         self.console_lines.append((self.uarths.last_byte_time, line.decode("ascii", "replace")))
         if line.startswith(FIRMWARE_ERROR_PREFIX) and self._error_report is None:
             words = line.decode("ascii", "replace")
@@ -413,10 +444,42 @@ class Board:
         if self.sd_image is not None:
             self.sd_image.close()
 
-    def warn(self, text: str) -> None:
-        line = f"[{self.time * 1e3:10.3f} ms] {text}"
-        self.warnings.append(line)
-        self.on_warning(line)
+    def warn(self, text: str, now: float | None = None) -> None:
+        """Every device's warnings come here (`now`: the virtual time the device noticed it,
+        else the board's). A warning given again with the same text is counted, not repeated:
+        on_warning hears only its first occurrence."""
+        at = self.time if now is None else now
+        record = self._warning_records.get(text)
+        if record is not None:
+            record.count += 1
+            record.last_s = max(record.last_s, at)
+            return
+        if len(self._warning_records) >= MAX_DISTINCT_WARNINGS:
+            self._warnings_unlisted += 1
+            return
+        record = WarningRecord(text, at, at)
+        self._warning_records[text] = record
+        self.on_warning(record.describe())
+
+    @property
+    def warnings(self) -> list[str]:
+        """The run's warnings, one line per distinct text in the order first given, with how
+        often and until when each recurred."""
+        lines = [record.describe() for record in self._warning_records.values()]
+        if self._warnings_unlisted:
+            lines.append(f"{self._warnings_unlisted} further warnings not listed (only the first "
+                         f"{MAX_DISTINCT_WARNINGS} distinct ones are)")
+        return lines
+
+    @property
+    def repeated_warnings(self) -> list[str]:
+        """The warnings given more than once, with their counts (on_warning heard each once)."""
+        return [record.describe() for record in self._warning_records.values() if record.count > 1]
+
+    def recent_warnings(self, count: int) -> list[str]:
+        """The `count` distinct warnings most recently given, oldest first."""
+        records = sorted(self._warning_records.values(), key=lambda record: record.last_s)[-count:]
+        return [record.describe() for record in records]
 
     # --- interrupts --------------------------------------------------------------------
 
@@ -637,6 +700,12 @@ class Board:
     # --- frames ---------------------------------------------------------------------------
 
     def _frame_captured(self, image: np.ndarray) -> None:
+        if self._draining:
+            # a frame beyond the requested ones: not recorded, and the drain ends here
+            self._frame_while_draining = True
+            if self._current is not None:
+                self._current.request_stop()
+            return
         totals = [h.instret for h in self.harts]
         record = FrameRecord(
             index=len(self.frames),
@@ -681,6 +750,33 @@ class Board:
         return RunResult("ok", f"{len(self.frames)} frames shown", self.frames, self.time,
                          [h.instret for h in self.harts], host_time.perf_counter() - self._host_start,
                          self.warnings)
+
+    def finish_console_line(self, limit_s: float = CONSOLE_DRAIN_S) -> None:
+        """After run(): runs on until the first console line begun after the last frame was
+        shown has ended (this firmware's hart 1 reports "frame N" once frame N is sent, after
+        the LCD has it), for at most limit_s of virtual time, so that the console of an N-frame
+        run ends with its last frame's line. Frames shown meanwhile are not recorded and end
+        it; so does a firmware that will never do anything again. A trap or error report
+        meanwhile gets its grace period and ends the run as in run(). Kept out of run() so
+        that a run's instruction counts up to its last frame (the bench's) do not change."""
+        frame_time = self._last_frame_time
+        deadline = self.time + limit_s
+        self._draining, self._frame_while_draining = True, False
+        self._frames_wanted = len(self.frames) + 1     # _turn moves time on as before a frame
+        try:
+            while (self._completed_line_began < frame_time and self.time < deadline
+                   and not self._frame_while_draining and self._trap_deadline is None):
+                if not any(h.state is HartState.RUNNING for h in self.harts) and \
+                        self.next_device_event(self.time) is None:
+                    break
+                self._step()
+                if self._grabs:
+                    self._run_grabs()
+        finally:
+            self._draining = False
+            self._frames_wanted = len(self.frames)
+        while self._trap_deadline is not None:
+            self._step()
 
     def _step(self) -> None:
         """One turn (see _turn); a stop recorded by a device outside a hart's turn (a stray
@@ -830,7 +926,7 @@ class Board:
                     raise FirmwareTrap(self._trap_report + " (the firmware's trap handler has run; see the console)")
                 code, line = self._error_report
                 raise FirmwareReportedError(f"the firmware reported: {line}", code)
-        if self.time - self._last_frame_time > self.hang_budget_s:
+        if self.time - self._last_frame_time > self.hang_budget_s and not self._draining:
             self._report_hang(f"no frame reached the LCD for {self.hang_budget_s:g} s of virtual time")
 
     def _report_hang(self, why: str) -> None:
@@ -847,4 +943,8 @@ class Board:
                 lines.append(text)
         lines.append(f"LCD: {self.lcd.frames_captured} frames captured, display "
                      f"{'on' if self.lcd.display_on else 'off'}, {'asleep' if self.lcd.sleeping else 'awake'}")
+        recent = self.recent_warnings(WARNINGS_IN_HANG_REPORT)
+        if recent:
+            lines.append(f"the most recent warnings (of {len(self.warnings)} in the run, every one in run.json):")
+            lines.extend(f"  {text}" for text in recent)
         raise HangDetected("\n  ".join(lines))

@@ -2,30 +2,89 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import time
-
 from pathlib import Path
+from typing import TextIO
 
-from .errors import EXIT_GOLDEN_MISMATCH, EXIT_INTERNAL, EXIT_OK, EXIT_USAGE, BoardStop
+from .errors import (EXIT_BAD_INPUT, EXIT_GOLDEN_MISMATCH, EXIT_INTERNAL, EXIT_OK, EXIT_USAGE, BadInput,
+                     BoardStop)
+from .sdcard import FAULTS
 
-EXIT_STATUS_HELP = """exit status:
-  0  the requested frames were shown
+PROG = "python -m emulator"
+MAX_QUANTUM = 1_000_000_000    # instructions per turn; the native counter's limit is 64-bit, runs need far less
+MAX_TOLERANCE = 255            # a channel of an RGB888 pixel differs by at most 255
+
+EXIT_STATUS_HELP = f"""exit status:
+  0  the requested frames were shown (with --golden: all match; every --grab was taken)
   1  internal error of the board model
-  2  bad command line
+  2  bad command line: an unknown option or a value out of range (--frames, --quantum 1..{MAX_QUANTUM},
+     --budget above 0 and finite, --tolerance 0..{MAX_TOLERANCE}, --sd-fault, a --grab's syntax or time),
+     an option without the one it needs (--tolerance without --golden, --sd-writable or --sd-fault
+     without --sd), a --grab of a symbol the firmware does not define or of a buffer outside SRAM;
+     or, after a run that ended well, a --grab whose time the run ended before
   3  the firmware trapped (exception), or jumped outside memory
   4  hang: no frame within the virtual-time budget, or every hart waits forever
   5  the firmware touched an address or register the model does not implement
-  6  bad input: the firmware image is missing or not a RISC-V ELF
+  6  bad input: a file or folder the command line names cannot be used: the firmware image (missing,
+     unreadable, not a RISC-V ELF), the card image (missing, truncated), the --golden folder (missing
+     or a file) or one of its frames (not a readable PNG), the --out folder (a file of that name
+     exists, or it cannot be created or written in)
   7  hardware misuse: something the real K210 would not do (e.g. CPU on an unlocked PLL)
   8  the firmware reported a fatal error on its console ("error <code> <words>")
   9  --golden: a shown frame differs from its golden PNG (diff images are in the output folder)
  10  --check-writes: a store (a hart's or a DMA channel's) landed in SRAM outside the firmware's buffers
+The command line, then the --golden frames, the --grab buffers and the --out folder are checked
+before the run: a refusal there (2 or 6) writes nothing. Every run that starts writes run.json in
+the output folder, whatever its status. After the run the first that applies decides: how the run
+stopped (3-8, 10), --golden (9), a --grab not taken (2).
 """
 
 
+def _whole_number(text: str) -> int:
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+
+
+def frames_count(text: str) -> int:
+    value = _whole_number(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, not {value}")
+    return value
+
+
+def quantum_count(text: str) -> int:
+    value = _whole_number(text)
+    if not 1 <= value <= MAX_QUANTUM:
+        raise argparse.ArgumentTypeError(f"must be 1..{MAX_QUANTUM} instructions, not {value}")
+    return value
+
+
+def budget_seconds(text: str) -> float:
+    """A finite number of virtual seconds above 0: 0 or less would call every run hung at once,
+    nan and inf would turn hang detection off without saying so."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds") from None
+    if not math.isfinite(value) or value <= 0:
+        raise argparse.ArgumentTypeError(f"must be a finite number of seconds above 0, not {text}")
+    return value
+
+
+def tolerance_value(text: str) -> int:
+    value = _whole_number(text)
+    if not 0 <= value <= MAX_TOLERANCE:
+        raise argparse.ArgumentTypeError(f"must be 0..{MAX_TOLERANCE} (a channel differs by at most "
+                                         f"{MAX_TOLERANCE}), not {value}")
+    return value
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="python -m emulator", description="Sipeed Maix Dock (Kendryte K210) board model",
+    parser = argparse.ArgumentParser(prog=PROG, description="Sipeed Maix Dock (Kendryte K210) board model",
                                      epilog=EXIT_STATUS_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True)
     run = sub.add_parser("run", help="run a firmware ELF and capture the LCD's frames",
@@ -33,26 +92,32 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("firmware", help="firmware ELF (linked for SRAM at 0x80000000)")
     run.add_argument("--sd", metavar="IMAGE", help="SD card image in the Dock's slot (opened read-only: the "
                      "firmware's writes are kept in memory for the run)")
-    run.add_argument("--sd-writable", action="store_true", help="let the firmware's writes reach the image file")
-    run.add_argument("--sd-fault", action="append", default=[], metavar="FAULT",
-                     help="make the card misbehave, to test firmware error paths: "
+    run.add_argument("--sd-writable", action="store_true", help="with --sd: let the firmware's writes reach the "
+                     "image file")
+    run.add_argument("--sd-fault", action="append", default=[], metavar="FAULT", choices=list(FAULTS),
+                     help="with --sd: make the card misbehave, to test firmware error paths: "
                           "no-init (never leaves idle), bad-crc (every block's CRC16 wrong), "
                           "flaky-crc (each block's first CRC16 wrong); repeatable")
-    run.add_argument("--frames", type=int, default=8, help="stop after this many frames reach the LCD (default 8)")
-    run.add_argument("--out", default="build/frames", help="output folder (default build/frames)")
-    run.add_argument("--budget", type=float, default=5.0,
-                     help="virtual seconds allowed between frames before the run counts as hung (default 5)")
-    run.add_argument("--quantum", type=int, default=20_000, help="instructions per hart per turn (default 20000)")
+    run.add_argument("--frames", type=frames_count, default=8,
+                     help="stop after this many frames reach the LCD (default 8; at least 1)")
+    run.add_argument("--out", default="build/frames", type=Path, help="output folder (default build/frames)")
+    run.add_argument("--budget", type=budget_seconds, default=5.0,
+                     help="virtual seconds allowed between frames before the run counts as hung "
+                          "(default 5; finite, above 0)")
+    run.add_argument("--quantum", type=quantum_count, default=20_000,
+                     help=f"instructions per hart per turn (default 20000; 1..{MAX_QUANTUM})")
     run.add_argument("--golden", metavar="DIR", type=Path,
                      help="compare every shown frame with DIR/frame_NNNN.png of the same index; write "
                           "diff_NNNN.png for frames that differ and exit with status 9 on any mismatch")
-    run.add_argument("--tolerance", type=int, default=0, metavar="N",
-                     help="with --golden: a pixel matches when no channel differs by more than N (default 0: exact)")
+    run.add_argument("--tolerance", type=tolerance_value, default=None, metavar="N",
+                     help="with --golden: a pixel matches when no channel differs by more than N "
+                          f"(0..{MAX_TOLERANCE}; default 0: exact)")
     run.add_argument("--grab", action="append", default=[], metavar="WHAT@SECONDS",
                      help="write a PNG of a framebuffer at a virtual time, whether or not a frame is complete: "
                           "WHAT is 'gram' (the LCD's memory), a firmware symbol or a 0x address of a 320x240 "
                           "RGB565 buffer in SRAM; add ':pairs' for the project's pixel-pair order or "
-                          ":WxH for another size, e.g. --grab framebuffers@0.45:pairs; repeatable")
+                          ":WxH for another size, e.g. --grab framebuffers@0.45:pairs; repeatable. "
+                          "A time the run ends before fails the run (status 2)")
     run.add_argument("--check-writes", action="store_true",
                      help="stop with exit status 10 at the first store into SRAM outside the firmware's buffers "
                           "(.data/.bss, the heap handed out so far, the storing hart's own stack): a checker "
@@ -64,55 +129,153 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _progress(board) -> None:
-    frames = len(board.frames)
-    total = sum(h.instret for h in board.harts)
-    sys.stderr.write(f"\r[board] frame {frames}/{board._frames_wanted}  virtual {board.time * 1e3:9.2f} ms  "
-                     f"{total / 1e6:9.2f} M instructions ")
-    sys.stderr.flush()
+def option_problem(args: argparse.Namespace) -> str | None:
+    """What is wrong with the combination of options (argparse checked each value)."""
+    if args.tolerance is not None and args.golden is None:
+        return "--tolerance needs --golden (it says how far a pixel may differ from its golden frame)"
+    if args.sd is None and args.sd_writable:
+        return "--sd-writable needs --sd (the card image the firmware's writes would reach)"
+    if args.sd is None and args.sd_fault:
+        return "--sd-fault needs --sd (a card in the slot to misbehave)"
+    return None
+
+
+def grab_problem(grabs: list, firmware: str) -> str | None:
+    """Before the run: every --grab of a symbol or address names a buffer in SRAM. A firmware
+    that cannot be read is left for the run to report (status 6)."""
+    from .elf import read_symbol_values
+    from .grab import check_grab_buffer
+    symbols: dict[str, int] = {}
+    if any(g.what != "gram" and not g.what.lower().startswith("0x") for g in grabs):
+        try:
+            symbols = read_symbol_values(firmware)
+        except BadInput:
+            return None
+    for request in grabs:
+        try:
+            check_grab_buffer(request, symbols)
+        except ValueError as error:
+            return f"--grab {error}"
+    return None
+
+
+class Terminal:
+    """What the user sees: the firmware's console on stdout and, when stderr is a terminal, a
+    progress line on stderr that is rewritten in place. Console lines are written whole, each
+    after clearing the progress line, so that neither is written into the other."""
+
+    CLEAR_LINE = "\r\033[K"
+
+    def __init__(self, quiet: bool, out: TextIO | None = None, err: TextIO | None = None) -> None:
+        self.out = out or sys.stdout
+        self.err = err or sys.stderr
+        self.quiet = quiet
+        self.shows_progress = not quiet and self.err.isatty()
+        self._line = bytearray()
+        self._progress_shown = False
+
+    def _clear_progress(self) -> None:
+        if self._progress_shown:
+            self.err.write(self.CLEAR_LINE)
+            self.err.flush()
+            self._progress_shown = False
+
+    def console_byte(self, byte: int) -> None:
+        if self.quiet:
+            return
+        self._line.append(byte)
+        if byte == 10:
+            self._write_console_line()
+
+    def _write_console_line(self) -> None:
+        self._clear_progress()
+        self.out.flush()
+        self.out.buffer.write(bytes(self._line))
+        self.out.flush()
+        self._line.clear()
+
+    def progress(self, board) -> None:
+        frames = len(board.frames)
+        total = sum(h.instret for h in board.harts)
+        self.out.flush()
+        self.err.write(f"{self.CLEAR_LINE}[board] frame {frames}/{board._frames_wanted}  virtual "
+                       f"{board.time * 1e3:9.2f} ms  {total / 1e6:9.2f} M instructions")
+        self.err.flush()
+        self._progress_shown = True
+
+    def message(self, text: str) -> None:
+        """A line of the board model's own (warnings, results) on stderr."""
+        self._clear_progress()
+        self.out.flush()
+        self.err.write(text + "\n")
+        self.err.flush()
+
+    def warning(self, text: str) -> None:
+        if not self.quiet:
+            self.message(f"[board] warning: {text}")
+
+    def finish(self) -> None:
+        """The end of the run: a console line the firmware did not end is shown as it is."""
+        if self._line:
+            self._line.append(10)
+            self._write_console_line()
+        self._clear_progress()
+
+
+def usage_error(message: str) -> int:
+    print(f"{PROG} run: error: {message}", file=sys.stderr)
+    return EXIT_USAGE
 
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    if args.frames < 1:
-        print("--frames must be at least 1", file=sys.stderr)
-        return EXIT_USAGE
+    problem = option_problem(args)
+    if problem:
+        return usage_error(problem)
     from .board import Board
+    from .golden import compare_run, load_golden_frames
     from .grab import GrabRequest, parse_grab
-    from .golden import compare_run
-    from .output import RunOutput, summary_dict
+    from .output import RunOutput, prepare_output_folder, summary_dict
     try:
         grabs: list[GrabRequest] = [parse_grab(text) for text in args.grab]
     except ValueError as error:
-        print(f"--grab: {error}", file=sys.stderr)
-        return EXIT_USAGE
-    if args.golden is not None and not args.golden.is_dir():
-        print(f"--golden: {args.golden} is not a folder", file=sys.stderr)
-        return EXIT_USAGE
+        return usage_error(f"--grab {error}")
+    try:
+        goldens = load_golden_frames(args.golden, args.frames) if args.golden is not None else None
+        problem = grab_problem(grabs, args.firmware)
+        if problem:
+            return usage_error(problem)
+        prepare_output_folder(args.out)
+    except BadInput as error:
+        print(f"[board] stopped (bad-input): {error}", file=sys.stderr)
+        return EXIT_BAD_INPUT
 
     output = RunOutput(args.out)
+    terminal = Terminal(args.quiet)
 
     def console(byte: int) -> None:
         output.console_byte(byte)
-        if not args.quiet:
-            sys.stdout.buffer.write(bytes((byte,)))
-            if byte == 10:
-                sys.stdout.flush()
+        terminal.console_byte(byte)
 
-    def warning(text: str) -> None:
-        if not args.quiet:
-            sys.stderr.write(f"\n[board] warning: {text}\n")
+    taken: set[int] = set()
+
+    def grab_action(index: int, request: GrabRequest):
+        def action(board) -> None:
+            output.grab(request, board)
+            taken.add(index)
+        return action
 
     started = time.perf_counter()
     board = None
     try:
-        board = Board(args.firmware, quantum=args.quantum, hang_budget_s=args.budget, console=console,
-                      on_frame=output.frame, on_warning=warning, permissive=args.permissive,
+        board = Board(str(args.firmware), quantum=args.quantum, hang_budget_s=args.budget, console=console,
+                      on_frame=output.frame, on_warning=terminal.warning, permissive=args.permissive,
                       sd_image=args.sd, sd_writable=args.sd_writable, sd_faults=frozenset(args.sd_fault),
                       check_writes=args.check_writes)
-        for request in grabs:
-            board.grab_at(request.at_s, lambda b, request=request: output.grab(request, b))
-        result = board.run(args.frames, progress=None if args.quiet or not sys.stderr.isatty() else _progress)
+        for index, request in enumerate(grabs):
+            board.grab_at(request.at_s, grab_action(index, request))
+        result = board.run(args.frames, progress=terminal.progress if terminal.shows_progress else None)
+        board.finish_console_line()
         status, kind, message = EXIT_OK, "ok", result.message
     except BoardStop as stop:
         status, kind, message = stop.exit_status, stop.kind, str(stop)
@@ -120,34 +283,44 @@ def main(argv: list[str] | None = None) -> int:
         status, kind, message = EXIT_INTERNAL, "internal", f"{type(error).__name__}: {error}"
         import traceback
         traceback.print_exc()
-    sys.stdout.flush()
+    terminal.finish()
     if board is not None:
         board.close()
+        for text in board.repeated_warnings:
+            terminal.warning(f"repeated: {text}")
     frames = board.frames if board is not None else []
     summary = summary_dict(kind, message, frames, board.time if board else 0.0,
                            [h.instret for h in board.harts] if board else [0, 0],
-                           time.perf_counter() - started, board.warnings if board else [], args.firmware,
+                           time.perf_counter() - started, board.warnings if board else [], str(args.firmware),
                            board.device_writes if board else {}, board.console_lines if board else [])
     if args.golden is not None and board is not None:
-        comparisons = compare_run(output.frame_paths, args.golden, output.folder, args.tolerance)
-        summary["golden"] = {"folder": str(args.golden), "tolerance": args.tolerance,
+        tolerance = args.tolerance or 0
+        comparisons = compare_run(output.frame_paths, args.golden, output.folder, tolerance, goldens)
+        summary["golden"] = {"folder": str(args.golden), "tolerance": tolerance,
                              "frames": [c.as_dict() for c in comparisons]}
         mismatches = [c for c in comparisons if not c.matches]
         for comparison in mismatches:
-            print(f"[golden] {comparison.describe()}", file=sys.stderr)
+            terminal.message(f"[golden] {comparison.describe()}")
         if status == EXIT_OK and mismatches:
             status, kind = EXIT_GOLDEN_MISMATCH, "golden-mismatch"
             message = f"{len(mismatches)} of {len(comparisons)} frames differ from {args.golden}"
-            summary["exit"], summary["message"] = kind, message
         elif status == EXIT_OK:
-            print(f"[golden] all {len(comparisons)} frames match {args.golden}", file=sys.stderr)
+            terminal.message(f"[golden] all {len(comparisons)} frames match {args.golden}")
+    if board is not None:
+        missed = [request for index, request in enumerate(grabs) if index not in taken]
+        for request in missed:
+            output.missed_grab(request, board.time)
+        if missed and status == EXIT_OK:
+            status, kind = EXIT_USAGE, "grab-missed"
+            message = (f"--grab {', '.join(r.label for r in missed)}: the run ended at {board.time:.6f} s of "
+                       f"virtual time, before the grab's time, so nothing was written (ask for more --frames "
+                       f"or an earlier time)")
+    summary["exit"], summary["message"] = kind, message
     summary["grabs"] = output.grabs
     summary["writes_checked"] = args.check_writes
     output.finish(summary)
-    if not args.quiet and sys.stderr.isatty():
-        sys.stderr.write("\n")
     if status == EXIT_OK:
-        print(f"[board] {message}; {board.time * 1e3:.2f} ms virtual; output in {args.out}", file=sys.stderr)
+        terminal.message(f"[board] {message}; {board.time * 1e3:.2f} ms virtual; output in {args.out}")
     else:
-        print(f"[board] stopped ({kind}): {message}", file=sys.stderr)
+        terminal.message(f"[board] stopped ({kind}): {message}")
     return status

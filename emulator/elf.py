@@ -69,18 +69,43 @@ def load_elf(path: str | Path, memory: Sram) -> LoadedImage:
                     code_ranges.append((address, data))
             if not code_ranges:
                 raise BadInput(f"{path}: no executable segment to run")
-            symbols, values = {}, {}
-            symtab = elf.get_section_by_name(".symtab")
-            if symtab is not None:
-                for symbol in symtab.iter_symbols():
-                    if symbol.name and not symbol.name.startswith("$"):
-                        values.setdefault(symbol.name, symbol["st_value"])
-                    if symbol["st_info"]["type"] in ("STT_FUNC", "STT_NOTYPE") and symbol.name \
-                            and not symbol.name.startswith("$") and symbol["st_value"]:
-                        symbols.setdefault(symbol["st_value"], symbol.name)
+            symbols, values = _symbol_tables(elf)
             return LoadedImage(elf.header["e_entry"], code_ranges, symbols, total, segments, values)
     except (ELFError, ValueError) as error:
         raise BadInput(f"{path}: not a valid ELF file ({error})") from None
+    except OSError as error:
+        raise BadInput(f"{path}: cannot read it ({error.strerror or error})") from None
+
+
+def _symbol_tables(elf: ELFFile) -> tuple[dict[int, str], dict[str, int]]:
+    """(address -> name of code and label symbols, for pc reports; name -> value of every
+    named symbol)."""
+    symbols: dict[int, str] = {}
+    values: dict[str, int] = {}
+    symtab = elf.get_section_by_name(".symtab")
+    if symtab is not None:
+        for symbol in symtab.iter_symbols():
+            if symbol.name and not symbol.name.startswith("$"):
+                values.setdefault(symbol.name, symbol["st_value"])
+            if symbol["st_info"]["type"] in ("STT_FUNC", "STT_NOTYPE") and symbol.name \
+                    and not symbol.name.startswith("$") and symbol["st_value"]:
+                symbols.setdefault(symbol["st_value"], symbol.name)
+    return symbols, values
+
+
+def read_symbol_values(path: str | Path) -> dict[str, int]:
+    """Every named symbol of an ELF and its value, without loading it anywhere (for checking
+    a command line before a run). Raises BadInput as load_elf does."""
+    path = Path(path)
+    if not path.is_file():
+        raise BadInput(f"firmware image {path} does not exist (build it with `make firmware`)")
+    try:
+        with path.open("rb") as handle:
+            return _symbol_tables(ELFFile(handle))[1]
+    except (ELFError, ValueError) as error:
+        raise BadInput(f"{path}: not a valid ELF file ({error})") from None
+    except OSError as error:
+        raise BadInput(f"{path}: cannot read it ({error.strerror or error})") from None
 
 
 def symbolize(symbols: dict[int, str], address: int) -> str:

@@ -7,11 +7,14 @@ differences are reported, so a golden-frame check is one line in anyone's CI.
 """
 from __future__ import annotations
 
+import zlib
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
-from PIL import Image
+from PIL import Image, UnidentifiedImageError
+
+from .errors import BadInput
 
 DIFF_COLOUR = (255, 0, 255)
 
@@ -41,16 +44,54 @@ class FrameComparison:
         return asdict(self)
 
 
+FRAME_NAME = "frame_{:04d}.png"
+# What Pillow raises for a file it cannot read as an image, besides OSError (which includes
+# UnidentifiedImageError and "image file is truncated"): a broken PNG chunk, bad zlib data,
+# a picture too large to decode safely.
+IMAGE_ERRORS = (OSError, SyntaxError, ValueError, EOFError, zlib.error, Image.DecompressionBombError)
+
+
 def load_rgb(path: Path) -> np.ndarray:
     return np.asarray(Image.open(path).convert("RGB"))
 
 
+def load_golden_frames(folder: Path, count: int) -> dict[int, np.ndarray]:
+    """Before a run: the golden frames DIR/frame_NNNN.png for frames 0 .. count-1 that exist,
+    decoded. A missing one is left for the comparison to report as a mismatch; one that is
+    there but cannot be read as a PNG raises BadInput naming it (a run would be wasted)."""
+    if not folder.is_dir():
+        raise BadInput(f"--golden {folder}: {'not a folder' if folder.exists() else 'no such folder'}")
+    frames: dict[int, np.ndarray] = {}
+    for index in range(count):
+        path = folder / FRAME_NAME.format(index)
+        if not path.exists():
+            continue
+        try:
+            with Image.open(path) as image:
+                if image.format != "PNG":
+                    raise BadInput(f"--golden: {path} is a {image.format} image, not a PNG")
+                frames[index] = np.asarray(image.convert("RGB"))
+        except UnidentifiedImageError:
+            raise BadInput(f"--golden: {path} is not a PNG image (nor any image Pillow reads)") from None
+        except IMAGE_ERRORS as error:
+            reason = error.strerror if isinstance(error, OSError) and error.strerror else str(error)
+            raise BadInput(f"--golden: {path} cannot be read as a PNG image ({reason})") from None
+    return frames
+
+
 def compare_frame(index: int, actual_path: Path, golden_path: Path, diff_path: Path,
-                  tolerance: int = 0) -> FrameComparison:
-    """Compares one frame; writes `diff_path` when they differ."""
-    if not golden_path.exists():
+                  tolerance: int = 0, golden: np.ndarray | None = None) -> FrameComparison:
+    """Compares one frame; writes `diff_path` when they differ. `golden`: the golden frame
+    already decoded (load_golden_frames), else it is read from golden_path."""
+    if golden is None and not golden_path.exists():
         return FrameComparison(index, str(golden_path), False, 0, 0, None, None, f"no golden frame {golden_path}")
-    actual, golden = load_rgb(actual_path), load_rgb(golden_path)
+    actual = load_rgb(actual_path)
+    if golden is None:
+        try:
+            golden = load_rgb(golden_path)
+        except IMAGE_ERRORS as error:
+            return FrameComparison(index, str(golden_path), False, 0, 0, None, None,
+                                   f"golden frame {golden_path} cannot be read as a PNG image ({error})")
     if actual.shape != golden.shape:
         return FrameComparison(index, str(golden_path), False, actual.shape[0] * actual.shape[1], 255, None, None,
                                f"size {actual.shape[1]}x{actual.shape[0]} differs from the golden "
@@ -68,10 +109,11 @@ def compare_frame(index: int, actual_path: Path, golden_path: Path, diff_path: P
                            (int(xs.min()), int(ys.min()), int(xs.max()), int(ys.max())), str(diff_path))
 
 
-def compare_run(frame_paths: list[Path], golden_dir: Path, out_dir: Path, tolerance: int = 0) -> list[FrameComparison]:
-    """Compares every frame of a run with golden_dir/frame_NNNN.png of the same index."""
-    results = []
-    for index, path in enumerate(frame_paths):
-        results.append(compare_frame(index, path, golden_dir / path.name, out_dir / f"diff_{index:04d}.png",
-                                     tolerance))
-    return results
+def compare_run(frame_paths: list[Path], golden_dir: Path, out_dir: Path, tolerance: int = 0,
+                goldens: dict[int, np.ndarray] | None = None) -> list[FrameComparison]:
+    """Compares every frame of a run with golden_dir/frame_NNNN.png of the same index, taken
+    from `goldens` (load_golden_frames) when it holds that index, else read now."""
+    goldens = goldens or {}
+    return [compare_frame(index, path, golden_dir / FRAME_NAME.format(index), out_dir / f"diff_{index:04d}.png",
+                          tolerance, goldens.get(index))
+            for index, path in enumerate(frame_paths)]

@@ -3,11 +3,14 @@ not a frame is complete then: the LCD's GRAM, or an RGB565 buffer in SRAM named 
 firmware symbol or an address."""
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
+
+from .memory import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE
 
 if TYPE_CHECKING:
     from .board import Board
@@ -34,21 +37,50 @@ def parse_grab(text: str) -> GrabRequest:
     match = GRAB_SYNTAX.match(text)
     if not match:
         raise ValueError(f"{text!r}: expected WHAT@SECONDS[:pairs][:WxH], e.g. gram@0.5 or framebuffers@0.5:pairs")
-    at_s = float(match.group("at"))
-    if at_s < 0:
-        raise ValueError(f"{text!r}: the time must not be negative")
+    try:
+        at_s = float(match.group("at"))
+    except ValueError:
+        raise ValueError(f"{text!r}: {match.group('at')!r} is not a number of seconds") from None
+    if not math.isfinite(at_s) or at_s < 0:
+        raise ValueError(f"{text!r}: the time must be a finite number of seconds, 0 or more")
     width, height, pairs = DEFAULT_WIDTH, DEFAULT_HEIGHT, False
     for option in filter(None, match.group("options").split(":")):
         if option == "pairs":
             pairs = True
         elif re.fullmatch(r"\d+x\d+", option):
             width, height = map(int, option.split("x"))
+            if width < 1 or height < 1:
+                raise ValueError(f"{text!r}: a size must be at least 1x1")
         else:
             raise ValueError(f"{text!r}: unknown option {option!r} (pairs, or a size like 320x240)")
     what = match.group("what")
     if what == "gram" and (pairs or (width, height) != (DEFAULT_WIDTH, DEFAULT_HEIGHT)):
         raise ValueError(f"{text!r}: gram takes no options")
+    if pairs and width % 2:
+        raise ValueError(f"{text!r}: :pairs needs an even width (pixels come in pairs), not {width}")
+    if what.lower().startswith("0x"):
+        try:
+            int(what, 16)
+        except ValueError:
+            raise ValueError(f"{text!r}: {what!r} is not a hexadecimal address") from None
     return GrabRequest(what, at_s, width, height, pairs)
+
+
+def check_grab_buffer(request: GrabRequest, symbol_values: dict[str, int]) -> None:
+    """Before a run: the buffer a request names must be a symbol of the firmware (or an
+    address) and lie in SRAM whole. Raises ValueError with what is wrong."""
+    if request.what == "gram":
+        return
+    try:
+        address = buffer_address(symbol_values, request.what)
+    except ValueError as error:
+        raise ValueError(f"{request.label}: {error}") from None
+    length = request.width * request.height * 2
+    if not any(base <= address and address + length <= base + SRAM_SIZE for base in (SRAM_BASE, SRAM_UNCACHED_BASE)):
+        raise ValueError(f"{request.label}: a {request.width}x{request.height} RGB565 buffer at 0x{address:x} "
+                         f"(..0x{address + length - 1:x}) does not lie in SRAM "
+                         f"(0x{SRAM_BASE:x}..0x{SRAM_BASE + SRAM_SIZE - 1:x}, or its uncached alias at "
+                         f"0x{SRAM_UNCACHED_BASE:x})")
 
 
 def gram_image(board: "Board") -> np.ndarray:
@@ -61,13 +93,13 @@ def gram_image(board: "Board") -> np.ndarray:
     return image
 
 
-def buffer_address(board: "Board", what: str) -> int:
+def buffer_address(symbol_values: dict[str, int], what: str) -> int:
+    """The address WHAT names: a 0x number, or the value of a firmware symbol."""
     if what.lower().startswith("0x"):
         return int(what, 16)
-    for address, name in board.image.symbols.items():
-        if name == what:
-            return address
-    raise ValueError(f"no symbol {what!r} in the firmware")
+    if what not in symbol_values:
+        raise ValueError(f"no symbol {what!r} in the firmware")
+    return symbol_values[what]
 
 
 def rgb565_image(raw: bytes, width: int, height: int, pairs: bool) -> np.ndarray:
@@ -87,6 +119,6 @@ def grab(board: "Board", request: GrabRequest) -> np.ndarray:
     """The requested buffer as an RGB image, read now."""
     if request.what == "gram":
         return gram_image(board)
-    address = buffer_address(board, request.what)
+    address = buffer_address(board.image.symbol_values, request.what)
     raw = board.memory.read(address, request.width * request.height * 2)
     return rgb565_image(raw, request.width, request.height, request.pairs)

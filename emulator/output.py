@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import tempfile
 from dataclasses import asdict
 from pathlib import Path
 
@@ -10,15 +11,51 @@ import numpy as np
 from PIL import Image
 
 from .board import FrameRecord
+from .errors import BadInput
 
 ANIMATION_NAME = "animation.png"
 FRAME_PATTERN = "frame_{:04d}.png"
+# Browsers show an APNG frame shorter than about 11 ms for 100 ms (Chromium; Firefox does
+# the like), which would play a fast run ten times too slowly: frames shown for less than
+# this are given this long in animation.png, and run.json says which.
+MIN_ANIMATION_FRAME_MS = 20.0
+
+
+def prepare_output_folder(folder: Path) -> None:
+    """Creates the output folder if needed and checks that files can be written in it.
+    Raises BadInput naming the folder and the reason."""
+    if folder.exists() and not folder.is_dir():
+        raise BadInput(f"--out {folder}: a file of that name exists; the output must be a folder")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise BadInput(f"--out {folder}: cannot create the output folder ({error.strerror or error}"
+                       f"{f': {error.filename}' if error.filename and str(error.filename) != str(folder) else ''})") \
+            from None
+    try:
+        with tempfile.TemporaryFile(dir=folder):
+            pass
+    except OSError as error:
+        raise BadInput(f"--out {folder}: cannot write in the output folder ({error.strerror or error})") from None
+
+
+def animation_durations(frame_times: list[float]) -> tuple[list[float], list[int]]:
+    """How long animation.png shows each frame, in ms, and the indices of the frames whose
+    virtual time on screen was shorter than MIN_ANIMATION_FRAME_MS and was lengthened to it.
+    A frame is on screen from its own virtual time until the next frame's; the last one for
+    as long as the one before it (a single frame: a still, 0)."""
+    if len(frame_times) < 2:
+        return [0.0] * len(frame_times), []
+    shown = [(later - earlier) * 1e3 for earlier, later in zip(frame_times, frame_times[1:])]
+    shown.append(shown[-1])
+    lengthened = [index for index, ms in enumerate(shown) if ms < MIN_ANIMATION_FRAME_MS]
+    return [max(ms, MIN_ANIMATION_FRAME_MS) for ms in shown], lengthened
 
 
 class RunOutput:
     def __init__(self, folder: str | Path) -> None:
+        """The folder must exist and be writable (prepare_output_folder)."""
         self.folder = Path(folder)
-        self.folder.mkdir(parents=True, exist_ok=True)
         stale_files = list(self.folder.glob("frame_*.png")) + list(self.folder.glob("diff_*.png")) + \
             list(self.folder.glob("grab_*.png")) + [self.folder / ANIMATION_NAME]
         for stale in stale_files:
@@ -28,6 +65,7 @@ class RunOutput:
         self.frame_paths: list[Path] = []
         self.frame_times: list[float] = []
         self.grabs: list[dict] = []
+        self.animation: dict | None = None
 
     def console_byte(self, byte: int) -> None:
         self._console.write(bytes((byte,)))
@@ -39,25 +77,28 @@ class RunOutput:
         self.frame_times.append(record.virtual_time_s)
 
     def grab(self, request, board) -> None:
-        """Writes grab_<what>_<ms>ms.png for a --grab request (see grab.py)."""
+        """Writes grab_<what>_<ms>ms.png for a --grab request (see grab.py; the request was
+        checked against the firmware before the run)."""
         from .grab import grab
         name = f"grab_{request.what}_{request.at_s * 1e3:.3f}ms.png".replace("/", "_")
-        try:
-            image = grab(board, request)
-        except Exception as error:   # a bad symbol or address is reported, the run goes on
-            self.grabs.append({"request": request.label, "error": str(error)})
-            return
-        Image.fromarray(image, "RGB").save(self.folder / name)
+        Image.fromarray(grab(board, request), "RGB").save(self.folder / name)
         self.grabs.append({"request": request.label, "virtual_time_s": board.time, "file": name})
+
+    def missed_grab(self, request, end_s: float) -> None:
+        self.grabs.append({"request": request.label,
+                           "error": f"not taken: the run ended at {end_s:.6f} s of virtual time, before it"})
 
     def finish(self, summary: dict) -> None:
         self._console.close()
         if self.frame_paths:
             images = [Image.open(p) for p in self.frame_paths]
-            gaps = np.diff([0.0] + self.frame_times) if len(self.frame_times) > 1 else [0.1]
-            durations = [max(20, int(round(g * 1000))) for g in gaps]
+            durations, lengthened = animation_durations(self.frame_times)
+            # Pillow writes each duration as an exact fraction delay_num/delay_den of a second
             images[0].save(self.folder / ANIMATION_NAME, save_all=True, append_images=images[1:],
                            duration=durations, loop=0)
+            self.animation = {"file": ANIMATION_NAME, "frame_durations_ms": durations,
+                              "lengthened_to_ms": MIN_ANIMATION_FRAME_MS, "lengthened_frames": lengthened}
+        summary["animation"] = self.animation
         (self.folder / "run.json").write_text(json.dumps(summary, indent=2) + "\n")
 
 

@@ -279,7 +279,9 @@ class SpiController(Peripheral):
         self._rx.extend(int(v) for v in values[:room])
         if len(values) > room:
             self._raw_int |= INT_RXO
-            self.board.warn(f"{self.NAME}: receive FIFO overflow, {len(values) - room} frames lost")
+            # no frame count in the text: repeated overflows are counted as one warning
+            self.board.warn(f"{self.NAME}: receive FIFO overflow: received frames lost "
+                            f"(the {FIFO_DEPTH}-frame FIFO was full)", now)
 
     def _push(self, values: np.ndarray, now: float) -> None:
         """Queues frames for the wire as written at `now` (by the CPU or the DMA)."""
@@ -488,7 +490,8 @@ class SpiController(Peripheral):
             return
         if self.tx_level(now) >= FIFO_DEPTH:
             self._raw_int |= INT_TXO
-            self.board.warn(f"{self.NAME}: write to a full transmit FIFO lost (0x{value:x})")
+            # no value in the text: repeated losses are counted as one warning
+            self.board.warn(f"{self.NAME}: a frame written to a full transmit FIFO was lost", now)
             return
         if self.tmod == TMOD_RX:
             # receive-only: one write starts clocking ctrlr1 + 1 frames in (sending 0xFF filler,

@@ -13,7 +13,9 @@ written every GRAM cell since the last captured frame, the model captures a fram
 and calls `on_frame` with that picture.
 
 Timing and protocol mistakes do not stop the run: the chip itself does not
-complain either. They are collected as strings in `warnings`.
+complain either. They are collected as strings in `warnings` and, when the
+owner gives `on_warning`, handed to it as they happen (the board puts them
+among the run's warnings).
 
 Supported commands (everything else is ignored, parameters included, as the chip
 ignores commands it does not know):
@@ -155,8 +157,11 @@ class ST7789V:
     WIDTH = 240   # physical GRAM columns
     HEIGHT = 320  # physical GRAM rows
 
-    def __init__(self, on_frame: Callable[[np.ndarray], None] | None = None) -> None:
+    def __init__(self, on_frame: Callable[[np.ndarray], None] | None = None,
+                 on_warning: Callable[[float, str], None] | None = None) -> None:
+        """on_warning(now_s, message) hears every warning as it is given."""
         self.on_frame = on_frame
+        self.on_warning = on_warning
         self.warnings: list[str] = []
         self.frames_captured = 0
 
@@ -506,6 +511,8 @@ class ST7789V:
 
     def _warn(self, now_s: float, message: str) -> None:
         self.warnings.append(f"ST7789V at {_ms(now_s)}: {message}")
+        if self.on_warning is not None:
+            self.on_warning(now_s, message)
 
 
 # --- helpers --------------------------------------------------------------------------

@@ -3,7 +3,9 @@
 Bytes written to txdata go through an 8-entry transmit FIFO that drains at the
 programmed baud rate (core clock / (div + 1), 10 bits per byte with one stop
 bit); each byte reaches the console when its stop bit is out. With txen = 0
-bytes wait in the FIFO, as on the real UART. Nothing is ever received.
+bytes wait in the FIFO, as on the real UART. Nothing is ever received. A byte
+written while the FIFO is full is lost, as on the chip, with a warning (the
+firmware should wait while txdata reads FULL).
 """
 from __future__ import annotations
 
@@ -84,8 +86,13 @@ class Uarths(Peripheral):
     def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
         self.advance(now)
         if offset == TXDATA:
-            if len(self._fifo) < TX_FIFO_DEPTH:   # a write to a full FIFO is lost, as on the chip
+            if len(self._fifo) < TX_FIFO_DEPTH:
                 self._fifo.append(value & 0xFF)
+            elif self.board is not None:
+                # the text names no byte, so that a firmware that never waits gets one
+                # counted warning rather than one per lost character
+                self.board.warn(f"{self.NAME}: a byte written to txdata while the {TX_FIFO_DEPTH}-byte transmit "
+                                f"FIFO was full was lost: a writer must wait while txdata reads bit 31 (full)", now)
         else:
             self.values[offset] = value
         self.advance(now)

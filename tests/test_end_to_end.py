@@ -3,12 +3,16 @@ and hold the first frames against the golden PNGs."""
 from __future__ import annotations
 
 import json
+import os
+import pty
+import subprocess
+import sys
 
 import numpy as np
 import pytest
 from PIL import Image
 
-from conftest import GOLDEN, GOLDEN_FRAMES, run_emulator
+from conftest import GOLDEN, GOLDEN_FRAMES, ROOT, run_emulator
 
 from golden_scenes import SCENES, scene_card
 
@@ -29,6 +33,58 @@ def test_run_succeeds_and_writes_its_outputs(firmware_run):
         assert len(frame["instructions"]) == 2
     times = [f["virtual_time_s"] for f in summary["frames"]]
     assert times == sorted(times) and times[0] > 0
+
+
+def test_a_correct_run_has_no_warnings(firmware_run):
+    """Every device's warnings reach run.json now (see the LCD test below): the firmware's own
+    run must give none, or they would be noise in every run."""
+    _, _, summary = firmware_run
+    assert summary["warnings"] == []
+
+
+def test_the_console_shows_the_last_frame_line(firmware_run):
+    """Hart 1 reports "frame N" after sending frame N; the run goes on after the last frame
+    until that line is out (at most a few virtual ms), without recording more frames."""
+    _, out, summary = firmware_run
+    lines = (out / "console.log").read_text().splitlines()
+    assert lines[-1] == f"frame {GOLDEN_FRAMES - 1}"
+    assert len(summary["frames"]) == GOLDEN_FRAMES
+    last_frame = summary["frames"][-1]["virtual_time_s"]
+    assert last_frame < summary["console"][-1]["virtual_time_s"] <= summary["virtual_time_s"] < last_frame + 5e-3
+
+
+def test_animation_timing_is_in_run_json(firmware_run):
+    """animation.png shows each frame for its virtual time on screen, lengthened to 20 ms when
+    shorter (browsers play shorter APNG frames at 100 ms); run.json says which frames."""
+    _, out, summary = firmware_run
+    animation = summary["animation"]
+    times = [frame["virtual_time_s"] for frame in summary["frames"]]
+    on_screen = [(b - a) * 1e3 for a, b in zip(times, times[1:])]
+    on_screen.append(on_screen[-1])
+    assert animation["frame_durations_ms"] == pytest.approx([max(ms, 20.0) for ms in on_screen])
+    assert animation["lengthened_frames"] == [i for i, ms in enumerate(on_screen) if ms < 20.0]
+    written = Image.open(out / "animation.png")
+    for index, duration in enumerate(animation["frame_durations_ms"]):
+        written.seek(index)
+        assert written.info["duration"] == pytest.approx(duration, abs=1e-3)
+
+
+def test_animation_keeps_exact_frame_durations(tmp_path):
+    """Each frame is shown from its own virtual time to the next frame's, to the fraction of a
+    millisecond (APNG delays are fractions of a second; no rounding to whole ms)."""
+    from emulator.board import FrameRecord
+    from emulator.output import RunOutput
+    output = RunOutput(tmp_path)
+    for index, at in enumerate([0.5, 0.5505, 0.6001]):
+        image = np.full((240, 320, 3), index * 60, dtype=np.uint8)   # distinct: Pillow merges equal neighbours
+        output.frame(FrameRecord(index, at, [0, 0], [0, 0], 0.0), image)
+    output.finish({})
+    animation = Image.open(tmp_path / "animation.png")
+    durations = []
+    for index in range(animation.n_frames):
+        animation.seek(index)
+        durations.append(animation.info["duration"])
+    assert durations == pytest.approx([50.5, 49.6, 49.6], abs=1e-3)
 
 
 def test_console_has_a_line_per_boot_stage(firmware_run):
@@ -178,3 +234,177 @@ def test_permissive_run_warns_and_goes_on(assemble, tmp_path):
     assert result.returncode == 4, result.stderr   # it went on, and then never drew a frame
     warnings = json.loads((tmp_path / "run.json").read_text())["warnings"]
     assert any("UARTHS has no register at offset 0x20" in w and "permissive" in w for w in warnings)
+
+
+# --- the command line refuses what it cannot do, before anything runs ---------------------
+
+@pytest.mark.parametrize("option, value", [
+    ("--quantum", "0"), ("--quantum", "-5"), ("--quantum", "1e3"), ("--quantum", "1000000001"),
+    ("--budget", "0"), ("--budget", "-1"), ("--budget", "nan"), ("--budget", "inf"), ("--budget", "x"),
+    ("--frames", "0"), ("--frames", "-2"),
+])
+def test_nonsense_numbers_are_refused(tmp_path, option, value):
+    result = run_emulator("run", str(tmp_path / "any.elf"), "--out", str(tmp_path / "out"), "--quiet",
+                          f"{option}={value}")
+    assert result.returncode == 2, result.stderr
+    assert f"argument {option}:" in result.stderr and "Traceback" not in result.stderr
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("options, expected", [
+    (["--sd", "CARD", "--sd-fault", "bogus"], "argument --sd-fault: invalid choice: 'bogus'"),
+    (["--sd-fault", "no-init"], "--sd-fault needs --sd"),
+    (["--sd-writable"], "--sd-writable needs --sd"),
+])
+def test_sd_options_are_checked(tmp_path, card, options, expected):
+    options = [str(card) if option == "CARD" else option for option in options]
+    result = run_emulator("run", str(tmp_path / "any.elf"), "--out", str(tmp_path / "out"), "--quiet", *options)
+    assert result.returncode == 2, result.stderr
+    assert expected in result.stderr
+
+
+@pytest.mark.parametrize("where, expected", [
+    ("a-file", "a file of that name exists; the output must be a folder"),
+    ("a-file/below", "cannot create the output folder (Not a directory"),
+])
+def test_an_unusable_output_folder_is_bad_input(firmware, tmp_path, where, expected):
+    (tmp_path / "a-file").write_text("keep me\n")
+    result = run_emulator("run", str(firmware), "--frames", "1", "--out", str(tmp_path / where), "--quiet")
+    assert result.returncode == 6, result.stderr
+    assert "Traceback" not in result.stderr
+    assert f"--out {tmp_path / where}: {expected}" in result.stderr
+    assert (tmp_path / "a-file").read_text() == "keep me\n"
+
+
+def test_help_lists_every_exit_status():
+    result = run_emulator("run", "--help")
+    assert result.returncode == 0
+    statuses = result.stdout[result.stdout.index("exit status:"):]
+    for status in range(11):
+        assert f"\n{status:>3}  " in statuses, status
+    # the refusals this command makes are among them
+    for phrase in ("--tolerance without --golden", "--sd-fault", "a --grab of a symbol the firmware does not define",
+                   "a --grab whose time the run ended before", "the --out folder", "not a readable PNG"):
+        assert phrase in " ".join(statuses.split()), phrase
+    readme = (ROOT / "README.md").read_text()
+    section = readme[readme.index("## The board model"):readme.index("## The firmware")]
+    for status in range(11):
+        assert f"| {status} |" in section, f"README's board-model section does not list exit status {status}"
+
+
+# --- what the devices notice reaches the user ------------------------------------------------
+
+# Hart 0 brings up clocks, pins and SPI0 with the firmware's own routines, then pulses the
+# LCD's reset for a few instructions (the datasheet asks for 10 us) and sends SLPOUT at once
+# (the chip takes no command for 5 ms after reset): the LCD never wakes, and the run hangs.
+BAD_LCD_RESET = """
+    .option norelax
+    .include "k210.inc"
+    .include "st7789v.inc"
+    .text
+    .globl main_hart0
+    .globl main_hart1
+main_hart0:
+    call    clocks_init
+    call    pins_init
+    call    spi0_init
+    li      a0, GPIOHS_LCD_DC_BIT
+    call    gpiohs_set
+    li      a0, GPIOHS_LCD_RST_BIT
+    call    gpiohs_clear
+    li      a0, GPIOHS_LCD_RST_BIT
+    call    gpiohs_set
+    li      a0, LCD_CMD_SLPOUT
+    call    lcd_command
+1:  wfi
+    j       1b
+main_hart1:
+    wfi
+    j       main_hart1
+"""
+
+
+def link_with_firmware(source: str, folder) -> str:
+    """A program whose main.S is `source`, linked with the firmware's other objects and k210.ld."""
+    objects = sorted(str(p) for p in (ROOT / "build" / "fw").glob("*.o") if p.name != "main.o")
+    (folder / "main.S").write_text(source)
+    subprocess.run(["riscv64-unknown-elf-as", "-march=rv64gc", "-mabi=lp64d", "-I", str(ROOT / "firmware" / "include"),
+                    "-o", str(folder / "main.o"), str(folder / "main.S")], check=True)
+    elf = folder / "program.elf"
+    subprocess.run(["riscv64-unknown-elf-ld", "-T", str(ROOT / "firmware" / "k210.ld"), "--no-relax", "-o", str(elf),
+                    str(folder / "main.o"), *objects], check=True)
+    return str(elf)
+
+
+def test_a_wrong_lcd_reset_is_reported_in_the_hang(firmware, tmp_path):
+    elf = link_with_firmware(BAD_LCD_RESET, tmp_path)
+    out = tmp_path / "out"
+    result = run_emulator("run", elf, "--out", str(out), "--quiet")
+    assert result.returncode == 4, result.stderr
+    summary = json.loads((out / "run.json").read_text())
+    warnings = summary["warnings"]
+    assert len(warnings) == 2, warnings
+    assert "ST7789V: RESX low pulse of" in warnings[0] and "shorter than the 10 us" in warnings[0]
+    assert "ST7789V: SLPOUT (0x11) ignored: chip busy for 5 ms after RESX release" in warnings[1]
+    # the hang report says what the LCD noticed
+    report = summary["message"]
+    assert "LCD: 0 frames captured, display off, asleep" in report
+    assert warnings[0] in report and warnings[1] in report
+    assert warnings[1] in result.stderr
+
+
+# --- the terminal ---------------------------------------------------------------------------
+
+CONSOLE_AFTER_A_WHILE = """
+    .globl _start
+_start:
+    csrr    t0, mhartid
+    bnez    t0, park
+    li      t0, 300000              # about 23 virtual ms at 26 MHz: the progress line is up by then
+1:  addi    t0, t0, -1
+    bnez    t0, 1b
+    li      s0, 0x38000000          # UARTHS
+    li      t0, 1
+    sw      t0, 0x08(s0)            # txen
+    la      s1, text
+2:  lbu     t1, 0(s1)
+    beqz    t1, 4f
+3:  lw      t2, 0(s0)
+    bltz    t2, 3b
+    sw      t1, 0(s0)
+    addi    s1, s1, 1
+    j       2b
+4:  j       4b
+park:
+    wfi
+    j       park
+text:
+    .asciz  "console line\\n"
+"""
+
+
+def test_the_progress_line_is_cleared_before_console_lines(assemble, tmp_path):
+    """On a terminal the progress line (stderr) is rewritten in place; a console line (stdout)
+    must not be written onto it."""
+    elf = assemble(CONSOLE_AFTER_A_WHILE)
+    controller, terminal = pty.openpty()
+    process = subprocess.Popen([sys.executable, "-m", "emulator", "run", str(elf), "--out", str(tmp_path / "out"),
+                                "--budget", "0.1"], cwd=ROOT, stdin=subprocess.DEVNULL, stdout=terminal,
+                               stderr=terminal)
+    os.close(terminal)
+    transcript = bytearray()
+    while True:
+        try:
+            data = os.read(controller, 4096)
+        except OSError:                 # the terminal closes with the process
+            break
+        if not data:
+            break
+        transcript += data
+    os.close(controller)
+    assert process.wait(timeout=60) == 4
+    text = transcript.decode()
+    assert "[board] frame 0/8" in text, text               # the progress line was shown
+    where = text.index("console line")
+    on_that_line = text[text.rfind("\n", 0, where) + 1:where]
+    assert on_that_line == "" or on_that_line.endswith("\r\x1b[K"), repr(on_that_line)

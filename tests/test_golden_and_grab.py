@@ -73,8 +73,7 @@ def test_grab_reads_the_buffers_at_the_requested_time(firmware, card, tmp_path, 
     shown_at = first["frames"][0]["virtual_time_s"]
     at = f"{shown_at - 2e-6:.7f}"
     out = tmp_path / "out"
-    result, summary = _run(firmware, card, out, "--grab", f"framebuffers@{at}:pairs", "--grab", "gram@0.05",
-                           "--grab", "no_such_symbol@0.2")
+    result, summary = _run(firmware, card, out, "--grab", f"framebuffers@{at}:pairs", "--grab", "gram@0.05")
     assert result.returncode == 0, result.stderr
     grabs = {g["request"].split("@")[0]: g for g in summary["grabs"]}
     assert grabs["framebuffers"]["virtual_time_s"] == pytest.approx(float(at))
@@ -82,13 +81,91 @@ def test_grab_reads_the_buffers_at_the_requested_time(firmware, card, tmp_path, 
     shown = np.asarray(Image.open(first_out / "frame_0000.png").convert("RGB"))
     assert np.array_equal(picture, shown)
     assert np.asarray(Image.open(out / grabs["gram"]["file"])).shape == (240, 320, 3)
-    assert "no symbol" in grabs["no_such_symbol"]["error"]
+
+
+@pytest.mark.parametrize("grab, expected", [
+    ("no_such_symbol@0.2", "no symbol 'no_such_symbol' in the firmware"),
+    ("0x1000@0.2", "does not lie in SRAM"),                  # an address outside SRAM
+    ("framebuffers@0.2:4000x4000", "does not lie in SRAM"),  # a buffer running past its end
+])
+def test_a_grab_of_no_buffer_is_refused_before_the_run(firmware, tmp_path, grab, expected):
+    """Checked against the firmware's symbols before anything runs: status 2, no output."""
+    out = tmp_path / "out"
+    result = run_emulator("run", str(firmware), "--frames", "1", "--out", str(out), "--quiet", "--grab", grab)
+    assert result.returncode == 2, result.stderr
+    assert expected in result.stderr and grab.split(":")[0] in result.stderr
+    assert not out.exists()
+
+
+def test_a_grab_the_run_ends_before_fails_the_run(firmware, card, tmp_path):
+    out = tmp_path / "out"
+    result = run_emulator("run", str(firmware), "--sd", str(card), "--frames", "1", "--out", str(out), "--quiet",
+                          "--grab", "gram@30")
+    assert result.returncode == 2, result.stderr
+    assert "gram@30: the run ended at" in result.stderr and "before the grab's time" in result.stderr
+    summary = json.loads((out / "run.json").read_text())
+    assert summary["exit"] == "grab-missed" and len(summary["frames"]) == 1
+    assert summary["grabs"] == [{"request": "gram@30", "error": summary["grabs"][0]["error"]}]
+    assert summary["grabs"][0]["error"].startswith("not taken: the run ended at")
+    assert not list(out.glob("grab_*.png"))
+
+
+def test_tolerance_without_golden_is_refused(firmware, tmp_path):
+    result = run_emulator("run", str(firmware), "--frames", "1", "--out", str(tmp_path / "out"), "--quiet",
+                          "--tolerance", "3")
+    assert result.returncode == 2
+    assert "--tolerance needs --golden" in result.stderr
+
+
+@pytest.mark.parametrize("tolerance", ["-1", "256", "x"])
+def test_tolerance_out_of_range_is_refused(firmware, tmp_path, goldens, tolerance):
+    result = run_emulator("run", str(firmware), "--frames", "1", "--out", str(tmp_path / "out"), "--quiet",
+                          "--golden", str(goldens), "--tolerance", tolerance)
+    assert result.returncode == 2
+    assert "argument --tolerance" in result.stderr
+
+
+@pytest.mark.parametrize("damage, expected", [
+    ("text", "is not a PNG image"),
+    ("folder", "cannot be read as a PNG image (Is a directory)"),
+    ("truncated", "cannot be read as a PNG image"),
+    ("jpeg", "is a JPEG image, not a PNG"),
+])
+def test_an_unreadable_golden_frame_is_bad_input_before_the_run(firmware, card, tmp_path, goldens, damage, expected):
+    """A golden frame that is there but is no readable PNG stops everything before the run
+    (status 6, naming the file), rather than a traceback after it. (A file without read
+    permission fails the same way; the tests may run as root, so a folder stands in for it.)"""
+    frame = goldens / "frame_0001.png"
+    if damage == "text":
+        frame.write_text("not a picture\n")
+    elif damage == "folder":
+        frame.unlink()
+        frame.mkdir()
+    elif damage == "truncated":
+        frame.write_bytes(frame.read_bytes()[:200])
+    else:
+        Image.open(goldens / "frame_0000.png").convert("RGB").save(frame, format="JPEG")
+    out = tmp_path / "out"
+    result = run_emulator("run", str(firmware), "--sd", str(card), "--frames", "2", "--out", str(out), "--quiet",
+                          "--golden", str(goldens))
+    assert result.returncode == 6, result.stderr
+    assert "Traceback" not in result.stderr
+    assert f"{frame}" in result.stderr and expected in result.stderr
+    assert not out.exists()
+
+
+def test_a_golden_path_that_is_a_file_is_bad_input(firmware, tmp_path, goldens):
+    result = run_emulator("run", str(firmware), "--frames", "1", "--out", str(tmp_path / "out"), "--quiet",
+                          "--golden", str(goldens / "frame_0000.png"))
+    assert result.returncode == 6
+    assert "frame_0000.png: not a folder" in result.stderr
 
 
 def test_grab_syntax():
     request = parse_grab("0x80001000@1.5:pairs:64x32")
     assert (request.what, request.at_s, request.width, request.height, request.pairs) == ("0x80001000", 1.5, 64, 32, True)
-    for bad in ("gram", "gram@x", "fb@1:wide", "gram@1:pairs"):
+    for bad in ("gram", "gram@x", "fb@1:wide", "gram@1:pairs",
+                "gram@1e999", "gram@e", "fb@1:0x4", "fb@1:pairs:3x2", "0xzz@1"):
         with pytest.raises(ValueError):
             parse_grab(bad)
 

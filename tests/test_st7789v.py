@@ -4,6 +4,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from k210_fixtures import idle_elf, make_board  # noqa: F401
+
 from emulator.st7789v import (
     CASET, COLMOD, DISPOFF, DISPON, INVOFF, INVON, MADCTL, NOP, NORON, PTLON,
     RAMWR, RASET, SLPIN, SLPOUT, SWRESET, ST7789V,
@@ -203,6 +205,28 @@ def test_slpin_too_soon_after_slpout_is_a_warning() -> None:
     host.cmd(SLPIN, gap_s=50e-3)
     assert host.lcd.sleeping
     assert len(host.lcd.warnings) == 1 and "120 ms" in host.lcd.warnings[0]
+
+
+def test_the_board_hears_every_lcd_warning_and_counts_repeats(idle_elf) -> None:
+    """On the board the LCD's notes join the run's warnings (console and run.json), timed when
+    the LCD noticed them; the same note again is counted, not repeated."""
+    heard: list[str] = []
+    board = make_board(idle_elf, on_warning=heard.append)
+    lcd = board.lcd
+    lcd.set_reset_pin(0, 1e-3)
+    lcd.set_reset_pin(1, 1e-3 + 2e-6)                  # 2 us: too short
+    lcd.write(bytes([SLPOUT]), 0, 2e-3)                 # busy for 5 ms after the release
+    lcd.write(bytes([SLPOUT]), 0, 10e-3)
+    for n in range(10):                                 # ten commands too soon after SLPOUT
+        lcd.write(bytes([NOP]), 0, 11e-3 + n * 1e-4)
+    assert len(board.warnings) == 3, board.warnings
+    reset, busy, soon = board.warnings
+    assert reset.startswith("[     1.002 ms] ST7789V: RESX low pulse of 2.00 us")
+    assert busy.startswith("[     2.000 ms] ST7789V: SLPOUT (0x11) ignored: chip busy")
+    assert soon == ("[    11.000 ms] ST7789V: NOP (0x00) sent within 5 ms after SLPOUT at t=10.000 ms "
+                    "(10 times in all, the last at 11.900 ms)")
+    assert heard == [reset, busy, soon.split(" (10 times")[0]]   # each heard once, when first given
+    assert len(lcd.warnings) == 12                      # the model itself keeps every note
 
 
 # --- parameters and windows ------------------------------------------------------------

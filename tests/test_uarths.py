@@ -101,6 +101,27 @@ def test_fifo_full_after_eight_queued_bytes_and_a_write_to_a_full_fifo_is_lost(c
     assert bytes(out) == b"01234567"
 
 
+def test_a_lost_byte_is_a_warning_counted_not_repeated(console_board):
+    board, out = console_board
+    uart = board.uarths
+    for i in range(8):
+        uart.write(u.TXDATA, 4, 0x30 + i, 1e-3)
+    assert board.warnings == []
+    for i in range(5):                              # five bytes into a full FIFO: all lost
+        uart.write(u.TXDATA, 4, ord("X"), 1e-3 + i * 1e-6)
+    assert board.warnings == [
+        "[     1.000 ms] UARTHS: a byte written to txdata while the 8-byte transmit FIFO was full was lost"
+        ": a writer must wait while txdata reads bit 31 (full) (5 times in all, the last at 1.004 ms)"]
+
+
+def test_distinct_warnings_are_capped(console_board):
+    board, _ = console_board
+    for n in range(130):
+        board.warn(f"warning number {n}")
+    assert len(board.warnings) == 101
+    assert board.warnings[-1] == "30 further warnings not listed (only the first 100 distinct ones are)"
+
+
 def test_with_txen_the_shift_register_holds_a_ninth_byte(console_board):
     board, out = console_board
     uart = board.uarths
