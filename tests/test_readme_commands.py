@@ -89,6 +89,10 @@ def _ci_runs(command: str):
     return check
 
 
+def _lists_exit_statuses(result: subprocess.CompletedProcess) -> None:
+    assert "exit status:" in result.stdout
+
+
 def _prints_agreement(result: subprocess.CompletedProcess) -> None:
     assert result.stdout.count("lit per face: identical") == 4
 
@@ -108,6 +112,7 @@ COMMANDS = {
     "--golden tests/golden/default": ("run", _golden_matched),
     "python -m reference render-card build/card.img --frames 2 --out build/reference":
         ("run", _frames_written("build/reference", 2)),
+    "python -m emulator run --help": ("run", _lists_exit_statuses),
     ".venv/bin/python -m pytest tests/test_reference.py -k first_golden -s":
         ("run", _prints_agreement),
 }
