@@ -265,7 +265,7 @@ class Board:
                            on_warning=lambda now, text: self.warn(f"ST7789V: {text}", now))
         self.lcd_port = LcdPort(self, self.lcd)
         self.spi0.device_for_ss = self._spi0_device
-        self.sd_image = SdImage(sd_image, writable=sd_writable) if sd_image else None
+        self.sd_image = SdImage(sd_image, writable=sd_writable, warn=self.warn) if sd_image else None
         self.sd_slot = SdSlot(self, SdCard(self.sd_image, warn=self.warn, faults=sd_faults)) if self.sd_image else None
         self.spi1.device_for_ss = self._spi1_device
         self._lcd_reset_level = 1

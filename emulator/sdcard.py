@@ -22,11 +22,25 @@ Block addresses (CCS = 1). The image is opened read-only unless writes are asked
 for; then writes go to the file. Read-only, the card still accepts writes (it has
 no write-protect switch in SPI mode) but keeps them in memory for the run only,
 so the image on disk never changes.
+
+Capacity: the card holds exactly the image's blocks; a read or write at a block past
+them answers R1 with the parameter-error bit (the argument is outside the card's
+range), a CMD18 stream that runs past them ends in an out-of-range error token. The
+CSD (version 2.0) states the capacity as (C_SIZE + 1) x 512 KiB, so it can only be
+exact for an image of whole 512 KiB (what the card builder makes); for other sizes
+it states the whole 512 KiB units the image holds, so a host that believes the CSD
+never reads past the image (and one of under 512 KiB, which no CSD can state, is
+stated as 512 KiB). Either is a warning, as is a partition table entry that runs
+past the image's end: a card whose partition table claims more than the card holds
+is the firmware's to judge (as a real card of that size would be), but on an image
+it usually means a download cut short, so the user hears of it. Only an image the
+card cannot hold at all is refused: empty, or not a whole number of 512-byte blocks.
 """
 from __future__ import annotations
 
 import mmap
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
@@ -45,6 +59,9 @@ TOKEN_START, TOKEN_MULTI_WRITE, TOKEN_STOP_TRAN = 0xFE, 0xFC, 0xFD
 ERROR_TOKEN_OUT_OF_RANGE = 0x08
 DATA_ACCEPTED, DATA_CRC_ERROR = 0x05, 0x0B
 OCR_POWERED_UP, OCR_CCS, OCR_VOLTAGE = 1 << 31, 1 << 30, 0x00FF_8000
+CSD_UNIT_BLOCKS = 1024   # an SDHC CSD counts capacity in 512 KiB: (C_SIZE + 1) * 1024 blocks
+MBR_SIGNATURE = b"\x55\xaa"
+MBR_TABLE, MBR_ENTRY_BYTES, MBR_ENTRIES = 446, 16, 4
 
 
 def crc7(data: bytes) -> int:
@@ -84,9 +101,10 @@ def command_frame(index: int, argument: int) -> bytes:
 
 
 class SdImage:
-    """The card's storage: the image file, read-only unless `writable`."""
+    """The card's storage: the image file, read-only unless `writable`. `warn` hears what is
+    odd about the image but still usable (see the module comment)."""
 
-    def __init__(self, path: str | Path, writable: bool = False) -> None:
+    def __init__(self, path: str | Path, writable: bool = False, warn: Callable[[str], None] | None = None) -> None:
         path = Path(path)
         if not path.is_file():
             raise BadInput(f"SD card image {path} does not exist")
@@ -100,21 +118,44 @@ class SdImage:
         self._map = mmap.mmap(self._file.fileno(), 0, access=mmap.ACCESS_WRITE if writable else mmap.ACCESS_READ)
         self.blocks = size // BLOCK
         self.overlay: dict[int, bytes] = {}
-        self._check_partitions()
+        notes = self._capacity_notes() + self._partition_notes()
+        for note in notes:
+            (warn or (lambda text: None))(f"SD card image {self.path}: {note}")
 
-    def _check_partitions(self) -> None:
-        """A partition table that reaches past the end of the file means a truncated image."""
+    @property
+    def csd_c_size(self) -> int:
+        """C_SIZE of the CSD: the whole 512 KiB units the image holds, less one (at least 0)."""
+        return max(0, self.blocks // CSD_UNIT_BLOCKS - 1)
+
+    def _capacity_notes(self) -> list[str]:
+        """Why the CSD cannot state the image's size exactly, if it cannot."""
+        stated = (self.csd_c_size + 1) * CSD_UNIT_BLOCKS
+        if stated == self.blocks:
+            return []
+        if stated > self.blocks:
+            return [f"{self.blocks} blocks is less than 512 KiB, the smallest capacity an SDHC card's CSD can "
+                    f"state: the CSD says {stated} blocks, and blocks {self.blocks} on answer out of range"]
+        return [f"{self.blocks} blocks is not a whole number of 512 KiB (an SDHC card's capacity is "
+                f"(C_SIZE + 1) x 512 KiB): the CSD states {stated} blocks, so the last {self.blocks - stated} "
+                f"are beyond what the firmware is told"]
+
+    def _partition_notes(self) -> list[str]:
+        """Every MBR entry that runs past the image's end: the card is what it is, but an image
+        whose partition table claims more than it holds was probably cut short."""
         mbr = self._map[:BLOCK]
-        if mbr[510:512] != b"\x55\xaa":
-            return   # no MBR: a superfloppy or a blank card; the firmware will say what it thinks
-        for entry in range(4):
-            raw = mbr[446 + 16 * entry: 446 + 16 * (entry + 1)]
+        if mbr[BLOCK - len(MBR_SIGNATURE):] != MBR_SIGNATURE:
+            return []   # no MBR: a superfloppy or a blank card; the firmware will say what it thinks
+        notes = []
+        for entry in range(MBR_ENTRIES):
+            raw = mbr[MBR_TABLE + MBR_ENTRY_BYTES * entry: MBR_TABLE + MBR_ENTRY_BYTES * (entry + 1)]
             kind = raw[4]
             first = int.from_bytes(raw[8:12], "little")
             count = int.from_bytes(raw[12:16], "little")
             if kind and count and first + count > self.blocks:
-                raise BadInput(f"SD card image {self.path} is truncated: partition {entry + 1} ends at block "
-                               f"{first + count}, the image has {self.blocks} blocks")
+                notes.append(f"partition {entry + 1} (type 0x{kind:02X}, blocks {first}..{first + count - 1}) "
+                             f"runs past the image's last block {self.blocks - 1}: a truncated image? The card "
+                             f"holds only the image's blocks")
+        return notes
 
     def read(self, block: int) -> bytes:
         if block in self.overlay:
@@ -137,8 +178,8 @@ class SdImage:
 # Faults a test can inject, to drive firmware error paths a healthy card never takes.
 FAULTS = {
     "no-init": "ACMD41 never completes: the card stays idle (the firmware should time out)",
-    "bad-crc": "every data block is sent with a wrong CRC16",
-    "flaky-crc": "the first time each block is sent its CRC16 is wrong; a retry gets it right",
+    "bad-crc": "every data block (the CSD and CID registers too) is sent with a wrong CRC16",
+    "flaky-crc": "the first time each block (or register) is sent its CRC16 is wrong; a retry gets it right",
 }
 
 
@@ -150,7 +191,7 @@ class SdCard:
         if unknown:
             raise BadInput(f"unknown SD card fault(s): {', '.join(sorted(unknown))} (known: {', '.join(FAULTS)})")
         self.faults = frozenset(faults)
-        self._blocks_sent: set[int] = set()
+        self._blocks_sent: set[int | str] = set()
         self.image = image
         self.warn = warn or (lambda text: None)
         self.selected = False
@@ -237,11 +278,16 @@ class SdCard:
             self._reading = None
             return
         data = self.image.read(block)
+        self._say(b"\xff" * NAC_BYTES + bytes([TOKEN_START]) + data + self._data_crc(data, block).to_bytes(2, "big"))
+
+    def _data_crc(self, data: bytes, key: int | str) -> int:
+        """The CRC16 sent with a data block (a block, key = its number, or a register, key = its
+        name), made wrong as the faults ask: always, or the first time this key is sent."""
         crc = crc16(data)
-        if "bad-crc" in self.faults or ("flaky-crc" in self.faults and block not in self._blocks_sent):
+        if "bad-crc" in self.faults or ("flaky-crc" in self.faults and key not in self._blocks_sent):
             crc ^= 0xFFFF
-        self._blocks_sent.add(block)
-        self._say(b"\xff" * NAC_BYTES + bytes([TOKEN_START]) + data + crc.to_bytes(2, "big"))
+        self._blocks_sent.add(key)
+        return crc
 
     # --- commands ------------------------------------------------------------------------
 
@@ -316,8 +362,9 @@ class SdCard:
             self._respond(R1_IDLE | R1_ILLEGAL)
         elif index in (9, 10):
             register = self._csd() if index == 9 else self._cid()
+            crc = self._data_crc(register, "CSD" if index == 9 else "CID")
             self._respond(0)
-            self._say(b"\xff" * NAC_BYTES + bytes([TOKEN_START]) + register + crc16(register).to_bytes(2, "big"))
+            self._say(b"\xff" * NAC_BYTES + bytes([TOKEN_START]) + register + crc.to_bytes(2, "big"))
         elif index == 13:
             self._respond(0, b"\x00")
         elif index == 16:
@@ -383,8 +430,8 @@ class SdCard:
     # --- registers ---------------------------------------------------------------------------
 
     def _csd(self) -> bytes:
-        """CSD version 2.0 (SDHC): capacity = (C_SIZE + 1) * 512 KiB."""
-        c_size = max(0, self.image.blocks // 1024 - 1)
+        """CSD version 2.0 (SDHC): capacity = (C_SIZE + 1) * 512 KiB (SdImage.csd_c_size)."""
+        c_size = self.image.csd_c_size
         csd = bytearray(16)
         csd[0] = 0x40                      # CSD_STRUCTURE = 1
         csd[1] = 0x0E                      # TAAC

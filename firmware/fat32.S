@@ -1,12 +1,15 @@
 # fat32.S: a read-only FAT32 volume on the SD card: mount, path lookup,
 # file reads.
 #
-# Mount: the first MBR partition of type 0x0B or 0x0C; its BPB must have
-# 512 bytes per sector, a power-of-two cluster size, reserved sectors,
-# 1 or 2 FATs, a FAT size, a root cluster >= 2 inside the volume, a total
-# sector count that fits its partition and leaves a data region, a FAT big
-# enough for every cluster, and the 0x55AA signature. Anything else is
-# error 5.
+# Mount: the first MBR partition of type 0x0B or 0x0C, which must lie on
+# the card (below sd_capacity, the CSD's capacity: a partition table that
+# claims more than the card holds is checked here rather than left to a
+# read the card refuses); its BPB must have 512 bytes per sector, a
+# power-of-two cluster size, reserved sectors, 1 or 2 FATs, a FAT size, a
+# root cluster >= 2 inside the volume, a total sector count that fits its
+# partition and the card and leaves a data region, a FAT big enough for
+# every cluster, and the 0x55AA signature. Anything else is error 5. Every
+# block fat32.S reads is then inside the volume, so on the card.
 #
 # FAT entries are read through a one-sector cache (fat_cache). Chains are
 # checked as they are followed: an entry < 2 or >= cluster count + 2, the
@@ -124,6 +127,9 @@ msg_bpb_root:       .asciz "invalid BPB: root cluster out of range"
 msg_bpb_total:      .asciz "invalid BPB: no sectors"
 msg_bpb_partition:  .asciz "invalid BPB: volume larger than its partition"
 msg_bpb_data:       .asciz "invalid BPB: no data region"
+msg_part_past_card: .asciz "no FAT32 partition: the partition ends at block "
+msg_bpb_past_card:  .asciz "invalid BPB: the volume ends at block "
+msg_past_card_last: .asciz ", past the card's last block "
 msg_not_found:      .asciz "file not found: "
 msg_chain:          .asciz "corrupt FAT chain: "
 msg_chain_open:     .asciz " ("
@@ -200,7 +206,13 @@ fat32_mount:
     LE32    s3, MBR_PART_SECTORS, t2, t0    # s3 = partition's length
     bnez    s2, 4f
     FAIL    ERR_NO_FAT32, msg_part_at_zero
-4:  sd      s2, VOL_PART_LBA(s0)
+4:  mv      a0, s2
+    mv      a1, s3
+    bnez    a1, 41f
+    li      a1, 1                       # no length: at least its BPB
+41: la      a2, msg_part_past_card
+    call    fat_check_on_card
+    sd      s2, VOL_PART_LBA(s0)
 
     # BPB
     mv      a0, s2
@@ -248,9 +260,13 @@ fat32_mount:
     LE32    s9, BPB_TOTAL_SECTORS_32, s1, t1
     bnez    s9, 16f
     FAIL    ERR_NO_FAT32, msg_bpb_total
-16: beqz    s3, 17f                     # (a partition entry without a length)
-    bleu    s9, s3, 17f
+16: beqz    s3, 161f                    # (a partition entry without a length)
+    bleu    s9, s3, 161f
     FAIL    ERR_NO_FAT32, msg_bpb_partition
+161: mv     a0, s2
+    mv      a1, s9
+    la      a2, msg_bpb_past_card
+    call    fat_check_on_card
 17: mul     t0, s6, s7
     add     t0, t0, s5                  # t0 = data region's first sector
     bltu    t0, s9, 18f
@@ -307,6 +323,35 @@ fat32_mount:
     ld      ra, 88(sp)
     addi    sp, sp, 96
     ret
+
+# fat_check_on_card (file-local)
+#   What: error 5 unless blocks a0 .. a0 + a1 - 1 all exist on the card
+#         (below sd_capacity): "<words><last block>, past the card's last
+#         block <sd_capacity - 1>".
+#   Arguments: a0 = first block, a1 = block count (>= 1; both below 2^32),
+#         a2 = words (msg_part_past_card, msg_bpb_past_card).
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+fat_check_on_card:
+    add     t0, a0, a1
+    la      t1, sd_capacity
+    ld      t1, 0(t1)
+    bgtu    t0, t1, 1f
+    ret
+1:  addi    s0, t0, -1                  # (fatal: the callers' registers are not needed)
+    addi    s1, t1, -1
+    mv      s2, a2
+    li      a0, ERR_NO_FAT32
+    call    error_begin
+    mv      a0, s2
+    call    console_puts
+    mv      a0, s0
+    call    console_put_dec
+    la      a0, msg_past_card_last
+    call    console_puts
+    mv      a0, s1
+    call    console_put_dec
+    j       error_end
 
 # has_boot_signature (file-local)
 #   What: whether a sector ends in 0x55 0xAA.

@@ -26,8 +26,9 @@
 #
 # A truncated file, a bad magic, header or maxval, a sample above maxval or
 # a P3 sample that is not a number is error 11: "error 11 bad texture: <what>".
-# In wireframe mode scene.S loads no texture; TEX_W, TEX_H and TEX_PIXELS
-# stay 0.
+# Only textured mode draws a texture: in flat and wireframe mode scene.S
+# loads none (the file need not exist), TEX_W, TEX_H and TEX_PIXELS stay 0
+# and the console says "texture: not loaded (mode flat)" (or wireframe).
 
     .option norelax
     .include "k210.inc"
@@ -61,7 +62,8 @@ msg_short_raster:   .asciz "truncated raster (fewer samples than width x height 
 msg_bad_sample:     .asciz "bad sample (not a decimal number)"
 msg_big_sample:     .asciz "sample above maxval"
 msg_texture:        .asciz "texture: "
-msg_none:           .asciz "texture: none (wireframe)\n"
+msg_not_loaded_flat: .asciz "texture: not loaded (mode flat)\n"
+msg_not_loaded_wireframe: .asciz "texture: not loaded (mode wireframe)\n"
 msg_times:          .asciz "x"
 
     .text
@@ -69,8 +71,8 @@ msg_times:          .asciz "x"
 # ppm_parse_texture
 #   What: parses the texture file scene.S loaded (scene_texture) and fills
 #         TEX_W, TEX_H, TEX_PIXELS (over the file's bytes, see the file
-#         comment); prints "texture: <w>x<h>" (or "texture: none
-#         (wireframe)" when no texture was loaded).
+#         comment); prints "texture: <w>x<h>", or "texture: not loaded
+#         (mode <mode>)" when the mode draws none (scene.S loaded none).
 #   Arguments: none. Results: none (errors are fatal).
 #   Clobbers: only ABI temporaries.
 ppm_parse_texture:
@@ -90,8 +92,13 @@ ppm_parse_texture:
     ld      s0, 0(t0)                   # s0 = file (and pixels)
     ld      s1, 8(t0)
     bnez    s0, 1f
-    la      a0, msg_none
-    call    console_line
+    la      a0, msg_not_loaded_flat
+    la      t0, scene
+    lwu     t0, SCENE_MODE(t0)
+    li      t1, MODE_FLAT
+    beq     t0, t1, 3f
+    la      a0, msg_not_loaded_wireframe
+3:  call    console_line
     j       90f
 1:  add     s1, s1, s0                  # s1 = end of the file
 

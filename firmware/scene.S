@@ -14,8 +14,8 @@
 # key         value                                   default       scene field
 # ----------  --------------------------------------  ------------  ----------------
 # model       path of a Wavefront .obj (obj.S)        model.obj     (scene_model)
-# texture     path of a P3 / P6 .ppm (ppm.S); not     texture.ppm   (scene_texture)
-#             loaded in wireframe mode
+# texture     path of a P3 / P6 .ppm (ppm.S); loaded  texture.ppm   (scene_texture)
+#             only in textured mode
 # mode        textured | flat | wireframe             textured      SCENE_MODE
 # cull        on|off|yes|no|true|false|1|0            on            SCENE_CULL
 # scale       s  or  sx sy sz                         1 1 1         SCENE_SCALE
@@ -84,7 +84,7 @@
     .equ SCENE_CHECK_LEVELS,    6           # whole, LIGHT_LEVELS_MIN .. LIGHT_LEVELS_MAX
 # When a SCENE_KIND_FILE file is loaded (its SCENE_KEY_CHECK)
     .equ SCENE_FILE_ALWAYS,     0
-    .equ SCENE_FILE_SURFACE,    1           # not in wireframe mode
+    .equ SCENE_FILE_TEXTURED,   1           # only in textured mode
     .equ SCENE_FOV_LIMIT,       180         # degrees, excluded
     .equ SCENE_NUMBERS_MAX,     3           # most numbers a key takes
     .equ SCENE_DOUBLE_BYTES,    8
@@ -146,7 +146,7 @@ scene_line_\name:
 # scene_default_values (or a default path), its field in scene.inc.
 scene_keys:
     SCENE_KEY model, SCENE_KIND_FILE, 0, SCENE_FILE_ALWAYS, scene_model_path, scene_model, default_model_path
-    SCENE_KEY texture, SCENE_KIND_FILE, 0, SCENE_FILE_SURFACE, scene_texture_path, scene_texture, default_texture_path
+    SCENE_KEY texture, SCENE_KIND_FILE, 0, SCENE_FILE_TEXTURED, scene_texture_path, scene_texture, default_texture_path
     SCENE_KEY mode, SCENE_KIND_WORD, 0, 0, scene + SCENE_MODE, words_mode, msg_expect_mode
     SCENE_KEY cull, SCENE_KIND_WORD, 0, 0, scene + SCENE_CULL, words_cull, msg_expect_cull
     SCENE_KEY scale, SCENE_KIND_NUMBERS, 3, SCENE_CHECK_BROADCAST, scene + SCENE_SCALE
@@ -293,8 +293,8 @@ msg_levels:         .asciz "bad value (must be a whole number from 2 to 65)"
 # scene_load
 #   What: fills `scene` with the defaults, reads and parses scene.ini from
 #         the card's root when there is one, checks far > near, then loads
-#         the files the scene needs (the model; the texture unless the mode
-#         is wireframe), recording each in its file record (scene_model,
+#         the files the scene needs (the model; the texture only in
+#         textured mode: flat and wireframe draw none), recording each in its file record (scene_model,
 #         scene_texture; 0, 0 for a file not loaded). Once per boot. Needs
 #         fat32_mount and heap_init.
 #   Arguments: none. Results: none (errors are fatal).
@@ -322,12 +322,12 @@ scene_load:
     li      t1, SCENE_KIND_FILE
     bne     t0, t1, 4f
     lbu     t0, SCENE_KEY_CHECK(s0)
-    li      t1, SCENE_FILE_SURFACE
+    li      t1, SCENE_FILE_TEXTURED
     bne     t0, t1, 31f
     la      t2, scene
     lwu     t2, SCENE_MODE(t2)
-    li      t1, MODE_WIREFRAME
-    beq     t2, t1, 4f                  # wireframe: no surface, no texture
+    li      t1, MODE_TEXTURED
+    bne     t2, t1, 4f                  # flat, wireframe: no texture drawn, none read
 31: ld      a0, SCENE_KEY_TARGET(s0)
     call    scene_load_file
     ld      t0, SCENE_KEY_AUX(s0)

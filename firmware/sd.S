@@ -15,7 +15,10 @@
 #   answer at all = no card); CMD8(0x1AA) -> R7 echo; CMD55 + ACMD41(HCS)
 #   until R1 = 0 (1 s limit on the CLINT timer, delay_us between tries);
 #   CMD58 -> OCR (power-up bit, CCS); CMD59(1) CRC on; CMD16(512) for a
-#   byte-addressed card; then SCLK to 403 MHz / 18 = 22.4 MHz.
+#   byte-addressed card; CMD9 -> CSD: the card's capacity in blocks
+#   (sd_capacity; fat32.S refuses a volume that does not fit in it, so no
+#   read ever asks for a block the card does not have); then SCLK to
+#   403 MHz / 18 = 22.4 MHz.
 #
 # Reads (sd_read_blocks): CMD17 for one block, CMD18 + CMD12 for several,
 # so a run of contiguous clusters costs one command. For each block: poll
@@ -45,8 +48,9 @@
     .globl sd_init
 # sd_init
 #   What: SPI1 and DMAC channel 1 set up for the card, then the card's SPI
-#         mode bring-up (see the file comment) and the fast clock. Prints
-#         one console line on success. Needs clocks_init, pins_init,
+#         mode bring-up (see the file comment), its capacity from the CSD
+#         (sd_capacity) and the fast clock. Prints one console line on
+#         success. Needs clocks_init, pins_init,
 #         console_init, crc_init, dma_init; the LCD should be up so that
 #         errors can be shown.
 #   Arguments: none. Results: none (returns only with a ready card).
@@ -199,8 +203,24 @@ sd_init:
     li      a2, 0
     call    sd_cmd_ok
 
+    # CMD9: the CSD, for the card's capacity (at the identification clock,
+    # which any card takes).
+14: mv      a0, sp
+    call    sd_read_csd
+    mv      a0, sp
+    call    sd_csd_blocks
+    bnez    a0, 16f
+    mv      a2, a1
+    li      a0, ERR_UNSUPPORTED
+    la      a1, msg_csd_version
+    la      a3, msg_csd_version_tail
+    call    error_fatal_dec
+16: mv      s2, a0                      # s2 = capacity in blocks
+    la      t0, sd_capacity
+    sd      s2, 0(t0)
+
     # Identification done: up to the default-speed clock.
-14: li      a0, SD_BAUDR_FAST
+    li      a0, SD_BAUDR_FAST
     call    sd_spi_setup
 
     call    console_lock
@@ -210,6 +230,10 @@ sd_init:
     bnez    s1, 15f
     la      a0, msg_sdsc
 15: call    console_puts
+    la      a0, msg_sd_capacity
+    call    console_puts
+    mv      a0, s2
+    call    console_put_dec
     la      a0, msg_sd_clock
     call    console_puts
     li      a0, SD_FAST_ACTUAL_HZ
@@ -223,6 +247,130 @@ sd_init:
     ld      s0, 32(sp)
     ld      ra, 40(sp)
     addi    sp, sp, 48
+    ret
+
+# sd_read_csd (file-local)
+#   What: CMD9: the CSD register, a 16-byte data block after R1 (read by
+#         the CPU, it is short), its CRC16 checked. A bad CRC16, an error
+#         token or an R1 reporting a command CRC error is read again, up to
+#         SD_READ_RETRIES times, then error 4.
+#   Arguments: a0 = where the SD_CSD_BYTES bytes go.
+#   Results: none (returns only with an intact CSD).
+#   Clobbers: only ABI temporaries.
+sd_read_csd:
+    addi    sp, sp, -48
+    sd      ra, 40(sp)
+    sd      s0, 32(sp)
+    sd      s1, 24(sp)
+    sd      s2, 16(sp)
+    sd      s3, 8(sp)
+    mv      s0, a0                      # s0 = destination
+    li      s1, SD_READ_RETRIES + 1     # s1 = tries left
+1:  call    sd_select
+    li      a0, SD_CMD9_SEND_CSD
+    li      a1, 0
+    call    sd_command
+    beqz    a0, 3f
+    mv      s2, a0                      # s2 = R1
+    call    sd_deselect
+    li      t0, SD_R1_NONE
+    beq     s2, t0, 2f
+    andi    t0, s2, SD_R1_CRC_ERROR
+    bnez    t0, 7f                      # the card saw a bad command CRC: again
+2:  li      a0, SD_CMD9_SEND_CSD
+    mv      a1, s2
+    call    sd_fail_r1
+
+3:  call    sd_wait_token
+    li      t0, SD_TOKEN_START_BLOCK
+    bne     a0, t0, 6f                  # error token
+    mv      s2, s0                      # s2 = next byte out
+4:  li      a0, SD_IDLE_BYTE
+    call    sd_xchg
+    sb      a0, 0(s2)
+    addi    s2, s2, 1
+    addi    t0, s0, SD_CSD_BYTES
+    bltu    s2, t0, 4b
+    li      a0, SD_IDLE_BYTE
+    call    sd_xchg
+    slli    s3, a0, SD_BYTE_BITS
+    li      a0, SD_IDLE_BYTE
+    call    sd_xchg
+    or      s3, s3, a0                  # s3 = CRC16 the card sent
+    call    sd_deselect
+    mv      a0, s0
+    li      a1, SD_CSD_BYTES
+    call    crc16_ccitt
+    beq     a0, s3, 9f
+    j       7f
+6:  call    sd_deselect
+7:  addi    s1, s1, -1
+    bnez    s1, 1b
+    li      a0, ERR_CRC
+    la      a1, msg_crc_csd
+    li      a2, 0
+    call    error_fatal
+
+9:  ld      s3, 8(sp)
+    ld      s2, 16(sp)
+    ld      s1, 24(sp)
+    ld      s0, 32(sp)
+    ld      ra, 40(sp)
+    addi    sp, sp, 48
+    ret
+
+    .globl sd_csd_blocks
+# sd_csd_blocks
+#   What: a card's capacity in 512-byte blocks from its CSD register (the
+#         field layouts are in sd.inc): version 2.0 (SDHC, SDXC)
+#         (C_SIZE + 1) << 10; version 1.0 (SDSC) (C_SIZE + 1) <<
+#         (C_SIZE_MULT + 2) blocks of 2^READ_BL_LEN bytes, counted in 512s.
+#   Arguments: a0 = the SD_CSD_BYTES bytes, as the card sent them.
+#   Results: a0 = capacity in blocks, or 0 for a CSD_STRUCTURE this
+#         firmware does not know (version 3.0, reserved); a1 = CSD_STRUCTURE.
+#   Clobbers: only ABI temporaries.
+sd_csd_blocks:
+    lbu     a1, SD_CSD_STRUCTURE_BYTE(a0)
+    srli    a1, a1, SD_CSD_STRUCTURE_SHIFT
+    li      t0, SD_CSD_VERSION_2
+    beq     a1, t0, 2f
+    li      t0, SD_CSD_VERSION_1
+    beq     a1, t0, 1f
+    li      a0, 0
+    ret
+1:  lbu     t0, SD_CSD1_C_SIZE_HI(a0)
+    andi    t0, t0, SD_CSD1_C_SIZE_HI_MASK
+    slli    t0, t0, SD_CSD1_C_SIZE_HI_SHIFT
+    lbu     t1, SD_CSD1_C_SIZE_MID(a0)
+    slli    t1, t1, SD_CSD1_C_SIZE_MID_SHIFT
+    or      t0, t0, t1
+    lbu     t1, SD_CSD1_C_SIZE_LO(a0)
+    srli    t1, t1, SD_CSD1_C_SIZE_LO_SHIFT
+    or      t0, t0, t1
+    addi    t0, t0, 1                   # t0 = C_SIZE + 1
+    lbu     t1, SD_CSD1_MULT_HI(a0)
+    andi    t1, t1, SD_CSD1_MULT_HI_MASK
+    slli    t1, t1, 1
+    lbu     t2, SD_CSD1_MULT_LO(a0)
+    srli    t2, t2, SD_CSD1_MULT_LO_SHIFT
+    or      t1, t1, t2
+    addi    t1, t1, SD_CSD1_MULT_BIAS   # t1 = C_SIZE_MULT + 2
+    lbu     t2, SD_CSD1_READ_BL_LEN(a0)
+    andi    t2, t2, SD_CSD1_READ_BL_LEN_MASK
+    add     t1, t1, t2
+    sll     t0, t0, t1                  # bytes (below 2^34)
+    srli    a0, t0, SD_BLOCK_SHIFT
+    ret
+2:  lbu     t0, SD_CSD2_C_SIZE_HI(a0)
+    andi    t0, t0, SD_CSD2_C_SIZE_HI_MASK
+    lbu     t1, SD_CSD2_C_SIZE_MID(a0)
+    slli    t0, t0, SD_BYTE_BITS
+    or      t0, t0, t1
+    lbu     t1, SD_CSD2_C_SIZE_LO(a0)
+    slli    t0, t0, SD_BYTE_BITS
+    or      t0, t0, t1
+    addi    t0, t0, 1
+    slli    a0, t0, SD_CSD2_UNIT_SHIFT
     ret
 
     .globl sd_read_blocks
@@ -857,7 +1005,8 @@ sd_delay_us:
 msg_sd_ready:       .asciz "sd: card ready, "
 msg_sdhc:           .asciz "SDHC (block addressing)"
 msg_sdsc:           .asciz "SDSC (byte addressing)"
-msg_sd_clock:       .asciz ", SPI1 "
+msg_sd_capacity:    .asciz ", "
+msg_sd_clock:       .asciz " blocks, SPI1 "
 msg_hz_nl:          .asciz " Hz\n"
 msg_no_card:        .asciz "no card: no response to CMD0"
 msg_sd_v1:          .asciz "unsupported card: CMD8 illegal (SD 1.x card)"
@@ -872,6 +1021,9 @@ msg_refused_r1:     .asciz " answered R1 0x"
 msg_crc_block:      .asciz "CRC errors: block "
 msg_crc_block_tail: .asciz " stays bad after retries"
 msg_crc_cmd:        .asciz "CRC errors: CMD"
+msg_crc_csd:        .asciz "CRC errors: the CSD (CMD9) stays bad after retries"
+msg_csd_version:    .asciz "unsupported card: CSD_STRUCTURE "
+msg_csd_version_tail: .asciz " (known: 0 and 1, CSD versions 1.0 and 2.0)"
 msg_crc_cmd_tail:   .asciz " response keeps reporting a CRC error"
 
 # ---------------------------------------------------------------------------
@@ -880,3 +1032,9 @@ msg_crc_cmd_tail:   .asciz " response keeps reporting a CRC error"
 # sd_ccs: 1 = block-addressed card (SDHC/SDXC), 0 = byte-addressed (SDSC).
 sd_ccs:
     .space  4
+    .balign 8
+    .globl sd_capacity
+# sd_capacity: the card's capacity in 512-byte blocks (its CSD), set by
+# sd_init; blocks 0 .. sd_capacity - 1 exist.
+sd_capacity:
+    .space  8

@@ -1,6 +1,7 @@
 """The scene, model and texture of a card: from a folder laid out like a card, a card image,
-or the files' contents. As on the board: the texture is not loaded in wireframe mode, and a
-card without scene.ini shows the defaults."""
+or the files' contents. As on the board: the texture is loaded only in textured mode (flat and
+wireframe draw none, so a card for them needs no texture file), and a card without scene.ini
+shows the defaults."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -15,13 +16,19 @@ from .scene import Scene, parse_scene
 def load_files(scene_ini_text: str | bytes | None, obj_bytes: bytes,
                ppm_bytes: bytes | None) -> tuple[Scene, Mesh, np.ndarray | None]:
     """(scene, mesh, texture) from the files' contents; scene_ini_text None = no scene.ini,
-    ppm_bytes None = no texture (it is ignored in wireframe mode)."""
+    ppm_bytes None = no texture (it is ignored unless the mode is textured)."""
     scene = parse_scene(scene_ini_text)
     mesh = parse_obj(obj_bytes)
     texture = None
-    if scene.mode != "wireframe" and ppm_bytes is not None:
+    if uses_texture(scene) and ppm_bytes is not None:
         texture = parse_ppm(ppm_bytes)
     return scene, mesh, texture
+
+
+def uses_texture(scene: Scene) -> bool:
+    """Whether the scene draws its texture, so that its file must be on the card: only in
+    textured mode (firmware/scene.S loads it then and only then)."""
+    return scene.mode == "textured"
 
 
 def _find(folder: Path, card_path: str) -> Path:
@@ -48,7 +55,7 @@ def load_card_folder(folder) -> tuple[Scene, Mesh, np.ndarray | None]:
         scene_ini = None
     scene = parse_scene(scene_ini)
     obj = _find(folder, scene.model).read_bytes()
-    ppm = _find(folder, scene.texture).read_bytes() if scene.mode != "wireframe" else None
+    ppm = _find(folder, scene.texture).read_bytes() if uses_texture(scene) else None
     return load_files(scene_ini, obj, ppm)
 
 
@@ -61,5 +68,5 @@ def load_card_image(image) -> tuple[Scene, Mesh, np.ndarray | None]:
         scene_ini = None
     scene = parse_scene(scene_ini)
     obj = read_file(image, "/" + scene.model.lstrip("/"))
-    ppm = read_file(image, "/" + scene.texture.lstrip("/")) if scene.mode != "wireframe" else None
+    ppm = read_file(image, "/" + scene.texture.lstrip("/")) if uses_texture(scene) else None
     return load_files(scene_ini, obj, ppm)

@@ -7,6 +7,7 @@ import os
 import pty
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -114,6 +115,38 @@ def test_scene_matches_its_golden_frames(name, firmware, tmp_path):
     assert result.returncode == 0, "\n".join(
         [result.stderr] + [f"frame {c['index']}: {c['problem'] or c['differing_pixels']} differing; diff {c['diff_image']}"
                            for c in problems])
+
+
+@pytest.fixture(scope="module")
+def assets(tmp_path_factory) -> Path:
+    """The generated models and textures (tools/make_assets.py), once for this module."""
+    folder = tmp_path_factory.mktemp("assets")
+    subprocess.run([sys.executable, str(ROOT / "tools" / "make_assets.py"), str(folder)], check=True)
+    return folder
+
+
+@pytest.mark.parametrize("name,mode", [("gem-flat", "flat"), ("torus-wireframe", "wireframe")])
+def test_flat_and_wireframe_cards_need_no_texture(name, mode, firmware, assets, tmp_path):
+    """Only textured mode draws a texture, so a flat or wireframe card without any (no texture
+    key, no texture.ppm) boots, says it loaded none and draws its golden frame; the reference
+    renderer reads the same card."""
+    scene = {key: value for key, value in SCENES[name][0].items() if key != "texture"}
+    assert scene["mode"] == mode
+    from sdcard_image import build_image
+    card = tmp_path / "card.img"
+    build_image(card, [assets / "models"], scene=scene)
+    out = tmp_path / "out"
+    result = run_emulator("run", str(firmware), "--sd", str(card), "--frames", "1", "--out", str(out),
+                          "--quiet", "--golden", str(GOLDEN / name))
+    console = (out / "console.log").read_text()
+    assert result.returncode == 0, result.stderr + console
+    assert f"texture: not loaded (mode {mode})" in console.splitlines()
+    assert "load models/" in console and ".ppm" not in console
+    reference = subprocess.run([sys.executable, "-m", "reference", "render-card", str(card), "--frames", "1",
+                                "--out", str(tmp_path / "reference"), "--quiet"], cwd=ROOT, capture_output=True,
+                               text=True)
+    assert reference.returncode == 0, reference.stderr
+    assert (tmp_path / "reference" / "frame_0000.png").exists()
 
 
 def test_both_harts_work_and_hart1_drives_the_display(firmware_run):

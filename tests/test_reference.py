@@ -497,9 +497,11 @@ def test_ppm_reading_and_rounding():
         assert error.value.what == what, data
 
 
-def test_load_files_skips_the_texture_in_wireframe_mode():
+@pytest.mark.parametrize("mode", ["flat", "wireframe"])
+def test_load_files_skips_the_texture_unless_textured(mode):
+    """Only textured mode draws the texture, so only it reads one (as the firmware)."""
     obj = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"
-    scene, mesh, texture = load_files("mode = wireframe\n", obj, b"not a ppm")
+    scene, mesh, texture = load_files(f"mode = {mode}\n", obj, b"not a ppm")
     assert texture is None and len(mesh.faces) == 1
     with pytest.raises(TextureError):
         load_files(None, obj, b"not a ppm")

@@ -175,6 +175,24 @@ def test_csd_reports_the_capacity(image_path):
     assert csd[15] == (crc7(csd[:15]) << 1) | 1
 
 
+def test_crc_faults_reach_the_csd_too(image_path):
+    """--sd-fault flaky-crc sends each data block's CRC16 wrong the first time: the CSD is a
+    data block, so the firmware's retry of CMD9 is exercised too; bad-crc never gets it right."""
+    length = NCR_BYTES + 1 + NAC_BYTES + 1 + 16 + 2
+    for fault, wrong in (("flaky-crc", [True, False]), ("bad-crc", [True, True])):
+        card = SdCard(SdImage(image_path), faults=frozenset({fault}))
+        clock(card, b"\xff" * 10)
+        card.set_selected(True, 0.0)
+        command(card, 0, 0, 2)
+        for now in (0.0, INIT_TIME_S):
+            command(card, 55, 0, 2, now)
+            command(card, 41, 0x4000_0000, 2, now)
+        for expected in wrong:
+            reply = command(card, 9, 0, length)
+            csd, crc = reply[-18:-2], int.from_bytes(reply[-2:], "big")
+            assert (crc != crc16(csd)) == expected, fault
+
+
 def _write_block(card: SdCard, index: int, block: int, data: bytes, now: float = 1.0) -> bytes:
     assert command(card, index, block, 2, now)[NCR_BYTES] == 0x00
     clock(card, b"\xff" + (b"\xfe" if index == 24 else b"\xfc") + data + crc16(data).to_bytes(2, "big"), now)
@@ -232,19 +250,62 @@ def test_deselected_card_does_not_answer(image_path):
     assert command(card, 13, 0, 3) == b"\xff" * 3
 
 
-def test_missing_and_truncated_images_are_bad_input(tmp_path):
+def test_missing_empty_and_partial_block_images_are_bad_input(tmp_path):
+    """What no card can hold: nothing, or a part of a 512-byte block."""
     with pytest.raises(BadInput, match="does not exist"):
         SdImage(tmp_path / "none.img")
-    odd = tmp_path / "odd.img"
-    odd.write_bytes(b"\x00" * 1000)
-    with pytest.raises(BadInput, match="whole number"):
-        SdImage(odd)
-    truncated = tmp_path / "truncated.img"
+    for size in (0, 1000):
+        odd = tmp_path / f"odd{size}.img"
+        odd.write_bytes(b"\x00" * size)
+        with pytest.raises(BadInput, match="whole number"):
+            SdImage(odd)
+
+
+def _mbr(*entries: tuple[int, int, int]) -> bytes:
+    """Block 0 with these (type, first block, block count) partition entries."""
     mbr = bytearray(BLOCK)
-    mbr[446 + 4] = 0x0C
-    mbr[446 + 8:446 + 12] = (2048).to_bytes(4, "little")
-    mbr[446 + 12:446 + 16] = (100_000).to_bytes(4, "little")
+    for n, (kind, first, count) in enumerate(entries):
+        at = 446 + 16 * n
+        mbr[at + 4] = kind
+        mbr[at + 8:at + 12] = first.to_bytes(4, "little")
+        mbr[at + 12:at + 16] = count.to_bytes(4, "little")
     mbr[510:512] = b"\x55\xaa"
-    truncated.write_bytes(bytes(mbr) + b"\x00" * BLOCK * 100)
-    with pytest.raises(BadInput, match="truncated"):
-        SdImage(truncated)
+    return bytes(mbr)
+
+
+def test_a_partition_past_the_end_is_a_warning_and_the_card_still_works(tmp_path):
+    """A partition table that claims more than the image holds (any entry, used or not) was once
+    refused as a truncated image. The card is what the image holds and the partition table is
+    the firmware's to judge (it reports error 5, tests/test_storage_end_to_end.py); the user
+    still hears that the image looks cut short."""
+    image = tmp_path / "past.img"
+    image.write_bytes(_mbr((0x0C, 8, 56), (0x83, 2048, 100_000)) + _pattern(1) * (BLOCKS - 1))
+    heard: list[str] = []
+    card = SdImage(image, warn=heard.append)
+    assert card.blocks == BLOCKS
+    assert [note for note in heard if "runs past" in note] == [
+        f"SD card image {image}: partition 2 (type 0x83, blocks 2048..102047) runs past the image's last "
+        f"block {BLOCKS - 1}: a truncated image? The card holds only the image's blocks"]
+    card.close()
+    card = initialised(image)
+    reply = command(card, 17, BLOCKS - 1, NCR_BYTES + 1 + NAC_BYTES + 1 + BLOCK + 2)
+    assert reply[NCR_BYTES] == 0x00 and reply[NCR_BYTES + 1 + NAC_BYTES + 1:][:BLOCK] == _pattern(1)
+    assert command(card, 17, BLOCKS, 2)[NCR_BYTES] == 0x40   # outside the card: parameter error
+
+
+@pytest.mark.parametrize("blocks,c_size,note", [
+    (2048, 1, None),
+    (3000, 1, "3000 blocks is not a whole number of 512 KiB (an SDHC card's capacity is (C_SIZE + 1) x 512 KiB): "
+              "the CSD states 2048 blocks, so the last 952 are beyond what the firmware is told"),
+    (64, 0, "64 blocks is less than 512 KiB, the smallest capacity an SDHC card's CSD can state: the CSD says "
+            "1024 blocks, and blocks 64 on answer out of range"),
+])
+def test_the_csd_states_the_whole_512_kib_the_image_holds(tmp_path, blocks, c_size, note):
+    image = tmp_path / "card.img"
+    with image.open("wb") as handle:
+        handle.truncate(blocks * BLOCK)
+    heard: list[str] = []
+    card = SdImage(image, warn=heard.append)
+    assert card.csd_c_size == c_size
+    assert heard == ([] if note is None else [f"SD card image {image}: {note}"])
+    card.close()

@@ -3,6 +3,7 @@ match, byte for byte (size and CRC-32), what the host put on the card, and every
 must end in its own error code, console line and error screen colour."""
 from __future__ import annotations
 
+import json
 import re
 import shutil
 import subprocess
@@ -13,7 +14,8 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from conftest import ROOT, run_emulator
+from conftest import ROOT, make_card, run_emulator
+from firmware_calls import FirmwareCaller
 from sdcard_image.fat32 import CardWriter
 from sdcard_image.layouts import (cluster_chain, delete_leaving_entries, fill_directory, is_fragmented,
                                   place_case_variants, write_fragmented)
@@ -259,6 +261,90 @@ def test_card_without_fat32_partition(firmware, tmp_path):
     out = tmp_path / "out"
     result = run_emulator("run", str(firmware), "--sd", str(blank), "--frames", "1", "--out", str(out), "--quiet")
     assert_error(result, (out / "console.log").read_text(), out, 5, "FAT32")
+
+
+MIB = 1024 * 1024
+
+
+def _cut_card(tmp_path: Path) -> tuple[Path, int]:
+    """A card whose model lies past 4 MiB, then cut to its first 4 MiB, as a download cut short
+    leaves it: the partition table and the volume claim 64 MiB. Returns (image, blocks left)."""
+    card = make_card(tmp_path / "card", {"/scene.ini": f"model = model.obj\n{WIREFRAME}".encode(),
+                                         "/pad.bin": bytes(3 * MIB), "/model.obj": TRIANGLE})
+    cut = 4 * MIB
+    assert _cluster_offset(card, cluster_chain(card, "/model.obj")[0]) >= cut
+    with card.open("r+b") as handle:
+        handle.truncate(cut)
+    return card, cut // 512
+
+
+def test_a_card_cut_short_is_a_partition_error_naming_the_block(firmware, tmp_path):
+    """The partition claims blocks the card does not have. The board model runs the card (it
+    holds what the image holds) and warns that the image looks truncated; the firmware compares
+    the partition with the card's capacity from its CSD before reading, and reports error 5
+    naming the blocks (it used to read on and stop with error 3 when the card refused a block
+    of the model past its end)."""
+    card, blocks = _cut_card(tmp_path)
+    out = tmp_path / "out"
+    result = run_emulator("run", str(firmware), "--sd", str(card), "--frames", "1", "--out", str(out), "--quiet")
+    console = (out / "console.log").read_text()
+    end = 64 * MIB // 512 - 1
+    assert_error(result, console, out, 5, f"no FAT32 partition: the partition ends at block {end}, "
+                                          f"past the card's last block {blocks - 1}")
+    assert f"sd: card ready, SDHC (block addressing), {blocks} blocks" in console
+    warnings = json.loads((out / "run.json").read_text())["warnings"]
+    assert any(f"partition 1 (type 0x0C, blocks 2048..{end}) runs past the image's last block {blocks - 1}" in w
+               for w in warnings), warnings
+
+
+def test_a_volume_past_the_card_is_an_invalid_boot_sector(firmware, tmp_path):
+    """A partition entry without a length leaves the BPB's total sectors to say where the
+    volume ends: past the card's last block, that is error 5 too."""
+    card, blocks = _cut_card(tmp_path)
+    with card.open("r+b") as handle:
+        handle.seek(446 + 12)
+        handle.write(bytes(4))
+    out = tmp_path / "out"
+    result = run_emulator("run", str(firmware), "--sd", str(card), "--frames", "1", "--out", str(out), "--quiet")
+    assert_error(result, (out / "console.log").read_text(), out, 5,
+                 f"invalid BPB: the volume ends at block {64 * MIB // 512 - 1}, past the card's last block "
+                 f"{blocks - 1}")
+
+
+@pytest.fixture(scope="module")
+def caller(firmware) -> FirmwareCaller:
+    """The firmware on a board model whose hart 0 runs single routines (firmware_calls.py)."""
+    return FirmwareCaller(firmware)
+
+
+def _csd(structure: int, **fields: tuple[int, int, int]) -> bytes:
+    """A CSD register with CSD_STRUCTURE and the given fields, each (high bit, low bit, value)
+    as the SD specification numbers the register's 128 bits; 16 bytes, most significant first."""
+    register = structure << 126
+    for high, low, value in fields.values():
+        assert value < 1 << (high - low + 1)
+        register |= value << low
+    return register.to_bytes(16, "big")
+
+
+@pytest.mark.parametrize("c_size,mult,block_len", [(0, 0, 9), (3839, 7, 10), (4095, 7, 11), (1234, 3, 9)])
+def test_the_firmware_reads_an_sdsc_capacity_from_a_version_1_csd(caller, c_size, mult, block_len):
+    """sd_csd_blocks on the board model's CPU: (C_SIZE + 1) x 2^(C_SIZE_MULT + 2) blocks of
+    2^READ_BL_LEN bytes, counted in 512-byte blocks (the model's card only sends version 2.0)."""
+    caller.write(caller.scratch, _csd(0, c_size=(73, 62, c_size), mult=(49, 47, mult),
+                                      block_len=(83, 80, block_len), filler=(61, 50, 0xABC)))
+    result = caller.call("sd_csd_blocks", [caller.scratch])
+    assert result.a[0] == ((c_size + 1) << (mult + 2 + block_len)) // 512 and result.a[1] == 0
+
+
+def test_the_firmware_reads_an_sdhc_capacity_and_refuses_unknown_csd_versions(caller):
+    for c_size in (0, 15, 0x3F_FFFF):
+        caller.write(caller.scratch, _csd(1, c_size=(69, 48, c_size), around=(75, 70, 0x3F), low=(47, 40, 0xFF)))
+        result = caller.call("sd_csd_blocks", [caller.scratch])
+        assert (result.a[0], result.a[1]) == ((c_size + 1) * 1024, 1)
+    for structure in (2, 3):
+        caller.write(caller.scratch, _csd(structure, c_size=(69, 48, 100)))
+        assert caller.call("sd_csd_blocks", [caller.scratch]).a[:2] == (0, structure)
 
 
 def test_missing_file(firmware, loader_card, tmp_path):
