@@ -189,7 +189,7 @@ def test_100k_triangles_with_a_256x256_texture(firmware, layout, tmp_path, case)
     frame is the first triangle's, textured. Before obj.S streamed the model, its text (461 KB
     here) was kept beside the arrays and the largest case ended in "error 12 model too large for
     memory (vertex records: 1565856 bytes needed, 1259456 bytes free)". Board-model run times:
-    about 8-15 s each."""
+    about 10-12 s each (25 s when the host is busy)."""
     most, beyond = limits(lambda n: crowded_outcomes(layout, n), 3, layout.size // layout.VTX_BYTES)
     vertices = most if case == "largest" else beyond
     model = crowded_model(vertices)
