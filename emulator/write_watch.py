@@ -11,7 +11,8 @@ The firmware's buffers, from its ELF (the symbols are k210.ld's and heap.S's):
 
 - the writable PT_LOAD segments: .data and .bss, p_memsz bytes from p_paddr;
 - the heap blocks handed out so far, [__heap_start, heap_next), where heap_next is heap.S's
-  u64 variable, read live from SRAM at the time of each store;
+  u64 variable, read live from SRAM at the time of each store (heap.S gives blocks back by
+  lowering it, heap_release: a block given back is out of bounds again);
 - the storing hart's own stack: hart h owns [__stack_top - (h + 1) S, __stack_top - h S),
   S = __stack_hart0_top - __stack_hart1_top (16 KiB in k210.ld); the trap save area at its top
   is part of it.

@@ -30,7 +30,10 @@
 #
 # Reads: a file's contiguous clusters are read with one multi-block command
 # each (sd_read_blocks), only the sectors the file's size needs; the file's
-# CRC-32 is computed sector by sector while the next sector arrives.
+# CRC-32 is computed sector by sector while the next sector arrives. A file
+# is read whole into the heap (fat32_load) or a few sectors at a time into
+# the reader's buffer (fat32_stream_open, fat32_stream_read: obj.S reads the
+# model so, without keeping its text).
 
     .option norelax
     .include "k210.inc"
@@ -990,6 +993,162 @@ fat32_read:
     ld      ra, 88(sp)
     addi    sp, sp, 96
 9:  ret
+
+    .if STREAM_CRC != CRC_CTX_CRC || STREAM_CRC_LEFT != CRC_CTX_LEFT
+    .error "a stream record must start with a CRC context"
+    .endif
+
+    .globl fat32_stream_open
+# fat32_stream_open
+#   What: opens a file to be read a few sectors at a time (fat32_stream_read),
+#         for a reader that does not keep the whole file: fills the stream
+#         record (STREAM_*, fat32.inc) and starts following the file's chain.
+#   Arguments: a0 = stream record (STREAM_BYTES), a1 = path (NUL-terminated;
+#         must stay in place while the stream is read).
+#   Results: a0 = the file's size in bytes.
+#   Errors: 6 not found, 8 corrupt chain (a first cluster out of range).
+#   Clobbers: only ABI temporaries.
+fat32_stream_open:
+    addi    sp, sp, -32
+    sd      ra, 24(sp)
+    sd      s0, 16(sp)
+    sd      s1, 8(sp)
+    mv      s0, a0                      # s0 = stream
+    sd      a1, STREAM_PATH(s0)
+    mv      a0, a1
+    call    fat32_open
+    mv      s1, a1                      # s1 = size
+    sd      a0, STREAM_CLUSTER(s0)
+    sd      zero, STREAM_SECTOR(s0)
+    addi    t0, s1, FAT_SECTOR_BYTES - 1
+    srli    t0, t0, FAT_SECTOR_SHIFT
+    sd      t0, STREAM_LEFT(s0)
+    sd      zero, STREAM_CRC(s0)
+    sd      s1, STREAM_CRC_LEFT(s0)
+    beqz    s1, 1f                      # an empty file: no chain to follow
+    call    fat_walk_start
+1:  mv      a0, s1
+    ld      s1, 8(sp)
+    ld      s0, 16(sp)
+    ld      ra, 24(sp)
+    addi    sp, sp, 32
+    ret
+
+    .globl fat32_stream_read
+# fat32_stream_read
+#   What: reads the next sectors of a stream's file (at most a2, fewer at the
+#         file's end) to a1, one multi-block read per run of contiguous
+#         clusters, checking the chain as fat32_read does (it must not end
+#         before the file's size, and must end with the file's last sector).
+#         With a3 = 1 the sectors extend the stream's CRC-32 (STREAM_CRC, over
+#         the file's bytes only) while the next ones arrive. No other chain
+#         may be followed between fat32_stream_open and the last read.
+#   Arguments: a0 = stream record, a1 = destination (a2 * 512 bytes, any
+#         alignment), a2 = most sectors to read, a3 = 1 to extend the CRC.
+#   Results: a0 = sectors read (0 once the file is read).
+#   Errors: 8 corrupt chain (out of range, bad cluster, loop, longer than
+#         the volume, ending before or after the file's size).
+#   Clobbers: only ABI temporaries.
+fat32_stream_read:
+    addi    sp, sp, -80
+    sd      ra, 72(sp)
+    sd      s0, 64(sp)
+    sd      s1, 56(sp)
+    sd      s2, 48(sp)
+    sd      s3, 40(sp)
+    sd      s4, 32(sp)
+    sd      s5, 24(sp)
+    sd      s6, 16(sp)
+    sd      s7, 8(sp)
+    mv      s0, a0                      # s0 = stream
+    mv      s1, a1                      # s1 = destination
+    ld      t0, STREAM_LEFT(s0)
+    bleu    a2, t0, 1f
+    mv      a2, t0
+1:  mv      s2, a2                      # s2 = sectors still to read in this call
+    mv      s7, a2                      # s7 = sectors this call reads
+    li      s6, 0                       # s6 = hook
+    beqz    a3, 2f
+    la      s6, fat_crc_sector
+2:  ld      t0, STREAM_PATH(s0)         # errors name this file
+    la      t1, fat_path
+    sd      t0, 0(t1)
+    la      t0, fat_volume
+    ld      t0, VOL_SPC_SHIFT(t0)
+    li      s5, 1
+    sll     s5, s5, t0                  # s5 = sectors per cluster
+
+10: beqz    s2, 90f
+    ld      t0, STREAM_SECTOR(s0)
+    bne     t0, s5, 11f
+    ld      a0, STREAM_CLUSTER(s0)      # this cluster is read: on to the next
+    call    fat_walk_next
+    beqz    a0, 80f
+    sd      a0, STREAM_CLUSTER(s0)
+    sd      zero, STREAM_SECTOR(s0)
+11: ld      a0, STREAM_CLUSTER(s0)
+    call    fat_cluster_lba
+    ld      t0, STREAM_SECTOR(s0)
+    add     s3, a0, t0                  # s3 = first block of the run
+    sub     s4, s5, t0                  # s4 = sectors in the run
+    bleu    s4, s2, 12f
+    mv      s4, s2
+12: add     t0, t0, s4
+    sd      t0, STREAM_SECTOR(s0)
+    # The run goes on while the next cluster is the one after this.
+13: bgeu    s4, s2, 20f
+    ld      a0, STREAM_CLUSTER(s0)
+    call    fat_walk_next
+    beqz    a0, 80f
+    ld      t0, STREAM_CLUSTER(s0)
+    sd      a0, STREAM_CLUSTER(s0)
+    sd      zero, STREAM_SECTOR(s0)
+    addi    t0, t0, 1
+    bne     a0, t0, 20f                 # not contiguous: read what the run has
+    sub     t1, s2, s4                  # take min(sectors per cluster, still wanted)
+    bleu    t1, s5, 14f
+    mv      t1, s5
+14: add     s4, s4, t1
+    sd      t1, STREAM_SECTOR(s0)
+    j       13b
+
+20: ld      t0, STREAM_LEFT(s0)
+    sub     t0, t0, s4
+    sd      t0, STREAM_LEFT(s0)
+    bnez    t0, 21f
+    # The file's last sector: its chain must end with this cluster (a loop
+    # never ends; it would repeat data).
+    ld      a0, STREAM_CLUSTER(s0)
+    call    fat_chain_next
+    beqz    a0, 21f
+    la      a0, msg_chain_long
+    call    fat_chain_error
+21: mv      a0, s3
+    mv      a1, s4
+    mv      a2, s1
+    mv      a3, s6
+    mv      a4, s0
+    call    sd_read_blocks
+    slli    t0, s4, FAT_SECTOR_SHIFT
+    add     s1, s1, t0
+    sub     s2, s2, s4
+    j       10b
+
+80: la      a0, msg_chain_short
+    call    fat_chain_error
+
+90: mv      a0, s7
+    ld      s7, 8(sp)
+    ld      s6, 16(sp)
+    ld      s5, 24(sp)
+    ld      s4, 32(sp)
+    ld      s3, 40(sp)
+    ld      s2, 48(sp)
+    ld      s1, 56(sp)
+    ld      s0, 64(sp)
+    ld      ra, 72(sp)
+    addi    sp, sp, 80
+    ret
 
 # fat_crc_sector (file-local)
 #   What: fat32_load's hook: extends the file's CRC-32 over one arrived

@@ -1,8 +1,11 @@
 # heap.S: a bump allocator over the SRAM between the end of .bss and the
 # hart stacks ([__heap_start, __heap_end), from k210.ld).
 #
-# Blocks are never freed: the firmware loads its files once at boot and keeps
-# them. Only hart 0 allocates, before hart 1 is released, so there is no lock.
+# Blocks are handed out in order and given back only from the top: a block
+# that is needed for a while (scene.ini's text, the window obj.S reads the
+# model through) is given back with every block after it (heap_release) while
+# it is still the latest. Everything else is kept. Only hart 0 allocates,
+# before hart 1 is released, so there is no lock.
 
     .option norelax
     .include "k210.inc"
@@ -43,6 +46,19 @@ heap_alloc:
     mv      a0, t1
     ret
 1:  li      a0, 0
+    ret
+
+    .globl heap_release
+# heap_release
+#   What: gives back the block at a0 and every block handed out after it (the
+#         next block starts at a0 again). a0 must be an address heap_alloc
+#         returned, not given back since.
+#   Arguments: a0 = the block's address.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+heap_release:
+    la      t0, heap_next
+    sd      a0, 0(t0)
     ret
 
     .globl heap_alloc_or_fail

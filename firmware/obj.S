@@ -29,17 +29,38 @@
 # Two passes over the text: the first checks every line and counts vertices,
 # texture coordinates, normals and triangles (after fanning); then the
 # arrays are taken from the heap, sized from those counts; the second pass
-# fills them. Errors: 10, "error 10 bad model line N: <what>" (an unknown
+# fills them.
+#
+# The text is not kept: each pass reads the file from the card through a
+# window of OBJ_WINDOW_BYTES in the heap (fat32_stream_read), taken for the
+# pass and given back after it, so that the model's memory is its arrays
+# alone. Tokens (a keyword, a number, a face corner) are parsed whole: when
+# one runs to the end of what the window holds, its bytes move to the
+# window's start and the next sectors are read after them; a token longer
+# than the window grows it by OBJ_WINDOW_BYTES (the window is the heap's
+# latest block), so no token or line is too long but for the heap. The first
+# pass also computes the file's CRC-32 and prints its "load <path> <size>
+# crc32=<crc>" line (scene.S scene_print_load) once it has read it all. A
+# model record with text in memory (FILE_RECORD_ADDRESS, scene.inc) is
+# parsed through the same window, copied into it as if from the card.
+#
+# Errors: 10, "error 10 bad model line N: <what>" (an unknown
 # statement, a malformed number, a wrong count of numbers, a malformed face
 # corner, a face with fewer than 3 vertices, an index 0 or out of range, a
 # number too large for single precision; a positive index past the file's
 # total is found in the second pass, so after any other error of the file),
 # "error 10 bad model: no faces" for a model without a face; 12 when the
-# arrays do not fit in the heap.
+# arrays do not fit in the heap ("model too large for memory: <n> bytes
+# needed, <m> bytes free"), or the window ("model too large for memory
+# (model text window: <n> bytes needed, <m> bytes free)", heap.S
+# heap_alloc_or_fail; "(model text window for a longer word: ...)" when a
+# word outgrows the heap). Errors of the card
+# and its chains (4, 8) as in fat32.S.
 
     .option norelax
     .include "k210.inc"
     .include "errors.inc"
+    .include "fat32.inc"
     .include "heap.inc"
     .include "scene.inc"
     .include "text.inc"
@@ -82,6 +103,20 @@
     .equ OBJ_FACE_MIN_CORNERS,  3
     .equ OBJ_F32_BYTES,         4
     .equ OBJ_INDEX_LIMIT,       0x80000000  # indices saturate here (out of range)
+    .equ OBJ_WINDOW_BYTES,      16384       # the window the text is read through
+    .if (OBJ_WINDOW_BYTES % FAT_SECTOR_BYTES) || (OBJ_WINDOW_BYTES % HEAP_ALIGN)
+    .error "the window holds whole sectors and grows in whole heap blocks"
+    .endif
+# obj_reader (.bss): the window the pass reads the text through
+    .equ RD_BASE,               0           # window start (heap block)
+    .equ RD_CAP,                8           # its bytes
+    .equ RD_END,                16          # end of the text read into it
+    .equ RD_CURSOR,             24          # next byte to parse
+    .equ RD_LEFT,               32          # file bytes not yet read into it
+    .equ RD_TEXT,               40          # text in memory: its next byte; 0: the card
+    .equ RD_CRC_ON,             48          # 1: card reads extend the CRC (first pass)
+    .equ RD_STREAM,             56          # fat32 stream record (STREAM_BYTES)
+    .equ RD_BYTES,              RD_STREAM + STREAM_BYTES
     .equ OBJ_V_COUNTS,          (1 << 3) | (1 << 4) | (1 << 6) | (1 << 7)
     .equ OBJ_VT_COUNTS,         (1 << 1) | (1 << 2) | (1 << 3)
     .equ OBJ_VN_COUNTS,         (1 << 3)
@@ -141,6 +176,8 @@ msg_range_v:        .asciz "vertex index out of range"
 msg_range_t:        .asciz "texture coordinate index out of range"
 msg_range_n:        .asciz "normal index out of range"
 msg_no_faces:       .asciz "bad model: no faces"
+msg_window:         .asciz "model text window"
+msg_window_grow:    .asciz "model text window for a longer word"
 msg_too_large:      .asciz "model too large for memory: "
 msg_too_large_need: .asciz " bytes needed, "
 msg_too_large_free: .asciz " bytes free"
@@ -154,10 +191,12 @@ msg_normals_none:   .asciz " normals (not stored: wireframe)\n"
     .text
     .globl obj_parse_model
 # obj_parse_model
-#   What: parses the model file scene.S loaded (scene_model) into the mesh
-#         fields of `scene` (two passes, arrays from the heap; see the file
-#         comment) and prints "model: <f> triangles, <v> vertices, <t> uv,
-#         <n> normals". Needs scene_load (SCENE_MODE decides the normals).
+#   What: parses the model file scene.S found (scene_model) into the mesh
+#         fields of `scene` (two passes over the file read from the card,
+#         arrays from the heap; see the file comment), printing its "load"
+#         line after the first and "model: <f> triangles, <v> vertices,
+#         <t> uv, <n> normals" after the second. Needs scene_load
+#         (SCENE_MODE decides the normals).
 #   Arguments: none. Results: none (errors are fatal).
 #   Clobbers: only ABI temporaries.
 obj_parse_model:
@@ -169,10 +208,6 @@ obj_parse_model:
     sd      s3, 24(sp)
     sd      s4, 16(sp)
     sd      s5, 8(sp)
-    la      t0, scene_model
-    ld      s0, 0(t0)                   # s0 = text
-    ld      s1, 8(t0)
-    add     s1, s1, s0                  # s1 = end of the text
     la      s2, obj_state               # s2 = state
     la      s3, scene                   # s3 = scene
     lwu     t0, SCENE_MODE(s3)
@@ -186,10 +221,19 @@ obj_parse_model:
     sd      t0, OBJ_TOTALS + (OBJ_KIND_V << OBJ_COUNT_SHIFT)(s2)
     sd      t0, OBJ_TOTALS + (OBJ_KIND_T << OBJ_COUNT_SHIFT)(s2)
     sd      t0, OBJ_TOTALS + (OBJ_KIND_N << OBJ_COUNT_SHIFT)(s2)
-    mv      a0, s0
-    mv      a1, s1
+    li      a0, 1
+    call    obj_reader_open
     call    obj_pass
-    ld      t0, OBJ_NF(s2)
+    call    obj_reader_close
+    la      t0, scene_model             # read from the card: its load line
+    ld      t1, FILE_RECORD_ADDRESS(t0)
+    bnez    t1, 1f
+    ld      a0, FILE_RECORD_PATH(t0)
+    ld      a1, FILE_RECORD_SIZE(t0)
+    la      t0, obj_reader
+    ld      a2, RD_STREAM + STREAM_CRC(t0)
+    call    scene_print_load
+1:  ld      t0, OBJ_NF(s2)
     beqz    t0, 80f
     ld      t0, OBJ_COUNTS + (OBJ_KIND_V << OBJ_COUNT_SHIFT)(s2)
     sd      t0, OBJ_TOTALS + (OBJ_KIND_V << OBJ_COUNT_SHIFT)(s2)
@@ -230,9 +274,10 @@ obj_parse_model:
     # Second pass: fill them.
     li      t0, 1
     sd      t0, OBJ_STORE(s2)
-    mv      a0, s0
-    mv      a1, s1
+    li      a0, 0
+    call    obj_reader_open
     call    obj_pass
+    call    obj_reader_close
 
     call    console_lock
     la      a0, msg_model
@@ -253,9 +298,9 @@ obj_parse_model:
     call    console_put_dec
     la      a0, msg_normals
     ld      t0, OBJ_KEEP_NORMALS(s2)
-    bnez    t0, 1f
+    bnez    t0, 2f
     la      a0, msg_normals_none
-1:  call    console_puts
+2:  call    console_puts
     call    console_unlock
     ld      s5, 8(sp)
     ld      s4, 16(sp)
@@ -341,93 +386,290 @@ obj_alloc:
     ret
 
 # obj_pass (file-local)
-#   What: one pass over the text: every line's statement is found in
-#         obj_statements and handed to its handler (a0 = after the keyword,
-#         a1 = end of the line's content, a2 = the row's aux). Resets and
-#         leaves the counts in obj_state.
-#   Arguments: a0 = text, a1 = end of the text.
+#   What: one pass over the text, read through the window obj_reader_open
+#         set up: every line's statement is found in obj_statements and
+#         handed to its handler (a2 = the row's aux), which reads the line's
+#         tokens (obj_token); the rest of the line is then skipped (a
+#         comment, the CR of a CRLF, an ignored statement's words). Resets
+#         and leaves the counts in obj_state.
+#   Arguments: none.
 #   Results: none (errors are fatal).
 #   Clobbers: only ABI temporaries.
 obj_pass:
-    addi    sp, sp, -64
-    sd      ra, 56(sp)
-    sd      s0, 48(sp)
-    sd      s1, 40(sp)
-    sd      s2, 32(sp)
-    sd      s3, 24(sp)
-    sd      s4, 16(sp)
-    sd      s5, 8(sp)
-    mv      s0, a0                      # s0 = start of the line
-    mv      s1, a1                      # s1 = end of the text
-    la      s5, obj_state
-    sd      zero, OBJ_LINE(s5)
-    sd      zero, OBJ_COUNTS + (OBJ_KIND_V << OBJ_COUNT_SHIFT)(s5)
-    sd      zero, OBJ_COUNTS + (OBJ_KIND_T << OBJ_COUNT_SHIFT)(s5)
-    sd      zero, OBJ_COUNTS + (OBJ_KIND_N << OBJ_COUNT_SHIFT)(s5)
-    sd      zero, OBJ_NF(s5)
-1:  bgeu    s0, s1, 90f
-    ld      t0, OBJ_LINE(s5)
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+    sd      s0, 0(sp)
+    la      s0, obj_state
+    sd      zero, OBJ_LINE(s0)
+    sd      zero, OBJ_COUNTS + (OBJ_KIND_V << OBJ_COUNT_SHIFT)(s0)
+    sd      zero, OBJ_COUNTS + (OBJ_KIND_T << OBJ_COUNT_SHIFT)(s0)
+    sd      zero, OBJ_COUNTS + (OBJ_KIND_N << OBJ_COUNT_SHIFT)(s0)
+    sd      zero, OBJ_NF(s0)
+1:  call    obj_more
+    beqz    a0, 90f
+    ld      t0, OBJ_LINE(s0)
     addi    t0, t0, 1
-    sd      t0, OBJ_LINE(s5)
-    # s2 = the line's LF (or the end of the text); s3 = end of its content
-    # (before a comment, before a CR ending the line)
-    mv      s2, s0
-    li      t1, CHAR_LF
-2:  bgeu    s2, s1, 3f
-    lbu     t0, 0(s2)
-    beq     t0, t1, 3f
-    addi    s2, s2, 1
-    j       2b
-3:  mv      s3, s2
-    bleu    s3, s0, 4f
-    lbu     t0, -1(s3)
-    li      t1, CHAR_CR
-    bne     t0, t1, 4f
-    addi    s3, s3, -1
-4:  mv      t2, s0
-    li      t1, CHAR_COMMENT
-5:  bgeu    t2, s3, 6f
-    lbu     t0, 0(t2)
-    beq     t0, t1, 51f
-    addi    t2, t2, 1
-    j       5b
-51: mv      s3, t2
-6:  mv      a0, s0
-    mv      a1, s3
-    call    parse_skip_blanks
-    beq     a0, s3, 60f                 # blank or comment only
-    mv      s4, a0                      # s4 = keyword
-    li      t1, CHAR_SPACE
-    li      t2, CHAR_TAB
-7:  bgeu    a0, s3, 8f                  # a0 = end of the keyword
-    lbu     t0, 0(a0)
-    beq     t0, t1, 8f
-    beq     t0, t2, 8f
-    addi    a0, a0, 1
-    j       7b
-8:  mv      a1, a0
-    mv      a0, s4
+    sd      t0, OBJ_LINE(s0)
+    call    obj_token                   # the keyword
+    beq     a0, a1, 60f                 # blank or comment only
     call    obj_find_statement
     beqz    a0, 80f
     ld      t0, OBJ_STMT_HANDLER(a0)
     ld      a2, OBJ_STMT_AUX(a0)
-    mv      a0, a1
-    mv      a1, s3
     jalr    t0
-60: addi    s0, s2, 1                   # next line
+60: call    obj_next_line
     j       1b
 
 80: la      a0, msg_unknown
     j       obj_error
 
-90: ld      s5, 8(sp)
-    ld      s4, 16(sp)
-    ld      s3, 24(sp)
-    ld      s2, 32(sp)
-    ld      s1, 40(sp)
-    ld      s0, 48(sp)
-    ld      ra, 56(sp)
-    addi    sp, sp, 64
+90: ld      s0, 0(sp)
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
+    ret
+
+# obj_reader_open (file-local)
+#   What: starts reading the model's text for a pass: takes the window from
+#         the heap (OBJ_WINDOW_BYTES; error 12 when it does not fit) and opens
+#         the file on the card by its path (scene_model), or the text in
+#         memory when the record has an address.
+#   Arguments: a0 = 1 to compute the file's CRC-32 while reading it (into
+#         obj_reader's stream record), 0 not to.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+obj_reader_open:
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+    sd      s0, 0(sp)
+    la      s0, obj_reader
+    sd      a0, RD_CRC_ON(s0)
+    li      a0, OBJ_WINDOW_BYTES
+    la      a1, msg_window
+    call    heap_alloc_or_fail
+    sd      a0, RD_BASE(s0)
+    sd      a0, RD_END(s0)
+    sd      a0, RD_CURSOR(s0)
+    li      t0, OBJ_WINDOW_BYTES
+    sd      t0, RD_CAP(s0)
+    la      t0, scene_model
+    ld      t1, FILE_RECORD_ADDRESS(t0)
+    sd      t1, RD_TEXT(s0)
+    beqz    t1, 1f
+    ld      t1, FILE_RECORD_SIZE(t0)
+    sd      t1, RD_LEFT(s0)
+    j       2f
+1:  addi    a0, s0, RD_STREAM
+    ld      a1, FILE_RECORD_PATH(t0)
+    call    fat32_stream_open
+    sd      a0, RD_LEFT(s0)
+2:  ld      s0, 0(sp)
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
+    ret
+
+# obj_reader_close (file-local)
+#   What: ends a pass's reading: gives the window back to the heap (it is
+#         the latest block).
+#   Arguments: none. Results: none.
+#   Clobbers: only ABI temporaries.
+obj_reader_close:
+    la      t0, obj_reader
+    ld      a0, RD_BASE(t0)
+    tail    heap_release
+
+# obj_refill (file-local)
+#   What: reads more of the text into the window, keeping the bytes from the
+#         cursor on: they move to the window's start (the cursor with them),
+#         then as many whole sectors as the window has room for are read
+#         after them. When less than a sector is free after them (a token as
+#         long as the window) the window first grows by OBJ_WINDOW_BYTES: the
+#         block heap_alloc hands out next starts where the window ends, as
+#         nothing is taken from the heap during a pass.
+#   Arguments: none.
+#   Results: a0 = 1 when bytes were added, 0 when the text is read to its
+#         end (the window is left as it was).
+#   Clobbers: only ABI temporaries.
+obj_refill:
+    addi    sp, sp, -32
+    sd      ra, 24(sp)
+    sd      s0, 16(sp)
+    sd      s1, 8(sp)
+    sd      s2, 0(sp)
+    la      s0, obj_reader
+    li      a0, 0
+    ld      t0, RD_LEFT(s0)
+    beqz    t0, 90f
+    ld      t1, RD_CURSOR(s0)
+    ld      t2, RD_END(s0)
+    ld      t3, RD_BASE(s0)
+    beq     t1, t3, 2f
+1:  bgeu    t1, t2, 11f                 # [cursor, end) to the start
+    lbu     t4, 0(t1)
+    sb      t4, 0(t3)
+    addi    t1, t1, 1
+    addi    t3, t3, 1
+    j       1b
+11: sd      t3, RD_END(s0)
+    ld      t3, RD_BASE(s0)
+    sd      t3, RD_CURSOR(s0)
+2:  ld      t0, RD_BASE(s0)
+    ld      t1, RD_CAP(s0)
+    add     t0, t0, t1
+    ld      t2, RD_END(s0)
+    sub     s1, t0, t2                  # s1 = bytes free after the kept ones
+    li      t0, FAT_SECTOR_BYTES
+    bgeu    s1, t0, 3f
+    li      a0, OBJ_WINDOW_BYTES
+    la      a1, msg_window_grow
+    call    heap_alloc_or_fail
+    ld      t0, RD_CAP(s0)
+    li      t1, OBJ_WINDOW_BYTES
+    add     t0, t0, t1
+    sd      t0, RD_CAP(s0)
+    add     s1, s1, t1
+3:  srli    s1, s1, FAT_SECTOR_SHIFT    # s1 = sectors that fit
+    slli    s2, s1, FAT_SECTOR_SHIFT
+    ld      t0, RD_LEFT(s0)
+    bleu    s2, t0, 4f
+    mv      s2, t0                      # s2 = text bytes coming in
+4:  ld      t0, RD_TEXT(s0)
+    beqz    t0, 6f
+    ld      t1, RD_END(s0)              # text in memory: copied
+    add     t2, t0, s2
+5:  bgeu    t0, t2, 51f
+    lbu     t3, 0(t0)
+    sb      t3, 0(t1)
+    addi    t0, t0, 1
+    addi    t1, t1, 1
+    j       5b
+51: sd      t0, RD_TEXT(s0)
+    j       7f
+6:  addi    a0, s0, RD_STREAM           # from the card
+    ld      a1, RD_END(s0)
+    mv      a2, s1
+    ld      a3, RD_CRC_ON(s0)
+    call    fat32_stream_read
+7:  ld      t0, RD_END(s0)
+    add     t0, t0, s2
+    sd      t0, RD_END(s0)
+    ld      t0, RD_LEFT(s0)
+    sub     t0, t0, s2
+    sd      t0, RD_LEFT(s0)
+    li      a0, 1
+90: ld      s2, 0(sp)
+    ld      s1, 8(sp)
+    ld      s0, 16(sp)
+    ld      ra, 24(sp)
+    addi    sp, sp, 32
+    ret
+
+# obj_more (file-local)
+#   What: whether any text is left to parse (refilling an empty window).
+#   Arguments: none.
+#   Results: a0 = 1 some is, 0 the text is parsed to its end.
+#   Clobbers: only ABI temporaries.
+obj_more:
+    la      t0, obj_reader
+    ld      t1, RD_CURSOR(t0)
+    ld      t2, RD_END(t0)
+    li      a0, 1
+    bgeu    t1, t2, 1f
+    ret
+1:  tail    obj_refill
+
+# obj_next_line (file-local)
+#   What: moves the cursor past the next LF (or to the end of the text).
+#   Arguments: none. Results: none.
+#   Clobbers: only ABI temporaries.
+obj_next_line:
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+1:  la      t0, obj_reader
+    ld      t1, RD_CURSOR(t0)
+    ld      t2, RD_END(t0)
+    li      t3, CHAR_LF
+2:  bgeu    t1, t2, 3f
+    lbu     t4, 0(t1)
+    addi    t1, t1, 1
+    bne     t4, t3, 2b
+    sd      t1, RD_CURSOR(t0)
+    j       9f
+3:  sd      t1, RD_CURSOR(t0)
+    call    obj_refill
+    bnez    a0, 1b
+9:  ld      ra, 8(sp)
+    addi    sp, sp, 16
+    ret
+
+# obj_token (file-local)
+#   What: the line's next token: skips spaces and tabs, then takes the bytes
+#         up to a space or tab or the end of the line's content (a LF, a '#',
+#         a CR followed by LF or by the end of the text, the end of the text),
+#         refilling the window as needed so that the token lies whole in it.
+#         A CR followed by anything else is part of the token.
+#   Arguments: none.
+#   Results: a0 = token start, a1 = token end (in the window, valid until
+#         the next read); the cursor moves to a1. a0 = a1 where the content
+#         ends (the cursor stays on what ends it).
+#   Clobbers: only ABI temporaries.
+obj_token:
+    addi    sp, sp, -32
+    sd      ra, 24(sp)
+    sd      s0, 16(sp)
+    sd      s1, 8(sp)
+    la      s0, obj_reader
+1:  ld      t0, RD_CURSOR(s0)           # spaces and tabs
+    ld      t1, RD_END(s0)
+    li      t3, CHAR_SPACE
+    li      t4, CHAR_TAB
+2:  bgeu    t0, t1, 3f
+    lbu     t2, 0(t0)
+    beq     t2, t3, 21f
+    bne     t2, t4, 4f
+21: addi    t0, t0, 1
+    j       2b
+3:  sd      t0, RD_CURSOR(s0)
+    call    obj_refill
+    bnez    a0, 1b
+    ld      t3, RD_CURSOR(s0)           # the end of the text: no token
+    j       80f
+4:  sd      t0, RD_CURSOR(s0)           # the token starts here
+    li      s1, 0                       # s1 = its bytes scanned so far
+5:  ld      t0, RD_CURSOR(s0)
+    ld      t1, RD_END(s0)
+    add     t3, t0, s1                  # t3 = scan
+    li      t5, CHAR_COMMENT            # no byte above '#' ends a token
+6:  bgeu    t3, t1, 7f
+    lbu     t2, 0(t3)
+    bgtu    t2, t5, 65f
+    li      t4, CHAR_SPACE
+    beq     t2, t4, 80f
+    li      t4, CHAR_TAB
+    beq     t2, t4, 80f
+    li      t4, CHAR_LF
+    beq     t2, t4, 80f
+    beq     t2, t5, 80f
+    li      t4, CHAR_CR
+    bne     t2, t4, 65f
+    addi    t4, t3, 1                   # a CR: what follows it decides
+    bgeu    t4, t1, 7f
+    lbu     t2, 1(t3)
+    li      t4, CHAR_LF
+    beq     t2, t4, 80f
+65: addi    t3, t3, 1
+    j       6b
+7:  sub     s1, t3, t0                  # more text, the token kept: scan on
+    call    obj_refill
+    bnez    a0, 5b
+    ld      t0, RD_CURSOR(s0)           # the end of the text ends the token
+    add     t3, t0, s1
+80: ld      a0, RD_CURSOR(s0)
+    mv      a1, t3
+    sd      a1, RD_CURSOR(s0)
+    ld      s1, 8(sp)
+    ld      s0, 16(sp)
+    ld      ra, 24(sp)
+    addi    sp, sp, 32
     ret
 
 # obj_find_statement (file-local)
@@ -457,17 +699,19 @@ obj_find_statement:
     ret
 
 # obj_stmt_ignore (file-local)
-#   What: a statement accepted and ignored (o, g, s, mtllib, usemtl).
-#   Arguments: a0, a1, a2 as obj_pass hands them. Results: none.
+#   What: a statement accepted and ignored (o, g, s, mtllib, usemtl): obj_pass
+#         skips the rest of its line.
+#   Arguments: a2 as obj_pass hands it. Results: none.
 #   Clobbers: nothing.
 obj_stmt_ignore:
     ret
 
 # obj_stmt_vector (file-local)
-#   What: v, vt or vn: checks its numbers, stores them in the second pass
-#         (vn only when normals are kept), counts it.
-#   Arguments: a0 = after the keyword, a1 = end of the content,
-#         a2 = obj_vectors row.
+#   What: v, vt or vn: reads its numbers (the line's tokens; one past
+#         OBJ_NUMBERS_MAX is counted, not read: the count is wrong then),
+#         checks them, stores them in the second pass (vn only when normals
+#         are kept), counts it.
+#   Arguments: a2 = obj_vectors row.
 #   Results: none (errors are fatal).
 #   Clobbers: only ABI temporaries.
 obj_stmt_vector:
@@ -477,13 +721,23 @@ obj_stmt_vector:
     sd      s1, 72(sp)
     # 0(sp): OBJ_NUMBERS_MAX doubles
     mv      s0, a2                      # s0 = row
+    li      s1, 0                       # s1 = numbers
     sd      zero, OBJ_DOUBLE_BYTES(sp)  # vt: v = 0 when absent
-    addi    a2, sp, 0
-    li      a3, OBJ_NUMBERS_MAX
-    call    parse_numbers
+4:  call    obj_token
+    beq     a0, a1, 6f
+    li      t0, OBJ_NUMBERS_MAX
+    bltu    s1, t0, 5f
+    addi    s1, s1, 1                   # one too many
+    j       6f
+5:  call    parse_number
     bnez    a1, 81f
-    lbu     t0, OBJ_VEC_COUNTS(s0)
-    srl     t0, t0, a0
+    slli    t0, s1, OBJ_DOUBLE_SHIFT
+    add     t0, t0, sp
+    fsd     fa0, 0(t0)
+    addi    s1, s1, 1
+    j       4b
+6:  lbu     t0, OBJ_VEC_COUNTS(s0)
+    srl     t0, t0, s1
     andi    t0, t0, 1
     beqz    t0, 82f
     lbu     s1, OBJ_VEC_STORED(s0)      # s1 = numbers kept
@@ -539,29 +793,22 @@ obj_stmt_vector:
     j       obj_error
 
 # obj_stmt_face (file-local)
-#   What: f: reads its corners (obj_corner) and fans them into triangles
-#         (first, latest, this), stored in the second pass, counted always.
-#   Arguments: a0 = after the keyword, a1 = end of the content, a2 unused.
+#   What: f: reads its corners (the line's tokens, obj_corner) and fans them
+#         into triangles (first, latest, this), stored in the second pass,
+#         counted always.
+#   Arguments: a2 unused.
 #   Results: none (errors are fatal).
 #   Clobbers: only ABI temporaries.
 obj_stmt_face:
     addi    sp, sp, -48
     sd      ra, 40(sp)
-    sd      s0, 32(sp)
-    sd      s1, 24(sp)
     sd      s2, 16(sp)
     sd      s3, 8(sp)
-    mv      s0, a0                      # s0 = cursor
-    mv      s1, a1                      # s1 = end
     li      s2, 0                       # s2 = corners so far
     la      s3, obj_state
-1:  mv      a0, s0
-    mv      a1, s1
-    call    parse_skip_blanks
-    bgeu    a0, s1, 8f
-    mv      a1, s1
+1:  call    obj_token
+    beq     a0, a1, 8f
     call    obj_corner
-    mv      s0, a0
     beqz    s2, 4f
     li      t0, 1
     beq     s2, t0, 5f
@@ -599,8 +846,6 @@ obj_stmt_face:
     bltu    s2, t0, 80f
     ld      s3, 8(sp)
     ld      s2, 16(sp)
-    ld      s1, 24(sp)
-    ld      s0, 32(sp)
     ld      ra, 40(sp)
     addi    sp, sp, 48
     ret
@@ -623,7 +868,7 @@ obj_copy_corner:
 
 # obj_corner (file-local)
 #   What: one face corner, v, v/vt, v//vn or v/vt/vn, ending at a blank or
-#         the end, into obj_state's OBJ_CORNER (0-based indices,
+#         the end (a token: the end), into obj_state's OBJ_CORNER (0-based indices,
 #         MESH_NO_INDEX for an absent one, and for vn when normals are not
 #         kept).
 #   Arguments: a0 = its first character, a1 = end of the content.
@@ -768,3 +1013,6 @@ obj_state:
 # obj_alloc_failed: 1 once a mesh array did not fit in the heap.
 obj_alloc_failed:
     .space  8
+# obj_reader: the window the text is read through (RD_* offsets above).
+obj_reader:
+    .space  RD_BYTES

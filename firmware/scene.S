@@ -60,7 +60,11 @@
 #
 # Every file loaded (scene.ini included) is reported on the console as
 #     load <path> <size> crc32=<8 lowercase hex digits>
-# with the CRC-32 zlib.crc32 gives for the same bytes.
+# with the CRC-32 zlib.crc32 gives for the same bytes. The model is only
+# looked up here (a missing model is error 6 before the texture is read):
+# obj.S reads it from the card as it parses it, without keeping its text, and
+# prints its line (scene_print_load) once it has read it all. scene.ini's
+# text is given back to the heap once it is parsed.
 
     .option norelax
     .include "k210.inc"
@@ -85,6 +89,8 @@
 # When a SCENE_KIND_FILE file is loaded (its SCENE_KEY_CHECK)
     .equ SCENE_FILE_ALWAYS,     0
     .equ SCENE_FILE_TEXTURED,   1           # only in textured mode
+    .equ SCENE_FILE_STREAM,     2           # always; looked up, not loaded: obj.S
+                                            # reads it from the card itself
     .equ SCENE_FOV_LIMIT,       180         # degrees, excluded
     .equ SCENE_NUMBERS_MAX,     3           # most numbers a key takes
     .equ SCENE_DOUBLE_BYTES,    8
@@ -112,10 +118,6 @@
     .equ SCENE_WORD_NAME,       0
     .equ SCENE_WORD_VALUE,      8
     .equ SCENE_WORD_BYTES,      16
-# file records (scene_model, scene_texture)
-    .equ FILE_RECORD_ADDRESS,   0
-    .equ FILE_RECORD_SIZE,      8
-    .equ FILE_RECORD_BYTES,     16
 
     .equ UTF8_BOM_0,            0xEF
     .equ UTF8_BOM_1,            0xBB
@@ -145,7 +147,7 @@ scene_line_\name:
 # The keys scene.ini may set. Adding a key: one row here, its default in
 # scene_default_values (or a default path), its field in scene.inc.
 scene_keys:
-    SCENE_KEY model, SCENE_KIND_FILE, 0, SCENE_FILE_ALWAYS, scene_model_path, scene_model, default_model_path
+    SCENE_KEY model, SCENE_KIND_FILE, 0, SCENE_FILE_STREAM, scene_model_path, scene_model, default_model_path
     SCENE_KEY texture, SCENE_KIND_FILE, 0, SCENE_FILE_TEXTURED, scene_texture_path, scene_texture, default_texture_path
     SCENE_KEY mode, SCENE_KIND_WORD, 0, 0, scene + SCENE_MODE, words_mode, msg_expect_mode
     SCENE_KEY cull, SCENE_KIND_WORD, 0, 0, scene + SCENE_CULL, words_cull, msg_expect_cull
@@ -292,10 +294,12 @@ msg_levels:         .asciz "bad value (must be a whole number from 2 to 65)"
     .globl scene_load
 # scene_load
 #   What: fills `scene` with the defaults, reads and parses scene.ini from
-#         the card's root when there is one, checks far > near, then loads
-#         the files the scene needs (the model; the texture only in
-#         textured mode: flat and wireframe draw none), recording each in its file record (scene_model,
-#         scene_texture; 0, 0 for a file not loaded). Once per boot. Needs
+#         the card's root when there is one (then gives its text back to the
+#         heap), checks far > near, then finds the files the scene needs: the
+#         model is looked up (obj.S reads it), the texture loaded only in
+#         textured mode (flat and wireframe draw none); each is recorded in
+#         its file record (scene_model, scene_texture; FILE_RECORD_*,
+#         scene.inc; 0, 0 for a file not loaded). Once per boot. Needs
 #         fat32_mount and heap_init.
 #   Arguments: none. Results: none (errors are fatal).
 #   Clobbers: only ABI temporaries.
@@ -313,7 +317,10 @@ scene_load:
     j       2f
 1:  la      a0, path_scene_ini
     call    scene_load_file
+    mv      s0, a0
     call    scene_parse
+    mv      a0, s0                      # its values are stored: the text goes
+    call    heap_release
 2:  call    scene_check_planes
 
     la      s0, scene_keys
@@ -322,6 +329,8 @@ scene_load:
     li      t1, SCENE_KIND_FILE
     bne     t0, t1, 4f
     lbu     t0, SCENE_KEY_CHECK(s0)
+    li      t1, SCENE_FILE_STREAM
+    beq     t0, t1, 32f
     li      t1, SCENE_FILE_TEXTURED
     bne     t0, t1, 31f
     la      t2, scene
@@ -330,9 +339,15 @@ scene_load:
     bne     t2, t1, 4f                  # flat, wireframe: no texture drawn, none read
 31: ld      a0, SCENE_KEY_TARGET(s0)
     call    scene_load_file
-    ld      t0, SCENE_KEY_AUX(s0)
+    j       33f
+32: ld      a0, SCENE_KEY_TARGET(s0)
+    call    fat32_open                  # a0 = first cluster, a1 = size
+    li      a0, 0                       # not in memory
+33: ld      t0, SCENE_KEY_AUX(s0)
     sd      a0, FILE_RECORD_ADDRESS(t0)
     sd      a1, FILE_RECORD_SIZE(t0)
+    ld      t1, SCENE_KEY_TARGET(s0)
+    sd      t1, FILE_RECORD_PATH(t0)
 4:  addi    s0, s0, SCENE_KEY_BYTES
     bltu    s0, s1, 3b
     ld      s1, 8(sp)
@@ -404,17 +419,43 @@ scene_check_planes:
 #   Results: a0 = address of the bytes, a1 = size.
 #   Clobbers: only ABI temporaries.
 scene_load_file:
-    addi    sp, sp, -48
-    sd      ra, 40(sp)
-    sd      s0, 32(sp)
-    sd      s1, 24(sp)
-    sd      s2, 16(sp)
-    sd      s3, 8(sp)
+    addi    sp, sp, -32
+    sd      ra, 24(sp)
+    sd      s0, 16(sp)
+    sd      s1, 8(sp)
+    sd      s2, 0(sp)
     mv      s0, a0                      # s0 = path
     call    fat32_load
     mv      s1, a0                      # s1 = address
     mv      s2, a1                      # s2 = size
-    mv      s3, a2                      # s3 = CRC-32
+    mv      a1, s2
+    mv      a0, s0
+    call    scene_print_load
+    mv      a0, s1
+    mv      a1, s2
+    ld      s2, 0(sp)
+    ld      s1, 8(sp)
+    ld      s0, 16(sp)
+    ld      ra, 24(sp)
+    addi    sp, sp, 32
+    ret
+
+    .globl scene_print_load
+# scene_print_load
+#   What: prints "load <path> <size> crc32=<crc>" (the CRC-32 as 8
+#         lowercase hex digits), the line of a file read from the card.
+#   Arguments: a0 = path (NUL-terminated), a1 = size, a2 = CRC-32.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+scene_print_load:
+    addi    sp, sp, -32
+    sd      ra, 24(sp)
+    sd      s0, 16(sp)
+    sd      s1, 8(sp)
+    sd      s2, 0(sp)
+    mv      s0, a0                      # s0 = path
+    mv      s1, a1                      # s1 = size
+    mv      s2, a2                      # s2 = CRC-32
     call    console_lock
     la      a0, msg_load
     call    console_puts
@@ -422,23 +463,20 @@ scene_load_file:
     call    console_puts
     li      a0, CHAR_SPACE
     call    console_putc
-    mv      a0, s2
+    mv      a0, s1
     call    console_put_dec
     la      a0, msg_crc32
     call    console_puts
-    mv      a0, s3
+    mv      a0, s2
     call    console_put_hex32
     li      a0, CHAR_LF
     call    console_putc
     call    console_unlock
-    mv      a0, s1
-    mv      a1, s2
-    ld      s3, 8(sp)
-    ld      s2, 16(sp)
-    ld      s1, 24(sp)
-    ld      s0, 32(sp)
-    ld      ra, 40(sp)
-    addi    sp, sp, 48
+    ld      s2, 0(sp)
+    ld      s1, 8(sp)
+    ld      s0, 16(sp)
+    ld      ra, 24(sp)
+    addi    sp, sp, 32
     ret
 
 # scene_parse (file-local)

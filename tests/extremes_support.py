@@ -216,7 +216,7 @@ class HeapLayout:
 
 NEEDED = ("HEAP_ALIGN", "FAT_SECTOR_BYTES", "MESH_V_BYTES", "MESH_T_BYTES", "MESH_N_BYTES", "MESH_F_BYTES",
           "VTX_BYTES", "EDGE_BYTES", "EDGES_PER_TRIANGLE", "DEPTH_BUFFER_BYTES", "DEPTH16_BUFFER_BYTES",
-          "NORMAL_LIGHT_SHIFT", "TEX_PIXEL_BYTES")
+          "NORMAL_LIGHT_SHIFT", "TEX_PIXEL_BYTES", "OBJ_WINDOW_BYTES")
 
 
 def heap_layout(elf: Path) -> HeapLayout:
@@ -233,53 +233,84 @@ def heap_layout(elf: Path) -> HeapLayout:
 
 class Heap:
     """heap.S's bump allocator: a block of n bytes fits when n <= the bytes free; the next block
-    then starts at the next HEAP_ALIGN boundary (or the heap is full)."""
+    then starts at the next HEAP_ALIGN boundary (or the heap is full). heap_release gives back
+    the latest blocks, from a block's address on."""
 
     def __init__(self, layout: HeapLayout):
         self.layout = layout
         self.next = layout.start
+        self.failed: str | None = None
 
     @property
     def free(self) -> int:
         return self.layout.end - self.next
 
-    def alloc(self, size: int) -> bool:
+    def alloc(self, size: int) -> int | None:
+        """The block's address, or None when it does not fit (the heap is left as it was)."""
         if size > self.free:
-            return False
+            return None
         align = self.layout.HEAP_ALIGN
+        address = self.next
         self.next = min(self.layout.end, -(-(self.next + size) // align) * align)
-        return True
+        return address
+
+    def alloc_or_fail(self, name: str, size: int) -> int | None:
+        """heap.S heap_alloc_or_fail: on failure remembers its error 12 line."""
+        address = self.alloc(size)
+        if address is None:
+            self.failed = f"error 12 model too large for memory ({name}: {size} bytes needed, {self.free} bytes free)"
+        return address
+
+    def release(self, address: int) -> None:
+        self.next = address
 
 
-def boot_allocations(layout: HeapLayout, files: list[int], vertices: int, texcoords: int, normals: int,
-                     triangles: int, wireframe: bool = False, depth: str = "int16",
-                     gouraud: bool = False) -> tuple[str, Heap]:
-    """Replays the firmware's heap use at boot: main.S scene_load (scene.ini if any, the model,
-    the texture unless wireframe: fat32_load takes each file's size rounded up to whole
-    sectors), obj.S obj_parse_model (v, vt, vn, triangle arrays; none for a count of 0; all four
-    tried before failing), render.S render_init: vertex.S vertex_init's vertex records, then
-    the wireframe edge list, or else the depth buffer (DEPTH16_BUFFER_BYTES for `depth = int16`,
-    the default; DEPTH_BUFFER_BYTES for float32; error 12 "model too large for memory (depth
-    buffer: n bytes needed, m bytes free)") and, with `shading = gouraud`, one f32 per normal
-    (MESH_NCOUNT << NORMAL_LIGHT_SHIFT; heap.S's heap_alloc of 0 bytes always succeeds).
+def boot_allocations(layout: HeapLayout, texture: int | None, vertices: int, texcoords: int, normals: int,
+                     triangles: int, wireframe: bool = False, depth: str = "int16", gouraud: bool = False,
+                     scene_ini: int | None = None) -> tuple[str, Heap]:
+    """Replays the firmware's heap use at boot, given the sizes of the files (texture: bytes of
+    texture.ppm, None for none; scene_ini likewise) and the model's counts. The model's text
+    takes no part: obj.S reads it through a window. In order: scene.S scene_load (scene.ini if
+    any, loaded and given back once parsed; the texture unless wireframe: fat32_load takes its
+    size rounded up to whole sectors, error 7 when that does not fit), obj.S obj_parse_model (the
+    first pass's window of OBJ_WINDOW_BYTES, given back; the v, vt, vn and triangle arrays, none
+    for a count of 0, all four tried before failing: error 12 "model too large for memory: n
+    bytes needed, m bytes free"; the second pass's window after them, given back), render.S
+    render_init: vertex.S vertex_init's vertex records, then the wireframe edge list, or else the
+    depth buffer (DEPTH16_BUFFER_BYTES for `depth = int16`, the default; DEPTH_BUFFER_BYTES for
+    float32) and, with `shading = gouraud`, one f32 per normal (MESH_NCOUNT <<
+    NORMAL_LIGHT_SHIFT; heap.S's heap_alloc of 0 bytes always succeeds); each of these blocks is
+    error 12 "model too large for memory (<block>: n bytes needed, m bytes free)".
     Returns ("ok" | "error 7" | "error 12", heap); heap.failed is the console line for the block
     that did not fit (for error 7 its start: the line goes on with the file's name and sizes)."""
     heap = Heap(layout)
-    heap.failed = None
     sector = layout.FAT_SECTOR_BYTES
-    for size in files:
-        if not heap.alloc(-(-size // sector) * sector):
+    for size, kept in ((scene_ini, False), (None if wireframe else texture, True)):
+        if size is None:
+            continue
+        address = heap.alloc(-(-size // sector) * sector)
+        if address is None:
             heap.failed = "error 7 file too large for memory: "
             return "error 7", heap
+        if not kept:
+            heap.release(address)
+    window = heap.alloc_or_fail("model text window", layout.OBJ_WINDOW_BYTES)
+    if window is None:
+        return "error 12", heap
+    heap.release(window)
     ok, free, needed, align = True, heap.free, 0, layout.HEAP_ALIGN
     for count, each in ((vertices, layout.MESH_V_BYTES), (texcoords, layout.MESH_T_BYTES),
                         (normals, 0 if wireframe else layout.MESH_N_BYTES), (triangles, layout.MESH_F_BYTES)):
         if count and each:
-            ok = heap.alloc(count * each) and ok
+            ok = heap.alloc(count * each) is not None and ok
             needed += -(-count * each // align) * align
     if not ok:
         heap.failed = f"error 12 model too large for memory: {needed} bytes needed, {free} bytes free"
         return "error 12", heap
+    window = heap.alloc_or_fail("model text window", layout.OBJ_WINDOW_BYTES)
+    if window is None:
+        return "error 12", heap
+    heap.release(window)
     blocks = [("vertex records", vertices * layout.VTX_BYTES)]
     if wireframe:
         blocks.append(("edge list", triangles * layout.EDGES_PER_TRIANGLE * layout.EDGE_BYTES))
@@ -289,8 +320,7 @@ def boot_allocations(layout: HeapLayout, files: list[int], vertices: int, texcoo
         if gouraud:
             blocks.append(("normal intensities", normals << layout.NORMAL_LIGHT_SHIFT))
     for name, size in blocks:
-        if not heap.alloc(size):
-            heap.failed = f"error 12 model too large for memory ({name}: {size} bytes needed, {heap.free} bytes free)"
+        if heap.alloc_or_fail(name, size) is None:
             return "error 12", heap
     return "ok", heap
 

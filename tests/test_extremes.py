@@ -49,11 +49,13 @@ The root causes of the discrepancies found with 3-frame runs, each pinned by a t
   (extremes_support.firmware_lighting_in_reference) leaves only outline and texel-boundary
   pixels (test_angles_beyond_a_turn_and_negative_are_exact).
 
-Figures (today's heap: 5,909,440 bytes between __heap_start and __heap_end, the depth buffer now
-one of its blocks, after the vertex records: 153,600 bytes for int16; the tests derive every limit
-from the ELF's symbols and the firmware's allocation sequence, so they follow the heap when it
-changes): the largest model is 151,443 triangles (one more: error 12, "(depth buffer)"); the
-largest texture 1,918,287 texels (1,385 x 1,385 as a square; one texel more: error 12, the depth
+Figures (today's heap: 5,908,160 bytes between __heap_start and __heap_end, the depth buffer
+one of its blocks, after the vertex records: 153,600 bytes for int16; the model's text none of
+them, as obj.S reads it through a window; the tests derive every limit from the ELF's symbols and
+the firmware's allocation sequence, so they follow the heap when it changes): the largest model
+is 159,827 triangles beside a 1x1 texture, 154,366 beside a 256x256 one (one more: error 12,
+"(depth buffer)"); 100,000 triangles beside a 256x256 texture with up to 32,622 vertices; the
+largest texture 1,917,946 texels (1,384 x 1,384 as a square; one texel more: error 12, the depth
 buffer; 51,201 more: error 7); beside a model filling the rest, 32,933 texels.
 
 Corners projecting beyond +-2^23 pixels (the Q4 range) are cut at the guard band in clip space
@@ -64,6 +66,7 @@ from __future__ import annotations
 
 import os
 import re
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -71,10 +74,13 @@ import pytest
 from PIL import Image
 
 import reference
-from conftest import make_card, run_emulator
+from conftest import ROOT, make_card, run_emulator
 from extremes_support import (TEXTURE_1X1, boot_allocations, boot_outcomes, compare, compare_texels, heap_layout,
                               largest, limits, lighting_ok, outline_mask, reference_depth, run_scene, texel_index,
                               unique_texture, within_one_pixel)
+
+sys.path.insert(0, str(ROOT / "tools"))
+import make_assets  # noqa: E402  (tools/ is not a package on the path)
 
 TEXTURE = TEXTURE_1X1
 TRIANGLE = "v 0 0 -1\nv 1 0 -1\nv 0 1 -1\nf 1 2 3\n"
@@ -108,8 +114,22 @@ def fan_model(triangles: int, head: str = FAN_HEAD, first: str = "1 2 3") -> byt
     return (head + "f " + first + " 3" * (triangles - 1) + "\n").encode()
 
 
-def model_outcomes(layout, triangles: int) -> set[str]:
-    return boot_outcomes(layout, [len(fan_model(triangles)), len(TEXTURE)], 3, 0, 0, triangles)
+def random_texture(width: int, height: int, seed: int = 7) -> bytes:
+    """A P6 texture of random texels."""
+    rng = np.random.default_rng(seed)
+    return f"P6\n{width} {height}\n255\n".encode() + rng.integers(0, 256, 3 * width * height, dtype=np.uint8).tobytes()
+
+
+TEXTURE_256 = random_texture(256, 256)
+TEXTURES = {"1x1": TEXTURE,
+            "256x256": pytest.param(TEXTURE_256, marks=pytest.mark.skipif(
+                not os.environ.get("EXTREMES_FULL"), reason="like 1x1, with the texture of "
+                "test_100k_triangles_with_a_256x256_texture: set EXTREMES_FULL=1"))}
+
+
+def model_outcomes(layout, triangles: int, texture: bytes = TEXTURE) -> set[str]:
+    """The model's text takes no heap (obj.S reads it through a window): only its counts matter."""
+    return boot_outcomes(layout, len(texture), 3, 0, 0, triangles)
 
 
 @pytest.fixture(scope="module")
@@ -117,28 +137,94 @@ def layout(firmware):
     return heap_layout(firmware)
 
 
+@pytest.mark.parametrize("data", TEXTURES.values(), ids=TEXTURES.keys())
 @pytest.mark.parametrize("case", ["largest", "one-more-triangle"])
-def test_largest_model(firmware, layout, tmp_path, case):
-    """The largest model that fits: 151,443 triangles with today's heap of 5,909,440 bytes
-    (__heap_start..__heap_end), derived from the ELF and the firmware's allocation sequence
-    (extremes_support.boot_allocations: files, mesh arrays, vertex records, then the 16-bit depth
-    buffer), not a constant. One more is error 12, the block the replay says did not fit ("model
-    too large for memory (depth buffer)" today). Board-model run times: about 5-10 s (fits,
-    1 frame) and 4-7 s (error 12)."""
-    most, beyond = limits(lambda n: model_outcomes(layout, n), 1, layout.size // layout.MESH_F_BYTES + 1)
+def test_largest_model(firmware, layout, tmp_path, case, data):
+    """The largest model that fits: 159,827 triangles with a 1x1 texture, 154,366 with a 256x256
+    one, with today's heap of 5,908,160 bytes (__heap_start..__heap_end), derived from the ELF and
+    the firmware's allocation sequence (extremes_support.boot_allocations: the texture, the mesh
+    arrays, vertex records, then the 16-bit depth buffer; the model's text is read through a
+    window and not kept), not a constant. One more is error 12, the block the replay says did not
+    fit ("model too large for memory (depth buffer)" today). Before obj.S streamed the model, its
+    text (2 bytes a triangle here) stayed beside the arrays: the limit was 151,443 (1x1), and
+    the largest here ended in error 12. Board-model run times: about 6-12 s (fits, 1 frame) and
+    5-8 s (error 12)."""
+    most, beyond = limits(lambda n: model_outcomes(layout, n, data), 1, layout.size // layout.MESH_F_BYTES + 1)
     triangles = most if case == "largest" else beyond
-    run = run_scene(firmware, tmp_path, fan_model(triangles), None, frames=1)
+    run = run_scene(firmware, tmp_path, fan_model(triangles), None, texture=data, frames=1)
     if case == "largest":
         assert run.returncode == 0, run.stderr + run.console
         assert f"model: {most} triangles, 3 vertices" in run.console
         # the degenerate triangles draw nothing: the frame is that of the first triangle alone
-        scene, mesh, texture = reference.load_files(None, fan_model(1), TEXTURE)
+        scene, mesh, ref_texture = reference.load_files(None, fan_model(1), data)
+        result = compare(run.frames[0], reference.render_image(scene, mesh, ref_texture, 0), run.background)
+        assert result.drawn_shown > 1000 and result.beyond_lighting_off_outline == 0, str(result)
+    else:
+        assert run.returncode == 8, run.stderr + run.console
+        failed = boot_allocations(layout, len(data), 3, 0, 0, triangles)[1].failed
+        assert (run.error_line() or "").startswith(failed), (failed, run.console)
+
+
+HUNDRED_THOUSAND = 100_000
+UV_HEAD = "vt 0 0\nvt 1 0\nvt 0.5 1\n"
+
+
+def crowded_model(vertices: int, triangles: int = HUNDRED_THOUSAND) -> bytes:
+    """A fan model (fan_model) with more vertices: the first triangle's three with texture
+    coordinates, then `vertices - 3` more at the origin (8 bytes of text, 12 of vertex array and
+    48 of vertex record each) that only the vertex transform visits."""
+    head = FAN_HEAD + UV_HEAD + "v 0 0 0\n" * (vertices - 3)
+    return fan_model(triangles, head, "1/1 2/2 3/3")
+
+
+def crowded_outcomes(layout, vertices: int) -> set[str]:
+    return boot_outcomes(layout, len(TEXTURE_256), vertices, 3, 0, HUNDRED_THOUSAND)
+
+
+@pytest.mark.parametrize("case", ["largest", "one-more-vertex"])
+def test_100k_triangles_with_a_256x256_texture(firmware, layout, tmp_path, case):
+    """Issue 14, defect 15: 100,000 triangles with a 256x256 texture fit, with up to 32,622
+    vertices today (the most vertices such a model may have: derived from the ELF and the
+    allocation sequence like test_largest_model; one more is error 12, "(depth buffer)"), and the
+    frame is the first triangle's, textured. Before obj.S streamed the model, its text (461 KB
+    here) was kept beside the arrays and the largest case ended in "error 12 model too large for
+    memory (vertex records: 1565856 bytes needed, 1259456 bytes free)". Board-model run times:
+    about 10-12 s each (25 s when the host is busy)."""
+    most, beyond = limits(lambda n: crowded_outcomes(layout, n), 3, layout.size // layout.VTX_BYTES)
+    vertices = most if case == "largest" else beyond
+    model = crowded_model(vertices)
+    run = run_scene(firmware, tmp_path, model, None, texture=TEXTURE_256, frames=1)
+    if case == "largest":
+        assert run.returncode == 0, run.stderr + run.console
+        assert f"model: {HUNDRED_THOUSAND} triangles, {most} vertices, 3 uv" in run.console
+        assert "texture: 256x256" in run.console
+        scene, mesh, texture = reference.load_files(None, fan_model(1, FAN_HEAD + UV_HEAD, "1/1 2/2 3/3"),
+                                                    TEXTURE_256)
         result = compare(run.frames[0], reference.render_image(scene, mesh, texture, 0), run.background)
         assert result.drawn_shown > 1000 and result.beyond_lighting_off_outline == 0, str(result)
     else:
         assert run.returncode == 8, run.stderr + run.console
-        failed = boot_allocations(layout, [len(fan_model(triangles)), len(TEXTURE)], 3, 0, 0, triangles)[1].failed
+        failed = boot_allocations(layout, len(TEXTURE_256), vertices, 3, 0, HUNDRED_THOUSAND)[1].failed
         assert (run.error_line() or "").startswith(failed), (failed, run.console)
+
+
+@pytest.mark.skipif(not os.environ.get("EXTREMES_FULL"), reason="about 2 minutes: set EXTREMES_FULL=1")
+def test_the_issues_51200_triangle_torus_with_a_texture(firmware, layout, tmp_path):
+    """Issue 14, defect 15, as reported: a 160 x 160 torus (tools/make_assets.py: 51,200
+    triangles, 25,921 vertices each with a vt and a vn, 4.8 MB of text) with a 256x256 texture
+    ended in "error 12 model too large for memory: 2672832 bytes needed, 887744 bytes free": its
+    text was kept beside its arrays. The arrays, the vertex records and the depth buffer take
+    4.3 MB of the heap: it loads and draws. Its text is read from the card twice."""
+    model = make_assets.torus(160, 160).encode()
+    assert boot_outcomes(layout, len(TEXTURE_256), 25_921, 25_921, 25_921, 51_200) == {"ok"}
+    facing = "translate = 0 0 -2.6\naxis = 1 0 0\nangle = 90\n"     # the ring faces the camera
+    run = run_scene(firmware, tmp_path, model, facing, texture=TEXTURE_256, frames=1)
+    assert run.returncode == 0, run.stderr + run.console
+    assert "model: 51200 triangles, 25921 vertices, 25921 uv, 25921 normals" in run.console
+    assert "texture: 256x256" in run.console
+    result = run.compare(0)
+    assert result.drawn_ref > 15_000 and result.differing_off_outline <= result.drawn_ref // 100, str(result)
+    assert abs(result.drawn_shown - result.drawn_ref) <= OUTLINE_BUDGET, str(result)
 
 
 def test_mesh_arrays_that_do_not_fit(firmware, layout, tmp_path):
@@ -146,7 +232,7 @@ def test_mesh_arrays_that_do_not_fit(firmware, layout, tmp_path):
     arrays take from the heap, each rounded up to HEAP_ALIGN as the heap hands them out, and what
     was free: "needed" exceeds "free" exactly when they do not fit (the smallest such model)."""
     def failed_line(n: int) -> str:
-        return boot_allocations(layout, [len(fan_model(n)), len(TEXTURE)], 3, 0, 0, n)[1].failed or ""
+        return boot_allocations(layout, len(TEXTURE), 3, 0, 0, n)[1].failed or ""
 
     def arrays_fit(n: int) -> bool:
         return not failed_line(n).startswith("error 12 model too large for memory:")
@@ -167,18 +253,17 @@ FILLED_HEAD = FAN_HEAD + "vt 0.99 0\nvt 1 0\nvt 0.995 1\n"
 
 
 def filled_outcomes(layout, filler: int, texels: int) -> set[str]:
-    files = [len(MAGENTA), len(fan_model(filler, FILLED_HEAD, "1/1 2/2 3/3")), len(unique_texture(texels, 1)[0])]
-    return boot_outcomes(layout, files, 3, 3, 0, filler)
+    return boot_outcomes(layout, len(unique_texture(texels, 1)[0]), 3, 3, 0, filler, scene_ini=len(MAGENTA))
 
 
 @pytest.mark.parametrize("case", ["largest", "one-more-texel"])
 def test_largest_texture_beside_a_model(firmware, layout, tmp_path, case):
     """The largest texture that fits beside a model filling the rest of the heap, and one texel
     more. The limit a texture meets is one inequality, the same whatever else is in the heap: its
-    file rounded up to whole sectors, after the files before it, with the mesh arrays and vertex
-    records and the depth buffer after it (ppm.S converts in place: a texture needs no memory
-    beyond its file). On its own (a 1-triangle model) that is 1,918,287 texels (1,385 x 1,385 as
-    a square), 5.8 MB:
+    file rounded up to whole sectors (scene.ini's text is given back before it is loaded), with
+    the mesh arrays and vertex records and the depth buffer after it (ppm.S converts in place: a
+    texture needs no memory beyond its file). On its own (a 1-triangle model) that is 1,917,946
+    texels (1,384 x 1,384 as a square), 5.8 MB:
     loading that on the board model takes about 30 s a run (test_largest_texture_alone, opt-in),
     so here a fan model (the cheapest bytes of heap to fill: 36 per 2 bytes of text) takes all
     but ~100 KB and the texture gets the rest: the same boundary in about 5 s a run."""
@@ -200,27 +285,28 @@ def test_largest_texture_beside_a_model(firmware, layout, tmp_path, case):
         assert result.neighbour <= result.drawn // 50 and result.coverage <= OUTLINE_BUDGET, str(result)
     else:
         assert run.returncode == 8, run.stderr + run.console
-        files = [len(MAGENTA), len(model), len(data)]
-        failed = boot_allocations(layout, files, 3, 3, 0, filler)[1].failed    # "(depth buffer)" today
+        failed = boot_allocations(layout, len(data), 3, 3, 0, filler, scene_ini=len(MAGENTA))[1].failed
+        # "(depth buffer)" today
         assert (run.error_line() or "").startswith(failed), (failed, run.console)
 
 
 def test_texture_file_larger_than_the_free_heap_is_error_7(firmware, layout, tmp_path):
     """The smallest texture whose file cannot be loaded at all: error 7 from fat32_load, before
     reading any of it (so this is quick despite the 5.9 MB file). The console line today:
-    "error 7 file too large for memory: texture.ppm (5908481 bytes, 5908992 in whole sectors,
-    5908928 bytes free)": the file is taken in whole sectors, so its size alone would read as if
-    it fitted."""
+    "error 7 file too large for memory: texture.ppm (5907971 bytes, 5908480 in whole sectors,
+    5908160 bytes free)": the file is taken in whole sectors, so its size alone would read as if
+    it fitted. The texture is the first block of the heap: the model is read later, through a
+    window."""
     small = "v -1 -1 0\nv 1 -1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0.5 1\nf 1/1 2/2 3/3\n"
 
     def outcomes(texels):
-        return boot_outcomes(layout, [len(small), len(f"P6\n{texels} 1\n255\n") + 3 * texels], 3, 3, 0, 1)
+        return boot_outcomes(layout, len(f"P6\n{texels} 1\n255\n") + 3 * texels, 3, 3, 0, 1)
 
     # the first error 7
     texels = limits(lambda n: {"error 7" if o == "error 7" else "ok" for o in outcomes(n)}, 1, layout.size)[1]
     data = f"P6\n{texels} 1\n255\n".encode() + bytes(3 * texels)
     sector = layout.FAT_SECTOR_BYTES
-    free = layout.size - -(-len(small) // sector) * sector      # when the texture is loaded
+    free = layout.size                                          # when the texture is loaded
     run = run_scene(firmware, tmp_path, small, None, texture=data, frames=1)
     assert run.returncode == 8, run.stderr + run.console
     found = re.fullmatch(r"error 7 file too large for memory: texture\.ppm \((\d+) bytes, (\d+) in whole sectors, "
@@ -233,7 +319,7 @@ def test_texture_file_larger_than_the_free_heap_is_error_7(firmware, layout, tmp
 @pytest.mark.skipif(not os.environ.get("EXTREMES_FULL"), reason="about 50 s: set EXTREMES_FULL=1")
 @pytest.mark.parametrize("case", ["largest", "one-more-texel"])
 def test_largest_texture_alone(firmware, layout, tmp_path, case):
-    """The largest texture of all (a 1-triangle model): 1,918,287 x 1 today (about 25 s on the
+    """The largest texture of all (a 1-triangle model): 1,917,946 x 1 today (about 25 s on the
     board model). One texel more still loads (its
     file fits) but leaves too little for the depth buffer: error 12 "model too large for memory
     (depth buffer)"; from 51,201 texels more (the depth buffer's 153,600 bytes / 3, as the depth
@@ -242,7 +328,7 @@ def test_largest_texture_alone(firmware, layout, tmp_path, case):
     small = "v -1 -1 0\nv 1 -1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0.5 1\nf 1/1 2/2 3/3\n"
 
     def outcomes(texels):
-        return boot_outcomes(layout, [len(small), len(f"P6\n{texels} 1\n255\n") + 3 * texels], 3, 3, 0, 1)
+        return boot_outcomes(layout, len(f"P6\n{texels} 1\n255\n") + 3 * texels, 3, 3, 0, 1)
 
     most, beyond = limits(outcomes, 1, layout.size)
     texels = most if case == "largest" else beyond
@@ -258,7 +344,7 @@ def test_largest_texture_alone(firmware, layout, tmp_path, case):
         codes = {outcome.split()[1] for outcome in outcomes(texels)}
         assert (run.error_line() or "").split()[1] in codes, (codes, run.console)   # 12 today
         assert (run.error_line() or "").startswith(
-            boot_allocations(layout, [len(small), len(data)], 3, 3, 0, 1)[1].failed), run.console
+            boot_allocations(layout, len(data), 3, 3, 0, 1)[1].failed), run.console
 
 
 # =========================================================================== the first cases

@@ -167,3 +167,67 @@ def test_bad_files_end_in_their_error(firmware, tmp_path, name):
     assert errors and int(errors[0][0]) == code and words in errors[0][1], console
     frames = sorted(out.glob("frame_*.png"))
     assert frames, "no error screen"
+
+
+def _vertex_lines(count: int, seed: int) -> tuple[list[str], list[tuple[float, float, float]]]:
+    """Vertex lines of varied lengths and number forms (signs, exponents, leading dots, CRLF,
+    tabs, comments), every number with at most 15 significant digits and a decimal exponent
+    within +-22, so that the firmware's value is the correctly rounded single of Python's float."""
+    import numpy as np
+    rng = np.random.default_rng(seed)
+    lines, values = [], []
+    forms = ["{:.6f}", "{:.3e}", "{:.12g}", "{:+.9f}", "{:.1E}"]
+    for n in range(count):
+        xyz = rng.normal(0, 10, 3) * 10.0 ** rng.integers(-6, 6, 3)
+        text = [forms[(n + k) % len(forms)].format(value) for k, value in enumerate(xyz)]
+        text = [t.replace("0.", ".", 1) if t.startswith("0.") and n % 3 == 0 else t for t in text]
+        sep = "\t" if n % 4 == 1 else " " * (1 + n % 3)
+        end = ["\n", "\r\n", " # c\n", "\t\n"][n % 4]
+        lines.append("v" + sep + sep.join(text) + end)
+        values.append(tuple(float(t) for t in text))
+    return lines, values
+
+
+def test_a_model_longer_than_the_window_from_a_fragmented_file(firmware, tmp_path):
+    """obj.S reads the model from the card through a window of OBJ_WINDOW_BYTES (16 KiB), twice,
+    and keeps no text: a 62 KB model in 7 fragments, whose tokens the window's edges cut wherever
+    they fall, lands exactly as the text says (every vertex the correctly rounded single of its
+    numbers), with its load line (size and CRC-32 of the whole file) and nothing of its text left
+    in the heap (heap_next ends at the last block render_init took, as with a tiny model)."""
+    import zlib
+
+    import numpy as np
+
+    from extremes_support import boot_allocations, heap_layout
+    from sdcard_image.fat32 import CardWriter
+    from sdcard_image.layouts import cluster_chain, is_fragmented, write_fragmented
+
+    lines, values = _vertex_lines(1500, seed=15)
+    faces = "f 1 2 3\nf -1 -2 -3\n"
+    model = ("".join(lines) + faces).encode()
+    assert 3 * 16384 < len(model) < 4 * 16384
+    scene = b"model = m/model.obj\nmode = flat\n"
+    card = tmp_path / "card.img"
+    with CardWriter.create(card, 64) as writer:
+        writer.makedirs("/m")
+        write_fragmented(writer, "/m/model.obj", model, fragments=7)
+        writer.write("/texture.ppm", TEXTURE)
+        writer.write("/scene.ini", scene)
+    assert is_fragmented(cluster_chain(card, "/m/model.obj"))
+    board = Board(str(firmware), sd_image=str(card))
+    board.run(1)
+    board.close()
+    console = [line for _, line in board.console_lines]
+    assert f"load m/model.obj {len(model)} crc32={zlib.crc32(model):08x}" in console, console
+    assert "model: 2 triangles, 1500 vertices, 0 uv, 0 normals" in console, console
+    raw = scene_bytes(board)
+    stored = np.array(array(board, raw, MESH_V, 1500, "<3f"), dtype=np.float32)
+    assert np.array_equal(stored, np.array(values, dtype=np.float64).astype(np.float32))
+    none = 0xFFFFFFFF
+    assert array(board, raw, MESH_F, 2, "<9I") == [(0, none, none, 1, none, none, 2, none, none),
+                                                   (1499, none, none, 1498, none, none, 1497, none, none)]
+    # the heap holds the texture, the arrays and render_init's blocks: the replay of
+    # tests/extremes_support.py, where the model's text takes no part
+    expected = boot_allocations(heap_layout(firmware), len(TEXTURE), 1500, 0, 0, 2, scene_ini=len(scene))[1]
+    heap_next = next(a for a, name in board.image.symbols.items() if name == "heap_next")
+    assert struct.unpack("<Q", board.memory.read(heap_next, 8))[0] == expected.next

@@ -353,13 +353,15 @@ def test_missing_file(firmware, loader_card, tmp_path):
 
 
 def test_file_too_large_for_memory(firmware, loader_card, tmp_path):
+    """A texture is loaded whole (a model is not: obj.S reads it through a window)."""
     image = tmp_path / "huge.img"
     shutil.copyfile(loader_card[0], image)
     huge = tmp_path / "huge.bin"
     huge.write_bytes(bytes(7 * 1024 * 1024))       # more than the 6 MiB of SRAM
-    subprocess.run(["mcopy", "-i", f"{image}@@1M", str(huge), "::/huge.obj"], check=True)
-    result, console, out = run_scene(firmware, image, f"model = huge.obj\n{WIREFRAME}", tmp_path / "run")
-    assert_error(result, console, out, 7, "huge.obj")
+    subprocess.run(["mcopy", "-i", f"{image}@@1M", str(huge), "::/huge.ppm"], check=True)
+    result, console, out = run_scene(firmware, image, "model = sizes/cluster.obj\ntexture = huge.ppm\n",
+                                     tmp_path / "run")
+    assert_error(result, console, out, 7, "huge.ppm")
 
 
 def _fat_entry_offsets(image: Path, cluster: int) -> list[int]:

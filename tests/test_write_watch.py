@@ -112,6 +112,13 @@ STRAYS = {
         0, f"la t0, __heap_start\nstore: sb t0, {HEAP_GIVEN}(t0)", lambda b: sym(b, "__heap_start") + HEAP_GIVEN, 1,
         lambda b: f"heap not allocated [0x{sym(b, '__heap_start') + HEAP_GIVEN:08x}, 0x{sym(b, '__heap_end'):08x}) "
                   f"(heap_next = 0x{sym(b, '__heap_start') + HEAP_GIVEN:x})"),
+    # heap.S's heap_release lowers heap_next: a block given back is no longer the firmware's
+    "into a block given back": (
+        0, f"la t0, heap_next\nla t1, __heap_start\naddi t1, t1, {HEAP_GIVEN // 2}\nsd t1, 0(t0)\n"
+           f"la t0, __heap_start\nstore: sw t0, {HEAP_GIVEN // 2}(t0)",
+        lambda b: sym(b, "__heap_start") + HEAP_GIVEN // 2, 4,
+        lambda b: f"heap not allocated [0x{sym(b, '__heap_start') + HEAP_GIVEN // 2:08x}, "
+                  f"0x{sym(b, '__heap_end'):08x}) (heap_next = 0x{sym(b, '__heap_start') + HEAP_GIVEN // 2:x})"),
     "across the end of the heap handed out": (
         0, f"la t0, __heap_start\nstore: sd t0, {HEAP_GIVEN - 4}(t0)",
         lambda b: sym(b, "__heap_start") + HEAP_GIVEN - 4, 8,

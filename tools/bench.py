@@ -110,7 +110,10 @@ THESIS_TEXTURE_BYTES = round(183.2 * 1024)   # and its 250 x 250 texture, 183.2 
 
 def sd_figures(firmware: Path, folder: Path) -> dict:
     """Virtual times of SD bring-up and of loading files the size of the thesis's model A
-    (from the console lines' timestamps; each span includes printing its console line)."""
+    (from the console lines' timestamps; each span includes printing its console line). The
+    texture is loaded whole first; the model is then read through obj.S's window twice: its load
+    line ends the first pass (read and checked), its "model:" line the second (read again and
+    stored)."""
     from sdcard_image import build_image
     sys.path.insert(0, str(ROOT / "tools"))
     from make_assets import torus
@@ -129,15 +132,16 @@ def sd_figures(firmware: Path, folder: Path) -> dict:
     board.run(1)
     times = {}
     for t, line in board.console_lines:
-        for key in ("lcd:", "fat32:", "load scene.ini", "load a/model.obj", "load a/texture.ppm"):
+        for key in ("lcd:", "fat32:", "load scene.ini", "load a/texture.ppm", "load a/model.obj", "model:"):
             if line.startswith(key):
                 times[key] = t
     board.close()
     return {
         "model_bytes": len(model), "texture_bytes": len(texture),
         "card_setup_to_root_ms": (times["fat32:"] - times["lcd:"]) * 1e3,
-        "model_read_ms": (times["load a/model.obj"] - times["load scene.ini"]) * 1e3,
-        "texture_read_ms": (times["load a/texture.ppm"] - times["load a/model.obj"]) * 1e3,
+        "texture_read_ms": (times["load a/texture.ppm"] - times["load scene.ini"]) * 1e3,
+        "model_read_ms": (times["load a/model.obj"] - times["load a/texture.ppm"]) * 1e3,
+        "model_second_pass_ms": (times["model:"] - times["load a/model.obj"]) * 1e3,
         "thesis_ms": {"card_setup_to_root": 32.35, "texture_read": 200.75, "model_read": 43.05},
     }
 
@@ -416,7 +420,8 @@ def speed_figures(args: argparse.Namespace) -> None:
           f"({checked['ratio_to_unchecked']:.3f} x the board without; fastest of {checked['rounds']} alternating "
           f"runs each; {checked['ratio_while_executing']:.3f} x while harts execute)")
     print(f"SD (virtual time; thesis in brackets): card set-up to root directory {sd['card_setup_to_root_ms']:.2f} ms "
-          f"[32.35], model {sd['model_bytes']} bytes {sd['model_read_ms']:.2f} ms [43.05], "
+          f"[32.35], model {sd['model_bytes']} bytes {sd['model_read_ms']:.2f} ms read and checked [43.05 read], "
+          f"{sd['model_second_pass_ms']:.2f} ms read again and stored, "
           f"texture {sd['texture_bytes']} bytes {sd['texture_read_ms']:.2f} ms [200.75]")
     out = ROOT / "build" / "bench.json"
     out.parent.mkdir(exist_ok=True)
