@@ -271,7 +271,8 @@ def boot_allocations(layout: HeapLayout, texture: int | None, vertices: int, tex
     """Replays the firmware's heap use at boot, given the sizes of the files (texture: bytes of
     texture.ppm, None for none; scene_ini likewise) and the model's counts. The model's text
     takes no part: obj.S reads it through a window. In order: scene.S scene_load (scene.ini if
-    any, loaded and given back once parsed; the texture unless wireframe: fat32_load takes its
+    any, loaded and given back once parsed; the texture, which only textured mode reads (give
+    None for a flat or wireframe scene): fat32_load takes its
     size rounded up to whole sectors, error 7 when that does not fit), obj.S obj_parse_model (the
     first pass's window of OBJ_WINDOW_BYTES, given back; the v, vt, vn and triangle arrays, none
     for a count of 0, all four tried before failing: error 12 "model too large for memory: n

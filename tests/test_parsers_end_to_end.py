@@ -226,8 +226,8 @@ def test_a_model_longer_than_the_window_from_a_fragmented_file(firmware, tmp_pat
     none = 0xFFFFFFFF
     assert array(board, raw, MESH_F, 2, "<9I") == [(0, none, none, 1, none, none, 2, none, none),
                                                    (1499, none, none, 1498, none, none, 1497, none, none)]
-    # the heap holds the texture, the arrays and render_init's blocks: the replay of
-    # tests/extremes_support.py, where the model's text takes no part
-    expected = boot_allocations(heap_layout(firmware), len(TEXTURE), 1500, 0, 0, 2, scene_ini=len(scene))[1]
+    # the heap holds the arrays and render_init's blocks (a flat scene reads no texture): the
+    # replay of tests/extremes_support.py, where the model's text takes no part
+    expected = boot_allocations(heap_layout(firmware), None, 1500, 0, 0, 2, scene_ini=len(scene))[1]
     heap_next = next(a for a, name in board.image.symbols.items() if name == "heap_next")
     assert struct.unpack("<Q", board.memory.read(heap_next, 8))[0] == expected.next
