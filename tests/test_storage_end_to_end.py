@@ -422,6 +422,19 @@ def test_missing_file(firmware, loader_card, tmp_path):
     assert_error(result, console, out, 6, "sizes/none.obj")
 
 
+@pytest.mark.parametrize("mode", ["textured", "flat"])
+def test_only_textured_mode_needs_its_texture(firmware, loader_card, tmp_path, mode):
+    """The texture a scene names is read only when the mode draws it: a missing one is error 6
+    in textured mode, and in flat mode it is not looked for at all."""
+    result, console, out = run_scene(firmware, loader_card[0], f"model=sizes/cluster.obj\ntexture=sizes/none.ppm\n"
+                                                                f"mode = {mode}\n", tmp_path)
+    if mode == "textured":
+        assert_error(result, console, out, 6, "file not found: sizes/none.ppm")
+    else:
+        assert result.returncode == 0, result.stderr + console
+        assert "texture: not loaded (mode flat)" in console.splitlines()
+
+
 def test_file_too_large_for_memory(firmware, loader_card, tmp_path):
     image = tmp_path / "huge.img"
     shutil.copyfile(loader_card[0], image)
