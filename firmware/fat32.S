@@ -338,15 +338,15 @@ fat32_mount:
 #         block <sd_capacity - 1>".
 #   Arguments: a0 = first block, a1 = block count (>= 1; both below 2^32),
 #         a2 = words (msg_part_past_card, msg_bpb_past_card).
-#   Results: none.
-#   Clobbers: only ABI temporaries.
+#   Results: none (the error path does not return).
+#   Clobbers: only ABI temporaries when it returns.
 fat_check_on_card:
     add     t0, a0, a1
     la      t1, sd_capacity
     ld      t1, 0(t1)
     bgtu    t0, t1, 1f
     ret
-1:  addi    s0, t0, -1                  # (fatal: the callers' registers are not needed)
+1:  addi    s0, t0, -1                  # (fatal: the caller's s registers are not needed)
     addi    s1, t1, -1
     mv      s2, a2
     li      a0, ERR_NO_FAT32
