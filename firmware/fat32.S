@@ -26,7 +26,12 @@
 # path component decoded from UTF-8 to UTF-16, ASCII letters case-folded and
 # every other character exact. An entry without a valid long name matches by
 # its 8.3 name, case-insensitively. Deleted entries and volume labels are
-# skipped; a 0x00 name ends the directory. Not found is error 6.
+# skipped; a 0x00 name ends the directory. Not found is error 6. A
+# directory's chain may hold at most FAT_DIR_MAX_ENTRIES entries (the FAT
+# limit, 2 MiB): it is measured on the FAT before the search, and a longer
+# one is error 8, "corrupt directory: <folder> has more than 65536 entries",
+# so no search reads more than 2 MiB (a chain of deleted entries could
+# otherwise fill the volume and take longer than any boot should).
 #
 # Reads: a file's contiguous clusters are read with one multi-block command
 # each (sd_read_blocks), only the sectors the file's size needs; the file's
@@ -143,6 +148,9 @@ msg_chain_loop:     .asciz "loop"
 msg_chain_volume:   .asciz "chain longer than the volume"
 msg_chain_short:    .asciz "chain ends before the file's size"
 msg_chain_long:     .asciz "chain does not end at the file's size"
+msg_dir_corrupt:    .asciz "corrupt directory: "
+msg_dir_entries:    .asciz " has more than "
+msg_dir_entries_tail: .asciz " entries"
 msg_too_large:      .asciz "file too large for memory: "
 msg_too_large_size: .asciz " ("
 msg_too_large_sectors: .asciz " bytes, "
@@ -333,15 +341,15 @@ fat32_mount:
 #         block <sd_capacity - 1>".
 #   Arguments: a0 = first block, a1 = block count (>= 1; both below 2^32),
 #         a2 = words (msg_part_past_card, msg_bpb_past_card).
-#   Results: none.
-#   Clobbers: only ABI temporaries.
+#   Results: none (the error path does not return).
+#   Clobbers: only ABI temporaries when it returns.
 fat_check_on_card:
     add     t0, a0, a1
     la      t1, sd_capacity
     ld      t1, 0(t1)
     bgtu    t0, t1, 1f
     ret
-1:  addi    s0, t0, -1                  # (fatal: the callers' registers are not needed)
+1:  addi    s0, t0, -1                  # (fatal: the caller's s registers are not needed)
     addi    s1, t1, -1
     mv      s2, a2
     li      a0, ERR_NO_FAT32
@@ -445,7 +453,7 @@ fat32_load:
 #   What: fat32_lookup, with "not found" a fatal error.
 #   Arguments: a0 = path (NUL-terminated).
 #   Results: a0 = the file's first cluster (0 for an empty file), a1 = size.
-#   Errors: 6 not found, 8 corrupt chain in a directory.
+#   Errors: 6 not found, 8 corrupt chain or directory.
 #   Clobbers: only ABI temporaries.
 fat32_open:
     addi    sp, sp, -16
@@ -470,7 +478,8 @@ fat32_open:
 #   Results: a2 = 1 found, then a0 = the file's first cluster (0 for an
 #         empty file), a1 = size; a2 = 0 not found (no such file, or a
 #         folder where a file is wanted or the other way round).
-#   Errors: 8 corrupt chain in a directory.
+#   Errors: 8 corrupt chain in a directory, or a directory longer than
+#         FAT_DIR_MAX_ENTRIES entries.
 #   Clobbers: only ABI temporaries.
 fat32_lookup:
     addi    sp, sp, -48
@@ -497,7 +506,9 @@ fat32_lookup:
     beq     t0, t1, 4f
     addi    s2, s2, 1
     j       3b
-4:  mv      a0, s1
+4:  la      t0, fat_dir_end
+    sd      s0, 0(t0)                   # the folder searched is the path before s0
+    mv      a0, s1
     mv      a1, s0
     sub     a2, s2, s0
     call    fat32_find
@@ -534,7 +545,8 @@ fat32_lookup:
 #         in bytes (no NUL needed).
 #   Results: a0 = 1 found, 0 not found; when found a1 = first cluster,
 #         a2 = size, a3 = attribute byte.
-#   Errors: 8 corrupt chain.
+#   Errors: 8 corrupt chain, or a chain longer than FAT_DIR_MAX_ENTRIES
+#         entries (the folder is named from fat_path up to fat_dir_end).
 #   Clobbers: only ABI temporaries.
 fat32_find:
     addi    sp, sp, -112
@@ -558,6 +570,8 @@ fat32_find:
     mv      a1, s9
     call    utf8_to_utf16
     mv      s10, a0                     # s10 = name length (UTF-16 units)
+    mv      a0, s0
+    call    fat_dir_check_length
     mv      a0, s0
     call    fat_walk_start
     li      s4, -1                      # s4 = long name state: -1 none, n > 0 next
@@ -1318,6 +1332,84 @@ fat_walk_next:
     addi    sp, sp, 16
     ret
 
+# fat_dir_check_length (file-local)
+#   What: follows a directory's cluster chain through the FAT (fat_walk_*:
+#         its range, loop and volume checks) before any of its entries is
+#         read, and reports error 8 (fat_dir_error) when the chain is longer
+#         than FAT_DIR_MAX_ENTRIES entries. Checking the chain rather than
+#         counting entries as they are read gives the same answer wherever
+#         the wanted entry lies, and costs one FAT sector per 128 clusters
+#         instead of reading 2 MiB of entries before the error.
+#   Arguments: a0 = the directory's first cluster.
+#   Results: none.
+#   Errors: 8 corrupt chain, or a directory longer than the limit.
+#   Clobbers: only ABI temporaries.
+fat_dir_check_length:
+    addi    sp, sp, -32
+    sd      ra, 24(sp)
+    sd      s0, 16(sp)
+    sd      s1, 8(sp)
+    mv      s0, a0                      # s0 = cluster reached
+    call    fat_walk_start
+    la      t0, fat_volume
+    ld      t0, VOL_SPC_SHIFT(t0)
+    li      s1, FAT_DIR_MAX_SECTORS
+    srl     s1, s1, t0                  # s1 = clusters the directory may have (>= 1)
+1:  addi    s1, s1, -1                  # cluster s0 counted
+    mv      a0, s0
+    call    fat_walk_next
+    beqz    a0, 2f
+    mv      s0, a0
+    bnez    s1, 1b
+    call    fat_dir_error
+2:  ld      s1, 8(sp)
+    ld      s0, 16(sp)
+    ld      ra, 24(sp)
+    addi    sp, sp, 32
+    ret
+
+# fat_dir_error (file-local)
+#   What: error 8, "corrupt directory: <folder> has more than 65536
+#         entries", the folder being fat_path up to fat_dir_end without its
+#         separators at either end ("/" for the root).
+#   Arguments: none.
+#   Results: never returns.
+#   Clobbers: everything.
+fat_dir_error:
+    li      a0, ERR_BAD_CHAIN
+    call    error_begin
+    la      a0, msg_dir_corrupt
+    call    console_puts
+    la      t0, fat_path
+    ld      s0, 0(t0)                   # s0 = folder's first character
+    la      t0, fat_dir_end
+    ld      s1, 0(t0)                   # s1 = its end
+    li      t1, PATH_SEPARATOR
+1:  bgeu    s0, s1, 2f
+    lbu     t0, 0(s0)
+    bne     t0, t1, 2f
+    addi    s0, s0, 1
+    j       1b
+2:  bgeu    s0, s1, 3f
+    lbu     t0, -1(s1)
+    bne     t0, t1, 3f
+    addi    s1, s1, -1
+    j       2b
+3:  li      a0, PATH_SEPARATOR
+    call    console_putc
+4:  bgeu    s0, s1, 5f
+    lbu     a0, 0(s0)
+    call    console_putc
+    addi    s0, s0, 1
+    j       4b
+5:  la      a0, msg_dir_entries
+    call    console_puts
+    li      a0, FAT_DIR_MAX_ENTRIES
+    call    console_put_dec
+    la      a0, msg_dir_entries_tail
+    call    console_puts
+    j       error_end
+
 # fat_chain_error (file-local)
 #   What: error 8, "corrupt FAT chain: <path> (<reason>)".
 #   Arguments: a0 = reason (string).
@@ -1355,6 +1447,10 @@ fat_volume:
     .space  VOL_BYTES
 # fat_path: the path being opened, for error reports.
 fat_path:
+    .space  8
+# fat_dir_end: where in fat_path the folder being searched ends (the start
+# of the component looked up in it), for error reports.
+fat_dir_end:
     .space  8
 # fat_walk: the chain being followed (WALK_* offsets).
 fat_walk:

@@ -358,7 +358,7 @@ sd_csd_blocks:
     lbu     t2, SD_CSD1_READ_BL_LEN(a0)
     andi    t2, t2, SD_CSD1_READ_BL_LEN_MASK
     add     t1, t1, t2
-    sll     t0, t0, t1                  # bytes (below 2^34)
+    sll     t0, t0, t1                  # bytes (below 2^37 whatever the fields)
     srli    a0, t0, SD_BLOCK_SHIFT
     ret
 2:  lbu     t0, SD_CSD2_C_SIZE_HI(a0)

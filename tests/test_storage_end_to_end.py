@@ -17,8 +17,8 @@ from PIL import Image
 from conftest import ROOT, make_card, run_emulator
 from firmware_calls import FirmwareCaller
 from sdcard_image.fat32 import CardWriter
-from sdcard_image.layouts import (cluster_chain, delete_leaving_entries, fill_directory, is_fragmented,
-                                  place_case_variants, write_fragmented)
+from sdcard_image.layouts import (cluster_chain, delete_leaving_entries, directory_entries, fill_directory,
+                                  is_fragmented, place_case_variants, write_fragmented)
 
 LOAD = re.compile(r"^load (.+) (\d+) crc32=([0-9a-f]{8})$", re.M)
 ERROR = re.compile(r"^error (\d+) (.*)$", re.M)
@@ -347,9 +347,92 @@ def test_the_firmware_reads_an_sdhc_capacity_and_refuses_unknown_csd_versions(ca
         assert caller.call("sd_csd_blocks", [caller.scratch]).a[:2] == (0, structure)
 
 
+DIR_LIMIT = 65536          # entries a FAT directory may hold: 2 MiB of 32-byte entries
+DIR_ENTRY = 32
+DELETED_ENTRY = b"\xe5ELETED TXT\x20" + bytes(DIR_ENTRY - 12)
+SPARE_CLUSTERS = 10_000    # where the long folder's chain continues: free on a card of a few files
+EOC = 0x0FFF_FFFF
+
+
+def _long_folder_card(folder: Path, entries: int) -> Path:
+    """A card whose folder /big is `entries` entries long (whole clusters): its own '.' and
+    '..', the model's entries (long-name slots and 8.3 entry), then deleted entries to the end
+    of its chain, with no end marker. Written on the raw FAT, as a directory chain full of
+    deleted entries is what a card builder never makes."""
+    card = make_card(folder, {"/scene.ini": f"model = big/model.obj\n{WIREFRAME}".encode(),
+                              "/big/model.obj": TRIANGLE})
+    part, reserved, fats, fat_sectors, per_cluster = _partition_geometry(card)
+    cluster_bytes = 512 * per_cluster
+    data_at = part + (reserved + fats * fat_sectors) * 512
+    assert entries * DIR_ENTRY % cluster_bytes == 0
+    first = cluster_chain(card, "/big")
+    assert len(first) == 1
+    model = next(e for e in directory_entries(card, "/big") if e.name == "model.obj")
+    start = data_at + (first[0] - 2) * cluster_bytes
+    with card.open("r+b") as handle:
+        handle.seek(start)
+        own = handle.read(model.offset + DIR_ENTRY - start)
+        content = own + DELETED_ENTRY * (entries - len(own) // DIR_ENTRY)
+        chain = first + list(range(SPARE_CLUSTERS, SPARE_CLUSTERS + len(content) // cluster_bytes - 1))
+        for n, cluster in enumerate(chain):
+            following = chain[n + 1] if n + 1 < len(chain) else EOC
+            for copy in range(fats):
+                handle.seek(part + (reserved + copy * fat_sectors) * 512 + 4 * cluster)
+                assert n == 0 or handle.read(4) == bytes(4), "the spare clusters are not free"
+                handle.seek(part + (reserved + copy * fat_sectors) * 512 + 4 * cluster)
+                handle.write(following.to_bytes(4, "little"))
+            handle.seek(data_at + (cluster - 2) * cluster_bytes)
+            handle.write(content[n * cluster_bytes:(n + 1) * cluster_bytes])
+    # the raw FAT reader (not the firmware) sees the folder so
+    listed = directory_entries(card, "/big")
+    assert len(cluster_chain(card, "/big")) * cluster_bytes // DIR_ENTRY == entries
+    assert [e.name for e in listed if not e.deleted] == [".", "..", "model.obj"]
+    return card
+
+
+def _run_long_folder(firmware: Path, folder: Path, entries: int):
+    card = _long_folder_card(folder, entries)
+    out = folder / "out"
+    result = run_emulator("run", str(firmware), "--sd", str(card), "--frames", "1", "--out", str(out), "--quiet")
+    console = (out / "console.log").read_text()
+    timed = json.loads((out / "run.json").read_text())["console"]
+    return result, console, out, timed
+
+
+def test_a_folder_of_more_than_65536_entries_is_a_corrupt_directory(firmware, tmp_path):
+    """The FAT limit bounds a directory: a chain of deleted entries one cluster longer than
+    65,536 entries is error 8, found on the FAT before the entries are read, in milliseconds of
+    virtual time (a directory used to be bounded only by the volume: 30,000 clusters of deleted
+    entries took more than the 5 s budget). The model's entry comes first: the answer does not
+    depend on where the wanted entry lies."""
+    result, console, out, timed = _run_long_folder(firmware, tmp_path, DIR_LIMIT + 16)
+    assert_error(result, console, out, 8, f"corrupt directory: /big has more than {DIR_LIMIT} entries")
+    times = {entry["line"].split()[0]: entry["virtual_time_s"] for entry in timed}
+    assert times["error"] - times["load"] < 0.05, times      # from scene.ini's load line
+
+
+def test_a_folder_of_exactly_65536_entries_still_works(firmware, tmp_path):
+    result, console, _, _ = _run_long_folder(firmware, tmp_path, DIR_LIMIT)
+    assert result.returncode == 0, result.stderr + console
+    assert _load_line("big/model.obj", TRIANGLE) in console
+
+
 def test_missing_file(firmware, loader_card, tmp_path):
     result, console, out = run_scene(firmware, loader_card[0], f"model=sizes/none.obj\n{WIREFRAME}", tmp_path)
     assert_error(result, console, out, 6, "sizes/none.obj")
+
+
+@pytest.mark.parametrize("mode", ["textured", "flat"])
+def test_only_textured_mode_needs_its_texture(firmware, loader_card, tmp_path, mode):
+    """The texture a scene names is read only when the mode draws it: a missing one is error 6
+    in textured mode, and in flat mode it is not looked for at all."""
+    result, console, out = run_scene(firmware, loader_card[0], f"model=sizes/cluster.obj\ntexture=sizes/none.ppm\n"
+                                                                f"mode = {mode}\n", tmp_path)
+    if mode == "textured":
+        assert_error(result, console, out, 6, "file not found: sizes/none.ppm")
+    else:
+        assert result.returncode == 0, result.stderr + console
+        assert "texture: not loaded (mode flat)" in console.splitlines()
 
 
 def test_file_too_large_for_memory(firmware, loader_card, tmp_path):
