@@ -97,6 +97,8 @@ def parse_header(data: bytes) -> PpmHeader:
     width = reader.number("truncated header", header)
     height = reader.number("truncated header", header)
     maxval = reader.number("truncated header", header)
+    if magic == b"P6" and reader.pos >= len(data):
+        raise TextureError("truncated header")      # ppm.S wants maxval's whitespace first
     if max(width, height, maxval) >= NUMBER_LIMIT:
         raise TextureError(header)
     if width == 0 or height == 0:
@@ -134,6 +136,8 @@ def parse_ppm(data: bytes) -> np.ndarray:
                 raise TextureError("truncated raster (fewer samples than width x height x 3)")
             samples[i] = reader.number("truncated raster (fewer samples than width x height x 3)",
                                        "bad sample (not a decimal number)")
+            if i % 3 == 2 and samples[i - 2:i + 1].max() > maxval:
+                raise TextureError("sample above maxval")   # ppm.S checks each pixel as it reads it
     if samples.size and samples.max() > maxval:
         raise TextureError("sample above maxval")
     rgb = samples.reshape(height, width, 3)
