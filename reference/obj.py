@@ -10,8 +10,8 @@ file (checked against the file's totals after every other check, as the firmware
 pass does); 0 is an error. Errors raise `ModelError`: ``bad model line N: <what>``, or
 ``bad model: no faces``.
 
-Numbers are kept as float64 (the firmware rounds them to single precision; a number that is
-not finite in single precision is an error in both).
+Numbers are kept as float64 (the firmware rounds them to single precision; a number it keeps
+that is not finite in single precision is an error in both, found after the count of numbers).
 """
 from __future__ import annotations
 
@@ -47,11 +47,30 @@ class Mesh:
 def _number(line: int, token: str) -> float:
     if not NUMBER.match(token):
         raise ModelError(line, "malformed number")
-    value = float(token)
+    return float(token)
+
+
+NUMBERS_MAX = 7          # obj.S's OBJ_NUMBERS_MAX: the most numbers any vector statement takes
+
+
+def _numbers(line: int, tokens: list[str], arity: str) -> list[float]:
+    """A vector statement's numbers, read in order as obj.S reads them: a malformed token stops
+    it, and so does any token after NUMBERS_MAX numbers (`arity`, whatever the token is)."""
+    values = []
+    for token in tokens:
+        if len(values) == NUMBERS_MAX:
+            raise ModelError(line, arity)
+        values.append(_number(line, token))
+    return values
+
+
+def _in_range(line: int, values: list[float]) -> list[float]:
+    """obj.S checks the count of a statement's numbers before their range, and the range only of
+    the numbers it keeps (x y z of a v, u v of a vt)."""
     with np.errstate(over="ignore"):
-        if not math.isfinite(float(np.float32(value))):
+        if not all(math.isfinite(float(np.float32(value))) for value in values):
             raise ModelError(line, "number out of range")
-    return value
+    return values
 
 
 def _resolve(line: int, text: str, defined: int, kind: str) -> tuple[int, int | None]:
@@ -66,6 +85,47 @@ def _resolve(line: int, text: str, defined: int, kind: str) -> tuple[int, int | 
     return index - 1, index
 
 
+CORNER_MALFORMED = "malformed face corner (expected v, v/vt, v//vn or v/vt/vn)"
+INDEX = re.compile(r"[+-]?\d*")
+
+
+def _corner_indices(line: int, corner: str):
+    """The corner's (kind, index text or None) in obj.S's order: each index is checked (by the
+    caller, through _resolve) as soon as it is read, before the rest of the corner."""
+    kinds = ("vertex", "texture coordinate", "normal")
+    pos = 0
+
+    def index(kind: str):
+        nonlocal pos
+        text = INDEX.match(corner, pos).group()
+        if not text.lstrip("+-"):
+            raise ModelError(line, CORNER_MALFORMED)
+        pos += len(text)
+        return kind, text
+
+    yield index("vertex")
+    if pos < len(corner) and corner[pos] == "/":
+        pos += 1
+        if pos >= len(corner):
+            raise ModelError(line, CORNER_MALFORMED)
+        if corner[pos] == "/":
+            yield "texture coordinate", None
+            pos += 1
+            yield index("normal")
+        else:
+            yield index("texture coordinate")
+            if pos < len(corner) and corner[pos] == "/":
+                pos += 1
+                yield index("normal")
+            else:
+                yield "normal", None
+    else:
+        yield "texture coordinate", None
+        yield "normal", None
+    if pos < len(corner):
+        raise ModelError(line, CORNER_MALFORMED)
+
+
 def parse_obj(data: bytes | str) -> Mesh:
     text = data.decode("latin-1") if isinstance(data, bytes) else data
     vertices: list[tuple[float, float, float]] = []
@@ -74,9 +134,9 @@ def parse_obj(data: bytes | str) -> Mesh:
     faces: list[list[tuple[int, int, int]]] = []
     forward: list[tuple[int, str, int]] = []      # (line, kind, 1-based index) checked at the end
     for number, raw in enumerate(text.split("\n"), start=1):
-        raw = raw.split("#", 1)[0]
-        if raw.endswith("\r"):
+        if raw.endswith("\r"):           # CR LF ends a line; a CR before a comment does not
             raw = raw[:-1]
+        raw = raw.split("#", 1)[0]
         tokens = raw.replace("\t", " ").split(" ")
         tokens = [t for t in tokens if t]
         if not tokens:
@@ -85,32 +145,33 @@ def parse_obj(data: bytes | str) -> Mesh:
         if keyword in IGNORED:
             continue
         if keyword == "v":
-            values = [_number(number, a) for a in args]
+            values = _numbers(number, args, "v takes 3, 4, 6 or 7 numbers")
             if len(values) not in (3, 4, 6, 7):
                 raise ModelError(number, "v takes 3, 4, 6 or 7 numbers")
+            _in_range(number, values[:3])
             vertices.append((values[0], values[1], values[2]))
         elif keyword == "vt":
-            values = [_number(number, a) for a in args]
+            values = _numbers(number, args, "vt takes 1, 2 or 3 numbers")
             if not 1 <= len(values) <= 3:
                 raise ModelError(number, "vt takes 1, 2 or 3 numbers")
+            _in_range(number, values[:2])
             texcoords.append((values[0], values[1] if len(values) > 1 else 0.0))
         elif keyword == "vn":
-            values = [_number(number, a) for a in args]
+            values = _numbers(number, args, "vn takes 3 numbers")
             if len(values) != 3:
                 raise ModelError(number, "vn takes 3 numbers")
+            _in_range(number, values)
             normals.append((values[0], values[1], values[2]))
         elif keyword == "f":
             corners = []
             for arg in args:
-                match = CORNER.match(arg)
-                if not match or ("//" in arg and match.group(3) is None) or arg.endswith("/"):
-                    raise ModelError(number, "malformed face corner (expected v, v/vt, v//vn or v/vt/vn)")
                 corner = []
-                for text_index, defined, kind in zip(match.groups(), (len(vertices), len(texcoords), len(normals)),
-                                                     ("vertex", "texture coordinate", "normal")):
+                for kind, text_index in _corner_indices(number, arg):
                     if text_index is None:
                         corner.append(NO_INDEX)
                         continue
+                    defined = {"vertex": len(vertices), "texture coordinate": len(texcoords),
+                               "normal": len(normals)}[kind]
                     index, later = _resolve(number, text_index, defined, kind)
                     if later is not None:
                         forward.append((number, kind, later))

@@ -12,6 +12,8 @@ Each sample is scaled to its RGB565 field rounded to nearest exactly as the firm
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 WHITESPACE = b" \t\r\n\x0b\x0c"
@@ -69,8 +71,19 @@ class _Reader:
         return int(self.data[start:self.pos])
 
 
-def parse_ppm(data: bytes) -> np.ndarray:
-    """The texture as a (height, width) uint16 RGB565 array, row 0 at the top."""
+@dataclass(frozen=True)
+class PpmHeader:
+    """A PPM's header as the firmware reads it."""
+
+    magic: str          # "P6" or "P3"
+    width: int
+    height: int
+    maxval: int
+    end: int            # offset just past maxval's last digit
+
+
+def parse_header(data: bytes) -> PpmHeader:
+    """The header (magic, width, height, maxval), checked as the firmware checks it."""
     if len(data) < 2:
         raise TextureError("truncated header" if data in (b"", b"P") else "not a PPM (magic is not P6 or P3)")
     magic = data[:2]
@@ -84,12 +97,23 @@ def parse_ppm(data: bytes) -> np.ndarray:
     width = reader.number("truncated header", header)
     height = reader.number("truncated header", header)
     maxval = reader.number("truncated header", header)
+    if magic == b"P6" and reader.pos >= len(data):
+        raise TextureError("truncated header")      # ppm.S wants maxval's whitespace first
     if max(width, height, maxval) >= NUMBER_LIMIT:
         raise TextureError(header)
     if width == 0 or height == 0:
         raise TextureError("bad header (width or height 0)")
     if not 1 <= maxval <= 65535:
         raise TextureError("bad maxval (not 1..65535)")
+    return PpmHeader(magic.decode("ascii"), width, height, maxval, reader.pos)
+
+
+def parse_ppm(data: bytes) -> np.ndarray:
+    """The texture as a (height, width) uint16 RGB565 array, row 0 at the top."""
+    head = parse_header(data)
+    magic, width, height, maxval = head.magic.encode("ascii"), head.width, head.height, head.maxval
+    reader = _Reader(data)
+    reader.pos = head.end
     count = width * height * 3
     if magic == b"P6":
         # exactly one whitespace character, or one comment with its line end
@@ -112,6 +136,8 @@ def parse_ppm(data: bytes) -> np.ndarray:
                 raise TextureError("truncated raster (fewer samples than width x height x 3)")
             samples[i] = reader.number("truncated raster (fewer samples than width x height x 3)",
                                        "bad sample (not a decimal number)")
+            if i % 3 == 2 and samples[i - 2:i + 1].max() > maxval:
+                raise TextureError("sample above maxval")   # ppm.S checks each pixel as it reads it
     if samples.size and samples.max() > maxval:
         raise TextureError("sample above maxval")
     rgb = samples.reshape(height, width, 3)

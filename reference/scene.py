@@ -89,9 +89,14 @@ def parse_number(text: str) -> float | None:
     return float(text)
 
 
-def _numbers(line: int, value: str) -> list[float]:
+def _numbers(line: int, value: str, most: int, too_many: str) -> list[float]:
+    """The value's numbers, read in order as scene.S reads them: a token that is not a number
+    stops it ("not a number"), and so does a token after the `most` numbers the key takes
+    (`too_many`, whatever that token is)."""
     numbers = []
     for token in value.replace("\t", " ").split():
+        if len(numbers) == most:
+            raise SceneError(line, too_many)
         number = parse_number(token)
         if number is None:
             raise SceneError(line, "bad value (not a number)")
@@ -154,7 +159,7 @@ def _light_levels(line: int, value: str) -> int:
     """light_levels: one number (parse.S's grammar), finite in single precision, whose single-
     precision value is a whole number from LIGHT_LEVELS_MIN to LIGHT_LEVELS_MAX (the firmware
     keeps the number in single precision, so it is checked as such: 6.5e1 is 65)."""
-    numbers = _count(line, "light_levels", _numbers(line, value), 1)
+    numbers = _count(line, "light_levels", _numbers(line, value, 1, "bad value (expected 1 number)"), 1)
     _finite_single(line, numbers)
     single = float(np.float32(numbers[0]))
     if single != math.floor(single) or not LIGHT_LEVELS_MIN <= single <= LIGHT_LEVELS_MAX:
@@ -249,7 +254,10 @@ def _set(scene: Scene, key: str, value: str, line: int) -> None:
     elif key == "background":
         scene.background = _colour(line, value)
     else:
-        numbers = _numbers(line, value)
+        most = 3 if key in ("scale", "axis", "light", "translate") else 1
+        too_many = ("bad value (expected 1 or 3 numbers)" if key == "scale" else
+                    "bad value (expected 3 numbers)" if most == 3 else "bad value (expected 1 number)")
+        numbers = _numbers(line, value, most, too_many)
         if key == "scale":
             numbers = _count(line, key, numbers, 3, broadcast=True)
         elif key in ("axis", "light", "translate"):

@@ -22,6 +22,7 @@ from . import objcheck, ppm
 from .errors import BadInputError, UsageError
 from .fat32 import check_card_name
 from .rawfat import fat_fold
+from reference.scene import Scene, SceneError, parse_scene
 
 if TYPE_CHECKING:
     from PIL import Image
@@ -158,102 +159,66 @@ def parse_scene_args(items: list[str]) -> dict[str, str]:
     return scene
 
 
-# The rules of the firmware's scene.ini reader (firmware/scene.S): '#' starts a comment
-# anywhere but as the first character of a value (background = #RRGGBB), keys compare
-# case-insensitively, values are under 256 bytes, no control characters. Checked here so a
-# card the tool accepts is a card the firmware accepts (values other than paths are checked
-# by the firmware only).
-KNOWN_SCENE_KEYS = ("model", "texture", "mode", "cull", "scale", "axis", "angle", "step",
-                    "translate", "fov", "near", "far", "light", "ambient",
-                    "background", "interpolation", "shading", "light_levels", "angles", "depth",
-                    "snap")  # scene_keys in firmware/scene.S
-SCENE_FILE_KEYS = ("model", "texture")  # keys whose value is a path on the card
-SCENE_VALUE_MAX = 255
-_SCENE_KEY = re.compile(r"[A-Za-z0-9_.\-]+\Z")
-
-
-def _scene_problem(key: str, value: str) -> str | None:
-    """Why `key = value` would be rejected by the firmware, or None."""
-    if not key:
-        return "no key before '='"
-    if not _SCENE_KEY.match(key):
-        return f"key {key!r}: use letters, digits, '_', '-' and '.'"
-    if not value:
-        return f"no value for {key!r}"
-    if any(ord(c) < 0x20 or ord(c) == 0x7F for c in key + value if c != "\t"):
-        return f"control character in {key!r}"
-    if len(value.encode("utf-8")) > SCENE_VALUE_MAX:
-        return f"value of {key!r} is longer than {SCENE_VALUE_MAX} bytes"
-    return None
+# scene.ini is held to the firmware's rules (firmware/scene.S), written once on the host in
+# `reference.scene`, which the reference renderer reads scenes with too: every key, value and
+# line the firmware would refuse with error 9 is refused here with its line and words.
+SCENE_FIRMWARE_ERROR = 9
 
 
 def scene_ini(scene: dict[str, str]) -> bytes:
-    """The scene.ini text: one "key = value" line per entry, in the given order."""
+    """The scene.ini text of --scene options: one "key = value" line per entry, in the given
+    order, checked as the firmware will read it; raises `UsageError` naming the option."""
     lines = []
-    seen: set[str] = set()
     for key, value in scene.items():
         key, value = str(key).strip(" \t"), str(value).strip(" \t")
-        if key.lower() in seen:
-            raise UsageError(f"scene key {key!r} given twice (keys ignore case)")
-        seen.add(key.lower())
-        problem = _scene_problem(key, value)
         if "#" in value[1:]:
-            problem = f"value of {key!r} contains '#', which starts a comment in scene.ini"
-        if problem:
-            raise UsageError(f"--scene {key}={value}: {problem}")
+            # written as is, the '#' would cut the value short on the card
+            raise UsageError(f"--scene {key}={value}: the value contains '#', which starts a "
+                             f"comment in scene.ini")
+        if "\n" in value or "\r" in value:
+            raise UsageError(f"--scene {key}={value!r}: a value is one line")
         lines.append(f"{key} = {value}\n")
-    return "".join(lines).encode("utf-8")
-
-
-def _strip_scene_comment(line: str) -> str:
-    """A scene.ini line without its comment: from a '#' to the end, except a '#' that is the
-    first non-blank character after the first '=' (it starts the value, as in #RRGGBB)."""
-    key, sep, value = line.partition("=")
-    if "#" in key or not sep:
-        return line.split("#", 1)[0]
-    lead = len(value) - len(value.lstrip(" \t"))
-    cut = value.find("#", lead + 1 if value[lead:lead + 1] == "#" else lead)
-    return key + sep + (value if cut < 0 else value[:cut])
-
-
-def check_scene_ini(data: bytes, path: Path | str) -> dict[str, str]:
-    """Validates a scene.ini given as input by the firmware's rules: "key = value" lines,
-    blank lines, '#' comments, LF or CRLF, an optional UTF-8 byte-order mark. Raises
-    `BadInputError` with the line of the first bad line; returns the settings."""
-    if data.startswith(b"\xef\xbb\xbf"):
-        data = data[3:]
+    text = "".join(lines).encode("utf-8")
     try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        line = data.count(b"\n", 0, exc.start) + 1
-        raise BadInputError(path, "not UTF-8 text", line) from None
-    scene: dict[str, str] = {}
-    for lineno, line in enumerate(text.split("\n"), start=1):
-        content = _strip_scene_comment(line.removesuffix("\r")).strip(" \t")
-        if not content:
-            continue
-        key, sep, value = content.partition("=")
-        if not sep:
-            raise BadInputError(path, f"expected 'key = value', got {content[:40]!r}", lineno)
-        key, value = key.strip(" \t"), value.strip(" \t")
-        problem = _scene_problem(key, value)
-        if problem:
-            raise BadInputError(path, problem, lineno)
-        if key.lower() in scene:
-            raise BadInputError(path, f"key {key!r} given twice", lineno)
-        scene[key.lower()] = value
-    return scene
+        parse_scene(text)
+    except SceneError as exc:
+        key, value = list(scene.items())[exc.line - 1]
+        raise UsageError(f"--scene {key}={value}: {exc.what} (firmware error "
+                         f"{SCENE_FIRMWARE_ERROR})") from None
+    return text
 
 
-def scene_warnings(scene: dict[str, str], card_files: set[str], origin: str) -> list[str]:
-    """Notes on settings the firmware will trip over: unknown keys, files not on the card."""
+def check_scene_ini(data: bytes, path: Path | str) -> Scene:
+    """Validates a scene.ini given as input by the firmware's rules; raises `BadInputError` with
+    the line and the firmware's words; returns the scene it describes."""
+    try:
+        return parse_scene(data)
+    except SceneError as exc:
+        raise BadInputError(path, f"{exc.what} (firmware error {SCENE_FIRMWARE_ERROR})",
+                            exc.line) from None
+
+
+def scene_warnings(scene: Scene, card_files: dict[str, str], origin: str) -> list[str]:
+    """Notes on files the scene names that the card lacks (the firmware's error 6): the model,
+    and the texture in textured mode (flat and wireframe scenes read none). When the card holds
+    a file of that name in a folder, says so: an input folder lands as a folder on the card.
+    `card_files`: each file's card path folded as FAT compares names -> the path itself."""
     notes = []
-    for key, value in scene.items():
-        if key.lower() not in KNOWN_SCENE_KEYS:
-            notes.append(f"{origin}: key {key!r} is not one the firmware knows "
-                         f"({', '.join(KNOWN_SCENE_KEYS)})")
-        elif key.lower() in SCENE_FILE_KEYS and "/" + fat_fold(value.lstrip("/")) not in card_files:
-            notes.append(f"{origin}: {key} = {value}: no such file on the card")
+    wanted = [("model", scene.model)] + ([("texture", scene.texture)]
+                                         if scene.mode == "textured" else [])
+    for key, value in wanted:
+        folded = "/" + fat_fold(value.replace("\\", "/").lstrip("/"))
+        if folded in card_files:
+            continue
+        note = f"{origin}: {key} = {value}: no such file on the card"
+        if key not in scene.lines:
+            note += " (the firmware's default)"
+        elsewhere = sorted(path for key_, path in card_files.items()
+                           if key_.endswith(folded) and key_ != folded)
+        if elsewhere:
+            note += (f"; the card has {elsewhere[0]}: a folder given as input lands on the card as "
+                     f"a folder (give the path from the card's root, or the folder's contents)")
+        notes.append(note)
     return notes
 
 
@@ -269,7 +234,7 @@ class _Planner:
         # Per card folder: folded name -> (card name, input it came from)
         self.names: dict[str, dict[str, tuple[str, str]]] = {"": {}}
         #: Settings of a scene.ini given as input, and its path.
-        self.scene_input: tuple[dict[str, str], str] | None = None
+        self.scene_input: tuple[Scene, str] | None = None
 
     def claim(self, card_dir: str, name: str, origin: str) -> str:
         problem = check_card_name(name)
@@ -358,9 +323,9 @@ def plan_card(inputs: list[Path], scene: dict[str, str] | None = None,
         card_path = planner.claim("", SCENE_FILE, "--scene")
         planner.plan.files.append((PlacedFile(card_path=card_path, size=len(data), source=None,
                                               detail="written from --scene"), data))
-    on_card = {fat_fold(p.card_path) for p, _ in planner.plan.files}
+    on_card = {fat_fold(p.card_path): p.card_path for p, _ in planner.plan.files}
     if scene:
-        planner.plan.warnings += scene_warnings(scene, on_card, "--scene")
+        planner.plan.warnings += scene_warnings(parse_scene(data), on_card, "--scene")
     elif planner.scene_input:
         settings, origin = planner.scene_input
         planner.plan.warnings += scene_warnings(settings, on_card, origin)

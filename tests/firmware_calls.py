@@ -102,9 +102,9 @@ def elf_symbols(path: Path) -> dict[str, set[int]]:
 class FirmwareCaller:
     """The firmware image on a board model whose hart 0 runs single routines on request."""
 
-    def __init__(self, elf: Path) -> None:
+    def __init__(self, elf: Path, check_writes: bool = False) -> None:
         self.elf = Path(elf)
-        self.board = Board(str(self.elf))
+        self.board = Board(str(self.elf), check_writes=check_writes)
         self.hart = self.board.harts[0]
         self.uc = self.hart.uc
         self._symbols = elf_symbols(self.elf)

@@ -493,25 +493,33 @@ def test_texture_size_resizes_converted_images_only(tmp_path):
 
 def test_obj_is_copied_unchanged_and_accepts_all_face_forms():
     stats = check_obj(CUBE_OBJ, "cube.obj")
-    assert (stats.vertices, stats.texcoords, stats.normals, stats.faces) == (8, 4, 2, 6)
+    assert (stats.vertices, stats.texcoords, stats.normals, stats.triangles) == (8, 4, 2, 7)
     crlf = CUBE_OBJ.replace(b"\n", b"\r\n")
-    assert check_obj(crlf).faces == 6
+    assert check_obj(crlf).triangles == 7
 
 
+# The firmware's words (firmware/obj.S through reference/obj.py), at the firmware's line.
 BAD_OBJS = [
-    (b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", 4, "vertex index 4 out of range"),
-    (b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -4\n", 4, "vertex index -4 out of range"),
+    (b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", 4, "vertex index out of range"),
+    (b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -4\n", 4, "vertex index out of range"),
     (b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n", 4, "index 0"),
-    (b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/1 2/1 3/1\n", 4, "texcoord index 1 out of range"),
-    (b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1//2 2//2 3//2\n", 4, "normal index 2 out of range"),
-    (b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2\n", 4, "face with 2 vertices"),
-    (b"v 0 0 0\nv 1 0 0.5.1\nv 0 1 0\n", 2, "malformed number '0.5.1'"),
-    (b"v 0 0 nan\n", 1, "malformed number 'nan'"),
-    (b"v 0 0\n", 1, "'v' needs 3 or 4 or 6 or 7 numbers"),
-    (b"vt 0 x\n", 1, "malformed number 'x'"),
-    (b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/a 2 3\n", 4, "malformed texcoord index 'a'"),
-    (b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1// 2 3\n", 4, "malformed face corner '1//'"),
-    (b"v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\nf 1 2 3\n", 4, "unknown statement 'l'"),
+    (b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/1 2/1 3/1\n", 4, "texture coordinate index out of range"),
+    (b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1//2 2//2 3//2\n", 4, "normal index out of range"),
+    (b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2\n", 4, "face with fewer than 3 vertices"),
+    (b"v 0 0 0\nv 1 0 0.5.1\nv 0 1 0\n", 2, "malformed number"),
+    (b"v 0 0 nan\n", 1, "malformed number"),
+    (b"v 0 0\n", 1, "v takes 3, 4, 6 or 7 numbers"),
+    (b"vt 0 x\n", 1, "malformed number"),
+    (b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/a 2 3\n", 4, "malformed face corner"),
+    (b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1// 2 3\n", 4, "malformed face corner"),
+    (b"v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\nf 1 2 3\n", 4, "unknown statement"),
+    # issue 14: numbers beyond single precision and line ends the firmware does not take
+    (b"v 1e400 0 0\n", 1, "number out of range"),
+    (b"v 0 0 0\nv 3.5e38 0 0\n", 2, "number out of range"),
+    (b"v 0 0 0\rv 1 0 0\rv 0 1 0\rf 1 2 3\r", 1, "malformed number"),
+    (b"v 0 0 0\r\r\nv 1 0 0\r\r\nv 0 1 0\r\r\nf 1 2 3\r\r\n", 1, "malformed number"),
+    # issue 14: the old check said "the file defines 8 vertexs"
+    (b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n", 4, "vertex index out of range"),
 ]
 
 
@@ -525,8 +533,9 @@ def test_obj_errors_name_file_and_line(text, line, message):
     with pytest.raises(BadInputError) as info:
         check_obj(text, "m.obj")
     assert info.value.line == line
-    assert str(info.value).startswith(f"m.obj:{line}: ")
-    assert message in str(info.value)
+    assert str(info.value).startswith(f"m.obj:{line}: {message}")
+    assert str(info.value).endswith("(firmware error 10)")
+    assert "vertexs" not in str(info.value)
 
 
 def test_bad_obj_on_command_line_exits_3_with_line(tmp_path):
@@ -534,26 +543,30 @@ def test_bad_obj_on_command_line_exits_3_with_line(tmp_path):
     obj.write_bytes(b"v 0 0 0\nv 1 0 0\nv 0 1 0\n\nf 1 2 9\n")
     result = run_process("build", tmp_path / "c.img", obj)
     assert result.returncode == 3
-    assert f"{obj}:5:" in result.stderr and "vertex index 9" in result.stderr
+    assert f"{obj}:5: vertex index out of range" in result.stderr
     assert "Traceback" not in result.stderr
     assert not (tmp_path / "c.img").exists() and not list(tmp_path.glob(".c.img*"))
 
 
 @pytest.mark.parametrize("data,message", [
-    (b"P6\n2 2\n255\n" + bytes(11), "truncated P6 data"),
-    (b"P6\n2 2\n", "maxval missing"),
-    (b"P6\n2 x\n255\n", "height is b'x'"),
-    (b"P5\n2 2\n255\n" + bytes(4), "PGM"),
-    (b"P3\n2 1\n255\n1 2 3 4 5\n", "truncated P3 data"),
-    (b"P3\n1 1\n100\n1 2 300\n", "exceeds maxval"),
-    (b"P6\n0 2\n255\n", "must not be empty"),
+    (b"P6\n2 2\n255\n" + bytes(11), "truncated raster"),
+    (b"P6\n2 2\n", "truncated header"),
+    (b"P6\n2 x\n255\n", "bad header"),
+    (b"P5\n2 2\n255\n" + bytes(4), "not a PPM"),
+    (b"P3\n2 1\n255\n1 2 3 4 5\n", "truncated raster"),
+    (b"P3\n1 1\n100\n1 2 300\n", "sample above maxval"),
+    (b"P6\n0 2\n255\n", "width or height 0"),
+    # issue 14: a two-byte P6 sample above maxval, and a magic run into the width
+    (b"P6\n1 1\n1000\n" + b"\x03\xe8\x03\xe9\x00\x00", "sample above maxval"),
+    (b"P68 8 255\n" + bytes(192), "bad header"),
 ])
 def test_bad_ppm_exits_3(tmp_path, data, message):
     ppm = tmp_path / "bad.ppm"
     ppm.write_bytes(data)
     result = run_cli("build", tmp_path / "c.img", ppm)
     assert result.returncode == 3, result.stderr
-    assert "bad.ppm" in result.stderr and message in result.stderr
+    assert "bad.ppm: " in result.stderr and message in result.stderr
+    assert "bad texture: " in result.stderr and "(firmware error 11)" in result.stderr
 
 
 def test_good_ppms_parse():
@@ -590,12 +603,17 @@ def test_scene_from_options_and_from_input(tmp_path, sample_img):
 
 
 @pytest.mark.parametrize("text,line,message", [
-    (b"model = a.obj\nMODEL = b.obj\n", 2, "given twice"),
-    (b"model =\n", 1, "no value"),
-    (b" = a.obj\n", 1, "no key"),
-    (b"; a comment the firmware does not know\n", 1, "expected 'key = value'"),
-    (b"model = a\x01b.obj\n", 1, "control character"),
-    (b"model = " + b"x" * 256 + b"\n", 1, "longer than 255 bytes"),
+    (b"model = a.obj\nMODEL = b.obj\n", 2, "duplicate key"),
+    (b"model =\n", 1, "malformed line (no value)"),
+    (b" = a.obj\n", 1, "malformed line (no key)"),
+    (b"; a comment the firmware does not know\n", 1, "malformed line (no '=')"),
+    (b"model = a\x01b.obj\n", 1, "malformed line (control character)"),
+    (b"model = " + b"x" * 256 + b"\n", 1, "malformed line (value too long)"),
+    # issue 14: what the card builder used to let through
+    (b"mode = flat\nfov = 200\n", 2, "bad value (fov must be between 0 and 180 degrees)"),
+    (b"mode = textures\n", 1, "bad value (expected textured, flat or wireframe)"),
+    (b"# card\nspeed = 3\n", 2, "unknown key"),
+    (b"near = 5\nfar = 1\n", 2, "bad value (far must be greater than near)"),
 ])
 def test_scene_ini_follows_the_firmware_rules(tmp_path, text, line, message):
     ini = tmp_path / "scene.ini"
@@ -605,21 +623,48 @@ def test_scene_ini_follows_the_firmware_rules(tmp_path, text, line, message):
     assert f"{ini}:{line}: " in result.stderr and message in result.stderr
 
 
-def test_scene_ini_accepts_bom_crlf_comments_and_warns_on_unknown(tmp_path):
+def test_scene_ini_accepts_bom_crlf_and_comments_and_refuses_what_the_firmware_refuses(tmp_path):
     ini = tmp_path / "scene.ini"
-    ini.write_bytes(b"\xef\xbb\xbf# card\r\nModel = m.obj  # the model\r\n\r\nspeed = 3\r\n")
+    ini.write_bytes(b"\xef\xbb\xbf# card\r\nModel = m.obj  # the model\r\n\r\nmode = Flat\r\n"
+                    b"background = #203040\r\n")
     obj = tmp_path / "m.obj"
     obj.write_bytes(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
     result = run_cli("build", tmp_path / "c.img", ini, obj, "--size", "34")
     assert result.returncode == 0, result.stderr
-    assert "'speed' is not one the firmware knows" in result.stderr
-    assert "no such file" not in result.stderr
+    assert "no such file" not in result.stderr      # flat: no texture needed
     hash_in_value = run_cli("build", tmp_path / "d.img", "--scene", "model=a#b.obj")
     assert hash_in_value.returncode == 2 and "starts a comment" in hash_in_value.stderr
     twice = run_cli("build", tmp_path / "e.img", "--scene", "model=a", "--scene", "Model=b")
     assert twice.returncode == 2 and "twice" in twice.stderr
     missing = run_cli("build", tmp_path / "f.img", "--scene", "texture=t.ppm", "--size", "34")
-    assert missing.returncode == 0 and "t.ppm: no such file on the card" in missing.stderr
+    assert missing.returncode == 0 and "texture = t.ppm: no such file on the card" in missing.stderr
+    assert "model = model.obj: no such file on the card (the firmware's default)" in missing.stderr
+
+
+@pytest.mark.parametrize("option,message", [
+    ("fov=200", "--scene fov=200: bad value (fov must be between 0 and 180 degrees) (firmware "
+                "error 9)"),
+    ("mode=textures", "--scene mode=textures: bad value (expected textured, flat or wireframe)"),
+    ("speed=3", "--scene speed=3: unknown key"),
+    ("axis=0 0 0", "--scene axis=0 0 0: bad value (zero vector)"),
+])
+def test_scene_options_the_firmware_refuses_are_usage_errors(tmp_path, option, message):
+    """Issue 14: these built with exit 0 and stopped the firmware at boot with error 9."""
+    result = run_cli("build", tmp_path / "c.img", "--scene", "model=m.obj", "--scene", option)
+    assert result.returncode == 2, result.stderr
+    assert message in result.stderr
+    assert not (tmp_path / "c.img").exists()
+
+
+def test_a_scene_naming_a_file_inside_an_input_folder_says_where_it_landed(tmp_path):
+    card_folder = tmp_path / "card"
+    card_folder.mkdir()
+    (card_folder / "x.obj").write_bytes(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    result = run_cli("build", tmp_path / "c.img", card_folder, "--scene", "model=x.obj",
+                     "--scene", "mode=flat", "--size", "34")
+    assert result.returncode == 0, result.stderr
+    assert ("--scene: model = x.obj: no such file on the card; the card has /card/x.obj: a folder "
+            "given as input lands on the card as a folder") in result.stderr
 
 
 # --- failures -------------------------------------------------------------------------------------

@@ -1,0 +1,287 @@
+"""Fuzzing of the input readers: generated and mutated scene.ini, .obj and .ppm files go through
+the host's rules (reference/, which the card builder uses) and through the firmware's own
+readers, called on the board model's CPU (tests/firmware_calls.py, no boot), with the board's
+store checker on. For every input:
+
+- host and firmware agree: both accept (the same counts, the same texels), or both refuse
+  with the same words and line (`bad scene.ini line N: ...`, `bad model line N: ...`,
+  `bad texture: ...`: the firmware's errors 9, 10 and 11);
+- the firmware neither traps, nor runs away (an instruction budget), nor stores outside its
+  buffers (`--check-writes`'s checker).
+
+The firmware's console output is captured by making the UART take each byte at once, and a
+fatal error is caught where errors.S ends its report (`error_end`), before it paints the screen.
+FUZZ_EXAMPLES=N runs N examples of each (nightly use: see README "Fuzzing").
+"""
+from __future__ import annotations
+
+import os
+import struct
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from unicorn import riscv_const as rv
+
+from emulator.hart import RunEnd
+from firmware_calls import FirmwareCaller
+from reference.obj import ModelError, parse_obj
+from reference.ppm import TextureError, parse_ppm
+from reference.scene import KEYS, SceneError, parse_scene
+
+ROOT = Path(__file__).resolve().parent.parent
+EXAMPLES = int(os.environ.get("FUZZ_EXAMPLES", "150"))
+FUZZ = settings(max_examples=EXAMPLES, deadline=None, derandomize=True, database=None,
+                suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow,
+                                       HealthCheck.data_too_large])
+INSN_WFI = 0x1050_0073
+BUDGET = 20_000_000
+UARTHS_TXDATA = 0x00
+SCENE_MODE = 0                         # firmware/include/scene.inc
+MESH_TEX_PIXELS = 168
+MESH_FCOUNT = 120
+FILE_RECORD_ADDRESS, FILE_RECORD_SIZE = 0, 8
+
+
+class ParserCaller:
+    """The firmware's readers, one call at a time, on a fresh .bss and heap each time."""
+
+    def __init__(self, elf: Path) -> None:
+        self.caller = FirmwareCaller(elf, check_writes=True)
+        board = self.caller.board
+        self.console = bytearray()
+        uart = board.uarths
+        plain_read, plain_write = uart.read_register, uart.write_register
+
+        def read(offset, reg, now):
+            return 0 if offset == UARTHS_TXDATA else plain_read(offset, reg, now)
+
+        def write(offset, reg, value, now):
+            if offset == UARTHS_TXDATA:
+                self.console.append(value & 0xFF)
+            else:
+                plain_write(offset, reg, value, now)
+
+        uart.read_register, uart.write_register = read, write
+        self.error_end = self.caller.symbol("error_end")
+        self.caller.write(self.error_end, INSN_WFI.to_bytes(4, "little"))
+        self.bss = (self.caller.symbol("__bss_start"), self.caller.symbol("__bss_end"))
+        # an error report stopped at error_end still holds the console (console.S keeps its
+        # owner in .data, which clearing .bss leaves alone)
+        self.console_owner = self.caller.symbol("console_owner")
+
+    def _fresh(self) -> None:
+        start, end = self.bss
+        self.caller.write(start, bytes(end - start))
+        self.caller.write(self.console_owner, bytes(4))
+        self.console.clear()
+        self.caller.call("heap_init")
+        # the heap's first bytes hold the wfi every call returns to (firmware_calls): keep
+        # them out of the blocks the readers are given
+        self.caller.call("heap_alloc", [self.caller.scratch - self.caller.return_address])
+
+    def _place(self, data: bytes) -> int:
+        """The bytes in a heap block, as scene.S would have loaded them."""
+        address = self.caller.call("heap_alloc", [max(len(data), 1)]).a[0]
+        assert address, "heap_alloc failed"
+        self.caller.write(address, data)
+        return address
+
+    def run(self, routine: str, args: list[int]) -> str:
+        """'ok' or the firmware's error line without 'error <code> ' (with the code first)."""
+        caller, hart = self.caller, self.caller.hart
+        try:
+            caller.call(routine, args, budget=BUDGET)
+            outcome = "ok"
+        except AssertionError as failure:
+            if hart.pc != self.error_end + 4:
+                raise
+            outcome = self.console.decode("latin-1").rsplit("\n", 1)[-1]
+        stop = caller.board.write_watch.stray_store(hart)
+        assert stop is None, f"{routine} stored outside the firmware's buffers: {stop}"
+        return outcome
+
+    def scene(self, text: bytes) -> str:
+        self._fresh()
+        caller = self.caller
+        address = self._place(text)
+        caller.call("scene_defaults")
+        outcome = self.run("scene_parse", [address, len(text)])
+        if outcome == "ok":
+            outcome = self.run("scene_check_planes", [])
+        return outcome
+
+    def _record(self, name: str, data: bytes) -> None:
+        record = self.caller.symbol(name)
+        self.caller.write(record, struct.pack("<QQ", self._place(data), len(data)))
+
+    def texture(self, data: bytes) -> tuple[str, np.ndarray | None]:
+        self._fresh()
+        self._record("scene_texture", data)
+        outcome = self.run("ppm_parse_texture", [])
+        if outcome != "ok":
+            return outcome, None
+        scene = self.caller.symbol("scene")
+        raw = self.caller.read(scene, 176)
+        width, height, pixels = struct.unpack_from("<IIQ", raw, 160)
+        texels = np.frombuffer(self.caller.read(pixels, 2 * width * height), dtype="<u2")
+        return outcome, texels.reshape(height, width)
+
+    def model(self, text: bytes) -> str:
+        self._fresh()
+        self._record("scene_model", text)
+        outcome = self.run("obj_parse_model", [])
+        if outcome != "ok":
+            return outcome
+        lines = self.console.decode("latin-1").split("\n")
+        return next(line for line in lines if line.startswith("model: "))
+
+
+@pytest.fixture(scope="module")
+def parsers(firmware) -> ParserCaller:
+    return ParserCaller(firmware)
+
+
+# --------------------------------------------------------------------------- generators
+
+NUMBERS = st.one_of(
+    st.floats(allow_nan=False, allow_infinity=False, width=32).map(repr),
+    st.integers(-10**6, 10**6).map(str),
+    st.sampled_from(["0", "-0", ".5", "5.", "1e38", "3.4e38", "3.5e38", "1e400", "1e-50", "-1.5e-3",
+                     "+2", "1.", "e5", "1e", "--1", "1.2.3", "nan", "inf", "0x10", "1_0", "", "."]),
+)
+BLANKS = st.sampled_from([" ", "  ", "\t", " \t "])
+ENDINGS = st.sampled_from(["\n", "\r\n", "\r", "\r\r\n", "\n\n"])
+
+
+def _mutate(data: bytes, edits: list[tuple[int, int, bytes]]) -> bytes:
+    """Each edit: at a relative position, delete some bytes and insert others."""
+    out = bytearray(data)
+    for where, delete, insert in edits:
+        at = where % (len(out) + 1)
+        out[at:at + delete] = insert
+    return bytes(out)
+
+
+EDITS = st.lists(st.tuples(st.integers(0, 10**6), st.integers(0, 3), st.binary(max_size=3)),
+                 max_size=3)
+
+
+@st.composite
+def scene_texts(draw) -> bytes:
+    lines = []
+    for _ in range(draw(st.integers(0, 6))):
+        key = draw(st.one_of(st.sampled_from(KEYS), st.sampled_from(["MODE", "Fov", "speed", ""])))
+        words = draw(st.lists(st.one_of(NUMBERS, st.sampled_from(
+            ["textured", "flat", "wireframe", "on", "off", "Yes", "affine", "gouraud", "table", "int16",
+             "float32", "pixel", "#203040", "#20304", "model.obj", "a b.obj", "#"])), min_size=0, max_size=4))
+        value = draw(BLANKS).join(words)
+        comment = draw(st.sampled_from(["", " # note", "#"]))
+        lines.append(f"{key}{draw(BLANKS)}={draw(BLANKS)}{value}{comment}{draw(ENDINGS)}")
+    text = "".join(lines).encode("latin-1")
+    return _mutate(text, draw(EDITS))
+
+
+@st.composite
+def obj_texts(draw) -> bytes:
+    lines = []
+    counts = {"v": 0, "vt": 0, "vn": 0}
+    for _ in range(draw(st.integers(1, 10))):
+        kind = draw(st.sampled_from(["v", "v", "vt", "vn", "f", "f", "#", "o", "usemtl", "s"]))
+        if kind in counts:
+            n = draw(st.integers(0, 8))
+            words = [kind] + [draw(NUMBERS) for _ in range(n)]
+            counts[kind] += 1
+        elif kind == "f":
+            corners = []
+            for _ in range(draw(st.integers(0, 5))):
+                index = st.integers(-4, 6).map(str)
+                form = draw(st.sampled_from(["v", "v/t", "v//n", "v/t/n", "v/", "/t", "v//"]))
+                corners.append(form.replace("v", draw(index)).replace("t", draw(index))
+                               .replace("n", draw(index)))
+            words = ["f"] + corners
+        else:
+            words = [kind, "name"]
+        lines.append(draw(BLANKS).join(words) + draw(ENDINGS))
+    return _mutate("".join(lines).encode("latin-1"), draw(EDITS))
+
+
+@st.composite
+def ppm_files(draw) -> bytes:
+    magic = draw(st.sampled_from([b"P6", b"P3", b"P5", b"P", b"P68"]))
+    width, height = draw(st.integers(0, 4)), draw(st.integers(0, 3))
+    maxval = draw(st.sampled_from([0, 1, 15, 255, 256, 1000, 65535, 65536]))
+    sep = lambda: draw(st.sampled_from([b" ", b"\n", b"\t", b"\r\n", b" # c\n", b"#c\n"]))  # noqa: E731
+    header = magic + sep() + str(width).encode() + sep() + str(height).encode() + sep() + \
+        str(maxval).encode()
+    samples = width * height * 3 + draw(st.integers(-2, 2))
+    if magic == b"P3":
+        values = [draw(st.integers(0, max(maxval, 1) + 1)) for _ in range(max(samples, 0))]
+        body = draw(st.sampled_from([b" ", b"\n"])) + b" ".join(str(v).encode() for v in values)
+    else:
+        wide = maxval > 255
+        top = min(max(maxval, 1) + 1, 65535 if wide else 255)
+        values = [draw(st.integers(0, top)) for _ in range(max(samples, 0))]
+        body = draw(st.sampled_from([b"\n", b" ", b"#x\n"])) + b"".join(
+            v.to_bytes(2 if wide else 1, "big") for v in values)
+    return _mutate(header + body, draw(st.lists(st.tuples(st.integers(0, 10**6), st.integers(0, 2),
+                                                           st.binary(max_size=2)), max_size=2)))
+
+
+# --------------------------------------------------------------------------- the properties
+
+def host_scene(text: bytes) -> str:
+    try:
+        parse_scene(text)
+    except SceneError as error:
+        return f"error 9 {error}"
+    return "ok"
+
+
+def host_model(text: bytes) -> str:
+    try:
+        mesh = parse_obj(text)
+    except ModelError as error:
+        return f"error 10 {error}"
+    return (f"model: {len(mesh.faces)} triangles, {len(mesh.vertices)} vertices, "
+            f"{len(mesh.texcoords)} uv, {len(mesh.normals)} normals")
+
+
+@FUZZ
+@given(text=scene_texts())
+def test_scene_ini_host_and_firmware_agree(parsers, text):
+    assert parsers.scene(text) == host_scene(text)
+
+
+@FUZZ
+@given(text=obj_texts())
+def test_obj_host_and_firmware_agree(parsers, text):
+    assert parsers.model(text) == host_model(text)
+
+
+@FUZZ
+@given(data=ppm_files())
+def test_ppm_host_and_firmware_agree(parsers, data):
+    outcome, texels = parsers.texture(data)
+    try:
+        expected = parse_ppm(data)
+    except TextureError as error:
+        assert outcome == f"error 11 {error}"
+        return
+    assert outcome == "ok"
+    assert np.array_equal(texels, expected)
+
+
+def test_the_harness_sees_acceptance_and_each_kind_of_refusal(parsers):
+    """The checks above can fail: known inputs give the firmware's known verdicts."""
+    assert parsers.scene(b"mode = flat\nfov = 90\n") == "ok"
+    assert parsers.scene(b"mode = flat\nfov = 200\n") == \
+        "error 9 bad scene.ini line 2: bad value (fov must be between 0 and 180 degrees)"
+    assert parsers.model(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n") == \
+        "model: 1 triangles, 3 vertices, 0 uv, 0 normals"
+    assert parsers.model(b"v 0 0 0\nv 3.5e38 0 0\n") == "error 10 bad model line 2: number out of range"
+    outcome, texels = parsers.texture(b"P3 1 1 255 255 0 255")
+    assert outcome == "ok" and texels.tolist() == [[0xF81F]]
+    assert parsers.texture(b"P68 8 255\n")[0].startswith("error 11 bad texture: bad header")
