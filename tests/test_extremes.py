@@ -49,13 +49,13 @@ The root causes of the discrepancies found with 3-frame runs, each pinned by a t
   (extremes_support.firmware_lighting_in_reference) leaves only outline and texel-boundary
   pixels (test_angles_beyond_a_turn_and_negative_are_exact).
 
-Figures (today's heap: 5,908,160 bytes between __heap_start and __heap_end, the depth buffer
+Figures (today's heap: 5,906,944 bytes between __heap_start and __heap_end, the depth buffer
 one of its blocks, after the vertex records: 153,600 bytes for int16; the model's text none of
 them, as obj.S reads it through a window; the tests derive every limit from the ELF's symbols and
 the firmware's allocation sequence, so they follow the heap when it changes): the largest model
-is 159,827 triangles beside a 1x1 texture, 154,366 beside a 256x256 one (one more: error 12,
-"(depth buffer)"); 100,000 triangles beside a 256x256 texture with up to 32,622 vertices; the
-largest texture 1,917,946 texels (1,384 x 1,384 as a square; one texel more: error 12, the depth
+is 159,793 triangles beside a 1x1 texture, 154,332 beside a 256x256 one (one more: error 12,
+"(depth buffer)"); 100,000 triangles beside a 256x256 texture with up to 32,602 vertices; the
+largest texture 1,917,605 texels (1,384 x 1,384 as a square; one texel more: error 12, the depth
 buffer; 51,201 more: error 7); beside a model filling the rest, 32,933 texels.
 
 Corners projecting beyond +-2^23 pixels (the Q4 range) are cut at the guard band in clip space
@@ -140,8 +140,8 @@ def layout(firmware):
 @pytest.mark.parametrize("data", TEXTURES.values(), ids=TEXTURES.keys())
 @pytest.mark.parametrize("case", ["largest", "one-more-triangle"])
 def test_largest_model(firmware, layout, tmp_path, case, data):
-    """The largest model that fits: 159,827 triangles with a 1x1 texture, 154,366 with a 256x256
-    one, with today's heap of 5,908,160 bytes (__heap_start..__heap_end), derived from the ELF and
+    """The largest model that fits: 159,793 triangles with a 1x1 texture, 154,332 with a 256x256
+    one, with today's heap of 5,906,944 bytes (__heap_start..__heap_end), derived from the ELF and
     the firmware's allocation sequence (extremes_support.boot_allocations: the texture, the mesh
     arrays, vertex records, then the 16-bit depth buffer; the model's text is read through a
     window and not kept), not a constant. One more is error 12, the block the replay says did not
@@ -183,7 +183,7 @@ def crowded_outcomes(layout, vertices: int) -> set[str]:
 
 @pytest.mark.parametrize("case", ["largest", "one-more-vertex"])
 def test_100k_triangles_with_a_256x256_texture(firmware, layout, tmp_path, case):
-    """Issue 14, defect 15: 100,000 triangles with a 256x256 texture fit, with up to 32,622
+    """Issue 14, defect 15: 100,000 triangles with a 256x256 texture fit, with up to 32,602
     vertices today (the most vertices such a model may have: derived from the ELF and the
     allocation sequence like test_largest_model; one more is error 12, "(depth buffer)"), and the
     frame is the first triangle's, textured. Before obj.S streamed the model, its text (461 KB
@@ -262,7 +262,7 @@ def test_largest_texture_beside_a_model(firmware, layout, tmp_path, case):
     more. The limit a texture meets is one inequality, the same whatever else is in the heap: its
     file rounded up to whole sectors (scene.ini's text is given back before it is loaded), with
     the mesh arrays and vertex records and the depth buffer after it (ppm.S converts in place: a
-    texture needs no memory beyond its file). On its own (a 1-triangle model) that is 1,917,946
+    texture needs no memory beyond its file). On its own (a 1-triangle model) that is 1,917,605
     texels (1,384 x 1,384 as a square), 5.8 MB:
     loading that on the board model takes about 30 s a run (test_largest_texture_alone, opt-in),
     so here a fan model (the cheapest bytes of heap to fill: 36 per 2 bytes of text) takes all
@@ -293,8 +293,8 @@ def test_largest_texture_beside_a_model(firmware, layout, tmp_path, case):
 def test_texture_file_larger_than_the_free_heap_is_error_7(firmware, layout, tmp_path):
     """The smallest texture whose file cannot be loaded at all: error 7 from fat32_load, before
     reading any of it (so this is quick despite the 5.9 MB file). The console line today:
-    "error 7 file too large for memory: texture.ppm (5907971 bytes, 5908480 in whole sectors,
-    5908160 bytes free)": the file is taken in whole sectors, so its size alone would read as if
+    "error 7 file too large for memory: texture.ppm (5906947 bytes, 5907456 in whole sectors,
+    5906944 bytes free)": the file is taken in whole sectors, so its size alone would read as if
     it fitted. The texture is the first block of the heap: the model is read later, through a
     window."""
     small = "v -1 -1 0\nv 1 -1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0.5 1\nf 1/1 2/2 3/3\n"
@@ -319,7 +319,7 @@ def test_texture_file_larger_than_the_free_heap_is_error_7(firmware, layout, tmp
 @pytest.mark.skipif(not os.environ.get("EXTREMES_FULL"), reason="about 50 s: set EXTREMES_FULL=1")
 @pytest.mark.parametrize("case", ["largest", "one-more-texel"])
 def test_largest_texture_alone(firmware, layout, tmp_path, case):
-    """The largest texture of all (a 1-triangle model): 1,917,946 x 1 today (about 25 s on the
+    """The largest texture of all (a 1-triangle model): 1,917,605 x 1 today (about 25 s on the
     board model). One texel more still loads (its
     file fits) but leaves too little for the depth buffer: error 12 "model too large for memory
     (depth buffer)"; from 51,201 texels more (the depth buffer's 153,600 bytes / 3, as the depth
