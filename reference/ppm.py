@@ -122,6 +122,8 @@ def parse_ppm(data: bytes) -> np.ndarray:
         if data[reader.pos:reader.pos + 1] == b"#":
             while reader.pos < len(data) and data[reader.pos:reader.pos + 1] not in (b"\r", b"\n"):
                 reader.pos += 1
+            if reader.pos >= len(data):
+                raise TextureError("truncated header")      # a comment without its line end
         reader.pos += 1
         wide = maxval > 255
         raster = data[reader.pos:reader.pos + count * (2 if wide else 1)]

@@ -226,7 +226,7 @@ def parse_scene(text: str | bytes | None) -> Scene:
             raise SceneError(number, "malformed line (no value)")
         _set(scene, key, value, number)
     near_line = scene.lines.get("near", 0)
-    if not scene.far > scene.near:
+    if not np.float32(scene.far) > np.float32(scene.near):       # as stored: singles
         raise SceneError(scene.lines.get("far", near_line), "bad value (far must be greater than near)")
     return scene
 
@@ -269,10 +269,11 @@ def _set(scene: Scene, key: str, value: str, line: int) -> None:
             setattr(scene, key, _direction(line, numbers))
             return
         first = numbers[0]
-        if key == "fov" and not 0.0 < first < 180.0:
+        single = float(np.float32(first))        # scene.S checks the value it stores, a single
+        if key == "fov" and not 0.0 < single < 180.0:
             raise SceneError(line, "bad value (fov must be between 0 and 180 degrees)")
-        if key in ("near", "far") and not first > 0.0:
+        if key in ("near", "far") and not single > 0.0:
             raise SceneError(line, "bad value (must be greater than 0)")
-        if key == "ambient" and not 0.0 <= first <= 1.0:
+        if key == "ambient" and not 0.0 <= single <= 1.0:
             raise SceneError(line, "bad value (must be between 0 and 1)")
         setattr(scene, key, tuple(numbers) if len(numbers) == 3 else first)

@@ -285,3 +285,37 @@ def test_the_harness_sees_acceptance_and_each_kind_of_refusal(parsers):
     outcome, texels = parsers.texture(b"P3 1 1 255 255 0 255")
     assert outcome == "ok" and texels.tolist() == [[0xF81F]]
     assert parsers.texture(b"P68 8 255\n")[0].startswith("error 11 bad texture: bad header")
+
+
+# Inputs on which the fuzz stage found host and firmware disagreeing (each host reader now
+# follows the firmware's order and precision): they stay checked whatever Hypothesis draws.
+FOUND = [
+    ("scene", b"light_levels = 0.0 :0.0\n"),        # the count before a bad later token
+    ("scene", b"fov = 1e-50\n"),                    # ranges on the single the firmware stores
+    ("scene", b"near = 1.00000001\nfar = 1.00000002\n"),
+    ("model", b"v 3.5e38\n"),                       # the count of numbers before their range
+    ("model", b"v 0.0 0.0 0.0 3.5e38\n"),           # the range only of the numbers kept
+    ("model", b"v 0.0 0.0 0.0 0.0 0.0 0.0 0.0 e5\n"),   # any token past 7 numbers
+    ("model", b"vt 0.0 0.0 0.0 0.0\rv\n"),
+    ("model", b"f 0/\n"),                           # a corner read index by index
+    ("model", b"v\r# name\n"),                      # a CR before a comment ends no line
+    ("texture", b"P6 0 0 0"),                       # P6's whitespace after maxval first
+    ("texture", b"P6 1 2 # c\n1#\x00\x00\x00\x00\x00\x00"),
+    ("texture", b"P3 1 2 1 0 0 2 0"),               # P3 pixels checked as they are read
+    ("texture", b"P3\r\n1 # c\n2#c\n1 0 0 2 0\x000 0"),
+]
+
+
+@pytest.mark.parametrize("reader,data", FOUND)
+def test_what_the_fuzz_stage_found(parsers, reader, data):
+    if reader == "scene":
+        assert parsers.scene(data) == host_scene(data)
+    elif reader == "model":
+        assert parsers.model(data) == host_model(data)
+    else:
+        try:
+            parse_ppm(data)
+            expected = "ok"
+        except TextureError as error:
+            expected = f"error 11 {error}"
+        assert parsers.texture(data)[0] == expected
