@@ -319,8 +319,8 @@ def test_texture_file_larger_than_the_free_heap_is_error_7(firmware, layout, tmp
 @pytest.mark.skipif(not os.environ.get("EXTREMES_FULL"), reason="about 50 s: set EXTREMES_FULL=1")
 @pytest.mark.parametrize("case", ["largest", "one-more-texel"])
 def test_largest_texture_alone(firmware, layout, tmp_path, case):
-    """The largest texture of all (a 1-triangle model): 1,917,605 x 1 today (about 25 s on the
-    board model). One texel more still loads (its
+    """The largest texture of all (a 1-triangle model): 1,917,605 x 1 today (37-39 s each case
+    on the board model in one run, 2026-11-22, with another job on the second core). One texel more still loads (its
     file fits) but leaves too little for the depth buffer: error 12 "model too large for memory
     (depth buffer)"; from 51,201 texels more (the depth buffer's 153,600 bytes / 3, as the depth
     buffer is now the last block) it is error 7
