@@ -89,12 +89,18 @@ def parse_number(text: str) -> float | None:
     return float(text)
 
 
+def _tokens(value: str) -> list[str]:
+    """The value's words, separated by spaces and tabs only, as scene.S separates them (str.split
+    would also split at the other bytes Unicode calls whitespace, such as 0x85 read as latin-1)."""
+    return [token for token in value.replace("\t", " ").split(" ") if token]
+
+
 def _numbers(line: int, value: str, most: int, too_many: str) -> list[float]:
     """The value's numbers, read in order as scene.S reads them: a token that is not a number
     stops it ("not a number"), and so does a token after the `most` numbers the key takes
     (`too_many`, whatever that token is)."""
     numbers = []
-    for token in value.replace("\t", " ").split():
+    for token in _tokens(value):
         if len(numbers) == most:
             raise SceneError(line, too_many)
         number = parse_number(token)
@@ -138,7 +144,7 @@ def _colour(line: int, value: str) -> int:
         rgb = [int(value[i:i + 2], 16) for i in (1, 3, 5)]
     else:
         numbers = []
-        for token in value.replace("\t", " ").split():
+        for token in _tokens(value):
             number = parse_number(token)
             if number is None:
                 raise SceneError(line, bad)

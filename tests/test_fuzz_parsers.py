@@ -293,6 +293,7 @@ FOUND = [
     ("scene", b"light_levels = 0.0 :0.0\n"),        # the count before a bad later token
     ("scene", b"fov = 1e-50\n"),                    # ranges on the single the firmware stores
     ("scene", b"near = 1.00000001\nfar = 1.00000002\n"),
+    ("scene", b"scale =\x85 \n"),                   # words split at spaces and tabs only
     ("model", b"v 3.5e38\n"),                       # the count of numbers before their range
     ("model", b"v 0.0 0.0 0.0 3.5e38\n"),           # the range only of the numbers kept
     ("model", b"v 0.0 0.0 0.0 0.0 0.0 0.0 0.0 e5\n"),   # any token past 7 numbers
