@@ -12,6 +12,7 @@ import pytest
 
 from conftest import make_card
 from emulator.board import Board
+from emulator.errors import FirmwareReportedError
 from sdcard_image import BadInputError
 from sdcard_image.convert import check_scene_ini
 from sdcard_image.objcheck import check_obj
@@ -58,7 +59,7 @@ def firmware_verdict(folder: Path, name: str, data: bytes) -> tuple[int | None, 
                   sd_image=str(make_card(folder, files)))
     try:
         board.run(1)
-    except Exception:       # the run stops at the firmware's error report; its line says which
+    except FirmwareReportedError:      # the run stops at the error report; its line says which
         pass
     finally:
         board.close()
