@@ -149,7 +149,8 @@ def _colour(line: int, value: str) -> int:
             if number is None:
                 raise SceneError(line, bad)
             numbers.append(number)
-        if len(numbers) != 3 or any(n != int(n) or not 0 <= n <= 255 for n in numbers):
+        # range first: int() of 1e400 (infinity) would raise
+        if len(numbers) != 3 or any(not 0 <= n <= 255 or n != int(n) for n in numbers):
             raise SceneError(line, bad)
         rgb = [int(n) for n in numbers]
     return rgb565_from_samples(*rgb, maxval=255)

@@ -294,6 +294,7 @@ FOUND = [
     ("scene", b"fov = 1e-50\n"),                    # ranges on the single the firmware stores
     ("scene", b"near = 1.00000001\nfar = 1.00000002\n"),
     ("scene", b"scale =\x85 \n"),                   # words split at spaces and tabs only
+    ("scene", b"background = 1 2 1e400\n"),          # the host's check raised OverflowError
     ("model", b"v 3.5e38\n"),                       # the count of numbers before their range
     ("model", b"v 0.0 0.0 0.0 3.5e38\n"),           # the range only of the numbers kept
     ("model", b"v 0.0 0.0 0.0 0.0 0.0 0.0 0.0 e5\n"),   # any token past 7 numbers
