@@ -18,11 +18,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from reference.scene import Scene, SceneError, parse_scene
+
 from . import objcheck, ppm
 from .errors import BadInputError, UsageError
 from .fat32 import check_card_name
 from .rawfat import fat_fold
-from reference.scene import Scene, SceneError, parse_scene
 
 if TYPE_CHECKING:
     from PIL import Image
@@ -165,9 +166,9 @@ def parse_scene_args(items: list[str]) -> dict[str, str]:
 SCENE_FIRMWARE_ERROR = 9
 
 
-def scene_ini(scene: dict[str, str]) -> bytes:
-    """The scene.ini text of --scene options: one "key = value" line per entry, in the given
-    order, checked as the firmware will read it; raises `UsageError` naming the option."""
+def scene_ini(scene: dict[str, str]) -> tuple[bytes, Scene]:
+    """The scene.ini text of --scene options (one "key = value" line per entry, in the given
+    order) and the scene the firmware will read from it; raises `UsageError` naming the option."""
     lines = []
     for key, value in scene.items():
         key, value = str(key).strip(" \t"), str(value).strip(" \t")
@@ -180,12 +181,11 @@ def scene_ini(scene: dict[str, str]) -> bytes:
         lines.append(f"{key} = {value}\n")
     text = "".join(lines).encode("utf-8")
     try:
-        parse_scene(text)
+        return text, parse_scene(text)
     except SceneError as exc:
         key, value = list(scene.items())[exc.line - 1]
         raise UsageError(f"--scene {key}={value}: {exc.what} (firmware error "
                          f"{SCENE_FIRMWARE_ERROR})") from None
-    return text
 
 
 def check_scene_ini(data: bytes, path: Path | str) -> Scene:
@@ -319,13 +319,13 @@ def plan_card(inputs: list[Path], scene: dict[str, str] | None = None,
         if fat_fold(SCENE_FILE) in root:
             raise UsageError(f"both --scene and an input {root[fat_fold(SCENE_FILE)][1]} give "
                              f"the card's {SCENE_FILE}: use one or the other")
-        data = scene_ini(scene)
+        data, scene_read = scene_ini(scene)
         card_path = planner.claim("", SCENE_FILE, "--scene")
         planner.plan.files.append((PlacedFile(card_path=card_path, size=len(data), source=None,
                                               detail="written from --scene"), data))
     on_card = {fat_fold(p.card_path): p.card_path for p, _ in planner.plan.files}
     if scene:
-        planner.plan.warnings += scene_warnings(parse_scene(data), on_card, "--scene")
+        planner.plan.warnings += scene_warnings(scene_read, on_card, "--scene")
     elif planner.scene_input:
         settings, origin = planner.scene_input
         planner.plan.warnings += scene_warnings(settings, on_card, origin)
