@@ -75,9 +75,15 @@
                                             # (all ones during the first pass)
     .equ OBJ_FIRST,             80          # face corners: first,
     .equ OBJ_PREV,              92          # latest,
-    .equ OBJ_CORNER,            104         # this one (MESH_CORNER_BYTES each)
+    .equ OBJ_CORNER,            104         # this one (OBJ_CORNER_BYTES each)
     .equ OBJ_STATE_BYTES,       120
     .equ OBJ_COUNT_SHIFT,       3           # 8 bytes per count
+# A corner while its face is parsed: three u32 indices (MESH_NO_INDEX for an
+# absent one), packed into a MESH_CORNER_BYTES doubleword when stored.
+    .equ OBJ_CORNER_V,          0
+    .equ OBJ_CORNER_T,          4
+    .equ OBJ_CORNER_N,          8
+    .equ OBJ_CORNER_BYTES,      12
 # index kinds (obj_index)
     .equ OBJ_KIND_V,            0
     .equ OBJ_KIND_T,            1
@@ -825,13 +831,13 @@ obj_stmt_face:
     add     t1, t1, t0                  # t1 = the triangle
     addi    a0, s3, OBJ_FIRST
     mv      a1, t1
-    call    obj_copy_corner
+    call    obj_store_corner
     addi    a0, s3, OBJ_PREV
     addi    a1, t1, MESH_CORNER_BYTES
-    call    obj_copy_corner
+    call    obj_store_corner
     addi    a0, s3, OBJ_CORNER
     addi    a1, t1, 2 * MESH_CORNER_BYTES
-    call    obj_copy_corner
+    call    obj_store_corner
     j       5f
 4:  addi    a0, s3, OBJ_CORNER          # the first corner
     addi    a1, s3, OBJ_FIRST
@@ -853,17 +859,35 @@ obj_stmt_face:
     j       obj_error
 
 # obj_copy_corner (file-local)
-#   What: copies one corner (v, t, n: three u32).
+#   What: copies one corner of obj_state (v, t, n: three u32).
 #   Arguments: a0 = from, a1 = to.
 #   Results: none.
 #   Clobbers: only ABI temporaries (t3 only: callers keep t0 .. t2).
 obj_copy_corner:
-    lw      t3, MESH_CORNER_V(a0)
-    sw      t3, MESH_CORNER_V(a1)
-    lw      t3, MESH_CORNER_T(a0)
-    sw      t3, MESH_CORNER_T(a1)
-    lw      t3, MESH_CORNER_N(a0)
-    sw      t3, MESH_CORNER_N(a1)
+    lw      t3, OBJ_CORNER_V(a0)
+    sw      t3, OBJ_CORNER_V(a1)
+    lw      t3, OBJ_CORNER_T(a0)
+    sw      t3, OBJ_CORNER_T(a1)
+    lw      t3, OBJ_CORNER_N(a0)
+    sw      t3, OBJ_CORNER_N(a1)
+    ret
+
+# obj_store_corner (file-local)
+#   What: stores one corner of obj_state into a triangle, its three indices
+#         packed (scene.inc MESH_CORNER_*_SHIFT; each is below its array's
+#         count, so below MESH_NO_INDEX, or MESH_NO_INDEX itself).
+#   Arguments: a0 = the corner (obj_state), a1 = where in the triangle.
+#   Results: none.
+#   Clobbers: only ABI temporaries (t3, t4 only: callers keep t0 .. t2).
+obj_store_corner:
+    lwu     t3, OBJ_CORNER_N(a0)
+    slli    t3, t3, MESH_CORNER_N_SHIFT - MESH_CORNER_T_SHIFT
+    lwu     t4, OBJ_CORNER_T(a0)
+    or      t3, t3, t4
+    slli    t3, t3, MESH_CORNER_T_SHIFT - MESH_CORNER_V_SHIFT
+    lwu     t4, OBJ_CORNER_V(a0)
+    or      t3, t3, t4
+    sd      t3, 0(a1)
     ret
 
 # obj_corner (file-local)
@@ -882,11 +906,11 @@ obj_corner:
     mv      s1, a1                      # s1 = end
     la      s0, obj_state
     li      t0, MESH_NO_INDEX
-    sw      t0, OBJ_CORNER + MESH_CORNER_T(s0)
-    sw      t0, OBJ_CORNER + MESH_CORNER_N(s0)
+    sw      t0, OBJ_CORNER + OBJ_CORNER_T(s0)
+    sw      t0, OBJ_CORNER + OBJ_CORNER_N(s0)
     li      a2, OBJ_KIND_V
     call    obj_index
-    sw      a1, OBJ_CORNER + MESH_CORNER_V(s0)
+    sw      a1, OBJ_CORNER + OBJ_CORNER_V(s0)
     li      t1, CHAR_SLASH
     bgeu    a0, s1, 8f
     lbu     t0, 0(a0)
@@ -898,7 +922,7 @@ obj_corner:
     mv      a1, s1
     li      a2, OBJ_KIND_T
     call    obj_index
-    sw      a1, OBJ_CORNER + MESH_CORNER_T(s0)
+    sw      a1, OBJ_CORNER + OBJ_CORNER_T(s0)
     li      t1, CHAR_SLASH
     bgeu    a0, s1, 8f
     lbu     t0, 0(a0)
@@ -909,7 +933,7 @@ obj_corner:
     call    obj_index
     ld      t0, OBJ_KEEP_NORMALS(s0)
     beqz    t0, 8f
-    sw      a1, OBJ_CORNER + MESH_CORNER_N(s0)
+    sw      a1, OBJ_CORNER + OBJ_CORNER_N(s0)
 8:  bgeu    a0, s1, 9f                  # the corner ends here
     lbu     t0, 0(a0)
     li      t1, CHAR_SPACE

@@ -189,9 +189,15 @@ render_frame:
     lwu     s11, SCENE_CULL(s2)         # s11 = cull
     beqz    s4, 9f
 2:  # s5, s6, s7 = the corners' vertex records
-    lwu     t0, MESH_CORNER_V(s3)
-    lwu     t1, MESH_CORNER_BYTES + MESH_CORNER_V(s3)
-    lwu     t2, 2 * MESH_CORNER_BYTES + MESH_CORNER_V(s3)
+    ld      t0, 0(s3)
+    slli    t0, t0, MESH_INDEX_LOW_SHIFT
+    srli    t0, t0, MESH_INDEX_LOW_SHIFT
+    ld      t1, MESH_CORNER_BYTES(s3)
+    slli    t1, t1, MESH_INDEX_LOW_SHIFT
+    srli    t1, t1, MESH_INDEX_LOW_SHIFT
+    ld      t2, 2 * MESH_CORNER_BYTES(s3)
+    slli    t2, t2, MESH_INDEX_LOW_SHIFT
+    srli    t2, t2, MESH_INDEX_LOW_SHIFT
     li      t3, VTX_BYTES
     mul     t0, t0, t3
     add     s5, s1, t0
@@ -229,9 +235,7 @@ render_frame:
     bge     t2, t3, 8f                  # area >= 0: back face or degenerate
 1:  andi    t0, s10, RASTER_GOURAUD
     bnez    t0, 20f
-    mv      a0, s5
-    mv      a1, s6
-    mv      a2, s7
+    mv      a0, s3
     call    face_light
     mv      s9, a0                      # s9 = intensity, or the lit colour
     andi    t0, s10, RASTER_TEXTURED
@@ -242,9 +246,6 @@ render_frame:
     mv      s9, a0
     j       4f
 20: mv      a0, s3                      # Gouraud: RV_K of render_rv
-    mv      a1, s5
-    mv      a2, s6
-    mv      a3, s7
     call    corner_light
     li      s9, FLAT_BASE_COLOUR        # (flat fill: lit per pixel)
     andi    t0, s10, RASTER_TEXTURED
@@ -279,9 +280,7 @@ render_frame:
     mv      a3, s10
     call    raster_triangle
     j       8f
-6:  mv      a0, s5
-    mv      a1, s6
-    mv      a2, s7
+6:  mv      a0, s3
     mv      a3, s11
     mv      a4, s9
     mv      a5, s10
@@ -332,26 +331,30 @@ shade_rgb565:
     ret
 
 # face_light (file-local)
-#   What: the face's light intensity (file comment, step 2).
-#   Arguments: a0, a1, a2 = the corners' vertex records.
+#   What: the face's light intensity (file comment, step 2), from its
+#         corners' world-space positions (face_world).
+#   Arguments: a0 = the face (MESH_F_BYTES).
 #   Results: a0 = k, 0 .. LIGHT_ONE; fa0 = the same before rounding to a
 #            whole k (light_level).
 #   Clobbers: only ABI temporaries.
+    .equ FACE_LIGHT_WORLD,      16          # stack: N and |N| below, then the corners' world positions,
+    .equ FACE_LIGHT_FRAME,      64          # then ra
+.if FACE_LIGHT_WORLD + TRIANGLE_CORNERS * WORLD_POS_BYTES > FACE_LIGHT_FRAME - 8
+    .error "face_light's stack frame is too small"
+.endif
 face_light:
-    addi    sp, sp, -48
-    sd      ra, 40(sp)
-    sd      s0, 32(sp)
-    sd      s1, 24(sp)
-    mv      s0, a0
-    mv      s1, a1
-    addi    a0, a2, VTX_WORLD_X
-    addi    a1, s0, VTX_WORLD_X
+    addi    sp, sp, -FACE_LIGHT_FRAME
+    sd      ra, FACE_LIGHT_FRAME - 8(sp)
+    addi    a1, sp, FACE_LIGHT_WORLD
+    call    face_world
+    addi    a0, sp, FACE_LIGHT_WORLD + 2 * WORLD_POS_BYTES
+    addi    a1, sp, FACE_LIGHT_WORLD
     call    vec3_sub                    # w2 - w0
     fmv.s   fa3, fa0
     fmv.s   fa4, fa1
     fmv.s   fa5, fa2
-    addi    a0, s1, VTX_WORLD_X
-    addi    a1, s0, VTX_WORLD_X
+    addi    a0, sp, FACE_LIGHT_WORLD + WORLD_POS_BYTES
+    addi    a1, sp, FACE_LIGHT_WORLD
     call    vec3_sub                    # w1 - w0
     call    vec3_cross                  # N
     fsw     fa0, 0(sp)
@@ -370,10 +373,8 @@ face_light:
     flw     ft0, 12(sp)
     fdiv.s  fa0, fa0, ft0               # cos; NaN when |N| = 0
     call    light_level
-    ld      s1, 24(sp)
-    ld      s0, 32(sp)
-    ld      ra, 40(sp)
-    addi    sp, sp, 48
+    ld      ra, FACE_LIGHT_FRAME - 8(sp)
+    addi    sp, sp, FACE_LIGHT_FRAME
     ret
 
 # light_level (file-local)
@@ -412,18 +413,20 @@ light_level:
 #         when any corner has none, the face's own intensity (face_light)
 #         at all three, so that a model without normals looks as with flat
 #         shading.
-#   Arguments: a0 = the face (MESH_F_BYTES), a1, a2, a3 = its corners'
-#              vertex records.
+#   Arguments: a0 = the face (MESH_F_BYTES).
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 corner_light:
     la      t0, scene
-    lwu     t1, MESH_NCOUNT(t0)
-    lwu     t2, MESH_CORNER_N(a0)
+    lwu     t1, MESH_NCOUNT(t0)         # (MESH_NO_INDEX is past any count)
+    ld      t2, 0(a0)
+    srli    t2, t2, MESH_CORNER_N_SHIFT
     bgeu    t2, t1, 2f
-    lwu     t3, MESH_CORNER_BYTES + MESH_CORNER_N(a0)
+    ld      t3, MESH_CORNER_BYTES(a0)
+    srli    t3, t3, MESH_CORNER_N_SHIFT
     bgeu    t3, t1, 2f
-    lwu     t4, 2 * MESH_CORNER_BYTES + MESH_CORNER_N(a0)
+    ld      t4, 2 * MESH_CORNER_BYTES(a0)
+    srli    t4, t4, MESH_CORNER_N_SHIFT
     bgeu    t4, t1, 2f
     la      t0, normal_light
     ld      t0, 0(t0)
@@ -443,10 +446,7 @@ corner_light:
     ret
 2:  addi    sp, sp, -16
     sd      ra, 8(sp)
-    mv      a0, a1
-    mv      a1, a2
-    mv      a2, a3
-    call    face_light
+    call    face_light                  # (a0 is still the face)
     la      t1, render_rv
     fsw     fa0, RV_K(t1)
     fsw     fa0, RV_BYTES + RV_K(t1)
@@ -552,7 +552,9 @@ face_texels:
     li      t4, TRIANGLE_CORNERS
     li      t5, F32_ONE
     fmv.w.x ft3, t5                     # ft3 = 1
-1:  lwu     t5, MESH_CORNER_T(a0)
+1:  ld      t5, 0(a0)
+    slli    t5, t5, MESH_INDEX_MID_SHIFT
+    srli    t5, t5, MESH_INDEX_LOW_SHIFT  # the vt index (MESH_NO_INDEX is past any count)
     fmv.w.x ft0, zero                   # no vt (or out of range): (0, 0)
     fmv.w.x ft1, zero
     bgeu    t5, t2, 2f
@@ -612,8 +614,8 @@ face_texels:
 #         band (file comment, step 4): cut in clip space against each plane
 #         one of its corners is outside of, projected, and drawn as a fan of
 #         triangles (0, 1, 2), then (i, i + 1, 0) for i = 2, 3, ...
-#   Arguments: a0, a1, a2 = the corners' vertex records (texel coordinates
-#              and intensities in render_rv), a3 = cull, a4 = colour or
+#   Arguments: a0 = the face (its texel coordinates and intensities in
+#              render_rv), a3 = cull, a4 = colour or
 #              intensity, a5 = fill mode (raster_triangle's a1..a3), a6 =
 #              the corners' outcodes ORed.
 #   Results: none.
@@ -633,30 +635,28 @@ clip_and_draw:
     mv      s4, a4
     mv      s5, a5
     mv      s6, a6                      # s6 = outcodes
-    # the corners as clip vertices
-    la      t0, clip_polygon_a
-    la      t1, render_rv
-    li      t2, TRIANGLE_CORNERS
-1:  lw      t3, VTX_CLIP_X(a0)
-    sw      t3, CV_X(t0)
-    lw      t3, VTX_CLIP_Y(a0)
-    sw      t3, CV_Y(t0)
-    lw      t3, VTX_CLIP_Z(a0)
-    sw      t3, CV_Z(t0)
-    lw      t3, VTX_CLIP_W(a0)
-    sw      t3, CV_W(t0)
-    lw      t3, RV_S(t1)
-    sw      t3, CV_S(t0)
-    lw      t3, RV_T(t1)
-    sw      t3, CV_T(t0)
-    lw      t3, RV_K(t1)
-    sw      t3, CV_K(t0)
-    addi    t0, t0, CV_BYTES
-    addi    t1, t1, RV_BYTES
-    mv      a0, a1                      # corner 1, then corner 2
-    mv      a1, a2
-    addi    t2, t2, -1
-    bnez    t2, 1b
+    # the corners as clip vertices: clip-space positions (vertex_clip, as
+    # the vertex stage found them), texel coordinates and intensities
+    mv      s0, a0                      # s0 = corner
+    la      s1, clip_polygon_a          # s1 = its clip vertex
+    la      s2, render_rv               # s2 = its raster vertex
+    li      s7, TRIANGLE_CORNERS
+1:  ld      a0, 0(s0)
+    slli    a0, a0, MESH_INDEX_LOW_SHIFT
+    srli    a0, a0, MESH_INDEX_LOW_SHIFT
+    addi    a1, s1, CV_X
+    call    vertex_clip
+    lw      t3, RV_S(s2)
+    sw      t3, CV_S(s1)
+    lw      t3, RV_T(s2)
+    sw      t3, CV_T(s1)
+    lw      t3, RV_K(s2)
+    sw      t3, CV_K(s1)
+    addi    s0, s0, MESH_CORNER_BYTES
+    addi    s1, s1, CV_BYTES
+    addi    s2, s2, RV_BYTES
+    addi    s7, s7, -1
+    bnez    s7, 1b
 
     # each plane in turn, the output of one the input of the next
     la      s0, clip_polygon_a          # s0 = the polygon
@@ -862,12 +862,12 @@ clip_plane:
 #   What: d = a x + b y + c z + e w of a clip-space point and a plane of
 #         clip_planes; the point is inside when d >= 0. For the near plane
 #         d is z itself, exactly (the other products are 0).
-#   Arguments: a0 = clip vertex or vertex record (both begin with clip x,
-#              y, z, w), a1 = plane.
+#   Arguments: a0 = clip vertex or clip-space position (vertex_clip's:
+#              both begin with clip x, y, z, w), a1 = plane.
 #   Results: fa0 = d.
 #   Clobbers: only ABI temporaries.
-.if (CV_X != VTX_CLIP_X) || (CV_Y != VTX_CLIP_Y) || (CV_Z != VTX_CLIP_Z) || (CV_W != VTX_CLIP_W)
-    .error "plane_distance reads clip vertices and vertex records alike"
+.if (CV_X != CLIP_POS_X) || (CV_Y != CLIP_POS_Y) || (CV_Z != CLIP_POS_Z) || (CV_W != CLIP_POS_W)
+    .error "plane_distance reads clip vertices and clip-space positions alike"
 .endif
 plane_distance:
     flw     ft0, PLANE_E(a1)
@@ -966,14 +966,27 @@ render_wireframe:
     andi    t2, a2, OUT_CLIP
     beqz    t2, 3f
     # an end behind the near plane or beyond the guard band: cut in clip
-    # space, from the end in front of the near plane (s3) when one is behind
+    # space (the ends' positions from vertex_clip), from the end in front
+    # of the near plane when one is behind
+    mv      s3, a2                      # s3 = outcodes ORed
+    ld      t1, 0(s1)
+    srli    a0, t1, EDGE_INDEX_SHIFT    # a0 = a, a1 = b
+    slli    a1, t1, EDGE_INDEX_SHIFT
+    srli    a1, a1, EDGE_INDEX_SHIFT
     andi    t0, t0, OUT_NEAR
     beqz    t0, 2f
-    mv      t0, s3
-    mv      s3, s4
-    mv      s4, t0
-2:  mv      a0, s3
-    mv      a1, s4
+    mv      t0, a0
+    mv      a0, a1
+    mv      a1, t0
+2:  mv      s4, a1
+    la      a1, segment_ends
+    call    vertex_clip
+    mv      a0, s4
+    la      a1, segment_ends + CLIP_POS_BYTES
+    call    vertex_clip
+    la      a0, segment_ends
+    la      a1, segment_ends + CLIP_POS_BYTES
+    mv      a2, s3
     call    clip_segment
     beqz    a0, 8f                      # nothing left
     mv      a0, a1
@@ -1015,7 +1028,8 @@ render_wireframe:
 #         end is outside of: t from 0 to 1 narrowed at each crossing), its
 #         ends projected (project_clip). An end that is not cut off is the
 #         vertex itself, exactly.
-#   Arguments: a0 = a's vertex record, a1 = b's, a2 = their outcodes ORed.
+#   Arguments: a0 = a's clip-space position (CLIP_POS_BYTES), a1 = b's,
+#              a2 = their outcodes ORed.
 #   Results: a0 = 1 when a part is left, else 0; then a1, a2 = its end
 #            towards a (screen x, y in Q4), a3, a4 = its end towards b.
 #   Clobbers: only ABI temporaries.
@@ -1103,7 +1117,7 @@ clip_segment:
 # segment_point (file-local)
 #   What: the clip-space point a + t (b - a) of an edge; at t = 1, b itself
 #         (as b + 0 (a - b)), so that an end not cut off is the vertex.
-#   Arguments: a0 = a's vertex record, a1 = b's, fa0 = t (0 .. 1).
+#   Arguments: a0 = a's clip-space position, a1 = b's, fa0 = t (0 .. 1).
 #   Results: fa0, fa1, fa2, fa3 = clip x, y, z, w (project_clip's arguments).
 #   Clobbers: only ABI temporaries.
 segment_point:
@@ -1116,20 +1130,20 @@ segment_point:
     mv      a0, a1
     mv      a1, t0
     fmv.w.x ft0, zero
-1:  flw     ft1, VTX_CLIP_X(a0)
-    flw     ft2, VTX_CLIP_X(a1)
+1:  flw     ft1, CLIP_POS_X(a0)
+    flw     ft2, CLIP_POS_X(a1)
     fsub.s  ft2, ft2, ft1
     fmadd.s fa0, ft2, ft0, ft1
-    flw     ft1, VTX_CLIP_Y(a0)
-    flw     ft2, VTX_CLIP_Y(a1)
+    flw     ft1, CLIP_POS_Y(a0)
+    flw     ft2, CLIP_POS_Y(a1)
     fsub.s  ft2, ft2, ft1
     fmadd.s fa1, ft2, ft0, ft1
-    flw     ft1, VTX_CLIP_Z(a0)
-    flw     ft2, VTX_CLIP_Z(a1)
+    flw     ft1, CLIP_POS_Z(a0)
+    flw     ft2, CLIP_POS_Z(a1)
     fsub.s  ft2, ft2, ft1
     fmadd.s fa2, ft2, ft0, ft1
-    flw     ft1, VTX_CLIP_W(a0)
-    flw     ft2, VTX_CLIP_W(a1)
+    flw     ft1, CLIP_POS_W(a0)
+    flw     ft2, CLIP_POS_W(a1)
     fsub.s  ft2, ft2, ft1
     fmadd.s fa3, ft2, ft0, ft1
     ret
@@ -1161,9 +1175,15 @@ edges_build:
     lwu     t2, MESH_FCOUNT(t0)
     mv      t3, s1
     beqz    t2, 5f
-1:  lwu     a1, MESH_CORNER_V(t1)
-    lwu     a2, MESH_CORNER_BYTES + MESH_CORNER_V(t1)
-    lwu     a3, 2 * MESH_CORNER_BYTES + MESH_CORNER_V(t1)
+1:  ld      a1, 0(t1)
+    slli    a1, a1, MESH_INDEX_LOW_SHIFT
+    srli    a1, a1, MESH_INDEX_LOW_SHIFT
+    ld      a2, MESH_CORNER_BYTES(t1)
+    slli    a2, a2, MESH_INDEX_LOW_SHIFT
+    srli    a2, a2, MESH_INDEX_LOW_SHIFT
+    ld      a3, 2 * MESH_CORNER_BYTES(t1)
+    slli    a3, a3, MESH_INDEX_LOW_SHIFT
+    srli    a3, a3, MESH_INDEX_LOW_SHIFT
     mv      a4, a1                      # (v0, v1), (v1, v2), (v2, v0)
     mv      a5, a2
     jal     t6, 3f
@@ -1305,3 +1325,6 @@ render_rv_out:
     .space  CLIP_MAX_OUT * RV_BYTES
 render_rv_fan:
     .space  TRIANGLE_CORNERS * RV_BYTES
+# A wireframe edge cut in clip space: its ends' clip-space positions.
+segment_ends:
+    .space  2 * CLIP_POS_BYTES

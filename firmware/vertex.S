@@ -3,12 +3,14 @@
 # frame * SCENE_STEP, translation), the perspective projection (SCENE_FOV,
 # aspect LCD_WIDTH / LCD_HEIGHT, SCENE_NEAR, SCENE_FAR) and their product,
 # then transforms every mesh vertex once into a VTX_BYTES record (render.inc):
-#   clip-space position (x, y, z, w), world-space position (lighting),
-#   outcode (which frustum planes it is outside of, and whether it lies
-#   beyond the guard band), and, for vertices in front of the near plane and
-#   inside the guard band, the projected screen position in Q4, z / w and
-#   1 / w (project_clip).
-# Triangles and edges then only look these records up (render.S).
+#   outcode (which frustum planes its clip-space position is outside of, and
+#   whether it lies beyond the guard band), and, for vertices in front of the
+#   near plane and inside the guard band, the projected screen position in
+#   Q4, z / w and 1 / w (project_clip).
+# Triangles and edges then only look these records up (render.S). The few
+# that need a vertex's clip-space position (to be cut) or its world-space
+# position (flat lighting) ask vertex_clip or face_world, which compute it
+# again, bit for bit as here, rather than keep it for every vertex.
 #
 # The camera sits at the origin looking down -z, so world space is also eye
 # space: no view matrix.
@@ -91,14 +93,15 @@ vertex_transform:
     la      a2, vertex_model
     call    mat4_mul
 
-    # --- every vertex: world = M p, clip = P M p, outcode, projection.
+    # --- every vertex: clip = P M p, outcode, projection.
     ld      s1, MESH_V(s0)              # s1 = mesh position
     lwu     s2, MESH_VCOUNT(s0)         # s2 = vertices left
     la      t0, vertex_records
     ld      s3, 0(t0)                   # s3 = record
     beqz    s2, 9f
-    # The model matrix's top three rows stay in fs0..fs11 (callee-saved:
-    # kept on the stack meanwhile); the MVP rows are loaded per vertex.
+    # The MVP's rows x, y, z stay in fs0..fs11 (callee-saved: kept on the
+    # stack meanwhile); row w is loaded per vertex. The products are those of
+    # vertex_clip, in the same order.
     addi    sp, sp, -96
     fsd     fs0, 0(sp)
     fsd     fs1, 8(sp)
@@ -112,7 +115,7 @@ vertex_transform:
     fsd     fs9, 72(sp)
     fsd     fs10, 80(sp)
     fsd     fs11, 88(sp)
-    la      t0, vertex_model
+    la      t0, vertex_mvp
     flw     fs0, 0(t0)
     flw     fs1, 4(t0)
     flw     fs2, 8(t0)
@@ -128,40 +131,16 @@ vertex_transform:
 1:  flw     ft8, 0(s1)                  # ft8, ft9, ft10 = model-space p
     flw     ft9, 4(s1)
     flw     ft10, 8(s1)
-    fmadd.s ft0, fs0, ft8, fs3
-    fmadd.s ft0, fs1, ft9, ft0
-    fmadd.s ft0, fs2, ft10, ft0
-    fsw     ft0, VTX_WORLD_X(s3)
-    fmadd.s ft0, fs4, ft8, fs7
-    fmadd.s ft0, fs5, ft9, ft0
-    fmadd.s ft0, fs6, ft10, ft0
-    fsw     ft0, VTX_WORLD_Y(s3)
-    fmadd.s ft0, fs8, ft8, fs11
-    fmadd.s ft0, fs9, ft9, ft0
-    fmadd.s ft0, fs10, ft10, ft0
-    fsw     ft0, VTX_WORLD_Z(s3)
+    fmadd.s fa0, fs0, ft8, fs3          # clip x -> fa0
+    fmadd.s fa0, fs1, ft9, fa0
+    fmadd.s fa0, fs2, ft10, fa0
+    fmadd.s fa1, fs4, ft8, fs7          # clip y -> fa1
+    fmadd.s fa1, fs5, ft9, fa1
+    fmadd.s fa1, fs6, ft10, fa1
+    fmadd.s fa2, fs8, ft8, fs11         # clip z -> fa2
+    fmadd.s fa2, fs9, ft9, fa2
+    fmadd.s fa2, fs10, ft10, fa2
     la      t0, vertex_mvp
-    flw     ft0, 0(t0)                  # clip x -> fa0
-    flw     ft1, 4(t0)
-    flw     ft2, 8(t0)
-    flw     ft3, 12(t0)
-    fmadd.s fa0, ft0, ft8, ft3
-    fmadd.s fa0, ft1, ft9, fa0
-    fmadd.s fa0, ft2, ft10, fa0
-    flw     ft0, 16(t0)                 # clip y -> fa1
-    flw     ft1, 20(t0)
-    flw     ft2, 24(t0)
-    flw     ft3, 28(t0)
-    fmadd.s fa1, ft0, ft8, ft3
-    fmadd.s fa1, ft1, ft9, fa1
-    fmadd.s fa1, ft2, ft10, fa1
-    flw     ft0, 32(t0)                 # clip z -> fa2
-    flw     ft1, 36(t0)
-    flw     ft2, 40(t0)
-    flw     ft3, 44(t0)
-    fmadd.s fa2, ft0, ft8, ft3
-    fmadd.s fa2, ft1, ft9, fa2
-    fmadd.s fa2, ft2, ft10, fa2
     flw     ft0, 48(t0)                 # clip w -> fa3
     flw     ft1, 52(t0)
     flw     ft2, 56(t0)
@@ -169,10 +148,6 @@ vertex_transform:
     fmadd.s fa3, ft0, ft8, ft3
     fmadd.s fa3, ft1, ft9, fa3
     fmadd.s fa3, ft2, ft10, fa3
-    fsw     fa0, VTX_CLIP_X(s3)
-    fsw     fa1, VTX_CLIP_Y(s3)
-    fsw     fa2, VTX_CLIP_Z(s3)
-    fsw     fa3, VTX_CLIP_W(s3)
     # outcode
     fneg.s  ft0, fa3                    # -w
     flt.s   t0, fa0, ft0                # x < -w (OUT_LEFT_BIT = 0)
@@ -234,6 +209,94 @@ vertex_transform:
     ld      s0, 48(sp)
     ld      ra, 56(sp)
     addi    sp, sp, 64
+    ret
+
+    .globl vertex_clip
+# vertex_clip
+#   What: a mesh vertex's clip-space position this frame, P M p, exactly as
+#         vertex_transform computed it for its outcode and projection (the
+#         same products in the same order), for the triangles and edges cut
+#         in clip space.
+#   Arguments: a0 = the vertex's index, a1 = where to write x, y, z, w
+#              (CLIP_POS_BYTES).
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+vertex_clip:
+    la      t0, scene
+    ld      t0, MESH_V(t0)
+    li      t1, MESH_V_BYTES
+    mul     t1, t1, a0
+    add     t0, t0, t1
+    flw     ft8, 0(t0)
+    flw     ft9, 4(t0)
+    flw     ft10, 8(t0)
+    la      t0, vertex_mvp
+    li      t1, CLIP_POS_BYTES / 4      # rows
+1:  flw     ft0, 0(t0)
+    flw     ft1, 4(t0)
+    flw     ft2, 8(t0)
+    flw     ft3, 12(t0)
+    fmadd.s ft4, ft0, ft8, ft3
+    fmadd.s ft4, ft1, ft9, ft4
+    fmadd.s ft4, ft2, ft10, ft4
+    fsw     ft4, 0(a1)
+    addi    t0, t0, 16
+    addi    a1, a1, 4
+    addi    t1, t1, -1
+    bnez    t1, 1b
+    ret
+
+    .globl face_world
+# face_world
+#   What: the world-space positions this frame, M p, of a triangle's three
+#         corners (flat lighting's face normal), with the model matrix's
+#         products in the order of the other stages.
+#   Arguments: a0 = the triangle (MESH_F_BYTES), a1 = where to write the
+#              corners' x, y, z (TRIANGLE_CORNERS * WORLD_POS_BYTES).
+#   Results: none.
+#   Clobbers: only ABI temporaries. M's top rows stay in ft0..ft11 while the
+#         corners go through fa0..fa3.
+face_world:
+    la      t0, vertex_model
+    flw     ft0, 0(t0)
+    flw     ft1, 4(t0)
+    flw     ft2, 8(t0)
+    flw     ft3, 12(t0)
+    flw     ft4, 16(t0)
+    flw     ft5, 20(t0)
+    flw     ft6, 24(t0)
+    flw     ft7, 28(t0)
+    flw     ft8, 32(t0)
+    flw     ft9, 36(t0)
+    flw     ft10, 40(t0)
+    flw     ft11, 44(t0)
+    la      t0, scene
+    ld      t0, MESH_V(t0)              # t0 = mesh positions
+    li      t1, MESH_V_BYTES
+    addi    t2, a0, TRIANGLE_CORNERS * MESH_CORNER_BYTES
+1:  ld      t3, 0(a0)
+    slli    t3, t3, MESH_INDEX_LOW_SHIFT
+    srli    t3, t3, MESH_INDEX_LOW_SHIFT
+    mul     t3, t3, t1
+    add     t3, t3, t0
+    flw     fa0, 0(t3)
+    flw     fa1, 4(t3)
+    flw     fa2, 8(t3)
+    fmadd.s fa3, ft0, fa0, ft3
+    fmadd.s fa3, ft1, fa1, fa3
+    fmadd.s fa3, ft2, fa2, fa3
+    fsw     fa3, 0(a1)
+    fmadd.s fa3, ft4, fa0, ft7
+    fmadd.s fa3, ft5, fa1, fa3
+    fmadd.s fa3, ft6, fa2, fa3
+    fsw     fa3, 4(a1)
+    fmadd.s fa3, ft8, fa0, ft11
+    fmadd.s fa3, ft9, fa1, fa3
+    fmadd.s fa3, ft10, fa2, fa3
+    fsw     fa3, 8(a1)
+    addi    a0, a0, MESH_CORNER_BYTES
+    addi    a1, a1, WORLD_POS_BYTES
+    bne     a0, t2, 1b
     ret
 
     .globl project_clip

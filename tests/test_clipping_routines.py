@@ -42,18 +42,18 @@ NEAR = 0
 FIELDS = ("x", "y", "z", "w", "s", "t", "k")    # a clip vertex (render.inc CV_*), f32 each
 CV_BYTES = 4 * len(FIELDS)
 CANARY = bytes(range(0xA0, 0xA0 + CV_BYTES)) * 8  # written after an output: a pattern no corner here has
-RECORD_POISON = 0xC7                              # vertex record bytes clip_segment must not need
 
 
 @pytest.fixture(scope="module")
 def fw(firmware) -> FirmwareCaller:
     """One board per module: every call below sets up all the memory it reads."""
     caller = FirmwareCaller(firmware)
-    # the clip vertex and vertex record layouts the tests write (render.inc)
+    # the clip vertex and clip-space position layouts the tests write (render.inc)
     for offset, name in enumerate(("CV_X", "CV_Y", "CV_Z", "CV_W", "CV_S", "CV_T", "CV_K")):
         assert caller.symbol(name) == 4 * offset, name
-    for offset, name in enumerate(("VTX_CLIP_X", "VTX_CLIP_Y", "VTX_CLIP_Z", "VTX_CLIP_W")):
+    for offset, name in enumerate(("CLIP_POS_X", "CLIP_POS_Y", "CLIP_POS_Z", "CLIP_POS_W")):
         assert caller.symbol(name) == 4 * offset, name
+    assert caller.symbol("CLIP_POS_BYTES") == 16
     assert caller.symbol("CV_BYTES") == CV_BYTES
     assert caller.symbol("CLIP_PLANES") == len(PLANE_NAMES)
     assert caller.symbol("PLANE_BYTES") == 16
@@ -452,11 +452,9 @@ def model_segment(a: np.ndarray, b: np.ndarray, outcodes: int, planes, out: dict
     return None if t1 < t0 else (t0, t1)
 
 
-def write_record(fw: FirmwareCaller, address: int, clip: np.ndarray) -> None:
-    """A vertex record (render.inc VTX_*): clip x, y, z, w, the rest poison (clip_segment takes
-    the outcodes in a2 and projects the clip position itself)."""
-    size = fw.symbol("VTX_BYTES")
-    fw.write(address, bytes([RECORD_POISON]) * size)
+def write_position(fw: FirmwareCaller, address: int, clip: np.ndarray) -> None:
+    """A clip-space position as vertex_clip writes it (render.inc CLIP_POS_*): x, y, z, w
+    (clip_segment takes the outcodes in a2 and projects the position itself)."""
     fw.write_f32(address, clip[:4])
 
 
@@ -487,10 +485,10 @@ def test_clip_segment_cuts_as_liang_barsky(fw, name, a, b):
     outcodes = frustum_outcode(a, g) | frustum_outcode(b, g)
     span = model_segment(a, b, outcodes, planes, out)
     assert span is not None and span != (0.0, 1.0), "every case here cuts something and keeps something"
-    record_a, record_b = fw.scratch, fw.scratch + fw.symbol("VTX_BYTES")
-    write_record(fw, record_a, a)
-    write_record(fw, record_b, b)
-    result = fw.call("clip_segment", [record_a, record_b, outcodes])
+    position_a, position_b = fw.scratch, fw.scratch + fw.symbol("CLIP_POS_BYTES")
+    write_position(fw, position_a, a)
+    write_position(fw, position_b, b)
+    result = fw.call("clip_segment", [position_a, position_b, outcodes])
     assert result.a[0] == 1, "clip_segment dropped a segment that has a part left"
     ends = [(result.a_signed(1, 32), result.a_signed(2, 32)), (result.a_signed(3, 32), result.a_signed(4, 32))]
     a64, b64 = a.astype(np.float64), b.astype(np.float64)
@@ -520,10 +518,10 @@ def test_clip_segment_keeps_an_uncut_end_exactly(fw):
     assert outcodes & (out["OUT_NEAR"] | out["OUT_GUARD"]) == out["OUT_NEAR"]
     t_enter, t_leave = model_segment(a, b, outcodes, planes, out)
     assert t_leave == 1.0
-    record_a, record_b = fw.scratch, fw.scratch + fw.symbol("VTX_BYTES")
-    write_record(fw, record_a, a)
-    write_record(fw, record_b, b)
-    result = fw.call("clip_segment", [record_a, record_b, outcodes])
+    position_a, position_b = fw.scratch, fw.scratch + fw.symbol("CLIP_POS_BYTES")
+    write_position(fw, position_a, a)
+    write_position(fw, position_b, b)
+    result = fw.call("clip_segment", [position_a, position_b, outcodes])
     assert result.a[0] == 1
     assert (result.a_signed(3, 32), result.a_signed(4, 32)) == fw_project(fw, b)
     point = a.astype(np.float64) + t_enter * (b.astype(np.float64) - a)
@@ -549,10 +547,10 @@ def test_clip_segment_drops_what_is_outside(fw, name, a, b):
     a, b = np.array(a, dtype=np.float32), np.array(b, dtype=np.float32)
     outcodes = frustum_outcode(a, g) | frustum_outcode(b, g)
     assert model_segment(a, b, outcodes, planes, out) is None
-    record_a, record_b = fw.scratch, fw.scratch + fw.symbol("VTX_BYTES")
-    write_record(fw, record_a, a)
-    write_record(fw, record_b, b)
-    assert fw.call("clip_segment", [record_a, record_b, outcodes]).a[0] == 0
+    position_a, position_b = fw.scratch, fw.scratch + fw.symbol("CLIP_POS_BYTES")
+    write_position(fw, position_a, a)
+    write_position(fw, position_b, b)
+    assert fw.call("clip_segment", [position_a, position_b, outcodes]).a[0] == 0
 
 
 def test_segment_point_ends_are_the_vertices(fw):
@@ -564,11 +562,11 @@ def test_segment_point_ends_are_the_vertices(fw):
     b = np.array([0.3, 2.0 ** -30, 0.1, 0.03], dtype=np.float32)
     naive = np.array([np.float32(np.float32(q - p) + p) for p, q in zip(a, b)], dtype=np.float32)
     assert naive.tobytes() != b.tobytes()
-    record_a, record_b = fw.scratch, fw.scratch + fw.symbol("VTX_BYTES")
-    write_record(fw, record_a, a)
-    write_record(fw, record_b, b)
+    position_a, position_b = fw.scratch, fw.scratch + fw.symbol("CLIP_POS_BYTES")
+    write_position(fw, position_a, a)
+    write_position(fw, position_b, b)
     for t in (0.0, 1.0, 0.375):
-        result = fw.call("segment_point", [record_a, record_b], fargs=[t])
+        result = fw.call("segment_point", [position_a, position_b], fargs=[t])
         got = np.array([result.fa(n) for n in range(4)], dtype=np.float32)
         if t in (0.0, 1.0):
             want = a if t == 0.0 else b

@@ -55,6 +55,18 @@ def array(board: Board, raw: bytes, pointer_offset: int, count: int, fmt: str) -
     return [struct.unpack_from(fmt, data, i * size) for i in range(count)]
 
 
+INDEX_BITS = 21                    # scene.inc MESH_INDEX_BITS: a corner's v, vt, vn indices
+NO_INDEX = (1 << INDEX_BITS) - 1   # MESH_NO_INDEX
+
+
+def triangles(board: Board, raw: bytes, count: int) -> list[tuple[int, ...]]:
+    """The triangle array as (v0, t0, n0, v1, t1, n1, v2, t2, n2), unpacked from its three
+    doubleword corners (scene.inc MESH_F): v in the low 21 bits, then vt, then vn."""
+    mask = (1 << INDEX_BITS) - 1
+    return [tuple((corner >> shift) & mask for corner in packed for shift in (0, INDEX_BITS, 2 * INDEX_BITS))
+            for packed in array(board, raw, MESH_F, count, "<3Q")]
+
+
 def test_defaults_without_scene_ini(firmware, tmp_path):
     board = boot(tmp_path, {"/model.obj": TRIANGLE.encode(), "/texture.ppm": TEXTURE})
     lines = [line for _, line in board.console_lines]
@@ -97,8 +109,8 @@ def test_every_key_and_an_obj_using_every_feature(firmware, tmp_path):
     assert [u32(raw, o) for o in (MESH_VCOUNT, MESH_TCOUNT, MESH_NCOUNT, MESH_FCOUNT)] == [5, 2, 2, 1 + 2 + 3 + 1]
     vertices = array(board, raw, MESH_V, 5, "<3f")
     assert vertices[1] == pytest.approx((-1.5, 2.25, -0.3)) and vertices[4] == (7, 8, 9)
-    none = 0xFFFFFFFF
-    faces = array(board, raw, MESH_F, 7, "<9I")
+    none = NO_INDEX
+    faces = triangles(board, raw, 7)
     assert faces[0] == (0, none, none, 1, none, none, 2, none, none)
     # the quad with negative indices, fanned from its first corner: (1 2 3) (1 3 4)
     assert faces[1] == (0, 0, none, 1, 1, none, 2, 0, none) and faces[2] == (0, 0, none, 2, 0, none, 3, 1, none)
@@ -223,8 +235,8 @@ def test_a_model_longer_than_the_window_from_a_fragmented_file(firmware, tmp_pat
     raw = scene_bytes(board)
     stored = np.array(array(board, raw, MESH_V, 1500, "<3f"), dtype=np.float32)
     assert np.array_equal(stored, np.array(values, dtype=np.float64).astype(np.float32))
-    none = 0xFFFFFFFF
-    assert array(board, raw, MESH_F, 2, "<9I") == [(0, none, none, 1, none, none, 2, none, none),
+    none = NO_INDEX
+    assert triangles(board, raw, 2) == [(0, none, none, 1, none, none, 2, none, none),
                                                    (1499, none, none, 1498, none, none, 1497, none, none)]
     # the heap holds the arrays and render_init's blocks (a flat scene reads no texture): the
     # replay of tests/extremes_support.py, where the model's text takes no part
