@@ -6,7 +6,8 @@
 #      (their outcodes share one of the six OUT_FRUSTUM bits, vertex.S) ->
 #      skipped.
 #   2. Lighting per face: N = (w1 - w0) x (w2 - w0) from the world-space
-#      positions of the transformed vertices (never from vn), intensity
+#      positions of the corners (never from vn; vertex.S face_world computes
+#      them per face rather than keep one for every vertex), intensity
 #      I = max(SCENE_AMBIENT, N . L / |N|) with L = SCENE_LIGHT, as an integer
 #      k = round(64 I) in 0 .. 64 (render.inc). Flat mode draws
 #      FLAT_BASE_COLOUR (0xC618, light grey) with every RGB565 channel times
@@ -21,7 +22,9 @@
 #      the guard band (|x|, |y| <= 16 w, render.inc GUARD_BAND) is cut
 #      against each of those planes one of its corners is outside of
 #      (Sutherland-Hodgman), the new corners interpolated linearly in clip
-#      space (x, y, z, w, s, t, k), and drawn as a fan. An edge is always
+#      space (x, y, z, w, s, t, k), and drawn as a fan. The corners'
+#      clip-space positions come from vertex.S vertex_clip: the vertex
+#      stage's own values, computed again. An edge is always
 #      cut from its corner inside towards the one outside, so the two
 #      triangles sharing an edge compute bit-identical new corners (no
 #      cracks). The screen's own sides are left to the rasteriser's bounding
