@@ -69,17 +69,21 @@ class Run:
 
 
 def run_scene(firmware: Path, folder: Path, model: str | bytes, scene: str | None,
-              texture: bytes = TEXTURE_1X1, frames: int = 3, timeout: float = 600) -> Run:
+              texture: bytes = TEXTURE_1X1, frames: int = 3, timeout: float = 600,
+              budget_s: float | None = None) -> Run:
     """Builds a card (model.obj, texture.ppm, scene.ini unless None) and runs it for `frames`, with
     --check-writes: every adversarial case also shows that the firmware stores only inside its own
-    buffers (a stray store ends the run with status 10, which no case expects)."""
+    buffers (a stray store ends the run with status 10, which no case expects). `budget_s`: the
+    board's --budget, for models whose loading alone takes longer than its default 5 virtual
+    seconds (the hang detection counts from reset to the first frame)."""
     files = {"/model.obj": model.encode() if isinstance(model, str) else model, "/texture.ppm": texture}
     if scene is not None:
         files["/scene.ini"] = scene.encode()
     card = make_card(folder, files)
     out = folder / "out"
     result = run_emulator("run", str(firmware), "--sd", str(card), "--frames", str(frames), "--out", str(out),
-                          "--quiet", "--check-writes", timeout=timeout)
+                          "--quiet", "--check-writes",
+                          *([] if budget_s is None else ["--budget", str(budget_s)]), timeout=timeout)
     run = Run(result.returncode, out, card, result.stderr)
     if result.returncode == 0:
         run.frames = [np.asarray(Image.open(out / f"frame_{n:04d}.png").convert("RGB")) for n in range(frames)]
