@@ -66,9 +66,11 @@ class Board:
                  on_frame: Callable[[FrameRecord, np.ndarray], None] | None = None,
                  on_warning: Callable[[str], None] | None = None, permissive: bool = False,
                  sd_image: str | None = None, sd_writable: bool = False,
-                 sd_faults: frozenset[str] = frozenset(), check_writes: bool = False) -> None:
+                 sd_faults: frozenset[str] = frozenset(), check_writes: bool = False, strict: bool = False) -> None:
         """check_writes: stop with StrayWrite at the first store (a hart's or a DMA channel's) into
-        SRAM outside the firmware's buffers (write_watch.py; a checker, not hardware behaviour)."""
+        SRAM outside the firmware's buffers (write_watch.py; a checker, not hardware behaviour).
+        strict: stop at the first access a register table does not take as it is, or that no device
+        answers, instead of answering it as the K210's bus does with a warning (bus.py)."""
         self.permissive = permissive   # unimplemented registers of modelled devices warn instead of stopping
         self.on_frame = on_frame or (lambda record, image: None)
         self.on_warning = on_warning or (lambda text: None)
@@ -100,7 +102,7 @@ class Board:
         self.wiring = DockWiring(self, LcdPort(self, self.lcd), sd_slot)
         self.spi0.device_for_ss = self.wiring.spi0_device
         self.spi1.device_for_ss = self.wiring.spi1_device
-        self.bus = Bus(self)
+        self.bus = Bus(self, strict)
         self.write_watch: WriteWatch | None = None
         self.image: LoadedImage = load_elf(firmware, self.memory)
         if self.image.entry != RESET_PC:

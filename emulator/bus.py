@@ -4,10 +4,30 @@ SRAM is mapped straight into each hart's Unicorn engine (both views, one buffer)
 Every device window becomes an MMIO range whose callbacks come here: the access is
 decoded from the instruction (Unicorn splits 64-bit and misaligned MMIO accesses into
 pieces; the instruction says what the hart really did), checked against the rules
-(a misaligned device access traps, a peripheral whose clock is gated or held in reset
-cannot be used), and handed to the device's register table. An address no device
-answers stops the run with a message naming hart, pc, instruction and address.
-With --check-writes the stray-write checker watches stores into SRAM here too.
+(a peripheral whose clock is gated or held in reset cannot be used) and handed to the
+device's register table. With --check-writes the stray-write checker watches stores
+into SRAM here too.
+
+Accesses a register table does not take as they are get what the K210's buses do with
+them (README, "What the bus does"), with a warning naming hart, pc, instruction and
+address, or, with --strict, stop the run (exit status 5):
+
+- TileLink devices (CLINT, PLIC, UARTHS, GPIOHS: Rocket's register router) answer any
+  width: a load returns the addressed bytes of the register; a store writes each field
+  of the register whose bytes it covers entirely and leaves the others; an offset
+  without a register reads 0 and ignores stores.
+- APB devices (SYSCTL, FPIOA, SPI0, SPI1) are 32 bits wide with no byte strobes: a load
+  reads the whole register (side effects included) and returns the addressed bytes; a
+  narrower store writes the whole register with the stored byte or halfword repeated in
+  every lane, as Rocket puts it on the bus.
+- The DMAC's 32-bit AHB port takes each half of its 64-bit registers as a register of
+  its own and narrower accesses by their bytes.
+- A 64-bit access to two 32-bit registers is two 32-bit accesses, the lower one first.
+- A store to a read-only register is ignored; a load from a write-only one reads 0.
+- A misaligned access to a device raises the misaligned-address exception (mcause 4, 6).
+- An address where nothing answers raises an access fault too, except in the debug
+  module's region at the bottom of the address space, which answers outside debug mode:
+  loads read 0 and stores are ignored.
 """
 from __future__ import annotations
 
@@ -17,12 +37,11 @@ import unicorn
 from unicorn import riscv_const as rv
 
 from . import hart as hartmod
-from .disasm import disassemble_one
 from .elf import symbolize
-from .errors import BoardStop, FirmwareTrap, HardwareMisuse, StrayWrite, UnmodelledAccess
+from .errors import BoardStop, FirmwareTrap, HardwareMisuse, RegisterRuleViolation, StrayWrite, UnmodelledAccess
 from .hart import Hart
 from .memory import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE
-from .mmio import Peripheral
+from .mmio import BUS_AHB, BUS_APB, BUS_TILELINK, Peripheral, Register
 from .write_watch import describe as describe_stray
 
 if TYPE_CHECKING:
@@ -40,6 +59,17 @@ KNOWN_UNMODELLED = [
     (0x8800_0000, 0x2_0000, "boot ROM"),
 ]
 CAUSE_LOAD_MISALIGNED, CAUSE_STORE_MISALIGNED = 4, 6
+CAUSE_LOAD_ACCESS, CAUSE_STORE_ACCESS = 5, 7
+# Rocket's debug module answers at the bottom of the address space, in and out of debug mode
+# (rocket-chip denied M-mode access to it only in August 2019, long after the K210's design)
+DEBUG_BASE, DEBUG_SIZE = 0x0000_0000, 0x1000
+NO_DEVICE = "no device or memory answers at this address"
+# What a store of 1 or 2 bytes puts on a 32-bit bus: Rocket repeats it in every byte lane
+LANE_REPEAT = {1: 0x0101_0101, 2: 0x0001_0001}
+
+
+def _mask(width_bytes: int) -> int:
+    return (1 << (8 * width_bytes)) - 1
 
 
 def _bits(word: int, high: int, low: int) -> int:
@@ -86,8 +116,9 @@ def is_sram(address: int) -> bool:
 class Bus:
     """Decodes every hart access outside SRAM and applies the K210's rules to it."""
 
-    def __init__(self, board: "Board") -> None:
+    def __init__(self, board: "Board", strict: bool = False) -> None:
         self.board = board
+        self.strict = strict     # stop at the first access the register tables do not take as it is
         self.scheduler = board.scheduler
         self.peripherals: list[Peripheral] = board.peripherals
         self._timed_set = set(board.timed_devices)
@@ -96,6 +127,7 @@ class Bus:
         self._accesses: dict[int, tuple[int, int, int]] = {}
         self._faulting_pc: list[int | None] = [None] * harts
         self.device_writes: dict[str, list[int]] = {}     # stores per device, per hart
+        self.questionable: dict[str, int] = {}            # accesses the bus answered with a warning, per kind
 
     # --- mapping ----------------------------------------------------------------------
 
@@ -172,16 +204,75 @@ class Bus:
             fetch = access in (unicorn.UC_MEM_FETCH_UNMAPPED, unicorn.UC_MEM_FETCH_PROT)
             write = access in (unicorn.UC_MEM_WRITE_UNMAPPED, unicorn.UC_MEM_WRITE_PROT)
             name = next((n for base, length, n in KNOWN_UNMODELLED if base <= address < base + length), None)
+            if not fetch and not self.strict and DEBUG_BASE <= address < DEBUG_BASE + DEBUG_SIZE:
+                # mapped on first use: a mapping at address 0 slows every hart down by several per cent
+                uc.mmio_map(DEBUG_BASE, DEBUG_SIZE, self._debug_reader(hart), None, self._debug_writer(hart), None)
+                return True     # Unicorn retries the access, which now reaches the debug region
             if fetch:
                 self.scheduler.stop(FirmwareTrap(
                     f"hart {hart.hart_id}: instruction fetch from 0x{address:08x}, which is not memory "
                     f"(jumped from around pc 0x{uc.reg_read(rv.UC_RISCV_REG_PC):08x})"))
                 return False
-            reason = (f"{name}, which the board model does not implement" if name
-                      else "no device or memory answers at this address")
-            self._fail(hart, UnmodelledAccess(reason), address, size, "store" if write else "load")
+            if name is not None or self.strict:
+                reason = f"{name}, which the board model does not implement" if name else NO_DEVICE
+                self._fail(hart, UnmodelledAccess(reason), address, size, "store" if write else "load")
+                return False
+            self._access_fault(hart, address, write, "no device answers at this address")
             return False
         return hook
+
+    def _access_fault(self, hart: Hart, address: int, is_store: bool, why: str) -> None:
+        """Rocket's answer to an access its physical memory attributes do not allow: a precise
+        load or store access fault with mtval = the address, into the firmware's trap handler."""
+        pc = hart.reg(rv.UC_RISCV_REG_PC)
+        cause = CAUSE_STORE_ACCESS if is_store else CAUSE_LOAD_ACCESS
+        width = self._access(hart, pc)[0]
+        self._questionable(hart, "access fault", address, width, "store" if is_store else "load",
+                           f"{why}: the K210 raises a {'store' if is_store else 'load'} access fault "
+                           f"(mcause {cause}, mtval 0x{address:x}) into the firmware's trap handler")
+        hart.pending_exception = hartmod.PendingException(cause, pc, address)
+        hart.retired_adjust += 1
+        hart.request_stop()
+        self._faulting_pc[hart.hart_id] = pc
+
+    def _questionable(self, hart: Hart, kind: str, address: int, width: int, direction: str,
+                      what_happens: str) -> None:
+        """An access the bus answered the way the K210 does, though a register table would not
+        take it as it is: a warning naming the access, counted per kind for run.json."""
+        self.questionable[kind] = self.questionable.get(kind, 0) + 1
+        self.board.warn(f"{self.describe_access(hart, address, width, direction)}: {what_happens}",
+                        self.scheduler.hart_now(hart))
+
+    # --- the debug module's region ------------------------------------------------------------
+
+    def _debug_reader(self, hart: Hart):
+        def read(uc, offset, size, user_data):
+            if self.scheduler.pending_stop is None:
+                self._debug_access(hart, offset, False)
+            return 0
+        return read
+
+    def _debug_writer(self, hart: Hart):
+        def write(uc, offset, size, value, user_data):
+            if self.scheduler.pending_stop is None:
+                self._debug_access(hart, offset, True)
+        return write
+
+    def _debug_access(self, hart: Hart, offset: int, is_store: bool) -> None:
+        """An access to the debug module's window outside debug mode: it answers (loads 0,
+        stores ignored; the model has no debug ROM image or debug state to change). Not mapped
+        with --strict, where such an access stops the run as any address nothing answers."""
+        pc = hart.reg(rv.UC_RISCV_REG_PC)
+        width, rs1, imm = self._access(hart, pc)
+        direction = "store" if is_store else "load"
+        if self._misaligned(hart, pc, width, rs1, imm, is_store):
+            return
+        base = hart.reg(rv.UC_RISCV_REG_X0 + rs1) if rs1 else 0
+        if DEBUG_BASE + offset != (base + imm) & (2**64 - 1):
+            return     # the second half of a 64-bit access: the first one warned
+        self._questionable(hart, "debug region", DEBUG_BASE + offset, width, direction,
+                           "the debug module's region (0x0..0xfff) answers outside debug mode too: "
+                           + ("the store is ignored" if is_store else "the load reads 0"))
 
     # --- the rules of a device access ---------------------------------------------------------
 
@@ -207,8 +298,9 @@ class Bus:
         return access
 
     def _misaligned(self, hart: Hart, pc: int, width: int, rs1: int, imm: int, is_store: bool) -> bool:
-        """A misaligned device access raises the misaligned-access exception, as on the K210;
-        the rest of the instruction's callbacks are ignored."""
+        """A misaligned device access raises the misaligned-access exception, as on the K210
+        (its Rocket's data cache raises it for every address); the rest of the instruction's
+        callbacks are ignored."""
         if self._faulting_pc[hart.hart_id] == pc:
             return True
         base = hart.reg(rv.UC_RISCV_REG_X0 + rs1) if rs1 else 0
@@ -239,7 +331,7 @@ class Bus:
                 return 0
             try:
                 self._gate_check(peripheral)
-                value = peripheral.read(offset, width, now)
+                value = self._load(hart, peripheral, offset, width, now)
             except BoardStop as error:
                 self._fail(hart, error, peripheral.BASE + offset, width, "load")
                 return 0
@@ -273,7 +365,7 @@ class Bus:
             self.device_writes.setdefault(peripheral.NAME, [0] * len(self._split))[hart.hart_id] += 1
             try:
                 self._gate_check(peripheral)
-                peripheral.write(offset, width, value, now)
+                self._store(hart, peripheral, offset, width, value, now)
             except BoardStop as error:
                 self._fail(hart, error, peripheral.BASE + offset, width, "store")
                 return
@@ -286,3 +378,116 @@ class Bus:
                 if event is not None and event < scheduler.turn_horizon:
                     hart.request_stop()
         return write
+
+    # --- what the buses do with accesses a register table does not take as they are -----------
+
+    def _load(self, hart: Hart, peripheral: Peripheral, offset: int, width: int, now: float) -> int:
+        try:
+            return peripheral.read(offset, width, now)
+        except RegisterRuleViolation:
+            if self.strict:
+                raise
+            located = peripheral.register_containing(offset)
+            if located is None and peripheral.BUS != BUS_TILELINK:
+                raise     # an APB or AHB register the model may lack: --permissive decides
+        return self._answer_load(hart, peripheral, offset, width, now, located)
+
+    def _answer_load(self, hart: Hart, peripheral: Peripheral, offset: int, width: int, now: float,
+                     located: tuple[int, Register] | None) -> int:
+        address = peripheral.BASE + offset
+        if located is None:
+            self._questionable(hart, "no register", address, width, "load",
+                               f"{peripheral.NAME} has no register at offset 0x{offset:x}; its TileLink "
+                               f"register router answers 0")
+            return 0
+        base, reg = located
+        name = f"{peripheral.NAME}.{reg.name}"
+        if width == 8 and reg.width == 4:
+            self._warn_pair(hart, peripheral, offset, "load")
+            low = self._load(hart, peripheral, offset, 4, now)
+            return low | self._load(hart, peripheral, offset + 4, 4, now) << 32
+        if not reg.readable:
+            self._questionable(hart, "write-only register", address, width, "load",
+                               f"{name} is write-only: the load reads 0")
+            return 0
+        value = peripheral.read_register(base, reg, now)
+        part = (value >> (8 * (offset - base))) & _mask(width)
+        self._questionable(hart, "narrow load", address, width, "load",
+                           f"{width * 8}-bit load from the {reg.width * 8}-bit register {name}: "
+                           f"the register is read whole (with any side effect of reading it) and the "
+                           f"addressed bytes returned (0x{part:x})")
+        return part
+
+    def _store(self, hart: Hart, peripheral: Peripheral, offset: int, width: int, value: int, now: float) -> None:
+        try:
+            peripheral.write(offset, width, value, now)
+            return
+        except RegisterRuleViolation:
+            if self.strict:
+                raise
+            located = peripheral.register_containing(offset)
+            if located is None and peripheral.BUS != BUS_TILELINK:
+                raise
+        self._answer_store(hart, peripheral, offset, width, value, now, located)
+
+    def _answer_store(self, hart: Hart, peripheral: Peripheral, offset: int, width: int, value: int,
+                      now: float, located: tuple[int, Register] | None) -> None:
+        address = peripheral.BASE + offset
+        if located is None:
+            self._questionable(hart, "no register", address, width, "store",
+                               f"{peripheral.NAME} has no register at offset 0x{offset:x}; its TileLink "
+                               f"register router ignores the store")
+            return
+        base, reg = located
+        name = f"{peripheral.NAME}.{reg.name}"
+        if width == 8 and reg.width == 4:
+            self._warn_pair(hart, peripheral, offset, "store")
+            self._store(hart, peripheral, offset, 4, value & 0xFFFF_FFFF, now)
+            self._store(hart, peripheral, offset + 4, 4, value >> 32, now)
+            return
+        if not reg.writable:
+            self._questionable(hart, "read-only register", address, width, "store",
+                               f"{name} is read-only: the store is ignored")
+            return
+        new, what = self._narrow_store_result(peripheral, base, reg, offset, width, value, now)
+        self._questionable(hart, "narrow store", address, width, "store",
+                           f"{width * 8}-bit store to the {reg.width * 8}-bit register {name}: {what}")
+        if new is not None:
+            peripheral.write_register(base, reg, new, now)
+
+    def _narrow_store_result(self, peripheral: Peripheral, base: int, reg: Register, offset: int, width: int,
+                             value: int, now: float) -> tuple[int | None, str]:
+        """The register's value after a store narrower than the register (None: unchanged), and
+        how the bus came to it, for the warning."""
+        shift = 8 * (offset - base)
+        lanes = _mask(width) << shift
+        data = (value & _mask(width)) << shift
+        if peripheral.BUS == BUS_APB and reg.width == 4:
+            new = (value & _mask(width)) * LANE_REPEAT[width]
+            return new, (f"{peripheral.BUS} has no byte strobes, so the whole register is written with the "
+                         f"stored value repeated in every byte lane (0x{new:08x})")
+        old = peripheral.merge_base(base, reg, now)
+        if peripheral.BUS == BUS_AHB:
+            new = (old & ~lanes) | data
+            return new, f"the {peripheral.BUS} port writes the addressed bytes only (now 0x{new:x})"
+        fields = reg.fields or ((0, 8 * reg.width),)
+        new, covered = old, 0
+        for low, bits in fields:
+            field_mask = ((1 << bits) - 1) << low
+            if field_mask & ~lanes == 0:
+                new = (new & ~field_mask) | (data & field_mask)
+                covered += 1
+        if not covered:
+            return None, (f"it covers no whole field of the register, so the {BUS_TILELINK} register router "
+                          f"ignores it")
+        return new, (f"the {BUS_TILELINK} register router writes the fields whose bytes it covers "
+                     f"(now 0x{new:x})")
+
+    def _warn_pair(self, hart: Hart, peripheral: Peripheral, offset: int, direction: str) -> None:
+        names = []
+        for part in (offset, offset + 4):
+            located = peripheral.register_containing(part)
+            names.append(f"{peripheral.NAME}.{located[1].name}" if located else f"offset 0x{part:x}")
+        self._questionable(hart, "64-bit access to 32-bit registers", peripheral.BASE + offset, 8, direction,
+                           f"{names[0]} and {names[1]} are 32-bit registers: the bus makes the 64-bit "
+                           f"{direction} two 32-bit ones, the lower address first")

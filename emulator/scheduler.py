@@ -23,7 +23,6 @@ import unicorn
 from unicorn import riscv_const as rv
 
 from . import hart as hartmod
-from .disasm import disassemble_one
 from .elf import symbolize
 from .errors import BoardStop, FirmwareReportedError, FirmwareTrap, HangDetected
 from .hart import CsrContext, Hart, HartState, RunEnd
@@ -359,7 +358,9 @@ class Scheduler:
             end, _ = hart.run(budget)
         except unicorn.UcError as error:
             hart.pc = hart.uc.reg_read(rv.UC_RISCV_REG_PC)
-            if self.pending_stop is None:
+            if hart.pending_exception is not None:
+                end = RunEnd.EXCEPTION     # the bus turned the access into an access fault
+            elif self.pending_stop is None:
                 if error.errno == unicorn.UC_ERR_INSN_INVALID and (hart.read_u16(hart.pc) == 0x9002 or
                                                                     hart.read_u32(hart.pc) == 0x00100073):
                     hart.note_breakpoint()
