@@ -26,7 +26,8 @@ EXIT_STATUS_HELP = f"""exit status:
      or, after a run that ended well, a --grab whose time the run ended before
   3  the firmware trapped (exception), or jumped outside memory
   4  hang: no frame within the virtual-time budget, or every hart waits forever
-  5  the firmware touched an address or register the model does not implement
+  5  the firmware touched an address or register the model does not implement; with --strict also
+     an access the K210's bus answers in a way of its own (see --strict)
   6  bad input: a file or folder the command line names cannot be used: the firmware image (missing,
      unreadable, not a RISC-V ELF), the card image (missing, truncated), the --golden folder (missing
      or a file) or one of its frames (not a readable PNG), the --out folder (a file of that name
@@ -126,6 +127,12 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--permissive", action="store_true",
                      help="an access to a register a modelled device does not implement warns (loads read 0, "
                           "stores are ignored) instead of stopping the run; addresses no device claims still stop it")
+    run.add_argument("--strict", action="store_true",
+                     help="stop (status 5) at the first access the K210's bus answers in a way of its own instead "
+                          "of answering it as the chip does with a warning: an 8/16-bit or 64-bit access to "
+                          "32-bit registers, a 32-bit access to half of a 64-bit DMAC register, a store to a "
+                          "read-only or load from a write-only register, an offset of a TileLink device without "
+                          "a register, an address no device answers, the debug region at address 0")
     return parser
 
 
@@ -271,7 +278,7 @@ def main(argv: list[str] | None = None) -> int:
         board = Board(str(args.firmware), quantum=args.quantum, hang_budget_s=args.budget, console=console,
                       on_frame=output.frame, on_warning=terminal.warning, permissive=args.permissive,
                       sd_image=args.sd, sd_writable=args.sd_writable, sd_faults=frozenset(args.sd_fault),
-                      check_writes=args.check_writes)
+                      check_writes=args.check_writes, strict=args.strict)
         for index, request in enumerate(grabs):
             board.grab_at(request.at_s, grab_action(index, request))
         result = board.run(args.frames, progress=terminal.progress if terminal.shows_progress else None)
@@ -318,6 +325,8 @@ def main(argv: list[str] | None = None) -> int:
     summary["exit"], summary["message"] = kind, message
     summary["grabs"] = output.grabs
     summary["writes_checked"] = args.check_writes
+    summary["strict"] = args.strict
+    summary["bus_warnings"] = dict(board.bus.questionable) if board is not None else {}
     output.finish(summary)
     if status == EXIT_OK:
         terminal.message(f"[board] {message}; {board.time * 1e3:.2f} ms virtual; output in {args.out}")

@@ -8,9 +8,10 @@ power-up contents almost always amount to.
 """
 from __future__ import annotations
 
-from .mmio import Peripheral, Register
+from .mmio import BUS_TILELINK, Peripheral, Register
 
 HARTS = 2
+HALVES = ((0, 32), (32, 32))     # mtimecmp and mtime: two 32-bit fields each
 MSIP = 0x0000
 MTIMECMP = 0x4000
 MTIME = 0xBFF8
@@ -18,13 +19,19 @@ ALL_ONES = (1 << 64) - 1
 
 
 class Clint(Peripheral):
+    """Rocket's CLINT on TileLink, as rocket-chip had it before its privileged-spec-1.10 merge
+    (March 2017; the K210 implements 1.9.1): every register is made of 32-bit fields (msip, the
+    halves of mtimecmp and mtime), so a store narrower than 32 bits changes nothing."""
+
     NAME = "CLINT"
     BASE = 0x0200_0000
     SIZE = 0x10000
+    BUS = BUS_TILELINK
     REGISTERS = {
         **{MSIP + 4 * h: Register(f"msip{h}") for h in range(HARTS)},
-        **{MTIMECMP + 8 * h: Register(f"mtimecmp{h}", width=8, narrow_ok=True, reset=ALL_ONES) for h in range(HARTS)},
-        MTIME: Register("mtime", width=8, narrow_ok=True),
+        **{MTIMECMP + 8 * h: Register(f"mtimecmp{h}", width=8, narrow_ok=True, reset=ALL_ONES, fields=HALVES)
+           for h in range(HARTS)},
+        MTIME: Register("mtime", width=8, narrow_ok=True, fields=HALVES),
     }
 
     def msip(self, hart: int) -> bool:

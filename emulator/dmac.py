@@ -8,7 +8,9 @@ then has BLOCK_TFR_DONE (bit 0) and DMA_TFR_DONE (bit 1) set as far as
 intstatus_en allows, and its interrupt line (PLIC source 27 + n) is high while
 intstatus & intsignal_en is non-zero and cfg.int_en is set.
 Linked-list and multi-block transfers are not modelled and stop the run.
-Registers are 64 bits wide and only 64-bit accesses (ld/sd) are accepted.
+Registers are 64 bits wide; the SDK accesses them with ld/sd. The DMAC's register port is a
+32-bit AHB slave (the SDK's platform.h), so a 32-bit access reaches one half of a register and a
+narrower one the bytes it addresses: the bus models those with a warning (bus.py).
 """
 from __future__ import annotations
 
@@ -17,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import HardwareMisuse, UnmodelledAccess
-from .mmio import Peripheral, Register, field
+from .mmio import BUS_AHB, Peripheral, Register, field
 
 CHANNELS = 6
 ID, COMPVER, CFG, CHEN, INTSTATUS, COM_INTCLEAR = 0x00, 0x08, 0x10, 0x18, 0x30, 0x38
@@ -120,6 +122,7 @@ class Dmac(Peripheral):
     BASE = 0x5000_0000
     SIZE = 0x1000
     GATE = "dma"
+    BUS = BUS_AHB
     REGISTERS = {
         ID: Register("id", width=8, writable=False), COMPVER: Register("compver", width=8, writable=False,
                                                                         reset=0x3130_302A),

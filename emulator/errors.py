@@ -47,6 +47,13 @@ class UnmodelledAccess(BoardStop):
     kind = "unmodelled"
 
 
+class RegisterRuleViolation(UnmodelledAccess):
+    """An access a device's register table does not take as it is: no register at the offset, a
+    width other than the register's, a store to a read-only or a load from a write-only register.
+    By default the bus then does what the K210's bus does with such an access and warns; with
+    --strict it stops the run (exit status 5), as every UnmodelledAccess does."""
+
+
 class BadInput(BoardStop):
     """The firmware image (or another input file) is missing or malformed."""
 

@@ -7,7 +7,7 @@ interrupt pending bits follow the input value; writing 1 clears an edge bit.
 """
 from __future__ import annotations
 
-from .mmio import Peripheral, Register
+from .mmio import BUS_TILELINK, Peripheral, Register
 
 INPUT_VAL, INPUT_EN, OUTPUT_EN, OUTPUT_VAL, PUE, PDE = 0x00, 0x04, 0x08, 0x0C, 0x10, 0x14
 RISE_IE, RISE_IP, FALL_IE, FALL_IP = 0x18, 0x1C, 0x20, 0x24
@@ -18,9 +18,13 @@ MASK = 0xFFFF_FFFF
 
 
 class Gpiohs(Peripheral):
+    """sifive-blocks' GPIO on TileLink: every register is one 32-bit field (one bit per line), so
+    only a store that covers all four bytes changes it."""
+
     NAME = "GPIOHS"
     BASE = 0x3800_1000
     SIZE = 0x1000
+    BUS = BUS_TILELINK
     REGISTERS = {
         INPUT_VAL: Register("input_val", writable=False),
         INPUT_EN: Register("input_en"), OUTPUT_EN: Register("output_en"),

@@ -1,17 +1,25 @@
 """Memory-mapped peripherals: the common register-table machinery.
 
 A peripheral declares its registers as a table (offset -> Register) the way a
-datasheet lists them. The board routes loads and stores to `read`/`write`;
-an offset that is not in the table, a write to a read-only register or an
-access of the wrong width stops the run with `UnmodelledAccess`, so firmware
-never silently talks to hardware the model does not implement.
+datasheet lists them. The bus routes loads and stores to `read`/`write`, which
+take exactly the accesses the table describes; an offset that is not in the
+table, a write to a read-only register, a read of a write-only one or an access
+of another width raises `RegisterRuleViolation`. What happens then is the bus's
+business (bus.py): the K210's buses answer such accesses in ways of their own,
+which the bus models by default, or the run stops (--strict), so firmware never
+silently talks to hardware the model does not implement.
+
+Each peripheral says which bus it sits on (`BUS`), since that decides what a
+narrow store does to a register; a register of a TileLink device lists its
+fields (`fields`), since the TileLink register router writes a field only when
+a store covers all of its bytes.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from .errors import UnmodelledAccess
+from .errors import RegisterRuleViolation
 
 if TYPE_CHECKING:
     from .board import Board
@@ -27,6 +35,20 @@ class Register:
     writable: bool = True
     reset: int = 0
     narrow_ok: bool = False  # a 64-bit register that may also be accessed as two 32-bit halves
+    # TileLink devices only: the register's writable fields as (lowest bit, width in bits), as the
+    # RTL's register map declares them; None: one field spanning the whole register
+    fields: tuple[tuple[int, int], ...] | None = None
+
+
+# The buses a peripheral can sit on (see bus.py for what each does with a narrow store)
+BUS_TILELINK = "TileLink"   # Rocket's register router: CLINT, PLIC, UARTHS, GPIOHS
+BUS_APB = "APB"             # 32-bit APB behind the AXI-to-APB bridges: SYSCTL, FPIOA, SPI0, SPI1
+BUS_AHB = "AHB"             # the DMAC's 32-bit AHB port
+
+
+def byte_fields(width: int) -> tuple[tuple[int, int], ...]:
+    """The fields of a register the RTL declares byte by byte (RegField.bytes)."""
+    return tuple((8 * n, 8) for n in range(width))
 
 
 class Peripheral:
@@ -36,6 +58,7 @@ class Peripheral:
     NAME = "peripheral"
     BASE = 0
     SIZE = 0x1000
+    BUS = BUS_APB
     REGISTERS: dict[int, Register] = {}
 
     def __init__(self, board: "Board | None" = None) -> None:
@@ -49,7 +72,7 @@ class Peripheral:
     # --- routing, called by the board -------------------------------------------------
 
     def lookup(self, offset: int, size: int, is_write: bool) -> tuple[int, Register]:
-        """Finds the register an access hits; raises UnmodelledAccess if none can take it."""
+        """Finds the register an access hits; raises RegisterRuleViolation if none can take it."""
         reg = self.REGISTERS.get(offset)
         base = offset
         if reg is None and size == 4 and (offset - 4) in self.REGISTERS:
@@ -57,17 +80,33 @@ class Peripheral:
             if wide.width == 8 and wide.narrow_ok:
                 reg, base = wide, offset - 4
         if reg is None:
-            raise UnmodelledAccess(f"{self.NAME} has no register at offset 0x{offset:x}")
+            raise RegisterRuleViolation(f"{self.NAME} has no register at offset 0x{offset:x}")
         if size != reg.width and not (reg.width == 8 and reg.narrow_ok and size == 4):
-            raise UnmodelledAccess(
+            raise RegisterRuleViolation(
                 f"{self.NAME}.{reg.name} is a {reg.width * 8}-bit register; "
                 f"a {size * 8}-bit access is not supported by the model"
             )
         if is_write and not reg.writable:
-            raise UnmodelledAccess(f"{self.NAME}.{reg.name} is read-only")
+            raise RegisterRuleViolation(f"{self.NAME}.{reg.name} is read-only")
         if not is_write and not reg.readable:
-            raise UnmodelledAccess(f"{self.NAME}.{reg.name} is write-only")
+            raise RegisterRuleViolation(f"{self.NAME}.{reg.name} is write-only")
         return base, reg
+
+    def register_containing(self, offset: int) -> tuple[int, Register] | None:
+        """(offset of the register, register) for the register whose bytes include `offset`."""
+        word = offset & ~3
+        reg = self.REGISTERS.get(word)
+        if reg is not None:
+            return word, reg
+        double = offset & ~7
+        reg = self.REGISTERS.get(double)
+        if reg is not None and reg.width == 8:
+            return double, reg
+        return None
+
+    def merge_base(self, offset: int, reg: Register, now: float) -> int:
+        """What a store that changes only some bytes of a register leaves in the others."""
+        return self.values[offset]
 
     def read(self, offset: int, size: int, now: float) -> int:
         base, reg = self.lookup(offset, size, False)

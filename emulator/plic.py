@@ -6,12 +6,17 @@ Interrupts are level-triggered through a gateway: a source becomes pending when 
 line is high and it is not being served; claim returns the highest-priority pending
 enabled source above the threshold (ties: lowest id) and clears its pending bit;
 the source can pend again only after its id is written back to complete.
+
+Register layout as rocket-chip's PLIC had it before its privileged-spec-1.10 merge (March
+2017; the K210 implements 1.9.1): priorities (source 0's included, which always reads 0),
+thresholds and claim/complete are 32-bit fields, so a store narrower than 32 bits leaves them
+as they are; enables are one field per bit, so any store changes the bits it covers.
 """
 from __future__ import annotations
 
 from typing import Callable, Iterable
 
-from .mmio import Peripheral, Register
+from .mmio import BUS_TILELINK, Peripheral, Register, byte_fields
 
 SOURCES = 66          # 0 is "no interrupt"
 CONTEXTS = 2
@@ -32,10 +37,11 @@ class Plic(Peripheral):
     NAME = "PLIC"
     BASE = 0x0C00_0000
     SIZE = 0x0400_0000
+    BUS = BUS_TILELINK
     REGISTERS = {
-        **{PRIORITY + 4 * s: Register(f"priority{s}") for s in range(1, SOURCES)},
+        **{PRIORITY + 4 * s: Register(f"priority{s}") for s in range(SOURCES)},
         **{PENDING + 4 * w: Register(f"pending{w}", writable=False) for w in range(WORDS)},
-        **{ENABLE + ENABLE_STRIDE * c + 4 * w: Register(f"enable{c}_{w}")
+        **{ENABLE + ENABLE_STRIDE * c + 4 * w: Register(f"enable{c}_{w}", fields=byte_fields(4))
            for c in range(CONTEXTS) for w in range(WORDS)},
         **{THRESHOLD + CONTEXT_STRIDE * c: Register(f"threshold{c}") for c in range(CONTEXTS)},
         **{CLAIM + CONTEXT_STRIDE * c: Register(f"claim{c}") for c in range(CONTEXTS)},
@@ -91,6 +97,8 @@ class Plic(Peripheral):
         if offset >= CLAIM - 4 and (offset - CLAIM) % CONTEXT_STRIDE == 0:
             self.in_service.discard(value)   # complete
             self.sample()
+        elif offset == PRIORITY:
+            pass     # source 0 ("no interrupt") has a priority register that always reads 0
         elif offset < PENDING:
             self.values[offset] = value & PRIORITY_MASK
         else:

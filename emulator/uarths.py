@@ -12,7 +12,7 @@ from __future__ import annotations
 from collections import deque
 from typing import Callable
 
-from .mmio import Peripheral, Register
+from .mmio import BUS_TILELINK, Peripheral, Register
 
 TXDATA, RXDATA, TXCTRL, RXCTRL, IE, IP, DIV = 0x00, 0x04, 0x08, 0x0C, 0x10, 0x14, 0x18
 TX_FIFO_DEPTH = 8
@@ -25,11 +25,14 @@ class Uarths(Peripheral):
     NAME = "UARTHS"
     BASE = 0x3800_0000
     SIZE = 0x1000
+    BUS = BUS_TILELINK
+    # fields as sifive-blocks' UART declares them: an 8-bit txdata byte (a store that covers it
+    # queues it), txen and nstop, the 3-bit watermarks at bit 16, a 16-bit divisor
     REGISTERS = {
-        TXDATA: Register("txdata"), RXDATA: Register("rxdata", writable=False),
-        TXCTRL: Register("txctrl"), RXCTRL: Register("rxctrl"),
-        IE: Register("ie"), IP: Register("ip", writable=False),
-        DIV: Register("div", reset=0x0D8D),  # 115200 baud from the 26 MHz oscillator... about
+        TXDATA: Register("txdata", fields=((0, 8),)), RXDATA: Register("rxdata", writable=False),
+        TXCTRL: Register("txctrl", fields=((0, 1), (1, 1), (16, 3))), RXCTRL: Register("rxctrl", fields=((0, 1), (16, 3))),
+        IE: Register("ie", fields=((0, 1), (1, 1))), IP: Register("ip", writable=False),
+        DIV: Register("div", reset=0x0D8D, fields=((0, 16),)),  # 115200 baud from the 26 MHz oscillator... about
     }
 
     def __init__(self, board=None, on_byte: Callable[[int], None] | None = None) -> None:

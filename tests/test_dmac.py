@@ -98,8 +98,8 @@ def test_ld_sd_on_64_bit_registers():
 
 @pytest.mark.parametrize("insn, direction", [("lw t0, 0x10(s1)", "load"), ("sw zero, 0x10(s1)", "store"),
                                              ("lwu t0, 0x08(s1)", "load"), ("lw t0, 0x104(s1)", "load")])
-def test_32_bit_access_to_a_dmac_register_is_unmodelled(insn, direction):
-    board = make_board(program(DMAC_CLOCK_ON + f"    {insn}\n"))
+def test_32_bit_access_to_a_dmac_register_stops_a_strict_run(insn, direction):
+    board = make_board(program(DMAC_CLOCK_ON + f"    {insn}\n"), strict=True)
     with pytest.raises(UnmodelledAccess) as info:
         run_to_done(board)
     text = str(info.value)

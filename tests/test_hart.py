@@ -484,11 +484,13 @@ def test_masked_interrupts_are_not_taken():
 # --- accesses nothing answers ------------------------------------------------------------------
 
 def test_unmapped_load_names_hart_pc_instruction_address_size_and_direction():
+    """With --strict an access nothing answers stops the run (by default it is an access fault
+    into the firmware's trap handler: tests/test_bus.py)."""
     board = make_board(program("""
         li      t0, 0x60000000
     bad:
         lw      t1, 8(t0)
-    """))
+    """), strict=True)
     with pytest.raises(UnmodelledAccess) as info:
         run_to_done(board)
     text = str(info.value)

@@ -1,0 +1,493 @@
+"""The K210's bus as the harts see it: address decoding and the rules of an access.
+
+SRAM is mapped straight into each hart's Unicorn engine (both views, one buffer).
+Every device window becomes an MMIO range whose callbacks come here: the access is
+decoded from the instruction (Unicorn splits 64-bit and misaligned MMIO accesses into
+pieces; the instruction says what the hart really did), checked against the rules
+(a peripheral whose clock is gated or held in reset cannot be used) and handed to the
+device's register table. With --check-writes the stray-write checker watches stores
+into SRAM here too.
+
+Accesses a register table does not take as they are get what the K210's buses do with
+them (README, "What the bus does"), with a warning naming hart, pc, instruction and
+address, or, with --strict, stop the run (exit status 5):
+
+- TileLink devices (CLINT, PLIC, UARTHS, GPIOHS: Rocket's register router) answer any
+  width: a load returns the addressed bytes of the register; a store writes each field
+  of the register whose bytes it covers entirely and leaves the others; an offset
+  without a register reads 0 and ignores stores.
+- APB devices (SYSCTL, FPIOA, SPI0, SPI1) are 32 bits wide with no byte strobes: a load
+  reads the whole register (side effects included) and returns the addressed bytes; a
+  narrower store writes the whole register with the stored byte or halfword repeated in
+  every lane, as Rocket puts it on the bus.
+- The DMAC's 32-bit AHB port takes each half of its 64-bit registers as a register of
+  its own and narrower accesses by their bytes.
+- A 64-bit access to two 32-bit registers is two 32-bit accesses, the lower one first.
+- A store to a read-only register is ignored; a load from a write-only one reads 0.
+- A misaligned access to a device raises the misaligned-address exception (mcause 4, 6).
+- An address where nothing answers raises an access fault too, except in the debug
+  module's region at the bottom of the address space, which answers outside debug mode:
+  loads read 0 and stores are ignored.
+"""
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import unicorn
+from unicorn import riscv_const as rv
+
+from . import hart as hartmod
+from .elf import symbolize
+from .errors import BoardStop, FirmwareTrap, HardwareMisuse, RegisterRuleViolation, StrayWrite, UnmodelledAccess
+from .hart import Hart
+from .memory import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE
+from .mmio import BUS_AHB, BUS_APB, BUS_TILELINK, Peripheral, Register
+from .write_watch import describe as describe_stray
+
+if TYPE_CHECKING:
+    from .board import Board
+
+# Blocks of the K210 the model knows by name but does not implement (for clear messages)
+KNOWN_UNMODELLED = [
+    (0x5020_0000, 0x1000, "GPIO (the slow GPIO block)"), (0x5021_0000, 0x1_0000, "UART1"),
+    (0x5022_0000, 0x1_0000, "UART2"), (0x5023_0000, 0x1_0000, "UART3"), (0x5024_0000, 0x1_0000, "SPI slave"),
+    (0x5025_0000, 0x3_0000, "I2S"), (0x5028_0000, 0x3_0000, "I2C"), (0x502C_0000, 0x1_0000, "SHA256"),
+    (0x502D_0000, 0x3_0000, "timers"), (0x5040_0000, 0x2_0000, "WDT"), (0x5042_0000, 0x1_0000, "OTP"),
+    (0x5043_0000, 0x1_0000, "DVP"), (0x5045_0000, 0x1_0000, "AES"), (0x5046_0000, 0x1_0000, "RTC"),
+    (0x5400_0000, 0x100_0000, "SPI3 (on-board flash)"), (0x5000_0000 + 0x1000, 0xF000, "DMAC (past its registers)"),
+    (0x5100_0000, 0x100_0000, "SPI2"), (0x4080_0000, 0x100_0000, "KPU"), (0x4200_0000, 0x100_0000, "FFT"),
+    (0x8800_0000, 0x2_0000, "boot ROM"),
+]
+CAUSE_LOAD_MISALIGNED, CAUSE_STORE_MISALIGNED = 4, 6
+CAUSE_LOAD_ACCESS, CAUSE_STORE_ACCESS = 5, 7
+# Rocket's debug module answers at the bottom of the address space, in and out of debug mode
+# (rocket-chip denied M-mode access to it only in August 2019, long after the K210's design)
+DEBUG_BASE, DEBUG_SIZE = 0x0000_0000, 0x1000
+NO_DEVICE = "no device or memory answers at this address"
+# What a store of 1 or 2 bytes puts on a 32-bit bus: Rocket repeats it in every byte lane
+LANE_REPEAT = {1: 0x0101_0101, 2: 0x0001_0001}
+
+
+def _mask(width_bytes: int) -> int:
+    return (1 << (8 * width_bytes)) - 1
+
+
+def _bits(word: int, high: int, low: int) -> int:
+    return (word >> low) & ((1 << (high - low + 1)) - 1)
+
+
+def _signed(value: int, bits: int) -> int:
+    return value - (1 << bits) if value >> (bits - 1) & 1 else value
+
+
+def decode_memory_access(word: int) -> tuple[int, int, int] | None:
+    """(bytes moved, base register, offset) of an RV64GC load/store/AMO, or None."""
+    if word & 3 != 3:                         # compressed
+        op, funct3 = word & 3, _bits(word, 15, 13)
+        if op == 0 and funct3 in (1, 2, 3, 5, 6, 7):          # c.fld c.lw c.ld c.fsd c.sw c.sd
+            rs1 = 8 + _bits(word, 9, 7)
+            if funct3 in (2, 6):
+                imm = _bits(word, 12, 10) << 3 | _bits(word, 6, 6) << 2 | _bits(word, 5, 5) << 6
+                return 4, rs1, imm
+            return 8, rs1, _bits(word, 12, 10) << 3 | _bits(word, 6, 5) << 6
+        if op == 2 and funct3 in (1, 2, 3):                    # c.fldsp c.lwsp c.ldsp
+            if funct3 == 2:
+                return 4, 2, _bits(word, 12, 12) << 5 | _bits(word, 6, 4) << 2 | _bits(word, 3, 2) << 6
+            return 8, 2, _bits(word, 12, 12) << 5 | _bits(word, 6, 5) << 3 | _bits(word, 4, 2) << 6
+        if op == 2 and funct3 in (5, 6, 7):                    # c.fsdsp c.swsp c.sdsp
+            if funct3 == 6:
+                return 4, 2, _bits(word, 12, 9) << 2 | _bits(word, 8, 7) << 6
+            return 8, 2, _bits(word, 12, 10) << 3 | _bits(word, 9, 7) << 6
+        return None
+    opcode, funct3, rs1 = word & 0x7F, _bits(word, 14, 12), _bits(word, 19, 15)
+    if opcode in (0x03, 0x07):                                 # loads
+        return 1 << (funct3 & 3), rs1, _signed(word >> 20, 12)
+    if opcode in (0x23, 0x27):                                 # stores
+        return 1 << (funct3 & 3), rs1, _signed(_bits(word, 31, 25) << 5 | _bits(word, 11, 7), 12)
+    if opcode == 0x2F:                                         # AMOs and LR/SC
+        return (8 if funct3 == 3 else 4), rs1, 0
+    return None
+
+
+def is_sram(address: int) -> bool:
+    return SRAM_BASE <= address < SRAM_BASE + SRAM_SIZE or SRAM_UNCACHED_BASE <= address < SRAM_UNCACHED_BASE + SRAM_SIZE
+
+
+class Bus:
+    """Decodes every hart access outside SRAM and applies the K210's rules to it."""
+
+    def __init__(self, board: "Board", strict: bool = False) -> None:
+        self.board = board
+        self.strict = strict     # stop at the first access the register tables do not take as it is
+        self.scheduler = board.scheduler
+        self.peripherals: list[Peripheral] = board.peripherals
+        self._timed_set = set(board.timed_devices)
+        harts = len(board.scheduler.harts)
+        self._split: list[tuple[int, int, int] | None] = [None] * harts
+        self._accesses: dict[int, tuple[int, int, int]] = {}
+        self._faulting_pc: list[int | None] = [None] * harts
+        self.device_writes: dict[str, list[int]] = {}     # stores per device, per hart
+        self.questionable: dict[str, int] = {}            # accesses the bus answered with a warning, per kind
+
+    # --- mapping ----------------------------------------------------------------------
+
+    def attach(self, hart: Hart) -> None:
+        """Maps SRAM (both views) and every device window into a hart's engine."""
+        uc = hart.uc
+        memory = self.board.memory
+        uc.mem_map_ptr(SRAM_BASE, SRAM_SIZE, unicorn.UC_PROT_ALL, memory.address)
+        uc.mem_map_ptr(SRAM_UNCACHED_BASE, SRAM_SIZE, unicorn.UC_PROT_ALL, memory.address)
+        for peripheral in self.peripherals:
+            uc.mmio_map(peripheral.BASE, peripheral.SIZE,
+                        self._mmio_reader(hart, peripheral), None, self._mmio_writer(hart, peripheral), None)
+        uc.hook_add(unicorn.UC_HOOK_MEM_UNMAPPED | unicorn.UC_HOOK_MEM_FETCH_PROT | unicorn.UC_HOOK_MEM_READ_PROT
+                    | unicorn.UC_HOOK_MEM_WRITE_PROT, self._unmapped(hart))
+
+    @staticmethod
+    def is_sram(address: int) -> bool:
+        return is_sram(address)
+
+    def is_device(self, address: int) -> bool:
+        return any(p.BASE <= address < p.BASE + p.SIZE for p in self.peripherals)
+
+    # --- turns ------------------------------------------------------------------------------
+
+    def turn_begins(self, hart: Hart) -> None:
+        self._faulting_pc[hart.hart_id] = None
+
+    def turn_ended(self, hart: Hart) -> BoardStop | None:
+        """After a hart's turn: with --check-writes, the stray store that ended it, if any."""
+        watch = self.board.write_watch
+        stray = watch.stray_store(hart) if watch is not None else None
+        if stray is None:
+            return None
+        # the hart stopped right after the stray store, so nothing it did later this turn
+        # can have been recorded: the store is what ends the run
+        access = self.describe_access(hart, stray.address, stray.size, "store", stray.pc)
+        return StrayWrite(f"{access}: {describe_stray(stray)}")
+
+    # --- describing and refusing accesses ------------------------------------------------
+
+    def describe_access(self, hart: Hart, address: int, size: int, direction: str, pc: int | None = None) -> str:
+        """'hart H at pc P <symbol> (instruction): <direction> of N bytes at A'; the pc is the
+        hart's current one unless given (a store the run has already gone past)."""
+        if pc is None:
+            pc = hart.uc.reg_read(rv.UC_RISCV_REG_PC)
+        where = symbolize(self.board.image.symbols, pc)
+        where = f" <{where}>" if where else ""
+        return (f"hart {hart.hart_id} at pc 0x{pc:08x}{where} ({self.board.disassemble_at(pc)}): "
+                f"{direction} of {size} bytes at 0x{address:08x}")
+
+    def _fail(self, hart: Hart, error: BoardStop, address: int, size: int, direction: str) -> None:
+        if self.board.permissive and isinstance(error, UnmodelledAccess) and self.is_device(address):
+            self.board.warn(f"{self.describe_access(hart, address, size, direction)}: {error.args[0]} "
+                            f"(permissive: loads read 0, stores are ignored)")
+            return
+        if self.scheduler.pending_stop is None:
+            error.args = (f"{self.describe_access(hart, address, size, direction)}: {error.args[0]}",)
+            self.scheduler.stop(error)
+        hart.request_stop()
+
+    def check_dma_write(self, address: int, length: int, writer: str) -> None:
+        """--check-writes for the DMAC: a write outside the firmware's buffers ends the run (the
+        current hart's turn ends after its instruction; between turns, step() raises)."""
+        stray = self.board.write_watch.check_dma(address, length)
+        if stray is None or self.scheduler.pending_stop is not None:
+            return
+        self.scheduler.stop(StrayWrite(f"{writer}: write of {length} bytes at "
+                                       f"0x{address:08x}..0x{address + length - 1:08x}: {describe_stray(stray)}"))
+        if self.scheduler.current is not None:
+            self.scheduler.current.request_stop()
+
+    def _unmapped(self, hart: Hart):
+        def hook(uc, access, address, size, value, user_data):
+            fetch = access in (unicorn.UC_MEM_FETCH_UNMAPPED, unicorn.UC_MEM_FETCH_PROT)
+            write = access in (unicorn.UC_MEM_WRITE_UNMAPPED, unicorn.UC_MEM_WRITE_PROT)
+            name = next((n for base, length, n in KNOWN_UNMODELLED if base <= address < base + length), None)
+            if not fetch and not self.strict and DEBUG_BASE <= address < DEBUG_BASE + DEBUG_SIZE:
+                # mapped on first use: a mapping at address 0 slows every hart down by several per cent
+                uc.mmio_map(DEBUG_BASE, DEBUG_SIZE, self._debug_reader(hart), None, self._debug_writer(hart), None)
+                return True     # Unicorn retries the access, which now reaches the debug region
+            if fetch:
+                self.scheduler.stop(FirmwareTrap(
+                    f"hart {hart.hart_id}: instruction fetch from 0x{address:08x}, which is not memory "
+                    f"(jumped from around pc 0x{uc.reg_read(rv.UC_RISCV_REG_PC):08x})"))
+                return False
+            if name is not None or self.strict:
+                reason = f"{name}, which the board model does not implement" if name else NO_DEVICE
+                self._fail(hart, UnmodelledAccess(reason), address, size, "store" if write else "load")
+                return False
+            self._access_fault(hart, address, write, "no device answers at this address")
+            return False
+        return hook
+
+    def _access_fault(self, hart: Hart, address: int, is_store: bool, why: str) -> None:
+        """Rocket's answer to an access its physical memory attributes do not allow: a precise
+        load or store access fault with mtval = the address, into the firmware's trap handler."""
+        pc = hart.reg(rv.UC_RISCV_REG_PC)
+        cause = CAUSE_STORE_ACCESS if is_store else CAUSE_LOAD_ACCESS
+        width = self._access(hart, pc)[0]
+        self._questionable(hart, "access fault", address, width, "store" if is_store else "load",
+                           f"{why}: the K210 raises a {'store' if is_store else 'load'} access fault "
+                           f"(mcause {cause}, mtval 0x{address:x}) into the firmware's trap handler")
+        hart.pending_exception = hartmod.PendingException(cause, pc, address)
+        hart.retired_adjust += 1
+        hart.request_stop()
+        self._faulting_pc[hart.hart_id] = pc
+
+    def _questionable(self, hart: Hart, kind: str, address: int, width: int, direction: str,
+                      what_happens: str) -> None:
+        """An access the bus answered the way the K210 does, though a register table would not
+        take it as it is: a warning naming the access, counted per kind for run.json."""
+        self.questionable[kind] = self.questionable.get(kind, 0) + 1
+        self.board.warn(f"{self.describe_access(hart, address, width, direction)}: {what_happens}",
+                        self.scheduler.hart_now(hart))
+
+    # --- the debug module's region ------------------------------------------------------------
+
+    def _debug_reader(self, hart: Hart):
+        def read(uc, offset, size, user_data):
+            if self.scheduler.pending_stop is None:
+                self._debug_access(hart, offset, False)
+            return 0
+        return read
+
+    def _debug_writer(self, hart: Hart):
+        def write(uc, offset, size, value, user_data):
+            if self.scheduler.pending_stop is None:
+                self._debug_access(hart, offset, True)
+        return write
+
+    def _debug_access(self, hart: Hart, offset: int, is_store: bool) -> None:
+        """An access to the debug module's window outside debug mode: it answers (loads 0,
+        stores ignored; the model has no debug ROM image or debug state to change). Not mapped
+        with --strict, where such an access stops the run as any address nothing answers."""
+        pc = hart.reg(rv.UC_RISCV_REG_PC)
+        width, rs1, imm = self._access(hart, pc)
+        direction = "store" if is_store else "load"
+        if self._misaligned(hart, pc, width, rs1, imm, is_store):
+            return
+        base = hart.reg(rv.UC_RISCV_REG_X0 + rs1) if rs1 else 0
+        if DEBUG_BASE + offset != (base + imm) & (2**64 - 1):
+            return     # the second half of a 64-bit access: the first one warned
+        self._questionable(hart, "debug region", DEBUG_BASE + offset, width, direction,
+                           "the debug module's region (0x0..0xfff) answers outside debug mode too: "
+                           + ("the store is ignored" if is_store else "the load reads 0"))
+
+    # --- the rules of a device access ---------------------------------------------------------
+
+    def _gate_check(self, peripheral: Peripheral) -> None:
+        gate = getattr(peripheral, "GATE", None)
+        sysctl = self.board.sysctl
+        if gate is None or gate in sysctl.usable:
+            return
+        if not sysctl.gate_open(gate):
+            raise HardwareMisuse(f"{peripheral.NAME} accessed while its clock is gated "
+                                 f"(SYSCTL clk_en_peri / clk_en_cent): enable its clock first")
+        if sysctl.in_reset(gate):
+            raise HardwareMisuse(f"{peripheral.NAME} accessed while held in reset (SYSCTL peri_reset)")
+
+    def _access(self, hart: Hart, pc: int) -> tuple[int, int, int]:
+        """(width, base register, offset) of the load/store at pc, decoded once per pc.
+        Unicorn splits a 64-bit or misaligned MMIO access into several callbacks; the
+        instruction says what the hart really did."""
+        access = self._accesses.get(pc)
+        if access is None:
+            access = decode_memory_access(hart.read_u32(pc)) or (4, 0, 0)
+            self._accesses[pc] = access
+        return access
+
+    def _misaligned(self, hart: Hart, pc: int, width: int, rs1: int, imm: int, is_store: bool) -> bool:
+        """A misaligned device access raises the misaligned-access exception, as on the K210
+        (its Rocket's data cache raises it for every address); the rest of the instruction's
+        callbacks are ignored."""
+        if self._faulting_pc[hart.hart_id] == pc:
+            return True
+        base = hart.reg(rv.UC_RISCV_REG_X0 + rs1) if rs1 else 0
+        address = (base + imm) & (2**64 - 1)
+        if address % width == 0:
+            return False
+        cause = CAUSE_STORE_MISALIGNED if is_store else CAUSE_LOAD_MISALIGNED
+        hart.pending_exception = hartmod.PendingException(cause, pc, address)
+        hart.retired_adjust += 1
+        hart.request_stop()
+        self._faulting_pc[hart.hart_id] = pc
+        return True
+
+    def _mmio_reader(self, hart: Hart, peripheral: Peripheral):
+        scheduler = self.scheduler
+
+        def read(uc, offset, size, user_data):
+            if scheduler.pending_stop is not None:
+                return 0
+            pc = hart.reg(rv.UC_RISCV_REG_PC)
+            pending = self._split[hart.hart_id]
+            if pending is not None and pending[:2] == (pc, offset):
+                self._split[hart.hart_id] = None
+                return pending[2]
+            now = scheduler.hart_now(hart)
+            width, rs1, imm = self._access(hart, pc)
+            if self._misaligned(hart, pc, width, rs1, imm, False):
+                return 0
+            try:
+                self._gate_check(peripheral)
+                value = self._load(hart, peripheral, offset, width, now)
+            except BoardStop as error:
+                self._fail(hart, error, peripheral.BASE + offset, width, "load")
+                return 0
+            if width == 8 and size == 4:
+                self._split[hart.hart_id] = (pc, offset + 4, value >> 32)
+                value &= 0xFFFF_FFFF
+            scheduler.note_poll(hart, pc, offset + peripheral.BASE, value)
+            return value
+        return read
+
+    def _mmio_writer(self, hart: Hart, peripheral: Peripheral):
+        scheduler = self.scheduler
+        timed = peripheral in self._timed_set
+
+        def write(uc, offset, size, value, user_data):
+            if scheduler.pending_stop is not None:
+                return
+            pc = hart.reg(rv.UC_RISCV_REG_PC)
+            width, rs1, imm = self._access(hart, pc)
+            if self._misaligned(hart, pc, width, rs1, imm, True):
+                return
+            if width == 8 and size == 4:
+                pending = self._split[hart.hart_id]
+                if pending is None or pending[:2] != (pc, offset):
+                    self._split[hart.hart_id] = (pc, offset + 4, value & 0xFFFF_FFFF)
+                    return
+                self._split[hart.hart_id] = None
+                offset, value = offset - 4, pending[2] | (value & 0xFFFF_FFFF) << 32
+            now = scheduler.hart_now(hart)
+            scheduler.forget_poll(hart)
+            self.device_writes.setdefault(peripheral.NAME, [0] * len(self._split))[hart.hart_id] += 1
+            try:
+                self._gate_check(peripheral)
+                self._store(hart, peripheral, offset, width, value, now)
+            except BoardStop as error:
+                self._fail(hart, error, peripheral.BASE + offset, width, "store")
+                return
+            # A hart with interrupts enabled must take an interrupt the moment its device raises
+            # it: a store that schedules something before this turn's planned end ends the turn.
+            # (Without mstatus.MIE nothing can preempt the hart; status reads are exact in any
+            # case, and sleeping harts wake at the event's own time.)
+            if timed and hart.reg(rv.UC_RISCV_REG_MSTATUS) & hartmod.MSTATUS_MIE:
+                event = self.board.next_device_event(now)
+                if event is not None and event < scheduler.turn_horizon:
+                    hart.request_stop()
+        return write
+
+    # --- what the buses do with accesses a register table does not take as they are -----------
+
+    def _load(self, hart: Hart, peripheral: Peripheral, offset: int, width: int, now: float) -> int:
+        try:
+            return peripheral.read(offset, width, now)
+        except RegisterRuleViolation:
+            if self.strict:
+                raise
+            located = peripheral.register_containing(offset)
+            if located is None and peripheral.BUS != BUS_TILELINK:
+                raise     # an APB or AHB register the model may lack: --permissive decides
+        return self._answer_load(hart, peripheral, offset, width, now, located)
+
+    def _answer_load(self, hart: Hart, peripheral: Peripheral, offset: int, width: int, now: float,
+                     located: tuple[int, Register] | None) -> int:
+        address = peripheral.BASE + offset
+        if located is None:
+            self._questionable(hart, "no register", address, width, "load",
+                               f"{peripheral.NAME} has no register at offset 0x{offset:x}; its TileLink "
+                               f"register router answers 0")
+            return 0
+        base, reg = located
+        name = f"{peripheral.NAME}.{reg.name}"
+        if width == 8 and reg.width == 4:
+            self._warn_pair(hart, peripheral, offset, "load")
+            low = self._load(hart, peripheral, offset, 4, now)
+            return low | self._load(hart, peripheral, offset + 4, 4, now) << 32
+        if not reg.readable:
+            self._questionable(hart, "write-only register", address, width, "load",
+                               f"{name} is write-only: the load reads 0")
+            return 0
+        value = peripheral.read_register(base, reg, now)
+        part = (value >> (8 * (offset - base))) & _mask(width)
+        self._questionable(hart, "narrow load", address, width, "load",
+                           f"{width * 8}-bit load from the {reg.width * 8}-bit register {name}: "
+                           f"the register is read whole (with any side effect of reading it) and the "
+                           f"addressed bytes returned (0x{part:x})")
+        return part
+
+    def _store(self, hart: Hart, peripheral: Peripheral, offset: int, width: int, value: int, now: float) -> None:
+        try:
+            peripheral.write(offset, width, value, now)
+            return
+        except RegisterRuleViolation:
+            if self.strict:
+                raise
+            located = peripheral.register_containing(offset)
+            if located is None and peripheral.BUS != BUS_TILELINK:
+                raise
+        self._answer_store(hart, peripheral, offset, width, value, now, located)
+
+    def _answer_store(self, hart: Hart, peripheral: Peripheral, offset: int, width: int, value: int,
+                      now: float, located: tuple[int, Register] | None) -> None:
+        address = peripheral.BASE + offset
+        if located is None:
+            self._questionable(hart, "no register", address, width, "store",
+                               f"{peripheral.NAME} has no register at offset 0x{offset:x}; its TileLink "
+                               f"register router ignores the store")
+            return
+        base, reg = located
+        name = f"{peripheral.NAME}.{reg.name}"
+        if width == 8 and reg.width == 4:
+            self._warn_pair(hart, peripheral, offset, "store")
+            self._store(hart, peripheral, offset, 4, value & 0xFFFF_FFFF, now)
+            self._store(hart, peripheral, offset + 4, 4, value >> 32, now)
+            return
+        if not reg.writable:
+            self._questionable(hart, "read-only register", address, width, "store",
+                               f"{name} is read-only: the store is ignored")
+            return
+        new, what = self._narrow_store_result(peripheral, base, reg, offset, width, value, now)
+        self._questionable(hart, "narrow store", address, width, "store",
+                           f"{width * 8}-bit store to the {reg.width * 8}-bit register {name}: {what}")
+        if new is not None:
+            peripheral.write_register(base, reg, new, now)
+
+    def _narrow_store_result(self, peripheral: Peripheral, base: int, reg: Register, offset: int, width: int,
+                             value: int, now: float) -> tuple[int | None, str]:
+        """The register's value after a store narrower than the register (None: unchanged), and
+        how the bus came to it, for the warning."""
+        shift = 8 * (offset - base)
+        lanes = _mask(width) << shift
+        data = (value & _mask(width)) << shift
+        if peripheral.BUS == BUS_APB and reg.width == 4:
+            new = (value & _mask(width)) * LANE_REPEAT[width]
+            return new, (f"{peripheral.BUS} has no byte strobes, so the whole register is written with the "
+                         f"stored value repeated in every byte lane (0x{new:08x})")
+        old = peripheral.merge_base(base, reg, now)
+        if peripheral.BUS == BUS_AHB:
+            new = (old & ~lanes) | data
+            return new, f"the {peripheral.BUS} port writes the addressed bytes only (now 0x{new:x})"
+        fields = reg.fields or ((0, 8 * reg.width),)
+        new, covered = old, 0
+        for low, bits in fields:
+            field_mask = ((1 << bits) - 1) << low
+            if field_mask & ~lanes == 0:
+                new = (new & ~field_mask) | (data & field_mask)
+                covered += 1
+        if not covered:
+            return None, (f"it covers no whole field of the register, so the {BUS_TILELINK} register router "
+                          f"ignores it")
+        return new, (f"the {BUS_TILELINK} register router writes the fields whose bytes it covers "
+                     f"(now 0x{new:x})")
+
+    def _warn_pair(self, hart: Hart, peripheral: Peripheral, offset: int, direction: str) -> None:
+        names = []
+        for part in (offset, offset + 4):
+            located = peripheral.register_containing(part)
+            names.append(f"{peripheral.NAME}.{located[1].name}" if located else f"offset 0x{part:x}")
+        self._questionable(hart, "64-bit access to 32-bit registers", peripheral.BASE + offset, 8, direction,
+                           f"{names[0]} and {names[1]} are 32-bit registers: the bus makes the 64-bit "
+                           f"{direction} two 32-bit ones, the lower address first")

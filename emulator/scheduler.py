@@ -1,0 +1,439 @@
+"""The board's clock and scheduler: virtual time, the harts and their turns, deadlines, hangs.
+
+Harts run in turn, in quanta of instructions (one instruction per CPU clock cycle),
+and a quantum never runs past the next moment a device changes state by itself, so
+interrupts and DMA completions are seen on time. A hart that sleeps in WFI, or that
+keeps polling a device register that cannot change before the next device event,
+costs no host time: the scheduler moves time forward instead.
+
+mcycle and mtime are integrals of the CPU clock over virtual time; a clock change
+(SYSCTL) starts a new epoch. A run ends when the requested frames have been shown,
+or with a BoardStop: a trap or fatal error report (after a grace period in which the
+firmware's own handler may report it), a hang, or a stop recorded by the bus.
+"""
+from __future__ import annotations
+
+import math
+import time as host_time
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Callable
+
+import numpy as np
+import unicorn
+from unicorn import riscv_const as rv
+
+from . import hart as hartmod
+from .elf import symbolize
+from .errors import BoardStop, FirmwareReportedError, FirmwareTrap, HangDetected
+from .hart import CsrContext, Hart, HartState, RunEnd
+
+if TYPE_CHECKING:
+    from .board import Board
+
+HARTS = 2
+DEFAULT_QUANTUM = 20_000          # instructions per hart per turn
+DEFAULT_HANG_BUDGET_S = 5.0       # virtual seconds without a new frame before a run counts as hung
+TRAP_GRACE_S = 0.5                # virtual time the firmware's trap handler gets to report
+POLL_REPEATS = 8                  # identical reads at one pc before a hart counts as polling
+# After the last requested frame the run goes on this long at most, so that the console line
+# the firmware begins after that frame (this firmware's "frame N") is not cut off.
+CONSOLE_DRAIN_S = 5e-3
+WARNINGS_IN_HANG_REPORT = 6       # the most recent distinct warnings a hang report repeats
+MTIME_DIVIDER = 50                # mtime ticks at CPU clock / 50
+NO_POLL = (-1, -1, -1, 0)
+
+
+@dataclass
+class FrameRecord:
+    index: int
+    virtual_time_s: float
+    instructions: list[int]          # per hart, since the previous frame
+    instructions_total: list[int]    # per hart, since reset
+    host_time_s: float
+
+
+@dataclass
+class RunResult:
+    exit: str
+    message: str
+    frames: list[FrameRecord]
+    virtual_time_s: float
+    instructions: list[int]
+    host_time_s: float
+    warnings: list[str] = field(default_factory=list)
+
+
+class Scheduler:
+    """Owns virtual time and the harts; runs them in turns between device events."""
+
+    def __init__(self, board: "Board", quantum: int, hang_budget_s: float) -> None:
+        self.board = board
+        self.quantum = quantum
+        self.hang_budget_s = hang_budget_s
+        self.time = 0.0
+        self.delivery_time = 0.0                          # when data last reached the LCD
+        # clock epochs: cycles and mtime are integrals of the CPU clock over virtual time
+        self._epoch_time = 0.0
+        self._epoch_cycles = 0
+        self._epoch_mtime = 0
+        self._hz = board.sysctl.cpu_hz()
+        # per-run state
+        self.frames: list[FrameRecord] = []
+        self.frames_wanted = 0
+        self._last_frame_time = 0.0
+        self._last_frame_instret = [0] * HARTS
+        self._host_start = host_time.perf_counter()
+        self.pending_stop: BoardStop | None = None        # ends the run at the end of the turn
+        self._draining = False                            # finish_console_line is running
+        self._frame_while_draining = False
+        self.current: Hart | None = None                  # the hart whose turn it is
+        self._quantum_t0 = 0.0
+        self._turn_hz = self._hz
+        self.turn_horizon = 0.0
+        self._quantum_start = [0] * HARTS
+        self._poll = [NO_POLL] * HARTS
+        self._grabs: list[tuple[float, Callable[["Board"], None]]] = []
+        self.host_time_in_harts = 0.0                     # host seconds spent executing guest code
+        self.trap_report: str | None = None
+        self._error_report: tuple[int, str] | None = None
+        self._trap_deadline: float | None = None
+        self.harts = [Hart(h, CsrContext(mcycle=self._mcycle_reader(h), mip=self._mip_reader(h)))
+                      for h in range(HARTS)]
+
+    def _mcycle_reader(self, h: int) -> Callable[[], int]:
+        return lambda: self.cycles(self.hart_now(self.harts[h]))
+
+    def _mip_reader(self, h: int) -> Callable[[], int]:
+        return lambda: self.board.mip(h, self.hart_now(self.harts[h]))
+
+    def stop(self, error: BoardStop) -> None:
+        """Records why the run ends (the first reason counts); the run ends after this turn."""
+        if self.pending_stop is None:
+            self.pending_stop = error
+
+    # --- virtual clock -----------------------------------------------------------------
+
+    def cpu_hz(self) -> float:
+        return self._hz
+
+    def hart_now(self, hart: Hart) -> float:
+        """The virtual time a hart has reached (mid-turn: counting its instructions so far)."""
+        if hart is self.current:
+            return self._quantum_t0 + (hart.executed - self._quantum_start[hart.hart_id]) / self._turn_hz
+        return hart.time
+
+    def cycles(self, now: float) -> int:
+        return self._epoch_cycles + int((now - self._epoch_time) * self._hz + 1e-6)
+
+    def mtime(self, now: float) -> int:
+        return self._epoch_mtime + int((now - self._epoch_time) * self._hz / MTIME_DIVIDER + 1e-6)
+
+    def time_of_mtime(self, value: int) -> float | None:
+        if value >= 1 << 63:
+            return None
+        return self._epoch_time + (value - self._epoch_mtime) * MTIME_DIVIDER / self._hz
+
+    def set_mtime(self, value: int, now: float) -> None:
+        self._rebase(now)
+        self._epoch_mtime = value
+
+    def _rebase(self, now: float) -> None:
+        self._epoch_cycles = self.cycles(now)
+        self._epoch_mtime = self.mtime(now)
+        self._epoch_time = now
+
+    def clock_changed(self, now: float) -> None:
+        """SYSCTL changed the CPU clock: later instructions take the new cycle time."""
+        self._rebase(now)
+        self._hz = self.board.sysctl.cpu_hz()
+        if self.current is not None:
+            self.current.request_stop()
+
+    # --- polling ----------------------------------------------------------------------------
+
+    def note_poll(self, hart: Hart, pc: int, address: int, value: int) -> None:
+        """Repeated identical reads of one register from one pc: the hart is polling. It
+        stops for the rest of its turn; time, not its loop, is what will change the value."""
+        last_pc, last_address, last_value, repeats = self._poll[hart.hart_id]
+        if (pc, address, value) == (last_pc, last_address, last_value):
+            repeats += 1
+            if repeats >= POLL_REPEATS:
+                hart.polling = True
+                hart.request_stop()
+                repeats = 0
+        else:
+            repeats = 1
+        self._poll[hart.hart_id] = (pc, address, value, repeats)
+
+    def forget_poll(self, hart: Hart) -> None:
+        """A store to a device: whatever the hart polled next may change because of it."""
+        self._poll[hart.hart_id] = NO_POLL
+
+    # --- interrupts ---------------------------------------------------------------------------
+
+    def interrupts_may_have_changed(self, now: float | None = None) -> None:
+        """A device changed an interrupt input at `now`: sleeping harts it concerns wake
+        then, and a running hart with interrupts enabled ends its turn to take it."""
+        self._wake_sleepers(self.time if now is None else now)
+        hart = self.current
+        if hart is not None and hart.reg(rv.UC_RISCV_REG_MSTATUS) & hartmod.MSTATUS_MIE:
+            hart.request_stop()
+
+    def _wake_sleepers(self, now: float) -> None:
+        for hart in self.harts:
+            if hart.state is not HartState.ASLEEP:
+                continue
+            enabled = hart.reg(rv.UC_RISCV_REG_MIE)
+            if enabled and self.board.mip(hart.hart_id, now, enabled):
+                hart.state = HartState.RUNNING
+                hart.time = max(hart.time, now)
+
+    def _take_interrupt(self, hart: Hart) -> None:
+        """Before a turn: a pending enabled interrupt with mstatus.MIE set enters mtvec."""
+        if not hart.reg(rv.UC_RISCV_REG_MSTATUS) & hartmod.MSTATUS_MIE:
+            return
+        enabled = hart.reg(rv.UC_RISCV_REG_MIE)
+        pending = self.board.mip(hart.hart_id, hart.time, enabled) & enabled
+        for irq in (hartmod.IRQ_MEI, hartmod.IRQ_MSI, hartmod.IRQ_MTI):
+            if pending >> irq & 1:
+                hart.enter_trap(hartmod.CAUSE_INTERRUPT | irq, hart.pc, 0)
+                return
+
+    # --- frames and grabs ---------------------------------------------------------------------
+
+    def frame_captured(self, image: np.ndarray) -> None:
+        if self._draining:
+            # a frame beyond the requested ones: not recorded, and the drain ends here
+            self._frame_while_draining = True
+            if self.current is not None:
+                self.current.request_stop()
+            return
+        totals = [h.instret for h in self.harts]
+        record = FrameRecord(
+            index=len(self.frames),
+            virtual_time_s=self.delivery_time,
+            instructions=[t - last for t, last in zip(totals, self._last_frame_instret)],
+            instructions_total=totals,
+            host_time_s=host_time.perf_counter() - self._host_start,
+        )
+        self._last_frame_instret = totals
+        self._last_frame_time = self.delivery_time
+        self.frames.append(record)
+        self.board.on_frame(record, image)
+        if len(self.frames) >= self.frames_wanted and self.current is not None and self._trap_deadline is None:
+            self.current.request_stop()
+
+    def grab_at(self, at_s: float, action: Callable[["Board"], None]) -> None:
+        """Calls action(board) once the board's virtual time reaches at_s (a framebuffer grab)."""
+        self._grabs.append((at_s, action))
+        self._grabs.sort(key=lambda item: item[0])
+
+    def _run_grabs(self) -> None:
+        while self._grabs and self._grabs[0][0] <= self.time:
+            _, action = self._grabs.pop(0)
+            action(self.board)
+
+    # --- the run loop --------------------------------------------------------------------------
+
+    def run(self, frames: int, progress: Callable[["Board"], None] | None = None) -> RunResult:
+        """Runs until `frames` frames have been shown. Raises a BoardStop subclass otherwise."""
+        self.frames_wanted = frames
+        self._host_start = host_time.perf_counter()
+        last_progress = 0.0
+        # a firmware that reported an error or trapped is given its grace period even when
+        # its error screen was the last frame asked for: the run ends with that error
+        while len(self.frames) < frames or self._trap_deadline is not None:
+            self.step()
+            if self._grabs:
+                self._run_grabs()
+            if progress is not None and host_time.perf_counter() - last_progress > 0.5:
+                last_progress = host_time.perf_counter()
+                progress(self.board)
+        return RunResult("ok", f"{len(self.frames)} frames shown", self.frames, self.time,
+                         [h.instret for h in self.harts], host_time.perf_counter() - self._host_start,
+                         self.board.warnings)
+
+    def finish_console_line(self, limit_s: float = CONSOLE_DRAIN_S) -> None:
+        """After run(): runs on until the first console line begun after the last frame was
+        shown has ended (this firmware's hart 1 reports "frame N" once frame N is sent, after
+        the LCD has it), for at most limit_s of virtual time, so that the console of an N-frame
+        run ends with its last frame's line. Frames shown meanwhile are not recorded and end
+        it; so does a firmware that will never do anything again. A trap or error report
+        meanwhile gets its grace period and ends the run as in run(). Kept out of run() so
+        that a run's instruction counts up to its last frame (the bench's) do not change."""
+        frame_time = self._last_frame_time
+        deadline = self.time + limit_s
+        self._draining, self._frame_while_draining = True, False
+        self.frames_wanted = len(self.frames) + 1     # turn() moves time on as before a frame
+        try:
+            while (self.board.completed_line_began < frame_time and self.time < deadline
+                   and not self._frame_while_draining and self._trap_deadline is None):
+                if not any(h.state is HartState.RUNNING for h in self.harts) and \
+                        self.board.next_device_event(self.time) is None:
+                    break
+                self.step()
+                if self._grabs:
+                    self._run_grabs()
+        finally:
+            self._draining = False
+            self.frames_wanted = len(self.frames)
+        while self._trap_deadline is not None:
+            self.step()
+
+    def step(self) -> None:
+        """One turn (see _turn); a stop recorded by a device outside a hart's turn (a stray
+        DMA write while every hart sleeps) ends the run here."""
+        self._turn()
+        if self.pending_stop is not None:
+            raise self.pending_stop
+
+    def _turn(self) -> None:
+        """One turn: the running hart that is furthest behind in virtual time runs until
+        its quantum ends, the next device event, or one quantum past the other hart."""
+        board = self.board
+        running = [h for h in self.harts if h.state is HartState.RUNNING]
+        if not running:
+            # every hart sleeps in wfi: time moves on to the next thing a device does
+            wake = board.next_device_event(self.time)
+            if wake is None:
+                self._report_hang("every hart sleeps in wfi and no device will ever raise an interrupt")
+            if self._grabs and self.time < self._grabs[0][0] < wake:
+                wake = self._grabs[0][0]   # stop at a requested grab rather than jump past it
+            self._set_time(wake)
+            self._check_deadlines()
+            return
+        hart = min(running, key=lambda h: (h.time, h.hart_id))
+        self._take_interrupt(hart)
+        t0 = hart.time
+        hz = self._hz
+        horizon = t0 + self.quantum / hz
+        event = board.next_device_event(t0)
+        if event is not None:
+            horizon = min(horizon, event)
+        if self._grabs and self._grabs[0][0] > t0:
+            horizon = min(horizon, self._grabs[0][0])
+        for other in running:
+            if other is not hart:
+                horizon = min(horizon, other.time + self.quantum / hz)
+        budget = max(1, math.ceil((horizon - t0) * hz - 1e-9))
+        self.turn_horizon = t0 + budget / hz
+        ran = self._run_hart(hart, t0, budget, hz)
+        if self.pending_stop is not None:
+            raise self.pending_stop
+        hart.time = t0 + ran / hz
+        if hart.polling:
+            # nothing the hart's loop does will change what it polls before the next device
+            # event: it waits until then (or the end of its turn) without executing
+            hart.polling = False
+            event = board.next_device_event(hart.time)
+            hart.time = max(hart.time, min(event, horizon) if event is not None else horizon)
+        if len(self.frames) >= self.frames_wanted and self._trap_deadline is None:
+            self.time = max(self.time, self.delivery_time)
+            return
+        running = [h.time for h in self.harts if h.state is HartState.RUNNING]
+        if running:
+            self._set_time(min(running))
+        self._check_deadlines()
+
+    def _set_time(self, now: float) -> None:
+        """Moves the board's time (the earliest time a running hart has reached) forward:
+        devices catch up and sleeping harts with a pending enabled interrupt wake."""
+        if now > self.time:
+            self.time = now
+        self.board.advance_devices(self.time)
+        self._wake_sleepers(self.time)
+
+    def _run_hart(self, hart: Hart, t0: float, budget: int, hz: float) -> int:
+        """Runs one turn of a hart; returns how many instructions it executed."""
+        bus = self.board.bus
+        self.current = hart
+        bus.turn_begins(hart)
+        self._quantum_t0 = t0
+        self._turn_hz = hz
+        self._quantum_start[hart.hart_id] = hart.executed
+        started = host_time.perf_counter()
+        before = hart.executed
+        end = None
+        try:
+            end, _ = hart.run(budget)
+        except unicorn.UcError as error:
+            hart.pc = hart.uc.reg_read(rv.UC_RISCV_REG_PC)
+            if hart.pending_exception is not None:
+                end = RunEnd.EXCEPTION     # the bus turned the access into an access fault
+            elif self.pending_stop is None:
+                if error.errno == unicorn.UC_ERR_INSN_INVALID and (hart.read_u16(hart.pc) == 0x9002 or
+                                                                    hart.read_u32(hart.pc) == 0x00100073):
+                    hart.note_breakpoint()
+                    end = RunEnd.EXCEPTION
+                else:
+                    self.pending_stop = FirmwareTrap(f"hart {hart.hart_id} at pc 0x{hart.pc:08x} "
+                                                     f"({self.board.disassemble_at(hart.pc)}): {error}")
+        finally:
+            self.current = None
+            self.host_time_in_harts += host_time.perf_counter() - started
+        stray = bus.turn_ended(hart)
+        if stray is not None:
+            self.pending_stop = stray
+        ran = hart.executed - before
+        if self.pending_stop is None:
+            if end is RunEnd.WFI:
+                hart.state = HartState.ASLEEP
+            elif end is RunEnd.EXCEPTION:
+                self._deliver_exception(hart)
+        return ran
+
+    # --- traps, error reports and deadlines ----------------------------------------------------
+
+    def _deliver_exception(self, hart: Hart) -> None:
+        exc = hart.pending_exception
+        hart.pending_exception = None
+        where = symbolize(self.board.image.symbols, exc.epc)
+        report = (f"hart {hart.hart_id}: {hartmod.EXCEPTION_NAMES.get(exc.cause, f'exception {exc.cause}')} "
+                  f"at pc 0x{exc.epc:08x}{f' <{where}>' if where else ''} ({self.board.disassemble_at(exc.epc)}), "
+                  f"mtval 0x{exc.tval:x}")
+        mtvec = hart.csr(rv.UC_RISCV_REG_MTVEC)
+        if self.trap_report is not None:
+            raise FirmwareTrap(f"{self.trap_report}; then, in the trap handler, {report}")
+        if mtvec & ~3 == 0 or not self.board.bus.is_sram(mtvec & ~3):
+            raise FirmwareTrap(f"{report}; mtvec = 0x{mtvec:x} points at no trap handler")
+        self.trap_report = report
+        self._trap_deadline = self.time + TRAP_GRACE_S
+        hart.enter_trap(exc.cause, exc.epc, exc.tval)
+
+    def firmware_reported_error(self, code: int, line: str) -> None:
+        """The firmware printed its fatal error report: the run ends after the grace period."""
+        if self._error_report is None:
+            self._error_report = (code, line)
+            self._trap_deadline = self.time + TRAP_GRACE_S
+
+    def _check_deadlines(self) -> None:
+        if self._trap_deadline is not None:
+            everyone_waits = all(h.state is not HartState.RUNNING for h in self.harts) and \
+                self.board.next_device_event(self.time) is None
+            if self.time >= self._trap_deadline or everyone_waits:
+                if self.trap_report is not None:
+                    raise FirmwareTrap(self.trap_report + " (the firmware's trap handler has run; see the console)")
+                code, line = self._error_report
+                raise FirmwareReportedError(f"the firmware reported: {line}", code)
+        if self.time - self._last_frame_time > self.hang_budget_s and not self._draining:
+            self._report_hang(f"no frame reached the LCD for {self.hang_budget_s:g} s of virtual time")
+
+    def _report_hang(self, why: str) -> None:
+        board = self.board
+        lines = [why]
+        for hart in self.harts:
+            where = symbolize(board.image.symbols, hart.pc)
+            lines.append(f"hart {hart.hart_id}: {hart.state.value} at pc 0x{hart.pc:08x}"
+                         f"{f' <{where}>' if where else ''} ({board.disassemble_at(hart.pc)}), "
+                         f"mie 0x{hart.csr(rv.UC_RISCV_REG_MIE):x}, mip 0x{board.mip(hart.hart_id, self.time):x}")
+        for peripheral in board.peripherals:
+            text = peripheral.describe_wait()
+            if text:
+                lines.append(text)
+        lines.append(f"LCD: {board.lcd.frames_captured} frames captured, display "
+                     f"{'on' if board.lcd.display_on else 'off'}, {'asleep' if board.lcd.sleeping else 'awake'}")
+        recent = board.recent_warnings(WARNINGS_IN_HANG_REPORT)
+        if recent:
+            lines.append(f"the most recent warnings (of {len(board.warnings)} in the run, every one in run.json):")
+            lines.extend(f"  {text}" for text in recent)
+        raise HangDetected("\n  ".join(lines))

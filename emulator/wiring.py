@@ -1,0 +1,147 @@
+"""The Maix Dock's wiring: which device sees which signal, derived from what the firmware programmed.
+
+As on the real board, the LCD sees SPI0 frames only through the chip select that
+FPIOA routes to pad 36, and its reset and D/C lines are the GPIOHS lines routed to
+pads 37 and 38. The SD slot is on SPI1 through pads 26-28, its chip select on pad 29
+as SPI1's own slave select or as a GPIOHS line.
+"""
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .errors import HardwareMisuse
+from .fpioa import (FUNC_GPIOHS0, FUNC_SPI0_SCLK, FUNC_SPI0_SS0, FUNC_SPI1_D0, FUNC_SPI1_D1, FUNC_SPI1_SCLK,
+                    FUNC_SPI1_SS0)
+from .sdcard import SdCard
+from .st7789v import ST7789V
+
+if TYPE_CHECKING:
+    from .board import Board
+
+# Maix Dock pads
+PAD_LCD_CS, PAD_LCD_RST, PAD_LCD_DC, PAD_LCD_SCLK = 36, 37, 38, 39
+PAD_SD_MISO, PAD_SD_SCLK, PAD_SD_MOSI, PAD_SD_CS = 26, 27, 28, 29
+SD_IDENTIFICATION_MAX_HZ = 400_000
+SD_DEFAULT_SPEED_MAX_HZ = 25_000_000
+
+
+class LcdPort:
+    """The Dock's LCD connector: SPI0's eight data lines, chip select and clock through
+    FPIOA, reset and D/C on GPIOHS lines through FPIOA."""
+
+    def __init__(self, board: "Board", lcd: ST7789V) -> None:
+        self.board = board
+        self.lcd = lcd
+
+    def spi_select(self, selected: bool, now: float) -> None:
+        self.lcd.set_chip_select(selected, now)
+
+    def spi_transfer(self, data: np.ndarray, lanes: int, now: float) -> np.ndarray:
+        board = self.board
+        if board.fpioa.function_of_pad(PAD_LCD_SCLK) != FUNC_SPI0_SCLK:
+            raise HardwareMisuse("SPI0 sends to the LCD but pad 39 (LCD WRX/clock) is not routed to SPI0_SCLK")
+        if lanes != 8:
+            raise HardwareMisuse(f"SPI0 sends to the LCD in a {lanes}-line format; the Dock's LCD takes SPI0's "
+                                 f"eight data lines (octal frame format, ctrlr0[22:21] = 3)")
+        if not board.sysctl.spi_dvp_data_enabled():
+            raise HardwareMisuse("SPI0 sends to the LCD with SYSCTL misc.spi_dvp_data_enable (bit 10) clear: "
+                                 "the upper data lines do not reach the LCD")
+        dc = board.gpiohs_level_on_pad(PAD_LCD_DC)
+        if dc is None:
+            raise HardwareMisuse("SPI0 sends to the LCD but its D/C line (pad 38) is not a driven GPIOHS output")
+        board.scheduler.delivery_time = now
+        self.lcd.write(data, dc, now)
+        return np.zeros(len(data), dtype=np.uint8)
+
+
+class SdSlot:
+    """The Dock's micro SD slot on SPI1: MISO, clock and MOSI through FPIOA (pads 26-28),
+    chip select on pad 29 as SPI1's own slave select or as a GPIOHS line."""
+
+    def __init__(self, board: "Board", card: SdCard) -> None:
+        self.board = board
+        self.card = card
+        self._warned_clock = False
+
+    def cs_is_gpiohs(self) -> bool:
+        function = self.board.fpioa.function_of_pad(PAD_SD_CS)
+        return FUNC_GPIOHS0 <= function < FUNC_GPIOHS0 + 32
+
+    def spi_select(self, selected: bool, now: float) -> None:
+        if not self.cs_is_gpiohs():
+            self.card.set_selected(selected, now)
+
+    def gpio_changed(self, now: float) -> None:
+        if self.cs_is_gpiohs():
+            level = self.board.gpiohs_level_on_pad(PAD_SD_CS)
+            self.card.set_selected(level == 0, now)
+
+    def spi_transfer(self, data: np.ndarray, lanes: int, now: float) -> np.ndarray:
+        fpioa = self.board.fpioa
+        if fpioa.function_of_pad(PAD_SD_SCLK) != FUNC_SPI1_SCLK or fpioa.function_of_pad(PAD_SD_MOSI) != FUNC_SPI1_D0:
+            return np.full(len(data), 0xFF, dtype=np.uint8)   # the card sees no clock or no data
+        if lanes != 1:
+            raise HardwareMisuse(f"SPI1 talks to the SD card in a {lanes}-line format; SPI mode uses one data line")
+        self._check_clock()
+        reply = self.card.exchange(data, now)
+        if fpioa.function_of_pad(PAD_SD_MISO) != FUNC_SPI1_D1:
+            return np.full(len(data), 0xFF, dtype=np.uint8)   # nothing routes the card's answer back
+        return reply
+
+    def _check_clock(self) -> None:
+        hz = self.board.spi1.sclk_hz()
+        limit = SD_DEFAULT_SPEED_MAX_HZ if self.card.initialised else SD_IDENTIFICATION_MAX_HZ
+        if hz > limit * 1.0001 and not self._warned_clock:
+            self._warned_clock = True
+            phase = "in default speed mode" if self.card.initialised else "before initialisation completes"
+            self.board.warn(f"SD card clocked at {hz / 1e6:.3f} MHz {phase} (the card allows {limit / 1e6:g} MHz)")
+
+
+class DockWiring:
+    """Routes SPI chip selects and GPIOHS lines to the LCD and the SD slot through FPIOA."""
+
+    def __init__(self, board: "Board", lcd_port: LcdPort, sd_slot: SdSlot | None) -> None:
+        self.board = board
+        self.lcd_port = lcd_port
+        self.sd_slot = sd_slot
+        self._lcd_reset_level = 1
+
+    def spi0_device(self, ss: int) -> LcdPort | None:
+        """The LCD answers on SPI0 when pad 36 carries SPI0's slave select ss."""
+        if self.board.fpioa.function_of_pad(PAD_LCD_CS) == FUNC_SPI0_SS0 + ss:
+            return self.lcd_port
+        return None
+
+    def spi1_device(self, ss: int) -> SdSlot | None:
+        """The SD slot answers on SPI1 when pad 29 carries SPI1's slave select ss, or a GPIOHS
+        line (then the card itself decides, from that line, whether it is selected)."""
+        if self.sd_slot is None:
+            return None
+        function = self.board.fpioa.function_of_pad(PAD_SD_CS)
+        if function == FUNC_SPI1_SS0 + ss or self.sd_slot.cs_is_gpiohs():
+            return self.sd_slot
+        return None
+
+    def gpiohs_level_on_pad(self, pad: int) -> int | None:
+        """The level a GPIOHS output drives on a pad, or None when no GPIOHS line drives it."""
+        function = self.board.fpioa.function_of_pad(pad)
+        if FUNC_GPIOHS0 <= function < FUNC_GPIOHS0 + 32:
+            return self.board.gpiohs.driven_level(function - FUNC_GPIOHS0)
+        return None
+
+    def changed(self, now: float) -> None:
+        """FPIOA or a GPIOHS output changed: the LCD's reset pin, the SPI chip selects and the
+        SD card's GPIOHS chip select follow."""
+        board = self.board
+        board.advance_devices(now)
+        level = self.gpiohs_level_on_pad(PAD_LCD_RST)
+        level = 1 if level is None else level
+        if level != self._lcd_reset_level:
+            self._lcd_reset_level = level
+            board.lcd.set_reset_pin(level, now)
+        board.spi0.wiring_changed(now)
+        board.spi1.wiring_changed(now)
+        if self.sd_slot is not None:
+            self.sd_slot.gpio_changed(now)
