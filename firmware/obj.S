@@ -8,10 +8,11 @@
 #                           vertex colours accepted, ignored)
 #   vt u [v [w]]            a texture coordinate: 1 to 3 numbers; u v kept
 #                           (v = 0 when absent, w ignored)
-#   vn x y z                a normal: 3 numbers; stored only when the mode is
-#                           lit (textured, flat): in wireframe mode vn lines
-#                           are still parsed and checked as numbers, counted
-#                           for index checks, but not stored (MESH_NCOUNT 0,
+#   vn x y z                a normal: 3 numbers; stored only when they are
+#                           drawn (shading = gouraud in a lit mode: textured,
+#                           flat): otherwise vn lines are still parsed and
+#                           checked as numbers, counted for index checks and
+#                           on the console, but not stored (MESH_NCOUNT 0,
 #                           MESH_N 0, every face's n index MESH_NO_INDEX)
 #   f c1 c2 c3 [c4 ...]     a face of 3 or more corners v, v/vt, v//vn or
 #                           v/vt/vn; a polygon (assumed convex) is fanned
@@ -67,7 +68,7 @@
 
 # obj_state (.bss): the pass in progress
     .equ OBJ_STORE,             0           # 0 first pass (count), 1 second (store)
-    .equ OBJ_KEEP_NORMALS,      8           # 1 store normals (lit modes)
+    .equ OBJ_KEEP_NORMALS,      8           # 1 store normals (Gouraud in a lit mode)
     .equ OBJ_LINE,              16          # line being parsed, from 1
     .equ OBJ_COUNTS,            24          # elements so far: v, vt, vn (8 bytes each)
     .equ OBJ_NF,                48          # triangles so far
@@ -192,7 +193,8 @@ msg_triangles:      .asciz " triangles, "
 msg_vertices:       .asciz " vertices, "
 msg_uv:             .asciz " uv, "
 msg_normals:        .asciz " normals\n"
-msg_normals_none:   .asciz " normals (not stored: wireframe)\n"
+msg_normals_wireframe: .asciz " normals (not stored: wireframe)\n"
+msg_normals_flat:   .asciz " normals (not stored: shading flat)\n"
 
     .text
     .globl obj_parse_model
@@ -201,8 +203,9 @@ msg_normals_none:   .asciz " normals (not stored: wireframe)\n"
 #         fields of `scene` (two passes over the file read from the card,
 #         arrays from the heap; see the file comment), printing its "load"
 #         line after the first and "model: <f> triangles, <v> vertices,
-#         <t> uv, <n> normals" after the second. Needs scene_load
-#         (SCENE_MODE decides the normals).
+#         <t> uv, <n> normals" (the file's counts; "(not stored: ...)" after
+#         normals it does not keep) after the second. Needs scene_load
+#         (SCENE_MODE and SCENE_SHADING decide the normals).
 #   Arguments: none. Results: none (errors are fatal).
 #   Clobbers: only ABI temporaries.
 obj_parse_model:
@@ -216,9 +219,14 @@ obj_parse_model:
     sd      s5, 8(sp)
     la      s2, obj_state               # s2 = state
     la      s3, scene                   # s3 = scene
+    # Normals only where they are drawn: Gouraud shading in a lit mode.
     lwu     t0, SCENE_MODE(s3)
     addi    t0, t0, -MODE_WIREFRAME
     snez    t0, t0
+    lwu     t1, SCENE_SHADING(s3)
+    addi    t1, t1, -SHADING_GOURAUD
+    seqz    t1, t1
+    and     t0, t0, t1
     sd      t0, OBJ_KEEP_NORMALS(s2)
 
     # First pass: check and count.
@@ -300,12 +308,16 @@ obj_parse_model:
     call    console_put_dec
     la      a0, msg_uv
     call    console_puts
-    lwu     a0, MESH_NCOUNT(s3)
-    call    console_put_dec
+    ld      a0, OBJ_TOTALS + (OBJ_KIND_N << OBJ_COUNT_SHIFT)(s2)
+    call    console_put_dec             # the file's normals, stored or not
     la      a0, msg_normals
     ld      t0, OBJ_KEEP_NORMALS(s2)
     bnez    t0, 2f
-    la      a0, msg_normals_none
+    la      a0, msg_normals_flat
+    lwu     t0, SCENE_MODE(s3)
+    li      t1, MODE_WIREFRAME
+    bne     t0, t1, 2f
+    la      a0, msg_normals_wireframe
 2:  call    console_puts
     call    console_unlock
     ld      s5, 8(sp)

@@ -6,8 +6,9 @@
 #      (their outcodes share one of the six OUT_FRUSTUM bits, vertex.S) ->
 #      skipped.
 #   2. Lighting per face: N = (w1 - w0) x (w2 - w0) from the world-space
-#      positions of the corners (never from vn; vertex.S face_world computes
-#      them per face rather than keep one for every vertex), intensity
+#      positions of the corners (never from vn; with flat shading the vertex
+#      stage keeps them, vertex_world_array; otherwise vertex.S face_world
+#      computes them for the face), intensity
 #      I = max(SCENE_AMBIENT, N . L / |N|) with L = SCENE_LIGHT, as an integer
 #      k = round(64 I) in 0 .. 64 (render.inc). Flat mode draws
 #      FLAT_BASE_COLOUR (0xC618, light grey) with every RGB565 channel times
@@ -335,29 +336,57 @@ shade_rgb565:
 
 # face_light (file-local)
 #   What: the face's light intensity (file comment, step 2), from its
-#         corners' world-space positions (face_world).
+#         corners' world-space positions: the vertex stage's
+#         (vertex_world_array, flat shading) or, where it keeps none,
+#         computed (face_world).
 #   Arguments: a0 = the face (MESH_F_BYTES).
 #   Results: a0 = k, 0 .. LIGHT_ONE; fa0 = the same before rounding to a
 #            whole k (light_level).
 #   Clobbers: only ABI temporaries.
-    .equ FACE_LIGHT_WORLD,      16          # stack: N and |N| below, then the corners' world positions,
-    .equ FACE_LIGHT_FRAME,      64          # then ra
+    .equ FACE_LIGHT_CORNERS,    16          # stack: N and |N| below, then the corners'
+    .equ FACE_LIGHT_WORLD,      40          # world positions' addresses, then the positions
+    .equ FACE_LIGHT_FRAME,      96          # when computed here, then ra
+.if FACE_LIGHT_CORNERS + TRIANGLE_CORNERS * 8 > FACE_LIGHT_WORLD
+    .error "face_light's stack frame is too small"
+.endif
 .if FACE_LIGHT_WORLD + TRIANGLE_CORNERS * WORLD_POS_BYTES > FACE_LIGHT_FRAME - 8
     .error "face_light's stack frame is too small"
 .endif
 face_light:
     addi    sp, sp, -FACE_LIGHT_FRAME
     sd      ra, FACE_LIGHT_FRAME - 8(sp)
-    addi    a1, sp, FACE_LIGHT_WORLD
+    la      t0, vertex_world_array
+    ld      t0, 0(t0)
+    beqz    t0, 2f
+    li      t1, WORLD_POS_BYTES         # kept: their addresses in the array
+    addi    t2, sp, FACE_LIGHT_CORNERS
+    addi    t3, a0, TRIANGLE_CORNERS * MESH_CORNER_BYTES
+1:  ld      t4, 0(a0)
+    slli    t4, t4, MESH_INDEX_LOW_SHIFT
+    srli    t4, t4, MESH_INDEX_LOW_SHIFT
+    mul     t4, t4, t1
+    add     t4, t4, t0
+    sd      t4, 0(t2)
+    addi    a0, a0, MESH_CORNER_BYTES
+    addi    t2, t2, 8
+    bne     a0, t3, 1b
+    j       3f
+2:  addi    a1, sp, FACE_LIGHT_WORLD    # not kept: computed into the frame
     call    face_world
-    addi    a0, sp, FACE_LIGHT_WORLD + 2 * WORLD_POS_BYTES
-    addi    a1, sp, FACE_LIGHT_WORLD
+    addi    t0, sp, FACE_LIGHT_WORLD
+    sd      t0, FACE_LIGHT_CORNERS(sp)
+    addi    t0, t0, WORLD_POS_BYTES
+    sd      t0, FACE_LIGHT_CORNERS + 8(sp)
+    addi    t0, t0, WORLD_POS_BYTES
+    sd      t0, FACE_LIGHT_CORNERS + 16(sp)
+3:  ld      a0, FACE_LIGHT_CORNERS + 16(sp)
+    ld      a1, FACE_LIGHT_CORNERS(sp)
     call    vec3_sub                    # w2 - w0
     fmv.s   fa3, fa0
     fmv.s   fa4, fa1
     fmv.s   fa5, fa2
-    addi    a0, sp, FACE_LIGHT_WORLD + WORLD_POS_BYTES
-    addi    a1, sp, FACE_LIGHT_WORLD
+    ld      a0, FACE_LIGHT_CORNERS + 8(sp)
+    ld      a1, FACE_LIGHT_CORNERS(sp)
     call    vec3_sub                    # w1 - w0
     call    vec3_cross                  # N
     fsw     fa0, 0(sp)

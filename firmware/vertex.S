@@ -7,10 +7,12 @@
 #   whether it lies beyond the guard band), and, for vertices in front of the
 #   near plane and inside the guard band, the projected screen position in
 #   Q4, z / w and 1 / w (project_clip).
-# Triangles and edges then only look these records up (render.S). The few
-# that need a vertex's clip-space position (to be cut) or its world-space
-# position (flat lighting) ask vertex_clip or face_world, which compute it
-# again, bit for bit as here, rather than keep it for every vertex.
+# With flat shading it also fills vertex_world_array, every vertex's
+# world-space position (the faces' lighting). Triangles and edges then only
+# look these up (render.S). The few that need a vertex's clip-space position
+# (to be cut) ask vertex_clip, which computes it again, bit for bit as here,
+# rather than keep it for every vertex; so do Gouraud's faces without
+# normals for their world-space positions (face_world).
 #
 # The camera sits at the origin looking down -z, so world space is also eye
 # space: no view matrix.
@@ -24,21 +26,43 @@
     .text
     .globl vertex_init
 # vertex_init
-#   What: allocates the vertex records (MESH_VCOUNT of them) from the heap;
-#         not enough memory is fatal (heap_alloc_or_fail).
+#   What: allocates the vertex records (MESH_VCOUNT of them) from the heap,
+#         and, when every drawn face is lit from its corners' world-space
+#         positions (shading = flat in a lit mode), an array of those
+#         positions, filled once a frame (vertex_world_array; 0 otherwise:
+#         Gouraud shading keeps the memory for its normals, which flat
+#         shading does not store, and computes the few it needs, face_world).
+#         Not enough memory is fatal (heap_alloc_or_fail).
 #   Arguments: none. Results: none.
 #   Clobbers: only ABI temporaries.
 vertex_init:
     addi    sp, sp, -16
     sd      ra, 8(sp)
-    la      t0, scene
-    lwu     a0, MESH_VCOUNT(t0)
+    sd      s0, 0(sp)
+    la      s0, scene
+    lwu     a0, MESH_VCOUNT(s0)
     li      t1, VTX_BYTES
     mul     a0, a0, t1
     la      a1, msg_vertex_records
     call    heap_alloc_or_fail
     la      t0, vertex_records
     sd      a0, 0(t0)
+    la      t0, vertex_world_array
+    sd      zero, 0(t0)
+    lwu     t0, SCENE_MODE(s0)
+    li      t1, MODE_WIREFRAME
+    beq     t0, t1, 9f
+    lwu     t0, SCENE_SHADING(s0)
+    li      t1, SHADING_GOURAUD
+    beq     t0, t1, 9f
+    lwu     a0, MESH_VCOUNT(s0)
+    li      t1, WORLD_POS_BYTES
+    mul     a0, a0, t1
+    la      a1, msg_world_positions
+    call    heap_alloc_or_fail
+    la      t0, vertex_world_array
+    sd      a0, 0(t0)
+9:  ld      s0, 0(sp)
     ld      ra, 8(sp)
     addi    sp, sp, 16
     ret
@@ -188,6 +212,47 @@ vertex_transform:
     addi    s3, s3, VTX_BYTES
     addi    s2, s2, -1
     bnez    s2, 1b
+
+    # Flat shading: every vertex's world-space position, M p, with the model
+    # matrix's top rows in fs0..fs11 (face_world's products, in its order).
+    la      t0, vertex_world_array
+    ld      s3, 0(t0)                   # s3 = world position
+    beqz    s3, 8f
+    ld      s1, MESH_V(s0)
+    lwu     s2, MESH_VCOUNT(s0)
+    la      t0, vertex_model
+    flw     fs0, 0(t0)
+    flw     fs1, 4(t0)
+    flw     fs2, 8(t0)
+    flw     fs3, 12(t0)
+    flw     fs4, 16(t0)
+    flw     fs5, 20(t0)
+    flw     fs6, 24(t0)
+    flw     fs7, 28(t0)
+    flw     fs8, 32(t0)
+    flw     fs9, 36(t0)
+    flw     fs10, 40(t0)
+    flw     fs11, 44(t0)
+3:  flw     ft8, 0(s1)
+    flw     ft9, 4(s1)
+    flw     ft10, 8(s1)
+    fmadd.s ft0, fs0, ft8, fs3
+    fmadd.s ft0, fs1, ft9, ft0
+    fmadd.s ft0, fs2, ft10, ft0
+    fsw     ft0, 0(s3)
+    fmadd.s ft0, fs4, ft8, fs7
+    fmadd.s ft0, fs5, ft9, ft0
+    fmadd.s ft0, fs6, ft10, ft0
+    fsw     ft0, 4(s3)
+    fmadd.s ft0, fs8, ft8, fs11
+    fmadd.s ft0, fs9, ft9, ft0
+    fmadd.s ft0, fs10, ft10, ft0
+    fsw     ft0, 8(s3)
+    addi    s1, s1, MESH_V_BYTES
+    addi    s3, s3, WORLD_POS_BYTES
+    addi    s2, s2, -1
+    bnez    s2, 3b
+8:
     fld     fs0, 0(sp)
     fld     fs1, 8(sp)
     fld     fs2, 16(sp)
@@ -249,8 +314,9 @@ vertex_clip:
     .globl face_world
 # face_world
 #   What: the world-space positions this frame, M p, of a triangle's three
-#         corners (flat lighting's face normal), with the model matrix's
-#         products in the order of the other stages.
+#         corners (a face normal where vertex_world_array is not kept:
+#         Gouraud shading's faces without normals), with the model matrix's
+#         products in the order of vertex_transform's.
 #   Arguments: a0 = the triangle (MESH_F_BYTES), a1 = where to write the
 #              corners' x, y, z (TRIANGLE_CORNERS * WORLD_POS_BYTES).
 #   Results: none.
@@ -351,6 +417,7 @@ project_clip:
 # ---------------------------------------------------------------------------
     .section .rodata
 msg_vertex_records: .asciz "vertex records"
+msg_world_positions: .asciz "world positions"
 
 # ---------------------------------------------------------------------------
     .bss
@@ -358,6 +425,11 @@ msg_vertex_records: .asciz "vertex records"
     .globl vertex_records
 # vertex_records: address of the MESH_VCOUNT vertex records (heap).
 vertex_records:
+    .space  8
+    .globl vertex_world_array
+# vertex_world_array: address of the MESH_VCOUNT world-space positions
+# (WORLD_POS_BYTES each, heap), or 0 when they are not kept (vertex_init).
+vertex_world_array:
     .space  8
     .balign 16
 # This frame's rotation, matrices (render.inc layouts).

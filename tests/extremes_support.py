@@ -219,7 +219,7 @@ class HeapLayout:
 
 
 NEEDED = ("HEAP_ALIGN", "FAT_SECTOR_BYTES", "MESH_V_BYTES", "MESH_T_BYTES", "MESH_N_BYTES", "MESH_F_BYTES",
-          "VTX_BYTES", "EDGE_BYTES", "EDGES_PER_TRIANGLE", "DEPTH_BUFFER_BYTES", "DEPTH16_BUFFER_BYTES",
+          "VTX_BYTES", "WORLD_POS_BYTES", "EDGE_BYTES", "EDGES_PER_TRIANGLE", "DEPTH_BUFFER_BYTES", "DEPTH16_BUFFER_BYTES",
           "NORMAL_LIGHT_SHIFT", "TEX_PIXEL_BYTES", "OBJ_WINDOW_BYTES")
 
 
@@ -280,8 +280,10 @@ def boot_allocations(layout: HeapLayout, texture: int | None, vertices: int, tex
     size rounded up to whole sectors, error 7 when that does not fit), obj.S obj_parse_model (the
     first pass's window of OBJ_WINDOW_BYTES, given back; the v, vt, vn and triangle arrays, none
     for a count of 0, all four tried before failing: error 12 "model too large for memory: n
-    bytes needed, m bytes free"; the second pass's window after them, given back), render.S
-    render_init: vertex.S vertex_init's vertex records, then the wireframe edge list, or else the
+    bytes needed, m bytes free"; normals only with `shading = gouraud` in a lit mode; the second
+    pass's window after them, given back), render.S render_init: vertex.S vertex_init's vertex
+    records and, with flat shading in a lit mode, the world positions; then the wireframe edge
+    list, or else the
     depth buffer (DEPTH16_BUFFER_BYTES for `depth = int16`, the default; DEPTH_BUFFER_BYTES for
     float32) and, with `shading = gouraud`, one f32 per normal (MESH_NCOUNT <<
     NORMAL_LIGHT_SHIFT; heap.S's heap_alloc of 0 bytes always succeeds); each of these blocks is
@@ -305,7 +307,8 @@ def boot_allocations(layout: HeapLayout, texture: int | None, vertices: int, tex
     heap.release(window)
     ok, free, needed, align = True, heap.free, 0, layout.HEAP_ALIGN
     for count, each in ((vertices, layout.MESH_V_BYTES), (texcoords, layout.MESH_T_BYTES),
-                        (normals, 0 if wireframe else layout.MESH_N_BYTES), (triangles, layout.MESH_F_BYTES)):
+                        (normals, layout.MESH_N_BYTES if gouraud and not wireframe else 0),
+                        (triangles, layout.MESH_F_BYTES)):
         if count and each:
             ok = heap.alloc(count * each) is not None and ok
             needed += -(-count * each // align) * align
@@ -317,6 +320,8 @@ def boot_allocations(layout: HeapLayout, texture: int | None, vertices: int, tex
         return "error 12", heap
     heap.release(window)
     blocks = [("vertex records", vertices * layout.VTX_BYTES)]
+    if not wireframe and not gouraud:
+        blocks.append(("world positions", vertices * layout.WORLD_POS_BYTES))
     if wireframe:
         blocks.append(("edge list", triangles * layout.EDGES_PER_TRIANGLE * layout.EDGE_BYTES))
     else:

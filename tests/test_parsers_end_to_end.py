@@ -231,7 +231,7 @@ def test_a_model_longer_than_the_window_from_a_fragmented_file(firmware, tmp_pat
     board.close()
     console = [line for _, line in board.console_lines]
     assert f"load m/model.obj {len(model)} crc32={zlib.crc32(model):08x}" in console, console
-    assert "model: 2 triangles, 1500 vertices, 0 uv, 0 normals" in console, console
+    assert "model: 2 triangles, 1500 vertices, 0 uv, 0 normals (not stored: shading flat)" in console, console
     raw = scene_bytes(board)
     stored = np.array(array(board, raw, MESH_V, 1500, "<3f"), dtype=np.float32)
     assert np.array_equal(stored, np.array(values, dtype=np.float64).astype(np.float32))

@@ -37,12 +37,19 @@ def set_scene(fw: FirmwareCaller, positions: np.ndarray, mesh_at: int, records_a
     fw.write(fw.symbol("vertex_records"), struct.pack("<Q", records_at))
 
 
+def world_array(fw: FirmwareCaller, address: int) -> None:
+    """Where vertex_transform keeps world positions (vertex_world_array; vertex_init sets it for
+    flat shading), or 0 for none."""
+    fw.write(fw.symbol("vertex_world_array"), struct.pack("<Q", address))
+
+
 def test_vertex_clip_and_world_give_the_vertex_stage_values(fw):
     """For vertices inside, beyond the guard band and behind the near plane: vertex_clip's
     position has the record's outcode and projects (project_clip) to the record's screen
     position, depth and 1 / w exactly; face_world gives each corner of a triangle the model
     matrix applied to it (fused multiply-adds in float32, checked against float64 to the
-    rounding of the last bits)."""
+    rounding of the last bits), bit for bit what the vertex stage keeps in vertex_world_array
+    for flat shading."""
     rng = np.random.default_rng(11)
     positions = np.concatenate([rng.uniform(-1.5, 1.5, (VERTICES - 40, 3)),
                                 rng.uniform(-400, 400, (20, 3)),                      # guard band
@@ -50,8 +57,10 @@ def test_vertex_clip_and_world_give_the_vertex_stage_values(fw):
     vtx_bytes = fw.symbol("VTX_BYTES")
     mesh_at = fw.scratch
     records_at = mesh_at + positions.nbytes + 64
-    out_at = records_at + VERTICES * vtx_bytes + 64
+    world_at = records_at + VERTICES * vtx_bytes + 64
+    out_at = world_at + VERTICES * fw.symbol("WORLD_POS_BYTES") + 64
     set_scene(fw, positions, mesh_at, records_at)
+    world_array(fw, world_at)
     frame = 3
     assert fw.call("vertex_transform", [frame]).a[0] == records_at
 
@@ -85,6 +94,9 @@ def test_vertex_clip_and_world_give_the_vertex_stage_values(fw):
         corners = (first, VERTICES - 1 - first, (first * 31) % VERTICES)
         fw.write(triangle_at, struct.pack("<3Q", *(v | no_index << t_shift | no_index << n_shift for v in corners)))
         fw.call("face_world", [triangle_at, out_at])
+        computed = fw.read(out_at, 36)
+        kept = b"".join(fw.read(world_at + 12 * v, 12) for v in corners)
+        assert computed == kept, f"triangle {corners}: face_world differs from vertex_world_array"
         world = fw.read_f32(out_at, 9).astype(np.float64).reshape(3, 3)
         exact = positions[list(corners)].astype(np.float64) @ model[:, :3].T + model[:, 3]
         assert np.allclose(world, exact, rtol=4e-7, atol=1e-6), f"triangle {corners}: {world} != {exact}"
