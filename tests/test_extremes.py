@@ -49,15 +49,17 @@ The root causes of the discrepancies found with 3-frame runs, each pinned by a t
   (extremes_support.firmware_lighting_in_reference) leaves only outline and texel-boundary
   pixels (test_angles_beyond_a_turn_and_negative_are_exact).
 
-Figures (today's heap: 5,906,752 bytes between __heap_start and __heap_end, the depth buffer
-one of its blocks, after the vertex records: 153,600 bytes for int16; the model's text none of
-them, as obj.S reads it through a window; a triangle takes 24 bytes, a vertex record 20; the
-tests derive every limit from the ELF's symbols and the firmware's allocation sequence, so they
-follow the heap when it changes): the largest model is 239,688 triangles beside a 1x1 texture,
-231,496 beside a 256x256 one (one more: error 12, "(depth buffer)"); 100,000 triangles beside a
-256x256 texture with up to 98,624 vertices (60,691 with a vt and a vn each); a closed mesh with a
-vt and a vn at every vertex up to 111,117 triangles beside a 256x256 texture; the
-largest texture 1,917,605 texels (1,384 x 1,384 as a square; one texel more: error 12, the depth
+Figures (today's heap: 5,906,368 bytes between __heap_start and __heap_end, the depth buffer
+one of its blocks, after the vertex records and, with flat shading, the world positions: 153,600
+bytes for int16; the model's text none of them, as obj.S reads it through a window; a triangle
+takes 24 bytes, a vertex record 20, a world position 12, and normals are stored only for Gouraud
+shading; the tests derive every limit from the ELF's symbols and the firmware's allocation
+sequence, so they follow the heap when it changes): the largest model is 239,669 triangles beside
+a 1x1 texture, 231,477 beside a 256x256 one (one more: error 12, "(depth buffer)"); 100,000
+triangles beside a 256x256 texture with up to 71,717 vertices (60,682 with a vt each: a vn takes no memory with flat shading); a
+closed mesh with a vt and a vn at every vertex up to 111,109 triangles beside a 256x256 texture
+(106,833 with Gouraud shading); the largest texture 1,917,434 texels (1,384 x 1,384 as a
+square; one texel more: error 12, the depth
 buffer; 51,201 more: error 7); beside a model filling the rest, 32,933 texels.
 
 Corners projecting beyond +-2^23 pixels (the Q4 range) are cut at the guard band in clip space
@@ -142,8 +144,8 @@ def layout(firmware):
 @pytest.mark.parametrize("data", TEXTURES.values(), ids=TEXTURES.keys())
 @pytest.mark.parametrize("case", ["largest", "one-more-triangle"])
 def test_largest_model(firmware, layout, tmp_path, case, data):
-    """The largest model that fits: 239,688 triangles with a 1x1 texture, 231,496 with a 256x256
-    one, with today's heap of 5,906,752 bytes (__heap_start..__heap_end), derived from the ELF and
+    """The largest model that fits: 239,669 triangles with a 1x1 texture, 231,477 with a 256x256
+    one, with today's heap of 5,906,368 bytes (__heap_start..__heap_end), derived from the ELF and
     the firmware's allocation sequence (extremes_support.boot_allocations: the texture, the mesh
     arrays, vertex records, then the 16-bit depth buffer; the model's text is read through a
     window and not kept), not a constant. One more is error 12, the block the replay says did not
@@ -174,8 +176,8 @@ UV_HEAD = "vt 0 0\nvt 1 0\nvt 0.5 1\n"
 
 def crowded_model(vertices: int, triangles: int = HUNDRED_THOUSAND) -> bytes:
     """A fan model (fan_model) with more vertices: the first triangle's three with texture
-    coordinates, then `vertices - 3` more at the origin (8 bytes of text, 12 of vertex array and
-    20 of vertex record each) that only the vertex transform visits."""
+    coordinates, then `vertices - 3` more at the origin (8 bytes of text, 12 of vertex array, 20
+    of vertex record and 12 of world position each) that only the vertex transform visits."""
     head = FAN_HEAD + UV_HEAD + "v 0 0 0\n" * (vertices - 3)
     return fan_model(triangles, head, "1/1 2/2 3/3")
 
@@ -186,7 +188,7 @@ def crowded_outcomes(layout, vertices: int) -> set[str]:
 
 @pytest.mark.parametrize("case", ["largest", "one-more-vertex"])
 def test_100k_triangles_with_a_256x256_texture(firmware, layout, tmp_path, case):
-    """Issue 14, defect 15: 100,000 triangles with a 256x256 texture fit, with up to 98,624
+    """Issue 14, defect 15: 100,000 triangles with a 256x256 texture fit, with up to 71,717
     vertices today (the most vertices such a model may have: derived from the ELF and the
     allocation sequence like test_largest_model; one more is error 12, "(depth buffer)"), and the
     frame is the first triangle's, textured. Before obj.S streamed the model, its text was kept
@@ -224,18 +226,23 @@ def torus_counts(rings: int, sides: int) -> tuple[int, int]:
 def test_a_closed_100k_triangle_mesh_fits_beside_a_256x256_texture(layout):
     """Issue 14, defect 15: "100,000 triangles with a 256x256 texture should fit". For a closed
     mesh with a vt and a vn at every vertex (the 250 x 200 torus: 100,000 triangles, 50,451
-    vertices) the replay of the firmware's allocations, on this ELF, says it does, and the
-    largest such mesh (F / 2 + 2 vertices) is 111,117 triangles today. With 36-byte triangles and
-    48-byte vertex records it was error 12 (73,105 was the most). Loading and drawing both tori
+    vertices) the replay of the firmware's allocations, on this ELF, says it does, with flat
+    shading (the default) and with Gouraud, and the largest such mesh (F / 2 + 2 vertices) is
+    111,109 triangles today (106,833 with Gouraud, which stores the normals and no world
+    positions). With 36-byte triangles and 48-byte vertex records it was error 12 (73,105 was the
+    most). Loading and drawing both tori
     on the board model: test_torus_loads_and_draws (EXTREMES_FULL)."""
     vertices, triangles = torus_counts(*TORI["100k"])
     assert triangles == HUNDRED_THOUSAND
-    assert boot_outcomes(layout, len(TEXTURE_256), vertices, vertices, vertices, triangles) == {"ok"}
+    for gouraud in (False, True):
+        assert boot_outcomes(layout, len(TEXTURE_256), vertices, vertices, vertices, triangles,
+                             gouraud=gouraud) == {"ok"}
 
-    def closed_mesh_fits(n: int) -> bool:
-        return boot_outcomes(layout, len(TEXTURE_256), n // 2 + 2, n // 2 + 2, n // 2 + 2, n) == {"ok"}
+        def closed_mesh_fits(n: int) -> bool:
+            counts = (n // 2 + 2, n // 2 + 2, n // 2 + 2, n)
+            return boot_outcomes(layout, len(TEXTURE_256), *counts, gouraud=gouraud) == {"ok"}
 
-    assert largest(closed_mesh_fits, 2, layout.size // layout.MESH_F_BYTES) >= HUNDRED_THOUSAND
+        assert largest(closed_mesh_fits, 2, layout.size // layout.MESH_F_BYTES) >= HUNDRED_THOUSAND
 
 
 @pytest.mark.skipif(not os.environ.get("EXTREMES_FULL"), reason="2-5 minutes each: set EXTREMES_FULL=1")
@@ -299,7 +306,7 @@ def test_largest_texture_beside_a_model(firmware, layout, tmp_path, case):
     more. The limit a texture meets is one inequality, the same whatever else is in the heap: its
     file rounded up to whole sectors (scene.ini's text is given back before it is loaded), with
     the mesh arrays and vertex records and the depth buffer after it (ppm.S converts in place: a
-    texture needs no memory beyond its file). On its own (a 1-triangle model) that is 1,917,605
+    texture needs no memory beyond its file). On its own (a 1-triangle model) that is 1,917,434
     texels (1,384 x 1,384 as a square), 5.8 MB:
     loading that on the board model takes about 30 s a run (test_largest_texture_alone, opt-in),
     so here a fan model (the cheapest bytes of heap to fill: 24 per 2 bytes of text) takes all
@@ -356,7 +363,7 @@ def test_texture_file_larger_than_the_free_heap_is_error_7(firmware, layout, tmp
 @pytest.mark.skipif(not os.environ.get("EXTREMES_FULL"), reason="about 50 s: set EXTREMES_FULL=1")
 @pytest.mark.parametrize("case", ["largest", "one-more-texel"])
 def test_largest_texture_alone(firmware, layout, tmp_path, case):
-    """The largest texture of all (a 1-triangle model): 1,917,605 x 1 today (37-39 s each case
+    """The largest texture of all (a 1-triangle model): 1,917,434 x 1 today (37-39 s each case
     on the board model in one run, 2026-11-22, with another job on the second core). One texel more still loads (its
     file fits) but leaves too little for the depth buffer: error 12 "model too large for memory
     (depth buffer)"; from 51,201 texels more (the depth buffer's 153,600 bytes / 3, as the depth
