@@ -5,13 +5,16 @@
 # (at least one mantissa digit, at least one exponent digit when there is an
 # 'e'), e.g. 3, -0.25, .5, 5., -1.5e-3, 2E+10. It must end at the end of the
 # text or at a space or tab. Its value is computed in double precision: the
-# first PARSE_MANTISSA_DIGITS significant digits as an exact 64-bit integer,
-# converted to double (one rounding), then scaled by the decimal exponent
-# with one multiplication or division by an exact power of ten (a second
-# rounding) while the exponent is within the table (|e| <= 22), a few more
-# beyond. Callers round once more to single precision, so results are the
-# correctly rounded f32 but for double-rounding ties far below what a model
-# or scene can show.
+# first 19 significant digits (digits are taken while the integer is below
+# PARSE_MANTISSA_LIMIT; the rest are dropped, not rounded) as an exact 64-bit
+# integer, converted to double (one rounding), then scaled by the decimal
+# exponent with one multiplication or division by an exact power of ten (a
+# second rounding) while the exponent is within the table (|e| <= 22), one
+# more by 10^22 for each 22 beyond. Callers round once more to single
+# precision, so results are the correctly rounded f32 but for double-rounding
+# ties far below what a model or scene can show. The host's readers follow
+# these steps exactly (reference/numbers.py), so they decide as the firmware
+# does even at those ties.
 
     .option norelax
     .include "text.inc"

@@ -10,18 +10,20 @@ file (checked against the file's totals after every other check, as the firmware
 pass does); 0 is an error. Errors raise `ModelError`: ``bad model line N: <what>``, or
 ``bad model: no faces``.
 
-Numbers are kept as float64 (the firmware rounds them to single precision; a number it keeps
-that is not finite in single precision is an error in both, found after the count of numbers).
+Numbers are read as parse.S reads them (`reference.numbers`: its double, not Python's float(),
+which differs beyond 19 significant digits and at the edges of single precision) and kept as
+float64 (the firmware rounds them to single precision; a number it keeps that is not finite in
+single precision is an error in both, found after the count of numbers).
 """
 from __future__ import annotations
 
-import math
 import re
 from dataclasses import dataclass
 
 import numpy as np
 
-NUMBER = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?\Z")
+from .numbers import finite_single, parse_number
+
 CORNER = re.compile(r"(-?\d+)(?:/(-?\d+)?(?:/(-?\d+))?)?\Z")
 IGNORED = {"o", "g", "s", "mtllib", "usemtl"}
 NO_INDEX = -1
@@ -45,9 +47,10 @@ class Mesh:
 
 
 def _number(line: int, token: str) -> float:
-    if not NUMBER.match(token):
+    value = parse_number(token)
+    if value is None:
         raise ModelError(line, "malformed number")
-    return float(token)
+    return value
 
 
 NUMBERS_MAX = 7          # obj.S's OBJ_NUMBERS_MAX: the most numbers any vector statement takes
@@ -67,9 +70,8 @@ def _numbers(line: int, tokens: list[str], arity: str) -> list[float]:
 def _in_range(line: int, values: list[float]) -> list[float]:
     """obj.S checks the count of a statement's numbers before their range, and the range only of
     the numbers it keeps (x y z of a v, u v of a vt)."""
-    with np.errstate(over="ignore"):
-        if not all(math.isfinite(float(np.float32(value))) for value in values):
-            raise ModelError(line, "number out of range")
+    if not all(finite_single(value) for value in values):
+        raise ModelError(line, "number out of range")
     return values
 
 

@@ -6,10 +6,13 @@ words of `mode`, `cull` and the precision keys ignore case. An unknown or repeat
 value raises `SceneError` naming the line (counted from 1), with the firmware's wording:
 ``bad scene.ini line N: <what>``.
 
-Unlike the firmware (which keeps single precision), numbers are kept as float64: the reference
-renders with the exact values written in the file. Range checks follow the firmware (a number
-must be finite in single precision, fov in (0, 180), near and far > 0, far > near, ambient in
-[0, 1], axis and light not zero, then normalised).
+Numbers are read as parse.S reads them (`reference.numbers`: its double, not Python's float(),
+which differs beyond 19 significant digits and at the edges of single precision). Unlike the
+firmware (which keeps single precision), they are kept as float64 (parse.S's doubles: the values
+written in the file to a few units in the last place of double precision) and the reference
+renders with them. Range checks follow the firmware, on the value it stores (a
+number must be finite in single precision, fov in (0, 180), near and far > 0, far > near,
+ambient in [0, 1], axis and light not zero, then normalised).
 
 The precision keys (`interpolation`, `shading`, `light_levels`, `angles`, `depth`, `snap`) select
 the firmware's approximations. They are read and checked here exactly as the firmware reads them
@@ -24,6 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .numbers import finite_single, parse_number, single
 from .ppm import rgb565_from_samples
 
 MODES = {"textured": 0, "flat": 1, "wireframe": 2}
@@ -42,8 +46,6 @@ KEYS = ("model", "texture", "mode", "cull", "scale", "axis", "angle", "step", "t
         "fov", "near", "far", "light", "ambient", "background",
         "interpolation", "shading", "light_levels", "angles", "depth", "snap")
 VALUE_MAX = 256          # a path of this many bytes or more is too long (NUL included)
-
-NUMBER = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?\Z")
 
 
 class SceneError(ValueError):
@@ -82,13 +84,6 @@ class Scene:
     lines: dict[str, int] = field(default_factory=dict, repr=False)   # key -> line that set it
 
 
-def parse_number(text: str) -> float | None:
-    """parse.S's number grammar: [+|-] (digits [. digits] | . digits) [(e|E) [+|-] digits]."""
-    if not NUMBER.match(text):
-        return None
-    return float(text)
-
-
 def _tokens(value: str) -> list[str]:
     """The value's words, separated by spaces and tabs only, as scene.S separates them (str.split
     would also split at the other bytes Unicode calls whitespace, such as 0x85 read as latin-1)."""
@@ -113,9 +108,7 @@ def _numbers(line: int, value: str, most: int, too_many: str) -> list[float]:
 def _finite_single(line: int, numbers: list[float]) -> None:
     """Every number must stay finite when rounded to single precision (as the firmware stores it)."""
     for number in numbers:
-        with np.errstate(over="ignore"):
-            single = float(np.float32(number))
-        if not math.isfinite(single):
+        if not finite_single(number):
             raise SceneError(line, "bad value (number out of range)")
 
 
@@ -168,10 +161,10 @@ def _light_levels(line: int, value: str) -> int:
     keeps the number in single precision, so it is checked as such: 6.5e1 is 65)."""
     numbers = _count(line, "light_levels", _numbers(line, value, 1, "bad value (expected 1 number)"), 1)
     _finite_single(line, numbers)
-    single = float(np.float32(numbers[0]))
-    if single != math.floor(single) or not LIGHT_LEVELS_MIN <= single <= LIGHT_LEVELS_MAX:
+    level = single(numbers[0])
+    if level != math.floor(level) or not LIGHT_LEVELS_MIN <= level <= LIGHT_LEVELS_MAX:
         raise SceneError(line, f"bad value (must be a whole number from {LIGHT_LEVELS_MIN} to {LIGHT_LEVELS_MAX})")
-    return int(single)
+    return int(level)
 
 
 def _split_line(raw: str, line: int) -> tuple[str, str] | None:
@@ -276,11 +269,11 @@ def _set(scene: Scene, key: str, value: str, line: int) -> None:
             setattr(scene, key, _direction(line, numbers))
             return
         first = numbers[0]
-        single = float(np.float32(first))        # scene.S checks the value it stores, a single
-        if key == "fov" and not 0.0 < single < 180.0:
+        stored = single(first)                   # scene.S checks the value it stores, a single
+        if key == "fov" and not 0.0 < stored < 180.0:
             raise SceneError(line, "bad value (fov must be between 0 and 180 degrees)")
-        if key in ("near", "far") and not single > 0.0:
+        if key in ("near", "far") and not stored > 0.0:
             raise SceneError(line, "bad value (must be greater than 0)")
-        if key == "ambient" and not 0.0 <= single <= 1.0:
+        if key == "ambient" and not 0.0 <= stored <= 1.0:
             raise SceneError(line, "bad value (must be between 0 and 1)")
         setattr(scene, key, tuple(numbers) if len(numbers) == 3 else first)

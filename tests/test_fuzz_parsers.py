@@ -9,6 +9,10 @@ store checker on. For every input:
 - the firmware neither traps, nor runs away (an instruction budget), nor stores outside its
   buffers (`--check-writes`'s checker).
 
+Decimal numbers, generated close to the single-precision edges where Python's float() and parse.S
+round differently, go through reference.numbers and parse.S's parse_number: the same verdict and
+the same double, bit for bit.
+
 The firmware's console output is captured by making the UART take each byte at once, and a
 fatal error is caught where errors.S ends its report (`error_end`), before it paints the screen.
 FUZZ_EXAMPLES=N runs N examples of each (nightly use: see README "Fuzzing").
@@ -17,6 +21,7 @@ from __future__ import annotations
 
 import os
 import struct
+from decimal import Decimal, localcontext
 from pathlib import Path
 
 import numpy as np
@@ -27,6 +32,7 @@ from unicorn import riscv_const as rv
 
 from emulator.hart import RunEnd
 from firmware_calls import FirmwareCaller
+from reference.numbers import parse_number
 from reference.obj import ModelError, parse_obj
 from reference.ppm import TextureError, parse_ppm
 from reference.scene import KEYS, SceneError, parse_scene
@@ -129,6 +135,18 @@ class ParserCaller:
         texels = np.frombuffer(self.caller.read(pixels, 2 * width * height), dtype="<u2")
         return outcome, texels.reshape(height, width)
 
+    def number(self, text: bytes) -> tuple[int, int] | None:
+        """parse.S parse_number on the text: (bytes it read, the IEEE bits of its double), or None
+        when it refuses the text."""
+        self._fresh()
+        address = self._place(text)
+        result = self.caller.call("parse_number", [address, address + len(text)], budget=BUDGET)
+        stop = self.caller.board.write_watch.stray_store(self.caller.hart)
+        assert stop is None, f"parse_number stored outside the firmware's buffers: {stop}"
+        if result.a[1] != 0:
+            return None
+        return result.a[0] - address, self.caller.uc.reg_read(rv.UC_RISCV_REG_F10)
+
     def model(self, text: bytes) -> str:
         self._fresh()
         self._record("scene_model", text)
@@ -230,6 +248,67 @@ def ppm_files(draw) -> bytes:
                                                            st.binary(max_size=2)), max_size=2)))
 
 
+def _exact_digits(value: Decimal) -> tuple[str, int]:
+    """(significant digits, q) with value = int(digits) x 10^q, for an exact finite decimal."""
+    _, digits, q = value.normalize().as_tuple()
+    return "".join(map(str, digits)), q
+
+
+# Where the firmware's rounding of a decimal decides a verdict or a stored single: the overflow
+# threshold (halfway between the largest single and 2^128), the largest single, the smallest
+# normal and subnormal singles and half the latter (below it: zero), the tie just above 1
+# (ambient <= 1) and just below 180 (fov < 180). Each is a finite decimal, written exactly.
+with localcontext() as _exact:
+    _exact.prec = 200
+    EDGES = [_exact_digits(value) for value in (
+        Decimal(2) ** 128 - Decimal(2) ** 103, Decimal(2) ** 128 - Decimal(2) ** 104,
+        Decimal(2) ** -126, Decimal(2) ** -149, Decimal(2) ** -150,
+        1 + Decimal(2) ** -24, 180 - Decimal(2) ** -17)]
+DIGITS = st.sampled_from("0123456789")
+
+
+@st.composite
+def edge_decimals(draw) -> str:
+    """A decimal agreeing with one of EDGES for its first 12 to 40 significant digits (mostly 16
+    to 19: close enough for parse.S's truncation to 19 digits and its roundings in double to
+    decide the single), 20 to 40 digits in all, written with a sign or none, the point anywhere,
+    leading and trailing zeros, and an exponent that keeps its value."""
+    edge, q = draw(st.sampled_from(EDGES))
+    prefix = edge[:draw(st.one_of(st.integers(16, 19), st.integers(16, 19), st.integers(12, 40)))]
+    digits = prefix + "".join(draw(st.lists(DIGITS, min_size=max(0, 20 - len(prefix)),
+                                            max_size=max(0, 40 - len(prefix)))))
+    q += len(edge) - len(digits)                # value ~ int(digits) x 10^q
+    point = draw(st.integers(0, len(digits)))
+    whole = "0" * draw(st.integers(0, 2)) + digits[:point]
+    fraction = ("0" * draw(st.integers(0, 3)) if point == 0 else "") + digits[point:]
+    trailing = draw(st.integers(0, 2))
+    fraction += "0" * trailing
+    text = whole + ("." + fraction if fraction or draw(st.booleans()) else "")
+    exponent = q + len(fraction) - trailing
+    if exponent or draw(st.booleans()):
+        sign = "-" if exponent < 0 else draw(st.sampled_from(["", "+"]))
+        text += draw(st.sampled_from("eE")) + sign + "0" * draw(st.integers(0, 2)) + str(abs(exponent))
+    return draw(st.sampled_from(["", "+", "-"])) + text
+
+
+@st.composite
+def long_decimals(draw) -> str:
+    """Any 1 to 40 digits, the point anywhere, any exponent up to beyond parse.S's cap."""
+    digits = "".join(draw(st.lists(DIGITS, min_size=1, max_size=40)))
+    point = draw(st.integers(0, len(digits)))
+    text = draw(st.sampled_from(["", "+", "-"])) + digits[:point] + "." + digits[point:]
+    exponent = draw(st.one_of(st.integers(-60, 60), st.integers(-400, 400), st.integers(-10**7, 10**7)))
+    return text + f"e{exponent:+d}"
+
+
+NUMBER_TOKENS = st.one_of(
+    edge_decimals(), edge_decimals(), edge_decimals(), long_decimals(),
+    st.floats(allow_nan=False, allow_infinity=False, width=32).map(repr),
+    st.text(st.sampled_from("0123456789.eE+-"), min_size=1, max_size=12),     # mostly not numbers
+)
+NUMBER_FUZZ = settings(FUZZ, max_examples=int(os.environ.get("FUZZ_EXAMPLES", "100")))
+
+
 # --------------------------------------------------------------------------- the properties
 
 def host_scene(text: bytes) -> str:
@@ -276,6 +355,19 @@ def test_ppm_host_and_firmware_agree(parsers, data):
     assert np.array_equal(texels, expected)
 
 
+@NUMBER_FUZZ
+@given(token=NUMBER_TOKENS, after=st.sampled_from(["", " ", "\t", " 1"]))
+def test_numbers_host_and_firmware_agree(parsers, token, after):
+    """reference.numbers and parse.S's parse_number: the same verdict and, bit for bit, the same
+    double, from which every range check and stored single of the readers follows."""
+    value = parse_number(token)
+    outcome = parsers.number((token + after).encode("ascii"))
+    if value is None:
+        assert outcome is None
+    else:
+        assert outcome == (len(token), struct.unpack("<Q", struct.pack("<d", value))[0]), value
+
+
 def test_the_harness_sees_acceptance_and_each_kind_of_refusal(parsers):
     """The checks above can fail: known inputs give the firmware's known verdicts."""
     assert parsers.scene(b"mode = flat\nfov = 90\n") == "ok"
@@ -308,6 +400,33 @@ FOUND = [
     ("texture", b"P3 1 2 1 0 0 2 0"),               # P3 pixels checked as they are read
     ("texture", b"P3\r\n1 # c\n2#c\n1 0 0 2 0\x000 0"),
 ]
+
+
+# Numbers on which Python's float() and parse.S disagree (the host's readers used float() before
+# reference.numbers): (reader, text, the firmware's verdict, which the host now gives too).
+FLOAT_DISAGREES = [
+    # 19 digits: float() rounds to the largest single, parse.S's double to infinity
+    ("model", b"v 3.402823567797336323e38 0 0\n", "error 10 bad model line 1: number out of range"),
+    ("scene", b"scale = 3.402823567797336323e38\n",
+     "error 9 bad scene.ini line 1: bad value (number out of range)"),
+    # 18 digits, the reverse: float() beyond single precision, parse.S within
+    ("model", b"v 3.40282356779733644e38 0 1\nv 0 1 0\nv 0 0 1\nf 1 2 3\n",
+     "model: 1 triangles, 3 vertices, 0 uv, 0 normals"),
+    # 55 digits: float() stores 1 + 2^-23 (above 1), parse.S's 19 digits store 1
+    ("scene", b"ambient = 1.000000059604644886412927462515654042363166809082031251\n", "ok"),
+    ("scene", b"near = 1\nfar = 1.000000059604644886412927462515654042363166809082031251\n",
+     "error 9 bad scene.ini line 2: bad value (far must be greater than near)"),
+    # a colour channel: a whole number by float(), not by parse.S (checked in double precision)
+    ("scene", b"background = 1.00000000000000010 0 0\n",
+     "error 9 bad scene.ini line 1: bad value (expected R G B with 0..255 each, or #RRGGBB)"),
+]
+
+
+@pytest.mark.parametrize("reader,data,verdict", FLOAT_DISAGREES)
+def test_numbers_where_float_and_the_firmware_disagree(parsers, reader, data, verdict):
+    host = host_scene(data) if reader == "scene" else host_model(data)
+    assert host == verdict
+    assert (parsers.scene(data) if reader == "scene" else parsers.model(data)) == verdict
 
 
 @pytest.mark.parametrize("reader,data", FOUND)

@@ -28,6 +28,9 @@ CASES = [
     ("obj beyond double precision", "model.obj", b"v 1e400 0 -1\nv 1 0 -1\nv 0 1 -1\nf 1 2 3\n", 10),
     ("obj beyond single precision", "model.obj", b"v 0 0 -1\nv 3.5e38 0 -1\nv 0 1 -1\nf 1 2 3\n", 10),
     ("obj largest single", "model.obj", b"v 0 0 -1\nv 3.4e38 0 -1\nv 0 1 -1\nf 1 2 3\n", None),
+    # float() rounds it to the largest single, parse.S (which the firmware reads with) beyond it
+    ("obj 19 digits beyond single precision", "model.obj",
+     b"v 0 0 -1\nv 3.402823567797336323e38 0 -1\nv 0 1 -1\nf 1 2 3\n", 10),
     ("obj CR line ends", "model.obj", TRIANGLE.replace(b"\n", b"\r"), 10),
     ("obj CR CR LF line ends", "model.obj", TRIANGLE.replace(b"\n", b"\r\r\n"), 10),
     ("obj CR LF line ends", "model.obj", TRIANGLE.replace(b"\n", b"\r\n"), None),
@@ -38,6 +41,7 @@ CASES = [
     ("scene fov beyond 180", "scene.ini", b"mode = textured\nfov = 200\n", 9),
     ("scene unknown mode", "scene.ini", b"mode = textures\n", 9),
     ("scene unknown key", "scene.ini", b"cull = off\nspeed = 3\n", 9),
+    ("scene 19 digits beyond single precision", "scene.ini", b"scale = 3.402823567797336323e38\n", 9),
     ("scene fine", "scene.ini", b"mode = flat\nfov = 179.5\n", None),
 ]
 
