@@ -1,8 +1,10 @@
-"""python -m reference render FOLDER --out DIR [--frames N] [--first K] [--quiet]
-   python -m reference render-card CARD.img --out DIR [--frames N] [--first K] [--quiet]
+"""python -m reference render FOLDER --out DIR [--frames N] [--first K] [--ideal [--density D]] [--quiet]
+   python -m reference render-card CARD.img --out DIR [--frames N] [--first K] [--ideal [--density D]] [--quiet]
 
 Renders frames K .. K+N-1 of the scene (scene.ini, model and texture from a folder laid out
-like a card, or from a card image) and writes DIR/frame_NNNN.png as the LCD would show them.
+like a card, or from a card image) and writes DIR/frame_NNNN.png as the LCD would show them:
+the pixel-centre image (the firmware's conventions, exactly), or with --ideal the ideal image
+(area-averaged pixels, area-filtered textures: reference/ideal.py).
 Exit statuses: see EXIT_STATUS_HELP."""
 from __future__ import annotations
 
@@ -13,6 +15,7 @@ from pathlib import Path
 
 from PIL import Image
 
+from .ideal import DEFAULT_DENSITY, DENSITY_MAX, LINE_ROWS_PER_DENSITY, render_ideal_image
 from .load import load_card_folder, load_card_image
 from .obj import ModelError
 from .ppm import TextureError
@@ -58,6 +61,15 @@ def _parser() -> argparse.ArgumentParser:
         sub.add_argument("--first", type=int, default=0, metavar="K",
                          help="number of the first frame: the model turns K * step degrees "
                               "before it (default 0)")
+        sub.add_argument("--ideal", action="store_true",
+                         help="render the ideal image instead of the pixel-centre one: each pixel "
+                              "the average of density x density samples, textures averaged over "
+                              "each sample's footprint, wireframe lines 1 pixel wide by coverage")
+        sub.add_argument("--density", type=int, default=None, metavar="D",
+                         help=f"with --ideal: the sampling density, 1 to {DENSITY_MAX}: D x D samples "
+                              f"per pixel for triangles, {LINE_ROWS_PER_DENSITY} D sample rows per "
+                              f"pixel for wireframe lines (exact along each row); default "
+                              f"{DEFAULT_DENSITY}, where the bench scenes have converged")
         sub.add_argument("--quiet", action="store_true",
                          help="do not print each frame's path and render time")
     return parser
@@ -80,6 +92,11 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.frames < 1 or args.first < 0:
         parser.error("--frames must be at least 1 and --first not negative")
+    if args.density is not None and not args.ideal:
+        parser.error("--density applies only with --ideal")
+    density = DEFAULT_DENSITY if args.density is None else args.density
+    if not 1 <= density <= DENSITY_MAX:
+        parser.error(f"--density must be from 1 to {DENSITY_MAX}")
     from sdcard_image import SdImageError, UsageError
     try:
         source = Path(args.source)
@@ -116,7 +133,11 @@ def main(argv: list[str] | None = None) -> int:
         start = time.perf_counter()
         path = args.out / f"frame_{n:04d}.png"
         try:
-            Image.fromarray(render_image(scene, mesh, texture, n)).save(path)
+            if args.ideal:
+                image = render_ideal_image(scene, mesh, texture, n, density=density)
+            else:
+                image = render_image(scene, mesh, texture, n)
+            Image.fromarray(image).save(path)
         except OSError as exc:
             print(f"error: cannot write {path}: {exc.strerror or exc}", file=sys.stderr)
             return EXIT_OUTPUT

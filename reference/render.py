@@ -373,30 +373,34 @@ def unique_edges(faces: np.ndarray) -> np.ndarray:
 
 # --------------------------------------------------------------------------- a frame
 
-def render_frame(scene: Scene, mesh: Mesh, texture: np.ndarray | None, n: int) -> np.ndarray:
-    """Frame n as a (240, 320) uint16 RGB565 array, row 0 at the top."""
-    target = Target(scene.background)
+@dataclass(frozen=True)
+class FrameTriangle:
+    """One triangle of a frame as the rasteriser receives it, after the vertex stage and the
+    near-plane cut: screen corners (3, 2), z/w (3,), 1/w (3,), texture coordinates (3, 2) when
+    the frame is textured (None otherwise) and its lighting. Corners in the model's order (not
+    yet culled or put in positive order: that is the rasteriser's business)."""
+    screen: np.ndarray
+    zw: np.ndarray
+    q: np.ndarray
+    uv: np.ndarray | None
+    lighting: Lighting
+
+
+def is_textured(scene: Scene, texture: np.ndarray | None) -> bool:
+    """Whether the frame is drawn with its texture (textured mode and a texture with texels)."""
+    return scene.mode == "textured" and texture is not None and texture.size > 0
+
+
+def frame_triangles(scene: Scene, mesh: Mesh, texture: np.ndarray | None, n: int):
+    """The triangles of frame n in drawing order (faces in file order, each face's near-plane
+    pieces as a fan), skipping faces whose corners are all outside one frustum plane. Not for
+    wireframe mode (see frame_segments)."""
     points = np.hstack([mesh.vertices, np.ones((len(mesh.vertices), 1))])
     model = model_matrix(scene, n)
     world = (points @ model.T)[:, :3]
     clip = points @ (projection_matrix(scene) @ model).T
     codes = outcodes(clip)
-
-    if scene.mode == "wireframe":
-        for i, j in unique_edges(mesh.faces):
-            if codes[i] & codes[j]:
-                continue
-            a, b = clip[i], clip[j]
-            if (codes[i] | codes[j]) & OUT_NEAR:
-                if codes[i] & OUT_NEAR:
-                    a, b = b, a                      # a = the end in front
-                t = a[2] / (a[2] - b[2])
-                b = a + t * (b - a)
-                b[2] = 0.0
-            draw_segment(target, to_screen(a), to_screen(b), WIRE_COLOUR)
-        return target.colour
-
-    textured = scene.mode == "textured" and texture is not None and texture.size > 0
+    textured = is_textured(scene, texture)
     normals = world_normals(mesh, scene, n)
     for face in mesh.faces:
         corners = face[:, 0]
@@ -424,12 +428,42 @@ def render_frame(scene: Scene, mesh: Mesh, texture: np.ndarray | None, n: int) -
                 lighting = face_lighting
             else:
                 lighting = Lighting(normals=pieces[tri, 6:9], light=scene.light, ambient=scene.ambient)
-            if textured:
-                raster_triangle(target, screen[tri], zw[tri], q[tri], scene.cull, None,
-                                uv=pieces[tri, 4:6], texture=texture, lighting=lighting)
-            else:
-                raster_triangle(target, screen[tri], zw[tri], q[tri], scene.cull, FLAT_COLOUR,
-                                lighting=lighting)
+            yield FrameTriangle(screen[tri], zw[tri], q[tri], pieces[tri, 4:6] if textured else None, lighting)
+
+
+def frame_segments(scene: Scene, mesh: Mesh, n: int):
+    """The wireframe edges of frame n as screen end points (a, b), in drawing order: each unique
+    edge not outside one frustum plane, cut at the near plane (b then the cut end)."""
+    points = np.hstack([mesh.vertices, np.ones((len(mesh.vertices), 1))])
+    clip = points @ (projection_matrix(scene) @ model_matrix(scene, n)).T
+    codes = outcodes(clip)
+    for i, j in unique_edges(mesh.faces):
+        if codes[i] & codes[j]:
+            continue
+        a, b = clip[i], clip[j]
+        if (codes[i] | codes[j]) & OUT_NEAR:
+            if codes[i] & OUT_NEAR:
+                a, b = b, a                      # a = the end in front
+            t = a[2] / (a[2] - b[2])
+            b = a + t * (b - a)
+            b[2] = 0.0
+        yield to_screen(a), to_screen(b)
+
+
+def render_frame(scene: Scene, mesh: Mesh, texture: np.ndarray | None, n: int) -> np.ndarray:
+    """Frame n as a (240, 320) uint16 RGB565 array, row 0 at the top."""
+    target = Target(scene.background)
+    if scene.mode == "wireframe":
+        for a, b in frame_segments(scene, mesh, n):
+            draw_segment(target, a, b, WIRE_COLOUR)
+        return target.colour
+    for tri in frame_triangles(scene, mesh, texture, n):
+        if tri.uv is not None:
+            raster_triangle(target, tri.screen, tri.zw, tri.q, scene.cull, None,
+                            uv=tri.uv, texture=texture, lighting=tri.lighting)
+        else:
+            raster_triangle(target, tri.screen, tri.zw, tri.q, scene.cull, FLAT_COLOUR,
+                            lighting=tri.lighting)
     return target.colour
 
 

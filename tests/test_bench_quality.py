@@ -9,6 +9,7 @@ import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -222,3 +223,118 @@ def test_bench_writes_every_record_and_both_tables(tmp_path):
     assert quality.markdown_table(records[:2]) in md and quality.markdown_table(records[:2]) in printed
     assert len(list(csv.DictReader(io.StringIO((tmp_path / "quality.csv").read_text())))) == 2
     assert len(points((tmp_path / "quality.svg").read_text())) == 2
+
+
+# --- against the ideal image too ------------------------------------------------------------------
+
+def both(setting: str, instructions: float, psnr: float, ideal: float, **keys) -> dict:
+    """A record measured against the pixel-centre image (psnr) and the ideal one (ideal)."""
+    return {**rec(setting, instructions, psnr, **keys), "psnr_ideal_db": ideal, "max_error_ideal": 120,
+            "pixels_differ_ideal": 0.05}
+
+
+# the ideal's front differs: affine is worse than default against the pixel centres but not
+# against the ideal, and gouraud equals the pixel-centre reference exactly but not the ideal
+IDEAL_RECORDS = [both("default", 200_000, 45.0, 36.0), both("affine", 200_000, 40.0, 36.5),
+                 both("gouraud", 260_000, math.inf, 36.2), both("dear", 300_000, 30.0, 35.0),
+                 both("default", 40_000, 32.8, 25.0, mode="wireframe")]
+
+
+def test_front_against_the_ideal_is_its_own():
+    assert pareto_front(IDEAL_RECORDS[:4]) == {"default", "gouraud"}
+    assert pareto_front(IDEAL_RECORDS[:4], quality.IDEAL) == {"affine"}
+    assert quality.dominated_by(IDEAL_RECORDS[:4], "default", quality.IDEAL) == ["affine"]
+    assert quality.has_ideal(IDEAL_RECORDS) and not quality.has_ideal(RECORDS)
+    lines = quality.front_report(IDEAL_RECORDS)
+    assert lines == ["A torus, scale 0.35, textured: default is on the Pareto front",
+                     "A torus, scale 0.35, wireframe: default is on the Pareto front",
+                     "A torus, scale 0.35, textured: default is NOT on the Pareto front against the ideal "
+                     "(dominated by affine)",
+                     "A torus, scale 0.35, wireframe: default is on the Pareto front against the ideal"]
+
+
+def test_csv_and_markdown_carry_both_psnrs_and_both_fronts():
+    rows = list(csv.DictReader(io.StringIO(quality.csv_text(IDEAL_RECORDS))))
+    assert list(rows[0]) == ["scene", "scale", "mode", "setting", "instructions_per_frame", "relative_to_default",
+                             "psnr_db", "max_error", "pixels_differ_percent", "on_front", "psnr_ideal_db",
+                             "max_error_ideal", "pixels_differ_ideal_percent", "on_ideal_front"]
+    assert [r["on_front"] for r in rows] == ["yes", "no", "yes", "no", "yes"]
+    assert [r["on_ideal_front"] for r in rows] == ["no", "yes", "no", "no", "yes"]
+    assert rows[0]["psnr_ideal_db"] == "36.000" and rows[2]["psnr_db"] == "inf"
+    assert rows[0]["max_error_ideal"] == "120" and float(rows[0]["pixels_differ_ideal_percent"]) == pytest.approx(5)
+    # a record without the ideal's figures among others that have them: its cells stay empty
+    mixed = list(csv.DictReader(io.StringIO(quality.csv_text(IDEAL_RECORDS[:1] + [rec("old", 1, 1)]))))
+    assert mixed[1]["psnr_ideal_db"] == mixed[1]["on_ideal_front"] == ""
+    lines = quality.markdown_table(IDEAL_RECORDS).splitlines()
+    header = [c.strip() for c in lines[0].strip("|").split("|")]
+    assert header[-4:] == ["PSNR vs ideal (dB)", "max error vs ideal", "pixels differ vs ideal (%)", "on ideal front"]
+    assert all(line.count("|") == len(header) + 1 for line in lines)
+    assert lines[2] == ("| A torus | 0.35 | textured | **default** | 200,000 | 1.000 | 45.00 | 10 | 1.00 | yes | "
+                        "36.00 | 120 | 5.00 | no |")
+    assert "| gouraud | 260,000 | 1.300 | exact | 10 | 1.00 | yes | 36.20 | 120 | 5.00 | no |" in lines[4]
+
+
+def test_svg_has_a_row_of_panels_against_the_ideal():
+    svg = quality.svg_text(IDEAL_RECORDS)
+    root = ET.fromstring(svg)
+    assert len([g for g in root.iter(SVG + "g") if g.get("class") == "panel"]) == 4
+    assert len([p for p in root.iter(SVG + "path") if p.get("class") == "front"]) == 4
+    assert len(points(svg)) == 2 * len(IDEAL_RECORDS)
+    texts = [t.text for t in root.iter(SVG + "text")]
+    assert "PSNR vs ideal (dB)" in texts and "PSNR vs reference (dB)" in texts
+    assert "A torus, scale 0.35, textured, vs ideal" in texts and "A torus, scale 0.35, textured" in texts
+    tips = [t.text for t in root.iter(SVG + "title")]
+    assert any("PSNR 36.50 dB against the ideal" in t and "on the front" in t for t in tips)
+    assert any("PSNR exact dB against the pixel-centre reference" in t for t in tips)
+
+
+def test_bench_writes_both_psnrs_and_the_ideal_figures(tmp_path):
+    pytest.importorskip("unicorn")
+    import json
+    from tools import bench
+    name = bench.BENCH_SCENES[2][0]
+    extra = {"instructions_hart1": 910, "draw_time_ms": 0.5, "frame_time_ms": 7.6, "fps": 131.0,
+             "ideal_density": 8, "ideal_seconds_per_frame": 0.4}
+    records = [{**both("default", 200_000, 45.0, 36.0, scene=name, scale=0.9), **extra,
+                "ideal_convergence_db": 61.25},
+               {**both("gouraud", 220_000, math.inf, math.inf, scene=name, scale=0.9), **extra,
+                "ideal_convergence_db": 61.25},
+               {**both("default", 40_000, 30.0, 25.0, scene=name, scale=0.9, mode="wireframe"), **extra,
+                "ideal_convergence_db": math.inf}]
+    printed = bench.write_results(records, tmp_path, renderer=True, sweep=True)
+
+    def no_constants(name):
+        raise ValueError(f"results.json holds {name}, which strict JSON readers reject")
+    written = json.loads((tmp_path / "results.json").read_text(), parse_constant=no_constants)
+    assert written[0]["psnr_ideal_db"] == 36.0 and written[1]["psnr_ideal_db"] is None
+    assert written[2]["ideal_convergence_db"] is None and written[0]["ideal_convergence_db"] == 61.25
+    md = (tmp_path / "results.md").read_text()
+    assert "| C cube 6 faces, 8x8 | 0.9 | textured | 8 | 0.40 | 61.2 |" in md
+    assert "| C cube 6 faces, 8x8 | 0.9 | wireframe | 8 | 0.40 | exact |" in md
+    assert "| 45.0 | 10 | 1.00 % | 36.0 |" in bench.renderer_table(records)
+    assert bench.ideal_table(records) in printed
+    rows = list(csv.DictReader(io.StringIO((tmp_path / "quality.csv").read_text())))
+    assert [r["psnr_ideal_db"] for r in rows] == ["36.000", "inf", "25.000"]
+    assert len(points((tmp_path / "quality.svg").read_text())) == 2 * 3
+    assert "against its ideal image" in (tmp_path / "quality.md").read_text()
+
+
+def test_bench_shares_the_reference_frames_among_precision_settings():
+    pytest.importorskip("unicorn")
+    from dataclasses import replace
+    from reference import Mesh, Scene
+    from tools import bench
+    mesh = Mesh(np.zeros((3, 3)), np.zeros((0, 2)), np.zeros((0, 3)), np.zeros((1, 3, 3), np.int64))
+    scene = Scene()
+    key = bench._reference_key(scene, mesh, None, 6)
+    precise = replace(scene, interpolation="affine", shading="gouraud", light_levels=9, angles="table",
+                      depth="float32", snap="pixel", lines={"snap": 3})
+    assert bench._reference_key(precise, mesh, None, 6) == key
+    assert bench._reference_key(replace(scene, mode="flat"), mesh, None, 6) != key
+    assert bench._reference_key(scene, mesh, np.ones((1, 1), np.uint16), 6) != key
+    assert bench._reference_key(scene, mesh, None, 5) != key
+    frame = np.zeros((2, 2, 3), np.uint8)
+    assert bench.distance([frame], [frame]) == {"psnr_db": math.inf, "max_error": 0, "pixels_differ": 0.0}
+    off = frame.copy()
+    off[0, 0, 1] = 255
+    assert bench.distance([off], [frame])["psnr_db"] == pytest.approx(10 * math.log10(12))

@@ -112,6 +112,8 @@ COMMANDS = {
     "--golden tests/golden/default": ("run", _golden_matched),
     "python -m reference render-card build/card.img --frames 2 --out build/reference":
         ("run", _frames_written("build/reference", 2)),
+    "python -m reference render-card build/card.img --frames 2 --out build/reference-ideal --ideal":
+        ("run", _frames_written("build/reference-ideal", 2)),
     "python -m emulator run --help": ("run", _lists_exit_statuses),
     ".venv/bin/python -m pytest tests/test_reference.py -k first_golden -s":
         ("run", _prints_agreement),

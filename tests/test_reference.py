@@ -19,7 +19,8 @@ if str(ROOT) not in sys.path:
 
 from golden_scenes import DEFAULT_CARD, GOLDEN, SCENES, scene_card  # noqa: E402
 from reference import (Mesh, ModelError, Scene, SceneError, TextureError, load_card_image,  # noqa: E402
-                       load_files, parse_obj, parse_ppm, parse_scene, render_frame, render_image)
+                       load_files, parse_obj, parse_ppm, parse_scene, render_frame, render_ideal_frame,
+                       render_image)
 from reference.render import FLAT_COLOUR, Target, model_matrix, raster_triangle, shade  # noqa: E402
 
 W, H = 320, 240
@@ -422,7 +423,7 @@ def test_scene_values_and_defaults():
     assert parse_scene("background = 16 20 16\n").background == 0x10A2
 
 
-def test_precision_keys_parse_with_defaults_and_do_not_change_the_ideal_image():
+def test_precision_keys_parse_with_defaults_and_change_neither_image():
     default = parse_scene(None)
     assert (default.interpolation, default.shading, default.light_levels, default.angles, default.depth,
             default.snap) == ("perspective", "flat", 65, "polynomial", "int16", "subpixel")
@@ -441,6 +442,9 @@ def test_precision_keys_parse_with_defaults_and_do_not_change_the_ideal_image():
     precise = replace(plain, interpolation="affine", shading="gouraud", light_levels=2, angles="table",
                       depth="float32", snap="pixel")
     assert np.array_equal(render_frame(precise, mesh, None, 0), render_frame(plain, mesh, None, 0))
+    # the ideal image ignores them too (the bench renders it once for all settings of a scene)
+    assert np.array_equal(render_ideal_frame(precise, mesh, None, 0, density=2),
+                          render_ideal_frame(plain, mesh, None, 0, density=2))
 
 
 @pytest.mark.parametrize("text, line, what", [

@@ -9,13 +9,17 @@ Measured in one run on one host, so the ratios are meaningful even on a noisy ma
      alternate, and the fastest of each counts, so that a busy moment of the host does not
      decide the ratio).
 Those are printed and written to build/bench.json. Then, per thesis scene and mode, runs of the
-firmware measured against the float64 reference renderer (instructions per frame, PSNR, largest
-channel error, share of pixels that differ), written to build/bench/:
+firmware measured against the float64 reference renderer's two images, the pixel-centre one (the
+firmware's sampling, exact arithmetic) and the ideal one (area-averaged pixels, area-filtered
+textures) (instructions per frame, PSNR, largest channel error, share of pixels that differ, against
+each), written to build/bench/:
   - the renderer table: every scene, scale and mode with the default settings;
   - the precision sweep: every scene at its first scale, every mode, every precision setting of
     tools/quality.py's SETTINGS, with the Pareto front of instructions against PSNR:
     quality.csv, quality.md and quality.svg;
-  - results.json holds every record (each names its `setting`), results.md both tables.
+  - the ideal image's own figures per scene and mode: its host time per frame and its convergence
+    (frame 0 at the default density against twice it);
+  - results.json holds every record (each names its `setting`), results.md the tables.
 
     python tools/bench.py                        (what `make bench` runs: everything)
     python tools/bench.py --quality-only --scenes cube --modes flat --settings default,gouraud
@@ -23,12 +27,15 @@ channel error, share of pixels that differ), written to build/bench/:
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import hashlib
 import json
 import math
 import subprocess
 import sys
 import tempfile
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -207,7 +214,8 @@ def measure(firmware: Path, folder: Path, name: str, model: str, texture: str, s
             setting: str) -> dict:
     """One scene, mode and precision setting on the board model for BENCH_FRAMES frames: instructions
     per frame per hart, virtual frame time and frame rate (steady state: the first frame, which
-    includes loading, is left out) and the distance of all frames from the reference renderer's."""
+    includes loading, is left out) and the distance of all frames from the reference renderer's
+    pixel-centre and ideal images."""
     from sdcard_image import build_image
     started = time.perf_counter()
     keys = quality.SETTINGS[setting]
@@ -250,48 +258,134 @@ def scene_figures(firmware: Path, folder: Path, runs: list[tuple]) -> tuple[list
             print(f"[{n}/{len(runs)}] {what}: FAILED: {type(error).__name__}: {error}", file=sys.stderr, flush=True)
             continue
         print(f"[{n}/{len(runs)}] {what}: {records[-1]['instructions_hart0']:,} instructions/frame, "
-              f"PSNR {records[-1]['psnr_db']:.2f} dB, {records[-1]['host_time_s']:.1f} s",
+              f"PSNR {records[-1]['psnr_db']:.2f} dB, against the ideal {records[-1]['psnr_ideal_db']:.2f} dB, "
+              f"{records[-1]['host_time_s']:.1f} s",
               file=sys.stderr, flush=True)
     return records, failures
 
 
-def compare_with_reference(card: Path, frames: list[np.ndarray]) -> dict:
-    """How far the firmware's frames are from the float64 reference renderer's (reference/):
-    PSNR over all frames, the largest channel error and the share of pixels that differ."""
+@dataclass
+class ReferenceFrames:
+    """The reference renderer's frames of one scene (RGB as the LCD shows them), and the ideal
+    image's own figures: host seconds per frame, and frame 0 at the default density against
+    twice the density (PSNR, dB)."""
+    pixel_centre: list[np.ndarray]
+    ideal: list[np.ndarray]
+    ideal_seconds_per_frame: float
+    ideal_convergence_db: float
+
+
+# The reference ignores the precision keys, so every setting of a scene shares its frames: rendered
+# once per scene, mode and scale (the ideal takes about a second a frame).
+_reference_cache: dict[tuple, ReferenceFrames] = {}
+
+
+def _reference_key(scene, mesh, texture, count: int) -> tuple:
+    """What the reference's frames depend on: the scene without its precision keys, the model's
+    arrays, the texture's texels and the number of frames."""
+    from reference.scene import PRECISION_WORDS
+    ignored = set(PRECISION_WORDS) | {"light_levels", "lines"}
+    fields = tuple((f.name, repr(getattr(scene, f.name))) for f in dataclasses.fields(scene) if f.name not in ignored)
+    digest = hashlib.sha256()
+    for array in (mesh.vertices, mesh.texcoords, mesh.normals, mesh.faces,
+                  np.zeros(0) if texture is None else texture):
+        digest.update(repr(array.shape).encode() + np.ascontiguousarray(array).tobytes())
+    return fields, digest.hexdigest(), count
+
+
+def reference_frames(card: Path, count: int) -> ReferenceFrames:
+    """Frames 0 .. count-1 of the card's scene from the reference renderer, both images."""
     import reference
+    from reference.ideal import DEFAULT_DENSITY
     scene, mesh, texture = reference.load_card_image(card)
+    key = _reference_key(scene, mesh, texture, count)
+    if key not in _reference_cache:
+        pixel_centre = [reference.render_image(scene, mesh, texture, n) for n in range(count)]
+        started = time.perf_counter()
+        ideal = [reference.render_ideal_image(scene, mesh, texture, n) for n in range(count)]
+        seconds = (time.perf_counter() - started) / count
+        denser = reference.render_ideal_image(scene, mesh, texture, 0, density=2 * DEFAULT_DENSITY)
+        _reference_cache[key] = ReferenceFrames(pixel_centre, ideal, seconds, distance(ideal[:1], [denser])["psnr_db"])
+    return _reference_cache[key]
+
+
+def distance(shown: list[np.ndarray], expected: list[np.ndarray]) -> dict:
+    """PSNR over all frames (infinite when equal), the largest channel error and the share of
+    pixels that differ, of RGB frames against the expected ones."""
     squared, largest, differing, pixels = 0.0, 0, 0, 0
-    for n, shown in enumerate(frames):
-        expected = reference.render_image(scene, mesh, texture, n).astype(np.int32)
-        error = np.abs(shown.astype(np.int32) - expected)
+    for image, wanted in zip(shown, expected):
+        error = np.abs(image.astype(np.int32) - wanted.astype(np.int32))
         squared += float((error.astype(np.float64) ** 2).sum())
         largest = max(largest, int(error.max()))
         differing += int(np.any(error, axis=2).sum())
         pixels += error.shape[0] * error.shape[1]
     mse = squared / (pixels * 3)
-    return {"psnr_db": float("inf") if mse == 0 else 10 * np.log10(255 ** 2 / mse),
+    return {"psnr_db": float("inf") if mse == 0 else float(10 * np.log10(255 ** 2 / mse)),
             "max_error": largest, "pixels_differ": differing / pixels}
+
+
+def compare_with_reference(card: Path, frames: list[np.ndarray]) -> dict:
+    """How far the firmware's frames are from the float64 reference renderer's (reference/): PSNR
+    over all frames, the largest channel error and the share of pixels that differ, against its
+    pixel-centre image (psnr_db, max_error, pixels_differ) and its ideal image (the same names
+    ending in _ideal), with the ideal's density, host time per frame and convergence."""
+    from reference.ideal import DEFAULT_DENSITY
+    expected = reference_frames(card, len(frames))
+    ideal = distance(frames, expected.ideal)
+    return {**distance(frames, expected.pixel_centre),
+            "psnr_ideal_db": ideal["psnr_db"], "max_error_ideal": ideal["max_error"],
+            "pixels_differ_ideal": ideal["pixels_differ"],
+            "ideal_density": DEFAULT_DENSITY, "ideal_seconds_per_frame": expected.ideal_seconds_per_frame,
+            "ideal_convergence_db": expected.ideal_convergence_db}
+
+
+def _db(value: float | None) -> str:
+    return "" if value is None else f"{value:.1f}"
 
 
 def renderer_table(records: list[dict]) -> str:
     """The renderer table: the default setting at every scene, scale and mode."""
     lines = ["| scene | scale | mode | instructions hart 0 / frame | hart 1 / frame | draw time (ms) | "
-             "frame time (ms) | fps | PSNR vs reference (dB) | max error | pixels differ |",
-             "|---|---|---|---|---|---|---|---|---|---|---|"]
+             "frame time (ms) | fps | PSNR vs reference (dB) | max error | pixels differ | PSNR vs ideal (dB) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in records:
         if r["setting"] != quality.DEFAULT_SETTING:
             continue
         lines.append(f"| {r['scene']} | {r['scale']:g} | {r['mode']} | {r['instructions_hart0']:,} | "
                      f"{r['instructions_hart1']:,} | {r['draw_time_ms']:.2f} | {r['frame_time_ms']:.2f} | "
-                     f"{r['fps']:.1f} | {r['psnr_db']:.1f} | {r['max_error']} | {100 * r['pixels_differ']:.2f} % |")
+                     f"{r['fps']:.1f} | {r['psnr_db']:.1f} | {r['max_error']} | {100 * r['pixels_differ']:.2f} % | "
+                     f"{_db(r.get('psnr_ideal_db'))} |")
     return "\n".join(lines) + "\n"
+
+
+def ideal_table(records: list[dict]) -> str:
+    """The ideal image's own figures, once per scene, scale and mode (from the first record that
+    carries them): density, host time per frame, and frame 0 against twice the density."""
+    lines = ["| scene | scale | mode | density | host time per ideal frame (s) | "
+             "PSNR against twice the density, frame 0 (dB) |",
+             "|---|---|---|---:|---:|---:|"]
+    seen = set()
+    for r in records:
+        key = (r["scene"], r["scale"], r["mode"])
+        if key in seen or r.get("ideal_density") is None:
+            continue
+        seen.add(key)
+        convergence = r["ideal_convergence_db"]
+        lines.append(f"| {r['scene']} | {r['scale']:g} | {r['mode']} | {r['ideal_density']} | "
+                     f"{r['ideal_seconds_per_frame']:.2f} | "
+                     f"{'exact' if convergence is None or math.isinf(convergence) else f'{convergence:.1f}'} |")
+    return "\n".join(lines) + "\n" if seen else ""
+
+
+# the record's figures that are infinite for frames equal to what they are compared with
+INFINITE_WHEN_EQUAL = ("psnr_db", "psnr_ideal_db", "ideal_convergence_db")
 
 
 def strict_json_record(record: dict) -> dict:
     """The record as strict JSON holds it: an infinite PSNR (frames equal to the reference's) is
     written as null, since JSON has no Infinity and strict readers reject Python's extension."""
-    psnr = record.get("psnr_db")
-    return {**record, "psnr_db": None} if psnr is not None and math.isinf(psnr) else record
+    return {**record, **{key: None for key in INFINITE_WHEN_EQUAL
+                         if record.get(key) is not None and math.isinf(record[key])}}
 
 
 def write_results(records: list[dict], folder: Path, renderer: bool, sweep: bool) -> str:
@@ -305,6 +399,11 @@ def write_results(records: list[dict], folder: Path, renderer: bool, sweep: bool
         table = renderer_table(records)
         md += "## Renderer: every thesis scene, scale and mode, default settings\n\n" + table
         printed += table
+    ideal = ideal_table(records)
+    if ideal:
+        md += (("\n" if md else "") + "## The ideal image: host time per frame and convergence (reference/ideal.py)\n\n"
+               + ideal)
+        printed += ("\n" if printed else "") + ideal
     if sweep:
         swept = [r for r in records if in_sweep(r)]
         report = quality.write_quality(swept, folder)

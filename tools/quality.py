@@ -4,7 +4,11 @@ plot (hand-written SVG, small multiples, one panel per scene and mode).
 
 Pure functions over records (dicts) with no emulator in sight, so they are tested quickly
 (tests/test_bench_quality.py). A record has at least `scene`, `scale`, `mode`, `setting`,
-`instructions_hart0`, `psnr_db`, `max_error` and `pixels_differ` (a share, 0 to 1).
+`instructions_hart0`, `psnr_db`, `max_error` and `pixels_differ` (a share, 0 to 1): the distance
+from the reference renderer's pixel-centre image. A record may also carry `psnr_ideal_db`,
+`max_error_ideal` and `pixels_differ_ideal`, the same against the ideal image (reference/ideal.py);
+where records carry them the tables gain their columns, the front against the ideal, and the plot
+a second row of panels.
 """
 from __future__ import annotations
 
@@ -55,30 +59,43 @@ def settings_for_mode(mode: str, wanted: Iterable[str] | None = None) -> list[st
 
 # --- the Pareto front -----------------------------------------------------------------------------
 
-def _quality(record: dict) -> float:
-    q = float(record["psnr_db"])
+# What a PSNR is measured against: the record's key -> (its fields' suffix, the plot's axis label).
+PIXEL_CENTRE = "psnr_db"           # the reference renderer's pixel-centre image (reference/render.py)
+IDEAL = "psnr_ideal_db"            # its ideal image (reference/ideal.py)
+METRICS = {PIXEL_CENTRE: ("", "PSNR vs reference (dB)"), IDEAL: ("_ideal", "PSNR vs ideal (dB)")}
+
+
+def has_ideal(records: Iterable[dict]) -> bool:
+    """Whether the records carry PSNRs against the ideal image."""
+    return any(r.get(IDEAL) is not None for r in records)
+
+
+def _quality(record: dict, metric: str = PIXEL_CENTRE) -> float:
+    value = record.get(metric)
+    q = math.nan if value is None else float(value)
     return -math.inf if math.isnan(q) else q
 
 
-def dominates(a: dict, b: dict) -> bool:
+def dominates(a: dict, b: dict, metric: str = PIXEL_CENTRE) -> bool:
     """a is at least as cheap and at least as good as b, and strictly better in one of them."""
-    ca, cb, qa, qb = a["instructions_hart0"], b["instructions_hart0"], _quality(a), _quality(b)
+    ca, cb, qa, qb = a["instructions_hart0"], b["instructions_hart0"], _quality(a, metric), _quality(b, metric)
     return ca <= cb and qa >= qb and (ca < cb or qa > qb)
 
 
-def pareto_front(records: Iterable[dict]) -> set[str]:
+def pareto_front(records: Iterable[dict], metric: str = PIXEL_CENTRE) -> set[str]:
     """Names (`setting`) of the records no other record dominates, fewer instructions per frame
-    and higher PSNR being better. Equal points do not dominate each other: both are on the front.
-    Infinite PSNR (frames identical to the reference) is better than any finite one."""
+    and higher PSNR (`metric`: against the pixel-centre image or the ideal) being better. Equal
+    points do not dominate each other: both are on the front. Infinite PSNR (frames identical to
+    the reference) is better than any finite one."""
     records = list(records)
-    return {r["setting"] for r in records if not any(dominates(o, r) for o in records if o is not r)}
+    return {r["setting"] for r in records if not any(dominates(o, r, metric) for o in records if o is not r)}
 
 
-def dominated_by(records: Iterable[dict], name: str) -> list[str]:
+def dominated_by(records: Iterable[dict], name: str, metric: str = PIXEL_CENTRE) -> list[str]:
     """The settings that dominate the one called `name`."""
     records = list(records)
     target = [r for r in records if r["setting"] == name]
-    return [o["setting"] for o in records for t in target if o is not t and dominates(o, t)]
+    return [o["setting"] for o in records for t in target if o is not t and dominates(o, t, metric)]
 
 
 def panel_key(record: dict) -> tuple:
@@ -94,17 +111,23 @@ def panels(records: Iterable[dict]) -> dict[tuple, list[dict]]:
 
 
 def front_report(records: Iterable[dict]) -> list[str]:
-    """One line per panel: is the default setting on the Pareto front?"""
+    """One line per panel: is the default setting on the Pareto front? Then, where the records
+    carry PSNRs against the ideal, one line per panel for the front against the ideal."""
+    records = list(records)
     lines = []
-    for (scene, scale, mode), group in panels(records).items():
-        where = f"{scene}, scale {scale:g}, {mode}"
-        if not any(r["setting"] == DEFAULT_SETTING for r in group):
-            lines.append(f"{where}: no '{DEFAULT_SETTING}' run")
-        elif DEFAULT_SETTING in pareto_front(group):
-            lines.append(f"{where}: default is on the Pareto front")
-        else:
-            lines.append(f"{where}: default is NOT on the Pareto front "
-                         f"(dominated by {', '.join(dominated_by(group, DEFAULT_SETTING))})")
+    metrics = [(PIXEL_CENTRE, "the Pareto front")]
+    if has_ideal(records):
+        metrics.append((IDEAL, "the Pareto front against the ideal"))
+    for metric, front_name in metrics:
+        for (scene, scale, mode), group in panels(records).items():
+            where = f"{scene}, scale {scale:g}, {mode}"
+            if not any(r["setting"] == DEFAULT_SETTING for r in group):
+                lines.append(f"{where}: no '{DEFAULT_SETTING}' run")
+            elif DEFAULT_SETTING in pareto_front(group, metric):
+                lines.append(f"{where}: default is on {front_name}")
+            else:
+                lines.append(f"{where}: default is NOT on {front_name} "
+                             f"(dominated by {', '.join(dominated_by(group, DEFAULT_SETTING, metric))})")
     return lines
 
 
@@ -116,16 +139,33 @@ TABLE_COLUMNS = [  # (CSV header, Markdown header)
     ("psnr_db", "PSNR (dB)"), ("max_error", "max error"), ("pixels_differ_percent", "pixels differ (%)"),
     ("on_front", "on front"),
 ]
+# and, where the records carry them, the same against the ideal image
+IDEAL_COLUMNS = [
+    ("psnr_ideal_db", "PSNR vs ideal (dB)"), ("max_error_ideal", "max error vs ideal"),
+    ("pixels_differ_ideal_percent", "pixels differ vs ideal (%)"), ("on_ideal_front", "on ideal front"),
+]
+
+
+def table_columns(records: Iterable[dict]) -> list[tuple[str, str]]:
+    """The table's columns: TABLE_COLUMNS, and IDEAL_COLUMNS where the records carry the ideal."""
+    return TABLE_COLUMNS + (IDEAL_COLUMNS if has_ideal(records) else [])
+
+
+def _optional(value, kind):
+    return None if value is None else kind(value)
 
 
 def table_rows(records: Iterable[dict]) -> list[dict]:
     """One row per record (grouped by panel, settings in record order) with the table's columns:
-    instructions relative to the same panel's default (None without one) and front membership."""
+    instructions relative to the same panel's default (None without one) and front membership,
+    against the pixel-centre image and (None where a record has no ideal PSNR) the ideal."""
     rows = []
     for group in panels(records).values():
         front = pareto_front(group)
+        ideal_front = pareto_front(group, IDEAL)
         default = next((r for r in group if r["setting"] == DEFAULT_SETTING), None)
         for r in group:
+            ideal = r.get(IDEAL) is not None
             rows.append({
                 "scene": r["scene"], "scale": r["scale"], "mode": r["mode"], "setting": r["setting"],
                 "instructions_per_frame": int(round(r["instructions_hart0"])),
@@ -134,41 +174,72 @@ def table_rows(records: Iterable[dict]) -> list[dict]:
                 "psnr_db": float(r["psnr_db"]), "max_error": int(r["max_error"]),
                 "pixels_differ_percent": 100 * float(r["pixels_differ"]),
                 "on_front": r["setting"] in front,
+                "psnr_ideal_db": _optional(r.get(IDEAL), float),
+                "max_error_ideal": _optional(r.get("max_error_ideal"), int),
+                "pixels_differ_ideal_percent": _optional(r.get("pixels_differ_ideal"), lambda v: 100 * float(v)),
+                "on_ideal_front": (r["setting"] in ideal_front) if ideal else None,
             })
     return rows
 
 
+def _csv_psnr(psnr: float | None) -> str:
+    return "" if psnr is None else "inf" if math.isinf(psnr) else f"{psnr:.3f}"
+
+
+def _yes_no(flag: bool | None) -> str:
+    return "" if flag is None else "yes" if flag else "no"
+
+
 def csv_text(records: Iterable[dict]) -> str:
     """The table as CSV: plain numbers (PSNR `inf` for identical frames, relative empty without a
-    default run), on_front yes/no."""
+    default run), on_front yes/no; the ideal's columns where the records carry them (empty for a
+    record without)."""
+    records = list(records)
+    ideal = has_ideal(records)
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")
-    writer.writerow([c for c, _ in TABLE_COLUMNS])
+    writer.writerow([c for c, _ in table_columns(records)])
     for row in table_rows(records):
-        writer.writerow([
+        cells = [
             row["scene"], f"{row['scale']:g}", row["mode"], row["setting"], row["instructions_per_frame"],
             "" if row["relative_to_default"] is None else f"{row['relative_to_default']:.4f}",
-            "inf" if math.isinf(row["psnr_db"]) else f"{row['psnr_db']:.3f}",
-            row["max_error"], f"{row['pixels_differ_percent']:.4f}", "yes" if row["on_front"] else "no",
-        ])
+            _csv_psnr(row["psnr_db"]), row["max_error"], f"{row['pixels_differ_percent']:.4f}",
+            _yes_no(row["on_front"]),
+        ]
+        if ideal:
+            cells += [_csv_psnr(row["psnr_ideal_db"]),
+                      "" if row["max_error_ideal"] is None else row["max_error_ideal"],
+                      "" if row["pixels_differ_ideal_percent"] is None else f"{row['pixels_differ_ideal_percent']:.4f}",
+                      _yes_no(row["on_ideal_front"])]
+        writer.writerow(cells)
     return out.getvalue()
 
 
-def _psnr_text(psnr: float) -> str:
+def _psnr_text(psnr: float | None) -> str:
+    if psnr is None:
+        return ""
     return "exact" if math.isinf(psnr) and psnr > 0 else f"{psnr:.2f}"
 
 
 def markdown_table(records: Iterable[dict]) -> str:
     """The table in Markdown (thousands separated, PSNR `exact` for identical frames)."""
-    lines = ["| " + " | ".join(h for _, h in TABLE_COLUMNS) + " |",
-             "|" + "---|" * 3 + "---|" + "---:|" * 5 + "---|"]
+    records = list(records)
+    ideal = has_ideal(records)
+    lines = ["| " + " | ".join(h for _, h in table_columns(records)) + " |",
+             "|" + "---|" * 3 + "---|" + "---:|" * 5 + "---|" + ("---:|" * 3 + "---|" if ideal else "")]
     for row in table_rows(records):
         relative = "" if row["relative_to_default"] is None else f"{row['relative_to_default']:.3f}"
         setting = f"**{row['setting']}**" if row["setting"] == DEFAULT_SETTING else row["setting"]
-        lines.append(f"| {row['scene']} | {row['scale']:g} | {row['mode']} | {setting} | "
-                     f"{row['instructions_per_frame']:,} | {relative} | {_psnr_text(row['psnr_db'])} | "
-                     f"{row['max_error']} | {row['pixels_differ_percent']:.2f} | "
-                     f"{'yes' if row['on_front'] else 'no'} |")
+        line = (f"| {row['scene']} | {row['scale']:g} | {row['mode']} | {setting} | "
+                f"{row['instructions_per_frame']:,} | {relative} | {_psnr_text(row['psnr_db'])} | "
+                f"{row['max_error']} | {row['pixels_differ_percent']:.2f} | "
+                f"{_yes_no(row['on_front'])} |")
+        if ideal:
+            differ = row["pixels_differ_ideal_percent"]
+            line += (f" {_psnr_text(row['psnr_ideal_db'])} | "
+                     f"{'' if row['max_error_ideal'] is None else row['max_error_ideal']} | "
+                     f"{'' if differ is None else f'{differ:.2f}'} | {_yes_no(row['on_ideal_front'])} |")
+        lines.append(line)
     return "\n".join(lines) + "\n"
 
 
@@ -255,14 +326,16 @@ def _place_labels(points: list[tuple[float, float, str]], bounds: tuple) -> list
     return out
 
 
-def _panel_svg(group: list[dict], title: str, ox: float, oy: float) -> list[str]:
-    """One panel at (ox, oy): axes, ticks, the front's step line, one point per record, labels."""
+def _panel_svg(group: list[dict], title: str, ox: float, oy: float, metric: str = PIXEL_CENTRE) -> list[str]:
+    """One panel at (ox, oy): axes, ticks, the front's step line, one point per record, labels;
+    PSNR against the pixel-centre image or the ideal (`metric`)."""
+    suffix, axis_label = METRICS[metric]
     left, top = ox + PAD_L, oy + PAD_T
     right, bottom = ox + PANEL_W - PAD_R, oy + PANEL_H - PAD_B
-    front = pareto_front(group)
+    front = pareto_front(group, metric)
     costs = [float(r["instructions_hart0"]) for r in group]
-    exact = [r for r in group if _quality(r) >= PSNR_CEILING_DB]
-    finite = [_quality(r) for r in group if _quality(r) < PSNR_CEILING_DB and math.isfinite(_quality(r))]
+    exact = [r for r in group if _quality(r, metric) >= PSNR_CEILING_DB]
+    finite = [_quality(r, metric) for r in group if _quality(r, metric) < PSNR_CEILING_DB and math.isfinite(_quality(r, metric))]
     # axes ranges: a little room around the points, then out to round ticks
     span = max(costs) - min(costs)
     pad = span * 0.06 if span else max(1.0, max(costs) * 0.05)
@@ -309,25 +382,29 @@ def _panel_svg(group: list[dict], title: str, ox: float, oy: float) -> list[str]
                  f'stroke-dasharray="4 3"/>')
         s.append(_text(left - 6, top + EXACT_BAND / 2 + 3.5, "exact", 10, "end", ' font-style="italic"'))
     s.append(_text((left + right) / 2, bottom + 32, "instructions / frame (hart 0)", 11, "middle"))
-    s.append(_text(ox + 16, (top + bottom) / 2, "PSNR vs reference (dB)", 11, "middle",
+    s.append(_text(ox + 16, (top + bottom) / 2, axis_label, 11, "middle",
                    f' transform="rotate(-90 {ox + 16:.1f} {(top + bottom) / 2:.1f})"'))
     # the front as a step line: the best PSNR available at each budget of instructions
-    steps = sorted((r for r in group if r["setting"] in front), key=lambda r: (r["instructions_hart0"], _quality(r)))
+    steps = sorted((r for r in group if r["setting"] in front), key=lambda r: (r["instructions_hart0"], _quality(r, metric)))
     if steps:
-        d = f"M{px(steps[0]['instructions_hart0']):.1f},{py(_quality(steps[0])):.1f}"
+        d = f"M{px(steps[0]['instructions_hart0']):.1f},{py(_quality(steps[0], metric)):.1f}"
         for r in steps[1:]:
-            d += f" H{px(r['instructions_hart0']):.1f} V{py(_quality(r)):.1f}"
+            d += f" H{px(r['instructions_hart0']):.1f} V{py(_quality(r, metric)):.1f}"
         d += f" H{right:.1f}"
         s.append(f'<path class="front" d="{d}" fill="none" stroke="{FRONT_COLOUR}" stroke-width="2" '
                  f'stroke-opacity="0.55"/>')
     # the points, the default last so that it is drawn on top
     labels: dict[tuple[int, int], list[str]] = {}
     for r in sorted(group, key=lambda r: r["setting"] == DEFAULT_SETTING):
-        x, y = px(r["instructions_hart0"]), py(_quality(r))
+        x, y = px(r["instructions_hart0"]), py(_quality(r, metric))
         on_front = r["setting"] in front
-        psnr = _psnr_text(float(r["psnr_db"]))
-        tip = (f"{r['setting']}: {int(round(r['instructions_hart0'])):,} instructions/frame, PSNR {psnr} dB, "
-               f"max error {r['max_error']}, {100 * float(r['pixels_differ']):.2f} % of pixels differ"
+        value = r.get(metric)
+        psnr = _psnr_text(None if value is None else float(value))
+        against = "the ideal" if metric == IDEAL else "the pixel-centre reference"
+        differ = r.get("pixels_differ" + suffix)
+        tip = (f"{r['setting']}: {int(round(r['instructions_hart0'])):,} instructions/frame, PSNR {psnr} dB "
+               f"against {against}, max error {r.get('max_error' + suffix, '?')}, "
+               f"{'?' if differ is None else f'{100 * float(differ):.2f}'} % of pixels differ"
                f"{', on the front' if on_front else ''}")
         s.append(f'<g class="point" data-setting="{escape(r["setting"])}">')
         s.append(f"<title>{escape(tip)}</title>")
@@ -354,13 +431,18 @@ def _panel_svg(group: list[dict], title: str, ox: float, oy: float) -> list[str]
 
 
 def svg_text(records: Iterable[dict], title: str = "Instructions per frame against PSNR, per precision setting") -> str:
-    """The plot: a grid of panels, one row per scene (and scale), one column per mode."""
+    """The plot: a grid of panels, one row per scene (and scale), one column per mode; where the
+    records carry PSNRs against the ideal, each scene's row is followed by a row of the same
+    panels against the ideal."""
+    records = list(records)
     groups = panels(records)
-    rows = list(dict.fromkeys((scene, scale) for scene, scale, _ in groups))
+    metrics = [PIXEL_CENTRE] + ([IDEAL] if has_ideal(records) else [])
+    rows = [(scene, scale, metric) for scene, scale in dict.fromkeys((scene, scale) for scene, scale, _ in groups)
+            for metric in metrics]
     cols = list(dict.fromkeys(mode for _, _, mode in groups))
     header = 78
     width = max(860, max(1, len(cols)) * PANEL_W + 20)
-    height = header + max(1, len(rows)) * PANEL_H + 52
+    height = header + max(1, len(rows)) * PANEL_H + (70 if IDEAL in metrics else 52)
     s = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" '
          f'viewBox="0 0 {width} {height}" {FONT}>',
          f'<rect width="{width}" height="{height}" fill="#f4f4f4"/>',
@@ -377,11 +459,16 @@ def svg_text(records: Iterable[dict], title: str = "Instructions per frame again
           f'stroke-opacity="0.55"/>',
           _text(lx + 426, ly + 4, "best PSNR within a budget of instructions (the front)", 11)]
     for (scene, scale, mode), group in groups.items():
-        ox = 10 + cols.index(mode) * PANEL_W
-        oy = header + rows.index((scene, scale)) * PANEL_H
-        s += _panel_svg(group, f"{scene}, scale {scale:g}, {mode}", ox, oy)
+        for metric in metrics:
+            ox = 10 + cols.index(mode) * PANEL_W
+            oy = header + rows.index((scene, scale, metric)) * PANEL_H
+            title = f"{scene}, scale {scale:g}, {mode}" + (", vs ideal" if metric == IDEAL else "")
+            s += _panel_svg(group, title, ox, oy, metric)
     s.append(_text(20, height - 32, "Fewer instructions (left) and higher PSNR against the float64 reference renderer "
                    "(up) are better; hover a point for its maximum error and share of differing pixels.", 11))
+    if IDEAL in metrics:
+        s.append(_text(20, height - 50, "Rows marked 'vs ideal': PSNR against the ideal image (area-averaged pixels, "
+                       "area-filtered textures); the others against the pixel-centre image.", 11))
     s.append(_text(20, height - 14, f"Frames identical to the reference (infinite PSNR) sit on the row 'exact', "
                    f"plotted at a ceiling of {PSNR_CEILING_DB:g} dB above a break in the axis.", 11))
     s.append("</svg>")
@@ -403,7 +490,11 @@ def write_quality(records: list[dict], folder: Path) -> str:
         "how far its frames are from the float64 reference renderer: PSNR over all frames, the largest "
         "per-channel error and the share of pixels that differ. `on front`: no other setting of the same "
         "scene and mode needs no more instructions and reaches at least the PSNR, being better in one. "
-        "Plot: quality.svg.\n\n"
+        + ("The first PSNR, error and front are against the reference's pixel-centre image (its sampling is "
+           "the firmware's, so they measure arithmetic); the columns `vs ideal` against its ideal image "
+           "(area-averaged pixels, area-filtered textures: what a camera would see, so they measure aliasing "
+           "too). " if has_ideal(records) else "")
+        + "Plot: quality.svg.\n\n"
         "| setting | scene.ini keys |\n|---|---|\n"
         + "".join(f"| {name} | {' '.join(f'`{k} = {v}`' for k, v in keys.items()) or '(firmware defaults)'} |\n"
                   for name, keys in SETTINGS.items())
