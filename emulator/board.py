@@ -21,11 +21,12 @@ from .disasm import disassemble_one
 from .dmac import Dmac
 from .elf import RESET_PC, LoadedImage, load_elf
 from .fpioa import Fpioa
+from .gpio import Gpio
 from .gpiohs import Gpiohs
 from .hart import Hart
 from .memory import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE, Sram
 from .mmio import Peripheral
-from .plic import SOURCE_DMA0, SOURCE_GPIOHS0, SOURCE_SPI0, SOURCE_SPI1, SOURCE_UARTHS, Plic
+from .plic import SOURCE_DMA0, SOURCE_GPIO, SOURCE_GPIOHS0, SOURCE_SPI0, SOURCE_SPI1, SOURCE_UARTHS, Plic
 from .scheduler import (DEFAULT_HANG_BUDGET_S, DEFAULT_QUANTUM, HARTS, FrameRecord, RunResult,  # noqa: F401
                         Scheduler)  # FrameRecord and RunResult: the board's results, imported from here
 from .sdcard import SdCard, SdImage
@@ -80,6 +81,7 @@ class Board:
         self.sysctl = Sysctl(self)
         self.fpioa = Fpioa(self)
         self.gpiohs = Gpiohs(self)
+        self.gpio = Gpio(self)
         self._console = console or (lambda byte: None)
         self._console_line = bytearray()
         self._line_began = 0.0                             # when the line under way began
@@ -91,8 +93,8 @@ class Board:
         self.dmac = Dmac(self)
         self.spi0 = SpiController(0, self)
         self.spi1 = SpiController(1, self)
-        self.peripherals: list[Peripheral] = [self.sysctl, self.fpioa, self.gpiohs, self.uarths, self.clint,
-                                              self.plic, self.dmac, self.spi0, self.spi1]
+        self.peripherals: list[Peripheral] = [self.sysctl, self.fpioa, self.gpiohs, self.gpio, self.uarths,
+                                              self.clint, self.plic, self.dmac, self.spi0, self.spi1]
         self.timed_devices = [self.uarths, self.spi0, self.spi1, self.dmac, self.sysctl, self.clint]
         self.scheduler = Scheduler(self, quantum, hang_budget_s)
         self.lcd = ST7789V(on_frame=self.scheduler.frame_captured,
@@ -237,6 +239,15 @@ class Board:
     def gpiohs_level_on_pad(self, pad: int) -> int | None:
         return self.wiring.gpiohs_level_on_pad(pad)
 
+    def pad_level(self, pad: int) -> int | None:
+        """The level a GPIOHS or GPIO line drives on a pad (None: no such line drives it)."""
+        return self.wiring.pad_level(pad)
+
+    @property
+    def pad_changes(self) -> list[tuple[float, int, int | None]]:
+        """Every change of a pad's GPIOHS/GPIO level: (virtual time, pad, level or None)."""
+        return self.wiring.pad_changes
+
     def wiring_changed(self, now: float) -> None:
         self.wiring.changed(now)
 
@@ -245,7 +256,8 @@ class Board:
 
     def reset_peripheral(self, name: str, now: float) -> None:
         """SYSCTL peri_reset released a block: it returns to its reset state."""
-        target = {"spi0": self.spi0, "spi1": self.spi1, "dma": self.dmac, "fpioa": self.fpioa}.get(name)
+        target = {"spi0": self.spi0, "spi1": self.spi1, "dma": self.dmac, "fpioa": self.fpioa,
+                  "gpio": self.gpio}.get(name)
         if target is not None:
             self.advance_devices(now)
             target.reset(now)
@@ -332,6 +344,8 @@ class Board:
         if self.spi1.irq_line():
             high.append(SOURCE_SPI1)
         high.extend(SOURCE_DMA0 + n for n in range(6) if self.dmac.irq_line(n))
+        if self.gpio.irq_line():
+            high.append(SOURCE_GPIO)
         if self.uarths.irq_line():
             high.append(SOURCE_UARTHS)
         lines = self.gpiohs.irq_lines()
