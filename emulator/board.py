@@ -191,6 +191,10 @@ class Board:
         """Runs until `frames` frames have been shown. Raises a BoardStop subclass otherwise."""
         return self.scheduler.run(frames, progress)
 
+    def run_until(self, until_s: float, progress: Callable[["Board"], None] | None = None) -> RunResult:
+        """Runs until `until_s` of virtual time, frames or not (Scheduler.run_until)."""
+        return self.scheduler.run_until(until_s, progress)
+
     def finish_console_line(self, limit_s: float | None = None) -> None:
         """After run(): lets the console line begun after the last frame end (Scheduler's doc)."""
         if limit_s is None:
