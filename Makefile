@@ -49,7 +49,7 @@ CFW_CFLAGS   := -march=rv64imafdc -mabi=lp64d -mcmodel=medany -Os -g -std=gnu11 
 CFW_LDFLAGS  := -nostartfiles -T $(CFW_DIR)/k210.ld -Wl,--gc-sections -Wl,--no-relax -Wl,--no-warn-rwx-segments
 CFW_LIB_OBJS := $(patsubst %,$(BUILD)/cfw/%.o,$(CFW_LIB))
 CFW_ELFS     := $(patsubst %,$(BUILD)/cfw/%.elf,$(CFW_PROGRAMS))
-.SECONDARY: $(CFW_LIB_OBJS) $(patsubst %,$(BUILD)/cfw/%.o,$(CFW_PROGRAMS))
+.SECONDARY: $(CFW_LIB_OBJS) $(patsubst %,$(BUILD)/cfw/%.o,$(CFW_PROGRAMS)) $(BUILD)/cfw/lcd_serial.o
 
 $(BUILD)/cfw/%.o: $(CFW_DIR)/%.c $(wildcard $(CFW_DIR)/*.h) | toolchain
 	@mkdir -p $(dir $@)
@@ -62,7 +62,17 @@ $(BUILD)/cfw/%.o: $(CFW_DIR)/%.S | toolchain
 $(BUILD)/cfw/%.elf: $(BUILD)/cfw/%.o $(CFW_LIB_OBJS) $(CFW_DIR)/k210.ld
 	$(CC) $(CFW_CFLAGS) $(CFW_LDFLAGS) -o $@ $< $(CFW_LIB_OBJS) -lm
 
-c-firmware: toolchain $(CFW_ELFS)
+# lcd_demo again, its LCD driver built for a 4-line serial ST7789V module (run it with
+# --lcd-interface spi)
+$(BUILD)/cfw/lcd_serial.o: $(CFW_DIR)/lcd.c $(wildcard $(CFW_DIR)/*.h) | toolchain
+	@mkdir -p $(dir $@)
+	$(CC) $(CFW_CFLAGS) -DLCD_SERIAL -c -o $@ $<
+
+$(BUILD)/cfw/lcd_demo_serial.elf: $(BUILD)/cfw/lcd_demo.o $(filter-out %/lcd.o,$(CFW_LIB_OBJS)) \
+                                  $(BUILD)/cfw/lcd_serial.o $(CFW_DIR)/k210.ld
+	$(CC) $(CFW_CFLAGS) $(CFW_LDFLAGS) -o $@ $(filter %.o,$^) -lm
+
+c-firmware: toolchain $(CFW_ELFS) $(BUILD)/cfw/lcd_demo_serial.elf
 
 # The default card: the generated test models and textures, and a scene naming one of them.
 CARD        := $(BUILD)/card.img

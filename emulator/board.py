@@ -34,7 +34,7 @@ from .spi import SpiController
 from .st7789v import ST7789V
 from .sysctl import Sysctl
 from .uarths import Uarths
-from .wiring import DockWiring, LcdPort, SdSlot
+from .wiring import LCD_8080, DockWiring, LcdPort, SdSlot
 from .write_watch import WriteWatch
 
 FIRMWARE_ERROR_PREFIX = b"error "
@@ -67,11 +67,14 @@ class Board:
                  on_frame: Callable[[FrameRecord, np.ndarray], None] | None = None,
                  on_warning: Callable[[str], None] | None = None, permissive: bool = False,
                  sd_image: str | None = None, sd_writable: bool = False,
-                 sd_faults: frozenset[str] = frozenset(), check_writes: bool = False, strict: bool = False) -> None:
+                 sd_faults: frozenset[str] = frozenset(), check_writes: bool = False, strict: bool = False,
+                 lcd_interface: str = LCD_8080) -> None:
         """check_writes: stop with StrayWrite at the first store (a hart's or a DMA channel's) into
         SRAM outside the firmware's buffers (write_watch.py; a checker, not hardware behaviour).
         strict: stop at the first access a register table does not take as it is, or that no device
-        answers, instead of answering it as the K210's bus does with a warning (bus.py)."""
+        answers, instead of answering it as the K210's bus does with a warning (bus.py).
+        lcd_interface: the LCD's bus, the Dock's 8-bit parallel panel or a 4-line serial module
+        (wiring.py, LCD_INTERFACES)."""
         self.permissive = permissive   # unimplemented registers of modelled devices warn instead of stopping
         self.on_frame = on_frame or (lambda record, image: None)
         self.on_warning = on_warning or (lambda text: None)
@@ -101,7 +104,7 @@ class Board:
                            on_warning=lambda now, text: self.warn(f"ST7789V: {text}", now))
         self.sd_image = SdImage(sd_image, writable=sd_writable, warn=self.warn) if sd_image else None
         sd_slot = SdSlot(self, SdCard(self.sd_image, warn=self.warn, faults=sd_faults)) if self.sd_image else None
-        self.wiring = DockWiring(self, LcdPort(self, self.lcd), sd_slot)
+        self.wiring = DockWiring(self, LcdPort(self, self.lcd, lcd_interface), sd_slot)
         self.spi0.device_for_ss = self.wiring.spi0_device
         self.spi1.device_for_ss = self.wiring.spi1_device
         self.bus = Bus(self, strict)

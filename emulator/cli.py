@@ -11,6 +11,7 @@ from typing import TextIO
 from .errors import (EXIT_BAD_INPUT, EXIT_GOLDEN_MISMATCH, EXIT_INTERNAL, EXIT_OK, EXIT_USAGE, BadInput,
                      BoardStop)
 from .sdcard import FAULTS
+from .wiring import LCD_8080, LCD_INTERFACES
 
 PROG = "python -m emulator"
 MAX_QUANTUM = 1_000_000_000    # instructions per turn; the native counter's limit is 64-bit, runs need far less
@@ -130,6 +131,10 @@ def build_parser() -> argparse.ArgumentParser:
                      help="stop with exit status 10 at the first store into SRAM outside the firmware's buffers "
                           "(.data/.bss, the heap handed out so far, the storing hart's own stack): a checker "
                           "of the board model, like a watchpoint; the real K210 lets such stores through")
+    run.add_argument("--lcd-interface", choices=LCD_INTERFACES, default=LCD_8080,
+                     help="the LCD's bus: 8080, the Dock's panel, an 8-bit parallel bus on SPI0's eight data "
+                          "lines (octal frames; the default), or spi, a 4-line serial ST7789V module on SPI0's "
+                          "data line 0 (standard frames)")
     run.add_argument("--quiet", action="store_true", help="do not echo the console or show progress")
     run.add_argument("--permissive", action="store_true",
                      help="an access to a register a modelled device does not implement warns (loads read 0, "
@@ -307,7 +312,7 @@ def main(argv: list[str] | None = None) -> int:
         board = Board(str(args.firmware), quantum=args.quantum, hang_budget_s=args.budget, console=console,
                       on_frame=output.frame, on_warning=terminal.warning, permissive=args.permissive,
                       sd_image=args.sd, sd_writable=args.sd_writable, sd_faults=frozenset(args.sd_fault),
-                      check_writes=args.check_writes, strict=args.strict)
+                      check_writes=args.check_writes, strict=args.strict, lcd_interface=args.lcd_interface)
         for index, request in enumerate(grabs):
             board.grab_at(request.at_s, grab_action(index, request))
         progress = terminal.progress if terminal.shows_progress else None
@@ -359,6 +364,7 @@ def main(argv: list[str] | None = None) -> int:
     summary["grabs"] = output.grabs
     summary["writes_checked"] = args.check_writes
     summary["strict"] = args.strict
+    summary["lcd_interface"] = args.lcd_interface
     summary["bus_warnings"] = dict(board.bus.questionable) if board is not None else {}
     summary["until_s"] = args.until
     summary.update(pad_changes_summary(board))

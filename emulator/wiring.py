@@ -14,8 +14,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .errors import HardwareMisuse
-from .fpioa import (FUNC_GPIO0, FUNC_GPIOHS0, FUNC_SPI0_SCLK, FUNC_SPI0_SS0, FUNC_SPI1_D0, FUNC_SPI1_D1,
-                    FUNC_SPI1_SCLK, FUNC_SPI1_SS0, PAD_COUNT)
+from .fpioa import (FUNC_GPIO0, FUNC_GPIOHS0, FUNC_SPI0_D0, FUNC_SPI0_SCLK, FUNC_SPI0_SS0, FUNC_SPI1_D0,
+                    FUNC_SPI1_D1, FUNC_SPI1_SCLK, FUNC_SPI1_SS0, PAD_COUNT)
 from .gpio import LINES as GPIO_LINES
 from .sdcard import SdCard
 from .st7789v import ST7789V
@@ -26,6 +26,9 @@ if TYPE_CHECKING:
 # Maix Dock pads
 PAD_LCD_CS, PAD_LCD_RST, PAD_LCD_DC, PAD_LCD_SCLK = 36, 37, 38, 39
 PAD_SD_MISO, PAD_SD_SCLK, PAD_SD_MOSI, PAD_SD_CS = 26, 27, 28, 29
+# The LCD's bus: the Dock's panel (8-bit MCU interface) or a 4-line serial ST7789V module
+LCD_8080, LCD_SPI = "8080", "spi"
+LCD_INTERFACES = (LCD_8080, LCD_SPI)
 SD_IDENTIFICATION_MAX_HZ = 400_000
 SD_DEFAULT_SPEED_MAX_HZ = 25_000_000
 # Pad changes kept for run.json and tests; a firmware that toggles pins for ever must not
@@ -39,26 +42,50 @@ def is_gpio_line(function: int) -> bool:
 
 
 class LcdPort:
-    """The Dock's LCD connector: SPI0's eight data lines, chip select and clock through
-    FPIOA, reset and D/C on GPIOHS or GPIO lines through FPIOA."""
+    """The Dock's LCD connector: SPI0's chip select and clock through FPIOA, reset and D/C on
+    GPIOHS or GPIO lines through FPIOA, and the data lines as the panel's interface has them.
+    The Dock's own panel (LCD_8080) has an 8-bit MCU bus: SPI0's eight data lines in the octal
+    frame format, its clock the write strobe, one byte per clock. A 4-line serial ST7789V
+    module on the same pins (LCD_SPI, --lcd-interface spi) takes SPI0's data line 0 (the pad
+    FPIOA gives SPI0_D0) in the standard frame format, one bit per clock, most significant
+    first. Either way each frame reaches the panel as its bytes, the most significant first,
+    with D/C as it is when the frame's last bit is out."""
 
-    def __init__(self, board: "Board", lcd: ST7789V) -> None:
+    def __init__(self, board: "Board", lcd: ST7789V, interface: str = LCD_8080) -> None:
+        if interface not in LCD_INTERFACES:
+            raise ValueError(f"LCD interface {interface!r}: one of {', '.join(LCD_INTERFACES)}")
         self.board = board
         self.lcd = lcd
+        self.interface = interface
 
     def spi_select(self, selected: bool, now: float) -> None:
         self.lcd.set_chip_select(selected, now)
+
+    def _check_data_lines(self, lanes: int) -> None:
+        board = self.board
+        if self.interface == LCD_8080:
+            if lanes != 8:
+                raise HardwareMisuse(
+                    f"SPI0 sends to the LCD in the {lanes}-line format; the Dock's LCD has an 8-bit parallel "
+                    f"bus that latches SPI0's eight data lines on every clock (octal frame format, ctrlr0[22:21] "
+                    f"= 3; a 4-line serial ST7789V module instead is --lcd-interface spi)")
+            if not board.sysctl.spi_dvp_data_enabled():
+                raise HardwareMisuse("SPI0 sends to the LCD with SYSCTL misc.spi_dvp_data_enable (bit 10) clear: "
+                                     "the upper data lines do not reach the LCD")
+            return
+        if lanes != 1:
+            raise HardwareMisuse(f"SPI0 sends to the LCD in the {lanes}-line format; a 4-line serial ST7789V "
+                                 f"(--lcd-interface spi) takes one data line (standard frame format, "
+                                 f"ctrlr0[22:21] = 0)")
+        if not board.fpioa.pads_with_function(FUNC_SPI0_D0):
+            raise HardwareMisuse("SPI0 sends to the 4-line serial LCD but no pad carries SPI0_D0 (FPIOA "
+                                 "function 4), its data line")
 
     def spi_transfer(self, data: np.ndarray, lanes: int, now: float) -> np.ndarray:
         board = self.board
         if board.fpioa.function_of_pad(PAD_LCD_SCLK) != FUNC_SPI0_SCLK:
             raise HardwareMisuse("SPI0 sends to the LCD but pad 39 (LCD WRX/clock) is not routed to SPI0_SCLK")
-        if lanes != 8:
-            raise HardwareMisuse(f"SPI0 sends to the LCD in a {lanes}-line format; the Dock's LCD takes SPI0's "
-                                 f"eight data lines (octal frame format, ctrlr0[22:21] = 3)")
-        if not board.sysctl.spi_dvp_data_enabled():
-            raise HardwareMisuse("SPI0 sends to the LCD with SYSCTL misc.spi_dvp_data_enable (bit 10) clear: "
-                                 "the upper data lines do not reach the LCD")
+        self._check_data_lines(lanes)
         dc = board.wiring.pad_level(PAD_LCD_DC)
         if dc is None:
             raise HardwareMisuse("SPI0 sends to the LCD but its D/C line (pad 38) is not a driven GPIOHS or "

@@ -182,3 +182,25 @@ def test_lcd_demo_resets_the_lcd_through_a_gpio_pin(lcd_run):
     reset = [(c["virtual_time_s"], c["level"]) for c in summary["pad_changes"] if c["pad"] == PAD_LCD_RST]
     assert [level for _, level in reset] == [1, 0, 1]
     assert reset[2][0] - reset[1][0] == pytest.approx(1e-3, abs=1e-5)
+
+
+def test_a_serial_lcd_module_in_standard_spi_gets_the_same_frames(c_firmware, tmp_path):
+    """lcd_demo built for a 4-line serial ST7789V (standard SPI frames of 8, 16 and 32 bits on
+    SPI0's data line 0, D/C on a slow-GPIO line, reset on a GPIOHS line) shows the same four
+    frames on a board whose LCD is such a module."""
+    result = run_emulator("run", str(c_firmware / "lcd_demo_serial.elf"), "--lcd-interface", "spi", "--frames",
+                          str(LCD_FRAMES), "--out", str(tmp_path), "--quiet", "--golden", str(LCD_GOLDEN))
+    assert result.returncode == 0, result.stderr
+    summary = json.loads((tmp_path / "run.json").read_text())
+    assert summary["lcd_interface"] == "spi"
+    assert [w for w in summary["warnings"] if "UARTHS.txdata" not in w] == []
+    levels = [c["level"] for c in summary["pad_changes"] if c["pad"] == PAD_LCD_RST]
+    assert levels == [1, 0, 1]
+
+
+def test_standard_spi_frames_do_not_reach_the_docks_parallel_lcd(c_firmware, tmp_path):
+    result = run_emulator("run", str(c_firmware / "lcd_demo_serial.elf"), "--frames", "1", "--out", str(tmp_path),
+                          "--quiet")
+    assert result.returncode == 7, result.stderr
+    assert "SPI0 sends to the LCD in the 1-line format; the Dock's LCD has an 8-bit parallel bus" in result.stderr
+    assert "--lcd-interface spi" in result.stderr

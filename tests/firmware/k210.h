@@ -71,6 +71,7 @@ static inline void mmio_write64(uintptr_t address, uint64_t value) { *(volatile 
 #define FPIOA_ST                (1u << 23)
 #define FPIOA_FUNCTION_MASK     0xFFu
 
+#define FUNC_SPI0_D0            4
 #define FUNC_SPI0_SS3           15
 #define FUNC_SPI0_SCLK          17
 #define FUNC_UARTHS_RX          18

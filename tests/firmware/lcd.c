@@ -1,6 +1,9 @@
 /* lcd.c: the Maix Dock's ST7789V. Its 8-bit parallel bus is SPI0's eight data lines in the
  * octal frame format, its write strobe SPI0's clock (pad 39), its chip select SPI0's slave
  * select 3 (pad 36); D/C is a GPIOHS line (pad 38) and reset a slow-GPIO line (pad 37).
+ * Built with LCD_SERIAL, it drives a 4-line serial ST7789V module on the same pins instead,
+ * as MaixPy's driver does such panels: standard SPI frames on SPI0's data line 0 (pad 40),
+ * D/C a slow-GPIO line and reset a GPIOHS line.
  * Every transfer goes by DMA, as the SDK's LCD driver sends: commands and parameters as
  * 8-bit frames, pixels as 16- or 32-bit frames, a fill as one word repeated. */
 #include "drivers.h"
@@ -8,8 +11,18 @@
 
 #define LCD_DMA_CHANNEL     0
 #define LCD_CHIP_SELECT     3
-#define LCD_DC_GPIOHS_LINE  2
-#define LCD_RST_GPIO_LINE   0
+#ifdef LCD_SERIAL
+#define PAD_LCD_SDA         40
+#define LCD_DC_IS_GPIOHS    0
+#define LCD_DC_LINE         1
+#define LCD_RST_IS_GPIOHS   1
+#define LCD_RST_LINE        3
+#else
+#define LCD_DC_IS_GPIOHS    1
+#define LCD_DC_LINE         2
+#define LCD_RST_IS_GPIOHS   0
+#define LCD_RST_LINE        0
+#endif
 #define LCD_SPI_HZ          10000000u
 #define LCD_RESET_PULSE_US  1000u         /* the datasheet asks for 10 us at least */
 #define LCD_RESET_WAIT_US   120000u       /* after RESX release, SWRESET and SLPOUT */
@@ -27,17 +40,37 @@
 
 enum dc { DC_COMMAND = 0, DC_DATA = 1 };
 
+static void line_write(int is_gpiohs, int line, int level)
+{
+    if (is_gpiohs)
+        gpiohs_write(line, level);
+    else
+        gpio_write(line, level);
+}
+
+static void line_make_output(int is_gpiohs, int line)
+{
+    if (is_gpiohs)
+        gpiohs_make_output(line);
+    else
+        gpio_make_output(line);
+}
+
 /* The bus set up for one kind of transfer, as the SDK's tft_write_* functions do each time:
- * octal frames of frame_bits, the instruction phase (8 or 16 bits) or the address phase
+ * frames of frame_bits; in octal, the instruction phase (8 or 16 bits) or the address phase
  * (32 bits) the same length as a frame, sent in the frame format. */
 static void lcd_bus(enum dc dc, int frame_bits)
 {
-    gpiohs_write(LCD_DC_GPIOHS_LINE, dc);
+    line_write(LCD_DC_IS_GPIOHS, LCD_DC_LINE, dc);
+#ifdef LCD_SERIAL
+    spi0_init(SPI_FF_STANDARD, frame_bits);
+#else
     spi0_init(SPI_FF_OCTAL, frame_bits);
     if (frame_bits == 32)
         spi0_init_non_standard(0, 32, 0, SPI_AITM_AS_FRAME_FORMAT);
     else
         spi0_init_non_standard(frame_bits, 0, 0, SPI_AITM_AS_FRAME_FORMAT);
+#endif
 }
 
 /* A command byte, sent as the SDK's tft_write_command does: one 32-bit DMA item. */
@@ -103,21 +136,25 @@ void lcd_init(void)
     clock_enable(CLOCK_GPIO);
     fpioa_set_function(PAD_LCD_CS, FUNC_SPI0_SS3);
     fpioa_set_function(PAD_LCD_WR, FUNC_SPI0_SCLK);
-    fpioa_set_function(PAD_LCD_DC, FUNC_GPIOHS0 + LCD_DC_GPIOHS_LINE);
-    fpioa_set_function(PAD_LCD_RST, FUNC_GPIO0 + LCD_RST_GPIO_LINE);
+    fpioa_set_function(PAD_LCD_DC, (LCD_DC_IS_GPIOHS ? FUNC_GPIOHS0 : FUNC_GPIO0) + LCD_DC_LINE);
+    fpioa_set_function(PAD_LCD_RST, (LCD_RST_IS_GPIOHS ? FUNC_GPIOHS0 : FUNC_GPIO0) + LCD_RST_LINE);
+#ifdef LCD_SERIAL
+    fpioa_set_function(PAD_LCD_SDA, FUNC_SPI0_D0);
+#else
     spi0_dvp_data_enable();
+#endif
     io_banks_1v8(POWER_BANK6_1V8 | POWER_BANK7_1V8);
-    gpiohs_make_output(LCD_DC_GPIOHS_LINE);
-    gpiohs_write(LCD_DC_GPIOHS_LINE, DC_DATA);
-    gpio_write(LCD_RST_GPIO_LINE, 1);
-    gpio_make_output(LCD_RST_GPIO_LINE);
+    line_write(LCD_DC_IS_GPIOHS, LCD_DC_LINE, DC_DATA);
+    line_make_output(LCD_DC_IS_GPIOHS, LCD_DC_LINE);
+    line_write(LCD_RST_IS_GPIOHS, LCD_RST_LINE, 1);
+    line_make_output(LCD_RST_IS_GPIOHS, LCD_RST_LINE);
     dmac_init();
     spi0_init(SPI_FF_OCTAL, 8);
     spi0_set_clock(LCD_SPI_HZ);
 
-    gpio_write(LCD_RST_GPIO_LINE, 0);
+    line_write(LCD_RST_IS_GPIOHS, LCD_RST_LINE, 0);
     delay_us(LCD_RESET_PULSE_US);
-    gpio_write(LCD_RST_GPIO_LINE, 1);
+    line_write(LCD_RST_IS_GPIOHS, LCD_RST_LINE, 1);
     delay_us(LCD_RESET_WAIT_US);
     lcd_command(ST_SWRESET);
     delay_us(LCD_RESET_WAIT_US);
