@@ -2,14 +2,13 @@
 flag: hello on UARTHS through picolibc's printf, LEDs blinking on the CLINT timer interrupt
 (one slow-GPIO line, one GPIOHS line), and the LCD driven over SPI0 in octal mode by DMA.
 `make c-firmware` builds them (with Debian's gcc-riscv64-unknown-elf and picolibc), once per
-session here. Their output is checked against what the programs and the datasheets say:
-console text, pin changes at their virtual times, and golden frames computed here."""
+session here (conftest's c_firmware fixture). Their output is checked against what the
+programs and the datasheets say: console text, pin changes at their virtual times, and golden
+frames computed here."""
 from __future__ import annotations
 
 import json
 import re
-import subprocess
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,18 +18,10 @@ from conftest import ROOT, run_emulator
 from emulator.board import Board
 from emulator.errors import UnmodelledAccess
 
-CFW = ROOT / "build" / "cfw"
 LCD_GOLDEN = ROOT / "tests" / "golden" / "c-lcd-demo"
 LCD_FRAMES = 4
 PAD_LED_BLUE, PAD_LED_GREEN, PAD_LCD_RST = 12, 13, 37
 TICK_S, TICKS = 0.050, 10
-
-
-@pytest.fixture(scope="session")
-def c_firmware() -> Path:
-    """The C programs, built by the Makefile's rule (make c-firmware) once per session."""
-    subprocess.run(["make", "-s", "c-firmware"], cwd=ROOT, check=True)
-    return CFW
 
 
 def console_of(summary: dict) -> list[str]:
