@@ -26,8 +26,9 @@ EXIT_STATUS_HELP = f"""exit status:
   2  bad command line: an unknown option or a value out of range (--frames, --quantum 1..{MAX_QUANTUM},
      --budget and --until above 0 and finite, --tolerance 0..{MAX_TOLERANCE}, --sd-fault, a --grab's syntax
      or time), an option without the one it needs (--tolerance without --golden, --sd-writable or
-     --sd-fault without --sd), --until with --frames, a --grab of a symbol the firmware does not define or of a buffer outside SRAM;
-     or, after a run that ended well, a --grab whose time the run ended before
+     --sd-fault without --sd), --until with --frames, a --grab of a symbol the firmware does not define
+     or of a buffer outside SRAM; or, after a run that ended well, a --grab whose time the run ended
+     before
   3  the firmware trapped (exception), or jumped outside memory
   4  hang: no frame within the virtual-time budget, or every hart waits forever (neither with --until)
   5  the firmware touched an address or register the model does not implement; with --strict also
