@@ -5,6 +5,7 @@ CROSS   ?= riscv64-unknown-elf-
 AS      := $(CROSS)as
 LD      := $(CROSS)ld
 OBJCOPY := $(CROSS)objcopy
+CC      := $(CROSS)gcc
 ASFLAGS := -march=rv64gc -mabi=lp64d -I firmware/include
 BUILD   := build
 VENV    := .venv
@@ -15,7 +16,7 @@ FW_SRCS := $(wildcard firmware/*.S)
 FW_OBJS := $(patsubst firmware/%.S,$(BUILD)/fw/%.o,$(FW_SRCS))
 FW_INCS := $(wildcard firmware/include/*.inc)
 
-.PHONY: all toolchain venv firmware card flash-to-emulator test bench goldens clean
+.PHONY: all toolchain venv firmware c-firmware card flash-to-emulator test bench goldens clean
 
 all: firmware
 
@@ -38,6 +39,41 @@ $(BUILD)/firmware.elf: $(FW_OBJS) firmware/k210.ld
 
 firmware: toolchain $(BUILD)/firmware.elf
 
+# The C test firmware (tests/firmware/): a small driver layer in the SDK's manner and the
+# programs built on it, with Debian's gcc-riscv64-unknown-elf and picolibc.
+CFW_DIR      := tests/firmware
+CFW_PROGRAMS := hello blink lcd_demo
+CFW_LIB      := start sysctl fpioa gpio uarths clint dmac spi lcd trap
+CFW_CFLAGS   := -march=rv64imafdc -mabi=lp64d -mcmodel=medany -Os -g -std=gnu11 -Wall -Wextra -Werror \
+                -ffunction-sections -fdata-sections -fstrict-volatile-bitfields --specs=picolibc.specs
+CFW_LDFLAGS  := -nostartfiles -T $(CFW_DIR)/k210.ld -Wl,--gc-sections -Wl,--no-relax -Wl,--no-warn-rwx-segments
+CFW_LIB_OBJS := $(patsubst %,$(BUILD)/cfw/%.o,$(CFW_LIB))
+CFW_ELFS     := $(patsubst %,$(BUILD)/cfw/%.elf,$(CFW_PROGRAMS))
+.SECONDARY: $(CFW_LIB_OBJS) $(patsubst %,$(BUILD)/cfw/%.o,$(CFW_PROGRAMS)) $(BUILD)/cfw/lcd_serial.o
+
+$(BUILD)/cfw/%.o: $(CFW_DIR)/%.c $(wildcard $(CFW_DIR)/*.h) | toolchain
+	@mkdir -p $(dir $@)
+	$(CC) $(CFW_CFLAGS) -c -o $@ $<
+
+$(BUILD)/cfw/%.o: $(CFW_DIR)/%.S | toolchain
+	@mkdir -p $(dir $@)
+	$(CC) $(CFW_CFLAGS) -c -o $@ $<
+
+$(BUILD)/cfw/%.elf: $(BUILD)/cfw/%.o $(CFW_LIB_OBJS) $(CFW_DIR)/k210.ld
+	$(CC) $(CFW_CFLAGS) $(CFW_LDFLAGS) -o $@ $< $(CFW_LIB_OBJS) -lm
+
+# lcd_demo again, its LCD driver built for a 4-line serial ST7789V module (run it with
+# --lcd-interface spi)
+$(BUILD)/cfw/lcd_serial.o: $(CFW_DIR)/lcd.c $(wildcard $(CFW_DIR)/*.h) | toolchain
+	@mkdir -p $(dir $@)
+	$(CC) $(CFW_CFLAGS) -DLCD_SERIAL -c -o $@ $<
+
+$(BUILD)/cfw/lcd_demo_serial.elf: $(BUILD)/cfw/lcd_demo.o $(filter-out %/lcd.o,$(CFW_LIB_OBJS)) \
+                                  $(BUILD)/cfw/lcd_serial.o $(CFW_DIR)/k210.ld
+	$(CC) $(CFW_CFLAGS) $(CFW_LDFLAGS) -o $@ $(filter %.o,$^) -lm
+
+c-firmware: toolchain $(CFW_ELFS) $(BUILD)/cfw/lcd_demo_serial.elf
+
 # The default card: the generated test models and textures, and a scene naming one of them.
 CARD        := $(BUILD)/card.img
 CARD_SCENE  := --scene model=models/torus.obj --scene texture=textures/torus.ppm --scene mode=textured \
@@ -54,7 +90,7 @@ card: $(CARD)
 flash-to-emulator: firmware venv $(CARD)
 	$(PYTHON) -m emulator run $(BUILD)/firmware.elf --sd $(CARD) --frames $(FRAMES) --out $(BUILD)/frames
 
-test: firmware venv $(CARD)
+test: firmware c-firmware venv $(CARD)
 	$(PYTHON) -m pytest -q -n 2
 
 bench: firmware venv $(CARD)

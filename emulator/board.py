@@ -21,11 +21,12 @@ from .disasm import disassemble_one
 from .dmac import Dmac
 from .elf import RESET_PC, LoadedImage, load_elf
 from .fpioa import Fpioa
+from .gpio import Gpio
 from .gpiohs import Gpiohs
 from .hart import Hart
 from .memory import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE, Sram
 from .mmio import Peripheral
-from .plic import SOURCE_DMA0, SOURCE_GPIOHS0, SOURCE_SPI0, SOURCE_SPI1, SOURCE_UARTHS, Plic
+from .plic import SOURCE_DMA0, SOURCE_GPIO, SOURCE_GPIOHS0, SOURCE_SPI0, SOURCE_SPI1, SOURCE_UARTHS, Plic
 from .scheduler import (DEFAULT_HANG_BUDGET_S, DEFAULT_QUANTUM, HARTS, FrameRecord, RunResult,  # noqa: F401
                         Scheduler)  # FrameRecord and RunResult: the board's results, imported from here
 from .sdcard import SdCard, SdImage
@@ -33,7 +34,7 @@ from .spi import SpiController
 from .st7789v import ST7789V
 from .sysctl import Sysctl
 from .uarths import Uarths
-from .wiring import DockWiring, LcdPort, SdSlot
+from .wiring import LCD_8080, DockWiring, LcdPort, SdSlot
 from .write_watch import WriteWatch
 
 FIRMWARE_ERROR_PREFIX = b"error "
@@ -66,11 +67,14 @@ class Board:
                  on_frame: Callable[[FrameRecord, np.ndarray], None] | None = None,
                  on_warning: Callable[[str], None] | None = None, permissive: bool = False,
                  sd_image: str | None = None, sd_writable: bool = False,
-                 sd_faults: frozenset[str] = frozenset(), check_writes: bool = False, strict: bool = False) -> None:
+                 sd_faults: frozenset[str] = frozenset(), check_writes: bool = False, strict: bool = False,
+                 lcd_interface: str = LCD_8080) -> None:
         """check_writes: stop with StrayWrite at the first store (a hart's or a DMA channel's) into
         SRAM outside the firmware's buffers (write_watch.py; a checker, not hardware behaviour).
         strict: stop at the first access a register table does not take as it is, or that no device
-        answers, instead of answering it as the K210's bus does with a warning (bus.py)."""
+        answers, instead of answering it as the K210's bus does with a warning (bus.py).
+        lcd_interface: the LCD's bus, the Dock's 8-bit parallel panel or a 4-line serial module
+        (wiring.py, LCD_INTERFACES)."""
         self.permissive = permissive   # unimplemented registers of modelled devices warn instead of stopping
         self.on_frame = on_frame or (lambda record, image: None)
         self.on_warning = on_warning or (lambda text: None)
@@ -80,6 +84,7 @@ class Board:
         self.sysctl = Sysctl(self)
         self.fpioa = Fpioa(self)
         self.gpiohs = Gpiohs(self)
+        self.gpio = Gpio(self)
         self._console = console or (lambda byte: None)
         self._console_line = bytearray()
         self._line_began = 0.0                             # when the line under way began
@@ -91,15 +96,15 @@ class Board:
         self.dmac = Dmac(self)
         self.spi0 = SpiController(0, self)
         self.spi1 = SpiController(1, self)
-        self.peripherals: list[Peripheral] = [self.sysctl, self.fpioa, self.gpiohs, self.uarths, self.clint,
-                                              self.plic, self.dmac, self.spi0, self.spi1]
+        self.peripherals: list[Peripheral] = [self.sysctl, self.fpioa, self.gpiohs, self.gpio, self.uarths,
+                                              self.clint, self.plic, self.dmac, self.spi0, self.spi1]
         self.timed_devices = [self.uarths, self.spi0, self.spi1, self.dmac, self.sysctl, self.clint]
         self.scheduler = Scheduler(self, quantum, hang_budget_s)
         self.lcd = ST7789V(on_frame=self.scheduler.frame_captured,
                            on_warning=lambda now, text: self.warn(f"ST7789V: {text}", now))
         self.sd_image = SdImage(sd_image, writable=sd_writable, warn=self.warn) if sd_image else None
         sd_slot = SdSlot(self, SdCard(self.sd_image, warn=self.warn, faults=sd_faults)) if self.sd_image else None
-        self.wiring = DockWiring(self, LcdPort(self, self.lcd), sd_slot)
+        self.wiring = DockWiring(self, LcdPort(self, self.lcd, lcd_interface), sd_slot)
         self.spi0.device_for_ss = self.wiring.spi0_device
         self.spi1.device_for_ss = self.wiring.spi1_device
         self.bus = Bus(self, strict)
@@ -189,6 +194,10 @@ class Board:
         """Runs until `frames` frames have been shown. Raises a BoardStop subclass otherwise."""
         return self.scheduler.run(frames, progress)
 
+    def run_until(self, until_s: float, progress: Callable[["Board"], None] | None = None) -> RunResult:
+        """Runs until `until_s` of virtual time, frames or not (Scheduler.run_until)."""
+        return self.scheduler.run_until(until_s, progress)
+
     def finish_console_line(self, limit_s: float | None = None) -> None:
         """After run(): lets the console line begun after the last frame end (Scheduler's doc)."""
         if limit_s is None:
@@ -237,6 +246,15 @@ class Board:
     def gpiohs_level_on_pad(self, pad: int) -> int | None:
         return self.wiring.gpiohs_level_on_pad(pad)
 
+    def pad_level(self, pad: int) -> int | None:
+        """The level a GPIOHS or GPIO line drives on a pad (None: no such line drives it)."""
+        return self.wiring.pad_level(pad)
+
+    @property
+    def pad_changes(self) -> list[tuple[float, int, int | None]]:
+        """Every change of a pad's GPIOHS/GPIO level: (virtual time, pad, level or None)."""
+        return self.wiring.pad_changes
+
     def wiring_changed(self, now: float) -> None:
         self.wiring.changed(now)
 
@@ -245,7 +263,8 @@ class Board:
 
     def reset_peripheral(self, name: str, now: float) -> None:
         """SYSCTL peri_reset released a block: it returns to its reset state."""
-        target = {"spi0": self.spi0, "spi1": self.spi1, "dma": self.dmac, "fpioa": self.fpioa}.get(name)
+        target = {"spi0": self.spi0, "spi1": self.spi1, "dma": self.dmac, "fpioa": self.fpioa,
+                  "gpio": self.gpio}.get(name)
         if target is not None:
             self.advance_devices(now)
             target.reset(now)
@@ -332,6 +351,8 @@ class Board:
         if self.spi1.irq_line():
             high.append(SOURCE_SPI1)
         high.extend(SOURCE_DMA0 + n for n in range(6) if self.dmac.irq_line(n))
+        if self.gpio.irq_line():
+            high.append(SOURCE_GPIO)
         if self.uarths.irq_line():
             high.append(SOURCE_UARTHS)
         lines = self.gpiohs.irq_lines()

@@ -49,7 +49,7 @@ if TYPE_CHECKING:
 
 # Blocks of the K210 the model knows by name but does not implement (for clear messages)
 KNOWN_UNMODELLED = [
-    (0x5020_0000, 0x1000, "GPIO (the slow GPIO block)"), (0x5021_0000, 0x1_0000, "UART1"),
+    (0x5020_1000, 0xF000, "GPIO (past its registers)"), (0x5021_0000, 0x1_0000, "UART1"),
     (0x5022_0000, 0x1_0000, "UART2"), (0x5023_0000, 0x1_0000, "UART3"), (0x5024_0000, 0x1_0000, "SPI slave"),
     (0x5025_0000, 0x3_0000, "I2S"), (0x5028_0000, 0x3_0000, "I2C"), (0x502C_0000, 0x1_0000, "SHA256"),
     (0x502D_0000, 0x3_0000, "timers"), (0x5040_0000, 0x2_0000, "WDT"), (0x5042_0000, 0x1_0000, "OTP"),
@@ -415,7 +415,7 @@ class Bus:
         self._questionable(hart, "narrow load", address, width, "load",
                            f"{width * 8}-bit load from the {reg.width * 8}-bit register {name}: "
                            f"the register is read whole (with any side effect of reading it) and the "
-                           f"addressed bytes returned (0x{part:x})")
+                           f"addressed bytes returned")
         return part
 
     def _store(self, hart: Hart, peripheral: Peripheral, offset: int, width: int, value: int, now: float) -> None:
@@ -458,18 +458,19 @@ class Bus:
     def _narrow_store_result(self, peripheral: Peripheral, base: int, reg: Register, offset: int, width: int,
                              value: int, now: float) -> tuple[int | None, str]:
         """The register's value after a store narrower than the register (None: unchanged), and
-        how the bus came to it, for the warning."""
+        how the bus came to it, for the warning. The text names no value: a firmware that keeps
+        storing bytes from one instruction (a console's putc) gives one warning, counted."""
         shift = 8 * (offset - base)
         lanes = _mask(width) << shift
         data = (value & _mask(width)) << shift
         if peripheral.BUS == BUS_APB and reg.width == 4:
             new = (value & _mask(width)) * LANE_REPEAT[width]
             return new, (f"{peripheral.BUS} has no byte strobes, so the whole register is written with the "
-                         f"stored value repeated in every byte lane (0x{new:08x})")
+                         f"stored value repeated in every byte lane")
         old = peripheral.merge_base(base, reg, now)
         if peripheral.BUS == BUS_AHB:
             new = (old & ~lanes) | data
-            return new, f"the {peripheral.BUS} port writes the addressed bytes only (now 0x{new:x})"
+            return new, f"the {peripheral.BUS} port writes the addressed bytes only"
         fields = reg.fields or ((0, 8 * reg.width),)
         new, covered = old, 0
         for low, bits in fields:
@@ -480,8 +481,7 @@ class Bus:
         if not covered:
             return None, (f"it covers no whole field of the register, so the {BUS_TILELINK} register router "
                           f"ignores it")
-        return new, (f"the {BUS_TILELINK} register router writes the fields whose bytes it covers "
-                     f"(now 0x{new:x})")
+        return new, f"the {BUS_TILELINK} register router writes the fields whose bytes it covers"
 
     def _warn_pair(self, hart: Hart, peripheral: Peripheral, offset: int, direction: str) -> None:
         names = []

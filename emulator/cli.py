@@ -11,21 +11,26 @@ from typing import TextIO
 from .errors import (EXIT_BAD_INPUT, EXIT_GOLDEN_MISMATCH, EXIT_INTERNAL, EXIT_OK, EXIT_USAGE, BadInput,
                      BoardStop)
 from .sdcard import FAULTS
+from .wiring import LCD_8080, LCD_INTERFACES
 
 PROG = "python -m emulator"
 MAX_QUANTUM = 1_000_000_000    # instructions per turn; the native counter's limit is 64-bit, runs need far less
 MAX_TOLERANCE = 255            # a channel of an RGB888 pixel differs by at most 255
+DEFAULT_FRAMES = 8
+MAX_PAD_CHANGES_IN_RUN_JSON = 10_000    # a pin toggled for ever must not bloat run.json
 
 EXIT_STATUS_HELP = f"""exit status:
-  0  the requested frames were shown (with --golden: all match; every --grab was taken)
+  0  the requested frames were shown, or --until's time was reached (with --golden: all match; every
+     --grab was taken)
   1  internal error of the board model
   2  bad command line: an unknown option or a value out of range (--frames, --quantum 1..{MAX_QUANTUM},
-     --budget above 0 and finite, --tolerance 0..{MAX_TOLERANCE}, --sd-fault, a --grab's syntax or time),
-     an option without the one it needs (--tolerance without --golden, --sd-writable or --sd-fault
-     without --sd), a --grab of a symbol the firmware does not define or of a buffer outside SRAM;
-     or, after a run that ended well, a --grab whose time the run ended before
+     --budget and --until above 0 and finite, --tolerance 0..{MAX_TOLERANCE}, --sd-fault, a --grab's syntax
+     or time), an option without the one it needs (--tolerance without --golden, --sd-writable or
+     --sd-fault without --sd), --until with --frames, a --grab of a symbol the firmware does not define
+     or of a buffer outside SRAM; or, after a run that ended well, a --grab whose time the run ended
+     before
   3  the firmware trapped (exception), or jumped outside memory
-  4  hang: no frame within the virtual-time budget, or every hart waits forever
+  4  hang: no frame within the virtual-time budget, or every hart waits forever (neither with --until)
   5  the firmware touched an address or register the model does not implement; with --strict also
      an access the K210's bus answers in a way of its own (see --strict)
   6  bad input: a file or folder the command line names cannot be used: the firmware image (missing,
@@ -99,8 +104,12 @@ def build_parser() -> argparse.ArgumentParser:
                      help="with --sd: make the card misbehave, to test firmware error paths: "
                           "no-init (never leaves idle), bad-crc (every block's CRC16 wrong), "
                           "flaky-crc (each block's first CRC16 wrong); repeatable")
-    run.add_argument("--frames", type=frames_count, default=8,
+    run.add_argument("--frames", type=frames_count, default=None,
                      help="stop after this many frames reach the LCD (default 8; at least 1)")
+    run.add_argument("--until", type=budget_seconds, default=None, metavar="SECONDS",
+                     help="instead of counting frames, run until this virtual time (finite, above 0), for "
+                          "firmware whose output is its console or its pins: frames shown are kept, no frame "
+                          "budget applies, and a board whose harts all sleep for good skips ahead to it")
     run.add_argument("--out", default="build/frames", type=Path, help="output folder (default build/frames)")
     run.add_argument("--budget", type=budget_seconds, default=5.0,
                      help="virtual seconds allowed between frames before the run counts as hung "
@@ -123,6 +132,10 @@ def build_parser() -> argparse.ArgumentParser:
                      help="stop with exit status 10 at the first store into SRAM outside the firmware's buffers "
                           "(.data/.bss, the heap handed out so far, the storing hart's own stack): a checker "
                           "of the board model, like a watchpoint; the real K210 lets such stores through")
+    run.add_argument("--lcd-interface", choices=LCD_INTERFACES, default=LCD_8080,
+                     help="the LCD's bus: 8080, the Dock's panel, an 8-bit parallel bus on SPI0's eight data "
+                          "lines (octal frames; the default), or spi, a 4-line serial ST7789V module on SPI0's "
+                          "data line 0 (standard frames)")
     run.add_argument("--quiet", action="store_true", help="do not echo the console or show progress")
     run.add_argument("--permissive", action="store_true",
                      help="an access to a register a modelled device does not implement warns (loads read 0, "
@@ -138,6 +151,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 def option_problem(args: argparse.Namespace) -> str | None:
     """What is wrong with the combination of options (argparse checked each value)."""
+    if args.until is not None and args.frames is not None:
+        return "--until and --frames exclude each other (a run ends at a virtual time or after frames)"
     if args.tolerance is not None and args.golden is None:
         return "--tolerance needs --golden (it says how far a pixel may differ from its golden frame)"
     if args.sd is None and args.sd_writable:
@@ -145,6 +160,24 @@ def option_problem(args: argparse.Namespace) -> str | None:
     if args.sd is None and args.sd_fault:
         return "--sd-fault needs --sd (a card in the slot to misbehave)"
     return None
+
+
+def pad_changes_summary(board) -> dict:
+    """run.json's record of the pads GPIOHS and GPIO lines drove: every change (the first
+    MAX_PAD_CHANGES_IN_RUN_JSON) with its virtual time, and how many there were."""
+    if board is None:
+        return {"pad_changes": [], "pad_changes_total": 0}
+    changes = [{"virtual_time_s": at, "pad": pad, "level": level}
+               for at, pad, level in board.pad_changes[:MAX_PAD_CHANGES_IN_RUN_JSON]]
+    return {"pad_changes": changes, "pad_changes_total": board.wiring.pad_change_count}
+
+
+def golden_count(args: argparse.Namespace) -> int:
+    """How many golden frames to load before the run: --frames, or with --until as many as the
+    folder holds (a folder that is missing is reported by load_golden_frames)."""
+    if args.frames is not None:
+        return args.frames
+    return max(1, len(list(args.golden.glob("frame_*.png")))) if args.golden.is_dir() else 1
 
 
 def grab_problem(grabs: list, firmware: str) -> str | None:
@@ -239,6 +272,8 @@ def main(argv: list[str] | None = None) -> int:
     problem = option_problem(args)
     if problem:
         return usage_error(problem)
+    if args.until is None and args.frames is None:
+        args.frames = DEFAULT_FRAMES
     from .board import Board
     from .golden import compare_run, load_golden_frames
     from .grab import GrabRequest, parse_grab
@@ -248,7 +283,7 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError as error:
         return usage_error(f"--grab {error}")
     try:
-        goldens = load_golden_frames(args.golden, args.frames) if args.golden is not None else None
+        goldens = load_golden_frames(args.golden, golden_count(args)) if args.golden is not None else None
         problem = grab_problem(grabs, args.firmware)
         if problem:
             return usage_error(problem)
@@ -278,11 +313,15 @@ def main(argv: list[str] | None = None) -> int:
         board = Board(str(args.firmware), quantum=args.quantum, hang_budget_s=args.budget, console=console,
                       on_frame=output.frame, on_warning=terminal.warning, permissive=args.permissive,
                       sd_image=args.sd, sd_writable=args.sd_writable, sd_faults=frozenset(args.sd_fault),
-                      check_writes=args.check_writes, strict=args.strict)
+                      check_writes=args.check_writes, strict=args.strict, lcd_interface=args.lcd_interface)
         for index, request in enumerate(grabs):
             board.grab_at(request.at_s, grab_action(index, request))
-        result = board.run(args.frames, progress=terminal.progress if terminal.shows_progress else None)
-        board.finish_console_line()
+        progress = terminal.progress if terminal.shows_progress else None
+        if args.until is not None:
+            result = board.run_until(args.until, progress=progress)
+        else:
+            result = board.run(args.frames, progress=progress)
+            board.finish_console_line()
         status, kind, message = EXIT_OK, "ok", result.message
     except BoardStop as stop:
         status, kind, message = stop.exit_status, stop.kind, str(stop)
@@ -326,7 +365,10 @@ def main(argv: list[str] | None = None) -> int:
     summary["grabs"] = output.grabs
     summary["writes_checked"] = args.check_writes
     summary["strict"] = args.strict
+    summary["lcd_interface"] = args.lcd_interface
     summary["bus_warnings"] = dict(board.bus.questionable) if board is not None else {}
+    summary["until_s"] = args.until
+    summary.update(pad_changes_summary(board))
     output.finish(summary)
     if status == EXIT_OK:
         terminal.message(f"[board] {message}; {board.time * 1e3:.2f} ms virtual; output in {args.out}")

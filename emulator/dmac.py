@@ -279,7 +279,11 @@ class Dmac(Peripheral):
         if not spi.is_data_register(address):
             raise HardwareMisuse(f"DMAC channel {n}: {'dar' if to_peripheral else 'sar'} = 0x{address:x} is not "
                                  f"{spi.NAME}'s data register, yet the channel handshakes with {spi.NAME}")
-        if (src_width if to_peripheral else dst_width) not in (1, 2, 4):
+        if src_width != dst_width:
+            raise UnmodelledAccess(f"DMAC channel {n}: {src_width * 8}-bit source items into {dst_width * 8}-bit "
+                                   f"destination items (the DMAC packing them) to or from a peripheral are not "
+                                   f"modelled")
+        if src_width not in (1, 2, 4):
             raise UnmodelledAccess(f"DMAC channel {n}: 64-bit items to or from an SPI FIFO are not modelled")
         transfer.peripheral = spi
         if to_peripheral:

@@ -41,6 +41,7 @@ CONSOLE_DRAIN_S = 5e-3
 WARNINGS_IN_HANG_REPORT = 6       # the most recent distinct warnings a hang report repeats
 MTIME_DIVIDER = 50                # mtime ticks at CPU clock / 50
 NO_POLL = (-1, -1, -1, 0)
+UNLIMITED_FRAMES = 1 << 62        # run_until: no frame count ends a turn
 
 
 @dataclass
@@ -83,6 +84,7 @@ class Scheduler:
         self._last_frame_time = 0.0
         self._last_frame_instret = [0] * HARTS
         self._host_start = host_time.perf_counter()
+        self.until: float | None = None                   # run_until's end: virtual time, not frames
         self.pending_stop: BoardStop | None = None        # ends the run at the end of the turn
         self._draining = False                            # finish_console_line is running
         self._frame_while_draining = False
@@ -253,6 +255,38 @@ class Scheduler:
                          [h.instret for h in self.harts], host_time.perf_counter() - self._host_start,
                          self.board.warnings)
 
+    def run_until(self, until_s: float, progress: Callable[["Board"], None] | None = None) -> RunResult:
+        """Runs until `until_s` seconds of virtual time (--until), for firmware whose output is
+        its console or its pins rather than frames: frames shown meanwhile are recorded but end
+        nothing, and no frame budget applies. Once every hart sleeps in wfi with nothing that
+        could ever wake it, time moves straight on to until_s. A trap, an error report or a
+        stop recorded by a device ends the run as in run()."""
+        self.frames_wanted = UNLIMITED_FRAMES
+        self.until = until_s
+        self._host_start = host_time.perf_counter()
+        last_progress = 0.0
+        idle_since: float | None = None
+        while self.time < until_s or self._trap_deadline is not None:
+            if self._trap_deadline is None and not any(h.state is HartState.RUNNING for h in self.harts) and \
+                    self.board.next_device_event(self.time) is None:
+                idle_since = self.time
+                self._set_time(until_s)
+                if self._grabs:
+                    self._run_grabs()
+                break
+            self.step()
+            if self._grabs:
+                self._run_grabs()
+            if progress is not None and host_time.perf_counter() - last_progress > 0.5:
+                last_progress = host_time.perf_counter()
+                progress(self.board)
+        message = f"ran until {until_s * 1e3:.3f} ms of virtual time; {len(self.frames)} frames shown"
+        if idle_since is not None:
+            message += (f"; from {idle_since * 1e3:.3f} ms every hart slept in wfi with nothing that could "
+                        f"wake it")
+        return RunResult("ok", message, self.frames, self.time, [h.instret for h in self.harts],
+                         host_time.perf_counter() - self._host_start, self.board.warnings)
+
     def finish_console_line(self, limit_s: float = CONSOLE_DRAIN_S) -> None:
         """After run(): runs on until the first console line begun after the last frame was
         shown has ended (this firmware's hart 1 reports "frame N" once frame N is sent, after
@@ -295,6 +329,8 @@ class Scheduler:
         if not running:
             # every hart sleeps in wfi: time moves on to the next thing a device does
             wake = board.next_device_event(self.time)
+            if self.until is not None and (wake is None or wake > self.until):
+                wake = max(self.until, self.time)   # run_until ends there; nothing happens before
             if wake is None:
                 self._report_hang("every hart sleeps in wfi and no device will ever raise an interrupt")
             if self._grabs and self.time < self._grabs[0][0] < wake:
@@ -312,6 +348,8 @@ class Scheduler:
             horizon = min(horizon, event)
         if self._grabs and self._grabs[0][0] > t0:
             horizon = min(horizon, self._grabs[0][0])
+        if self.until is not None and self.until > t0:
+            horizon = min(horizon, self.until)
         for other in running:
             if other is not hart:
                 horizon = min(horizon, other.time + self.quantum / hz)
@@ -415,7 +453,7 @@ class Scheduler:
                     raise FirmwareTrap(self.trap_report + " (the firmware's trap handler has run; see the console)")
                 code, line = self._error_report
                 raise FirmwareReportedError(f"the firmware reported: {line}", code)
-        if self.time - self._last_frame_time > self.hang_budget_s and not self._draining:
+        if self.time - self._last_frame_time > self.hang_budget_s and not self._draining and self.until is None:
             self._report_hang(f"no frame reached the LCD for {self.hang_budget_s:g} s of virtual time")
 
     def _report_hang(self, why: str) -> None:

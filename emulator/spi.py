@@ -11,8 +11,11 @@ FIFO; in receive-only mode writing one dummy frame clocks ctrlr1 + 1 frames in.
 DMA: with dmacr.tdmae set and a DMAC channel handshaking to this controller's
 TX request, the channel keeps the FIFO full, so a DMA transfer is one unbroken
 train of frames on the wire; each word is read from memory when a FIFO slot
-frees (at most 32 frames ahead of the wire). With rdmae set, received frames
-go to memory as they arrive.
+frees (at most 32 frames ahead of the wire). Each DMA item (8, 16 or 32 bits) is one
+FIFO entry, of which a frame takes the low bits. A channel started before any slave is
+selected fills the FIFO and waits; a block that fits in the FIFO is then done, as far as
+the DMA goes, before anything is sent (the SDK enables the channel, then writes ser).
+With rdmae set, received frames go to memory as they arrive.
 
 Configuration registers can only be written while the controller is disabled
 (ssienr = 0); the real controller ignores such writes, and so does the model
@@ -355,6 +358,12 @@ class SpiController(Peripheral):
     def attach_tx_dma(self, channel: "DmaChannel", now: float) -> None:
         self.advance(now)
         self.tx_dma = channel
+        item_bits = 8 * channel.transfer.dst_width
+        if item_bits < self.frame_bits and self.board is not None:
+            # each item is one FIFO entry; the DW SSI takes a frame's bits from the entry's low bits
+            self.board.warn(f"DMAC channel {channel.index} writes {item_bits}-bit items into {self.NAME}'s "
+                            f"{self.frame_bits}-bit frames: AXI leaves the byte lanes a narrow write does not "
+                            f"use undefined; the model sends their bits as 0", now)
         self._dma_started = now
         self._dma_refill(now)
 
@@ -391,6 +400,10 @@ class SpiController(Peripheral):
                 return
             self._push(channel.read_for_peripheral(min(room, channel.remaining())), now)
             if self._train is None:
+                # nothing on the wire yet (no slave selected): the FIFO holds what the DMA
+                # wrote, and a block that fitted in it is done now, as far as the DMA goes
+                if not channel.remaining():
+                    channel.peripheral_done(now)
                 return
             if not channel.remaining():
                 channel.peripheral_done(now)

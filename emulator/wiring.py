@@ -1,9 +1,11 @@
 """The Maix Dock's wiring: which device sees which signal, derived from what the firmware programmed.
 
 As on the real board, the LCD sees SPI0 frames only through the chip select that
-FPIOA routes to pad 36, and its reset and D/C lines are the GPIOHS lines routed to
-pads 37 and 38. The SD slot is on SPI1 through pads 26-28, its chip select on pad 29
-as SPI1's own slave select or as a GPIOHS line.
+FPIOA routes to pad 36, and its reset and D/C lines are whatever GPIOHS or slow-GPIO
+lines FPIOA routes to pads 37 and 38. The SD slot is on SPI1 through pads 26-28, its
+chip select on pad 29 as SPI1's own slave select or as a GPIOHS or GPIO line. Every
+change of the level a GPIOHS or GPIO line drives onto a pad is logged with its virtual
+time (`pad_changes`), for tests and run.json.
 """
 from __future__ import annotations
 
@@ -12,8 +14,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .errors import HardwareMisuse
-from .fpioa import (FUNC_GPIOHS0, FUNC_SPI0_SCLK, FUNC_SPI0_SS0, FUNC_SPI1_D0, FUNC_SPI1_D1, FUNC_SPI1_SCLK,
-                    FUNC_SPI1_SS0)
+from .fpioa import (FUNC_GPIO0, FUNC_GPIOHS0, FUNC_SPI0_D0, FUNC_SPI0_SCLK, FUNC_SPI0_SS0, FUNC_SPI1_D0,
+                    FUNC_SPI1_D1, FUNC_SPI1_SCLK, FUNC_SPI1_SS0, PAD_COUNT)
+from .gpio import LINES as GPIO_LINES
 from .sdcard import SdCard
 from .st7789v import ST7789V
 
@@ -23,34 +26,70 @@ if TYPE_CHECKING:
 # Maix Dock pads
 PAD_LCD_CS, PAD_LCD_RST, PAD_LCD_DC, PAD_LCD_SCLK = 36, 37, 38, 39
 PAD_SD_MISO, PAD_SD_SCLK, PAD_SD_MOSI, PAD_SD_CS = 26, 27, 28, 29
+# The LCD's bus: the Dock's panel (8-bit MCU interface) or a 4-line serial ST7789V module
+LCD_8080, LCD_SPI = "8080", "spi"
+LCD_INTERFACES = (LCD_8080, LCD_SPI)
 SD_IDENTIFICATION_MAX_HZ = 400_000
 SD_DEFAULT_SPEED_MAX_HZ = 25_000_000
+# Pad changes kept for run.json and tests; a firmware that toggles pins for ever must not
+# fill the host's memory: beyond this many only the count goes on
+MAX_PAD_CHANGES = 100_000
+
+
+def is_gpio_line(function: int) -> bool:
+    """Whether an FPIOA function is a GPIOHS or slow-GPIO line (software-driven)."""
+    return FUNC_GPIOHS0 <= function < FUNC_GPIOHS0 + 32 or FUNC_GPIO0 <= function < FUNC_GPIO0 + GPIO_LINES
 
 
 class LcdPort:
-    """The Dock's LCD connector: SPI0's eight data lines, chip select and clock through
-    FPIOA, reset and D/C on GPIOHS lines through FPIOA."""
+    """The Dock's LCD connector: SPI0's chip select and clock through FPIOA, reset and D/C on
+    GPIOHS or GPIO lines through FPIOA, and the data lines as the panel's interface has them.
+    The Dock's own panel (LCD_8080) has an 8-bit MCU bus: SPI0's eight data lines in the octal
+    frame format, its clock the write strobe, one byte per clock. A 4-line serial ST7789V
+    module on the same pins (LCD_SPI, --lcd-interface spi) takes SPI0's data line 0 (the pad
+    FPIOA gives SPI0_D0) in the standard frame format, one bit per clock, most significant
+    first. Either way each frame reaches the panel as its bytes, the most significant first,
+    with D/C as it is when the frame's last bit is out."""
 
-    def __init__(self, board: "Board", lcd: ST7789V) -> None:
+    def __init__(self, board: "Board", lcd: ST7789V, interface: str = LCD_8080) -> None:
+        if interface not in LCD_INTERFACES:
+            raise ValueError(f"LCD interface {interface!r}: one of {', '.join(LCD_INTERFACES)}")
         self.board = board
         self.lcd = lcd
+        self.interface = interface
 
     def spi_select(self, selected: bool, now: float) -> None:
         self.lcd.set_chip_select(selected, now)
+
+    def _check_data_lines(self, lanes: int) -> None:
+        board = self.board
+        if self.interface == LCD_8080:
+            if lanes != 8:
+                raise HardwareMisuse(
+                    f"SPI0 sends to the LCD in the {lanes}-line format; the Dock's LCD has an 8-bit parallel "
+                    f"bus that latches SPI0's eight data lines on every clock (octal frame format, ctrlr0[22:21] "
+                    f"= 3; a 4-line serial ST7789V module instead is --lcd-interface spi)")
+            if not board.sysctl.spi_dvp_data_enabled():
+                raise HardwareMisuse("SPI0 sends to the LCD with SYSCTL misc.spi_dvp_data_enable (bit 10) clear: "
+                                     "the upper data lines do not reach the LCD")
+            return
+        if lanes != 1:
+            raise HardwareMisuse(f"SPI0 sends to the LCD in the {lanes}-line format; a 4-line serial ST7789V "
+                                 f"(--lcd-interface spi) takes one data line (standard frame format, "
+                                 f"ctrlr0[22:21] = 0)")
+        if not board.fpioa.pads_with_function(FUNC_SPI0_D0):
+            raise HardwareMisuse("SPI0 sends to the 4-line serial LCD but no pad carries SPI0_D0 (FPIOA "
+                                 "function 4), its data line")
 
     def spi_transfer(self, data: np.ndarray, lanes: int, now: float) -> np.ndarray:
         board = self.board
         if board.fpioa.function_of_pad(PAD_LCD_SCLK) != FUNC_SPI0_SCLK:
             raise HardwareMisuse("SPI0 sends to the LCD but pad 39 (LCD WRX/clock) is not routed to SPI0_SCLK")
-        if lanes != 8:
-            raise HardwareMisuse(f"SPI0 sends to the LCD in a {lanes}-line format; the Dock's LCD takes SPI0's "
-                                 f"eight data lines (octal frame format, ctrlr0[22:21] = 3)")
-        if not board.sysctl.spi_dvp_data_enabled():
-            raise HardwareMisuse("SPI0 sends to the LCD with SYSCTL misc.spi_dvp_data_enable (bit 10) clear: "
-                                 "the upper data lines do not reach the LCD")
-        dc = board.gpiohs_level_on_pad(PAD_LCD_DC)
+        self._check_data_lines(lanes)
+        dc = board.wiring.pad_level(PAD_LCD_DC)
         if dc is None:
-            raise HardwareMisuse("SPI0 sends to the LCD but its D/C line (pad 38) is not a driven GPIOHS output")
+            raise HardwareMisuse("SPI0 sends to the LCD but its D/C line (pad 38) is not a driven GPIOHS or "
+                                 "GPIO output")
         board.scheduler.delivery_time = now
         self.lcd.write(data, dc, now)
         return np.zeros(len(data), dtype=np.uint8)
@@ -58,24 +97,24 @@ class LcdPort:
 
 class SdSlot:
     """The Dock's micro SD slot on SPI1: MISO, clock and MOSI through FPIOA (pads 26-28),
-    chip select on pad 29 as SPI1's own slave select or as a GPIOHS line."""
+    chip select on pad 29 as SPI1's own slave select or as a GPIOHS or GPIO line."""
 
     def __init__(self, board: "Board", card: SdCard) -> None:
         self.board = board
         self.card = card
         self._warned_clock = False
 
-    def cs_is_gpiohs(self) -> bool:
-        function = self.board.fpioa.function_of_pad(PAD_SD_CS)
-        return FUNC_GPIOHS0 <= function < FUNC_GPIOHS0 + 32
+    def cs_is_gpio(self) -> bool:
+        """Whether pad 29 carries a GPIOHS or GPIO line (software chip select)."""
+        return is_gpio_line(self.board.fpioa.function_of_pad(PAD_SD_CS))
 
     def spi_select(self, selected: bool, now: float) -> None:
-        if not self.cs_is_gpiohs():
+        if not self.cs_is_gpio():
             self.card.set_selected(selected, now)
 
     def gpio_changed(self, now: float) -> None:
-        if self.cs_is_gpiohs():
-            level = self.board.gpiohs_level_on_pad(PAD_SD_CS)
+        if self.cs_is_gpio():
+            level = self.board.wiring.pad_level(PAD_SD_CS)
             self.card.set_selected(level == 0, now)
 
     def spi_transfer(self, data: np.ndarray, lanes: int, now: float) -> np.ndarray:
@@ -100,13 +139,16 @@ class SdSlot:
 
 
 class DockWiring:
-    """Routes SPI chip selects and GPIOHS lines to the LCD and the SD slot through FPIOA."""
+    """Routes SPI chip selects and GPIOHS and GPIO lines to the LCD and the SD slot through FPIOA."""
 
     def __init__(self, board: "Board", lcd_port: LcdPort, sd_slot: SdSlot | None) -> None:
         self.board = board
         self.lcd_port = lcd_port
         self.sd_slot = sd_slot
         self._lcd_reset_level = 1
+        self._pad_levels: list[int | None] = [None] * PAD_COUNT
+        self.pad_changes: list[tuple[float, int, int | None]] = []   # (virtual time, pad, level or None)
+        self.pad_change_count = 0
 
     def spi0_device(self, ss: int) -> LcdPort | None:
         """The LCD answers on SPI0 when pad 36 carries SPI0's slave select ss."""
@@ -116,11 +158,11 @@ class DockWiring:
 
     def spi1_device(self, ss: int) -> SdSlot | None:
         """The SD slot answers on SPI1 when pad 29 carries SPI1's slave select ss, or a GPIOHS
-        line (then the card itself decides, from that line, whether it is selected)."""
+        or GPIO line (then the card itself decides, from that line, whether it is selected)."""
         if self.sd_slot is None:
             return None
         function = self.board.fpioa.function_of_pad(PAD_SD_CS)
-        if function == FUNC_SPI1_SS0 + ss or self.sd_slot.cs_is_gpiohs():
+        if function == FUNC_SPI1_SS0 + ss or self.sd_slot.cs_is_gpio():
             return self.sd_slot
         return None
 
@@ -131,12 +173,32 @@ class DockWiring:
             return self.board.gpiohs.driven_level(function - FUNC_GPIOHS0)
         return None
 
+    def pad_level(self, pad: int) -> int | None:
+        """The level a GPIOHS or slow-GPIO line drives on a pad, or None when none drives it."""
+        function = self.board.fpioa.function_of_pad(pad)
+        if FUNC_GPIOHS0 <= function < FUNC_GPIOHS0 + 32:
+            return self.board.gpiohs.driven_level(function - FUNC_GPIOHS0)
+        if FUNC_GPIO0 <= function < FUNC_GPIO0 + GPIO_LINES:
+            return self.board.gpio.driven_level(function - FUNC_GPIO0)
+        return None
+
+    def _log_pad_changes(self, now: float) -> None:
+        for pad in range(PAD_COUNT):
+            level = self.pad_level(pad)
+            if level != self._pad_levels[pad]:
+                self._pad_levels[pad] = level
+                self.pad_change_count += 1
+                if len(self.pad_changes) < MAX_PAD_CHANGES:
+                    self.pad_changes.append((now, pad, level))
+
     def changed(self, now: float) -> None:
-        """FPIOA or a GPIOHS output changed: the LCD's reset pin, the SPI chip selects and the
-        SD card's GPIOHS chip select follow."""
+        """FPIOA or a GPIOHS or GPIO output changed: the pad log, the LCD's reset pin, the SPI
+        chip selects, the SD card's software chip select and the GPIO block's edge detection
+        follow."""
         board = self.board
         board.advance_devices(now)
-        level = self.gpiohs_level_on_pad(PAD_LCD_RST)
+        self._log_pad_changes(now)
+        level = self.pad_level(PAD_LCD_RST)
         level = 1 if level is None else level
         if level != self._lcd_reset_level:
             self._lcd_reset_level = level
@@ -145,3 +207,4 @@ class DockWiring:
         board.spi1.wiring_changed(now)
         if self.sd_slot is not None:
             self.sd_slot.gpio_changed(now)
+        board.gpio.wiring_changed(now)

@@ -30,6 +30,13 @@ def firmware() -> Path:
 
 
 @pytest.fixture(scope="session")
+def c_firmware() -> Path:
+    """The C test firmware (tests/firmware/), built by the Makefile's rule into build/cfw."""
+    subprocess.run(["make", "-s", "c-firmware"], cwd=ROOT, check=True)
+    return ROOT / "build" / "cfw"
+
+
+@pytest.fixture(scope="session")
 def card() -> Path:
     """The default card `make flash-to-emulator` uses (generated models and textures)."""
     subprocess.run(["make", "-s", "build/card.img"], cwd=ROOT, check=True)

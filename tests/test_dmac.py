@@ -436,3 +436,79 @@ def test_dma_to_spi_through_a_program():
     assert abs(dma_wait - 100 * period_cycles) <= (s.FIFO_DEPTH + 1) * period_cycles
     total = reg(board, "s11") - reg(board, "s10")
     assert 100 * period_cycles <= total <= 100 * period_cycles + 60
+
+
+@pytest.mark.parametrize("n", [1, 32])
+def test_a_block_that_fits_in_the_fifo_is_done_before_the_slave_select(spi_bus, n):
+    """The SDK's LCD command: one item by DMA, channel enabled before ser. The DMA's part is
+    over once the item is in the FIFO, so chen drops at once (it never did: the SDK's
+    dmac_wait_done, which comes before anything else, spun for ever); the frames go out
+    when ser selects the device."""
+    board, spi, dev = spi_bus
+    board.memory.load(SRC, np.arange(0xA0, 0xA0 + n, dtype="<u4").tobytes())
+    board.sysctl.write(0x64, 4, 3, 0.0)                # channel 0 <- SSI1_TX
+    w(board, d.CFG, d.CFG_ENABLE | d.CFG_INT_EN, 0.0)
+    setup_channel(board, 0, sar=SRC, dar=SPI1_DR, items=n, ctl_value=ctl(dinc_fixed=True),
+                  cfg_value=chcfg(d.TT_MEM2PER, hs_dst_sw=False, dst_per=0))
+    w(board, ch(0, d.INTSTATUS_EN), d.INT_DMA_TFR_DONE, 0.0)
+    spi_setup(spi, 8, s.TMOD_TX, dmacr=s.DMACR_TDMAE)
+    w(board, d.CHEN, 0x0101, 1e-6)
+    t1 = 2e-6
+    assert not r(board, d.CHEN, t1) & 1
+    assert r(board, ch(0, d.CH_INTSTATUS), t1) == d.INT_DMA_TFR_DONE
+    assert spi.read(s.TXFLR, 4, t1) == n and dev.received == b""
+    spi.write(s.SER, 4, 1, t1)
+    t_end = run_devices(board, t1, lambda t: len(dev.received) == n and not spi.busy(t))
+    assert t_end == pytest.approx(t1 + n * 8 * SPI_BIT, abs=1e-9)
+    assert bytes(dev.received) == bytes(range(0xA0, 0xA0 + n))
+
+
+@pytest.mark.parametrize("width", [1, 2, 4])
+def test_dma_items_of_each_width_are_fifo_entries(spi_bus, width):
+    """8-, 16- and 32-bit DMA items into frames of the same size: each item one frame,
+    sent most significant bit first."""
+    board, spi, dev = spi_bus
+    n = 40
+    values = [(0x1357_9BDF * (i + 1)) & ((1 << (8 * width)) - 1) for i in range(n)]
+    dtype = {1: np.uint8, 2: "<u2", 4: "<u4"}[width]
+    board.memory.load(SRC, np.array(values, dtype=dtype).tobytes())
+    board.sysctl.write(0x64, 4, 3, 0.0)
+    w(board, d.CFG, d.CFG_ENABLE, 0.0)
+    code = {1: 0, 2: 1, 4: 2}[width]
+    setup_channel(board, 0, sar=SRC, dar=SPI1_DR, items=n, ctl_value=ctl(code, code, dinc_fixed=True),
+                  cfg_value=chcfg(d.TT_MEM2PER, hs_dst_sw=False, dst_per=0))
+    spi_setup(spi, 8 * width, s.TMOD_TX, dmacr=s.DMACR_TDMAE)
+    w(board, d.CHEN, 0x0101, 0.0)
+    spi.write(s.SER, 4, 1, 1e-6)
+    run_devices(board, 1e-6, lambda t: len(dev.received) == n * width and not spi.busy(t))
+    assert bytes(dev.received) == b"".join(v.to_bytes(width, "big") for v in values)
+    assert not board.dmac.values[d.CHEN] & 1
+    assert not any("items into" in text for text in board.warnings)
+
+
+def test_dma_items_narrower_than_the_frames_warn(spi_bus):
+    """8-bit items into 16-bit frames: the frame's upper byte is what AXI leaves undefined;
+    the model sends 0 and says so."""
+    board, spi, dev = spi_bus
+    board.memory.load(SRC, bytes([0x12, 0x34]))
+    board.sysctl.write(0x64, 4, 3, 0.0)
+    w(board, d.CFG, d.CFG_ENABLE, 0.0)
+    setup_channel(board, 0, sar=SRC, dar=SPI1_DR, items=2, ctl_value=ctl(0, 0, dinc_fixed=True),
+                  cfg_value=chcfg(d.TT_MEM2PER, hs_dst_sw=False, dst_per=0))
+    spi_setup(spi, 16, s.TMOD_TX, dmacr=s.DMACR_TDMAE)
+    spi.write(s.SER, 4, 1, 0.0)
+    w(board, d.CHEN, 0x0101, 0.0)
+    run_devices(board, 0.0, lambda t: len(dev.received) == 4 and not spi.busy(t))
+    assert bytes(dev.received) == b"\x00\x12\x00\x34"
+    assert any("DMAC channel 0 writes 8-bit items into SPI1's 16-bit frames" in text for text in board.warnings)
+
+
+def test_dma_items_of_different_widths_to_a_peripheral_are_unmodelled(spi_bus):
+    board, spi, dev = spi_bus
+    board.sysctl.write(0x64, 4, 3, 0.0)
+    w(board, d.CFG, d.CFG_ENABLE, 0.0)
+    setup_channel(board, 0, sar=SRC, dar=SPI1_DR, items=4, ctl_value=ctl(2, 0, dinc_fixed=True),
+                  cfg_value=chcfg(d.TT_MEM2PER, hs_dst_sw=False, dst_per=0))
+    spi_setup(spi, 8, s.TMOD_TX, dmacr=s.DMACR_TDMAE)
+    with pytest.raises(UnmodelledAccess, match="32-bit source items into 8-bit destination items"):
+        w(board, d.CHEN, 0x0101, 0.0)

@@ -180,14 +180,14 @@ def test_unmodelled_access_names_hart_pc_instruction_address(assemble, tmp_path)
     elf = assemble("""
     .globl _start
 _start:
-    li t0, 0x50200000      # the slow GPIO block, not modelled
+    li t0, 0x50210000      # UART1, not modelled
     lw t1, 8(t0)
 1:  j 1b
 """)
     result = run_emulator("run", str(elf), "--out", str(tmp_path), "--quiet", "--budget", "0.01")
     assert result.returncode == 5, result.stderr
     message = result.stderr
-    for part in ("hart 0", "pc 0x80000004", "lw", "load of 4 bytes", "0x50200008", "GPIO"):
+    for part in ("hart 0", "pc 0x80000004", "lw", "load of 4 bytes", "0x50210008", "UART1"):
         assert part in message, message
 
 
@@ -214,6 +214,46 @@ _start:
     assert result.returncode == 4, result.stderr
     assert "no frame reached the LCD" in result.stderr
     assert "hart 0: running" in result.stderr
+
+
+def test_until_runs_to_a_virtual_time_without_a_frame_budget(assemble, tmp_path):
+    """--until: a firmware that never draws runs to the time asked for and ends well."""
+    elf = assemble("""
+    .globl _start
+_start:
+    csrr t0, mhartid
+1:  addi t1, t1, 1
+    j 1b
+""")
+    result = run_emulator("run", str(elf), "--out", str(tmp_path), "--quiet", "--budget", "0.01", "--until", "0.03")
+    assert result.returncode == 0, result.stderr
+    summary = json.loads((tmp_path / "run.json").read_text())
+    assert summary["exit"] == "ok" and summary["until_s"] == 0.03
+    assert summary["message"] == "ran until 30.000 ms of virtual time; 0 frames shown"
+    assert summary["virtual_time_s"] == pytest.approx(0.03, abs=1e-6)
+
+
+def test_until_skips_ahead_once_every_hart_sleeps_for_good(assemble, tmp_path):
+    elf = assemble("""
+    .globl _start
+_start:
+    csrw mie, zero
+1:  wfi
+    j 1b
+""")
+    result = run_emulator("run", str(elf), "--out", str(tmp_path), "--quiet", "--until", "10")
+    assert result.returncode == 0, result.stderr
+    summary = json.loads((tmp_path / "run.json").read_text())
+    assert summary["virtual_time_s"] == 10
+    assert "from 0.000 ms every hart slept in wfi with nothing that could wake it" in summary["message"]
+
+
+def test_until_and_frames_exclude_each_other(tmp_path):
+    result = run_emulator("run", str(tmp_path / "any.elf"), "--out", str(tmp_path / "out"), "--quiet",
+                          "--until", "1", "--frames", "2")
+    assert result.returncode == 2, result.stderr
+    assert "--until and --frames exclude each other" in result.stderr
+    assert not (tmp_path / "out").exists()
 
 
 def test_firmware_trap_handler_runs_then_run_stops(firmware, card, tmp_path):
@@ -274,7 +314,7 @@ def test_permissive_run_warns_and_goes_on(assemble, tmp_path):
 @pytest.mark.parametrize("option, value", [
     ("--quantum", "0"), ("--quantum", "-5"), ("--quantum", "1e3"), ("--quantum", "1000000001"),
     ("--budget", "0"), ("--budget", "-1"), ("--budget", "nan"), ("--budget", "inf"), ("--budget", "x"),
-    ("--frames", "0"), ("--frames", "-2"),
+    ("--frames", "0"), ("--frames", "-2"), ("--until", "0"), ("--until", "nan"), ("--until", "inf"),
 ])
 def test_nonsense_numbers_are_refused(tmp_path, option, value):
     result = run_emulator("run", str(tmp_path / "any.elf"), "--out", str(tmp_path / "out"), "--quiet",

@@ -2,6 +2,8 @@
 wiring derived from them (LCD reset on pad 37, D/C on pad 38)."""
 from __future__ import annotations
 
+import re
+
 import pytest
 
 from emulator import gpiohs as g
@@ -177,3 +179,27 @@ def test_lcd_dc_through_a_program():
     run_to_done(board)
     assert board.fpioa.function_of_pad(38) == FUNC_GPIOHS0 + 1
     assert board.gpiohs_level_on_pad(38) == 1
+
+
+@pytest.mark.parametrize("interface, lanes, routed_d0, expected", [
+    ("spi", 8, True, "a 4-line serial ST7789V (--lcd-interface spi) takes one data line"),
+    ("spi", 1, False, "no pad carries SPI0_D0 (FPIOA function 4), its data line"),
+    ("8080", 1, True, "the Dock's LCD has an 8-bit parallel bus"),
+    ("spi", 1, True, None),
+])
+def test_the_lcd_takes_the_frame_format_its_interface_has(idle_elf, interface, lanes, routed_d0, expected):
+    import numpy as np
+    from emulator.errors import HardwareMisuse
+    board = make_board(idle_elf, lcd_interface=interface)
+    board.sysctl.write(0x54, 4, 1 << 10, 0.0)               # misc: SPI0's data lines to the connector
+    route(board, 39, 17)                                     # SPI0_SCLK
+    route(board, 38, FUNC_GPIOHS0 + 1)
+    board.gpiohs.write(g.OUTPUT_EN, 4, 1 << 1, 0.0)         # D/C driven, low: a command
+    if routed_d0:
+        route(board, 40, 4)                                  # SPI0_D0
+    if expected is None:
+        board.lcd_port.spi_transfer(np.array([0x29], dtype=np.uint8), lanes, 0.0)    # DISPON
+        assert board.lcd.display_on
+        return
+    with pytest.raises(HardwareMisuse, match=re.escape(expected)):
+        board.lcd_port.spi_transfer(np.array([0x29], dtype=np.uint8), lanes, 0.0)

@@ -97,6 +97,20 @@ def _prints_agreement(result: subprocess.CompletedProcess) -> None:
     assert result.stdout.count("lit per face: identical") == 4
 
 
+def _console_says(folder: str, *lines: str):
+    def check(result: subprocess.CompletedProcess) -> None:
+        assert result.returncode == 0, result.stderr
+        console = (ROOT / folder / "console.log").read_text()
+        for line in lines:
+            assert line in console, console
+    return check
+
+
+def _c_golden_matched(result: subprocess.CompletedProcess) -> None:
+    assert result.returncode == 0, result.stderr
+    assert "[golden] all 4 frames match tests/golden/c-lcd-demo" in result.stderr
+
+
 #: README command -> (how it is checked: "run" or "dry-run", what must hold afterwards).
 #: "dry-run" commands go through `make -n` (see the module's docstring for why).
 COMMANDS = {
@@ -115,6 +129,15 @@ COMMANDS = {
     "python -m reference render-card build/card.img --frames 2 --out build/reference-ideal --ideal":
         ("run", _frames_written("build/reference-ideal", 2)),
     "python -m emulator run --help": ("run", _lists_exit_statuses),
+    "make c-firmware": ("run", lambda r: None),
+    "python -m emulator run build/cfw/hello.elf --until 0.05 --out build/hello":
+        ("run", _console_says("build/hello", "hello from C on the K210")),
+    "python -m emulator run build/cfw/blink.elf --until 0.6 --out build/blink":
+        ("run", _console_says("build/blink", "tick 10: blue off, green on", "blink: done")),
+    "python -m emulator run build/cfw/lcd_demo.elf --frames 4 --out build/lcd-demo --golden tests/golden/c-lcd-demo":
+        ("run", _c_golden_matched),
+    "python -m emulator run build/cfw/lcd_demo_serial.elf --lcd-interface spi --frames 4 --out build/lcd-serial "
+    "--golden tests/golden/c-lcd-demo": ("run", _c_golden_matched),
     ".venv/bin/python -m pytest tests/test_reference.py -k first_golden -s":
         ("run", _prints_agreement),
 }
@@ -143,7 +166,9 @@ def _run_and_check(command: str, how: str, check) -> None:
 
 
 @pytest.mark.parametrize("command", sorted(COMMANDS))
-def test_readme_command(command, firmware, card):
+def test_readme_command(command, firmware, card, request):
+    if "build/cfw/" in command:
+        request.getfixturevalue("c_firmware")     # the C programs exist before they are run
     _run_and_check(command, *COMMANDS[command])
 
 

@@ -3,12 +3,15 @@
 # with apt-get (Debian):
 #   - the GNU RISC-V toolchain (gcc-riscv64-unknown-elf brings binutils-riscv64-unknown-elf),
 #     to assemble and link the firmware;
+#   - picolibc-riscv64-unknown-elf, the C library the C test firmware (tests/firmware/) links
+#     against (gcc's --specs=picolibc.specs comes from it);
 #   - dosfstools and mtools, with which the tests check SD card images independently.
 set -euo pipefail
 missing=""
 for tool in riscv64-unknown-elf-as riscv64-unknown-elf-ld riscv64-unknown-elf-objcopy; do
     command -v "$tool" >/dev/null || missing="binutils-riscv64-unknown-elf gcc-riscv64-unknown-elf"
 done
+[ -f /usr/lib/picolibc/riscv64-unknown-elf/picolibc.specs ] || missing="$missing picolibc-riscv64-unknown-elf"
 command -v fsck.fat >/dev/null || [ -x /usr/sbin/fsck.fat ] || [ -x /sbin/fsck.fat ] || missing="$missing dosfstools"
 command -v mdir >/dev/null || missing="$missing mtools"
 [ -z "$missing" ] && exit 0
@@ -24,3 +27,4 @@ fi
 $sudo apt-get update -qq
 DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq $missing >/dev/null
 command -v riscv64-unknown-elf-as >/dev/null || { echo "error: the RISC-V toolchain did not install" >&2; exit 1; }
+[ -f /usr/lib/picolibc/riscv64-unknown-elf/picolibc.specs ] || { echo "error: picolibc did not install" >&2; exit 1; }

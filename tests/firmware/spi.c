@@ -1,0 +1,72 @@
+/* spi.c: SPI0 (DesignWare SSI) transmitting through DMA, in the SDK's order: the DMA channel
+ * is started (and fills the transmit FIFO) before the slave select is written. */
+#include "drivers.h"
+#include "k210.h"
+
+#define SPI0_DMA_REQUEST DMA_REQ_SSI0_TX
+
+static uint32_t spi_read(uint32_t offset) { return mmio_read32(SPI0_BASE + offset); }
+static void spi_write(uint32_t offset, uint32_t value) { mmio_write32(SPI0_BASE + offset, value); }
+
+/* Disabled, no interrupts or DMA, mode 0, the given frame format and size, plain phases. */
+void spi0_init(int frame_format, int frame_bits)
+{
+    clock_enable(CLOCK_SPI0);
+    if (spi_read(SPI_BAUDR) == 0)
+        spi_write(SPI_BAUDR, 0x14);
+    spi_write(SPI_IMR, 0);
+    spi_write(SPI_DMACR, 0);
+    spi_write(SPI_DMATDLR, 0x10);
+    spi_write(SPI_DMARDLR, 0);
+    spi_write(SPI_SER, 0);
+    spi_write(SPI_SSIENR, 0);
+    spi_write(SPI_CTRLR0, (uint32_t)frame_format << SPI_FRF_SHIFT | (uint32_t)(frame_bits - 1) << SPI_DFS_SHIFT);
+    spi_write(SPI_SPI_CTRLR0, 0);
+    spi_write(SPI_ENDIAN, 0);
+}
+
+/* The instruction and address phases of the dual/quad/octal formats (spi_ctrlr0). */
+void spi0_init_non_standard(int instruction_bits, int address_bits, int wait_cycles, int trans_mode)
+{
+    uint32_t inst_l = instruction_bits == 0 ? 0 : instruction_bits == 4 ? 1 : instruction_bits == 8 ? 2 : 3;
+    spi_write(SPI_SPI_CTRLR0, (uint32_t)wait_cycles << SPI_WAIT_CYCLES_SHIFT | inst_l << SPI_INST_L_SHIFT
+              | (uint32_t)(address_bits / 4) << SPI_ADDR_L_SHIFT | (uint32_t)trans_mode);
+}
+
+/* The nearest serial clock at or below hz (the divider is even, 2..65534); returns it. */
+uint32_t spi0_set_clock(uint32_t hz)
+{
+    uint32_t source = spi0_source_hz();
+    uint32_t divider = source / hz;
+    divider = divider < 2 ? 2 : divider > 65534 ? 65534 : divider & ~1u;
+    spi_write(SPI_BAUDR, divider);
+    return source / divider;
+}
+
+/* Sends count items of `width` from memory (or count times one word, source_fixed) with
+ * TX DMA on channel `channel`, then waits for the wire to go idle and deselects. */
+static void send(int channel, int chip_select, const void *items, int source_fixed, size_t count,
+                 enum dma_width width)
+{
+    spi_write(SPI_CTRLR0, (spi_read(SPI_CTRLR0) & ~SPI_TMOD_MASK) | SPI_TMOD_TRANSMIT << SPI_TMOD_SHIFT);
+    spi_write(SPI_DMACR, SPI_DMACR_TDMAE);
+    spi_write(SPI_SSIENR, 1);
+    dma_select(channel, SPI0_DMA_REQUEST);
+    dmac_start(channel, items, (volatile void *)(uintptr_t)(SPI0_BASE + SPI_DR0), source_fixed, width, count);
+    spi_write(SPI_SER, 1u << chip_select);
+    dmac_wait_done(channel);
+    while ((spi_read(SPI_SR) & (SPI_SR_TFE | SPI_SR_BUSY)) != SPI_SR_TFE)
+        ;
+    spi_write(SPI_SER, 0);
+    spi_write(SPI_SSIENR, 0);
+}
+
+void spi0_send_dma(int channel, int chip_select, const void *items, size_t count, enum dma_width width)
+{
+    send(channel, chip_select, items, 0, count, width);
+}
+
+void spi0_fill_dma(int channel, int chip_select, const uint32_t *word, size_t count)
+{
+    send(channel, chip_select, word, 1, count, DMA_WIDTH_32);
+}

@@ -1,0 +1,37 @@
+/* uarths.c: the console on UARTHS, and picolibc's stdout on top of it. */
+#include <stdio.h>
+
+#include "drivers.h"
+#include "k210.h"
+
+/* Baud = CPU clock / (div + 1); transmitter and receiver on, no interrupts (uarths_init). */
+void uarths_init(uint32_t baud)
+{
+    mmio_write32(UARTHS_BASE + UARTHS_DIV, cpu_hz() / baud - 1);
+    mmio_write32(UARTHS_BASE + UARTHS_TXCTRL, UARTHS_TXEN);
+    mmio_write32(UARTHS_BASE + UARTHS_RXCTRL, UARTHS_RXEN);
+    mmio_write32(UARTHS_BASE + UARTHS_IE, 0);
+}
+
+/* Waits for room in the transmit FIFO (txdata bit 31), then stores the byte with a byte
+ * store to txdata's data field: what uarths_putchar's `txdata.data = c` compiles to without
+ * -fstrict-volatile-bitfields. */
+void uarths_putc(char c)
+{
+    while (mmio_read32(UARTHS_BASE + UARTHS_TXDATA) & UARTHS_TXDATA_FULL)
+        ;
+    mmio_write8(UARTHS_BASE + UARTHS_TXDATA, (uint8_t)c);
+}
+
+static int console_put(char c, FILE *file)
+{
+    (void)file;
+    if (c == '\n')
+        uarths_putc('\r');
+    uarths_putc(c);
+    return (unsigned char)c;
+}
+
+static FILE console = FDEV_SETUP_STREAM(console_put, NULL, NULL, _FDEV_SETUP_WRITE);
+FILE *const stdout = &console;
+FILE *const stderr = &console;

@@ -1,0 +1,197 @@
+"""C firmware in the Kendryte SDK's manner (tests/firmware/), run on the board model with no
+flag: hello on UARTHS through picolibc's printf, LEDs blinking on the CLINT timer interrupt
+(one slow-GPIO line, one GPIOHS line), and the LCD driven over SPI0 in octal mode by DMA.
+`make c-firmware` builds them (with Debian's gcc-riscv64-unknown-elf and picolibc), once per
+session here (conftest's c_firmware fixture). Their output is checked against what the
+programs and the datasheets say: console text, pin changes at their virtual times, and golden
+frames computed here."""
+from __future__ import annotations
+
+import json
+import re
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from conftest import ROOT, run_emulator
+from emulator.board import Board
+from emulator.errors import UnmodelledAccess
+
+LCD_GOLDEN = ROOT / "tests" / "golden" / "c-lcd-demo"
+LCD_FRAMES = 4
+PAD_LED_BLUE, PAD_LED_GREEN, PAD_LCD_RST = 12, 13, 37
+TICK_S, TICKS = 0.050, 10
+
+
+def console_of(summary: dict) -> list[str]:
+    return [entry["line"] for entry in summary["console"]]
+
+
+# --- hello ------------------------------------------------------------------------------------
+
+def test_hello_prints_through_picolibc_with_the_clocks_as_handed_over(c_firmware):
+    board = Board(str(c_firmware / "hello.elf"))
+    reset_status = board.sysctl.values[0x60]          # as the firmware finds it
+    result = board.run_until(0.05)
+    pin_reset = "the reset pin" if reset_status & 2 else "power-on"
+    cpu, pll0 = int(board.sysctl.cpu_hz()), int(board.sysctl.pll_hz(0x08))
+    assert [line for _, line in board.console_lines] == [
+        "hello from C on the K210",
+        f"cpu {cpu} Hz, pll0 {pll0} Hz, reset by {pin_reset}",
+        "malloc works; sqrt(2) = 1.414214; hart 0",
+    ]
+    assert "every hart slept in wfi" in result.message
+    # the two accesses firmware built without -fstrict-volatile-bitfields makes, answered as
+    # the K210's buses do, each warned about once and counted
+    sent = sum(len(line) + 2 for _, line in board.console_lines)        # with "\r\n"
+    assert board.bus.questionable == {"64-bit access to 32-bit registers": 1, "narrow store": sent}
+    assert len(board.warnings) == 2
+
+
+def test_hello_stops_a_strict_run_at_its_64_bit_sysctl_load(c_firmware):
+    board = Board(str(c_firmware / "hello.elf"), strict=True)
+    with pytest.raises(UnmodelledAccess, match=r"<reset_status\+0x[0-9a-f]+> \(c\.ld .*load of 8 bytes at "
+                                               r"0x50440060"):
+        board.run_until(0.05)
+
+
+# --- blink ------------------------------------------------------------------------------------
+
+@pytest.fixture(scope="session")
+def blink_run(c_firmware, tmp_path_factory):
+    out = tmp_path_factory.mktemp("blink")
+    result = run_emulator("run", str(c_firmware / "blink.elf"), "--until", "0.6", "--out", str(out), "--quiet")
+    return result, json.loads((out / "run.json").read_text())
+
+
+def test_blink_console(blink_run):
+    result, summary = blink_run
+    assert result.returncode == 0, result.stderr
+    lines = console_of(summary)
+    assert re.fullmatch(r"blink: 50 ms ticks, \d+ mtime counts each", lines[0])
+    expected = [f"tick {n}: blue {'on' if n % 2 else 'off'}, green {'on' if n // 2 % 2 else 'off'}"
+                for n in range(1, TICKS + 1)]
+    assert lines[1:] == expected + ["blink: done"]
+    assert summary["until_s"] == 0.6 and summary["virtual_time_s"] == pytest.approx(0.6)
+
+
+def test_blink_pins_change_on_the_timer_ticks(blink_run):
+    """The blue LED's pad (slow GPIO) toggles on every tick, the green one's (GPIOHS) on every
+    second: exactly one tick apart, since each mtimecmp is one period after the last."""
+    _, summary = blink_run
+    changes = [(c["virtual_time_s"], c["pad"], c["level"]) for c in summary["pad_changes"]]
+    blue = [(t, level) for t, pad, level in changes if pad == PAD_LED_BLUE]
+    green = [(t, level) for t, pad, level in changes if pad == PAD_LED_GREEN]
+    assert [level for _, level in blue] == [1] + [n % 2 == 0 for n in range(1, TICKS + 1)]
+    assert [level for _, level in green] == [1] + [n // 2 % 2 == 0 for n in range(2, TICKS + 1, 2)]
+    ticks = [t for t, _ in blue[1:]]
+    assert TICK_S < ticks[0] < TICK_S + 0.01                        # after the first 50 ms, set-up included
+    assert np.allclose(np.diff(ticks), TICK_S, rtol=0, atol=1e-6)
+    for (t_green, _), t_blue in zip(green[1:], ticks[1::2]):
+        assert 0 <= t_green - t_blue < 5e-6                       # the same interrupt, a few instructions on
+    assert summary["pad_changes_total"] == len(changes)
+
+
+# --- the LCD --------------------------------------------------------------------------------
+
+def rgb565(r5: int, g6: int, b5: int) -> int:
+    return r5 << 11 | g6 << 5 | b5
+
+
+def landscape_pixel(x: int, y: int) -> int:
+    """lcd_demo.c's landscape picture, 320 x 240."""
+    if 20 <= x < 60 and 20 <= y < 60:
+        return 0xFFFF
+    if 250 <= x < 300 and 170 <= y < 220:
+        return 0xF800
+    return rgb565(x * 32 // 320, y * 64 // 240, 31 if (x // 20 + y // 20) % 2 else 0)
+
+
+def portrait_pixel(x: int, y: int) -> int:
+    """lcd_demo.c's portrait picture, 240 x 320."""
+    if 10 <= x < 50 and 10 <= y < 50:
+        return 0x07E0
+    if 180 <= x < 230 and 260 <= y < 310:
+        return 0x001F
+    return rgb565(31 - y * 32 // 320, x * 64 // 240, 16)
+
+
+def to_rgb888(colours: np.ndarray, bgr: bool = False) -> np.ndarray:
+    """RGB565 as the ST7789V stores it (5 bits to 6 by repeating the top bit; MADCTL BGR
+    exchanges red and blue) and as the frame shows it (6 bits to 8 the same way)."""
+    r5, g6, b5 = colours >> 11 & 0x1F, colours >> 5 & 0x3F, colours & 0x1F
+    r6, b6 = r5 << 1 | r5 >> 4, b5 << 1 | b5 >> 4
+    if bgr:
+        r6, b6 = b6, r6
+    return np.stack([(c << 2 | c >> 4) for c in (r6, g6, b6)], axis=-1).astype(np.uint8)
+
+
+def expected_lcd_frames() -> list[np.ndarray]:
+    """What the Dock shows (320 x 240 PNGs) for lcd_demo.c's four frames, from the datasheet's
+    MADCTL rules and the Dock's panel mounting (PNG pixel (x, y) = GRAM row 319 - x, column y):
+    MY|MV shows logical (x, y) upright; MX|MV turns it 180 degrees; no MV puts the 240-wide
+    logical picture's (x, y) at PNG (319 - y, x)."""
+    landscape = np.array([[landscape_pixel(x, y) for x in range(320)] for y in range(240)])
+    portrait = np.array([[portrait_pixel(x, y) for x in range(240)] for y in range(320)])
+    fill = np.full((240, 320), 0x2945)
+    turned = landscape[::-1, ::-1]
+    shown_portrait = portrait[::-1, :].T            # PNG (x', y') = portrait (x = y', y = 319 - x')
+    return [to_rgb888(fill), to_rgb888(landscape), to_rgb888(turned), to_rgb888(shown_portrait, bgr=True)]
+
+
+def test_the_lcd_goldens_are_what_the_program_and_the_datasheet_say():
+    """tests/golden/c-lcd-demo holds expected_lcd_frames(), not frames the model made."""
+    for index, frame in enumerate(expected_lcd_frames()):
+        golden = np.asarray(Image.open(LCD_GOLDEN / f"frame_{index:04d}.png").convert("RGB"))
+        assert np.array_equal(golden, frame), index
+
+
+@pytest.fixture(scope="session")
+def lcd_run(c_firmware, tmp_path_factory):
+    out = tmp_path_factory.mktemp("lcd")
+    result = run_emulator("run", str(c_firmware / "lcd_demo.elf"), "--frames", str(LCD_FRAMES), "--out", str(out),
+                          "--quiet", "--golden", str(LCD_GOLDEN))
+    return result, json.loads((out / "run.json").read_text())
+
+
+def test_lcd_demo_matches_its_golden_frames(lcd_run):
+    result, summary = lcd_run
+    assert result.returncode == 0, result.stderr
+    assert all(frame["matches"] for frame in summary["golden"]["frames"])
+    assert len(summary["golden"]["frames"]) == LCD_FRAMES
+    assert console_of(summary) == ["lcd: ready", "lcd: frame 0 sent (fill)", "lcd: frame 1 sent (32-bit pairs)",
+                                   "lcd: frame 2 sent (16-bit, turned)", "lcd: frame 3 sent (bytes, portrait, BGR)"]
+    # only the console's byte stores are answered with a warning: the LCD took every command
+    assert summary["bus_warnings"] == {"narrow store": summary["bus_warnings"]["narrow store"]}
+    assert [w for w in summary["warnings"] if "UARTHS.txdata" not in w] == []
+
+
+def test_lcd_demo_resets_the_lcd_through_a_gpio_pin(lcd_run):
+    """RESX on pad 37 is a slow-GPIO line: driven high, pulled low for 1 ms, released."""
+    _, summary = lcd_run
+    reset = [(c["virtual_time_s"], c["level"]) for c in summary["pad_changes"] if c["pad"] == PAD_LCD_RST]
+    assert [level for _, level in reset] == [1, 0, 1]
+    assert reset[2][0] - reset[1][0] == pytest.approx(1e-3, abs=1e-5)
+
+
+def test_a_serial_lcd_module_in_standard_spi_gets_the_same_frames(c_firmware, tmp_path):
+    """lcd_demo built for a 4-line serial ST7789V (standard SPI frames of 8, 16 and 32 bits on
+    SPI0's data line 0, D/C on a slow-GPIO line, reset on a GPIOHS line) shows the same four
+    frames on a board whose LCD is such a module."""
+    result = run_emulator("run", str(c_firmware / "lcd_demo_serial.elf"), "--lcd-interface", "spi", "--frames",
+                          str(LCD_FRAMES), "--out", str(tmp_path), "--quiet", "--golden", str(LCD_GOLDEN))
+    assert result.returncode == 0, result.stderr
+    summary = json.loads((tmp_path / "run.json").read_text())
+    assert summary["lcd_interface"] == "spi"
+    assert [w for w in summary["warnings"] if "UARTHS.txdata" not in w] == []
+    levels = [c["level"] for c in summary["pad_changes"] if c["pad"] == PAD_LCD_RST]
+    assert levels == [1, 0, 1]
+
+
+def test_standard_spi_frames_do_not_reach_the_docks_parallel_lcd(c_firmware, tmp_path):
+    result = run_emulator("run", str(c_firmware / "lcd_demo_serial.elf"), "--frames", "1", "--out", str(tmp_path),
+                          "--quiet")
+    assert result.returncode == 7, result.stderr
+    assert "SPI0 sends to the LCD in the 1-line format; the Dock's LCD has an 8-bit parallel bus" in result.stderr
+    assert "--lcd-interface spi" in result.stderr
