@@ -70,7 +70,8 @@ class Board:
         """check_writes: stop with StrayWrite at the first store (a hart's or a DMA channel's) into
         SRAM outside the firmware's buffers (write_watch.py; a checker, not hardware behaviour).
         strict: stop at the first access a register table does not take as it is, or that no device
-        answers, instead of answering it as the K210's bus does with a warning (bus.py)."""
+        answers, instead of answering it as the K210's bus does with a warning (bus.py); and have the
+        LCD and the SD card enforce their datasheets' waits instead of warning only."""
         self.permissive = permissive   # unimplemented registers of modelled devices warn instead of stopping
         self.on_frame = on_frame or (lambda record, image: None)
         self.on_warning = on_warning or (lambda text: None)
@@ -95,10 +96,14 @@ class Board:
                                               self.plic, self.dmac, self.spi0, self.spi1]
         self.timed_devices = [self.uarths, self.spi0, self.spi1, self.dmac, self.sysctl, self.clint]
         self.scheduler = Scheduler(self, quantum, hang_budget_s)
+        self.timing_warnings: dict[str, int] = {}     # broken datasheet waits, per rule (run.json)
         self.lcd = ST7789V(on_frame=self.scheduler.frame_captured,
-                           on_warning=lambda now, text: self.warn(f"ST7789V: {text}", now))
+                           on_warning=lambda now, text: self.warn(f"ST7789V: {text}", now), strict=strict,
+                           on_rule=lambda kind, now, text: self.timing_rule_broken(kind, f"ST7789V: {text}", now))
         self.sd_image = SdImage(sd_image, writable=sd_writable, warn=self.warn) if sd_image else None
-        sd_slot = SdSlot(self, SdCard(self.sd_image, warn=self.warn, faults=sd_faults)) if self.sd_image else None
+        sd_slot = SdSlot(self, SdCard(self.sd_image, warn=self.warn, faults=sd_faults, strict=strict,
+                                      on_rule=lambda kind, now, text: self.timing_rule_broken(kind, text, now))
+                         ) if self.sd_image else None
         self.wiring = DockWiring(self, LcdPort(self, self.lcd), sd_slot)
         self.spi0.device_for_ss = self.wiring.spi0_device
         self.spi1.device_for_ss = self.wiring.spi1_device
@@ -301,6 +306,12 @@ class Board:
         record = WarningRecord(text, at, at)
         self._warning_records[text] = record
         self.on_warning(record.describe())
+
+    def timing_rule_broken(self, kind: str, text: str, now: float) -> None:
+        """A device noticed firmware breaking one of its datasheet's waits (kind: the rule): a
+        warning, and a count per rule for run.json's timing_warnings."""
+        self.timing_warnings[kind] = self.timing_warnings.get(kind, 0) + 1
+        self.warn(text, now)
 
     @property
     def warnings(self) -> list[str]:

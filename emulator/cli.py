@@ -132,7 +132,10 @@ def build_parser() -> argparse.ArgumentParser:
                           "of answering it as the chip does with a warning: an 8/16-bit or 64-bit access to "
                           "32-bit registers, a 32-bit access to half of a 64-bit DMAC register, a store to a "
                           "read-only or load from a write-only register, an offset of a TileLink device without "
-                          "a register, an address no device answers, the debug region at address 0")
+                          "a register, an address no device answers, the debug region at address 0; and have the "
+                          "LCD and the SD card enforce their datasheets' waits (a command too soon after a reset "
+                          "or SLPIN/SLPOUT is ignored, a RESX pulse under 10 us does not reset, CMD0 before 74 "
+                          "clocks is ignored) instead of carrying them out with a warning")
     return parser
 
 
@@ -327,6 +330,7 @@ def main(argv: list[str] | None = None) -> int:
     summary["writes_checked"] = args.check_writes
     summary["strict"] = args.strict
     summary["bus_warnings"] = dict(board.bus.questionable) if board is not None else {}
+    summary["timing_warnings"] = dict(board.timing_warnings) if board is not None else {}
     output.finish(summary)
     if status == EXIT_OK:
         terminal.message(f"[board] {message}; {board.time * 1e3:.2f} ms virtual; output in {args.out}")
