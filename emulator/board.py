@@ -14,6 +14,7 @@ from typing import Callable
 
 import numpy as np
 
+from . import bootrom
 from . import hart as hartmod
 from .bus import Bus, is_sram
 from .clint import Clint
@@ -66,12 +67,15 @@ class Board:
                  on_frame: Callable[[FrameRecord, np.ndarray], None] | None = None,
                  on_warning: Callable[[str], None] | None = None, permissive: bool = False,
                  sd_image: str | None = None, sd_writable: bool = False,
-                 sd_faults: frozenset[str] = frozenset(), check_writes: bool = False, strict: bool = False) -> None:
+                 sd_faults: frozenset[str] = frozenset(), check_writes: bool = False, strict: bool = False,
+                 cold: bool = False) -> None:
         """check_writes: stop with StrayWrite at the first store (a hart's or a DMA channel's) into
         SRAM outside the firmware's buffers (write_watch.py; a checker, not hardware behaviour).
         strict: stop at the first access a register table does not take as it is, or that no device
         answers, instead of answering it as the K210's bus does with a warning (bus.py); and have the
-        LCD and the SD card enforce their datasheets' waits instead of warning only."""
+        LCD and the SD card enforce their datasheets' waits instead of warning only.
+        cold: start from the reset value of every register, instead of the state the mask ROM
+        leaves when it jumps to the program (bootrom.py)."""
         self.permissive = permissive   # unimplemented registers of modelled devices warn instead of stopping
         self.on_frame = on_frame or (lambda record, image: None)
         self.on_warning = on_warning or (lambda text: None)
@@ -95,6 +99,9 @@ class Board:
         self.peripherals: list[Peripheral] = [self.sysctl, self.fpioa, self.gpiohs, self.uarths, self.clint,
                                               self.plic, self.dmac, self.spi0, self.spi1]
         self.timed_devices = [self.uarths, self.spi0, self.spi1, self.dmac, self.sysctl, self.clint]
+        self.cold = cold
+        if not cold:
+            bootrom.hand_over(self)    # before the scheduler reads the CPU clock
         self.scheduler = Scheduler(self, quantum, hang_budget_s)
         self.timing_warnings: dict[str, int] = {}     # broken datasheet waits, per rule (run.json)
         self.lcd = ST7789V(on_frame=self.scheduler.frame_captured,

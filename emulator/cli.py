@@ -127,6 +127,11 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--permissive", action="store_true",
                      help="an access to a register a modelled device does not implement warns (loads read 0, "
                           "stores are ignored) instead of stopping the run; addresses no device claims still stop it")
+    run.add_argument("--cold", action="store_true",
+                     help="start from the reset value of every register (CPU on the 26 MHz oscillator, clocks "
+                          "gated, pads unrouted) instead of the state the K210's mask ROM hands a program "
+                          "(CPU at 390 MHz from PLL0, the clocks the ROM and Dock firmware use on, UARTHS at "
+                          "115200 baud on pads 4 and 5)")
     run.add_argument("--strict", action="store_true",
                      help="stop (status 5) at the first access the K210's bus answers in a way of its own instead "
                           "of answering it as the chip does with a warning: an 8/16-bit or 64-bit access to "
@@ -281,7 +286,7 @@ def main(argv: list[str] | None = None) -> int:
         board = Board(str(args.firmware), quantum=args.quantum, hang_budget_s=args.budget, console=console,
                       on_frame=output.frame, on_warning=terminal.warning, permissive=args.permissive,
                       sd_image=args.sd, sd_writable=args.sd_writable, sd_faults=frozenset(args.sd_fault),
-                      check_writes=args.check_writes, strict=args.strict)
+                      check_writes=args.check_writes, strict=args.strict, cold=args.cold)
         for index, request in enumerate(grabs):
             board.grab_at(request.at_s, grab_action(index, request))
         result = board.run(args.frames, progress=terminal.progress if terminal.shows_progress else None)
@@ -329,6 +334,7 @@ def main(argv: list[str] | None = None) -> int:
     summary["grabs"] = output.grabs
     summary["writes_checked"] = args.check_writes
     summary["strict"] = args.strict
+    summary["cold"] = args.cold
     summary["bus_warnings"] = dict(board.bus.questionable) if board is not None else {}
     summary["timing_warnings"] = dict(board.timing_warnings) if board is not None else {}
     output.finish(summary)
