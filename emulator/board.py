@@ -30,6 +30,7 @@ from .plic import SOURCE_DMA0, SOURCE_GPIOHS0, SOURCE_SPI0, SOURCE_SPI1, SOURCE_
 from .scheduler import (DEFAULT_HANG_BUDGET_S, DEFAULT_QUANTUM, HARTS, FrameRecord, RunResult,  # noqa: F401
                         Scheduler)  # FrameRecord and RunResult: the board's results, imported from here
 from .sdcard import SdCard, SdImage
+from .shared_memory import find_poll_loops
 from .spi import SpiController
 from .st7789v import ST7789V
 from .sysctl import Sysctl
@@ -119,12 +120,14 @@ class Board:
         self.image: LoadedImage = load_elf(firmware, self.memory)
         if self.image.entry != RESET_PC:
             self.warn(f"ELF entry is 0x{self.image.entry:x}, but the K210 starts both harts at 0x{RESET_PC:x}")
-        sites = []
+        sites, loops = [], []
         for address, code in self.image.code_ranges:
             sites.extend(hartmod.find_csr_sites(code, address))
+            loops.extend(find_poll_loops(code, address))
         for hart in self.harts:
             self.bus.attach(hart)
             hart.intercept_csr_sites(sites)
+            hart.install_poll_loops(loops)
             hart.pc = RESET_PC
         if check_writes:
             self.write_watch = WriteWatch(self.image, self.memory, HARTS, firmware)
