@@ -20,10 +20,12 @@ the model does about it:
   else changes them (checked whenever devices advance); or when an interrupt it has enabled
   with mstatus.MIE set is pending. Loops that poll a device are left to the bus's own poll
   detection (Bus.note_poll).
-- Races. After a hart is woken by a store, and at reset, the harts run in lockstep for
-  RACE_WINDOW_CYCLES (turns of RACE_TURN instructions while both run), so that a reply stored
-  for only a few instructions meets the other hart's loop as it would on the chip. The window
-  is short: its cost is a few hundred turns per hand-over.
+- Races. After a hart is woken by a store, at reset, and while a hart comes round a poll loop on
+  SRAM that is not yet proven to wait (its last iteration began in an earlier turn, and the
+  memory it reads has changed since), the harts run in lockstep for RACE_WINDOW_CYCLES (turns of
+  RACE_TURN instructions while both run; each cycle is run by the lowest hart first), so that a
+  reply stored for only a few instructions meets the other hart's loop as it would on the chip.
+  The window is short: its cost is a few hundred turns per hand-over.
 
 What is left: a value stored and overwritten again while the other hart was not yet polling
 it, but would have started to within one turn of the storer on the chip, is missed as
