@@ -14,6 +14,7 @@ from typing import Callable
 
 import numpy as np
 
+from . import bootrom
 from . import hart as hartmod
 from .bus import Bus, is_sram
 from .clint import Clint
@@ -30,6 +31,7 @@ from .plic import SOURCE_DMA0, SOURCE_GPIO, SOURCE_GPIOHS0, SOURCE_SPI0, SOURCE_
 from .scheduler import (DEFAULT_HANG_BUDGET_S, DEFAULT_QUANTUM, HARTS, FrameRecord, RunResult,  # noqa: F401
                         Scheduler)  # FrameRecord and RunResult: the board's results, imported from here
 from .sdcard import SdCard, SdImage
+from .shared_memory import find_poll_loops
 from .spi import SpiController
 from .st7789v import ST7789V
 from .sysctl import Sysctl
@@ -68,13 +70,16 @@ class Board:
                  on_warning: Callable[[str], None] | None = None, permissive: bool = False,
                  sd_image: str | None = None, sd_writable: bool = False,
                  sd_faults: frozenset[str] = frozenset(), check_writes: bool = False, strict: bool = False,
-                 lcd_interface: str = LCD_8080) -> None:
+                 lcd_interface: str = LCD_8080, cold: bool = False) -> None:
         """check_writes: stop with StrayWrite at the first store (a hart's or a DMA channel's) into
         SRAM outside the firmware's buffers (write_watch.py; a checker, not hardware behaviour).
         strict: stop at the first access a register table does not take as it is, or that no device
-        answers, instead of answering it as the K210's bus does with a warning (bus.py).
+        answers, instead of answering it as the K210's bus does with a warning (bus.py); and have the
+        LCD and the SD card enforce their datasheets' waits instead of warning only.
         lcd_interface: the LCD's bus, the Dock's 8-bit parallel panel or a 4-line serial module
-        (wiring.py, LCD_INTERFACES)."""
+        (wiring.py, LCD_INTERFACES).
+        cold: start from the reset value of every register, instead of the state the mask ROM
+        leaves when it jumps to the program (bootrom.py)."""
         self.permissive = permissive   # unimplemented registers of modelled devices warn instead of stopping
         self.on_frame = on_frame or (lambda record, image: None)
         self.on_warning = on_warning or (lambda text: None)
@@ -99,11 +104,18 @@ class Board:
         self.peripherals: list[Peripheral] = [self.sysctl, self.fpioa, self.gpiohs, self.gpio, self.uarths,
                                               self.clint, self.plic, self.dmac, self.spi0, self.spi1]
         self.timed_devices = [self.uarths, self.spi0, self.spi1, self.dmac, self.sysctl, self.clint]
+        self.cold = cold
+        if not cold:
+            bootrom.hand_over(self)    # before the scheduler reads the CPU clock
         self.scheduler = Scheduler(self, quantum, hang_budget_s)
+        self.timing_warnings: dict[str, int] = {}     # broken datasheet waits, per rule (run.json)
         self.lcd = ST7789V(on_frame=self.scheduler.frame_captured,
-                           on_warning=lambda now, text: self.warn(f"ST7789V: {text}", now))
+                           on_warning=lambda now, text: self.warn(f"ST7789V: {text}", now), strict=strict,
+                           on_rule=lambda kind, now, text: self.timing_rule_broken(kind, f"ST7789V: {text}", now))
         self.sd_image = SdImage(sd_image, writable=sd_writable, warn=self.warn) if sd_image else None
-        sd_slot = SdSlot(self, SdCard(self.sd_image, warn=self.warn, faults=sd_faults)) if self.sd_image else None
+        sd_slot = SdSlot(self, SdCard(self.sd_image, warn=self.warn, faults=sd_faults, strict=strict,
+                                      on_rule=lambda kind, now, text: self.timing_rule_broken(kind, text, now))
+                         ) if self.sd_image else None
         self.wiring = DockWiring(self, LcdPort(self, self.lcd, lcd_interface), sd_slot)
         self.spi0.device_for_ss = self.wiring.spi0_device
         self.spi1.device_for_ss = self.wiring.spi1_device
@@ -112,12 +124,14 @@ class Board:
         self.image: LoadedImage = load_elf(firmware, self.memory)
         if self.image.entry != RESET_PC:
             self.warn(f"ELF entry is 0x{self.image.entry:x}, but the K210 starts both harts at 0x{RESET_PC:x}")
-        sites = []
+        sites, loops = [], []
         for address, code in self.image.code_ranges:
             sites.extend(hartmod.find_csr_sites(code, address))
+            loops.extend(find_poll_loops(code, address))
         for hart in self.harts:
             self.bus.attach(hart)
             hart.intercept_csr_sites(sites)
+            hart.install_poll_loops(loops)
             hart.pc = RESET_PC
         if check_writes:
             self.write_watch = WriteWatch(self.image, self.memory, HARTS, firmware)
@@ -320,6 +334,12 @@ class Board:
         record = WarningRecord(text, at, at)
         self._warning_records[text] = record
         self.on_warning(record.describe())
+
+    def timing_rule_broken(self, kind: str, text: str, now: float) -> None:
+        """A device noticed firmware breaking one of its datasheet's waits (kind: the rule): a
+        warning, and a count per rule for run.json's timing_warnings."""
+        self.timing_warnings[kind] = self.timing_warnings.get(kind, 0) + 1
+        self.warn(text, now)
 
     @property
     def warnings(self) -> list[str]:

@@ -140,12 +140,20 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--permissive", action="store_true",
                      help="an access to a register a modelled device does not implement warns (loads read 0, "
                           "stores are ignored) instead of stopping the run; addresses no device claims still stop it")
+    run.add_argument("--cold", action="store_true",
+                     help="start from the reset value of every register (CPU on the 26 MHz oscillator, clocks "
+                          "gated, pads unrouted) instead of the state the K210's mask ROM hands a program "
+                          "(CPU at 390 MHz from PLL0, the clocks the ROM and Dock firmware use on, UARTHS at "
+                          "115200 baud on pads 4 and 5)")
     run.add_argument("--strict", action="store_true",
                      help="stop (status 5) at the first access the K210's bus answers in a way of its own instead "
                           "of answering it as the chip does with a warning: an 8/16-bit or 64-bit access to "
                           "32-bit registers, a 32-bit access to half of a 64-bit DMAC register, a store to a "
                           "read-only or load from a write-only register, an offset of a TileLink device without "
-                          "a register, an address no device answers, the debug region at address 0")
+                          "a register, an address no device answers, the debug region at address 0; and have the "
+                          "LCD and the SD card enforce their datasheets' waits (a command too soon after a reset "
+                          "or SLPIN/SLPOUT is ignored, a RESX pulse under 10 us does not reset, CMD0 before 74 "
+                          "clocks is ignored) instead of carrying them out with a warning")
     return parser
 
 
@@ -313,7 +321,8 @@ def main(argv: list[str] | None = None) -> int:
         board = Board(str(args.firmware), quantum=args.quantum, hang_budget_s=args.budget, console=console,
                       on_frame=output.frame, on_warning=terminal.warning, permissive=args.permissive,
                       sd_image=args.sd, sd_writable=args.sd_writable, sd_faults=frozenset(args.sd_fault),
-                      check_writes=args.check_writes, strict=args.strict, lcd_interface=args.lcd_interface)
+                      check_writes=args.check_writes, strict=args.strict, lcd_interface=args.lcd_interface,
+                      cold=args.cold)
         for index, request in enumerate(grabs):
             board.grab_at(request.at_s, grab_action(index, request))
         progress = terminal.progress if terminal.shows_progress else None
@@ -369,6 +378,8 @@ def main(argv: list[str] | None = None) -> int:
     summary["bus_warnings"] = dict(board.bus.questionable) if board is not None else {}
     summary["until_s"] = args.until
     summary.update(pad_changes_summary(board))
+    summary["cold"] = args.cold
+    summary["timing_warnings"] = dict(board.timing_warnings) if board is not None else {}
     output.finish(summary)
     if status == EXIT_OK:
         terminal.message(f"[board] {message}; {board.time * 1e3:.2f} ms virtual; output in {args.out}")

@@ -9,7 +9,9 @@ that Unicorn leaves out (see ../shared/unicorn-riscv-notes.md):
 - synchronous exceptions and interrupts entering `mtvec` the way the privileged
   spec says, delivered by the board between runs,
 - `wfi`, which ends a run: the board keeps the hart asleep until an enabled
-  interrupt is pending.
+  interrupt is pending;
+- poll loops on SRAM, which end a run too: the board keeps the hart waiting until
+  what it polls changes (shared_memory.py).
 """
 from __future__ import annotations
 
@@ -22,7 +24,7 @@ import unicorn
 from unicorn import riscv_const as rv
 from unicorn.unicorn_py3 import unicorn as _ucpy
 
-from . import _insn_counter
+from . import _insn_counter, shared_memory
 
 # CSR numbers the board answers itself
 CSR_MHARTID = 0xF14
@@ -61,7 +63,9 @@ INSN_WFI = 0x10500073
 
 
 class _Counter(ctypes.Structure):
-    _fields_ = [("executed", ctypes.c_uint64), ("limit", ctypes.c_uint64), ("stop", ctypes.c_void_p)]
+    """_insn_counter.c's insn_counter_t."""
+    _fields_ = [("executed", ctypes.c_uint64), ("limit", ctypes.c_uint64), ("stop", ctypes.c_void_p),
+                ("loops", ctypes.c_void_p), ("loop_mask", ctypes.c_uint64), ("poll_report", ctypes.c_uint64)]
 
 
 _counter_lib = ctypes.CDLL(_insn_counter.__file__)
@@ -72,6 +76,7 @@ _UC_EMU_STOP = ctypes.cast(_ucpy.uclib.uc_emu_stop, ctypes.c_void_p).value
 class HartState(enum.Enum):
     RUNNING = "running"
     ASLEEP = "asleep (wfi)"
+    WAITING = "polling memory"     # stalled in a poll loop on SRAM (shared_memory.py)
 
 
 class RunEnd(enum.Enum):
@@ -81,6 +86,7 @@ class RunEnd(enum.Enum):
     WFI = "wfi"                # the hart executed wfi
     EXCEPTION = "exception"    # a synchronous exception is waiting in `pending_exception`
     STOPPED = "stopped"        # the board asked the hart to stop early (poll stall, clock change)
+    POLL = "poll"              # the hart came round a poll loop again (take_poll_report names it)
 
 
 @dataclass
@@ -114,22 +120,48 @@ class Hart:
         self.retired_adjust = 0   # instructions counted by the hook that did not retire (trapped)
         self.minstret_offset = 0  # set by firmware writes to minstret
         self.mcycle_offset = 0
-        self._counter = _Counter(0, 0, _UC_EMU_STOP)
+        self._counter = _Counter(0, 0, _UC_EMU_STOP, None, 0, 0)
         self.add_native_hook(unicorn.UC_HOOK_CODE, _COUNT_HOOK, self._counter, 1, 0, "the instruction counter")
+        self.poll_loops: dict[int, tuple[shared_memory.PollLoop, shared_memory.LoopSlot]] = {}
+        self._loop_slots: ctypes.Array | None = None   # the counter's table of poll loops, kept alive here
+        self.wait: shared_memory.Wait | None = None   # what the hart polls while WAITING
         self.uc.hook_add(unicorn.UC_HOOK_INTR, self._on_exception)
         self._reg_value = ctypes.c_uint64()
         self._reg_ref = ctypes.byref(self._reg_value)
 
     def add_native_hook(self, kind: int, callback: int, user_data: ctypes.Structure, begin: int, end: int,
-                        what: str) -> None:
+                        what: str) -> int:
         """Installs a C function (its address) as a Unicorn hook of `kind` for addresses
         begin..end (inclusive; begin > end: everywhere), called with a pointer to `user_data`,
-        which the caller keeps alive as long as the hart. `what` names it in the error."""
+        which the caller keeps alive as long as the hook. `what` names it in the error.
+        Returns the hook's handle (for remove_hook)."""
         handle = ctypes.c_size_t()
         status = _ucpy.uclib.uc_hook_add(self.uc._uch, ctypes.byref(handle), kind, callback,
                                          ctypes.byref(user_data), ctypes.c_uint64(begin), ctypes.c_uint64(end))
         if status != 0:
             raise RuntimeError(f"cannot install {what} on hart {self.hart_id}: unicorn status {status}")
+        return handle.value
+
+    def remove_hook(self, handle: int) -> None:
+        _ucpy.uclib.uc_hook_del(self.uc._uch, ctypes.c_size_t(handle))
+
+    def install_poll_loops(self, loops: list[shared_memory.PollLoop]) -> None:
+        """Hands the native counter the loops that can only be polling (shared_memory.py): it ends
+        a run with RunEnd.POLL when the hart comes round one of them again."""
+        if not loops:
+            return
+        slots, mask = shared_memory.loop_table(loops)
+        self._loop_slots = slots
+        for loop in loops:
+            self.poll_loops[loop.head] = (loop, slots[(loop.head >> 1) & mask])
+        self._counter.loop_mask = mask
+        self._counter.loops = ctypes.addressof(slots)
+
+    def take_poll_report(self) -> tuple[shared_memory.PollLoop, shared_memory.LoopSlot]:
+        """The poll loop the last run stopped for (and clears the report)."""
+        head = self._counter.poll_report
+        self._counter.poll_report = 0
+        return self.poll_loops[head]
 
     @property
     def counter_address(self) -> int:
@@ -167,12 +199,14 @@ class Hart:
         self.pc = self.uc.reg_read(rv.UC_RISCV_REG_PC)
         if self.pending_exception is not None:
             return RunEnd.EXCEPTION, ran
+        if self._counter.poll_report:
+            return RunEnd.POLL, ran
+        # a wfi ends the engine's run after it, even as the budget's last instruction (a turn
+        # boundary must not make the hart skip its sleep)
+        if ran > 0 and not self.stop_requested and self.read_u32(self.pc - 4) == INSN_WFI:
+            return RunEnd.WFI, ran
         if ran >= budget:
             return RunEnd.BUDGET, ran
-        if self.stop_requested:
-            return RunEnd.STOPPED, ran
-        if ran > 0 and self.read_u32(self.pc - 4) == INSN_WFI:
-            return RunEnd.WFI, ran
         return RunEnd.STOPPED, ran
 
     def request_stop(self) -> None:

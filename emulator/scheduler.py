@@ -4,7 +4,10 @@ Harts run in turn, in quanta of instructions (one instruction per CPU clock cycl
 and a quantum never runs past the next moment a device changes state by itself, so
 interrupts and DMA completions are seen on time. A hart that sleeps in WFI, or that
 keeps polling a device register that cannot change before the next device event,
-costs no host time: the scheduler moves time forward instead.
+costs no host time: the scheduler moves time forward instead. A hart that polls SRAM
+waits until another hart's store (or a DMA write) changes what it reads, and then runs
+before the storer goes on; after such a hand-over, and at reset, the harts run in
+lockstep for a moment (shared_memory.py).
 
 mcycle and mtime are integrals of the CPU clock over virtual time; a clock change
 (SYSCTL) starts a new epoch. A run ends when the requested frames have been shown,
@@ -23,9 +26,11 @@ import unicorn
 from unicorn import riscv_const as rv
 
 from . import hart as hartmod
+from . import shared_memory
 from .elf import symbolize
 from .errors import BoardStop, FirmwareReportedError, FirmwareTrap, HangDetected
 from .hart import CsrContext, Hart, HartState, RunEnd
+from .memory import SRAM_BASE, SRAM_UNCACHED_BASE
 
 if TYPE_CHECKING:
     from .board import Board
@@ -101,6 +106,11 @@ class Scheduler:
         self._trap_deadline: float | None = None
         self.harts = [Hart(h, CsrContext(mcycle=self._mcycle_reader(h), mip=self._mip_reader(h)))
                       for h in range(HARTS)]
+        # both harts start together: what one stores at once the other may be polling already
+        self._race_until = shared_memory.RACE_WINDOW_CYCLES / self._hz
+        self._priority: tuple[Hart, int] | None = None    # a hart woken by a store, and its turn's length
+        # per hart: the poll loop it last came round without waiting, and what that loop read then
+        self._poll_seen: dict[int, tuple[int, list[bytes]]] = {}
 
     def _mcycle_reader(self, h: int) -> Callable[[], int]:
         return lambda: self.cycles(self.hart_now(self.harts[h]))
@@ -182,13 +192,87 @@ class Scheduler:
             hart.request_stop()
 
     def _wake_sleepers(self, now: float) -> None:
+        """Harts asleep in wfi with an enabled interrupt pending wake; so do harts polling SRAM when
+        they would take the interrupt (mstatus.MIE set)."""
         for hart in self.harts:
-            if hart.state is not HartState.ASLEEP:
+            if hart.state is HartState.RUNNING:
+                continue
+            if hart.state is HartState.WAITING and not hart.reg(rv.UC_RISCV_REG_MSTATUS) & hartmod.MSTATUS_MIE:
                 continue
             enabled = hart.reg(rv.UC_RISCV_REG_MIE)
             if enabled and self.board.mip(hart.hart_id, now, enabled):
+                if hart.state is HartState.WAITING:
+                    self._end_wait(hart, now, by_store=False)
                 hart.state = HartState.RUNNING
                 hart.time = max(hart.time, now)
+
+    # --- harts polling SRAM (shared_memory.py) ------------------------------------------------
+
+    def _begin_wait(self, hart: Hart, turn_start: int) -> bool:
+        """The hart came round a poll loop again: when the loop reads only SRAM, and it ran its
+        last iteration on memory as it is now (the iteration ran in this turn, so nothing else
+        wrote meanwhile; or, in lockstep, what it reads was the same one iteration ago), the
+        hart waits, with a store watch on the other harts over what it reads. False: it goes on."""
+        loop, slot = hart.take_poll_report()
+        spans = shared_memory.polled_spans(loop, lambda r: hart.reg(rv.UC_RISCV_REG_X0 + r))
+        if spans is None:
+            slot.ignore = 1     # it polls a device: the bus's poll detection is for those
+            return False
+        memory = self.board.memory.bytes
+        seen = [memory[o:o + w].tobytes() for o, w in spans]
+        previous = self._poll_seen.get(hart.hart_id)
+        self._poll_seen[hart.hart_id] = (loop.head, seen)
+        if hart.executed - loop.body <= turn_start and previous != (loop.head, seen):
+            # the last iteration began before this turn: the next one decides. Meanwhile the harts
+            # run in lockstep, since what it polls may be about to change for a moment only
+            self._race_until = max(self._race_until,
+                                   self.hart_now(hart) + shared_memory.RACE_WINDOW_CYCLES / self._hz)
+            return False
+        del self._poll_seen[hart.hart_id]
+        wait = shared_memory.Wait(loop, spans, seen)
+        for other in self.harts:
+            if other is hart:
+                continue
+            watch = shared_memory.StoreWatch(other.counter_address, 0, 0)
+            handles = [other.add_native_hook(unicorn.UC_HOOK_MEM_WRITE, shared_memory.STORE_WATCH_HOOK, watch,
+                                             view + offset, view + offset + width - 1, "a store watch")
+                       for offset, width in spans for view in (SRAM_BASE, SRAM_UNCACHED_BASE)]
+            wait.watches.append((other, watch, handles))
+        hart.wait = wait
+        hart.state = HartState.WAITING
+        return True
+
+    def _end_wait(self, hart: Hart, now: float, by_store: bool) -> None:
+        """A waiting hart runs again from `now`; woken by a store, it runs before the storer goes on
+        (one whole iteration of its loop), and the harts race in lockstep for a moment."""
+        wait = hart.wait
+        for other, _, handles in wait.watches:
+            for handle in handles:
+                other.remove_hook(handle)
+        hart.wait = None
+        hart.state = HartState.RUNNING
+        hart.time = max(hart.time, now)
+        self._race_until = max(self._race_until, hart.time + shared_memory.RACE_WINDOW_CYCLES / self._hz)
+        if by_store:
+            self._priority = (hart, max(shared_memory.RACE_TURN, wait.loop.body))
+
+    def _check_waiters(self, now: float, storer: Hart | None = None) -> None:
+        """Waiting harts whose SRAM changed wake at `now` (after `storer`'s turn: at its store)."""
+        memory = self.board.memory.bytes
+        for hart in self.harts:
+            if hart.state is not HartState.WAITING:
+                continue
+            wait = hart.wait
+            stored = False
+            for other, watch, _ in wait.watches:
+                if other is storer and watch.hits:
+                    stored, watch.hits = True, 0
+            if any(memory[o:o + w].tobytes() != seen for (o, w), seen in zip(wait.spans, wait.seen)):
+                self._end_wait(hart, now, by_store=stored)
+
+    def _stopped_by_a_watch(self, hart: Hart) -> bool:
+        return any(other is hart and watch.hits for waiter in self.harts if waiter.wait is not None
+                   for other, watch, _ in waiter.wait.watches)
 
     def _take_interrupt(self, hart: Hart) -> None:
         """Before a turn: a pending enabled interrupt with mstatus.MIE set enters mtvec."""
@@ -327,18 +411,25 @@ class Scheduler:
         board = self.board
         running = [h for h in self.harts if h.state is HartState.RUNNING]
         if not running:
-            # every hart sleeps in wfi: time moves on to the next thing a device does
+            # every hart sleeps in wfi (or waits on SRAM): time moves on to the next thing a device does
             wake = board.next_device_event(self.time)
             if self.until is not None and (wake is None or wake > self.until):
                 wake = max(self.until, self.time)   # run_until ends there; nothing happens before
             if wake is None:
+                if any(h.state is HartState.WAITING for h in self.harts):
+                    self._report_hang("no hart runs: every hart sleeps in wfi or polls memory that nothing "
+                                      "will change, and no device will ever raise an interrupt")
                 self._report_hang("every hart sleeps in wfi and no device will ever raise an interrupt")
             if self._grabs and self.time < self._grabs[0][0] < wake:
                 wake = self._grabs[0][0]   # stop at a requested grab rather than jump past it
             self._set_time(wake)
             self._check_deadlines()
             return
-        hart = min(running, key=lambda h: (h.time, h.hart_id))
+        hart, priority_turn = min(running, key=lambda h: (h.time, h.hart_id)), 0
+        if self._priority is not None:
+            if self._priority[0] in running:
+                hart, priority_turn = self._priority
+            self._priority = None
         self._take_interrupt(hart)
         t0 = hart.time
         hz = self._hz
@@ -350,15 +441,25 @@ class Scheduler:
             horizon = min(horizon, self._grabs[0][0])
         if self.until is not None and self.until > t0:
             horizon = min(horizon, self.until)
-        for other in running:
-            if other is not hart:
-                horizon = min(horizon, other.time + self.quantum / hz)
+        if priority_turn:
+            horizon = min(horizon, t0 + priority_turn / hz)
+        elif t0 < self._race_until:
+            # lockstep: a hart behind catches up exactly, one level with the others runs RACE_TURN
+            # instructions, so that every cycle is run by each hart in turn, lowest hart first
+            for other in running:
+                if other is not hart:
+                    horizon = min(horizon, other.time if other.time > t0 else t0 + shared_memory.RACE_TURN / hz)
+        else:
+            for other in running:
+                if other is not hart:
+                    horizon = min(horizon, other.time + self.quantum / hz)
         budget = max(1, math.ceil((horizon - t0) * hz - 1e-9))
         self.turn_horizon = t0 + budget / hz
         ran = self._run_hart(hart, t0, budget, hz)
         if self.pending_stop is not None:
             raise self.pending_stop
         hart.time = t0 + ran / hz
+        self._check_waiters(hart.time, storer=hart)
         if hart.polling:
             # nothing the hart's loop does will change what it polls before the next device
             # event: it waits until then (or the end of its turn) without executing
@@ -379,6 +480,7 @@ class Scheduler:
         if now > self.time:
             self.time = now
         self.board.advance_devices(self.time)
+        self._check_waiters(self.time)
         self._wake_sleepers(self.time)
 
     def _run_hart(self, hart: Hart, t0: float, budget: int, hz: float) -> int:
@@ -393,7 +495,19 @@ class Scheduler:
         before = hart.executed
         end = None
         try:
-            end, _ = hart.run(budget)
+            while True:
+                end, _ = hart.run(budget - (hart.executed - before))
+                if end is not RunEnd.POLL:
+                    break
+                if self._begin_wait(hart, before):
+                    break
+                # a device poll, or a loop not yet proven in this turn: the turn goes on as if
+                # nothing had stopped it, unless something else asked for its end
+                if hart.stop_requested or hart.polling or hart.executed - before >= budget:
+                    end = RunEnd.STOPPED
+                    break
+            if end is RunEnd.WFI and self._stopped_by_a_watch(hart):
+                end = RunEnd.STOPPED       # the run ended at a watched store, not at a wfi before it
         except unicorn.UcError as error:
             hart.pc = hart.uc.reg_read(rv.UC_RISCV_REG_PC)
             if hart.pending_exception is not None:
@@ -461,7 +575,10 @@ class Scheduler:
         lines = [why]
         for hart in self.harts:
             where = symbolize(board.image.symbols, hart.pc)
-            lines.append(f"hart {hart.hart_id}: {hart.state.value} at pc 0x{hart.pc:08x}"
+            state = hart.state.value
+            if hart.wait is not None:
+                state += f" ({hart.wait.describe()})"
+            lines.append(f"hart {hart.hart_id}: {state} at pc 0x{hart.pc:08x}"
                          f"{f' <{where}>' if where else ''} ({board.disassemble_at(hart.pc)}), "
                          f"mie 0x{hart.csr(rv.UC_RISCV_REG_MIE):x}, mip 0x{board.mip(hart.hart_id, self.time):x}")
         for peripheral in board.peripherals:

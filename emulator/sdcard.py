@@ -3,7 +3,11 @@
 The card sees bytes on MOSI and answers on MISO, byte for byte, as the SD Physical
 Layer Simplified Specification describes SPI mode:
 
-- power-up: at least 74 clocks with CS high before the first command;
+- power-up: at least 74 clocks with CS high before the first command (Physical Layer
+  Simplified Specification, "Power Up": "the host shall supply at least 74 SD clocks ...
+  In case of SPI mode, CS shall be held to high during 74 clock cycles"). Real cards
+  evidently take CMD0 without them (issue 10: firmware that ran on Docks sends none), so
+  by default CMD0 is answered, with a warning; `strict` enforces the rule: CMD0 is ignored;
 - CMD0 (enter SPI mode, idle), CMD8 (interface condition, R7), CMD55 + ACMD41
   (initialisation: the card stays idle until ACMD41 comes INIT_TIME_S after the
   first one), CMD58 (OCR, R3: powered up, CCS = 1), CMD59 (CRC on/off), CMD9/CMD10
@@ -53,6 +57,7 @@ STOP_BUSY_BYTES = 4      # busy (0x00) bytes after CMD12
 WRITE_BUSY_S = 250e-6    # programming time after a written block
 INIT_TIME_S = 10e-3      # initialisation time after the first ACMD41
 POWER_UP_CLOCKS = 74
+RULE_POWER_UP_CLOCKS = "SD card CMD0 before 74 clocks with CS high"   # the board counts it by this kind
 
 R1_IDLE, R1_ILLEGAL, R1_CRC, R1_ADDRESS, R1_PARAMETER = 0x01, 0x04, 0x08, 0x20, 0x40
 TOKEN_START, TOKEN_MULTI_WRITE, TOKEN_STOP_TRAN = 0xFE, 0xFC, 0xFD
@@ -186,7 +191,10 @@ FAULTS = {
 class SdCard:
     """The card's SPI-mode state machine. `exchange` takes MOSI bytes and returns MISO bytes."""
 
-    def __init__(self, image: SdImage, warn=None, faults: frozenset[str] = frozenset()) -> None:
+    def __init__(self, image: SdImage, warn=None, faults: frozenset[str] = frozenset(), strict: bool = False,
+                 on_rule: Callable[[str, float, str], None] | None = None) -> None:
+        """warn(text) hears the card's warnings; on_rule(kind, now, text), instead, a broken timing
+        rule (RULE_POWER_UP_CLOCKS), enforced when `strict` (see the module comment)."""
         unknown = set(faults) - set(FAULTS)
         if unknown:
             raise BadInput(f"unknown SD card fault(s): {', '.join(sorted(unknown))} (known: {', '.join(FAULTS)})")
@@ -194,6 +202,8 @@ class SdCard:
         self._blocks_sent: set[int | str] = set()
         self.image = image
         self.warn = warn or (lambda text: None)
+        self.strict = strict
+        self.on_rule = on_rule or (lambda kind, now, text: self.warn(text))
         self.selected = False
         self.spi_mode = False
         self.initialised = False
@@ -327,9 +337,12 @@ class SdCard:
             return
         if index == 0:
             if not self.spi_mode and self.powerup_clocks < POWER_UP_CLOCKS:
-                self.warn(f"SD card: CMD0 after only {self.powerup_clocks} clocks with CS high "
-                          f"(the card needs at least {POWER_UP_CLOCKS} after power-up): ignored")
-                return
+                text = (f"SD card: CMD0 after only {self.powerup_clocks} clocks with CS high (the SD "
+                        f"specification asks for at least {POWER_UP_CLOCKS} after power-up)")
+                if self.strict:
+                    self.on_rule(RULE_POWER_UP_CLOCKS, now, f"{text}: ignored (--strict)")
+                    return
+                self.on_rule(RULE_POWER_UP_CLOCKS, now, f"{text}: answered (--strict ignores it)")
             self.spi_mode = True
             self.initialised = False
             self.init_started = None

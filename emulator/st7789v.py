@@ -17,6 +17,15 @@ complain either. They are collected as strings in `warnings` and, when the
 owner gives `on_warning`, handed to it as they happen (the board puts them
 among the run's warnings).
 
+The datasheet's waits (TIMING_RULES: the RESX pulse width, 5 ms after a reset
+and after SLPIN/SLPOUT before the next command, 120 ms between SLPOUT and SLPIN)
+are checked on every command. Real panels evidently run firmware that ignores
+them (issue 10: SWRESET, SLPOUT ... DISPON within microseconds), so by default a
+command that comes too soon is carried out, with a warning; with `strict` the
+rule is enforced the way the datasheet leaves the part free to: the command is
+ignored, and a RESX pulse shorter than tRW does not reset the chip. Each broken
+rule is also reported to `on_rule` (kind, time, text), which the board counts.
+
 Supported commands (everything else is ignored, parameters included, as the chip
 ignores commands it does not know):
 
@@ -112,6 +121,17 @@ SLEEP_SETTLE_S = 5e-3        # after SLPIN/SLPOUT: supplies and clocks still set
 SLEEP_TOGGLE_S = 120e-3      # SLPIN<->SLPOUT minimum spacing
 RESET_PULSE_MIN_S = 10e-6    # tRW: shorter RESX pulses are not guaranteed to reset
 
+# The datasheet's waits, by the kind the board counts them under (run.json's timing_warnings).
+# Sitronix ST7789V datasheet (version 1.3, 2014/03): "Reset Timing" (tRW, the RESX low pulse,
+# at least 10 us; wait 5 ms after releasing RESX before sending commands), the descriptions of
+# SWRESET (01h: wait 5 ms before the next command), SLPIN (10h) and SLPOUT (11h) (wait 5 ms
+# before the next command; 120 ms after SLPOUT before SLPIN, and after SLPIN before SLPOUT).
+RULE_RESET_PULSE = "ST7789V RESX pulse shorter than 10 us"
+RULE_AFTER_RESET = "ST7789V command within 5 ms of a reset"
+RULE_AFTER_SLEEP = "ST7789V command within 5 ms of SLPIN/SLPOUT"
+RULE_SLEEP_TOGGLE = "ST7789V SLPIN/SLPOUT within 120 ms of the last sleep change"
+TIMING_RULES = (RULE_RESET_PULSE, RULE_AFTER_RESET, RULE_AFTER_SLEEP, RULE_SLEEP_TOGGLE)
+
 PIXELS = 240 * 320
 # Seed of the power-up GRAM noise: real GRAM powers up random, a fixed seed keeps
 # runs reproducible while still showing garbage if firmware never clears the screen.
@@ -158,10 +178,15 @@ class ST7789V:
     HEIGHT = 320  # physical GRAM rows
 
     def __init__(self, on_frame: Callable[[np.ndarray], None] | None = None,
-                 on_warning: Callable[[float, str], None] | None = None) -> None:
-        """on_warning(now_s, message) hears every warning as it is given."""
+                 on_warning: Callable[[float, str], None] | None = None, strict: bool = False,
+                 on_rule: Callable[[str, float, str], None] | None = None) -> None:
+        """on_warning(now_s, message) hears every warning as it is given; on_rule(kind, now_s,
+        message) hears, instead, each broken timing rule (kind: one of TIMING_RULES). strict:
+        enforce the timing rules (see the module comment) instead of warning only."""
         self.on_frame = on_frame
         self.on_warning = on_warning
+        self.strict = strict
+        self.on_rule = on_rule
         self.warnings: list[str] = []
         self.frames_captured = 0
 
@@ -173,6 +198,7 @@ class ST7789V:
 
         self._resx_high = True
         self._resx_low_since = 0.0
+        self._before_reset: tuple | None = None   # (registers, last sleep change) when RESX fell
         # The board owns CSX; until it drives the pin the bus is assumed selected.
         self._selected = True
 
@@ -249,12 +275,19 @@ class ST7789V:
         self._resx_high = high
         if not high:
             self._resx_low_since = now_s
+            self._before_reset = (replace(self._regs), self._last_sleep_change)
             self._reset_registers(now_s)
             return
         pulse = now_s - self._resx_low_since
         if pulse < RESET_PULSE_MIN_S:
-            self._warn(now_s, f"RESX low pulse of {pulse * 1e6:.2f} us is shorter than "
-                              f"the {RESET_PULSE_MIN_S * 1e6:.0f} us the datasheet requires")
+            text = (f"RESX low pulse of {pulse * 1e6:.2f} us is shorter than "
+                    f"the {RESET_PULSE_MIN_S * 1e6:.0f} us the datasheet requires")
+            if self.strict and self._before_reset is not None:
+                # not a valid reset: the chip keeps the state it had before the pulse
+                self._regs, self._last_sleep_change = self._before_reset
+                self._rule(RULE_RESET_PULSE, now_s, f"{text}: not taken as a reset (--strict)")
+                return
+            self._rule(RULE_RESET_PULSE, now_s, f"{text}; taken as a reset (--strict would not)")
         self._busy_until = now_s + RESET_BUSY_S
         self._busy_reason = f"RESX release at {_ms(now_s)}"
 
@@ -318,10 +351,17 @@ class ST7789V:
         self._pending = self._pending[:0]
 
         if now_s < self._busy_until:
-            self._warn(now_s, f"{name} ignored: chip busy for 5 ms after {self._busy_reason}")
-            return
-        if now_s < self._settle_until:
-            self._warn(now_s, f"{name} sent within 5 ms after {self._settle_reason}")
+            if self.strict:
+                self._rule(RULE_AFTER_RESET, now_s, f"{name} ignored: chip busy for 5 ms after {self._busy_reason}")
+                return
+            self._rule(RULE_AFTER_RESET, now_s, f"{name} sent within 5 ms after {self._busy_reason}: "
+                                                f"carried out (--strict ignores it, as the chip may)")
+        elif now_s < self._settle_until:
+            if self.strict:
+                self._rule(RULE_AFTER_SLEEP, now_s, f"{name} ignored: sent within 5 ms after {self._settle_reason}")
+                return
+            self._rule(RULE_AFTER_SLEEP, now_s, f"{name} sent within 5 ms after {self._settle_reason}: "
+                                                f"carried out (--strict ignores it, as the chip may)")
 
         self._command = code
         if code not in PARAMETER_COUNT:
@@ -404,8 +444,11 @@ class ST7789V:
         if enter != self._regs.sleeping:
             since = now_s - self._last_sleep_change
             if since < SLEEP_TOGGLE_S:
-                self._warn(now_s, f"{name} only {since * 1e3:.3f} ms after the last sleep "
-                                  f"change; the datasheet asks for 120 ms")
+                text = f"{name} only {since * 1e3:.3f} ms after the last sleep change; the datasheet asks for 120 ms"
+                if self.strict:
+                    self._rule(RULE_SLEEP_TOGGLE, now_s, f"{text}: ignored (--strict)")
+                    return
+                self._rule(RULE_SLEEP_TOGGLE, now_s, f"{text}: carried out (--strict ignores it)")
             self._last_sleep_change = now_s
         self._regs.sleeping = enter
         self._settle_until = now_s + SLEEP_SETTLE_S
@@ -512,6 +555,14 @@ class ST7789V:
     def _warn(self, now_s: float, message: str) -> None:
         self.warnings.append(f"ST7789V at {_ms(now_s)}: {message}")
         if self.on_warning is not None:
+            self.on_warning(now_s, message)
+
+    def _rule(self, kind: str, now_s: float, message: str) -> None:
+        """A timing rule broken (kind: one of TIMING_RULES): a warning, heard by on_rule when given."""
+        self.warnings.append(f"ST7789V at {_ms(now_s)}: {message}")
+        if self.on_rule is not None:
+            self.on_rule(kind, now_s, message)
+        elif self.on_warning is not None:
             self.on_warning(now_s, message)
 
 

@@ -141,6 +141,10 @@ class Sysctl(Peripheral):
         bus = PERI_BUS.get(name)
         return bus is None or bool(self.values[CLK_EN_CENT] >> bus & 1)
 
+    def refresh_usable(self) -> None:
+        """After the register table was filled from outside (bootrom.py): which gates are usable."""
+        self._update_usable()
+
     def _update_usable(self) -> None:
         self.usable = {name for name in PERI_BITS if self.gate_open(name) and not self.in_reset(name)}
 

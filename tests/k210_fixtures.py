@@ -96,6 +96,10 @@ def idle_elf() -> str:
 
 
 def make_board(elf: str | None = None, **kwargs) -> Board:
+    """A board for the register-level and CPU-level tests. They test what each register does from
+    its reset value, so the board starts cold (26 MHz, clocks gated) unless a test says cold=False
+    (the state the mask ROM hands a program, the board model's default)."""
+    kwargs.setdefault("cold", True)
     board = Board(elf or build_elf(IDLE_SOURCE), **kwargs)
     board._frames_wanted = 1 << 60   # step freely: no frame count ends a turn early
     board.hang_budget_s = 1e9

@@ -6,7 +6,9 @@ from __future__ import annotations
 import pytest
 
 from emulator.errors import FirmwareTrap, UnmodelledAccess
-from emulator.hart import CAUSE_INTERRUPT, HartState, IRQ_MEI, IRQ_MSI, IRQ_MTI
+from emulator.elf import load_elf
+from emulator.hart import CAUSE_INTERRUPT, IRQ_MEI, IRQ_MSI, IRQ_MTI, CsrContext, Hart, HartState, RunEnd
+from emulator.memory import Sram
 from k210_fixtures import at_done, build_elf, make_board, program, reg, run_to_done, run_until, symbol
 
 CPU_HZ = 26e6
@@ -340,6 +342,32 @@ def test_wfi_with_nothing_to_wake_it_is_a_hang():
     """))
     with pytest.raises(HangDetected, match="every hart sleeps in wfi"):
         run_to_done(board)
+
+
+def load_segments(elf: str) -> bytes:
+    """The first 4 KiB of SRAM as the program's image fills them."""
+    sram = Sram(fill_seed=None)
+    load_elf(elf, sram)
+    return sram.read(0x8000_0000, 0x1000)
+
+
+def test_a_wfi_that_ends_the_budget_still_sleeps():
+    """A turn whose last instruction is a wfi ends with the hart asleep: a turn boundary must not
+    make the hart skip its sleep (it used to report the budget used up, and the hart ran on)."""
+    code = build_elf("""
+        .globl _start
+    _start:
+        nop
+        nop
+        wfi
+        nop
+    """)
+    hart = Hart(0, CsrContext(mcycle=lambda: 0, mip=lambda: 0))
+    hart.uc.mem_map(0x8000_0000, 0x1000)
+    hart.uc.mem_write(0x8000_0000, load_segments(code))
+    hart.pc = 0x8000_0000
+    assert hart.run(3) == (RunEnd.WFI, 3)
+    assert hart.pc == 0x8000_0008                   # past the wfi (after two c.nop)
 
 
 TIMER_IRQ = """

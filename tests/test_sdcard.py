@@ -4,9 +4,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from k210_fixtures import idle_elf, make_board  # noqa: F401
+
 from emulator.errors import BadInput
-from emulator.sdcard import (BLOCK, INIT_TIME_S, NAC_BYTES, NCR_BYTES, SdCard, SdImage, command_frame, crc7,
-                             crc16)
+from emulator.sdcard import (BLOCK, INIT_TIME_S, NAC_BYTES, NCR_BYTES, RULE_POWER_UP_CLOCKS, SdCard, SdImage,
+                             command_frame, crc7, crc16)
 
 BLOCKS = 64
 
@@ -61,12 +63,43 @@ def test_crc16_of_a_block_of_ff_is_the_spec_example():
     assert crc16(b"\xff" * 512) == 0x7FA1
 
 
-def test_cmd0_needs_power_up_clocks(image_path):
+def test_cmd0_without_power_up_clocks_is_answered_with_a_warning(image_path):
+    """Firmware that ran on real Docks sends CMD0 without the 74 clocks (issue 10): by default the
+    card answers it, and the broken rule is a warning counted under its kind."""
+    broken = []
+    card = SdCard(SdImage(image_path), on_rule=lambda kind, now, text: broken.append((kind, text)))
+    card.set_selected(True, 0.0)
+    assert command(card, 0, 0, 4) == b"\xff" * NCR_BYTES + b"\x01" + b"\xff" * (3 - NCR_BYTES)
+    [(kind, text)] = broken
+    assert kind == RULE_POWER_UP_CLOCKS
+    assert text == ("SD card: CMD0 after only 0 clocks with CS high (the SD specification asks for at least 74 "
+                    "after power-up): answered (--strict ignores it)")
+
+
+def test_cmd0_needs_power_up_clocks_when_strict(image_path):
     warnings = []
-    card = SdCard(SdImage(image_path), warn=warnings.append)
+    card = SdCard(SdImage(image_path), warn=warnings.append, strict=True)
     card.set_selected(True, 0.0)
     assert command(card, 0, 0, 4) == b"\xff" * 4
-    assert "74" in warnings[0]
+    assert warnings == ["SD card: CMD0 after only 0 clocks with CS high (the SD specification asks for at least "
+                        "74 after power-up): ignored (--strict)"]
+    card.set_selected(False, 0.0)
+    clock(card, b"\xff" * 10)              # 80 clocks with CS high: now the card takes CMD0
+    card.set_selected(True, 0.0)
+    assert command(card, 0, 0, 3)[NCR_BYTES] == 0x01
+
+
+@pytest.mark.parametrize("strict", [False, True])
+def test_the_board_counts_the_broken_power_up_rule(image_path, idle_elf, strict):
+    """On the board the card hears --strict, and its broken rule joins the run's warnings and is counted
+    per rule (run.json's timing_warnings)."""
+    board = make_board(idle_elf, sd_image=str(image_path), strict=strict)
+    card = board.sd_slot.card
+    card.set_selected(True, 0.0)
+    reply = command(card, 0, 0, 3)
+    assert reply[NCR_BYTES] == (0xFF if strict else 0x01)
+    assert board.timing_warnings == {RULE_POWER_UP_CLOCKS: 1}
+    assert "SD card: CMD0 after only 0 clocks with CS high" in board.warnings[-1]
 
 
 def test_cmd0_enters_idle_with_r1_01_after_ncr(image_path):

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Creates the project's virtual environment and installs the project (with its native
-# hooks, the instruction counter and the store checker, which need a C compiler and the
+# hooks, the instruction counter, the store checker and the poll watch, which need a C compiler and the
 # Python headers) and test tools.
 set -euo pipefail
 venv=${1:-.venv}
