@@ -27,7 +27,13 @@ address, or, with --strict, stop the run (exit status 5):
 - A misaligned access to a device raises the misaligned-address exception (mcause 4, 6).
 - An address where nothing answers raises an access fault too, except in the debug
   module's region at the bottom of the address space, which answers outside debug mode:
-  loads read 0 and stores are ignored.
+  loads read 0 and stores are ignored. A jump to where nothing answers raises the
+  instruction access fault (mcause 1).
+- Physical addresses are 32 bits: an address with any of its upper 32 bits set reaches
+  what its low 32 bits name (machine mode translates nothing, and Rocket's TLB passes the
+  low bits through), so a hart returning through a saved address whose upper half was
+  overwritten runs on at the low half. The model maps the same memory or device there
+  on first use.
 """
 from __future__ import annotations
 
@@ -58,8 +64,15 @@ KNOWN_UNMODELLED = [
     (0x5100_0000, 0x100_0000, "SPI2"), (0x4080_0000, 0x100_0000, "KPU"), (0x4200_0000, 0x100_0000, "FFT"),
     (0x8800_0000, 0x2_0000, "boot ROM"),
 ]
+CAUSE_FETCH_ACCESS = 1
 CAUSE_LOAD_MISALIGNED, CAUSE_STORE_MISALIGNED = 4, 6
 CAUSE_LOAD_ACCESS, CAUSE_STORE_ACCESS = 5, 7
+# Rocket's physical addresses (rocket-chip coreplex/Configs.scala, PAddrBits = 32; in machine
+# mode its TLB passes the address's low bits through unchanged, rocket/TLB.scala)
+PHYSICAL_ADDRESS_BITS = 32
+PHYSICAL_ADDRESS_MASK = (1 << PHYSICAL_ADDRESS_BITS) - 1
+# distinct upper halves one hart may use before the run stops: each costs a set of mappings
+MAX_ADDRESS_ALIASES = 16
 # Rocket's debug module answers at the bottom of the address space, in and out of debug mode
 # (rocket-chip denied M-mode access to it only in August 2019, long after the K210's design)
 DEBUG_BASE, DEBUG_SIZE = 0x0000_0000, 0x1000
@@ -126,6 +139,7 @@ class Bus:
         self._split: list[tuple[int, int, int] | None] = [None] * harts
         self._accesses: dict[int, tuple[int, int, int]] = {}
         self._faulting_pc: list[int | None] = [None] * harts
+        self._aliases: list[set[int]] = [set() for _ in range(harts)]    # upper halves mapped, per hart
         self.device_writes: dict[str, list[int]] = {}     # stores per device, per hart
         self.questionable: dict[str, int] = {}            # accesses the bus answered with a warning, per kind
 
@@ -134,14 +148,24 @@ class Bus:
     def attach(self, hart: Hart) -> None:
         """Maps SRAM (both views) and every device window into a hart's engine."""
         uc = hart.uc
-        memory = self.board.memory
-        uc.mem_map_ptr(SRAM_BASE, SRAM_SIZE, unicorn.UC_PROT_ALL, memory.address)
-        uc.mem_map_ptr(SRAM_UNCACHED_BASE, SRAM_SIZE, unicorn.UC_PROT_ALL, memory.address)
-        for peripheral in self.peripherals:
-            uc.mmio_map(peripheral.BASE, peripheral.SIZE,
-                        self._mmio_reader(hart, peripheral), None, self._mmio_writer(hart, peripheral), None)
+        self._map_windows(hart, 0)
         uc.hook_add(unicorn.UC_HOOK_MEM_UNMAPPED | unicorn.UC_HOOK_MEM_FETCH_PROT | unicorn.UC_HOOK_MEM_READ_PROT
                     | unicorn.UC_HOOK_MEM_WRITE_PROT, self._unmapped(hart))
+
+    def _map_windows(self, hart: Hart, upper: int) -> None:
+        """Maps SRAM's two views and every device window at `upper` (0, or an upper half of the
+        address space that aliases the 32-bit physical one) into a hart's engine."""
+        uc = hart.uc
+        memory = self.board.memory
+        uc.mem_map_ptr(upper + SRAM_BASE, SRAM_SIZE, unicorn.UC_PROT_ALL, memory.address)
+        uc.mem_map_ptr(upper + SRAM_UNCACHED_BASE, SRAM_SIZE, unicorn.UC_PROT_ALL, memory.address)
+        for peripheral in self.peripherals:
+            uc.mmio_map(upper + peripheral.BASE, peripheral.SIZE,
+                        self._mmio_reader(hart, peripheral), None, self._mmio_writer(hart, peripheral), None)
+
+    def answers(self, address: int) -> bool:
+        """Whether memory or a modelled device answers at a 32-bit physical address."""
+        return self.is_sram(address) or self.is_device(address)
 
     @staticmethod
     def is_sram(address: int) -> bool:
@@ -203,15 +227,15 @@ class Bus:
         def hook(uc, access, address, size, value, user_data):
             fetch = access in (unicorn.UC_MEM_FETCH_UNMAPPED, unicorn.UC_MEM_FETCH_PROT)
             write = access in (unicorn.UC_MEM_WRITE_UNMAPPED, unicorn.UC_MEM_WRITE_PROT)
+            if address >> PHYSICAL_ADDRESS_BITS:
+                return self._upper_bits_set(hart, address, size, fetch, write)
             name = next((n for base, length, n in KNOWN_UNMODELLED if base <= address < base + length), None)
             if not fetch and not self.strict and DEBUG_BASE <= address < DEBUG_BASE + DEBUG_SIZE:
                 # mapped on first use: a mapping at address 0 slows every hart down by several per cent
                 uc.mmio_map(DEBUG_BASE, DEBUG_SIZE, self._debug_reader(hart), None, self._debug_writer(hart), None)
                 return True     # Unicorn retries the access, which now reaches the debug region
             if fetch:
-                self.scheduler.stop(FirmwareTrap(
-                    f"hart {hart.hart_id}: instruction fetch from 0x{address:08x}, which is not memory "
-                    f"(jumped from around pc 0x{uc.reg_read(rv.UC_RISCV_REG_PC):08x})"))
+                self._fetch_fault(hart, address, name)
                 return False
             if name is not None or self.strict:
                 reason = f"{name}, which the board model does not implement" if name else NO_DEVICE
@@ -220,6 +244,65 @@ class Bus:
             self._access_fault(hart, address, write, "no device answers at this address")
             return False
         return hook
+
+    def _fetch_fault(self, hart: Hart, address: int, name: str | None) -> None:
+        """A jump to where no memory answers: Rocket's instruction access fault (mcause 1,
+        mepc and mtval = the address; rocket/TLB.scala xcpt_if, rocket/CSR.scala). A device the
+        model lacks, the debug region (its ROM is not modelled) and --strict stop the run."""
+        jumped_from = hart.uc.reg_read(rv.UC_RISCV_REG_PC)
+        if name is not None or self.strict or DEBUG_BASE <= address < DEBUG_BASE + DEBUG_SIZE:
+            what = f"{name}, which the board model does not implement" if name else "not memory"
+            self.scheduler.stop(FirmwareTrap(
+                f"hart {hart.hart_id}: instruction fetch from 0x{address:08x}, which is {what} "
+                f"(jumped from around pc 0x{jumped_from:08x})"))
+            return
+        self._questionable(hart, "access fault", address, 4, "instruction fetch",
+                           f"no memory answers at this address: the K210 raises an instruction access "
+                           f"fault (mcause {CAUSE_FETCH_ACCESS}, mtval 0x{address:x}) into the firmware's "
+                           f"trap handler", pc=address)
+        # the jump retired; the instruction at the target was never fetched, so nothing to take back
+        hart.pending_exception = hartmod.PendingException(CAUSE_FETCH_ACCESS, address, address)
+
+    def _upper_bits_set(self, hart: Hart, address: int, size: int, fetch: bool, write: bool) -> bool:
+        """An address above 4 GiB: the K210 reaches what its low 32 bits name. The same memory
+        or device windows are mapped at the address's upper half (on first use, per hart) and
+        the access retried; --strict stops instead. Returns whether Unicorn is to retry."""
+        physical = address & PHYSICAL_ADDRESS_MASK
+        upper = address - physical
+        direction = "instruction fetch" if fetch else ("store" if write else "load")
+        if not self.answers(physical):
+            # nothing answers at the low half either: the access faults as it would there
+            if fetch:
+                self._fetch_fault(hart, address, None)
+            elif self.strict:
+                self._fail(hart, UnmodelledAccess(NO_DEVICE), address, size, direction)
+            else:
+                self._access_fault(hart, address, write, f"nothing answers at its low 32 bits (0x{physical:08x})")
+            return False
+        pc = address if fetch else None
+        if self.strict:
+            error = UnmodelledAccess(f"upper 32 bits set; the K210 would reach 0x{physical:08x} "
+                                     f"(its physical addresses are 32 bits), --strict stops here")
+            if fetch:
+                self.scheduler.stop(FirmwareTrap(f"hart {hart.hart_id}: instruction fetch from "
+                                                 f"0x{address:x}: {error.args[0]}"))
+            else:
+                self._fail(hart, error, address, size, direction)
+            return False
+        aliases = self._aliases[hart.hart_id]
+        if upper not in aliases and len(aliases) >= MAX_ADDRESS_ALIASES:
+            self._fail(hart, UnmodelledAccess(
+                f"upper 32 bits set, and this hart has already used {MAX_ADDRESS_ALIASES} other upper "
+                f"halves; the board model maps no more of them"), address, size, direction)
+            return False
+        self._questionable(hart, "upper address bits", address, size, direction,
+                           f"the upper 32 bits are not 0: the K210's physical addresses are 32 bits, so "
+                           f"the {direction} reaches 0x{physical:08x} (reported once per upper half and hart: "
+                           f"the model maps memory and devices there and runs on at full speed)", pc=pc)
+        if upper not in aliases:
+            aliases.add(upper)
+            self._map_windows(hart, upper)
+        return True
 
     def _access_fault(self, hart: Hart, address: int, is_store: bool, why: str) -> None:
         """Rocket's answer to an access its physical memory attributes do not allow: a precise
@@ -236,11 +319,11 @@ class Bus:
         self._faulting_pc[hart.hart_id] = pc
 
     def _questionable(self, hart: Hart, kind: str, address: int, width: int, direction: str,
-                      what_happens: str) -> None:
+                      what_happens: str, pc: int | None = None) -> None:
         """An access the bus answered the way the K210 does, though a register table would not
         take it as it is: a warning naming the access, counted per kind for run.json."""
         self.questionable[kind] = self.questionable.get(kind, 0) + 1
-        self.board.warn(f"{self.describe_access(hart, address, width, direction)}: {what_happens}",
+        self.board.warn(f"{self.describe_access(hart, address, width, direction, pc)}: {what_happens}",
                         self.scheduler.hart_now(hart))
 
     # --- the debug module's region ------------------------------------------------------------

@@ -12,6 +12,8 @@ import pytest
 from conftest import GOLDEN, GOLDEN_FRAMES, run_emulator
 from emulator import plic as p
 from emulator import sysctl as sc
+from unicorn import riscv_const as rv
+
 from emulator.errors import UnmodelledAccess
 from emulator.hart import IRQ_MSI
 from k210_fixtures import make_board, program, reg, run_to_done, run_until, symbol
@@ -328,6 +330,95 @@ def test_the_debug_region_answers_outside_debug_mode():
     assert board.bus.questionable == {"debug region": 2}
     with pytest.raises(UnmodelledAccess, match="store of 1 bytes at 0x00000009: no device or memory answers"):
         run_to_done(make_board(program(source), strict=True))
+
+
+# --- addresses with upper bits set: the K210's physical addresses are 32 bits -------------------------
+
+UPPER_HALF = 0x1234_5678_0000_0000
+
+
+def test_a_return_through_an_address_with_a_clobbered_upper_half_runs_on_at_its_low_half():
+    """Issue 10: a saved return address whose upper 32 bits a later store overwrote; the real chip
+    fetched from its low 32 bits and went on."""
+    board = make_board(program(SET_MTVEC + """
+        la      t0, saved
+        la      t1, back
+        sd      t1, 0(t0)
+        li      t1, 0x12345678
+        sw      t1, 4(t0)                 # the later store over the upper half
+        ld      ra, 0(t0)
+        li      s1, 0
+        ret
+    back:
+        li      s1, 1
+        auipc   s2, 0                     # where the hart runs now
+        la      t0, done                  # pc-relative, so in the upper half too: clear it
+        slli    t0, t0, 32
+        srli    t0, t0, 32
+        jr      t0
+    """ + HANDLER, data="saved: .dword 0\n"))
+    run_to_done(board)
+    assert reg(board, "s1") == 1 and reg(board, "s8") == 0        # back reached, no trap
+    target = UPPER_HALF | symbol(board, "back")
+    assert reg(board, "s2") == target + 2          # the model keeps the pc's upper half (README)
+    assert board.bus.questionable == {"upper address bits": 1}
+    assert f"reaches 0x{symbol(board, 'back'):08x}" in warning_about(board, target)
+
+
+def test_loads_and_stores_with_upper_bits_reach_sram_and_devices_at_their_low_half():
+    board = make_board(program(SET_MTVEC + f"""
+        la      t0, cell
+        li      t2, {UPPER_HALF:#x}
+        or      t0, t0, t2
+        li      t1, 0x5A5A
+        sd      t1, 0(t0)                 # SRAM through the upper half
+        la      t3, cell
+        ld      s1, 0(t3)                 # ... is the cell
+        li      t4, 0x0C000004
+        or      t4, t4, t2
+        li      t1, 6
+        sw      t1, 0(t4)                 # PLIC source 1's priority through the upper half
+        li      t4, 0x0C000004
+        lw      s2, 0(t4)
+    """ + HANDLER, data="cell: .dword 0\n"))
+    run_to_done(board)
+    assert reg(board, "s8") == 0
+    assert reg(board, "s1") == 0x5A5A and reg(board, "s2") == 6
+    assert board.bus.questionable == {"upper address bits": 1}     # once per upper half and hart
+
+
+def test_upper_bits_over_a_hole_fault_and_strict_stops_at_upper_bits():
+    board = make_board(program(SET_MTVEC + """
+        li      t0, 0x60000000
+        li      t2, 0x100000000
+        or      t0, t0, t2
+    bad:
+        lw      t1, 0(t0)
+    """ + HANDLER))
+    run_to_done(board)
+    assert reg(board, "s8") == 5 and reg(board, "s9") == symbol(board, "bad")
+    assert reg(board, "s10") == 0x1_6000_0000
+    strict = make_board(program("""
+        la      t0, cell
+        li      t2, 0x100000000
+        or      t0, t0, t2
+        ld      t1, 0(t0)
+    """, data="cell: .dword 0\n"), strict=True)
+    with pytest.raises(UnmodelledAccess, match="upper 32 bits set; the K210 would reach 0x8"):
+        run_to_done(strict)
+
+
+def test_a_jump_where_nothing_answers_is_an_instruction_access_fault():
+    board = make_board(program(SET_MTVEC + """
+        li      t0, 0x60000000
+    bad:
+        jalr    ra, 0(t0)
+    """ + HANDLER))
+    run_to_done(board)
+    assert reg(board, "s8") == 1                                   # instruction access fault
+    assert reg(board, "s9") == 0x6000_0000 and reg(board, "s10") == 0x6000_0000
+    assert board.harts[0].uc.reg_read(rv.UC_RISCV_REG_RA) == symbol(board, "bad") + 4   # the jump retired
+    assert board.bus.questionable == {"access fault": 1}
 
 
 # --- the command line ------------------------------------------------------------------------------------
