@@ -20,7 +20,9 @@ from .bus import Bus, is_sram
 from .clint import Clint
 from .disasm import disassemble_one
 from .dmac import Dmac
-from .elf import RESET_PC, LoadedImage, load_elf
+from .elf import RESET_PC, LoadedImage
+from .raw_image import load_firmware
+from .errors import BoardStop
 from .fpioa import Fpioa
 from .gpio import Gpio
 from .gpiohs import Gpiohs
@@ -121,7 +123,7 @@ class Board:
         self.spi1.device_for_ss = self.wiring.spi1_device
         self.bus = Bus(self, strict)
         self.write_watch: WriteWatch | None = None
-        self.image: LoadedImage = load_elf(firmware, self.memory)
+        self.image: LoadedImage = load_firmware(firmware, self.memory)
         if self.image.entry != RESET_PC:
             self.warn(f"ELF entry is 0x{self.image.entry:x}, but the K210 starts both harts at 0x{RESET_PC:x}")
         sites, loops = [], []
@@ -211,6 +213,13 @@ class Board:
     def run_until(self, until_s: float, progress: Callable[["Board"], None] | None = None) -> RunResult:
         """Runs until `until_s` of virtual time, frames or not (Scheduler.run_until)."""
         return self.scheduler.run_until(until_s, progress)
+
+    def stop_run(self, error: BoardStop) -> None:
+        """Ends the run with `error` once the current instruction has completed: for watchers
+        outside the harts (--expect, --fail-on). The first reason recorded counts."""
+        self.scheduler.stop(error)
+        if self.scheduler.current is not None:
+            self.scheduler.current.request_stop()
 
     def finish_console_line(self, limit_s: float | None = None) -> None:
         """After run(): lets the console line begun after the last frame end (Scheduler's doc)."""

@@ -20,16 +20,17 @@ DEFAULT_FRAMES = 8
 MAX_PAD_CHANGES_IN_RUN_JSON = 10_000    # a pin toggled for ever must not bloat run.json
 
 EXIT_STATUS_HELP = f"""exit status:
-  0  the requested frames were shown, or --until's time was reached (with --golden: all match; every
-     --grab was taken)
+  0  the requested frames were shown, or --until's time was reached, or (with --expect) the console
+     printed every expected text (with --golden: all match; every --grab was taken)
   1  internal error of the board model
   2  bad command line: an unknown option or a value out of range (--frames, --quantum 1..{MAX_QUANTUM},
      --budget and --until above 0 and finite, --tolerance 0..{MAX_TOLERANCE}, --sd-fault, a --grab's syntax
      or time), an option without the one it needs (--tolerance without --golden, --sd-writable or
      --sd-fault without --sd), --until with --frames, a --grab of a symbol the firmware does not define
-     or of a buffer outside SRAM; or, after a run that ended well, a --grab whose time the run ended
-     before
-  3  the firmware trapped (exception), or jumped outside memory
+     or of a buffer outside SRAM, an empty --expect/--fail-on text or a regular expression that does
+     not compile, --expect with --frames; or, after a run that ended well, a --grab whose time the run
+     ended before
+  3  the firmware trapped (exception), or jumped into a block the model lacks
   4  hang: no frame within the virtual-time budget, or every hart waits forever (neither with --until)
   5  the firmware touched an address or register the model does not implement; with --strict also
      an access the K210's bus answers in a way of its own (see --strict)
@@ -41,10 +42,13 @@ EXIT_STATUS_HELP = f"""exit status:
   8  the firmware reported a fatal error on its console ("error <code> <words>")
   9  --golden: a shown frame differs from its golden PNG (diff images are in the output folder)
  10  --check-writes: a store (a hart's or a DMA channel's) landed in SRAM outside the firmware's buffers
+ 11  --fail-on: the console printed a failure text
+ 12  --expect: the run ended (--until's time, or --budget seconds of virtual time without the next
+     expected text) before the console printed every expected text
 The command line, then the --golden frames, the --grab buffers and the --out folder are checked
 before the run: a refusal there (2 or 6) writes nothing. Every run that starts writes run.json in
 the output folder, whatever its status. After the run the first that applies decides: how the run
-stopped (3-8, 10), --golden (9), a --grab not taken (2).
+stopped (3-8, 10-12), --golden (9), a --grab not taken (2).
 """
 
 
@@ -95,7 +99,8 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
     run = sub.add_parser("run", help="run a firmware ELF and capture the LCD's frames",
                          epilog=EXIT_STATUS_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
-    run.add_argument("firmware", help="firmware ELF (linked for SRAM at 0x80000000)")
+    run.add_argument("firmware", help="firmware ELF (linked for SRAM at 0x80000000), or a raw image ending in "
+                     ".bin (firmware.bin, as kflash writes it and the ROM copies it to 0x80000000)")
     run.add_argument("--sd", metavar="IMAGE", help="SD card image in the Dock's slot (opened read-only: the "
                      "firmware's writes are kept in memory for the run)")
     run.add_argument("--sd-writable", action="store_true", help="with --sd: let the firmware's writes reach the "
@@ -110,6 +115,24 @@ def build_parser() -> argparse.ArgumentParser:
                      help="instead of counting frames, run until this virtual time (finite, above 0), for "
                           "firmware whose output is its console or its pins: frames shown are kept, no frame "
                           "budget applies, and a board whose harts all sleep for good skips ahead to it")
+    run.add_argument("--expect", dest="expected", action="append", default=[], metavar="TEXT",
+                     type=literal_pattern,
+                     help="end the run with success (status 0) once the console has printed TEXT and every "
+                          "--expect/--expect-re before it, in order; found wherever it is printed, within a "
+                          "line or across lines; frames then end nothing; without --until the run fails "
+                          "(status 12) after --budget seconds of virtual time without the next one; repeatable")
+    run.add_argument("--expect-re", dest="expected", action="append", metavar="REGEX", type=regex_pattern,
+                     help="as --expect, a Python regular expression matched against each whole console line")
+    run.add_argument("--fail-on", dest="failures", action="append", default=[], metavar="TEXT",
+                     type=literal_pattern,
+                     help="end the run with failure (status 11) when the console prints TEXT; repeatable")
+    run.add_argument("--fail-on-re", dest="failures", action="append", metavar="REGEX", type=regex_pattern,
+                     help="as --fail-on, a regular expression matched against each whole console line")
+    run.add_argument("--uart-input", metavar="FILE", default=None,
+                     help="send FILE's bytes to UARTHS's receiver at the baud the firmware set, as the Dock's "
+                          "USB serial bridge would (each when the receiver is on and has room); '-' reads "
+                          "standard input: piped, all of it; from a terminal, each key as it is typed, with "
+                          "virtual time held to the host's clock")
     run.add_argument("--out", default="build/frames", type=Path, help="output folder (default build/frames)")
     run.add_argument("--budget", type=budget_seconds, default=5.0,
                      help="virtual seconds allowed between frames before the run counts as hung "
@@ -157,8 +180,27 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def literal_pattern(text: str):
+    from .console_watch import ConsolePattern
+    try:
+        return ConsolePattern.literal(text)
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
+
+
+def regex_pattern(text: str):
+    from .console_watch import ConsolePattern
+    try:
+        return ConsolePattern.expression(text)
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
+
+
 def option_problem(args: argparse.Namespace) -> str | None:
     """What is wrong with the combination of options (argparse checked each value)."""
+    if args.expected and args.frames is not None:
+        return ("--expect and --frames exclude each other (with --expect the run ends when the console has "
+                "printed the texts; add --until to bound it in virtual time)")
     if args.until is not None and args.frames is not None:
         return "--until and --frames exclude each other (a run ends at a virtual time or after frames)"
     if args.tolerance is not None and args.golden is None:
@@ -207,6 +249,37 @@ def grab_problem(grabs: list, firmware: str) -> str | None:
     return None
 
 
+# --expect without --until: how far the run may go in virtual time at most (the --budget
+# deadline after each expected text ends it long before)
+EXPECT_HORIZON_S = 1e6
+
+
+def run_expecting(board, watch, until_s: float | None, budget_s: float, progress):
+    """--expect: runs until the console has printed every expected text (the watch ends the run
+    with ConsoleExpectationsMet), or fails at --until's time, or without --until after
+    budget_s of virtual time without the next expected text."""
+    from .errors import ConsoleExpectationUnmet
+    if until_s is not None:
+        board.run_until(until_s, progress=progress)
+        raise ConsoleExpectationUnmet(watch.unmet_message(f"by --until's {until_s:g} s of virtual time"))
+
+    def arm(at_s: float) -> None:
+        count = len(watch.matches)
+
+        def deadline(board) -> None:
+            if len(watch.matches) != count:          # an expected text came meanwhile
+                arm(watch.matches[-1].virtual_time_s + budget_s)
+                return
+            since = "the previous expected text" if count else "reset"
+            raise ConsoleExpectationUnmet(watch.unmet_message(
+                f"in {budget_s:g} s of virtual time after {since} (--budget)"))
+        board.grab_at(at_s, deadline)
+
+    arm(budget_s)
+    board.run_until(EXPECT_HORIZON_S, progress=progress)
+    raise ConsoleExpectationUnmet(watch.unmet_message(f"by {EXPECT_HORIZON_S:g} s of virtual time"))
+
+
 class Terminal:
     """What the user sees: the firmware's console on stdout and, when stderr is a terminal, a
     progress line on stderr that is rewritten in place. Console lines are written whole, each
@@ -214,11 +287,15 @@ class Terminal:
 
     CLEAR_LINE = "\r\033[K"
 
-    def __init__(self, quiet: bool, out: TextIO | None = None, err: TextIO | None = None) -> None:
+    def __init__(self, quiet: bool, out: TextIO | None = None, err: TextIO | None = None,
+                 immediate: bool = False) -> None:
+        """immediate: write each console byte at once (an interactive run, whose prompts end
+        no line), with no progress line to keep apart."""
         self.out = out or sys.stdout
         self.err = err or sys.stderr
         self.quiet = quiet
-        self.shows_progress = not quiet and self.err.isatty()
+        self.immediate = immediate
+        self.shows_progress = not quiet and self.err.isatty() and not immediate
         self._line = bytearray()
         self._progress_shown = False
 
@@ -232,7 +309,7 @@ class Terminal:
         if self.quiet:
             return
         self._line.append(byte)
-        if byte == 10:
+        if byte == 10 or self.immediate:
             self._write_console_line()
 
     def _write_console_line(self) -> None:
@@ -280,9 +357,11 @@ def main(argv: list[str] | None = None) -> int:
     problem = option_problem(args)
     if problem:
         return usage_error(problem)
-    if args.until is None and args.frames is None:
+    if args.until is None and args.frames is None and not args.expected:
         args.frames = DEFAULT_FRAMES
     from .board import Board
+    from .console_watch import ConsoleWatch
+    from .uart_input import UartInput
     from .golden import compare_run, load_golden_frames
     from .grab import GrabRequest, parse_grab
     from .output import RunOutput, prepare_output_folder, summary_dict
@@ -295,17 +374,21 @@ def main(argv: list[str] | None = None) -> int:
         problem = grab_problem(grabs, args.firmware)
         if problem:
             return usage_error(problem)
+        uart_input = UartInput.open(args.uart_input) if args.uart_input is not None else None
         prepare_output_folder(args.out)
     except BadInput as error:
         print(f"[board] stopped (bad-input): {error}", file=sys.stderr)
         return EXIT_BAD_INPUT
 
     output = RunOutput(args.out)
-    terminal = Terminal(args.quiet)
+    terminal = Terminal(args.quiet, immediate=uart_input is not None and uart_input.interactive)
+    watch = ConsoleWatch(args.expected, args.failures)
+    board = None
 
     def console(byte: int) -> None:
         output.console_byte(byte)
         terminal.console_byte(byte)
+        watch.byte(byte, board.uarths.last_byte_time)
 
     taken: set[int] = set()
 
@@ -316,21 +399,26 @@ def main(argv: list[str] | None = None) -> int:
         return action
 
     started = time.perf_counter()
-    board = None
     try:
         board = Board(str(args.firmware), quantum=args.quantum, hang_budget_s=args.budget, console=console,
                       on_frame=output.frame, on_warning=terminal.warning, permissive=args.permissive,
                       sd_image=args.sd, sd_writable=args.sd_writable, sd_faults=frozenset(args.sd_fault),
                       check_writes=args.check_writes, strict=args.strict, lcd_interface=args.lcd_interface,
                       cold=args.cold)
+        board.uarths.input = uart_input
+        watch.attach(board.stop_run)
         for index, request in enumerate(grabs):
             board.grab_at(request.at_s, grab_action(index, request))
         progress = terminal.progress if terminal.shows_progress else None
-        if args.until is not None:
+        if args.expected:
+            result = run_expecting(board, watch, args.until, args.budget, progress)
+        elif args.until is not None:
             result = board.run_until(args.until, progress=progress)
         else:
             result = board.run(args.frames, progress=progress)
             board.finish_console_line()
+        if board.scheduler.pending_stop is not None:
+            raise board.scheduler.pending_stop     # recorded as the run's last turn ended
         status, kind, message = EXIT_OK, "ok", result.message
     except BoardStop as stop:
         status, kind, message = stop.exit_status, stop.kind, str(stop)
@@ -339,6 +427,8 @@ def main(argv: list[str] | None = None) -> int:
         import traceback
         traceback.print_exc()
     terminal.finish()
+    if uart_input is not None:
+        uart_input.close()
     if board is not None:
         board.close()
         for text in board.repeated_warnings:
@@ -380,6 +470,10 @@ def main(argv: list[str] | None = None) -> int:
     summary.update(pad_changes_summary(board))
     summary["cold"] = args.cold
     summary["timing_warnings"] = dict(board.timing_warnings) if board is not None else {}
+    summary.update(watch.summary())
+    summary["uart_input"] = None if uart_input is None else {
+        "source": args.uart_input, "interactive": uart_input.interactive, "bytes": uart_input.total,
+        "received": board.uarths.bytes_received if board is not None else 0}
     output.finish(summary)
     if status == EXIT_OK:
         terminal.message(f"[board] {message}; {board.time * 1e3:.2f} ms virtual; output in {args.out}")

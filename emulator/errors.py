@@ -17,6 +17,8 @@ EXIT_MISUSE = 7
 EXIT_FIRMWARE_ERROR = 8
 EXIT_GOLDEN_MISMATCH = 9
 EXIT_STRAY_WRITE = 10
+EXIT_FAIL_ON = 11
+EXIT_EXPECT_UNMET = 12
 
 
 class BoardStop(Exception):
@@ -89,3 +91,26 @@ class StrayWrite(BoardStop):
 
     exit_status = EXIT_STRAY_WRITE
     kind = "stray-write"
+
+
+class ConsoleExpectationsMet(BoardStop):
+    """--expect: the console has printed every expected text, in order. Not a failure: the run
+    ends here with status 0, as a run that showed its frames does."""
+
+    exit_status = EXIT_OK
+    kind = "ok"
+
+
+class ConsoleFailText(BoardStop):
+    """--fail-on: the console printed a text the user named as failure."""
+
+    exit_status = EXIT_FAIL_ON
+    kind = "fail-on"
+
+
+class ConsoleExpectationUnmet(BoardStop):
+    """--expect: the run reached its end (--until's time, or --budget seconds of virtual time
+    without the next expected text) before the console printed every expected text."""
+
+    exit_status = EXIT_EXPECT_UNMET
+    kind = "expect-unmet"

@@ -3,9 +3,18 @@
 Bytes written to txdata go through an 8-entry transmit FIFO that drains at the
 programmed baud rate (core clock / (div + 1), 10 bits per byte with one stop
 bit); each byte reaches the console when its stop bit is out. With txen = 0
-bytes wait in the FIFO, as on the real UART. Nothing is ever received. A byte
-written while the FIFO is full is lost, as on the chip, with a warning (the
-firmware should wait while txdata reads FULL).
+bytes wait in the FIFO, as on the real UART. A byte written while the FIFO is
+full is lost, as on the chip, with a warning (the firmware should wait while
+txdata reads FULL).
+
+The receiver takes what --uart-input sends (uart_input.py) into an 8-entry
+receive FIFO, one byte per 10 bit times at the programmed baud. rxdata reads
+the oldest byte (bit 31 set: empty); ip.rxwm is raised while the FIFO holds more
+than rxctrl.rxcnt bytes (SiFive FE310-G000 manual, UART chapter, whose UART is
+the block UARTHS is). The host side waits while the receiver is off or its FIFO
+is full, as QEMU's and Renode's serial back-ends hand a device a byte only when
+it can take one: on the chip those bytes would be lost, but a test's input
+should not depend on how fast a firmware boots.
 """
 from __future__ import annotations
 
@@ -13,12 +22,16 @@ from collections import deque
 from typing import Callable
 
 from .mmio import BUS_TILELINK, Peripheral, Register
+from .uart_input import UartInput
 
 TXDATA, RXDATA, TXCTRL, RXCTRL, IE, IP, DIV = 0x00, 0x04, 0x08, 0x0C, 0x10, 0x14, 0x18
 TX_FIFO_DEPTH = 8
+RX_FIFO_DEPTH = 8
 FULL = 1 << 31
 EMPTY = 1 << 31
-IP_TXWM = 1
+IP_TXWM, IP_RXWM = 1, 2
+RXCTRL_RXEN = 1
+INTERACTIVE_POLL_S = 0.05     # virtual time between looks at a terminal while nothing was typed
 
 
 class Uarths(Peripheral):
@@ -41,6 +54,11 @@ class Uarths(Peripheral):
         self._fifo: deque[int] = deque()
         self._shifting_until: float | None = None   # end time of the byte on the wire
         self.last_byte_time = 0.0                    # when the last byte's stop bit went out
+        self.input: UartInput | None = None          # what the host sends (--uart-input)
+        self._rx_fifo: deque[int] = deque()
+        self._receiving_until: float | None = None   # end time of the byte coming in
+        self._receiving_byte = 0
+        self.bytes_received = 0
 
     def _byte_time(self) -> float:
         hz = self.board.cpu_hz() if self.board is not None else 26e6
@@ -48,6 +66,30 @@ class Uarths(Peripheral):
         return bits * (self.values[DIV] + 1) / hz
 
     def advance(self, now: float) -> None:
+        self._advance_tx(now)
+        if self.input is not None:
+            self._advance_rx(now)
+
+    def _advance_rx(self, now: float) -> None:
+        while True:
+            if self._receiving_until is not None:
+                if self._receiving_until > now:
+                    return
+                self._rx_fifo.append(self._receiving_byte)
+                self.bytes_received += 1
+                start = self._receiving_until
+                self._receiving_until = None
+            else:
+                start = now
+            if not self._receiver_ready() or not self.input.has_byte(start):
+                return
+            self._receiving_byte = self.input.pop()
+            self._receiving_until = start + self._byte_time()
+
+    def _receiver_ready(self) -> bool:
+        return bool(self.values[RXCTRL] & RXCTRL_RXEN) and len(self._rx_fifo) < RX_FIFO_DEPTH
+
+    def _advance_tx(self, now: float) -> None:
         while True:
             if self._shifting_until is not None:
                 if self._shifting_until > now:
@@ -64,7 +106,14 @@ class Uarths(Peripheral):
             self._shifting_until = start + self._byte_time()
 
     def next_event_time(self, now: float) -> float | None:
-        return self._shifting_until
+        events = [t for t in (self._shifting_until, self._receiving_until) if t is not None]
+        source = self.input
+        if source is not None and self._receiving_until is None and self._receiver_ready():
+            if source.has_byte(now):
+                events.append(now)                      # the next byte starts coming in now
+            elif source.may_grow:
+                events.append(now + INTERACTIVE_POLL_S)   # look at the terminal again then
+        return min(events) if events else None
 
     def tx_level(self) -> int:
         return len(self._fifo)
@@ -73,15 +122,21 @@ class Uarths(Peripheral):
         return bool(self.read_ip() & self.values[IE])
 
     def read_ip(self) -> int:
-        watermark = (self.values[TXCTRL] >> 16) & 7
-        return IP_TXWM if len(self._fifo) < watermark else 0
+        tx_watermark = (self.values[TXCTRL] >> 16) & 7
+        rx_watermark = (self.values[RXCTRL] >> 16) & 7
+        return (IP_TXWM if len(self._fifo) < tx_watermark else 0) | \
+            (IP_RXWM if len(self._rx_fifo) > rx_watermark else 0)
 
     def read_register(self, offset: int, reg: Register, now: float) -> int:
         self.advance(now)
         if offset == TXDATA:
             return FULL if len(self._fifo) >= TX_FIFO_DEPTH else 0
         if offset == RXDATA:
-            return EMPTY
+            if not self._rx_fifo:
+                return EMPTY
+            byte = self._rx_fifo.popleft()
+            self.advance(now)          # room in the FIFO: the host's next byte may start
+            return byte
         if offset == IP:
             return self.read_ip()
         return self.values[offset]

@@ -138,8 +138,18 @@ COMMANDS = {
         ("run", _c_golden_matched),
     "python -m emulator run build/cfw/lcd_demo_serial.elf --lcd-interface spi --frames 4 --out build/lcd-serial "
     "--golden tests/golden/c-lcd-demo": ("run", _c_golden_matched),
+    "printf 'Ada\\nhello world\\nquit\\n' | python -m emulator run build/cfw/echo.elf --uart-input - "
+    '--expect "hello, Ada!" --expect bye --out build/echo': ("run", _console_says("build/echo", "hello, Ada!", "bye")),
     ".venv/bin/python -m pytest tests/test_reference.py -k first_golden -s":
         ("run", _prints_agreement),
+}
+#: Each needs the one before (assemble, link, run), so they run in this order in one test.
+OWN_FIRMWARE_COMMANDS = {
+    "riscv64-unknown-elf-as -march=rv64gc -o build/hello-asm.o tests/firmware/hello.S": lambda r: None,
+    "riscv64-unknown-elf-ld -N -Ttext=0x80000000 --no-warn-rwx-segments -o build/hello-asm.elf build/hello-asm.o":
+        lambda r: None,
+    'python -m emulator run build/hello-asm.elf --expect "hello from my own firmware" --fail-on "error" '
+    "--out build/hello-asm": _console_says("build/hello-asm", "hello from my own firmware"),
 }
 #: Both write build/frames, so they run one after the other in one test.
 FLASH_COMMANDS = {
@@ -150,7 +160,7 @@ FLASH_COMMANDS = {
 
 def test_every_command_is_known():
     found = readme_commands(README.read_text())
-    known = set(COMMANDS) | set(FLASH_COMMANDS)
+    known = set(COMMANDS) | set(FLASH_COMMANDS) | set(OWN_FIRMWARE_COMMANDS)
     assert set(found) == known, (
         f"README commands without a check here: {sorted(set(found) - known)}; "
         f"checks of commands the README no longer shows: {sorted(known - set(found))}")
@@ -174,4 +184,9 @@ def test_readme_command(command, firmware, card, request):
 
 def test_readme_flash_commands(firmware, card):
     for command, check in FLASH_COMMANDS.items():
+        _run_and_check(command, "run", check)
+
+
+def test_readme_own_firmware_commands(firmware):
+    for command, check in OWN_FIRMWARE_COMMANDS.items():
         _run_and_check(command, "run", check)

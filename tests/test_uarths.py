@@ -186,3 +186,52 @@ def test_a_program_prints_through_uarths():
     # the run cannot be faster than the wire: 10 bit times per byte
     assert board.time >= len(text) * BYTE - 1e-9
     assert board.time <= len(text) * BYTE + 2000 / CPU_HZ + 1e-6
+
+
+# --- the receiver (--uart-input) ---------------------------------------------------------------
+
+def receiving_board(idle_elf, data: bytes):
+    from emulator.uart_input import UartInput
+    board = make_board(idle_elf)
+    board.uarths.write(u.DIV, 4, DIV, 0.0)
+    board.uarths.input = UartInput(data)
+    return board, board.uarths
+
+
+def rx(uart, now) -> int:
+    return uart.read(u.RXDATA, 4, now)
+
+
+def test_the_receiver_takes_a_byte_every_ten_bit_times_once_enabled(idle_elf):
+    board, uart = receiving_board(idle_elf, b"hi")
+    uart.advance(1e-3)
+    assert rx(uart, 1e-3) & u.EMPTY                     # receiver off: the host waits
+    assert uart.next_event_time(1e-3) is None
+    t0 = 2e-3
+    uart.write(u.RXCTRL, 4, u.RXCTRL_RXEN, t0)
+    assert uart.next_event_time(t0) == pytest.approx(t0 + BYTE)
+    assert rx(uart, t0 + BYTE * 0.999) & u.EMPTY
+    assert rx(uart, t0 + BYTE + EPS) == ord("h")
+    assert rx(uart, t0 + 2 * BYTE + EPS) == ord("i")
+    assert rx(uart, t0 + 3 * BYTE) & u.EMPTY
+    assert uart.bytes_received == 2
+
+
+def test_a_full_receive_fifo_holds_the_host_back_and_rxwm_follows_rxcnt(idle_elf):
+    data = bytes(range(0x41, 0x41 + 12))
+    board, uart = receiving_board(idle_elf, data)
+    uart.write(u.RXCTRL, 4, u.RXCTRL_RXEN | 3 << 16, 0.0)      # rxcnt 3
+    uart.write(u.IE, 4, u.IP_RXWM, 0.0)
+    uart.advance(3 * BYTE + EPS)
+    assert not uart.read_ip() & u.IP_RXWM and not uart.irq_line()     # 3 bytes: not more than rxcnt
+    uart.advance(4 * BYTE + EPS)
+    assert uart.read_ip() & u.IP_RXWM and uart.irq_line()
+    late = 100 * BYTE                                           # the firmware looks late
+    uart.advance(late)
+    assert uart.bytes_received == u.RX_FIFO_DEPTH               # the rest waits on the host's side
+    got = [rx(uart, late) for _ in range(u.RX_FIFO_DEPTH)]
+    assert bytes(got) == data[:u.RX_FIFO_DEPTH]
+    assert rx(uart, late) & u.EMPTY
+    assert uart.next_event_time(late) == pytest.approx(late + BYTE)   # the next one started when room came
+    got += [rx(uart, late + k * BYTE + EPS) for k in range(1, 5)]
+    assert bytes(got) == data

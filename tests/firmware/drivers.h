@@ -35,6 +35,7 @@ void gpiohs_write(int line, int level);
 /* uarths.c: the console; stdout goes here */
 void uarths_init(uint32_t baud);
 void uarths_putc(char c);
+int uarths_getc(void);
 
 /* clint.c: time */
 uint64_t mtime_now(void);

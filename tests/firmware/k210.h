@@ -101,11 +101,13 @@ static inline void mmio_write64(uintptr_t address, uint64_t value) { *(volatile 
 
 /* --- UARTHS (uarths.h: SiFive UART) ------------------------------------------------------ */
 #define UARTHS_TXDATA           0x00
+#define UARTHS_RXDATA           0x04
 #define UARTHS_TXCTRL           0x08
 #define UARTHS_RXCTRL           0x0C
 #define UARTHS_IE               0x10
 #define UARTHS_DIV              0x18
 #define UARTHS_TXDATA_FULL      (1u << 31)
+#define UARTHS_RXDATA_EMPTY     (1u << 31)
 #define UARTHS_TXEN             (1u << 0)
 #define UARTHS_RXEN             (1u << 0)
 

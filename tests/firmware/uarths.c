@@ -23,6 +23,22 @@ void uarths_putc(char c)
     mmio_write8(UARTHS_BASE + UARTHS_TXDATA, (uint8_t)c);
 }
 
+/* Waits for a byte in the receive FIFO (rxdata bit 31 clear) and returns it; reading rxdata
+ * takes the byte out of the FIFO. */
+int uarths_getc(void)
+{
+    uint32_t word;
+    while ((word = mmio_read32(UARTHS_BASE + UARTHS_RXDATA)) & UARTHS_RXDATA_EMPTY)
+        ;
+    return (int)(word & 0xFF);
+}
+
+static int console_get(FILE *file)
+{
+    (void)file;
+    return uarths_getc();
+}
+
 static int console_put(char c, FILE *file)
 {
     (void)file;
@@ -32,6 +48,7 @@ static int console_put(char c, FILE *file)
     return (unsigned char)c;
 }
 
-static FILE console = FDEV_SETUP_STREAM(console_put, NULL, NULL, _FDEV_SETUP_WRITE);
+static FILE console = FDEV_SETUP_STREAM(console_put, console_get, NULL, _FDEV_SETUP_RW);
+FILE *const stdin = &console;
 FILE *const stdout = &console;
 FILE *const stderr = &console;
