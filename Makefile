@@ -16,7 +16,7 @@ FW_SRCS := $(wildcard firmware/*.S)
 FW_OBJS := $(patsubst firmware/%.S,$(BUILD)/fw/%.o,$(FW_SRCS))
 FW_INCS := $(wildcard firmware/include/*.inc)
 
-.PHONY: all toolchain venv firmware c-firmware card flash-to-emulator test bench goldens clean
+.PHONY: all toolchain venv firmware c-firmware card flash-to-emulator test bench goldens golden-check clean
 
 all: firmware
 
@@ -96,8 +96,15 @@ test: firmware c-firmware venv $(CARD)
 bench: firmware venv $(CARD)
 	$(PYTHON) tools/bench.py
 
+# Goldens of one's own scene folders: make goldens SCENE_DIRS="dir ..." [GOLDEN_FRAMES=N] writes
+# each DIR/golden; make golden-check SCENE_DIRS="dir ..." checks against them (status 9: mismatch)
+SCENE_DIR_ARGS = $(foreach d,$(SCENE_DIRS),--folder $(d)) $(if $(GOLDEN_FRAMES),--frames $(GOLDEN_FRAMES))
+
 goldens: firmware venv $(CARD)
-	$(PYTHON) tools/regen_goldens.py $(SCENES)
+	$(PYTHON) tools/regen_goldens.py $(SCENES) $(SCENE_DIR_ARGS)
+
+golden-check: firmware venv
+	$(PYTHON) tools/regen_goldens.py --check $(SCENE_DIR_ARGS)
 
 clean:
 	rm -rf $(BUILD)

@@ -3,12 +3,14 @@ from __future__ import annotations
 
 import json
 import shutil
+import subprocess
+import sys
 
 import numpy as np
 import pytest
 from PIL import Image
 
-from conftest import GOLDEN, GOLDEN_FRAMES, run_emulator
+from conftest import GOLDEN, GOLDEN_FRAMES, ROOT, run_emulator
 from emulator.grab import parse_grab, rgb565_image
 
 
@@ -176,3 +178,33 @@ def test_rgb565_pairs_layout():
     plain = rgb565_image(raw, 2, 1, pairs=False)
     paired = rgb565_image(raw, 2, 1, pairs=True)
     assert tuple(plain[0, 0]) == (255, 0, 0) and tuple(paired[0, 0]) == (0, 0, 255)
+
+
+# --- goldens of one's own scene folders (make goldens / golden-check SCENE_DIRS=...) ---------------
+
+def _regen(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, str(ROOT / "tools" / "regen_goldens.py"), *args], cwd=ROOT,
+                          capture_output=True, text=True, timeout=600)
+
+
+def test_a_scene_folder_of_ones_own_gets_goldens_and_is_checked_against_them(firmware, card, tmp_path):
+    scene = tmp_path / "my-scene"
+    (scene / "models").mkdir(parents=True)
+    (scene / "textures").mkdir()
+    assets = ROOT / "build" / "assets"
+    shutil.copy(assets / "models" / "cube.obj", scene / "models")
+    shutil.copy(assets / "textures" / "cube.png", scene / "textures")
+    (scene / "scene.ini").write_text("model = models/cube.obj\ntexture = textures/cube.ppm\nmode = textured\n"
+                                     "translate = 0 0 -3\naxis = 1 1 0\nangle = 20\nstep = 5\n")
+    made = _regen("--folder", str(scene), "--frames", "2")
+    assert made.returncode == 0, made.stderr
+    assert sorted(p.name for p in (scene / "golden").iterdir()) == ["frame_0000.png", "frame_0001.png"]
+    assert f"{scene / 'golden' / 'frame_0001.png'}: new" in made.stdout
+    checked = _regen("--check", "--folder", str(scene), "--frames", "2")
+    assert checked.returncode == 0 and "[golden] all 2 frames match" in checked.stderr
+    _nudge(scene / "golden" / "frame_0001.png", (10, 10, 12, 12), 9)
+    checked = _regen("--check", "--folder", str(scene), "--frames", "2")
+    assert checked.returncode == 9 and "frame 1" in checked.stderr
+    (scene / "scene.ini").unlink()
+    refused = _regen("--check", "--folder", str(scene))
+    assert refused.returncode == 2 and "no scene.ini in it" in refused.stderr
