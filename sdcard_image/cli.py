@@ -62,6 +62,11 @@ def _parser() -> argparse.ArgumentParser:
                    help="resize converted images to WxH (PPM inputs are kept as they are)")
     b.add_argument("--scene", action="append", default=[], metavar="KEY=VALUE",
                    help="write /scene.ini with one 'key = value' line per option")
+    b.add_argument("--layout", choices=fat32.LAYOUTS, default=fat32.LAYOUT_FATGEN103,
+                   help="how the FAT32 partition is laid out: fatgen103 (the default: Microsoft's "
+                        "specification's cluster sizes, as pyfatfs formats it) or mkfs.fat (exactly as "
+                        "dosfstools' mkfs.fat -F 32 formats a card's partition on Linux: its cluster size, "
+                        "reserved sectors, FAT size and geometry fields; needs dosfstools)")
     b.add_argument("--quiet", "-q", action="store_true", help="no report on stdout")
 
     ls = sub.add_parser("list", help="list the folders and files on a card image", **sub_options)
@@ -86,7 +91,7 @@ def _build(args: argparse.Namespace) -> None:
     scene = parse_scene_args(args.scene) if args.scene else None
     placed = build_image(args.out, args.paths, size_mib=args.size, force=args.force,
                          scene=scene, texture_size=texture,
-                         on_warning=lambda m: print(f"warning: {m}", file=sys.stderr))
+                         on_warning=lambda m: print(f"warning: {m}", file=sys.stderr), layout=args.layout)
     if not args.quiet:
         for p in placed:
             print(p.report_line())

@@ -19,9 +19,13 @@ of a volume that fsck.fat, mtools and a strict firmware reader accept, this modu
 from __future__ import annotations
 
 import errno
+import functools
 import math
 import os
+import shutil
 import struct
+import subprocess
+import tempfile
 import warnings
 from copy import copy
 from dataclasses import dataclass
@@ -41,6 +45,13 @@ from . import mbr, rawfat
 from .errors import ImageTooSmallError, UsageError
 
 VOLUME_LABEL = "K210SD"
+#: How the partition is laid out: as pyfatfs formats it (Microsoft's fatgen103 table; the
+#: default), or exactly as dosfstools' `mkfs.fat -F 32` formats a card's first partition on
+#: Linux (it runs mkfs.fat), for firmware whose FAT code expects that.
+LAYOUT_FATGEN103 = "fatgen103"
+LAYOUT_MKFS_FAT = "mkfs.fat"
+LAYOUTS = (LAYOUT_FATGEN103, LAYOUT_MKFS_FAT)
+_SBIN = ("/usr/sbin", "/sbin")
 RESERVED_SECTORS = 32  # what pyfatfs (and mkfs.fat) reserve on FAT32
 NUM_FATS = 2
 #: pyfatfs refuses FAT32 below this many sectors (its "up to 32.5 MB: error" row).
@@ -101,10 +112,55 @@ def plan_geometry(partition_sectors: int) -> Geometry:
                     fat_sectors=fat_sectors)
 
 
-def image_geometry(size_mib: int) -> Geometry:
+def image_geometry(size_mib: int, layout: str = LAYOUT_FATGEN103) -> Geometry:
     """Geometry of the partition of an image of `size_mib` MiB (partition at LBA 2048)."""
     total = size_mib * 1024 * 1024 // mbr.SECTOR_SIZE
+    if layout == LAYOUT_MKFS_FAT:
+        return mkfs_fat_geometry(total - mbr.PARTITION_START_LBA)
     return plan_geometry(total - mbr.PARTITION_START_LBA)
+
+
+def mkfs_fat_command() -> str:
+    """The mkfs.fat program (dosfstools; the bootstrap installs it). Raises UsageError."""
+    found = shutil.which("mkfs.fat") or shutil.which("mkfs.fat", path=os.pathsep.join(_SBIN))
+    if found is None:
+        raise UsageError("--layout mkfs.fat needs dosfstools' mkfs.fat (apt-get install dosfstools)")
+    return found
+
+
+def mkfs_fat_format(image: Path, partition: mbr.PartitionEntry, label: str, volume_id: int) -> None:
+    """Formats the partition with `mkfs.fat -F 32` and its defaults, as on a card's first
+    partition under Linux: hidden sectors = the partition's start (what mkfs.fat reads from a
+    partition device; an image file needs -h to say it), the rest mkfs.fat's own choice
+    (cluster size, reserved sectors aligned to the cluster size, FAT size, geometry fields)."""
+    kib = partition.sector_count * mbr.SECTOR_SIZE // 1024
+    command = [mkfs_fat_command(), "-F", "32", "--offset", str(partition.start_lba), "-h", str(partition.start_lba),
+               "-n", label, "-i", f"{volume_id:08x}", str(image), str(kib)]
+    result = subprocess.run(command, capture_output=True, text=True)
+    if result.returncode != 0:
+        why = (result.stderr or result.stdout).strip().splitlines()
+        raise UsageError(f"mkfs.fat could not format a {partition.sector_count}-sector partition: "
+                         f"{why[-1] if why else f'exit {result.returncode}'}")
+
+
+@functools.lru_cache(maxsize=None)
+def mkfs_fat_geometry(partition_sectors: int) -> Geometry:
+    """The geometry mkfs.fat gives a partition of this many sectors: measured, by formatting
+    a sparse scratch file and reading its boot sector (mkfs.fat's arithmetic is its own)."""
+    with tempfile.TemporaryDirectory() as scratch:
+        image = Path(scratch) / "geometry.img"
+        part = mbr.PartitionEntry(type=mbr.TYPE_FAT32_LBA, start_lba=mbr.PARTITION_START_LBA,
+                                  sector_count=partition_sectors)
+        with open(image, "wb") as f:
+            f.truncate((mbr.PARTITION_START_LBA + partition_sectors) * mbr.SECTOR_SIZE)
+        mkfs_fat_format(image, part, VOLUME_LABEL, 0)
+        with open(image, "rb") as f:
+            f.seek(mbr.PARTITION_START_LBA * mbr.SECTOR_SIZE)
+            boot = f.read(mbr.SECTOR_SIZE)
+    spc, reserved, fats = boot[13], struct.unpack_from("<H", boot, 14)[0], boot[16]
+    total, fat_sectors = struct.unpack_from("<I", boot, 32)[0], struct.unpack_from("<I", boot, 36)[0]
+    return Geometry(partition_sectors=total, sectors_per_cluster=spc, fat_sectors=fat_sectors,
+                    reserved_sectors=reserved, num_fats=fats)
 
 
 def min_image_mib() -> int:
@@ -327,11 +383,12 @@ class CardWriter:
         self.fs: CardFS = self._open()
 
     @classmethod
-    def create(cls, image: Path, size_mib: int, label: str = VOLUME_LABEL) -> "CardWriter":
+    def create(cls, image: Path, size_mib: int, label: str = VOLUME_LABEL,
+               layout: str = LAYOUT_FATGEN103) -> "CardWriter":
         """Writes a blank card: MBR with one FAT32 (0x0C) partition from LBA 2048 to the end,
-        formatted by pyfatfs. The file is created or truncated."""
+        formatted by pyfatfs or (layout mkfs.fat) by mkfs.fat. The file is created or truncated."""
         total = size_mib * 1024 * 1024 // mbr.SECTOR_SIZE
-        geometry = image_geometry(size_mib)
+        geometry = image_geometry(size_mib, layout)
         part = mbr.PartitionEntry(type=mbr.TYPE_FAT32_LBA, start_lba=mbr.PARTITION_START_LBA,
                                   sector_count=total - mbr.PARTITION_START_LBA)
         volume_id = int.from_bytes(os.urandom(4), "little")
@@ -339,6 +396,13 @@ class CardWriter:
             # Sparse: the zeros pyfatfs relies on for free FAT entries cost no disk space.
             f.truncate(total * mbr.SECTOR_SIZE)
             f.write(mbr.build_mbr([part], disk_signature=volume_id))
+        if layout == LAYOUT_MKFS_FAT:
+            mkfs_fat_format(image, part, label, volume_id)
+            writer = cls(image, part)
+            if writer.cluster_count != geometry.cluster_count:
+                writer.fs.close()
+                raise RuntimeError(f"mkfs.fat formatted {writer.cluster_count} clusters; planned {geometry}")
+            return writer
         formatter = PyFat(offset=part.start_lba * mbr.SECTOR_SIZE)
         formatter.mkfs(str(image), PyFat.FAT_TYPE_FAT32,
                        size=part.sector_count * mbr.SECTOR_SIZE, label=label,
@@ -369,9 +433,12 @@ class CardWriter:
             fs = CardFS(str(self.image), offset=self.offset)
         pf = fs.fs
         header = pf.bpb_header
-        header["BPB_HiddSec"] = self.partition.start_lba
-        header["BPB_SecPerTrk"] = mbr.SECTORS_PER_TRACK
-        header["BPB_NumHeads"] = mbr.HEADS
+        # pyfatfs's mkfs leaves these 0; a volume another formatter made keeps its own
+        if header["BPB_HiddSec"] == 0:
+            header["BPB_HiddSec"] = self.partition.start_lba
+        if header["BPB_SecPerTrk"] == 0 or header["BPB_NumHeads"] == 0:
+            header["BPB_SecPerTrk"] = mbr.SECTORS_PER_TRACK
+            header["BPB_NumHeads"] = mbr.HEADS
         data_sectors = pf._get_total_sectors() - pf.first_data_sector
         self.cluster_count = data_sectors // header["BPB_SecPerClus"]
         self.bytes_per_cluster = pf.bytes_per_cluster

@@ -41,46 +41,46 @@ def clusters_needed(plan: CardPlan, bytes_per_cluster: int) -> int:
     return total
 
 
-def _fits(plan: CardPlan, size_mib: int) -> tuple[bool, int, int]:
-    geo = fat32.image_geometry(size_mib)
+def _fits(plan: CardPlan, size_mib: int, layout: str = fat32.LAYOUT_FATGEN103) -> tuple[bool, int, int]:
+    geo = fat32.image_geometry(size_mib, layout)
     need = clusters_needed(plan, geo.bytes_per_cluster)
     return need <= geo.cluster_count, need, geo.cluster_count
 
 
-def choose_size(plan: CardPlan, size_mib: int | None) -> int:
+def choose_size(plan: CardPlan, size_mib: int | None, layout: str = fat32.LAYOUT_FATGEN103) -> int:
     """The image size in MiB: `size_mib` if the content fits (else `ImageTooSmallError`),
     or the default grown in 64 MiB steps until it fits."""
     lo, hi = fat32.min_image_mib(), fat32.max_image_mib()
     if size_mib is not None:
         if not lo <= size_mib <= hi:
             raise UsageError(f"--size {size_mib}: a FAT32 card built here is {lo}..{hi} MiB")
-        ok, need, have = _fits(plan, size_mib)
+        ok, need, have = _fits(plan, size_mib, layout)
         if not ok:
-            geo = fat32.image_geometry(size_mib)
+            geo = fat32.image_geometry(size_mib, layout)
             raise ImageTooSmallError(
                 f"content needs {need} clusters of {geo.bytes_per_cluster} bytes but a "
-                f"{size_mib} MiB card has {have}; use --size {_smallest_fit(plan, size_mib)} "
+                f"{size_mib} MiB card has {have}; use --size {_smallest_fit(plan, size_mib, layout)} "
                 f"or more (or leave --size out)")
         return size_mib
     size = DEFAULT_SIZE_MIB
     while size <= hi:
-        if _fits(plan, size)[0]:
+        if _fits(plan, size, layout)[0]:
             return size
         size += SIZE_STEP_MIB
     raise ImageTooSmallError(f"content does not fit on the largest card built here ({hi} MiB)")
 
 
-def _smallest_fit(plan: CardPlan, start: int) -> int:
+def _smallest_fit(plan: CardPlan, start: int, layout: str = fat32.LAYOUT_FATGEN103) -> int:
     """Smallest size above `start` MiB that holds the plan (binary search: capacity grows with
     size, give or take the slack of the cluster-size steps, which the final check covers)."""
     lo, hi = start + 1, fat32.max_image_mib()
     while lo < hi:
         mid = (lo + hi) // 2
-        if _fits(plan, mid)[0]:
+        if _fits(plan, mid, layout)[0]:
             hi = mid
         else:
             lo = mid + 1
-    while lo < fat32.max_image_mib() and not _fits(plan, lo)[0]:
+    while lo < fat32.max_image_mib() and not _fits(plan, lo, layout)[0]:
         lo += 1
     return lo
 
@@ -126,7 +126,8 @@ def verify_image(image: Path, plan: CardPlan) -> None:
 def build_image(out: Path, inputs: list[Path], size_mib: int | None = None, force: bool = False,
                 scene: dict[str, str] | None = None,
                 texture_size: tuple[int, int] | None = None,
-                on_warning: Callable[[str], None] | None = None) -> list[PlacedFile]:
+                on_warning: Callable[[str], None] | None = None,
+                layout: str = fat32.LAYOUT_FATGEN103) -> list[PlacedFile]:
     """Builds an SD card image at `out` from files and folders, each at the card root.
 
     The image gets an MBR with one FAT32 partition (type 0x0C, LBA 2048 to the end), filled
@@ -155,7 +156,9 @@ def build_image(out: Path, inputs: list[Path], size_mib: int | None = None, forc
             on_warning(message)
         else:
             warnings.warn(message, stacklevel=2)
-    size = choose_size(plan, size_mib)
+    if layout not in fat32.LAYOUTS:
+        raise UsageError(f"layout {layout!r}: one of {', '.join(fat32.LAYOUTS)}")
+    size = choose_size(plan, size_mib, layout)
     try:
         fd, tmp_name = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
     except OSError as exc:
@@ -164,7 +167,7 @@ def build_image(out: Path, inputs: list[Path], size_mib: int | None = None, forc
     os.close(fd)
     tmp = Path(tmp_name)
     try:
-        writer = fat32.CardWriter.create(tmp, size)
+        writer = fat32.CardWriter.create(tmp, size, layout=layout)
         try:
             write_plan(writer, plan)
         finally:

@@ -208,3 +208,40 @@ def test_a_scene_folder_of_ones_own_gets_goldens_and_is_checked_against_them(fir
     (scene / "scene.ini").unlink()
     refused = _regen("--check", "--folder", str(scene))
     assert refused.returncode == 2 and "no scene.ini in it" in refused.stderr
+
+
+COMM_PROGRAM = """
+    .globl _start
+_start:
+    csrr    t0, mhartid
+    bnez    t0, 2f
+    la      t0, shared_pixels         # a .comm buffer: 4 x 2 RGB565 pixels, all pure red
+    la      t1, local_pixels          # a .lcomm buffer: 2 x 2, all pure blue
+    li      t2, 0xF800
+    li      t3, 8
+1:  sh      t2, 0(t0)
+    addi    t0, t0, 2
+    addi    t3, t3, -1
+    bnez    t3, 1b
+    li      t2, 0x001F
+    sh      t2, 0(t1)
+    sh      t2, 2(t1)
+    sh      t2, 4(t1)
+    sh      t2, 6(t1)
+2:  wfi
+    j       2b
+    .comm   shared_pixels, 16, 8
+    .lcomm  local_pixels, 8
+"""
+
+
+def test_grab_finds_buffers_declared_with_comm_and_lcomm(assemble, tmp_path):
+    """Issue 10: `.comm` buffers were "no symbol" when grabs looked only at code symbols."""
+    elf = assemble(COMM_PROGRAM)
+    run = run_emulator("run", str(elf), "--until", "0.001", "--quiet", "--out", str(tmp_path),
+                       "--grab", "shared_pixels@0.0005:4x2", "--grab", "local_pixels@0.0005:2x2")
+    assert run.returncode == 0, run.stderr
+    red = np.asarray(Image.open(tmp_path / "grab_shared_pixels_0.500ms.png").convert("RGB"))
+    blue = np.asarray(Image.open(tmp_path / "grab_local_pixels_0.500ms.png").convert("RGB"))
+    assert red.shape == (2, 4, 3) and (red == [255, 0, 0]).all()
+    assert blue.shape == (2, 2, 3) and (blue == [0, 0, 255]).all()

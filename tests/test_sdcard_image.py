@@ -882,3 +882,46 @@ def test_exif_orientation_and_16_bit_grey(tmp_path):
     # 16-bit samples are scaled to 8 bits, not clipped at 255.
     assert read_file(out, "/deep.ppm") == b"P6\n2 2\n255\n" + bytes(
         v for s in (0, 255, 128, 1) for v in (s, s, s))
+
+
+# --- the mkfs.fat layout (--layout mkfs.fat) -----------------------------------------------------
+
+FSINFO_COUNTS = range(488, 496)        # free count and next-free hint: they follow the files written
+
+
+def _mkfs_fat_reference(path: Path, size_mib: int, volume_id: bytes) -> bytes:
+    """What dosfstools' mkfs.fat -F 32 writes for the card's partition (its first 8 sectors)."""
+    tool("fsck.fat")      # dosfstools is present
+    part_sectors = size_mib * 2048 - 2048
+    with open(path, "wb") as f:
+        f.truncate(size_mib * MIB)
+    subprocess.run([fat32.mkfs_fat_command(), "-F", "32", "--offset", "2048", "-h", "2048", "-n", "K210SD",
+                    "-i", volume_id[::-1].hex(), str(path), str(part_sectors // 2)], check=True, capture_output=True)
+    return path.read_bytes()[PART_OFFSET:PART_OFFSET + 8 * 512]
+
+
+@pytest.mark.parametrize("size_mib, bytes_per_cluster", [(64, 512), (300, 4096)])
+def test_a_card_laid_out_as_mkfs_fat_does(tmp_path, size_mib, bytes_per_cluster):
+    src = tmp_path / "in"
+    src.mkdir()
+    (src / "cube.obj").write_bytes(CUBE_OBJ)
+    out = tmp_path / "card.img"
+    build_image(out, [src / "cube.obj"], size_mib=size_mib, layout=fat32.LAYOUT_MKFS_FAT)
+    ours = out.read_bytes()[PART_OFFSET:PART_OFFSET + 8 * 512]
+    reference = _mkfs_fat_reference(tmp_path / "ref.img", size_mib, ours[67:71])
+    for sector in (0, 1, 6, 7):       # boot sector, FSInfo and their backups
+        theirs, mine = (bytearray(x[sector * 512:(sector + 1) * 512]) for x in (reference, ours))
+        if sector in (1, 7):
+            for i in FSINFO_COUNTS:
+                theirs[i] = mine[i] = 0
+        assert mine == theirs, f"sector {sector} differs from mkfs.fat's"
+    assert fat32.image_geometry(size_mib, fat32.LAYOUT_MKFS_FAT).bytes_per_cluster == bytes_per_cluster
+    assert read_file(out, "cube.obj") == CUBE_OBJ
+    # and the default layout is not mkfs.fat's (else the option would be pointless)
+    assert fat32.image_geometry(64).fat_sectors != fat32.image_geometry(64, fat32.LAYOUT_MKFS_FAT).fat_sectors
+
+
+def test_an_unknown_layout_is_a_usage_error(tmp_path):
+    result = subprocess.run([sys.executable, "-m", "sdcard_image", "build", str(tmp_path / "c.img"), "--layout", "exfat",
+                             "--scene", "model=x.obj"], cwd=ROOT, capture_output=True, text=True)
+    assert result.returncode == 2 and "invalid choice: 'exfat'" in result.stderr

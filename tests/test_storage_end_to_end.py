@@ -471,3 +471,21 @@ def test_unknown_scene_key_names_its_line(firmware, loader_card, tmp_path):
     result, console, out = run_scene(firmware, loader_card[0], "model=sizes/cluster.obj\n# fine\nshiny = yes\n",
                                      tmp_path)
     assert_error(result, console, out, 9, "line 3")
+
+
+def test_the_firmware_reads_a_card_laid_out_as_mkfs_fat_does(firmware, card, tmp_path):
+    """The default scene on a card formatted by dosfstools' mkfs.fat (--layout mkfs.fat): the
+    same first frame as on the default card."""
+    mkfs_card = tmp_path / "mkfs.img"
+    make = subprocess.run(["make", "-s", "-n", "build/card.img"], cwd=ROOT, capture_output=True, text=True)
+    scene_args = re.findall(r'--scene ("[^"]+"|\S+)', make.stdout) or re.findall(
+        r'--scene ("[^"]+"|\S+)', (ROOT / "Makefile").read_text())
+    from sdcard_image import build_image
+    from sdcard_image.fat32 import LAYOUT_MKFS_FAT
+    scene = dict(arg.strip('"').split("=", 1) for arg in scene_args)
+    assets = ROOT / "build" / "assets"
+    build_image(mkfs_card, [assets / "models", assets / "textures"], scene=scene, layout=LAYOUT_MKFS_FAT)
+    out = tmp_path / "out"
+    run = run_emulator("run", str(firmware), "--sd", str(mkfs_card), "--frames", "1", "--quiet", "--out", str(out),
+                       "--golden", str(ROOT / "tests" / "golden" / "default"))
+    assert run.returncode == 0, run.stderr
