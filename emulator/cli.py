@@ -28,14 +28,17 @@ EXIT_STATUS_HELP = f"""exit status:
      or time), an option without the one it needs (--tolerance without --golden, --sd-writable or
      --sd-fault without --sd), --until with --frames, a --grab of a symbol the firmware does not define
      or of a buffer outside SRAM, an empty --expect/--fail-on text or a regular expression that does
-     not compile, --expect with --frames; or, after a run that ended well, a --grab whose time the run
+     not compile, --expect with --frames, --trace-from/--trace-to without --trace-insn or in the wrong
+     order; or, after a run that ended well, a --grab whose time the run
      ended before
   3  the firmware trapped (exception), or jumped into a block the model lacks
   4  hang: no frame within the virtual-time budget, or every hart waits forever (neither with --until)
   5  the firmware touched an address or register the model does not implement; with --strict also
      an access the K210's bus answers in a way of its own (see --strict)
   6  bad input: a file or folder the command line names cannot be used: the firmware image (missing,
-     unreadable, not a RISC-V ELF), the card image (missing, truncated), the --golden folder (missing
+     unreadable, not a RISC-V ELF, a raw .bin that is empty or larger than SRAM), the card image
+     (missing, truncated), the --uart-input file (missing, unreadable), the --trace-insn file (cannot
+     be written), the --golden folder (missing
      or a file) or one of its frames (not a readable PNG), the --out folder (a file of that name
      exists, or it cannot be created or written in)
   7  hardware misuse: something the real K210 would not do (e.g. CPU on an unlocked PLL)
@@ -82,6 +85,17 @@ def budget_seconds(text: str) -> float:
         raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds") from None
     if not math.isfinite(value) or value <= 0:
         raise argparse.ArgumentTypeError(f"must be a finite number of seconds above 0, not {text}")
+    return value
+
+
+def time_seconds(text: str) -> float:
+    """A finite virtual time of 0 or more."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds") from None
+    if not math.isfinite(value) or value < 0:
+        raise argparse.ArgumentTypeError(f"must be a finite number of seconds, 0 or more, not {text}")
     return value
 
 
@@ -133,6 +147,14 @@ def build_parser() -> argparse.ArgumentParser:
                           "USB serial bridge would (each when the receiver is on and has room); '-' reads "
                           "standard input: piped, all of it; from a terminal, each key as it is typed, with "
                           "virtual time held to the host's clock")
+    run.add_argument("--trace-insn", metavar="FILE", type=Path, default=None,
+                     help="write an instruction trace to FILE: per instruction the hart, virtual time, pc, "
+                          "disassembly and the registers it wrote (about 60 bytes per instruction; the model runs "
+                          "at about 1 %% of its speed inside the window)")
+    run.add_argument("--trace-from", metavar="SECONDS", type=time_seconds, default=None,
+                     help="with --trace-insn: start the trace at this virtual time (default 0)")
+    run.add_argument("--trace-to", metavar="SECONDS", type=time_seconds, default=None,
+                     help="with --trace-insn: end the trace at this virtual time (default: the end of the run)")
     run.add_argument("--out", default="build/frames", type=Path, help="output folder (default build/frames)")
     run.add_argument("--budget", type=budget_seconds, default=5.0,
                      help="virtual seconds allowed between frames before the run counts as hung "
@@ -198,6 +220,10 @@ def regex_pattern(text: str):
 
 def option_problem(args: argparse.Namespace) -> str | None:
     """What is wrong with the combination of options (argparse checked each value)."""
+    if args.trace_insn is None and (args.trace_from is not None or args.trace_to is not None):
+        return "--trace-from and --trace-to need --trace-insn (the file the trace goes to)"
+    if args.trace_from is not None and args.trace_to is not None and args.trace_to <= args.trace_from:
+        return f"--trace-to ({args.trace_to:g} s) must come after --trace-from ({args.trace_from:g} s)"
     if args.expected and args.frames is not None:
         return ("--expect and --frames exclude each other (with --expect the run ends when the console has "
                 "printed the texts; add --until to bound it in virtual time)")
@@ -361,6 +387,7 @@ def main(argv: list[str] | None = None) -> int:
         args.frames = DEFAULT_FRAMES
     from .board import Board
     from .console_watch import ConsoleWatch
+    from .trace import InstructionTrace, open_trace
     from .uart_input import UartInput
     from .golden import compare_run, load_golden_frames
     from .grab import GrabRequest, parse_grab
@@ -376,6 +403,7 @@ def main(argv: list[str] | None = None) -> int:
             return usage_error(problem)
         uart_input = UartInput.open(args.uart_input) if args.uart_input is not None else None
         prepare_output_folder(args.out)
+        trace_file = open_trace(args.trace_insn) if args.trace_insn is not None else None
     except BadInput as error:
         print(f"[board] stopped (bad-input): {error}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -399,6 +427,7 @@ def main(argv: list[str] | None = None) -> int:
         return action
 
     started = time.perf_counter()
+    trace = None
     try:
         board = Board(str(args.firmware), quantum=args.quantum, hang_budget_s=args.budget, console=console,
                       on_frame=output.frame, on_warning=terminal.warning, permissive=args.permissive,
@@ -406,6 +435,8 @@ def main(argv: list[str] | None = None) -> int:
                       check_writes=args.check_writes, strict=args.strict, lcd_interface=args.lcd_interface,
                       cold=args.cold)
         board.uarths.input = uart_input
+        if trace_file is not None:
+            trace = InstructionTrace(board, trace_file, args.trace_from or 0.0, args.trace_to)
         watch.attach(board.stop_run)
         for index, request in enumerate(grabs):
             board.grab_at(request.at_s, grab_action(index, request))
@@ -427,6 +458,10 @@ def main(argv: list[str] | None = None) -> int:
         import traceback
         traceback.print_exc()
     terminal.finish()
+    if trace is not None:
+        trace.close()
+    elif trace_file is not None:
+        trace_file.close()
     if uart_input is not None:
         uart_input.close()
     if board is not None:
@@ -471,6 +506,8 @@ def main(argv: list[str] | None = None) -> int:
     summary["cold"] = args.cold
     summary["timing_warnings"] = dict(board.timing_warnings) if board is not None else {}
     summary.update(watch.summary())
+    summary["trace_insn"] = None if trace is None else {
+        "file": str(args.trace_insn), "from_s": args.trace_from or 0.0, "to_s": args.trace_to, "lines": trace.lines}
     summary["uart_input"] = None if uart_input is None else {
         "source": args.uart_input, "interactive": uart_input.interactive, "bytes": uart_input.total,
         "received": board.uarths.bytes_received if board is not None else 0}
