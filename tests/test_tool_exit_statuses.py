@@ -68,7 +68,7 @@ def test_build_write_failure_names_the_output_not_its_temporary_file(tmp_path, m
     out = tmp_path / "out" / "card.img"
     out.parent.mkdir()
 
-    def full_disk(path, size_mib):
+    def full_disk(path, size_mib, **options):
         raise OSError(errno.ENOSPC, "No space left on device", str(path))
 
     monkeypatch.setattr(fat32.CardWriter, "create", staticmethod(full_disk))
