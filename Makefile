@@ -16,7 +16,7 @@ FW_SRCS := $(wildcard firmware/*.S)
 FW_OBJS := $(patsubst firmware/%.S,$(BUILD)/fw/%.o,$(FW_SRCS))
 FW_INCS := $(wildcard firmware/include/*.inc)
 
-.PHONY: all toolchain venv firmware c-firmware card flash-to-emulator test bench goldens golden-check clean
+.PHONY: all toolchain venv firmware c-firmware card flash-to-emulator debug test bench goldens golden-check clean
 
 all: firmware
 
@@ -92,6 +92,13 @@ flash-to-emulator: firmware venv $(CARD)
 
 test: firmware c-firmware venv $(CARD)
 	$(PYTHON) -m pytest -q -n 2
+
+# The default card under GDB: the board waits on 127.0.0.1:$(GDB_PORT) and prints the
+# gdb-multiarch command that attaches to it
+GDB_PORT ?= 3333
+debug: firmware venv $(CARD)
+	$(PYTHON) -m emulator run $(BUILD)/firmware.elf --sd $(CARD) --frames $(FRAMES) --out $(BUILD)/debug \
+		--gdb $(GDB_PORT) --gdb-wait
 
 bench: firmware venv $(CARD)
 	$(PYTHON) tools/bench.py

@@ -29,8 +29,8 @@ EXIT_STATUS_HELP = f"""exit status:
      --sd-fault without --sd), --until with --frames, a --grab of a symbol the firmware does not define
      or of a buffer outside SRAM, an empty --expect/--fail-on text or a regular expression that does
      not compile, --expect with --frames, --trace-from/--trace-to without --trace-insn or in the wrong
-     order; or, after a run that ended well, a --grab whose time the run
-     ended before
+     order, --gdb-wait without --gdb, --gdb with --expect or --fail-on, a --gdb port above 65535;
+     or, after a run that ended well, a --grab whose time the run ended before
   3  the firmware trapped (exception), or jumped into a block the model lacks
   4  hang: no frame within the virtual-time budget, or every hart waits forever (neither with --until)
   5  the firmware touched an address or register the model does not implement; with --strict also
@@ -38,9 +38,9 @@ EXIT_STATUS_HELP = f"""exit status:
   6  bad input: a file or folder the command line names cannot be used: the firmware image (missing,
      unreadable, not a RISC-V ELF, a raw .bin that is empty or larger than SRAM), the card image
      (missing, truncated), the --uart-input file (missing, unreadable), the --trace-insn file (cannot
-     be written), the --golden folder (missing
-     or a file) or one of its frames (not a readable PNG), the --out folder (a file of that name
-     exists, or it cannot be created or written in)
+     be written), the --gdb port (in use), the --golden folder (missing or a file) or one of its
+     frames (not a readable PNG), the --out folder (a file of that name exists, or it cannot be
+     created or written in)
   7  hardware misuse: something the real K210 would not do (e.g. CPU on an unlocked PLL)
   8  the firmware reported a fatal error on its console ("error <code> <words>")
   9  --golden: a shown frame differs from its golden PNG (diff images are in the output folder)
@@ -85,6 +85,13 @@ def budget_seconds(text: str) -> float:
         raise argparse.ArgumentTypeError(f"{text!r} is not a number of seconds") from None
     if not math.isfinite(value) or value <= 0:
         raise argparse.ArgumentTypeError(f"must be a finite number of seconds above 0, not {text}")
+    return value
+
+
+def port_number(text: str) -> int:
+    value = _whole_number(text)
+    if not 0 <= value <= 65535:
+        raise argparse.ArgumentTypeError(f"must be a TCP port 0..65535 (0: any free one), not {value}")
     return value
 
 
@@ -155,6 +162,14 @@ def build_parser() -> argparse.ArgumentParser:
                      help="with --trace-insn: start the trace at this virtual time (default 0)")
     run.add_argument("--trace-to", metavar="SECONDS", type=time_seconds, default=None,
                      help="with --trace-insn: end the trace at this virtual time (default: the end of the run)")
+    run.add_argument("--gdb", metavar="PORT", type=port_number, default=None,
+                     help="serve GDB's remote protocol on 127.0.0.1:PORT (0: any free port, printed): attach "
+                          "with gdb-multiarch FIRMWARE.elf -ex 'target remote :PORT'; while GDB is attached it "
+                          "drives the run (frames and --until end nothing); after it detaches the run goes on "
+                          "to its end, a kill ends it (status 0)")
+    run.add_argument("--gdb-wait", action="store_true",
+                     help="with --gdb: wait for GDB before the first instruction (else the board runs until it "
+                          "attaches)")
     run.add_argument("--out", default="build/frames", type=Path, help="output folder (default build/frames)")
     run.add_argument("--budget", type=budget_seconds, default=5.0,
                      help="virtual seconds allowed between frames before the run counts as hung "
@@ -224,6 +239,10 @@ def option_problem(args: argparse.Namespace) -> str | None:
         return "--trace-from and --trace-to need --trace-insn (the file the trace goes to)"
     if args.trace_from is not None and args.trace_to is not None and args.trace_to <= args.trace_from:
         return f"--trace-to ({args.trace_to:g} s) must come after --trace-from ({args.trace_from:g} s)"
+    if args.gdb_wait and args.gdb is None:
+        return "--gdb-wait needs --gdb (the port GDB attaches to)"
+    if args.gdb is not None and (args.expected or args.failures):
+        return "--gdb excludes --expect and --fail-on (under GDB, GDB decides when the run stops)"
     if args.expected and args.frames is not None:
         return ("--expect and --frames exclude each other (with --expect the run ends when the console has "
                 "printed the texts; add --until to bound it in virtual time)")
@@ -304,6 +323,43 @@ def run_expecting(board, watch, until_s: float | None, budget_s: float, progress
     arm(budget_s)
     board.run_until(EXPECT_HORIZON_S, progress=progress)
     raise ConsoleExpectationUnmet(watch.unmet_message(f"by {EXPECT_HORIZON_S:g} s of virtual time"))
+
+
+def run_under_gdb(board, args: argparse.Namespace, terminal):
+    """--gdb: serves GDB on the board (gdbstub.py). Without --gdb-wait the board runs until GDB
+    attaches (or until the run's own end); after GDB detaches the run goes on to its end."""
+    import select as select_module
+    from .gdbstub import GdbServer
+    from .scheduler import RunResult
+    server = GdbServer(board, args.gdb, terminal.message)
+    scheduler = board.scheduler
+    terminal.message(f"[gdb] listening on 127.0.0.1:{server.port}; attach with: gdb-multiarch {args.firmware} "
+                     f"-ex 'target remote 127.0.0.1:{server.port}'")
+    try:
+        if not args.gdb_wait:
+            scheduler.frames_wanted = args.frames if args.frames is not None else 1 << 62
+            while not select_module.select([server.listener], [], [], 0)[0]:
+                if args.until is not None and scheduler.time >= args.until:
+                    return board.run_until(args.until)
+                if args.frames is not None and len(board.frames) >= args.frames:
+                    return board.run(args.frames)
+                scheduler.step()
+        server.accept()
+        budget, scheduler.hang_budget_s = scheduler.hang_budget_s, math.inf   # GDB decides when it is stuck
+        outcome = server.serve()
+        scheduler.hang_budget_s = budget
+    finally:
+        server.close()
+    if outcome == "killed":
+        terminal.message("[gdb] GDB killed the run")
+        return RunResult("ok", f"ended by GDB (kill) at {board.time * 1e3:.3f} ms of virtual time; "
+                               f"{len(board.frames)} frames shown", board.frames, board.time,
+                         [h.instret for h in board.harts], 0.0, board.warnings)
+    terminal.message(f"[gdb] GDB {outcome}; the run goes on to its end")
+    scheduler._last_frame_time = board.time       # the frame budget counts from here, not from before GDB
+    if args.until is not None:
+        return board.run_until(max(args.until, board.time))
+    return board.run(max(args.frames, len(board.frames)))
 
 
 class Terminal:
@@ -441,7 +497,9 @@ def main(argv: list[str] | None = None) -> int:
         for index, request in enumerate(grabs):
             board.grab_at(request.at_s, grab_action(index, request))
         progress = terminal.progress if terminal.shows_progress else None
-        if args.expected:
+        if args.gdb is not None:
+            result = run_under_gdb(board, args, terminal)
+        elif args.expected:
             result = run_expecting(board, watch, args.until, args.budget, progress)
         elif args.until is not None:
             result = board.run_until(args.until, progress=progress)

@@ -119,6 +119,7 @@ COMMANDS = {
     "make bench": ("dry-run", lambda r: None),
     "make goldens": ("dry-run", lambda r: None),
     "make goldens SCENES=gem-flat": ("dry-run", lambda r: None),
+    "make debug": ("dry-run", lambda r: None),
     'make goldens SCENE_DIRS="my-scene other-scene"': ("dry-run", lambda r: None),
     "make golden-check SCENE_DIRS=my-scene": ("dry-run", lambda r: None),
     "EXTREMES_FULL=1 make test": ("dry-run", _env_read_by_tests("EXTREMES_FULL")),

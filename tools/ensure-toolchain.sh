@@ -5,7 +5,8 @@
 #     to assemble and link the firmware;
 #   - picolibc-riscv64-unknown-elf, the C library the C test firmware (tests/firmware/) links
 #     against (gcc's --specs=picolibc.specs comes from it);
-#   - dosfstools and mtools, with which the tests check SD card images independently.
+#   - dosfstools and mtools, with which the tests check SD card images independently;
+#   - gdb-multiarch, which the tests drive against the board model's GDB stub (make debug).
 set -euo pipefail
 missing=""
 for tool in riscv64-unknown-elf-as riscv64-unknown-elf-ld riscv64-unknown-elf-objcopy; do
@@ -14,6 +15,7 @@ done
 [ -f /usr/lib/picolibc/riscv64-unknown-elf/picolibc.specs ] || missing="$missing picolibc-riscv64-unknown-elf"
 command -v fsck.fat >/dev/null || [ -x /usr/sbin/fsck.fat ] || [ -x /sbin/fsck.fat ] || missing="$missing dosfstools"
 command -v mdir >/dev/null || missing="$missing mtools"
+command -v gdb-multiarch >/dev/null || missing="$missing gdb-multiarch"
 [ -z "$missing" ] && exit 0
 echo "[setup] missing tools: installing Debian packages: $missing"
 echo "[setup] (this needs root: apt-get update && apt-get install)"
