@@ -14,8 +14,8 @@ entered its trap handler; a board stop (a hang, an access the model refuses, the
 error report) as a stop with the board's message on GDB's console, instead of ending the run.
 
 Breakpoints and the single step are Python code hooks on the harts' engines, and watchpoints
-memory hooks: they cost instructions only while they are set. The instruction they stop
-before is taken off the native counter, so minstret and every count stay exact.
+memory hooks: they cost time only while they are set. A stop hook runs before the native
+counter, so the instruction it stops before is neither counted nor timed until it runs.
 """
 from __future__ import annotations
 
@@ -235,9 +235,8 @@ class Debugger:
         hart.enter_trap = enter_trap
 
     def _stop_before(self, uc: unicorn.Uc, hart: "Hart") -> None:
-        """Stops the hart before the instruction whose hook is running: the native counter has
-        already counted it, so it is taken back."""
-        hart._counter.executed -= 1
+        """Stops the hart before the instruction whose hook is running (a stop hook runs before
+        the native counter, which then never sees the instruction: Hart.add_stop_hook)."""
         uc.emu_stop()
 
     def _on_breakpoint(self, uc: unicorn.Uc, address: int, size: int, hart: "Hart") -> None:
@@ -253,7 +252,7 @@ class Debugger:
             self.breakpoints[address] = kind
             return
         self.breakpoints[address] = kind
-        self._bp_hooks[address] = [hart.uc.hook_add(unicorn.UC_HOOK_CODE, self._on_breakpoint, hart, address, address)
+        self._bp_hooks[address] = [hart.add_stop_hook(self._on_breakpoint, hart, address, address)
                                    for hart in self.board.harts]
 
     def clear_breakpoint(self, address: int) -> None:
@@ -307,7 +306,7 @@ class Debugger:
         if step_hart is not None:
             hart = self.board.harts[step_hart]
             self._step_started = False
-            self._step_hook = (hart, hart.uc.hook_add(unicorn.UC_HOOK_CODE, self._on_step, hart, 1, 0))
+            self._step_hook = (hart, hart.add_stop_hook(self._on_step, hart, 1, 0))
 
     def _end_step(self) -> None:
         if self._step_hook is not None:

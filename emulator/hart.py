@@ -121,7 +121,10 @@ class Hart:
         self.minstret_offset = 0  # set by firmware writes to minstret
         self.mcycle_offset = 0
         self._counter = _Counter(0, 0, _UC_EMU_STOP, None, 0, 0)
-        self.add_native_hook(unicorn.UC_HOOK_CODE, _COUNT_HOOK, self._counter, 1, 0, "the instruction counter")
+        self._counter_hook = self.add_native_hook(unicorn.UC_HOOK_CODE, _COUNT_HOOK, self._counter, 1, 0,
+                                                  "the instruction counter")
+        self._csr_sites: list[tuple[int, int]] = []
+        self._csr_hooks: list[int] = []
         self.poll_loops: dict[int, tuple[shared_memory.PollLoop, shared_memory.LoopSlot]] = {}
         self._loop_slots: ctypes.Array | None = None   # the counter's table of poll loops, kept alive here
         self.wait: shared_memory.Wait | None = None   # what the hart polls while WAITING
@@ -275,8 +278,25 @@ class Hart:
 
     def intercept_csr_sites(self, sites: list[tuple[int, int]]) -> None:
         """Installs a hook on each (address, instruction word) that accesses an intercepted CSR."""
+        self._csr_sites.extend(sites)
         for address, word in sites:
-            self.uc.hook_add(unicorn.UC_HOOK_CODE, self._on_csr, word, address, address)
+            self._csr_hooks.append(self.uc.hook_add(unicorn.UC_HOOK_CODE, self._on_csr, word, address, address))
+
+    def add_stop_hook(self, callback: Callable, user_data: object, begin: int, end: int) -> int:
+        """A Python code hook (a debugger's breakpoint or step) that runs before the native
+        counter on every instruction of begin..end: Unicorn calls code hooks in the order they
+        were added and skips the rest once one stops the engine, so an instruction the hook
+        stops before is neither counted nor timed. The counter and the CSR hooks (which rely on
+        the counter having counted their instruction) are added again after it."""
+        self.remove_hook(self._counter_hook)
+        for handle in self._csr_hooks:
+            self.uc.hook_del(handle)
+        handle = self.uc.hook_add(unicorn.UC_HOOK_CODE, callback, user_data, begin, end)
+        self._counter_hook = self.add_native_hook(unicorn.UC_HOOK_CODE, _COUNT_HOOK, self._counter, 1, 0,
+                                                  "the instruction counter")
+        sites, self._csr_sites, self._csr_hooks = self._csr_sites, [], []
+        self.intercept_csr_sites(sites)
+        return handle
 
     def _on_csr(self, uc: unicorn.Uc, address: int, size: int, word: int) -> None:
         csr = word >> 20

@@ -14,6 +14,8 @@ import time
 import pytest
 
 from conftest import ROOT, run_emulator
+from unicorn import riscv_const as rv
+
 from emulator.gdbstub import checksum
 
 GDB = shutil.which("gdb-multiarch")
@@ -199,3 +201,33 @@ def test_a_busy_port_and_bad_options(firmware, tmp_path):
     assert run.returncode == 2 and "--gdb-wait needs --gdb" in run.stderr
     run = run_emulator("run", str(firmware), "--gdb", "70000", "--out", str(tmp_path / "c"))
     assert run.returncode == 2 and "must be a TCP port 0..65535" in run.stderr
+
+
+def test_a_breakpoint_stops_before_its_instruction_and_counts_stay_exact():
+    from emulator.gdbstub import Debugger
+    from k210_fixtures import make_board, program, symbol
+    board = make_board(program("""
+    first:
+        addi    a0, a0, 1
+        addi    a0, a0, 1
+        addi    a0, a0, 1
+        addi    a0, a0, 1
+        addi    a0, a0, 1
+    second:
+        addi    a0, a0, 1
+    """))
+    debugger = Debugger(board)
+    hart = board.harts[0]
+    for name in ("first", "second"):
+        debugger.set_breakpoint(symbol(board, name), "swbreak")
+    debugger.resume(None)
+    event = debugger.run_until_stop(lambda: False)
+    assert (event.hart, event.extra, hart.pc) == (0, "swbreak:;", symbol(board, "first"))
+    at_first, a0 = hart.instret, hart.reg(rv.UC_RISCV_REG_A0)
+    debugger.resume(None)
+    debugger.run_until_stop(lambda: False)
+    assert hart.pc == symbol(board, "second")
+    assert hart.instret - at_first == 5 and hart.reg(rv.UC_RISCV_REG_A0) - a0 == 5
+    debugger.resume(0)                     # one step
+    debugger.run_until_stop(lambda: False)
+    assert hart.pc == symbol(board, "second") + 2 and hart.instret - at_first == 6    # c.addi
