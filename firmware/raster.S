@@ -267,7 +267,7 @@
 # FILTERED gouraud, affine, depth16, mipmap
 #   A textured fill with filtering (filter = bilinear, or mipmap with
 #   mipmap = 1): as FILL, but each pixel blends the four texels around
-#   (s - 1/2, t - 1/2) by the fractions in 1/32 texel, lit by k in the same
+#   (s - 1/2, t - 1/2) by the fractions, rounded to 1/32 texel, lit by k in the same
 #   multiplication (render.inc BLEND_*): round((sum of w c) k / 2^16) per
 #   channel, one rounding. With mipmap, the level comes first (render.inc:
 #   (e + 1) >> 1 from the float exponent e of rho^2 = |det H| w^3, or the
@@ -390,8 +390,8 @@
     flw     fs5, MIP_SCALE_T(t0)
     fmul.s  ft11, ft11, fs5
     .endif
-    fcvt.l.s t2, ft10, rdn              # floor(32 s), floor(32 t)
-    fcvt.l.s t3, ft11, rdn
+    fcvt.l.s t2, ft10, rne              # 32 s, 32 t to the nearest 1/32 texel
+    fcvt.l.s t3, ft11, rne
     addi    t2, t2, -TEXEL_HALF_FRACTION    # floor(32 (s - 1/2)): texel centres
     addi    t3, t3, -TEXEL_HALF_FRACTION
     andi    s6, t2, TEXEL_FRACTION_MASK     # fx, fy in 1/32
