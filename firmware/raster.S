@@ -29,7 +29,9 @@
 #     when it is strictly nearer than what the buffer holds.
 #   - Textured fill: u / w, v / w and 1 / w are interpolated linearly in
 #     screen space; per pixel one fdiv.s gives w, hence the texel (nearest,
-#     repeating), which is lit by the triangle's intensity k / 64.
+#     repeating), which is lit by the triangle's intensity k / 64. With
+#     filter = bilinear or mipmap the FILTERED fills blend four texels (of
+#     the mip level the footprint picks), README "Texture filtering".
 #   - Attributes are planes: gradients per pixel from the snapped corners,
 #     re-anchored at the first inside pixel of every row.
 
@@ -875,8 +877,9 @@ raster_clear:
 #              flags (render.inc). The depth format is raster_set_depth's.
 #   Results: none.
 #   Clobbers: only ABI temporaries. The pixel loops use every integer
-#         register but sp, ra, gp and tp, every temporary and argument
-#         float register, and fs0..fs3 (saved here).
+#         register but sp, gp and tp (ra holds a constant, saved here), every
+#         temporary and argument float register, and fs0..fs3 (saved here;
+#         the filtered fills save and use fs4, fs5 too).
 raster_triangle:
     addi    sp, sp, -RT_FRAME
     sd      s0, RT_SAVE + 0(sp)
