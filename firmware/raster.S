@@ -29,7 +29,9 @@
 #     when it is strictly nearer than what the buffer holds.
 #   - Textured fill: u / w, v / w and 1 / w are interpolated linearly in
 #     screen space; per pixel one fdiv.s gives w, hence the texel (nearest,
-#     repeating), which is lit by the triangle's intensity k / 64.
+#     repeating), which is lit by the triangle's intensity k / 64. With
+#     filter = bilinear or mipmap the FILTERED fills blend four texels (of
+#     the mip level the footprint picks), README "Texture filtering".
 #   - Attributes are planes: gradients per pixel from the snapped corners,
 #     re-anchored at the first inside pixel of every row.
 
@@ -43,7 +45,18 @@
     .equ RT_SAVE,               0           # s0 .. s11
     .equ RT_FSAVE,              96          # fs0 .. fs3 (the Gouraud intensity)
     .equ RT_RA,                 128         # ra (the lit fills' rounding constant)
-    .equ RT_FRAME,              144
+# the filtered fills' row state (FILTERED), and fs4, fs5
+    .equ RT_ROW_E0,             136         # edge functions at the row's first pixel
+    .equ RT_ROW_E1,             144
+    .equ RT_ROW_E2,             152
+    .equ RT_ROW_D0,             160         # their steps down
+    .equ RT_ROW_D1,             168
+    .equ RT_ROW_D2,             176
+    .equ RT_ROW_FB,             184         # framebuffer at (xmin, row)
+    .equ RT_ROW_DEPTH,          192         # depth at (xmin, row)
+    .equ RT_ROW_LEFT,           200         # rows left
+    .equ RT_FSAVE2,             208         # fs4, fs5
+    .equ RT_FRAME,              224
 
 # EDGE xa, ya, xb, yb, E, A, B
 #   The edge function of the edge a -> b at the first pixel centre
@@ -253,6 +266,269 @@
     .endif
 .endm
 
+# FILTERED gouraud, affine, depth16, mipmap
+#   A textured fill with filtering (filter = bilinear, or mipmap with
+#   mipmap = 1): as FILL, but each pixel blends the four texels around
+#   (s - 1/2, t - 1/2) by the fractions, rounded to 1/32 texel, lit by k in the same
+#   multiplication (render.inc BLEND_*): round((sum of w c) k / 2^16) per
+#   channel, one rounding. With mipmap, the level comes first (render.inc:
+#   (e + 1) >> 1 from the float exponent e of rho^2 = |det H| w^3, or the
+#   triangle's constant rho^2 with affine planes) and indexes the level
+#   table (raster_mip_table) for the level's texels, size and scale.
+#   The texel coordinate planes are 32 times the texel column and row
+#   (raster_triangle scales them). Needs more registers than FILL: the row
+#   state (s6..s11, a3, t6, a4) lives in raster_triangle's frame (RT_ROW_*)
+#   and the span loop uses those registers freely; fs4 (the constant rho^2)
+#   and fs5 are saved here. Registers of the span loop beyond FILL's:
+#   s9 BLEND_SPREAD_MUL, t5 BLEND_SPREAD_MASK, ra BLEND_ROUND, s10 the level
+#   table's entry for level 0 (mipmap); temporaries t0..t3, t6, a3, a4,
+#   s6 (fx), s7 (fy), s8 (x1), fs5. Ends at 90 (raster_triangle's epilogue).
+.macro FILTERED gouraud, affine, depth16, mipmap
+    sd      s6, RT_ROW_E0(sp)
+    sd      s7, RT_ROW_E1(sp)
+    sd      s8, RT_ROW_E2(sp)
+    sd      s9, RT_ROW_D0(sp)
+    sd      s10, RT_ROW_D1(sp)
+    sd      s11, RT_ROW_D2(sp)
+    sd      a3, RT_ROW_FB(sp)
+    sd      t6, RT_ROW_DEPTH(sp)
+    sd      a4, RT_ROW_LEFT(sp)
+    fsd     fs4, RT_FSAVE2(sp)
+    fsd     fs5, RT_FSAVE2 + 8(sp)
+    .if \mipmap
+    la      t0, raster_mip_rho2
+    flw     fs4, 0(t0)
+    la      t0, raster_mip_table
+    ld      s10, 0(t0)
+    li      t0, MIP_TABLE_BIAS << MIP_ENTRY_SHIFT
+    add     s10, s10, t0                # s10 = level 0's entry
+    .else
+    la      t0, raster_texture
+    ld      a5, 0(t0)
+    la      t0, raster_tex_w
+    ld      a6, 0(t0)
+    la      t0, raster_tex_h
+    ld      a7, 0(t0)
+    .endif
+    li      t5, BLEND_SPREAD_MASK
+    li      s9, BLEND_SPREAD_MUL
+    li      ra, BLEND_ROUND
+1:  ld      s0, RT_ROW_E0(sp)
+    ld      s1, RT_ROW_E1(sp)
+    ld      s2, RT_ROW_E2(sp)
+    ld      a0, RT_ROW_FB(sp)
+2:  or      t0, s0, s1                  # skip to the first inside pixel
+    or      t0, t0, s2
+    bgez    t0, 3f
+    add     s0, s0, s3
+    add     s1, s1, s4
+    add     s2, s2, s5
+    addi    a0, a0, LCD_BYTES_PER_PIXEL
+    bltu    a0, a2, 2b
+    j       8f
+3:  ld      t6, RT_ROW_FB(sp)
+    sub     t0, a0, t6                  # 2 (x - xmin)
+    ld      t6, RT_ROW_DEPTH(sp)
+    .if \depth16
+    add     a1, t6, t0
+    .else
+    slli    t1, t0, 1
+    add     a1, t6, t1
+    .endif
+    srli    t0, t0, 1
+    fcvt.s.l ft9, t0
+    fmadd.s fa0, fa4, ft9, ft0
+    .if !\affine
+    fmadd.s fa1, fa5, ft9, ft1
+    .endif
+    fmadd.s fa2, fa6, ft9, ft2
+    fmadd.s fa3, fa7, ft9, ft3
+    .if \gouraud
+    fmadd.s fs0, fs1, ft9, fs2
+    .endif
+4:
+    .if \depth16
+    lhu     t1, 0(a1)
+    fcvt.w.s t0, fa0, rtz
+    bge     t0, t1, 7f                  # not nearer
+    sh      t0, 0(a1)
+    .else
+    lw      t1, 0(a1)
+    fmv.x.w t0, fa0
+    bge     t0, t1, 7f                  # not nearer
+    sw      t0, 0(a1)
+    .endif
+    .if \gouraud
+    fcvt.wu.s t4, fs0, rne              # k (a rounding-noise negative -> 0)
+    .endif
+    .if \affine
+    fmv.s   ft10, fa2                   # 32 s, 32 t
+    fmv.s   ft11, fa3
+    .else
+    fdiv.s  ft9, ft8, fa1               # w
+    fmul.s  ft10, fa2, ft9              # 32 s, 32 t
+    fmul.s  ft11, fa3, ft9
+    .endif
+    .if \mipmap
+    .if \affine
+    fmv.x.w t0, fs4                     # rho^2, the triangle's
+    .else
+    fmul.s  fs5, ft9, ft9
+    fmul.s  fs5, fs5, ft9
+    fmul.s  fs5, fs5, fs4               # rho^2 = |det H| w^3
+    fmv.x.w t0, fs5
+    .endif
+    srliw   t0, t0, F32_EXP_SHIFT
+    andi    t0, t0, F32_EXP_MASK        # e + bias (a noise sign bit dropped)
+    addi    t0, t0, 1 - F32_EXP_BIAS
+    srai    t0, t0, 1                   # the level, -63 .. 64
+    slli    t0, t0, MIP_ENTRY_SHIFT
+    add     t0, t0, s10
+    ld      a5, MIP_PIXELS(t0)
+    lwu     a6, MIP_W(t0)
+    lwu     a7, MIP_H(t0)
+    flw     fs5, MIP_SCALE_S(t0)
+    fmul.s  ft10, ft10, fs5
+    flw     fs5, MIP_SCALE_T(t0)
+    fmul.s  ft11, ft11, fs5
+    .endif
+    fcvt.l.s t2, ft10, rne              # 32 s, 32 t to the nearest 1/32 texel
+    fcvt.l.s t3, ft11, rne
+    addi    t2, t2, -TEXEL_HALF_FRACTION    # floor(32 (s - 1/2)): texel centres
+    addi    t3, t3, -TEXEL_HALF_FRACTION
+    andi    s6, t2, TEXEL_FRACTION_MASK     # fx, fy in 1/32
+    andi    s7, t3, TEXEL_FRACTION_MASK
+    srai    t2, t2, TEXEL_FRACTION_BITS     # x0, y0
+    srai    t3, t3, TEXEL_FRACTION_BITS
+    bgeu    t2, a6, 10f                 # x0 outside 0 .. W - 1: repeat
+5:  addi    s8, t2, 1                   # x1
+    bltu    s8, a6, 12f
+    li      s8, 0
+12: bgeu    t3, a7, 11f
+6:  addi    a3, t3, 1                   # y1
+    bltu    a3, a7, 13f
+    li      a3, 0
+13: mul     t3, t3, a6
+    mul     a3, a3, a6
+    slli    t3, t3, 1
+    add     t3, t3, a5                  # row y0
+    slli    a3, a3, 1
+    add     a3, a3, a5                  # row y1
+    slli    t2, t2, 1
+    slli    s8, s8, 1
+    add     t0, t3, t2
+    lhu     t0, 0(t0)                   # (x0, y0)
+    add     t1, t3, s8
+    lhu     t1, 0(t1)                   # (x1, y0)
+    add     t6, a3, t2
+    lhu     t6, 0(t6)                   # (x0, y1)
+    add     a4, a3, s8
+    lhu     a4, 0(a4)                   # (x1, y1)
+    mul     t0, t0, s9                  # each spread (BLEND_SPREAD_*)
+    and     t0, t0, t5
+    mul     t1, t1, s9
+    and     t1, t1, t5
+    mul     t6, t6, s9
+    and     t6, t6, t5
+    mul     a4, a4, s9
+    and     a4, a4, t5
+    # c0 (32 - f) + c1 f = 32 c0 + (c1 - c0) f: exact in the fields even
+    # where c1 - c0 borrows across them, since the result fits each field
+    sub     t1, t1, t0
+    mul     t1, t1, s6
+    slli    t0, t0, TEXEL_FRACTION_BITS
+    add     t0, t0, t1                  # row y0 blended (32 c)
+    sub     a4, a4, t6
+    mul     a4, a4, s6
+    slli    t6, t6, TEXEL_FRACTION_BITS
+    add     t6, t6, a4                  # row y1 blended
+    sub     t6, t6, t0
+    mul     t6, t6, s7
+    slli    t0, t0, TEXEL_FRACTION_BITS
+    add     t0, t0, t6                  # 1024 c
+    mul     t0, t0, t4                  # lit: 1024 c k, up to 2^16 c
+    add     t0, t0, ra                  # rounded to nearest
+    srli    t1, t0, BLEND_R_SHIFT
+    slli    t1, t1, RGB565_R_SHIFT
+    srli    t2, t0, BLEND_G_SHIFT
+    andi    t2, t2, BLEND_G_MASK
+    or      t1, t1, t2
+    srli    t2, t0, BLEND_B_SHIFT
+    andi    t2, t2, BLEND_B_MASK
+    or      t1, t1, t2
+    xori    t2, a0, FB_PAIR_XOR
+    sh      t1, 0(t2)
+7:  fadd.s  fa0, fa0, fa4
+    .if !\affine
+    fadd.s  fa1, fa1, fa5
+    .endif
+    fadd.s  fa2, fa2, fa6
+    fadd.s  fa3, fa3, fa7
+    .if \gouraud
+    fadd.s  fs0, fs0, fs1
+    .endif
+    add     s0, s0, s3
+    add     s1, s1, s4
+    add     s2, s2, s5
+    addi    a0, a0, LCD_BYTES_PER_PIXEL
+    .if \depth16
+    addi    a1, a1, DEPTH16_BYTES_PER_PIXEL
+    .else
+    addi    a1, a1, DEPTH_BYTES_PER_PIXEL
+    .endif
+    bgeu    a0, a2, 8f
+    or      t0, s0, s1
+    or      t0, t0, s2
+    bgez    t0, 4b
+8:  ld      t0, RT_ROW_E0(sp)           # next row
+    ld      t1, RT_ROW_D0(sp)
+    add     t0, t0, t1
+    sd      t0, RT_ROW_E0(sp)
+    ld      t0, RT_ROW_E1(sp)
+    ld      t1, RT_ROW_D1(sp)
+    add     t0, t0, t1
+    sd      t0, RT_ROW_E1(sp)
+    ld      t0, RT_ROW_E2(sp)
+    ld      t1, RT_ROW_D2(sp)
+    add     t0, t0, t1
+    sd      t0, RT_ROW_E2(sp)
+    ld      t0, RT_ROW_FB(sp)
+    addi    t0, t0, FB_ROW_BYTES
+    sd      t0, RT_ROW_FB(sp)
+    addi    a2, a2, FB_ROW_BYTES
+    ld      t0, RT_ROW_DEPTH(sp)
+    .if \depth16
+    addi    t0, t0, DEPTH16_ROW_BYTES
+    .else
+    addi    t0, t0, DEPTH_ROW_BYTES
+    .endif
+    sd      t0, RT_ROW_DEPTH(sp)
+    fadd.s  ft0, ft0, ft4
+    .if !\affine
+    fadd.s  ft1, ft1, ft5
+    .endif
+    fadd.s  ft2, ft2, ft6
+    fadd.s  ft3, ft3, ft7
+    .if \gouraud
+    fadd.s  fs2, fs2, fs3
+    .endif
+    ld      t0, RT_ROW_LEFT(sp)
+    addi    t0, t0, -1
+    sd      t0, RT_ROW_LEFT(sp)
+    bnez    t0, 1b
+    fld     fs4, RT_FSAVE2(sp)
+    fld     fs5, RT_FSAVE2 + 8(sp)
+    j       90f
+10: rem     t2, t2, a6                  # x0 past either side: into 0 .. W - 1
+    bgez    t2, 5b
+    add     t2, t2, a6
+    j       5b
+11: rem     t3, t3, a7
+    bgez    t3, 6b
+    add     t3, t3, a7
+    j       6b
+.endm
+
     .text
     .globl raster_begin
 # raster_begin
@@ -279,6 +555,246 @@ raster_set_texture:
     sd      a1, 0(t0)
     la      t0, raster_tex_h
     sd      a2, 0(t0)
+    ret
+
+    .globl raster_build_mips
+# raster_build_mips
+#   What: filter = mipmap: builds the mip chain of the texture and its level
+#         table in one heap block ("mip chain": MIP_TABLE_BYTES, then the
+#         levels 1 .. L - 1 one after another), and sets raster_mip_table.
+#         Level l is max(1, W >> l) x max(1, H >> l), L levels down to 1 x 1
+#         (L = the bit length of max(W, H)); level 0 is the texture itself.
+#         Texel (i, j) of level l + 1 is the mean of texels 2i, 2i + 1 by
+#         2j, 2j + 1 of level l, each channel rounded to nearest (halves
+#         up); where level l's side is odd, the last texel of level l + 1
+#         takes its last three columns (rows), so every texel counts; a side
+#         of 1 stays 1. (reference/render.py mip_chain builds the same.)
+#         Level l's entry scales base texel coordinates by W_l / W, H_l / H,
+#         so each level repeats where the texture does. Running out of heap
+#         is fatal (heap_alloc_or_fail, error 12).
+#   Arguments: a0 = RGB565 texels, a1 = width, a2 = height (both > 0).
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+raster_build_mips:
+    addi    sp, sp, -112
+    sd      ra, 104(sp)
+    sd      s0, 96(sp)
+    sd      s1, 88(sp)
+    sd      s2, 80(sp)
+    sd      s3, 72(sp)
+    sd      s4, 64(sp)
+    sd      s5, 56(sp)
+    sd      s6, 48(sp)
+    sd      s7, 40(sp)
+    sd      s8, 32(sp)
+    sd      s9, 24(sp)
+    sd      s10, 16(sp)
+    sd      s11, 8(sp)
+    mv      s0, a0                      # s0, s1, s2 = the texture
+    mv      s1, a1
+    mv      s2, a2
+    # s3 = the block's bytes, s4 = L
+    mv      t0, s1                      # t0 = max(W, H)
+    bgeu    t0, s2, 1f
+    mv      t0, s2
+1:  li      s3, MIP_TABLE_BYTES
+    li      s4, 1
+2:  srl     t1, t0, s4
+    beqz    t1, 4f                      # level s4 would be past 1 x 1
+    srl     t2, s1, s4
+    bnez    t2, 3f
+    li      t2, 1
+3:  srl     t3, s2, s4
+    bnez    t3, 31f
+    li      t3, 1
+31: mul     t2, t2, t3
+    slli    t2, t2, 1                   # TEX_PIXEL_BYTES
+    add     s3, s3, t2
+    addi    s4, s4, 1
+    j       2b
+4:  mv      a0, s3
+    la      a1, msg_mip_chain
+    call    heap_alloc_or_fail
+    mv      s5, a0                      # s5 = the block: the table first
+    la      t0, raster_mip_table
+    sd      s5, 0(t0)
+    # level 0's entry (the texture, scale 1)
+    li      t0, MIP_TABLE_BIAS << MIP_ENTRY_SHIFT
+    add     t0, t0, s5
+    sd      s0, MIP_PIXELS(t0)
+    sw      s1, MIP_W(t0)
+    sw      s2, MIP_H(t0)
+    li      t1, F32_ONE
+    sw      t1, MIP_SCALE_S(t0)
+    sw      t1, MIP_SCALE_T(t0)
+    # levels 1 .. L - 1: s6, s7, s8 = the level above (texels, W, H),
+    # s9 = the new level's texels, s10, s11 = its W, H, s3 = l
+    mv      s6, s0
+    mv      s7, s1
+    mv      s8, s2
+    li      t0, MIP_TABLE_BYTES
+    add     s9, s5, t0
+    li      s3, 1
+5:  bgeu    s3, s4, 20f
+    srl     s10, s1, s3
+    bnez    s10, 6f
+    li      s10, 1
+6:  srl     s11, s2, s3
+    bnez    s11, 7f
+    li      s11, 1
+7:  addi    t0, s3, MIP_TABLE_BIAS      # the entry of level l
+    slli    t0, t0, MIP_ENTRY_SHIFT
+    add     t0, t0, s5
+    sd      s9, MIP_PIXELS(t0)
+    sw      s10, MIP_W(t0)
+    sw      s11, MIP_H(t0)
+    fcvt.s.wu ft0, s10
+    fcvt.s.wu ft1, s1
+    fdiv.s  ft0, ft0, ft1
+    fsw     ft0, MIP_SCALE_S(t0)
+    fcvt.s.wu ft0, s11
+    fcvt.s.wu ft1, s2
+    fdiv.s  ft0, ft0, ft1
+    fsw     ft0, MIP_SCALE_T(t0)
+    mv      a0, s6
+    mv      a1, s7
+    mv      a2, s8
+    mv      a3, s9
+    mv      a4, s10
+    mv      a5, s11
+    call    mip_halve
+    mv      s6, s9                      # the new level is the next one's source
+    mv      s7, s10
+    mv      s8, s11
+    mul     t0, s10, s11
+    slli    t0, t0, 1                   # TEX_PIXEL_BYTES
+    add     s9, s9, t0
+    addi    s3, s3, 1
+    j       5b
+    # the entries around the levels: below 0 repeat level 0, past L - 1
+    # repeat level L - 1 (t3 = the entry copied, t4 = the entry written)
+20: li      t4, 0
+21: li      t0, MIP_TABLE_BIAS
+    sub     t1, t4, t0                  # the entry's level
+    bgez    t1, 22f
+    li      t1, 0
+22: blt     t1, s4, 23f
+    addi    t1, s4, -1
+23: add     t1, t1, t0
+    slli    t3, t1, MIP_ENTRY_SHIFT
+    add     t3, t3, s5
+    slli    t2, t4, MIP_ENTRY_SHIFT
+    add     t2, t2, s5
+    ld      t0, MIP_PIXELS(t3)
+    sd      t0, MIP_PIXELS(t2)
+    ld      t0, MIP_W(t3)               # W and H
+    sd      t0, MIP_W(t2)
+    ld      t0, MIP_SCALE_S(t3)         # both scales
+    sd      t0, MIP_SCALE_S(t2)
+    addi    t4, t4, 1
+    li      t0, MIP_TABLE_ENTRIES
+    bltu    t4, t0, 21b
+    ld      s11, 8(sp)
+    ld      s10, 16(sp)
+    ld      s9, 24(sp)
+    ld      s8, 32(sp)
+    ld      s7, 40(sp)
+    ld      s6, 48(sp)
+    ld      s5, 56(sp)
+    ld      s4, 64(sp)
+    ld      s3, 72(sp)
+    ld      s2, 80(sp)
+    ld      s1, 88(sp)
+    ld      s0, 96(sp)
+    ld      ra, 104(sp)
+    addi    sp, sp, 112
+    ret
+
+# mip_halve (file-local)
+#   What: one mip level from the one above (raster_build_mips): each texel
+#         the rounded mean of its 2 x 2 block (the last column and row take
+#         three at an odd side; a side of 1 stays 1), the three channels
+#         summed at once in the blend spread (render.inc: 9 texels fit each
+#         field many times over), then divided apart.
+#   Arguments: a0 = the level above's texels, a1, a2 = its W, H; a3 = the
+#              new level's texels, a4, a5 = its W, H.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+mip_halve:
+    addi    sp, sp, -32
+    sd      s0, 24(sp)
+    sd      s1, 16(sp)
+    sd      s2, 8(sp)
+    sd      s3, 0(sp)
+    li      s2, BLEND_SPREAD_MUL
+    li      s3, BLEND_SPREAD_MASK
+    li      s0, 0                       # s0 = j
+1:  li      t0, 0                       # t0, t1 = the rows summed
+    li      t1, 1
+    li      t2, 1
+    beq     a2, t2, 3f
+    slli    t0, s0, 1
+    addi    t1, t0, 2
+    addi    t2, a5, -1
+    bne     s0, t2, 3f
+    mv      t1, a2                      # the last row takes what is left
+3:  li      s1, 0                       # s1 = i
+4:  li      t2, 0                       # t2, t3 = the columns summed
+    li      t3, 1
+    li      t4, 1
+    beq     a1, t4, 5f
+    slli    t2, s1, 1
+    addi    t3, t2, 2
+    addi    t4, a4, -1
+    bne     s1, t4, 5f
+    mv      t3, a1
+5:  li      a6, 0                       # a6 = the spread sum
+    mv      t4, t0                      # t4 = row
+6:  mul     t5, t4, a1
+    add     t5, t5, t2
+    slli    t5, t5, 1
+    add     t5, t5, a0                  # t5 -> (c0, row)
+    sub     t6, t3, t2                  # t6 = columns left
+7:  lhu     a7, 0(t5)
+    mul     a7, a7, s2
+    and     a7, a7, s3
+    add     a6, a6, a7
+    addi    t5, t5, TEX_PIXEL_BYTES
+    addi    t6, t6, -1
+    bnez    t6, 7b
+    addi    t4, t4, 1
+    bltu    t4, t1, 6b
+    sub     t4, t1, t0
+    sub     t5, t3, t2
+    mul     t4, t4, t5                  # t4 = texels summed
+    srli    t5, t4, 1                   # half of it: rounds to nearest
+    li      t6, MIP_SUM_B_MASK
+    and     t6, a6, t6
+    add     t6, t6, t5
+    divu    a7, t6, t4                  # B
+    srli    t6, a6, MIP_SUM_G_SHIFT
+    li      t2, MIP_SUM_G_MASK
+    and     t6, t6, t2
+    add     t6, t6, t5
+    divu    t6, t6, t4                  # G
+    slli    t6, t6, RGB565_G_SHIFT
+    or      a7, a7, t6
+    srli    t6, a6, MIP_SUM_R_SHIFT
+    add     t6, t6, t5
+    divu    t6, t6, t4                  # R
+    slli    t6, t6, RGB565_R_SHIFT
+    or      a7, a7, t6
+    sh      a7, 0(a3)
+    addi    a3, a3, TEX_PIXEL_BYTES
+    addi    s1, s1, 1
+    bltu    s1, a4, 4b
+    addi    s0, s0, 1
+    bltu    s0, a5, 1b
+    ld      s3, 0(sp)
+    ld      s2, 8(sp)
+    ld      s1, 16(sp)
+    ld      s0, 24(sp)
+    addi    sp, sp, 32
     ret
 
     .globl raster_set_depth
@@ -361,8 +877,9 @@ raster_clear:
 #              flags (render.inc). The depth format is raster_set_depth's.
 #   Results: none.
 #   Clobbers: only ABI temporaries. The pixel loops use every integer
-#         register but sp, ra, gp and tp, every temporary and argument
-#         float register, and fs0..fs3 (saved here).
+#         register but sp, gp and tp (ra holds a constant, saved here), every
+#         temporary and argument float register, and fs0..fs3 (saved here;
+#         the filtered fills save and use fs4, fs5 too).
 raster_triangle:
     addi    sp, sp, -RT_FRAME
     sd      s0, RT_SAVE + 0(sp)
@@ -557,7 +1074,40 @@ raster_triangle:
     GRADIENT ft11, ft7, ft3, fa7, ft7, ft3
     li      t3, F32_ONE
     fmv.w.x ft8, t3                     # ft8 = 1 (for 1 / (1 / w))
-6:
+6:  andi    t3, t5, RASTER_FILTERED     # (only ever with RASTER_TEXTURED)
+    beqz    t3, 62f
+    # filtered fills interpolate 32 s and 32 t (render.inc TEXEL_FRACTION_*)
+    li      t3, F32_TEXEL_FRACTIONS
+    fmv.w.x ft9, t3
+    fmul.s  fa6, fa6, ft9
+    fmul.s  ft6, ft6, ft9
+    fmul.s  ft2, ft2, ft9
+    fmul.s  fa7, fa7, ft9
+    fmul.s  ft7, ft7, ft9
+    fmul.s  ft3, ft3, ft9
+    andi    t3, t5, RASTER_MIPMAP
+    beqz    t3, 62f
+    # the footprint's area rho^2 (render.inc), 32^2 times with these planes:
+    # affine, det J = s_x t_y - t_x s_y itself; perspective, det H of the
+    # planes (u/w, v/w, 1/w), det J = det H w^3, w per pixel
+    fmul.s  ft9, fa6, ft7
+    fnmsub.s ft9, fa7, ft6, ft9         # s_x t_y - t_x s_y
+    andi    t3, t5, RASTER_AFFINE
+    bnez    t3, 61f
+    fmul.s  ft10, fa7, ft5
+    fnmsub.s ft10, ft7, fa5, ft10       # V_x Q_y - V_y Q_x
+    fmul.s  ft11, fa6, ft5
+    fnmsub.s ft11, ft6, fa5, ft11       # U_x Q_y - U_y Q_x
+    fmul.s  ft9, ft9, ft1               # det H = Q (U_x V_y - U_y V_x)
+    fmadd.s ft9, ft2, ft10, ft9         #   + U (V_x Q_y - V_y Q_x)
+    fnmsub.s ft9, ft3, ft11, ft9        #   - V (U_x Q_y - U_y Q_x)
+61: fabs.s  ft9, ft9
+    li      t3, F32_TEXEL_FRACTIONS_INV2
+    fmv.w.x ft10, t3
+    fmul.s  ft9, ft9, ft10
+    la      t3, raster_mip_rho2
+    fsw     ft9, 0(t3)
+62:
     # --- edge functions: s6..s8 = at the first centre of the row, s3..s5 =
     # steps right, s9..s11 = steps down (edge k is opposite corner k)
     EDGE    s2, s3, s4, s5, s6, t0, s9  # corner 1 -> corner 2
@@ -594,6 +1144,7 @@ raster_triangle:
     sub     a4, a7, a6
     addi    a4, a4, 1
     # --- the fill loop for these settings: raster_fills[flags | depth16 << 3]
+    # (flags with RASTER_BILINEAR or RASTER_MIPMAP index past the first 16)
     slli    t1, t1, RASTER_DEPTH16_SHIFT
     or      t0, t5, t1
     slli    t0, t0, 3
@@ -628,6 +1179,23 @@ fill_textured_d16:      FILL 1, 0, 0, 1
 fill_textured_gouraud_d16: FILL 1, 1, 0, 1
 fill_affine_d16:        FILL 1, 0, 1, 1
 fill_affine_gouraud_d16: FILL 1, 1, 1, 1
+# FILTERED gouraud, affine, depth16, mipmap
+fill_bilinear:          FILTERED 0, 0, 0, 0
+fill_bilinear_gouraud:  FILTERED 1, 0, 0, 0
+fill_bilinear_affine:   FILTERED 0, 1, 0, 0
+fill_bilinear_affine_gouraud: FILTERED 1, 1, 0, 0
+fill_bilinear_d16:      FILTERED 0, 0, 1, 0
+fill_bilinear_gouraud_d16: FILTERED 1, 0, 1, 0
+fill_bilinear_affine_d16: FILTERED 0, 1, 1, 0
+fill_bilinear_affine_gouraud_d16: FILTERED 1, 1, 1, 0
+fill_mipmap:            FILTERED 0, 0, 0, 1
+fill_mipmap_gouraud:    FILTERED 1, 0, 0, 1
+fill_mipmap_affine:     FILTERED 0, 1, 0, 1
+fill_mipmap_affine_gouraud: FILTERED 1, 1, 0, 1
+fill_mipmap_d16:        FILTERED 0, 0, 1, 1
+fill_mipmap_gouraud_d16: FILTERED 1, 0, 1, 1
+fill_mipmap_affine_d16: FILTERED 0, 1, 1, 1
+fill_mipmap_affine_gouraud_d16: FILTERED 1, 1, 1, 1
 
 90: ld      s0, RT_SAVE + 0(sp)
     ld      s1, RT_SAVE + 8(sp)
@@ -821,13 +1389,35 @@ raster_depth:
     .space  8
 raster_depth_mode:
     .space  8
+# filter = mipmap: the level table (raster_build_mips) and the triangle's
+# rho^2 constant (|det H| or, affine, |det J|; raster_triangle)
+raster_mip_table:
+    .space  8
+raster_mip_rho2:
+    .space  4
 
     .section .rodata
+msg_mip_chain:      .asciz "mip chain"
     .balign 8
 # raster_fills: the fill loop for RASTER_* flags | 16-bit depth << 3
-# (RASTER_AFFINE means nothing without RASTER_TEXTURED).
+# (RASTER_AFFINE, RASTER_BILINEAR, RASTER_MIPMAP mean nothing without
+# RASTER_TEXTURED).
 raster_fills:
     .dword  fill_flat, fill_textured, fill_flat_gouraud, fill_textured_gouraud
     .dword  fill_flat, fill_affine, fill_flat_gouraud, fill_affine_gouraud
     .dword  fill_flat_d16, fill_textured_d16, fill_flat_gouraud_d16, fill_textured_gouraud_d16
     .dword  fill_flat_d16, fill_affine_d16, fill_flat_gouraud_d16, fill_affine_gouraud_d16
+# RASTER_BILINEAR (flat fills never have it)
+    .dword  fill_flat, fill_bilinear, fill_flat_gouraud, fill_bilinear_gouraud
+    .dword  fill_flat, fill_bilinear_affine, fill_flat_gouraud, fill_bilinear_affine_gouraud
+    .dword  fill_flat_d16, fill_bilinear_d16, fill_flat_gouraud_d16, fill_bilinear_gouraud_d16
+    .dword  fill_flat_d16, fill_bilinear_affine_d16, fill_flat_gouraud_d16, fill_bilinear_affine_gouraud_d16
+# RASTER_MIPMAP
+    .dword  fill_flat, fill_mipmap, fill_flat_gouraud, fill_mipmap_gouraud
+    .dword  fill_flat, fill_mipmap_affine, fill_flat_gouraud, fill_mipmap_affine_gouraud
+    .dword  fill_flat_d16, fill_mipmap_d16, fill_flat_gouraud_d16, fill_mipmap_gouraud_d16
+    .dword  fill_flat_d16, fill_mipmap_affine_d16, fill_flat_gouraud_d16, fill_mipmap_affine_gouraud_d16
+raster_fills_end:
+    .if (raster_fills_end - raster_fills) != RASTER_FILLS * 8
+    .error "raster_fills must have RASTER_FILLS entries"
+    .endif

@@ -52,9 +52,10 @@
     .globl render_init
 # render_init
 #   What: prepares the renderer once the scene is loaded: vertex records,
-#         the texture (textured mode with a texture; else flat fills), and
-#         in wireframe mode the unique edge list. Running out of heap is
-#         fatal (heap_alloc_or_fail).
+#         the texture (textured mode with a texture; else flat fills) and
+#         its filtering (with filter = mipmap its mip chain, the last block
+#         allocated), and in wireframe mode the unique edge list. Running
+#         out of heap is fatal (heap_alloc_or_fail).
 #   Arguments: none. Results: none.
 #   Clobbers: only ABI temporaries.
 render_init:
@@ -89,7 +90,14 @@ render_init:
     li      t2, INTERP_AFFINE
     bne     t0, t2, 21f
     ori     t1, t1, RASTER_AFFINE
-21: la      t0, render_fill
+21: lwu     t0, SCENE_FILTER(s0)        # texture filtering
+    li      t2, FILTER_BILINEAR
+    bne     t0, t2, 22f
+    ori     t1, t1, RASTER_BILINEAR
+22: li      t2, FILTER_MIPMAP
+    bne     t0, t2, 23f
+    ori     t1, t1, RASTER_MIPMAP
+23: la      t0, render_fill
     sw      t1, 0(t0)
     call    raster_set_texture
     j       31f
@@ -127,13 +135,22 @@ render_init:
     la      t0, render_fill
     lwu     t0, 0(t0)
     andi    t0, t0, RASTER_GOURAUD
-    beqz    t0, 9f
+    beqz    t0, 8f
     lwu     a0, MESH_NCOUNT(s0)
     slli    a0, a0, NORMAL_LIGHT_SHIFT
     la      a1, msg_normal_intensities
     call    heap_alloc_or_fail
     la      t0, normal_light
     sd      a0, 0(t0)
+    # filter = mipmap: the mip chain, built from the texture in memory
+8:  la      t0, render_fill
+    lwu     t0, 0(t0)
+    andi    t0, t0, RASTER_MIPMAP
+    beqz    t0, 9f
+    ld      a0, TEX_PIXELS(s0)
+    lwu     a1, TEX_W(s0)
+    lwu     a2, TEX_H(s0)
+    call    raster_build_mips
 9:  ld      s0, 0(sp)
     ld      ra, 8(sp)
     addi    sp, sp, 16

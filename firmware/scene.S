@@ -40,6 +40,9 @@
 # angles      polynomial | table                      polynomial    SCENE_ANGLES
 # depth       int16 | float32                         int16         SCENE_DEPTH
 # snap        subpixel | pixel                        subpixel      SCENE_SNAP
+# filter      nearest | bilinear | mipmap             nearest       SCENE_FILTER
+#             (texture filtering, raster.S; its default, 0, is the
+#             zeros scene_defaults leaves after scene_default_values)
 #
 # Conventions (scene.inc): right-handed, camera at the origin looking down
 # -z (a model in view has negative z), angles in degrees about the axis.
@@ -168,6 +171,7 @@ scene_keys:
     SCENE_KEY angles, SCENE_KIND_WORD, 0, 0, scene + SCENE_ANGLES, words_angles, msg_expect_angles
     SCENE_KEY depth, SCENE_KIND_WORD, 0, 0, scene + SCENE_DEPTH, words_depth, msg_expect_depth
     SCENE_KEY snap, SCENE_KIND_WORD, 0, 0, scene + SCENE_SNAP, words_snap, msg_expect_snap
+    SCENE_KEY filter, SCENE_KIND_WORD, 0, 0, scene + SCENE_FILTER, words_filter, msg_expect_filter
 scene_keys_end:
 
     .balign 8
@@ -205,6 +209,11 @@ words_depth:
 words_snap:
     .dword  word_subpixel, SNAP_SUBPIXEL
     .dword  word_pixel, SNAP_PIXEL
+    .dword  0
+words_filter:
+    .dword  word_nearest, FILTER_NEAREST
+    .dword  word_bilinear, FILTER_BILINEAR
+    .dword  word_mipmap, FILTER_MIPMAP
     .dword  0
 
     .balign 4
@@ -257,6 +266,9 @@ word_float32:       .asciz "float32"
 word_int16:         .asciz "int16"
 word_subpixel:      .asciz "subpixel"
 word_pixel:         .asciz "pixel"
+word_nearest:       .asciz "nearest"
+word_bilinear:      .asciz "bilinear"
+word_mipmap:        .asciz "mipmap"
 path_scene_ini:     .asciz "scene.ini"
 msg_load:           .asciz "load "
 msg_crc32:          .asciz " crc32="
@@ -288,6 +300,7 @@ msg_expect_shading: .asciz "bad value (expected flat or gouraud)"
 msg_expect_angles:  .asciz "bad value (expected polynomial or table)"
 msg_expect_depth:   .asciz "bad value (expected int16 or float32)"
 msg_expect_snap:    .asciz "bad value (expected subpixel or pixel)"
+msg_expect_filter:  .asciz "bad value (expected nearest, bilinear or mipmap)"
 msg_levels:         .asciz "bad value (must be a whole number from 2 to 65)"
 
     .text

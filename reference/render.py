@@ -28,6 +28,13 @@ Conventions (README "Rendering", firmware/vertex.S, render.S, raster.S, maths.S)
 - flat mode: 0xC618 lit; textured: perspective-correct (u, v), texel column floor(u W) mod W,
   row floor((1 - v) H) mod H (v = 0 is the bottom of the image), lit; a corner without vt
   takes (0, 0); each pixel's channels are multiplied by that pixel's I;
+- texture filtering (`filter`, firmware/raster.S): `nearest` as above; `bilinear` samples at
+  (s - 1/2, t - 1/2) with s = u W, t = (1 - v) H, the four texels around it (repeating) weighed
+  by the fractions, channels blended as stored (RGB565, not linear light), then lit;
+  `mipmap`: the chain `mip_chain` builds (each level a box average of the one above), the level
+  the footprint chooses per pixel (`mip_level`: round(log2 rho), rho^2 = |det J| the area of the
+  pixel's footprint in texels, J the exact Jacobian of (s, t) over screen (x, y) at the
+  centre), bilinear within it at s W_l / W - 1/2, t H_l / H - 1/2;
 - wireframe: the unique (min, max) vertex index edges, white, no depth test or culling,
   rejected by outcodes, cut at the near plane, clipped to the screen rectangle [0, 320] x [0, 240]
   (Liang-Barsky), each end in the pixel it lies in (floor, clamped), Bresenham from the smaller
@@ -45,6 +52,9 @@ Where the reference is exact and the firmware is not (these are what the compari
   k = round(64 I), or to its `light_levels`, and truncates channel * k / 64);
 - texture coordinates: exact perspective-correct interpolation (the firmware interpolates
   u/w, v/w, 1/w incrementally in single precision and divides once per pixel);
+- bilinear weights: exact fractions (the firmware's are in 1/32 texel, truncated) and one
+  rounding of the lit blend (the firmware's is the same, with k / 64 for I); the mip level
+  from the exact Jacobian (the firmware's from its float32 planes, |det H| w^3);
 - wireframe end points: exact projections (the firmware converts its Q4 positions to pixels).
 """
 from __future__ import annotations
@@ -253,9 +263,11 @@ class Target:
 
 def raster_triangle(target: Target, screen: np.ndarray, zw: np.ndarray, q: np.ndarray,
                     cull: bool, colour: int | None, uv: np.ndarray | None = None,
-                    texture: np.ndarray | None = None, lighting: Lighting = UNLIT) -> None:
+                    texture: np.ndarray | None = None, lighting: Lighting = UNLIT,
+                    filter: str = "nearest") -> None:
     """One triangle given by its screen corners (3, 2), z/w (3,), 1/w (3,): `colour`, or
-    textured (uv (3, 2) per corner, perspective-correct), each pixel lit by `lighting`."""
+    textured (uv (3, 2) per corner, perspective-correct, sampled as `filter` says), each pixel
+    lit by `lighting`."""
     (x0, y0), (x1, y1), (x2, y2) = screen
     area = (x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0)
     if area == 0 or not math.isfinite(area):
@@ -308,9 +320,131 @@ def raster_triangle(target: Target, screen: np.ndarray, zw: np.ndarray, q: np.nd
     u = (l0 * uv[0, 0] * q[0] + l1 * uv[1, 0] * q[1] + l2 * uv[2, 0] * q[2]) / inv_w
     v = (l0 * uv[0, 1] * q[0] + l1 * uv[1, 1] * q[1] + l2 * uv[2, 1] * q[2]) / inv_w
     height, width = texture.shape
-    column = np.floor(u * width).astype(np.int64) % width
-    row = np.floor((1.0 - v) * height).astype(np.int64) % height
-    target.colour[ys, xs] = shade(texture[row, column], intensity)
+    if filter == "nearest":
+        column = np.floor(u * width).astype(np.int64) % width
+        row = np.floor((1.0 - v) * height).astype(np.int64) % height
+        target.colour[ys, xs] = shade(texture[row, column], intensity)
+        return
+    s_texel, t_texel = u * width, (1.0 - v) * height
+    if filter == "bilinear":
+        channels = bilinear(texture, s_texel, t_texel)
+    else:
+        chain = mip_chain(texture)
+        # the footprint: d(s, t) / d(x, y) from the planes U = s q, V = t q, q, each affine in
+        # screen space (the barycentric weights' gradients are the edges' over the area)
+        grad_l = []
+        for i in range(3):
+            a, b = screen[(i + 1) % 3], screen[(i + 2) % 3]
+            grad_l.append((-(b[1] - a[1]) / area, (b[0] - a[0]) / area))
+        ucol = np.array([uv[i, 0] * q[i] * width for i in range(3)])
+        vcol = np.array([(1.0 - uv[i, 1]) * q[i] * height for i in range(3)])
+        gx, gy = np.array([g[0] for g in grad_l]), np.array([g[1] for g in grad_l])
+        jac = np.array([[(ucol @ gx - s_texel * (q @ gx)) / inv_w, (ucol @ gy - s_texel * (q @ gy)) / inv_w],
+                        [(vcol @ gx - t_texel * (q @ gx)) / inv_w, (vcol @ gy - t_texel * (q @ gy)) / inv_w]])
+        rho2 = np.abs(jac[0, 0] * jac[1, 1] - jac[0, 1] * jac[1, 0])
+        level = mip_level(rho2, len(chain))
+        channels = np.zeros((len(s_texel), 3))
+        for number in np.unique(level):
+            pick = level == number
+            mip = chain[number]
+            channels[pick] = bilinear(mip, s_texel[pick] * (mip.shape[1] / width),
+                                      t_texel[pick] * (mip.shape[0] / height))
+    target.colour[ys, xs] = shade_channels(channels, intensity)
+
+
+def bilinear(texture: np.ndarray, s: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """(P, 3) float RGB565 channels: the texture at texel coordinates (s, t) (texel (i, j) covers
+    [i, i + 1) x [j, j + 1), its centre at + 1/2), the four nearest texel centres weighed by
+    the fractions, repeating."""
+    height, width = texture.shape
+    s, t = np.asarray(s, dtype=np.float64) - 0.5, np.asarray(t, dtype=np.float64) - 0.5
+    i0, j0 = np.floor(s), np.floor(t)
+    fx, fy = s - i0, t - j0
+    i0, j0 = i0.astype(np.int64) % width, j0.astype(np.int64) % height
+    i1, j1 = (i0 + 1) % width, (j0 + 1) % height
+    out = np.zeros((len(s), 3))
+    for rows, cols, weight in ((j0, i0, (1 - fx) * (1 - fy)), (j0, i1, fx * (1 - fy)),
+                               (j1, i0, (1 - fx) * fy), (j1, i1, fx * fy)):
+        c = texture[rows, cols].astype(np.int64)
+        out += weight[:, None] * np.stack([(c >> 11) & 31, (c >> 5) & 63, c & 31], axis=-1)
+    return out
+
+
+def shade_channels(channels: np.ndarray, intensity) -> np.ndarray:
+    """RGB565 from (P, 3) float channels, each times the intensity and rounded to nearest."""
+    lit = np.floor(np.asarray(channels) * np.asarray(intensity, dtype=np.float64).reshape(-1, 1) + 0.5)
+    r, g, b = (np.minimum(lit[:, i], top).astype(np.int64) for i, top in ((0, 31), (1, 63), (2, 31)))
+    return ((r << 11) | (g << 5) | b).astype(np.uint16)
+
+
+def mip_size(width: int, height: int, level: int) -> tuple[int, int]:
+    """The size of mip level `level`: each side halved (rounded down) per level, at least 1."""
+    return max(1, width >> level), max(1, height >> level)
+
+
+def mip_levels(width: int, height: int) -> int:
+    """How many levels the chain has: down to 1 x 1, the base texture included."""
+    return max(width, height).bit_length()
+
+
+def mip_chain(texture: np.ndarray) -> list[np.ndarray]:
+    """The mip chain the firmware builds at load time (render.S mip_build): level 0 is the
+    texture; texel (i, j) of level l + 1 is the mean of texels 2i, 2i + 1 by 2j, 2j + 1 of level
+    l, each RGB565 channel rounded to nearest (half up); where level l's side is odd the last
+    texel of level l + 1 takes the three last columns (rows) of level l, so every texel
+    contributes; a side of 1 stays 1 (the texel itself). Kept for the last few textures (a
+    frame asks for it once per triangle)."""
+    key = id(texture)
+    cached = _MIP_CACHE.get(key)
+    if cached is not None and cached[0] is texture:
+        return cached[1]
+    chain = [np.asarray(texture, dtype=np.uint16)]
+    height, width = texture.shape
+    for level in range(1, mip_levels(width, height)):
+        above = chain[-1].astype(np.int64)
+        channels = np.stack([(above >> 11) & 31, (above >> 5) & 63, above & 31], axis=-1)
+        new_w, new_h = mip_size(width, height, level)
+        sums, counts = _halve(channels, new_h, axis=0)
+        sums, col_counts = _halve(sums, new_w, axis=1)
+        count = counts[:, None, None] * col_counts[None, :, None]
+        mean = (sums + count // 2) // count
+        chain.append(((mean[..., 0] << 11) | (mean[..., 1] << 5) | mean[..., 2]).astype(np.uint16))
+    if len(_MIP_CACHE) >= 4:
+        _MIP_CACHE.clear()
+    _MIP_CACHE[key] = (texture, chain)
+    return chain
+
+
+_MIP_CACHE: dict[int, tuple[np.ndarray, list[np.ndarray]]] = {}
+
+
+def _halve(values: np.ndarray, new: int, axis: int) -> tuple[np.ndarray, np.ndarray]:
+    """Sums of pairs along `axis` (2k, 2k + 1), the last pair taking the odd one left over; a side
+    of 1 stays as it is. Returns (sums, how many each sum took)."""
+    old = values.shape[axis]
+    if old == 1:
+        return values, np.ones(1, dtype=np.int64)
+    take = np.take(values, np.arange(0, 2 * new, 2), axis=axis) + np.take(values, np.arange(1, 2 * new, 2), axis=axis)
+    counts = np.full(new, 2, dtype=np.int64)
+    if old % 2:
+        last = [slice(None)] * values.ndim
+        last[axis] = slice(new - 1, new)
+        extra = [slice(None)] * values.ndim
+        extra[axis] = slice(old - 1, old)
+        take[tuple(last)] += values[tuple(extra)]
+        counts[-1] = 3
+    return take, counts
+
+
+def mip_level(rho2: np.ndarray, levels: int) -> np.ndarray:
+    """The level each pixel samples: round(log2 rho) (halves up) with rho^2 the footprint's area
+    in texels, clamped to 0 .. levels - 1. With e = floor(log2 rho^2), that is (e + 1) >> 1, which
+    the firmware takes from rho^2's float exponent."""
+    rho2 = np.asarray(rho2, dtype=np.float64)
+    positive = rho2 > 0
+    _, exponent = np.frexp(np.where(positive, rho2, 1.0))      # rho^2 = m 2^exponent, m in [1/2, 1)
+    level = np.where(positive, (exponent - 1 + 1) >> 1, 0)
+    return np.clip(level, 0, levels - 1)
 
 
 # --------------------------------------------------------------------------- lines
@@ -460,7 +594,7 @@ def render_frame(scene: Scene, mesh: Mesh, texture: np.ndarray | None, n: int) -
     for tri in frame_triangles(scene, mesh, texture, n):
         if tri.uv is not None:
             raster_triangle(target, tri.screen, tri.zw, tri.q, scene.cull, None,
-                            uv=tri.uv, texture=texture, lighting=tri.lighting)
+                            uv=tri.uv, texture=texture, lighting=tri.lighting, filter=scene.filter)
         else:
             raster_triangle(target, tri.screen, tri.zw, tri.q, scene.cull, FLAT_COLOUR,
                             lighting=tri.lighting)

@@ -18,6 +18,10 @@ The precision keys (`interpolation`, `shading`, `light_levels`, `angles`, `depth
 the firmware's approximations. They are read and checked here exactly as the firmware reads them
 and kept on the `Scene`, but the reference ignores them: it renders one ideal image per scene,
 the yardstick every setting is measured against.
+
+`filter` (`nearest`, `bilinear`, `mipmap`) is not a precision key: it chooses how the texture is
+sampled, so the reference's pixel-centre image follows it (reference/render.py) and the firmware
+can be checked against it; the ideal image ignores it (it area-filters every texture).
 """
 from __future__ import annotations
 
@@ -41,10 +45,12 @@ PRECISION_WORDS: dict[str, tuple[str, ...]] = {
     "depth": ("int16", "float32"),
     "snap": ("subpixel", "pixel"),
 }
+# Texture filtering (firmware/raster.S), the default first.
+FILTER_WORDS: tuple[str, ...] = ("nearest", "bilinear", "mipmap")
 LIGHT_LEVELS_MIN, LIGHT_LEVELS_MAX = 2, 65
 KEYS = ("model", "texture", "mode", "cull", "scale", "axis", "angle", "step", "translate",
         "fov", "near", "far", "light", "ambient", "background",
-        "interpolation", "shading", "light_levels", "angles", "depth", "snap")
+        "interpolation", "shading", "light_levels", "angles", "depth", "snap", "filter")
 VALUE_MAX = 256          # a path of this many bytes or more is too long (NUL included)
 
 
@@ -81,6 +87,8 @@ class Scene:
     angles: str = "polynomial"                   # polynomial | table
     depth: str = "int16"                         # int16 | float32
     snap: str = "subpixel"                       # subpixel | pixel
+    # how textures are sampled (the pixel-centre image follows it)
+    filter: str = "nearest"                      # nearest | bilinear | mipmap
     lines: dict[str, int] = field(default_factory=dict, repr=False)   # key -> line that set it
 
 
@@ -244,8 +252,8 @@ def _set(scene: Scene, key: str, value: str, line: int) -> None:
         if value.lower() not in CULL_WORDS:
             raise SceneError(line, "bad value (expected on, off, yes, no, true, false, 1 or 0)")
         scene.cull = CULL_WORDS[value.lower()]
-    elif key in PRECISION_WORDS:
-        words = PRECISION_WORDS[key]
+    elif key in PRECISION_WORDS or key == "filter":
+        words = FILTER_WORDS if key == "filter" else PRECISION_WORDS[key]
         if value.lower() not in words:
             raise SceneError(line, _expected_words(words))
         setattr(scene, key, value.lower())

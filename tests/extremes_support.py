@@ -220,7 +220,7 @@ class HeapLayout:
 
 NEEDED = ("HEAP_ALIGN", "FAT_SECTOR_BYTES", "MESH_V_BYTES", "MESH_T_BYTES", "MESH_N_BYTES", "MESH_F_BYTES",
           "VTX_BYTES", "WORLD_POS_BYTES", "EDGE_BYTES", "EDGES_PER_TRIANGLE", "DEPTH_BUFFER_BYTES", "DEPTH16_BUFFER_BYTES",
-          "NORMAL_LIGHT_SHIFT", "TEX_PIXEL_BYTES", "OBJ_WINDOW_BYTES")
+          "NORMAL_LIGHT_SHIFT", "TEX_PIXEL_BYTES", "OBJ_WINDOW_BYTES", "MIP_TABLE_BYTES")
 
 
 def heap_layout(elf: Path) -> HeapLayout:
@@ -271,7 +271,7 @@ class Heap:
 
 def boot_allocations(layout: HeapLayout, texture: int | None, vertices: int, texcoords: int, normals: int,
                      triangles: int, wireframe: bool = False, depth: str = "int16", gouraud: bool = False,
-                     scene_ini: int | None = None) -> tuple[str, Heap]:
+                     scene_ini: int | None = None, mipmap: tuple[int, int] | None = None) -> tuple[str, Heap]:
     """Replays the firmware's heap use at boot, given the sizes of the files (texture: bytes of
     texture.ppm, None for none; scene_ini likewise) and the model's counts. The model's text
     takes no part: obj.S reads it through a window. In order: scene.S scene_load (scene.ini if
@@ -286,7 +286,9 @@ def boot_allocations(layout: HeapLayout, texture: int | None, vertices: int, tex
     list, or else the
     depth buffer (DEPTH16_BUFFER_BYTES for `depth = int16`, the default; DEPTH_BUFFER_BYTES for
     float32) and, with `shading = gouraud`, one f32 per normal (MESH_NCOUNT <<
-    NORMAL_LIGHT_SHIFT; heap.S's heap_alloc of 0 bytes always succeeds); each of these blocks is
+    NORMAL_LIGHT_SHIFT; heap.S's heap_alloc of 0 bytes always succeeds), and last, with
+    `filter = mipmap` (mipmap = the texture's (width, height)), the mip chain (raster.S
+    raster_build_mips: `mip_chain_bytes`); each of these blocks is
     error 12 "model too large for memory (<block>: n bytes needed, m bytes free)".
     Returns ("ok" | "error 7" | "error 12", heap); heap.failed is the console line for the block
     that did not fit (for error 7 its start: the line goes on with the file's name and sizes)."""
@@ -329,10 +331,22 @@ def boot_allocations(layout: HeapLayout, texture: int | None, vertices: int, tex
                        layout.DEPTH16_BUFFER_BYTES if depth == "int16" else layout.DEPTH_BUFFER_BYTES))
         if gouraud:
             blocks.append(("normal intensities", normals << layout.NORMAL_LIGHT_SHIFT))
+        if mipmap is not None and texture is not None:
+            blocks.append(("mip chain", mip_chain_bytes(layout, *mipmap)))
     for name, size in blocks:
         if heap.alloc_or_fail(name, size) is None:
             return "error 12", heap
     return "ok", heap
+
+
+def mip_chain_bytes(layout: HeapLayout, width: int, height: int) -> int:
+    """The "mip chain" block of a width x height texture: the level table, then levels 1 .. L - 1
+    (each side halved, rounded down, at least 1; L = the bit length of the longer side)."""
+    size, level = layout.MIP_TABLE_BYTES, 1
+    while max(width, height) >> level:
+        size += max(1, width >> level) * max(1, height >> level) * layout.TEX_PIXEL_BYTES
+        level += 1
+    return size
 
 
 def boot_outcomes(layout: HeapLayout, *args, **kwargs) -> set[str]:

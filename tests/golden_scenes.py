@@ -20,6 +20,14 @@ SCENES: dict[str, tuple[dict[str, str] | None, int]] = {
     "cube-textured": ({"model": "models/cube.obj", "texture": "textures/cube.ppm", "mode": "textured",
                        "translate": "0 0 -3", "axis": "1 1 0", "angle": "20", "step": "5",
                        "background": "40 40 80"}, 3),
+    # texture filtering: the cube's 8 x 8 texture magnified (bilinear's blend), the torus's 250 x 250
+    # one minified (the mip chain's levels)
+    "cube-bilinear": ({"model": "models/cube.obj", "texture": "textures/cube.ppm", "mode": "textured",
+                       "translate": "0 0 -3", "axis": "1 1 0", "angle": "20", "step": "5",
+                       "background": "40 40 80", "filter": "bilinear"}, 3),
+    "torus-mipmap": ({"model": "models/torus.obj", "texture": "textures/torus.ppm", "mode": "textured",
+                      "scale": "0.35", "translate": "0 0 -3", "axis": "1 1 0", "angle": "17", "step": "3",
+                      "shading": "gouraud", "filter": "mipmap"}, 3),
     "torus-wireframe": ({"model": "models/torus.obj", "texture": "textures/torus.ppm", "mode": "wireframe",
                          "translate": "0 0 -2.8", "axis": "1 0.6 0.2", "angle": "40", "step": "4"}, 3),
 }

@@ -334,6 +334,62 @@ def test_largest_texture_beside_a_model(firmware, layout, tmp_path, case):
         assert (run.error_line() or "").startswith(failed), (failed, run.console)
 
 
+MIPMAP = MAGENTA + "filter = mipmap\n"
+
+
+def mipmap_outcomes(layout, filler: int, texels: int) -> set[str]:
+    return boot_outcomes(layout, len(unique_texture(texels, 1)[0]), 3, 3, 0, filler, scene_ini=len(MIPMAP),
+                         mipmap=(texels, 1))
+
+
+@pytest.mark.parametrize("case", ["largest", "one-more-texel"])
+def test_largest_texture_with_a_mip_chain(firmware, layout, tmp_path, case):
+    """filter = mipmap: the mip chain (the level table, then every level down to 1 x 1) is the
+    last block the firmware allocates, so the largest texture beside a model is smaller than
+    without it, and one texel more is error 12 naming the mip chain with its size, as the replay
+    (extremes_support.mip_chain_bytes) predicts. The model fills the heap as in
+    test_largest_texture_beside_a_model; a texture of n x 1 texels needs a chain of about its
+    own size (only one side halves), a square one about a third (README, memory limits)."""
+    filler, _ = limits(lambda n: mipmap_outcomes(layout, n, TEXTURE_TARGET), 1,
+                       layout.size // layout.MESH_F_BYTES + 1)
+    most, beyond = limits(lambda n: mipmap_outcomes(layout, filler, n), TEXTURE_TARGET // 2, 63_000)
+    texels = most if case == "largest" else beyond
+    model = fan_model(filler, FILLED_HEAD, "1/1 2/2 3/3")
+    data, _ = unique_texture(texels, 1)
+    run = run_scene(firmware, tmp_path, model, MIPMAP, texture=data, frames=1)
+    failed = boot_allocations(layout, len(data), 3, 3, 0, filler, scene_ini=len(MIPMAP), mipmap=(texels, 1))[1].failed
+    if case == "largest":
+        assert run.returncode == 0, run.stderr + run.console
+        assert f"texture: {most}x1" in run.console and f"model: {filler} triangles" in run.console
+        assert failed is None
+    else:
+        assert failed and failed.startswith("error 12 model too large for memory (mip chain: "), failed
+        assert run.returncode == 8, run.stderr + run.console
+        assert run.error_line() == failed, (failed, run.console)
+
+
+@pytest.mark.parametrize("size", [(1, 1), (3, 5)], ids=lambda s: f"{s[0]}x{s[1]}")
+@pytest.mark.parametrize("filter_", ["bilinear", "mipmap"])
+def test_filtered_uvs_far_outside_the_unit_square(firmware, tmp_path, size, filter_):
+    """The far UVs of test_uv_far_outside_the_unit_square, filtered: the four texels a blend
+    takes wrap around the texture (its rows and columns repeat, negative ones too) and the mip
+    levels repeat where the texture does. A 1 x 1 texture blends its texel with itself: the
+    frames show it exactly as nearest does; 3 x 5 agrees with the reference's filter."""
+    data, _ = unique_texture(*size)
+    run = run_scene(firmware, tmp_path, UV_OFFSETS, TEXTURED + f"filter = {filter_}\n", texture=data)
+    assert run.returncode == 0, run.stderr + run.console
+    for n in range(FRAMES):
+        comparison = run.compare(n)
+        if size == (1, 1):
+            assert comparison.beyond_lighting_off_outline == 0 and comparison.differing <= OUTLINE_BUDGET, \
+                f"frame {n}: {comparison}"
+        else:
+            ref = run.reference(n).astype(np.float64)
+            mse = np.mean((run.frames[n].astype(np.float64) - ref) ** 2)
+            assert 10 * np.log10(255 ** 2 / mse) > 30, f"frame {n}: {comparison}"
+            assert comparison.beyond_lighting_off_outline <= comparison.drawn_ref // 100, f"frame {n}: {comparison}"
+
+
 def test_texture_file_larger_than_the_free_heap_is_error_7(firmware, layout, tmp_path):
     """The smallest texture whose file cannot be loaded at all: error 7 from fat32_load, before
     reading any of it (so this is quick despite the 5.9 MB file). The console line today:

@@ -395,6 +395,10 @@ def test_wireframe_draws_each_edge_once_in_white():
     ("depth = float16\n", 1, "bad value (expected int16 or float32)"),
     ("snap = none\n", 1, "bad value (expected subpixel or pixel)"),
     ("snap = pixel\n# again\nSNAP = subpixel\n", 3, "duplicate key"),
+    # texture filtering
+    ("filter = trilinear\n", 1, "bad value (expected nearest, bilinear or mipmap)"),
+    ("filter = mipmap\nFilter = Nearest\n", 2, "duplicate key"),
+    ("filter = bilinear mipmap\n", 1, "bad value (expected nearest, bilinear or mipmap)"),
     ("shading =\n", 1, "malformed line (no value)"),
     ("\nlight_levels = 3.5\n", 2, "bad value (must be a whole number from 2 to 65)"),
     ("light_levels = 1\n", 1, "bad value (must be a whole number from 2 to 65)"),

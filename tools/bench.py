@@ -276,15 +276,19 @@ class ReferenceFrames:
 
 
 # The reference ignores the precision keys, so every setting of a scene shares its frames: rendered
-# once per scene, mode and scale (the ideal takes about a second a frame).
+# once per scene, mode and scale (the ideal takes about a second a frame); the pixel-centre image
+# follows `filter`, so once per filter too.
 _reference_cache: dict[tuple, ReferenceFrames] = {}
+# The ideal image ignores `filter` too: shared by the filter settings of a scene.
+_ideal_cache: dict[tuple, tuple[list[np.ndarray], float, float]] = {}
 
 
-def _reference_key(scene, mesh, texture, count: int) -> tuple:
-    """What the reference's frames depend on: the scene without its precision keys, the model's
-    arrays, the texture's texels and the number of frames."""
+def _reference_key(scene, mesh, texture, count: int, ideal: bool = False) -> tuple:
+    """What the reference's frames depend on: the scene without its precision keys (and, for the
+    ideal image, which area-filters every texture, without `filter`), the model's arrays, the
+    texture's texels and the number of frames."""
     from reference.scene import PRECISION_WORDS
-    ignored = set(PRECISION_WORDS) | {"light_levels", "lines"}
+    ignored = set(PRECISION_WORDS) | {"light_levels", "lines"} | ({"filter"} if ideal else set())
     fields = tuple((f.name, repr(getattr(scene, f.name))) for f in dataclasses.fields(scene) if f.name not in ignored)
     digest = hashlib.sha256()
     for array in (mesh.vertices, mesh.texcoords, mesh.normals, mesh.faces,
@@ -301,11 +305,14 @@ def reference_frames(card: Path, count: int) -> ReferenceFrames:
     key = _reference_key(scene, mesh, texture, count)
     if key not in _reference_cache:
         pixel_centre = [reference.render_image(scene, mesh, texture, n) for n in range(count)]
-        started = time.perf_counter()
-        ideal = [reference.render_ideal_image(scene, mesh, texture, n) for n in range(count)]
-        seconds = (time.perf_counter() - started) / count
-        denser = reference.render_ideal_image(scene, mesh, texture, 0, density=2 * DEFAULT_DENSITY)
-        _reference_cache[key] = ReferenceFrames(pixel_centre, ideal, seconds, distance(ideal[:1], [denser])["psnr_db"])
+        ideal_key = _reference_key(scene, mesh, texture, count, ideal=True)
+        if ideal_key not in _ideal_cache:
+            started = time.perf_counter()
+            ideal = [reference.render_ideal_image(scene, mesh, texture, n) for n in range(count)]
+            seconds = (time.perf_counter() - started) / count
+            denser = reference.render_ideal_image(scene, mesh, texture, 0, density=2 * DEFAULT_DENSITY)
+            _ideal_cache[ideal_key] = (ideal, seconds, distance(ideal[:1], [denser])["psnr_db"])
+        _reference_cache[key] = ReferenceFrames(pixel_centre, *_ideal_cache[ideal_key])
     return _reference_cache[key]
 
 

@@ -19,13 +19,14 @@ from collections.abc import Iterable
 from pathlib import Path
 from xml.sax.saxutils import escape
 
-from reference.scene import LIGHT_LEVELS_MAX, LIGHT_LEVELS_MIN, PRECISION_WORDS
+from reference.scene import FILTER_WORDS, LIGHT_LEVELS_MAX, LIGHT_LEVELS_MIN, PRECISION_WORDS
 
 # --- the settings ---------------------------------------------------------------------------------
 
 # The firmware's precision keys in scene.ini and the values each takes, default first (the
-# reference renderer checks them exactly as the firmware does, so its tables serve here).
-PRECISION_KEYS = {**PRECISION_WORDS,
+# reference renderer checks them exactly as the firmware does, so its tables serve here), and
+# the texture filter, which the reference's pixel-centre image follows.
+PRECISION_KEYS = {**PRECISION_WORDS, "filter": FILTER_WORDS,
                   "light_levels": tuple(str(n) for n in range(LIGHT_LEVELS_MAX, LIGHT_LEVELS_MIN - 1, -1))}
 
 # Every setting the bench sweeps, in the order the tables list them: name -> scene.ini keys added
@@ -39,6 +40,8 @@ SETTINGS: dict[str, dict[str, str]] = {
     "angle-table":   {"angles": "table"},
     "depth-float32": {"depth": "float32"},
     "pixel-snap":    {"snap": "pixel"},
+    "bilinear":      {"filter": "bilinear"},
+    "mipmap":        {"filter": "mipmap"},
     "thesis":        {"interpolation": "affine", "shading": "flat", "light_levels": "33", "angles": "table",
                       "depth": "int16", "snap": "pixel"},
     "best":          {"interpolation": "perspective", "shading": "gouraud", "depth": "float32"},
@@ -46,11 +49,18 @@ SETTINGS: dict[str, dict[str, str]] = {
 DEFAULT_SETTING = "default"
 # Wireframe has no texture, light or depth buffer: only the angles and the snapping change it.
 WIREFRAME_SETTINGS = ("default", "angle-table", "pixel-snap")
+# Texture filtering changes only what a texture draws: swept in textured mode alone.
+TEXTURE_SETTINGS = ("bilinear", "mipmap")
 
 
 def settings_for_mode(mode: str, wanted: Iterable[str] | None = None) -> list[str]:
     """The settings swept in this mode (in SETTINGS order), limited to `wanted` if given."""
-    names = list(SETTINGS) if mode != "wireframe" else [n for n in SETTINGS if n in WIREFRAME_SETTINGS]
+    if mode == "wireframe":
+        names = [n for n in SETTINGS if n in WIREFRAME_SETTINGS]
+    elif mode == "textured":
+        names = list(SETTINGS)
+    else:
+        names = [n for n in SETTINGS if n not in TEXTURE_SETTINGS]
     if wanted is not None:
         wanted = set(wanted)
         names = [n for n in names if n in wanted]
