@@ -162,6 +162,11 @@ def build_parser() -> argparse.ArgumentParser:
                      help="with --trace-insn: start the trace at this virtual time (default 0)")
     run.add_argument("--trace-to", metavar="SECONDS", type=time_seconds, default=None,
                      help="with --trace-insn: end the trace at this virtual time (default: the end of the run)")
+    run.add_argument("--profile", action="store_true",
+                     help="write profile.txt (per hart, instructions and cycles per function, exclusive and "
+                          "inclusive, with calls; per frame the top functions) and profile.folded (call stacks "
+                          "weighted by cycles, for flame graphs and speedscope) into the output folder; the "
+                          "model runs several times slower with it")
     run.add_argument("--gdb", metavar="PORT", type=port_number, default=None,
                      help="serve GDB's remote protocol on 127.0.0.1:PORT (0: any free port, printed): attach "
                           "with gdb-multiarch FIRMWARE.elf -ex 'target remote :PORT'; while GDB is attached it "
@@ -484,13 +489,23 @@ def main(argv: list[str] | None = None) -> int:
 
     started = time.perf_counter()
     trace = None
+    profiler = None
+
+    def on_frame(record, image) -> None:
+        output.frame(record, image)
+        if profiler is not None:
+            profiler.frame(record)
+
     try:
         board = Board(str(args.firmware), quantum=args.quantum, hang_budget_s=args.budget, console=console,
-                      on_frame=output.frame, on_warning=terminal.warning, permissive=args.permissive,
+                      on_frame=on_frame, on_warning=terminal.warning, permissive=args.permissive,
                       sd_image=args.sd, sd_writable=args.sd_writable, sd_faults=frozenset(args.sd_fault),
                       check_writes=args.check_writes, strict=args.strict, lcd_interface=args.lcd_interface,
                       cold=args.cold)
         board.uarths.input = uart_input
+        if args.profile:
+            from .profile import Profiler
+            profiler = Profiler(board, args.firmware)
         if trace_file is not None:
             trace = InstructionTrace(board, trace_file, args.trace_from or 0.0, args.trace_to)
         watch.attach(board.stop_run)
@@ -564,6 +579,12 @@ def main(argv: list[str] | None = None) -> int:
     summary["cold"] = args.cold
     summary["timing_warnings"] = dict(board.timing_warnings) if board is not None else {}
     summary.update(watch.summary())
+    if profiler is not None:
+        try:
+            summary["profile"] = profiler.write(args.out)
+        except BadInput as error:
+            terminal.message(f"[board] {error}")
+            summary["profile"] = None
     summary["trace_insn"] = None if trace is None else {
         "file": str(args.trace_insn), "from_s": args.trace_from or 0.0, "to_s": args.trace_to, "lines": trace.lines}
     summary["uart_input"] = None if uart_input is None else {
