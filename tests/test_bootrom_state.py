@@ -87,7 +87,13 @@ def test_our_firmware_draws_the_same_frames_from_either_state(firmware, card, fi
                               "--quiet", "--cold", "--golden", "tests/golden/default")
         summary = json.loads((out / "run.json").read_text())
         default = firmware_run[2]
-        assert [f["instructions"] for f in summary["frames"]] == [f["instructions"] for f in default["frames"][:4]]
+        cold_counts = [f["instructions"] for f in summary["frames"]]
+        warm_counts = [f["instructions"] for f in default["frames"][:4]]
+        # every frame after the first exactly; the first (boot and loading) within a few
+        # instructions: it starts 1.8 ms later from --cold (.bss cleared at 26 MHz), and the
+        # spins of a device poll the model skips depend on where turn boundaries fall
+        assert cold_counts[1:] == warm_counts[1:]
+        assert all(abs(c - w) <= 32 for c, w in zip(cold_counts[0], warm_counts[0]))
     assert result.returncode == 0, result.stderr
     assert summary["cold"] is cold and summary["warnings"] == []
     assert summary["console"][1]["line"] == "clocks: PLL0 806000000 Hz, CPU 403000000 Hz"
