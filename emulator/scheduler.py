@@ -452,8 +452,12 @@ class Scheduler:
             horizon = min(horizon, self._grabs[0][0])
         if self.until is not None and self.until > t0:
             horizon = min(horizon, self.until)
+        instruction_limit = None
         if priority_turn:
+            # one iteration of the loop it woke in, counted in instructions: its cycles vary, and a
+            # turn longer than the iteration would run the woken hart on past what the storer does next
             horizon = min(horizon, t0 + self.board.loop_cycles_bound(priority_turn) / hz)
+            instruction_limit = priority_turn
         elif t0 < self._race_until:
             # lockstep: a hart behind catches up exactly, one level with the others runs RACE_TURN
             # instructions, so that every cycle is run by each hart in turn, lowest hart first
@@ -466,7 +470,7 @@ class Scheduler:
                     horizon = min(horizon, other.time + self.quantum / hz)
         budget = max(1, math.ceil((horizon - t0) * hz - 1e-9))
         self.turn_horizon = t0 + budget / hz
-        ran = self._run_hart(hart, t0, budget, hz)
+        ran = self._run_hart(hart, t0, budget, hz, instruction_limit)
         if self.pending_stop is not None:
             raise self.pending_stop
         hart.time = t0 + ran / hz
@@ -494,8 +498,9 @@ class Scheduler:
         self._check_waiters(self.time)
         self._wake_sleepers(self.time)
 
-    def _run_hart(self, hart: Hart, t0: float, budget: int, hz: float) -> int:
-        """Runs one turn of a hart, `budget` CPU cycles; returns how many cycles it used."""
+    def _run_hart(self, hart: Hart, t0: float, budget: int, hz: float, instruction_limit: int | None = None) -> int:
+        """Runs one turn of a hart, `budget` CPU cycles and at most `instruction_limit` instructions;
+        returns how many cycles it used."""
         bus = self.board.bus
         self.current = hart
         bus.turn_begins(hart)
@@ -510,14 +515,17 @@ class Scheduler:
             while True:
                 # every instruction takes at least a cycle: the cycle budget bounds the instructions too
                 remaining = budget - (hart.cycles - cycles_before)
-                end, _ = hart.run(remaining, remaining)
+                instructions = remaining if instruction_limit is None else \
+                    min(remaining, instruction_limit - (hart.executed - before))
+                end, _ = hart.run(instructions, remaining)
                 if end is not RunEnd.POLL:
                     break
                 if self._begin_wait(hart, before):
                     break
                 # a device poll, or a loop not yet proven in this turn: the turn goes on as if
                 # nothing had stopped it, unless something else asked for its end
-                if hart.stop_requested or hart.polling or hart.cycles - cycles_before >= budget:
+                if hart.stop_requested or hart.polling or hart.cycles - cycles_before >= budget or \
+                        (instruction_limit is not None and hart.executed - before >= instruction_limit):
                     end = RunEnd.STOPPED
                     break
             if end is RunEnd.WFI and self._stopped_by_a_watch(hart):
