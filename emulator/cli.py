@@ -66,7 +66,7 @@ def frames_count(text: str) -> int:
 def quantum_count(text: str) -> int:
     value = _whole_number(text)
     if not 1 <= value <= MAX_QUANTUM:
-        raise argparse.ArgumentTypeError(f"must be 1..{MAX_QUANTUM} instructions, not {value}")
+        raise argparse.ArgumentTypeError(f"must be 1..{MAX_QUANTUM} CPU cycles, not {value}")
     return value
 
 
