@@ -343,11 +343,26 @@ class CycleTable:
         return self.base + 2 * len(self.entries)
 
 
+_TABLES: dict[tuple, CycleTable] = {}     # by code: boards of one firmware share its table (read only)
+_TABLES_KEPT = 8
+
+
 def build_table(code_ranges: list[tuple[int, bytes]]) -> CycleTable | None:
     """The cycle table of the firmware's code: every 2-byte-aligned position is decoded as if an
     instruction began there (a position that is really the middle of one never executes)."""
     if not code_ranges:
         return None
+    key = tuple((address, bytes(code)) for address, code in code_ranges)
+    table = _TABLES.get(key)
+    if table is None:
+        table = _build_table(code_ranges)
+        if len(_TABLES) >= _TABLES_KEPT:
+            _TABLES.pop(next(iter(_TABLES)))
+        _TABLES[key] = table
+    return table
+
+
+def _build_table(code_ranges: list[tuple[int, bytes]]) -> CycleTable:
     base = min(address for address, _ in code_ranges) & ~1
     end = max(address + len(code) for address, code in code_ranges)
     entries = np.zeros((end - base + 1) // 2, dtype=np.uint32)
