@@ -460,7 +460,8 @@ class Scheduler:
             instruction_limit = priority_turn
         elif t0 < self._race_until:
             # lockstep: a hart behind catches up exactly, one level with the others runs RACE_TURN
-            # instructions, so that every cycle is run by each hart in turn, lowest hart first
+            # cycles (an instruction of several cycles runs whole), so that every cycle is run by
+            # each hart in turn, lowest hart first
             for other in running:
                 if other is not hart:
                     horizon = min(horizon, other.time if other.time > t0 else t0 + shared_memory.RACE_TURN / hz)
