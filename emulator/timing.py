@@ -373,6 +373,7 @@ def _build_table(code_ranges: list[tuple[int, bytes]]) -> CycleTable:
             if offset + 2 > len(code):
                 break
             insn = decode(int.from_bytes(code[offset:offset + 4].ljust(4, b"\0"), "little"))
-            needs_distance = insn.latency > 1 or insn.kind in (Kind.MUL, Kind.DIV)
+            # a call's link register is read by the return, far later: no stall is charged for it
+            needs_distance = (insn.latency > 1 and not insn.ends_run) or insn.kind in (Kind.MUL, Kind.DIV)
             entries[slot] = entry(insn, _distance(code, offset, insn) if needs_distance else WINDOW)
     return CycleTable(base, entries)
