@@ -373,7 +373,8 @@ def renderer_table(records: list[dict]) -> str:
         if r["setting"] != quality.DEFAULT_SETTING:
             continue
         lines.append(f"| {r['scene']} | {r['scale']:g} | {r['mode']} | {r['instructions_hart0']:,} | "
-                     f"{r['cycles_hart0']:,} | {r['instructions_hart1']:,} | {r['draw_time_ms']:.2f} | {r['frame_time_ms']:.2f} | "
+                     f"{r['cycles_hart0']:,} | {r['instructions_hart1']:,} | {r['draw_time_ms']:.2f} | "
+                     f"{r['frame_time_ms']:.2f} | "
                      f"{r['fps']:.1f} | {r['psnr_db']:.1f} | {r['max_error']} | {100 * r['pixels_differ']:.2f} % | "
                      f"{_db(r.get('psnr_ideal_db'))} |")
     return "\n".join(lines) + "\n"
