@@ -6,7 +6,8 @@
  * every instruction: it counts it, and stops the engine before the first
  * instruction past the quantum's budget. The board reads the count through
  * ctypes, so minstret/mcycle and per-frame counts are exact. It also notices
- * a hart coming round a poll loop (below).
+ * a hart coming round a poll loop (below), and counts the cycles the K210's
+ * Rocket core would take (below: timing.py computes the table it reads).
  *
  * It is built as a (method-less) Python extension only so that pip builds
  * it with the package; Python never calls into it, ctypes hands the address
@@ -25,6 +26,31 @@ typedef struct {
     uint64_t ignore;     /* set by Python: the loop polls a device, not SRAM */
 } poll_loop_t;
 
+typedef int (*uc_reg_read_fn)(void *uc, int regid, void *value);
+
+/* Rocket's branch predictor (rocket-chip e8c8d2af7, BTB.scala): a fully associative BTB with
+ * round-robin replacement, written only when a taken control transfer was mispredicted; a BHT of
+ * 2-bit entries indexed by pc ^ global history, consulted and updated only for branches that hit
+ * in the BTB; a return-address stack. */
+#define BTB_ENTRIES 40
+#define BHT_BITS 7
+#define BHT_ENTRIES (1 << BHT_BITS)
+#define RAS_ENTRIES 2
+
+typedef struct {
+    uint64_t pc[BTB_ENTRIES];
+    uint64_t target[BTB_ENTRIES];
+    uint8_t valid[BTB_ENTRIES];
+    uint8_t is_jump[BTB_ENTRIES];     /* jal/jalr: predicted taken without the BHT */
+    uint8_t is_return[BTB_ENTRIES];   /* target from the RAS */
+    uint8_t bht[BHT_ENTRIES];
+    uint64_t ras[RAS_ENTRIES];
+    uint32_t next_replace;
+    uint32_t history;
+    uint32_t ras_count;
+    uint32_t ras_pos;
+} predictor_t;
+
 typedef struct {
     uint64_t executed;   /* instructions started since the hart's reset */
     uint64_t limit;      /* stop before executing instruction number limit+1 */
@@ -32,7 +58,40 @@ typedef struct {
     poll_loop_t *loops;  /* the poll loops, a table indexed by (address >> 1) & loop_mask; or NULL */
     uint64_t loop_mask;
     uint64_t poll_report; /* head of the loop the hart came round again (0: none since Python looked) */
+    /* --- cycles (timing.py) --- */
+    uint64_t cycles;      /* CPU cycles the started instructions take (= executed without a table) */
+    uint64_t cycle_limit; /* stop before an instruction starts once cycles >= cycle_limit */
+    const uint32_t *table; /* one entry per 2-byte slot of [table_base, table_end); NULL: one cycle each */
+    uint64_t table_base;
+    uint64_t table_end;
+    uc_reg_read_fn reg_read;
+    int32_t reg_x0;       /* Unicorn's register id of x0 (x1.. follow) */
+    int32_t pending_kind; /* a control transfer waiting for the next pc to be resolved (0: none) */
+    uint64_t pending_pc;
+    uint32_t pending_entry;
+    uint32_t pad;
+    uint64_t mispredicts; /* statistics for the bench and the tests */
+    uint64_t stall_cycles;
+    predictor_t predictor;
 } insn_counter_t;
+
+/* A table entry (timing.py writes them; keep the two in step). */
+#define E_EXTRA(e)     ((e) & 0xFF)          /* cycles beyond the first, known statically */
+#define E_KIND(e)      (((e) >> 8) & 7)
+#define E_SIZE4(e)     (((e) >> 11) & 1)
+#define E_RS1(e)       (((e) >> 12) & 31)
+#define E_RS2(e)       (((e) >> 17) & 31)
+#define E_WORD(e)      (((e) >> 22) & 1)     /* mul/div: a *W instruction */
+#define E_LHS_SIGNED(e) (((e) >> 23) & 1)
+#define E_HI(e)        (((e) >> 24) & 1)     /* mulh*, rem* */
+#define E_DIST(e)      (((e) >> 25) & 31)    /* mul/div: instructions to the first that must wait for it */
+#define E_RHS_SIGNED(e) (((e) >> 30) & 1)    /* mul/div */
+#define E_CALL(e)      (((e) >> 30) & 1)     /* jal/jalr writing a link register */
+#define E_RETURN(e)    (((e) >> 31) & 1)     /* jalr through a link register, not writing one */
+
+enum { KIND_PLAIN = 0, KIND_BRANCH = 1, KIND_JAL = 2, KIND_JALR = 3, KIND_MUL = 4, KIND_DIV = 5 };
+
+#define MISPREDICT_PENALTY 3   /* redirect from the memory stage (Rocket.scala take_pc_mem) */
 
 PyMODINIT_FUNC PyInit__insn_counter(void);
 
@@ -43,15 +102,169 @@ PyMODINIT_FUNC PyInit__insn_counter(void);
  * `body` instructions after its previous execution, the hart has run one whole iteration and is
  * about to run another: it is polling. The loop is reported and the run ends after the head.
  */
+static int btb_find(const predictor_t *p, uint64_t pc)
+{
+    for (int i = 0; i < BTB_ENTRIES; i++)
+        if (p->valid[i] && p->pc[i] == pc)
+            return i;
+    return -1;
+}
+
+/* Cycles the control transfer at `pc` (its table entry `e`) costs beyond its own, now that the
+ * next instruction's address `next` shows where it went; the predictor learns as Rocket's does. */
+static uint64_t resolve_transfer(insn_counter_t *c, uint64_t pc, uint32_t e, int kind, uint64_t next)
+{
+    predictor_t *p = &c->predictor;
+    uint64_t fallthrough = pc + (E_SIZE4(e) ? 4 : 2);
+    int taken = next != fallthrough || kind != KIND_BRANCH;
+    int hit = btb_find(p, pc);
+    int predicted_taken = 0;
+    uint64_t predicted_target = 0;
+    uint32_t bht_index = (uint32_t)((pc >> 1) ^ p->history) & (BHT_ENTRIES - 1);
+    if (hit >= 0) {
+        predicted_taken = p->is_jump[hit] || (p->bht[bht_index] & 1);
+        predicted_target = p->target[hit];
+        if (p->is_return[hit] && p->ras_count > 0)
+            predicted_target = p->ras[p->ras_pos];
+    }
+    int mispredicted = taken != predicted_taken || (taken && predicted_target != next);
+    if (hit >= 0 && kind == KIND_BRANCH) {
+        uint8_t v = p->bht[bht_index];
+        uint8_t v1 = (v >> 1) & 1, v0 = v & 1;
+        p->bht[bht_index] = (uint8_t)((taken << 1) | ((v1 & v0) | ((v1 | v0) & taken)));
+        p->history = ((uint32_t)taken << (BHT_BITS - 1)) | (p->history >> 1);
+    }
+    if (taken && mispredicted) {
+        int slot = hit;
+        if (slot < 0) {
+            slot = (int)p->next_replace;
+            p->next_replace = (p->next_replace + 1) % BTB_ENTRIES;
+        }
+        p->valid[slot] = 1;
+        p->pc[slot] = pc;
+        p->target[slot] = next;
+        p->is_jump[slot] = kind != KIND_BRANCH;
+        p->is_return[slot] = kind == KIND_JALR && E_RETURN(e);
+    }
+    if ((kind == KIND_JAL || kind == KIND_JALR) && E_CALL(e)) {
+        if (p->ras_count < RAS_ENTRIES)
+            p->ras_count++;
+        p->ras_pos = (p->ras_pos + 1) % RAS_ENTRIES;
+        p->ras[p->ras_pos] = fallthrough;
+    } else if (kind == KIND_JALR && E_RETURN(e) && hit >= 0 && p->ras_count > 0) {
+        p->ras_count--;
+        p->ras_pos = (p->ras_pos + RAS_ENTRIES - 1) % RAS_ENTRIES;
+    }
+    if (!mispredicted)
+        return 0;
+    c->mispredicts++;
+    return MISPREDICT_PENALTY;
+}
+
+static uint64_t reg(insn_counter_t *c, void *uc, uint32_t r)
+{
+    uint64_t value = 0;
+    if (r != 0)
+        c->reg_read(uc, c->reg_x0 + (int)r, &value);
+    return value;
+}
+
+static int msb(uint64_t x)   /* hardware Log2: index of the highest set bit, 0 for 0 */
+{
+    return x ? 63 - __builtin_clzll(x) : 0;
+}
+
+/* Rocket's iterative MulDiv (Multiplier.scala) with the big core's parameters: mulUnroll 8,
+ * mulEarlyOut, divEarlyOut. Returns the result latency: cycles from the instruction's issue to
+ * the issue of one that waits for the result. Its states: an optional cycle negating the
+ * inputs, the iterations, an optional cycle moving the remainder and one negating the result,
+ * then the response (written back through the long-latency port). */
+static uint64_t muldiv_latency(insn_counter_t *c, void *uc, uint32_t e, int is_div)
+{
+    uint64_t a = reg(c, uc, E_RS1(e)), b = reg(c, uc, E_RS2(e));
+    int lhs_signed = E_LHS_SIGNED(e), rhs_signed = E_RHS_SIGNED(e), hi = E_HI(e);
+    if (E_WORD(e)) {   /* the 32-bit forms sign- (or zero-) extend their inputs to 64 bits */
+        a = lhs_signed ? (uint64_t)(int64_t)(int32_t)a : (uint32_t)a;
+        b = rhs_signed ? (uint64_t)(int64_t)(int32_t)b : (uint32_t)b;
+    }
+    int lhs_sign = lhs_signed && (a >> 63);
+    int rhs_sign = rhs_signed && (b >> 63);
+    uint64_t cycles = 1;                       /* the request, in the execute stage */
+    if (!is_div) {
+        if (lhs_sign) {
+            cycles++;
+            a = -a;
+        }
+        uint64_t iterations = 8;               /* 64 bits, 8 a cycle */
+        if (!hi) {
+            for (uint64_t n = 1; n < 7; n++)   /* early out once the multiplier's rest is zero */
+                if ((a >> (8 * n)) == 0) {
+                    iterations = n + 1;
+                    break;
+                }
+        }
+        cycles += iterations + (hi ? 1 : 0);
+        return cycles;
+    }
+    int neg_out = hi ? lhs_sign : lhs_sign != rhs_sign;
+    if (lhs_sign || rhs_sign)
+        cycles++;
+    if (lhs_sign)
+        a = -a;
+    if (rhs_sign)
+        b = -b;
+    uint64_t iterations = 65;                  /* count 0..64, one quotient bit each */
+    if (b != 0) {
+        int divisor_msb = msb(b), dividend_msb = msb(a);
+        int zero = divisor_msb > dividend_msb;
+        int position = (63 + divisor_msb - dividend_msb) & 63;
+        if (position > 0 || zero) {
+            int shift = zero ? 63 : position;
+            iterations = 1 + (uint64_t)(64 - shift + 1);
+        }
+    } else if (!hi) {
+        neg_out = 0;
+    }
+    cycles += iterations + (hi ? 1 : 0) + (neg_out ? 1 : 0);
+    return cycles;
+}
+
 __attribute__((visibility("default")))
 void count_instruction(void *uc, uint64_t address, uint32_t size, insn_counter_t *counter)
 {
     (void)size;
-    if (counter->executed >= counter->limit) {
+    if (counter->executed >= counter->limit || counter->cycles >= counter->cycle_limit) {
         counter->stop(uc);
         return;
     }
     counter->executed++;
+    if (counter->table == NULL) {
+        counter->cycles++;
+    } else {
+        uint64_t cost = 1;
+        if (counter->pending_kind) {
+            cost += resolve_transfer(counter, counter->pending_pc, counter->pending_entry,
+                                     counter->pending_kind, address);
+            counter->pending_kind = 0;
+        }
+        if (address >= counter->table_base && address < counter->table_end) {
+            uint32_t e = counter->table[(address - counter->table_base) >> 1];
+            int kind = (int)E_KIND(e);
+            uint64_t extra = E_EXTRA(e);
+            if (kind == KIND_MUL || kind == KIND_DIV) {
+                uint64_t latency = muldiv_latency(counter, uc, e, kind == KIND_DIV);
+                uint64_t distance = E_DIST(e);
+                extra += latency > distance ? latency - distance : 0;
+            } else if (kind != KIND_PLAIN) {
+                counter->pending_kind = kind;
+                counter->pending_pc = address;
+                counter->pending_entry = e;
+            }
+            counter->stall_cycles += extra;
+            cost += extra;
+        }
+        counter->cycles += cost;
+    }
     if (counter->loops != NULL) {
         poll_loop_t *loop = &counter->loops[(address >> 1) & counter->loop_mask];
         if (loop->head == address) {

@@ -36,6 +36,7 @@ from .sdcard import SdCard, SdImage
 from .shared_memory import find_poll_loops
 from .spi import SpiController
 from .st7789v import ST7789V
+from .timing import MISPREDICT_PENALTY, TIMING_IPC1, TIMING_MODELS, TIMING_ROCKET, build_table
 from .sysctl import Sysctl
 from .uarths import Uarths
 from .wiring import LCD_8080, DockWiring, LcdPort, SdSlot
@@ -72,7 +73,7 @@ class Board:
                  on_warning: Callable[[str], None] | None = None, permissive: bool = False,
                  sd_image: str | None = None, sd_writable: bool = False,
                  sd_faults: frozenset[str] = frozenset(), check_writes: bool = False, strict: bool = False,
-                 lcd_interface: str = LCD_8080, cold: bool = False) -> None:
+                 lcd_interface: str = LCD_8080, cold: bool = False, timing: str = TIMING_ROCKET) -> None:
         """check_writes: stop with StrayWrite at the first store (a hart's or a DMA channel's) into
         SRAM outside the firmware's buffers (write_watch.py; a checker, not hardware behaviour).
         strict: stop at the first access a register table does not take as it is, or that no device
@@ -81,7 +82,12 @@ class Board:
         lcd_interface: the LCD's bus, the Dock's 8-bit parallel panel or a 4-line serial module
         (wiring.py, LCD_INTERFACES).
         cold: start from the reset value of every register, instead of the state the mask ROM
-        leaves when it jumps to the program (bootrom.py)."""
+        leaves when it jumps to the program (bootrom.py).
+        timing: what an instruction costs, "rocket" (the K210's Rocket core, timing.py) or "ipc1"
+        (one cycle each)."""
+        if timing not in TIMING_MODELS:
+            raise ValueError(f"unknown timing model {timing!r}: one of {', '.join(TIMING_MODELS)}")
+        self.timing = timing
         self.permissive = permissive   # unimplemented registers of modelled devices warn instead of stopping
         self.on_frame = on_frame or (lambda record, image: None)
         self.on_warning = on_warning or (lambda text: None)
@@ -130,8 +136,10 @@ class Board:
         for address, code in self.image.code_ranges:
             sites.extend(hartmod.find_csr_sites(code, address))
             loops.extend(find_poll_loops(code, address))
+        self.cycle_table = build_table(self.image.code_ranges) if timing == TIMING_ROCKET else None
         for hart in self.harts:
             self.bus.attach(hart)
+            hart.install_cycle_table(self.cycle_table)
             hart.intercept_csr_sites(sites)
             hart.install_poll_loops(loops)
             hart.pc = RESET_PC
@@ -161,6 +169,15 @@ class Board:
     @property
     def frames(self) -> list[FrameRecord]:
         return self.scheduler.frames
+
+    def loop_cycles_bound(self, instructions: int) -> int:
+        """Cycles within which `instructions` instructions of a loop surely run (a hart woken
+        from a poll loop gets one iteration before the storer goes on): one each under ipc1; under
+        the Rocket model each may stall up to 3 cycles on a load, and the loop's branch may be
+        mispredicted."""
+        if self.timing == TIMING_IPC1:
+            return instructions
+        return 3 * instructions + MISPREDICT_PENALTY
 
     @property
     def quantum(self) -> int:

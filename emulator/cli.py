@@ -11,6 +11,7 @@ from typing import TextIO
 from .errors import (EXIT_BAD_INPUT, EXIT_GOLDEN_MISMATCH, EXIT_INTERNAL, EXIT_OK, EXIT_USAGE, BadInput,
                      BoardStop)
 from .sdcard import FAULTS
+from .timing import TIMING_MODELS, TIMING_ROCKET
 from .wiring import LCD_8080, LCD_INTERFACES
 
 PROG = "python -m emulator"
@@ -24,7 +25,7 @@ EXIT_STATUS_HELP = f"""exit status:
      printed every expected text (with --golden: all match; every --grab was taken)
   1  internal error of the board model
   2  bad command line: an unknown option or a value out of range (--frames, --quantum 1..{MAX_QUANTUM},
-     --budget and --until above 0 and finite, --tolerance 0..{MAX_TOLERANCE}, --sd-fault, a --grab's syntax
+     --budget and --until above 0 and finite, --tolerance 0..{MAX_TOLERANCE}, --sd-fault, --timing, a --grab's syntax
      or time), an option without the one it needs (--tolerance without --golden, --sd-writable or
      --sd-fault without --sd), --until with --frames, a --grab of a symbol the firmware does not define
      or of a buffer outside SRAM, an empty --expect/--fail-on text or a regular expression that does
@@ -72,7 +73,7 @@ def frames_count(text: str) -> int:
 def quantum_count(text: str) -> int:
     value = _whole_number(text)
     if not 1 <= value <= MAX_QUANTUM:
-        raise argparse.ArgumentTypeError(f"must be 1..{MAX_QUANTUM} instructions, not {value}")
+        raise argparse.ArgumentTypeError(f"must be 1..{MAX_QUANTUM} CPU cycles, not {value}")
     return value
 
 
@@ -180,7 +181,12 @@ def build_parser() -> argparse.ArgumentParser:
                      help="virtual seconds allowed between frames before the run counts as hung "
                           "(default 5; finite, above 0)")
     run.add_argument("--quantum", type=quantum_count, default=20_000,
-                     help=f"instructions per hart per turn (default 20000; 1..{MAX_QUANTUM})")
+                     help=f"CPU cycles per hart per turn (default 20000; 1..{MAX_QUANTUM})")
+    run.add_argument("--timing", choices=TIMING_MODELS, default=TIMING_ROCKET,
+                     help="what an instruction costs: rocket (the default), the cycles the K210's Rocket core "
+                          "takes (result latencies, the iterative multiplier and divider, branch prediction; "
+                          "mcycle and virtual time follow them); ipc1, one cycle per instruction, the model "
+                          "before cycle timing")
     run.add_argument("--golden", metavar="DIR", type=Path,
                      help="compare every shown frame with DIR/frame_NNNN.png of the same index; write "
                           "diff_NNNN.png for frames that differ and exit with status 9 on any mismatch")
@@ -501,7 +507,7 @@ def main(argv: list[str] | None = None) -> int:
                       on_frame=on_frame, on_warning=terminal.warning, permissive=args.permissive,
                       sd_image=args.sd, sd_writable=args.sd_writable, sd_faults=frozenset(args.sd_fault),
                       check_writes=args.check_writes, strict=args.strict, lcd_interface=args.lcd_interface,
-                      cold=args.cold)
+                      cold=args.cold, timing=args.timing)
         board.uarths.input = uart_input
         if args.profile:
             from .profile import Profiler
@@ -577,6 +583,8 @@ def main(argv: list[str] | None = None) -> int:
     summary["until_s"] = args.until
     summary.update(pad_changes_summary(board))
     summary["cold"] = args.cold
+    summary["timing"] = args.timing
+    summary["cycles"] = [h.cycles for h in board.harts] if board is not None else [0, 0]
     summary["timing_warnings"] = dict(board.timing_warnings) if board is not None else {}
     summary.update(watch.summary())
     if profiler is not None:

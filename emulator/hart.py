@@ -3,7 +3,9 @@
 Unicorn executes the instructions; this module adds the parts of a K210 hart
 that Unicorn leaves out (see ../shared/unicorn-riscv-notes.md):
 
-- an exact instruction count (a native per-instruction hook, `_insn_counter.c`),
+- an exact instruction count (a native per-instruction hook, `_insn_counter.c`), and the
+  cycles the instructions take on the K210's Rocket core (the same hook, from timing.py's table;
+  without a table one cycle each),
 - `mhartid`, `mcycle`, `minstret`, `cycle`, `instret` and `mip` reads, by code
   hooks on every CSR instruction that names them,
 - synchronous exceptions and interrupts entering `mtvec` the way the privileged
@@ -24,7 +26,7 @@ import unicorn
 from unicorn import riscv_const as rv
 from unicorn.unicorn_py3 import unicorn as _ucpy
 
-from . import _insn_counter, shared_memory
+from . import _insn_counter, shared_memory, timing
 
 # CSR numbers the board answers itself
 CSR_MHARTID = 0xF14
@@ -62,15 +64,34 @@ EXCEPTION_NAMES = {
 INSN_WFI = 0x10500073
 
 
+BTB_ENTRIES, BHT_ENTRIES, RAS_ENTRIES = 40, 128, 2     # _insn_counter.c's predictor sizes
+NO_LIMIT = 2**64 - 1
+
+
+class _Predictor(ctypes.Structure):
+    """_insn_counter.c's predictor_t (Rocket's BTB, BHT and RAS)."""
+    _fields_ = [("pc", ctypes.c_uint64 * BTB_ENTRIES), ("target", ctypes.c_uint64 * BTB_ENTRIES),
+                ("valid", ctypes.c_uint8 * BTB_ENTRIES), ("is_jump", ctypes.c_uint8 * BTB_ENTRIES),
+                ("is_return", ctypes.c_uint8 * BTB_ENTRIES), ("bht", ctypes.c_uint8 * BHT_ENTRIES),
+                ("ras", ctypes.c_uint64 * RAS_ENTRIES), ("next_replace", ctypes.c_uint32),
+                ("history", ctypes.c_uint32), ("ras_count", ctypes.c_uint32), ("ras_pos", ctypes.c_uint32)]
+
+
 class _Counter(ctypes.Structure):
     """_insn_counter.c's insn_counter_t."""
     _fields_ = [("executed", ctypes.c_uint64), ("limit", ctypes.c_uint64), ("stop", ctypes.c_void_p),
-                ("loops", ctypes.c_void_p), ("loop_mask", ctypes.c_uint64), ("poll_report", ctypes.c_uint64)]
+                ("loops", ctypes.c_void_p), ("loop_mask", ctypes.c_uint64), ("poll_report", ctypes.c_uint64),
+                ("cycles", ctypes.c_uint64), ("cycle_limit", ctypes.c_uint64), ("table", ctypes.c_void_p),
+                ("table_base", ctypes.c_uint64), ("table_end", ctypes.c_uint64), ("reg_read", ctypes.c_void_p),
+                ("reg_x0", ctypes.c_int32), ("pending_kind", ctypes.c_int32), ("pending_pc", ctypes.c_uint64),
+                ("pending_entry", ctypes.c_uint32), ("pad", ctypes.c_uint32), ("mispredicts", ctypes.c_uint64),
+                ("stall_cycles", ctypes.c_uint64), ("predictor", _Predictor)]
 
 
 _counter_lib = ctypes.CDLL(_insn_counter.__file__)
 _COUNT_HOOK = ctypes.cast(_counter_lib.count_instruction, ctypes.c_void_p)
 _UC_EMU_STOP = ctypes.cast(_ucpy.uclib.uc_emu_stop, ctypes.c_void_p).value
+_UC_REG_READ = ctypes.cast(_ucpy.uclib.uc_reg_read, ctypes.c_void_p).value
 
 
 class HartState(enum.Enum):
@@ -120,7 +141,9 @@ class Hart:
         self.retired_adjust = 0   # instructions counted by the hook that did not retire (trapped)
         self.minstret_offset = 0  # set by firmware writes to minstret
         self.mcycle_offset = 0
-        self._counter = _Counter(0, 0, _UC_EMU_STOP, None, 0, 0)
+        self._counter = _Counter(0, 0, _UC_EMU_STOP, None, 0, 0, 0, NO_LIMIT, None, 0, 0, _UC_REG_READ,
+                                 rv.UC_RISCV_REG_X0)
+        self._cycle_table: timing.CycleTable | None = None   # kept alive while the counter reads it
         self._counter_hook = self.add_native_hook(unicorn.UC_HOOK_CODE, _COUNT_HOOK, self._counter, 1, 0,
                                                   "the instruction counter")
         self._csr_sites: list[tuple[int, int]] = []
@@ -160,6 +183,22 @@ class Hart:
         self._counter.loop_mask = mask
         self._counter.loops = ctypes.addressof(slots)
 
+    def install_cycle_table(self, table: timing.CycleTable | None) -> None:
+        """Has the native counter charge the cycles `table` gives (timing.py) instead of one
+        cycle per instruction; None: one cycle each (--timing ipc1)."""
+        self._cycle_table = table
+        if table is None:
+            self._counter.table = None
+            return
+        self._counter.table = table.entries.ctypes.data
+        self._counter.table_base = table.base
+        self._counter.table_end = table.end
+
+    def forget_pending_transfer(self) -> None:
+        """A trap or interrupt enters mtvec: the control transfer the counter last saw does not
+        lead to the next instruction it will see, so it is not resolved (no misprediction)."""
+        self._counter.pending_kind = 0
+
     def take_poll_report(self) -> tuple[shared_memory.PollLoop, shared_memory.LoopSlot]:
         """The poll loop the last run stopped for (and clears the report)."""
         head = self._counter.poll_report
@@ -186,16 +225,34 @@ class Hart:
         return self._counter.executed
 
     @property
+    def cycles(self) -> int:
+        """CPU cycles the instructions started since reset take (the timing model's; equal to
+        `executed` under --timing ipc1). Time asleep or waiting is not in it."""
+        return self._counter.cycles
+
+    @property
+    def mispredicts(self) -> int:
+        return self._counter.mispredicts
+
+    @property
+    def stall_cycles(self) -> int:
+        """Cycles beyond one per instruction charged for stalls and flushes (not mispredictions)."""
+        return self._counter.stall_cycles
+
+    @property
     def instret(self) -> int:
         """Instructions retired since reset (what minstret counts)."""
         return self._counter.executed - self.retired_adjust
 
     # --- running ---------------------------------------------------------------------
 
-    def run(self, budget: int) -> tuple[RunEnd, int]:
-        """Runs at most `budget` instructions from `self.pc`. Returns why it stopped and how many ran."""
+    def run(self, budget: int, cycle_budget: int | None = None) -> tuple[RunEnd, int]:
+        """Runs at most `budget` instructions from `self.pc`, and no instruction starts once
+        `cycle_budget` cycles have been used (the last one may take a few cycles past it, as an
+        instruction in flight does). Returns why it stopped and how many instructions ran."""
         start = self._counter.executed
         self._counter.limit = start + budget
+        self._counter.cycle_limit = NO_LIMIT if cycle_budget is None else self._counter.cycles + cycle_budget
         self.stop_requested = False
         self.uc.emu_start(self.pc, 0)
         ran = self._counter.executed - start
@@ -208,7 +265,7 @@ class Hart:
         # boundary must not make the hart skip its sleep)
         if ran > 0 and not self.stop_requested and self.read_u32(self.pc - 4) == INSN_WFI:
             return RunEnd.WFI, ran
-        if ran >= budget:
+        if ran >= budget or self._counter.cycles >= self._counter.cycle_limit:
             return RunEnd.BUDGET, ran
         return RunEnd.STOPPED, ran
 
@@ -256,6 +313,7 @@ class Hart:
 
     def enter_trap(self, cause: int, epc: int, tval: int) -> None:
         """Takes a trap into machine mode exactly as the privileged spec describes."""
+        self.forget_pending_transfer()
         uc = self.uc
         mstatus = uc.reg_read(rv.UC_RISCV_REG_MSTATUS)
         mie_bit = 1 if mstatus & MSTATUS_MIE else 0

@@ -149,7 +149,7 @@ class Profiler:
     def _account(self, hart: "Hart") -> None:
         """What the hart ran since it was last looked at goes to its current call stack."""
         state = self._states[hart.hart_id]
-        executed, cycles = hart.executed, self._cycles(hart)
+        executed, cycles = hart.executed, hart.cycles
         instructions, spent = executed - state.executed, cycles - state.cycles
         state.executed, state.cycles = executed, cycles
         if not instructions:
@@ -167,11 +167,6 @@ class Profiler:
                 names.append(name)
         path = ";".join(names)
         self.folded[hart.hart_id][path] += spent
-
-    @staticmethod
-    def _cycles(hart: "Hart") -> int:
-        # the timing model's cycles where the board has one; one cycle per instruction otherwise
-        return getattr(hart, "cycles", hart.executed)
 
     def _on_block(self, uc: unicorn.Uc, address: int, size: int, hart: "Hart") -> None:
         self._account(hart)
@@ -201,7 +196,7 @@ class Profiler:
         for hart in self.board.harts:
             self._account(hart)
         lines = ["# per hart, functions by cycles (exclusive: own instructions; inclusive: with what they called)",
-                 f"# cycles: {'the timing model' if hasattr(self.board.harts[0], 'cycles') else 'one per instruction'}"]
+                 f"# cycles: the timing model's ({self.board.timing})"]
         for hart_id, figures in enumerate(self.figures):
             total_cycles = sum(f.cycles for f in figures.values()) or 1
             lines += ["", f"hart {hart_id}",

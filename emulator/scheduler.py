@@ -1,7 +1,9 @@
 """The board's clock and scheduler: virtual time, the harts and their turns, deadlines, hangs.
 
-Harts run in turn, in quanta of instructions (one instruction per CPU clock cycle),
-and a quantum never runs past the next moment a device changes state by itself, so
+Harts run in turn, in quanta of CPU cycles (what each instruction costs is timing.py's:
+the K210's Rocket core by default, one cycle per instruction with --timing ipc1), and a
+quantum never runs past the next moment a device changes state by itself (by more than the
+cycles of the instruction in flight), so
 interrupts and DMA completions are seen on time. A hart that sleeps in WFI, or that
 keeps polling a device register that cannot change before the next device event,
 costs no host time: the scheduler moves time forward instead. A hart that polls SRAM
@@ -36,7 +38,7 @@ if TYPE_CHECKING:
     from .board import Board
 
 HARTS = 2
-DEFAULT_QUANTUM = 20_000          # instructions per hart per turn
+DEFAULT_QUANTUM = 20_000          # CPU cycles per hart per turn
 DEFAULT_HANG_BUDGET_S = 5.0       # virtual seconds without a new frame before a run counts as hung
 TRAP_GRACE_S = 0.5                # virtual time the firmware's trap handler gets to report
 POLL_REPEATS = 8                  # identical reads at one pc before a hart counts as polling
@@ -56,6 +58,8 @@ class FrameRecord:
     instructions: list[int]          # per hart, since the previous frame
     instructions_total: list[int]    # per hart, since reset
     host_time_s: float
+    cycles: list[int] = field(default_factory=list)         # per hart, executing, since the previous frame
+    cycles_total: list[int] = field(default_factory=list)   # per hart, executing, since reset
 
 
 @dataclass
@@ -67,6 +71,7 @@ class RunResult:
     instructions: list[int]
     host_time_s: float
     warnings: list[str] = field(default_factory=list)
+    cycles: list[int] = field(default_factory=list)   # per hart: cycles spent executing (not asleep)
 
 
 class Scheduler:
@@ -88,6 +93,7 @@ class Scheduler:
         self.frames_wanted = 0
         self._last_frame_time = 0.0
         self._last_frame_instret = [0] * HARTS
+        self._last_frame_cycles = [0] * HARTS
         self._host_start = host_time.perf_counter()
         self.until: float | None = None                   # run_until's end: virtual time, not frames
         self.pending_stop: BoardStop | None = None        # ends the run at the end of the turn
@@ -97,7 +103,7 @@ class Scheduler:
         self._quantum_t0 = 0.0
         self._turn_hz = self._hz
         self.turn_horizon = 0.0
-        self._quantum_start = [0] * HARTS
+        self._quantum_start = [0] * HARTS                 # per hart: its cycle count when its turn began
         self._poll = [NO_POLL] * HARTS
         self._grabs: list[tuple[float, Callable[["Board"], None]]] = []
         self.host_time_in_harts = 0.0                     # host seconds spent executing guest code
@@ -131,7 +137,7 @@ class Scheduler:
     def hart_now(self, hart: Hart) -> float:
         """The virtual time a hart has reached (mid-turn: counting its instructions so far)."""
         if hart is self.current:
-            return self._quantum_t0 + (hart.executed - self._quantum_start[hart.hart_id]) / self._turn_hz
+            return self._quantum_t0 + (hart.cycles - self._quantum_start[hart.hart_id]) / self._turn_hz
         return hart.time
 
     def cycles(self, now: float) -> int:
@@ -295,14 +301,18 @@ class Scheduler:
                 self.current.request_stop()
             return
         totals = [h.instret for h in self.harts]
+        cycles = [h.cycles for h in self.harts]
         record = FrameRecord(
             index=len(self.frames),
             virtual_time_s=self.delivery_time,
             instructions=[t - last for t, last in zip(totals, self._last_frame_instret)],
             instructions_total=totals,
             host_time_s=host_time.perf_counter() - self._host_start,
+            cycles=[c - last for c, last in zip(cycles, self._last_frame_cycles)],
+            cycles_total=cycles,
         )
         self._last_frame_instret = totals
+        self._last_frame_cycles = cycles
         self._last_frame_time = self.delivery_time
         self.frames.append(record)
         self.board.on_frame(record, image)
@@ -337,7 +347,7 @@ class Scheduler:
                 progress(self.board)
         return RunResult("ok", f"{len(self.frames)} frames shown", self.frames, self.time,
                          [h.instret for h in self.harts], host_time.perf_counter() - self._host_start,
-                         self.board.warnings)
+                         self.board.warnings, [h.cycles for h in self.harts])
 
     def run_until(self, until_s: float, progress: Callable[["Board"], None] | None = None) -> RunResult:
         """Runs until `until_s` seconds of virtual time (--until), for firmware whose output is
@@ -369,7 +379,8 @@ class Scheduler:
             message += (f"; from {idle_since * 1e3:.3f} ms every hart slept in wfi with nothing that could "
                         f"wake it")
         return RunResult("ok", message, self.frames, self.time, [h.instret for h in self.harts],
-                         host_time.perf_counter() - self._host_start, self.board.warnings)
+                         host_time.perf_counter() - self._host_start, self.board.warnings,
+                         [h.cycles for h in self.harts])
 
     def finish_console_line(self, limit_s: float = CONSOLE_DRAIN_S) -> None:
         """After run(): runs on until the first console line begun after the last frame was
@@ -441,11 +452,16 @@ class Scheduler:
             horizon = min(horizon, self._grabs[0][0])
         if self.until is not None and self.until > t0:
             horizon = min(horizon, self.until)
+        instruction_limit = None
         if priority_turn:
-            horizon = min(horizon, t0 + priority_turn / hz)
+            # one iteration of the loop it woke in, counted in instructions: its cycles vary, and a
+            # turn longer than the iteration would run the woken hart on past what the storer does next
+            horizon = min(horizon, t0 + self.board.loop_cycles_bound(priority_turn) / hz)
+            instruction_limit = priority_turn
         elif t0 < self._race_until:
             # lockstep: a hart behind catches up exactly, one level with the others runs RACE_TURN
-            # instructions, so that every cycle is run by each hart in turn, lowest hart first
+            # cycles (an instruction of several cycles runs whole), so that every cycle is run by
+            # each hart in turn, lowest hart first
             for other in running:
                 if other is not hart:
                     horizon = min(horizon, other.time if other.time > t0 else t0 + shared_memory.RACE_TURN / hz)
@@ -455,7 +471,7 @@ class Scheduler:
                     horizon = min(horizon, other.time + self.quantum / hz)
         budget = max(1, math.ceil((horizon - t0) * hz - 1e-9))
         self.turn_horizon = t0 + budget / hz
-        ran = self._run_hart(hart, t0, budget, hz)
+        ran = self._run_hart(hart, t0, budget, hz, instruction_limit)
         if self.pending_stop is not None:
             raise self.pending_stop
         hart.time = t0 + ran / hz
@@ -483,27 +499,34 @@ class Scheduler:
         self._check_waiters(self.time)
         self._wake_sleepers(self.time)
 
-    def _run_hart(self, hart: Hart, t0: float, budget: int, hz: float) -> int:
-        """Runs one turn of a hart; returns how many instructions it executed."""
+    def _run_hart(self, hart: Hart, t0: float, budget: int, hz: float, instruction_limit: int | None = None) -> int:
+        """Runs one turn of a hart, `budget` CPU cycles and at most `instruction_limit` instructions;
+        returns how many cycles it used."""
         bus = self.board.bus
         self.current = hart
         bus.turn_begins(hart)
         self._quantum_t0 = t0
         self._turn_hz = hz
-        self._quantum_start[hart.hart_id] = hart.executed
+        self._quantum_start[hart.hart_id] = hart.cycles
         started = host_time.perf_counter()
         before = hart.executed
+        cycles_before = hart.cycles
         end = None
         try:
             while True:
-                end, _ = hart.run(budget - (hart.executed - before))
+                # every instruction takes at least a cycle: the cycle budget bounds the instructions too
+                remaining = budget - (hart.cycles - cycles_before)
+                instructions = remaining if instruction_limit is None else \
+                    min(remaining, instruction_limit - (hart.executed - before))
+                end, _ = hart.run(instructions, remaining)
                 if end is not RunEnd.POLL:
                     break
                 if self._begin_wait(hart, before):
                     break
                 # a device poll, or a loop not yet proven in this turn: the turn goes on as if
                 # nothing had stopped it, unless something else asked for its end
-                if hart.stop_requested or hart.polling or hart.executed - before >= budget:
+                if hart.stop_requested or hart.polling or hart.cycles - cycles_before >= budget or \
+                        (instruction_limit is not None and hart.executed - before >= instruction_limit):
                     end = RunEnd.STOPPED
                     break
             if end is RunEnd.WFI and self._stopped_by_a_watch(hart):
@@ -526,7 +549,7 @@ class Scheduler:
         stray = bus.turn_ended(hart)
         if stray is not None:
             self.pending_stop = stray
-        ran = hart.executed - before
+        ran = hart.cycles - cycles_before
         if self.pending_stop is None:
             if end is RunEnd.WFI:
                 hart.state = HartState.ASLEEP

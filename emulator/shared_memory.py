@@ -23,7 +23,7 @@ the model does about it:
 - Races. After a hart is woken by a store, at reset, and while a hart comes round a poll loop on
   SRAM that is not yet proven to wait (its last iteration began in an earlier turn, and the
   memory it reads has changed since), the harts run in lockstep for RACE_WINDOW_CYCLES (turns of
-  RACE_TURN instructions while both run; each cycle is run by the lowest hart first), so that a
+  RACE_TURN cycles while both run; each cycle is run by the lowest hart first), so that a
   reply stored for only a few instructions meets the other hart's loop as it would on the chip.
   The window is short: its cost is a few hundred turns per hand-over.
 
@@ -43,7 +43,7 @@ from .memory import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE
 
 MAX_LOOP_BYTES = 64            # longer loops are not taken for poll loops
 RACE_WINDOW_CYCLES = 512       # lockstep after a hand-over (and at reset), in CPU cycles
-RACE_TURN = 2                  # instructions per hart per turn in lockstep
+RACE_TURN = 2                  # CPU cycles per hart per turn in lockstep (at least one instruction)
 
 _watch_lib = ctypes.CDLL(_poll_watch.__file__)
 STORE_WATCH_HOOK = ctypes.cast(_watch_lib.store_watch, ctypes.c_void_p)

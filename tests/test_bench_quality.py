@@ -106,8 +106,8 @@ RECORDS = [rec("default", 200_000, 45.25, max_error=80, pixels_differ=0.0125),
 def test_csv_has_one_row_per_record_with_ratio_psnr_and_front():
     rows = list(csv.DictReader(io.StringIO(quality.csv_text(RECORDS))))
     assert [r["setting"] for r in rows] == [r["setting"] for r in RECORDS]
-    assert list(rows[0]) == ["scene", "scale", "mode", "setting", "instructions_per_frame", "relative_to_default",
-                             "psnr_db", "max_error", "pixels_differ_percent", "on_front"]
+    assert list(rows[0]) == ["scene", "scale", "mode", "setting", "instructions_per_frame", "cycles_per_frame",
+                             "relative_to_default", "psnr_db", "max_error", "pixels_differ_percent", "on_front"]
     default, affine, gouraud, light9, wire_default, wire_snap = rows
     assert default["instructions_per_frame"] == "200000" and default["relative_to_default"] == "1.0000"
     assert affine["relative_to_default"] == "0.7500" and gouraud["relative_to_default"] == "1.3000"
@@ -127,12 +127,25 @@ def test_markdown_table():
     lines = quality.markdown_table(RECORDS).splitlines()
     assert len(lines) == 2 + len(RECORDS)
     header = [c.strip() for c in lines[0].strip("|").split("|")]
-    assert header == ["scene", "scale", "mode", "setting", "instructions / frame", "relative to default",
+    assert header == ["scene", "scale", "mode", "setting", "instructions / frame", "cycles / frame",
+                      "relative to default",
                       "PSNR (dB)", "max error", "pixels differ (%)", "on front"]
     assert all(line.count("|") == len(header) + 1 for line in lines)
-    assert lines[2] == "| A torus | 0.35 | textured | **default** | 200,000 | 1.000 | 45.25 | 80 | 1.25 | yes |"
-    assert "| gouraud | 260,000 | 1.300 | exact | 0 | 0.00 | yes |" in lines[4]
+    assert lines[2] == "| A torus | 0.35 | textured | **default** | 200,000 |  | 1.000 | 45.25 | 80 | 1.25 | yes |"
+    assert "| gouraud | 260,000 |  | 1.300 | exact | 0 | 0.00 | yes |" in lines[4]
     assert lines[5].endswith("| no |")
+
+
+def test_the_front_and_the_ratio_use_cycles_where_records_carry_them():
+    """The cost of a frame is its cycles (the K210's Rocket timing): a setting with fewer
+    instructions but more cycles, and a worse PSNR, is dominated."""
+    records = [{**rec("default", 200_000, 45.0), "cycles_hart0": 300_000},
+               {**rec("affine", 150_000, 40.0), "cycles_hart0": 320_000}]
+    assert quality.pareto_front(records) == {"default"}
+    rows = list(csv.DictReader(io.StringIO(quality.csv_text(records))))
+    assert [r["cycles_per_frame"] for r in rows] == ["300000", "320000"]
+    assert rows[1]["relative_to_default"] == f"{320 / 300:.4f}"
+    assert "cycles / frame (hart 0)" in quality.svg_text(records)
 
 
 def test_write_quality_writes_the_three_files(tmp_path):
@@ -209,7 +222,8 @@ def test_bench_writes_every_record_and_both_tables(tmp_path):
     import json
     from tools import bench
     name = bench.BENCH_SCENES[2][0]
-    extra = {"instructions_hart1": 910, "draw_time_ms": 0.5, "frame_time_ms": 7.6, "fps": 131.0}
+    extra = {"instructions_hart1": 910, "cycles_hart0": 300_000, "draw_time_ms": 0.5, "frame_time_ms": 7.6,
+             "fps": 131.0}
     records = [{**rec("default", 200_000, 45.0, scene=name, scale=0.9), **extra},
                {**rec("gouraud", 220_000, math.inf, scene=name, scale=0.9), **extra},
                {**rec("default", 100_000, 44.0, scene=name, scale=0.45), **extra}]
@@ -257,8 +271,8 @@ def test_front_against_the_ideal_is_its_own():
 
 def test_csv_and_markdown_carry_both_psnrs_and_both_fronts():
     rows = list(csv.DictReader(io.StringIO(quality.csv_text(IDEAL_RECORDS))))
-    assert list(rows[0]) == ["scene", "scale", "mode", "setting", "instructions_per_frame", "relative_to_default",
-                             "psnr_db", "max_error", "pixels_differ_percent", "on_front", "psnr_ideal_db",
+    assert list(rows[0]) == ["scene", "scale", "mode", "setting", "instructions_per_frame", "cycles_per_frame",
+                             "relative_to_default", "psnr_db", "max_error", "pixels_differ_percent", "on_front", "psnr_ideal_db",
                              "max_error_ideal", "pixels_differ_ideal_percent", "on_ideal_front"]
     assert [r["on_front"] for r in rows] == ["yes", "no", "yes", "no", "yes"]
     assert [r["on_ideal_front"] for r in rows] == ["no", "yes", "no", "no", "yes"]
@@ -271,9 +285,9 @@ def test_csv_and_markdown_carry_both_psnrs_and_both_fronts():
     header = [c.strip() for c in lines[0].strip("|").split("|")]
     assert header[-4:] == ["PSNR vs ideal (dB)", "max error vs ideal", "pixels differ vs ideal (%)", "on ideal front"]
     assert all(line.count("|") == len(header) + 1 for line in lines)
-    assert lines[2] == ("| A torus | 0.35 | textured | **default** | 200,000 | 1.000 | 45.00 | 10 | 1.00 | yes | "
+    assert lines[2] == ("| A torus | 0.35 | textured | **default** | 200,000 |  | 1.000 | 45.00 | 10 | 1.00 | yes | "
                         "36.00 | 120 | 5.00 | no |")
-    assert "| gouraud | 260,000 | 1.300 | exact | 10 | 1.00 | yes | 36.20 | 120 | 5.00 | no |" in lines[4]
+    assert "| gouraud | 260,000 |  | 1.300 | exact | 10 | 1.00 | yes | 36.20 | 120 | 5.00 | no |" in lines[4]
 
 
 def test_svg_has_a_row_of_panels_against_the_ideal():
@@ -295,7 +309,8 @@ def test_bench_writes_both_psnrs_and_the_ideal_figures(tmp_path):
     import json
     from tools import bench
     name = bench.BENCH_SCENES[2][0]
-    extra = {"instructions_hart1": 910, "draw_time_ms": 0.5, "frame_time_ms": 7.6, "fps": 131.0,
+    extra = {"instructions_hart1": 910, "cycles_hart0": 300_000, "draw_time_ms": 0.5, "frame_time_ms": 7.6,
+             "fps": 131.0,
              "ideal_density": 8, "ideal_seconds_per_frame": 0.4}
     records = [{**both("default", 200_000, 45.0, 36.0, scene=name, scale=0.9), **extra,
                 "ideal_convergence_db": 61.25},

@@ -78,7 +78,8 @@ def test_cold_starts_from_the_reset_values():
 @pytest.mark.parametrize("cold", [False, True])
 def test_our_firmware_draws_the_same_frames_from_either_state(firmware, card, firmware_run, tmp_path, cold):
     """The project's firmware sets up its own clocks: from the ROM's state (the default run all the
-    golden-frame tests share) and from --cold it draws the golden frames with the same instructions."""
+    golden-frame tests share) and from --cold it draws the golden frames with the same instructions
+    (start-up's polls aside)."""
     if not cold:
         result, out, summary = firmware_run
     else:
@@ -87,13 +88,12 @@ def test_our_firmware_draws_the_same_frames_from_either_state(firmware, card, fi
                               "--quiet", "--cold", "--golden", "tests/golden/default")
         summary = json.loads((out / "run.json").read_text())
         default = firmware_run[2]
-        cold_counts = [f["instructions"] for f in summary["frames"]]
-        warm_counts = [f["instructions"] for f in default["frames"][:4]]
-        # every frame after the first exactly; the first (boot and loading) within a few
-        # instructions: it starts 1.8 ms later from --cold (.bss cleared at 26 MHz), and the
-        # spins of a device poll the model skips depend on where turn boundaries fall
-        assert cold_counts[1:] == warm_counts[1:]
-        assert all(abs(c - w) <= 32 for c, w in zip(cold_counts[0], warm_counts[0]))
+        # the drawing is the same work; start-up (frame 0) only polls the SD card a few times more or
+        # less, since the cycle-timed instructions before meet its answers at other moments
+        assert [f["instructions"] for f in summary["frames"][1:]] == \
+            [f["instructions"] for f in default["frames"][1:4]]
+        for cold_count, warm_count in zip(summary["frames"][0]["instructions"], default["frames"][0]["instructions"]):
+            assert abs(cold_count - warm_count) <= warm_count // 1000
     assert result.returncode == 0, result.stderr
     assert summary["cold"] is cold and summary["warnings"] == []
     assert summary["console"][1]["line"] == "clocks: PLL0 806000000 Hz, CPU 403000000 Hz"

@@ -7,6 +7,7 @@ import pytest
 from emulator.errors import HangDetected
 from emulator.hart import HartState
 from emulator.shared_memory import find_poll_loops
+from emulator.timing import MISPREDICT_PENALTY
 from k210_fixtures import build_elf, make_board, reg, run_until, symbol
 
 ROUNDS = 300
@@ -82,9 +83,10 @@ def test_a_flag_set_for_six_instructions_is_seen_every_time(delay):
     assert reg(board, "s3", hart=1) == ROUNDS
     assert reg(board, "s5", hart=1) == ROUNDS * (ROUNDS + 1) // 2       # each round once, in order
     # as soon as on the chip: a round costs hart 0 its own work (3 cycles a step), the six cycles of
-    # the flag and a few for the acknowledgement (13 in all), not a turn
+    # the flag and a few for the acknowledgement (13 in all), not a turn; the Rocket timing adds the
+    # mispredicted exits of the delay and acknowledgement loops and the latter's load-use stall
     per_round = (reg(board, "s7", hart=0) - reg(board, "s6", hart=0)) / ROUNDS
-    assert per_round <= 3 * delay + 16, per_round
+    assert per_round <= 3 * delay + 16 + 2 * MISPREDICT_PENALTY + 1, per_round
 
 
 def test_a_hart_waiting_on_sram_costs_no_instructions():

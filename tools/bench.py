@@ -4,7 +4,10 @@ Measured in one run on one host, so the ratios are meaningful even on a noisy ma
   1. raw Unicorn on a tight 4-instruction loop, run with no instruction limit;
   2. the same loop on a board hart (native instruction counter, 20,000-instruction quanta);
   3. the board model running the project's firmware: emulated instructions per host second
-     over both harts, frames per host second, and virtual frames per second;
+     over both harts, frames per host second, and virtual frames per second; instructions and
+     CPU cycles per frame, reset to the first frame in virtual ms, under the Rocket cycle timing
+     (the default) and under --timing ipc1, and the host cost of the cycle model (runs of both
+     alternate, the fastest of each counts);
   4. the same with --check-writes (the native store checker), as a ratio to 3 (runs of both
      alternate, and the fastest of each counts, so that a busy moment of the host does not
      decide the ratio).
@@ -46,6 +49,7 @@ sys.path.insert(0, str(ROOT))
 
 from emulator.board import Board  # noqa: E402
 from emulator.hart import CsrContext, Hart  # noqa: E402
+from emulator.timing import TIMING_IPC1, TIMING_ROCKET  # noqa: E402
 from tools import quality  # noqa: E402
 
 LOOP_SOURCE = """
@@ -92,14 +96,23 @@ def hart_mips(code: bytes, instructions: int, quantum: int) -> float:
     return hart.executed / (time.perf_counter() - start) / 1e6
 
 
-def firmware_figures(firmware: Path, card: Path, frames: int, check_writes: bool = False) -> dict:
-    board = Board(str(firmware), sd_image=str(card), check_writes=check_writes)
+def firmware_figures(firmware: Path, card: Path, frames: int, check_writes: bool = False,
+                     timing: str = TIMING_ROCKET) -> dict:
+    board = Board(str(firmware), sd_image=str(card), check_writes=check_writes, timing=timing)
     start = time.perf_counter()
     board.run(frames)
     host = time.perf_counter() - start
     instructions = [h.instret for h in board.harts]
+    steady = board.frames[1:]
     return {
+        "timing": timing,
         "frames": frames,
+        "reset_to_first_frame_ms": board.frames[0].virtual_time_s * 1e3,
+        "instructions_per_frame": [round(sum(f.instructions[h] for f in steady) / len(steady)) for h in (0, 1)],
+        "cycles_per_frame": [round(sum(f.cycles[h] for f in steady) / len(steady)) for h in (0, 1)],
+        "cycles": [h.cycles for h in board.harts],
+        "mispredicts": [h.mispredicts for h in board.harts],
+        "stall_cycles": [h.stall_cycles for h in board.harts],
         "host_time_s": host,
         "virtual_time_s": board.time,
         "instructions": instructions,
@@ -115,7 +128,7 @@ THESIS_MODEL_BYTES = round(38.8 * 1024)      # the thesis's model A: 400 polygon
 THESIS_TEXTURE_BYTES = round(183.2 * 1024)   # and its 250 x 250 texture, 183.2 KiB .ppm
 
 
-def sd_figures(firmware: Path, folder: Path) -> dict:
+def sd_figures(firmware: Path, folder: Path, timing: str = TIMING_ROCKET) -> dict:
     """Virtual times of SD bring-up and of loading files the size of the thesis's model A
     (from the console lines' timestamps; each span includes printing its console line). The
     texture is loaded whole first; the model is then read through obj.S's window twice: its load
@@ -130,12 +143,13 @@ def sd_figures(firmware: Path, folder: Path) -> dict:
     header = b"P6\n# padded to the thesis's texture size\n250 250\n255\n"
     pixels = bytes((i * 7) & 0xFF for i in range(250 * 250 * 3))
     texture = header[:4] + b"#" * (THESIS_TEXTURE_BYTES - len(header) - len(pixels)) + header[4:] + pixels
-    (folder / "a").mkdir()
+    (folder / "a").mkdir(exist_ok=True)
     (folder / "a" / "model.obj").write_bytes(model)
     (folder / "a" / "texture.ppm").write_bytes(texture)
     card = folder / "thesis.img"
-    build_image(card, [folder / "a"], scene={"model": "a/model.obj", "texture": "a/texture.ppm"})
-    board = Board(str(firmware), sd_image=str(card))
+    if not card.exists():
+        build_image(card, [folder / "a"], scene={"model": "a/model.obj", "texture": "a/texture.ppm"})
+    board = Board(str(firmware), sd_image=str(card), timing=timing)
     board.run(1)
     times = {}
     for t, line in board.console_lines:
@@ -144,12 +158,14 @@ def sd_figures(firmware: Path, folder: Path) -> dict:
                 times[key] = t
     board.close()
     return {
+        "timing": timing, "reset_to_first_frame_ms": board.frames[0].virtual_time_s * 1e3,
         "model_bytes": len(model), "texture_bytes": len(texture),
         "card_setup_to_root_ms": (times["fat32:"] - times["lcd:"]) * 1e3,
         "texture_read_ms": (times["load a/texture.ppm"] - times["load scene.ini"]) * 1e3,
         "model_read_ms": (times["load a/model.obj"] - times["load a/texture.ppm"]) * 1e3,
         "model_second_pass_ms": (times["model:"] - times["load a/model.obj"]) * 1e3,
-        "thesis_ms": {"card_setup_to_root": 32.35, "texture_read": 200.75, "model_read": 43.05},
+        "thesis_ms": {"card_setup_to_root": 32.35, "texture_read": 200.75, "model_read": 43.05,
+                      "start_up_model_a": 344.3},
     }
 
 
@@ -233,11 +249,14 @@ def measure(firmware: Path, folder: Path, name: str, model: str, texture: str, s
     steady = board.frames[1:]
     hart0 = sum(f.instructions[0] for f in steady) / len(steady)
     hart1 = sum(f.instructions[1] for f in steady) / len(steady)
+    cycles0 = sum(f.cycles[0] for f in steady) / len(steady)
+    cycles1 = sum(f.cycles[1] for f in steady) / len(steady)
     frame_time = (steady[-1].virtual_time_s - board.frames[0].virtual_time_s) / len(steady)
     return {
         "scene": name, "mode": mode, "scale": scale, "setting": setting, "setting_keys": dict(keys),
         "instructions_hart0": round(hart0), "instructions_hart1": round(hart1),
-        "draw_time_ms": hart0 / board.cpu_hz() * 1e3,
+        "cycles_hart0": round(cycles0), "cycles_hart1": round(cycles1),
+        "draw_time_ms": cycles0 / board.cpu_hz() * 1e3,
         "frame_time_ms": frame_time * 1e3, "fps": 1 / frame_time,
         **compared,
         "host_time_s": time.perf_counter() - started,
@@ -258,6 +277,7 @@ def scene_figures(firmware: Path, folder: Path, runs: list[tuple]) -> tuple[list
             print(f"[{n}/{len(runs)}] {what}: FAILED: {type(error).__name__}: {error}", file=sys.stderr, flush=True)
             continue
         print(f"[{n}/{len(runs)}] {what}: {records[-1]['instructions_hart0']:,} instructions/frame, "
+              f"{records[-1]['cycles_hart0']:,} cycles/frame, "
               f"PSNR {records[-1]['psnr_db']:.2f} dB, against the ideal {records[-1]['psnr_ideal_db']:.2f} dB, "
               f"{records[-1]['host_time_s']:.1f} s",
               file=sys.stderr, flush=True)
@@ -352,14 +372,16 @@ def _db(value: float | None) -> str:
 
 def renderer_table(records: list[dict]) -> str:
     """The renderer table: the default setting at every scene, scale and mode."""
-    lines = ["| scene | scale | mode | instructions hart 0 / frame | hart 1 / frame | draw time (ms) | "
-             "frame time (ms) | fps | PSNR vs reference (dB) | max error | pixels differ | PSNR vs ideal (dB) |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    lines = ["| scene | scale | mode | instructions hart 0 / frame | cycles hart 0 / frame | hart 1 instructions / "
+             "frame | draw time (ms) | frame time (ms) | fps | PSNR vs reference (dB) | max error | pixels differ | "
+             "PSNR vs ideal (dB) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in records:
         if r["setting"] != quality.DEFAULT_SETTING:
             continue
         lines.append(f"| {r['scene']} | {r['scale']:g} | {r['mode']} | {r['instructions_hart0']:,} | "
-                     f"{r['instructions_hart1']:,} | {r['draw_time_ms']:.2f} | {r['frame_time_ms']:.2f} | "
+                     f"{r['cycles_hart0']:,} | {r['instructions_hart1']:,} | {r['draw_time_ms']:.2f} | "
+                     f"{r['frame_time_ms']:.2f} | "
                      f"{r['fps']:.1f} | {r['psnr_db']:.1f} | {r['max_error']} | {100 * r['pixels_differ']:.2f} % | "
                      f"{_db(r.get('psnr_ideal_db'))} |")
     return "\n".join(lines) + "\n"
@@ -492,6 +514,24 @@ def write_check_figures(firmware: Path, card: Path, frames: int, unchecked: dict
             "ratio_while_executing": best["mips_while_executing"] / max(p["mips_while_executing"] for p in plain)}
 
 
+def timing_figures(firmware: Path, card: Path, frames: int, rocket: dict, rounds: int = 2) -> dict:
+    """The firmware under --timing ipc1 against the Rocket cycle timing: `rounds` runs of each,
+    alternating (the first Rocket one is `rocket`), compared fastest to fastest. Instructions
+    must be the same frame for frame in steady state: the timing changes cycles, not the work."""
+    timed, flat = [rocket], []
+    for n in range(rounds):
+        flat.append(firmware_figures(firmware, card, frames, timing=TIMING_IPC1))
+        if n + 1 < rounds:
+            timed.append(firmware_figures(firmware, card, frames))
+    best_timed = min(timed, key=lambda figures: figures["host_time_s"])
+    best_flat = min(flat, key=lambda figures: figures["host_time_s"])
+    return {**best_flat, "rounds": rounds,
+            "host_cost_of_cycle_model": best_timed["host_time_s"] / best_flat["host_time_s"]}
+
+
+THESIS_START_UP_MS = {"A": 344.3, "B": 122.2, "C": 87.8}   # power-up to its main loop, measured on a Dock
+
+
 def speed_figures(args: argparse.Namespace) -> None:
     """Raw Unicorn, a board hart and the board model running the firmware; SD timings. Printed and
     written to build/bench.json."""
@@ -503,8 +543,10 @@ def speed_figures(args: argparse.Namespace) -> None:
     counted = hart_mips(code, total, 20_000)
     board = firmware_figures(Path(args.firmware), Path(args.card), args.frames)
     checked = write_check_figures(Path(args.firmware), Path(args.card), args.frames, board)
+    ipc1 = timing_figures(Path(args.firmware), Path(args.card), args.frames, board)
     with tempfile.TemporaryDirectory() as tmp:
         sd = sd_figures(Path(args.firmware), Path(tmp))
+        sd_ipc1 = sd_figures(Path(args.firmware), Path(tmp), timing=TIMING_IPC1)
     results = {
         "raw_unicorn_mips": raw,
         "hart_with_counter_mips": counted,
@@ -512,7 +554,10 @@ def speed_figures(args: argparse.Namespace) -> None:
         "ratio_hart_to_raw": counted / raw,
         "ratio_board_to_raw": board["effective_mips"] / raw,
         "firmware_check_writes": checked,
+        "firmware_ipc1": ipc1,
         "sd": sd,
+        "sd_ipc1": sd_ipc1,
+        "thesis_start_up_ms": THESIS_START_UP_MS,
     }
     print(f"raw Unicorn, tight loop, no limit:         {raw:8.1f} MIPS")
     print(f"board hart, same loop, exact counting:     {counted:8.1f} MIPS  ({counted / raw:.2f} x raw)")
@@ -525,10 +570,22 @@ def speed_figures(args: argparse.Namespace) -> None:
     print(f"board with --check-writes:                 {checked['effective_mips']:8.1f} MIPS  "
           f"({checked['ratio_to_unchecked']:.3f} x the board without; fastest of {checked['rounds']} alternating "
           f"runs each; {checked['ratio_while_executing']:.3f} x while harts execute)")
-    print(f"SD (virtual time; thesis in brackets): card set-up to root directory {sd['card_setup_to_root_ms']:.2f} ms "
-          f"[32.35], model {sd['model_bytes']} bytes {sd['model_read_ms']:.2f} ms read and checked [43.05 read], "
-          f"{sd['model_second_pass_ms']:.2f} ms read again and stored, "
-          f"texture {sd['texture_bytes']} bytes {sd['texture_read_ms']:.2f} ms [200.75]")
+    print(f"cycle timing (Rocket) against --timing ipc1, default card, steady-state frames of hart 0:")
+    print(f"  instructions/frame {board['instructions_per_frame'][0]:,} (ipc1 {ipc1['instructions_per_frame'][0]:,}); "
+          f"cycles/frame {board['cycles_per_frame'][0]:,} (ipc1 {ipc1['cycles_per_frame'][0]:,}), "
+          f"{board['cycles_per_frame'][0] / board['instructions_per_frame'][0]:.2f} cycles per instruction")
+    print(f"  reset to first frame {board['reset_to_first_frame_ms']:.1f} ms virtual (ipc1 "
+          f"{ipc1['reset_to_first_frame_ms']:.1f} ms; the thesis's start-up, models A/B/C: "
+          f"{' / '.join(f'{v:g}' for v in THESIS_START_UP_MS.values())} ms)")
+    print(f"  host time of the cycle model: {ipc1['host_cost_of_cycle_model']:.3f} x ipc1's "
+          f"(fastest of {ipc1['rounds']} alternating runs each, {args.frames} frames)")
+    for label, figures in (("Rocket", sd), ("ipc1", sd_ipc1)):
+        print(f"SD, {label} timing (virtual time; thesis in brackets): card set-up to root directory "
+              f"{figures['card_setup_to_root_ms']:.2f} ms [32.35], model {figures['model_bytes']} bytes "
+              f"{figures['model_read_ms']:.2f} ms read and checked [43.05 read], "
+              f"{figures['model_second_pass_ms']:.2f} ms read again and stored, texture {figures['texture_bytes']} "
+              f"bytes {figures['texture_read_ms']:.2f} ms [200.75]; reset to first frame "
+              f"{figures['reset_to_first_frame_ms']:.1f} ms [344.3]")
     out = ROOT / "build" / "bench.json"
     out.parent.mkdir(exist_ok=True)
     out.write_text(json.dumps(results, indent=2) + "\n")

@@ -1,11 +1,13 @@
 """The precision settings the bench sweeps, and what it makes of the results: which settings are
-on the Pareto front of instructions per frame against PSNR, a table (CSV and Markdown) and a
+on the Pareto front of cycles per frame against PSNR, a table (CSV and Markdown) and a
 plot (hand-written SVG, small multiples, one panel per scene and mode).
 
 Pure functions over records (dicts) with no emulator in sight, so they are tested quickly
 (tests/test_bench_quality.py). A record has at least `scene`, `scale`, `mode`, `setting`,
 `instructions_hart0`, `psnr_db`, `max_error` and `pixels_differ` (a share, 0 to 1): the distance
-from the reference renderer's pixel-centre image. A record may also carry `psnr_ideal_db`,
+from the reference renderer's pixel-centre image. Its cost is `cycles_hart0`, hart 0's CPU cycles
+per frame under the board model's Rocket timing (emulator/timing.py), or `instructions_hart0` in a
+record without cycles. A record may also carry `psnr_ideal_db`,
 `max_error_ideal` and `pixels_differ_ideal`, the same against the ideal image (reference/ideal.py);
 where records carry them the tables gain their columns, the front against the ideal, and the plot
 a second row of panels.
@@ -86,14 +88,24 @@ def _quality(record: dict, metric: str = PIXEL_CENTRE) -> float:
     return -math.inf if math.isnan(q) else q
 
 
+def cost(record: dict) -> float:
+    """What a frame costs: hart 0's cycles per frame, or its instructions in a record without cycles."""
+    return record["cycles_hart0"] if record.get("cycles_hart0") is not None else record["instructions_hart0"]
+
+
+def cost_unit(records: Iterable[dict]) -> str:
+    """'cycles' when every record carries cycles, else 'instructions'."""
+    return "cycles" if all(r.get("cycles_hart0") is not None for r in records) else "instructions"
+
+
 def dominates(a: dict, b: dict, metric: str = PIXEL_CENTRE) -> bool:
     """a is at least as cheap and at least as good as b, and strictly better in one of them."""
-    ca, cb, qa, qb = a["instructions_hart0"], b["instructions_hart0"], _quality(a, metric), _quality(b, metric)
+    ca, cb, qa, qb = cost(a), cost(b), _quality(a, metric), _quality(b, metric)
     return ca <= cb and qa >= qb and (ca < cb or qa > qb)
 
 
 def pareto_front(records: Iterable[dict], metric: str = PIXEL_CENTRE) -> set[str]:
-    """Names (`setting`) of the records no other record dominates, fewer instructions per frame
+    """Names (`setting`) of the records no other record dominates, fewer cycles per frame
     and higher PSNR (`metric`: against the pixel-centre image or the ideal) being better. Equal
     points do not dominate each other: both are on the front. Infinite PSNR (frames identical to
     the reference) is better than any finite one."""
@@ -145,7 +157,8 @@ def front_report(records: Iterable[dict]) -> list[str]:
 
 TABLE_COLUMNS = [  # (CSV header, Markdown header)
     ("scene", "scene"), ("scale", "scale"), ("mode", "mode"), ("setting", "setting"),
-    ("instructions_per_frame", "instructions / frame"), ("relative_to_default", "relative to default"),
+    ("instructions_per_frame", "instructions / frame"), ("cycles_per_frame", "cycles / frame"),
+    ("relative_to_default", "relative to default"),
     ("psnr_db", "PSNR (dB)"), ("max_error", "max error"), ("pixels_differ_percent", "pixels differ (%)"),
     ("on_front", "on front"),
 ]
@@ -167,7 +180,8 @@ def _optional(value, kind):
 
 def table_rows(records: Iterable[dict]) -> list[dict]:
     """One row per record (grouped by panel, settings in record order) with the table's columns:
-    instructions relative to the same panel's default (None without one) and front membership,
+    the cost (cycles, or instructions without them) relative to the same panel's default (None
+    without one) and front membership,
     against the pixel-centre image and (None where a record has no ideal PSNR) the ideal."""
     rows = []
     for group in panels(records).values():
@@ -179,8 +193,8 @@ def table_rows(records: Iterable[dict]) -> list[dict]:
             rows.append({
                 "scene": r["scene"], "scale": r["scale"], "mode": r["mode"], "setting": r["setting"],
                 "instructions_per_frame": int(round(r["instructions_hart0"])),
-                "relative_to_default": (r["instructions_hart0"] / default["instructions_hart0"]
-                                        if default and default["instructions_hart0"] else None),
+                "cycles_per_frame": _optional(r.get("cycles_hart0"), lambda v: int(round(v))),
+                "relative_to_default": (cost(r) / cost(default) if default and cost(default) else None),
                 "psnr_db": float(r["psnr_db"]), "max_error": int(r["max_error"]),
                 "pixels_differ_percent": 100 * float(r["pixels_differ"]),
                 "on_front": r["setting"] in front,
@@ -212,6 +226,7 @@ def csv_text(records: Iterable[dict]) -> str:
     for row in table_rows(records):
         cells = [
             row["scene"], f"{row['scale']:g}", row["mode"], row["setting"], row["instructions_per_frame"],
+            "" if row["cycles_per_frame"] is None else row["cycles_per_frame"],
             "" if row["relative_to_default"] is None else f"{row['relative_to_default']:.4f}",
             _csv_psnr(row["psnr_db"]), row["max_error"], f"{row['pixels_differ_percent']:.4f}",
             _yes_no(row["on_front"]),
@@ -236,12 +251,13 @@ def markdown_table(records: Iterable[dict]) -> str:
     records = list(records)
     ideal = has_ideal(records)
     lines = ["| " + " | ".join(h for _, h in table_columns(records)) + " |",
-             "|" + "---|" * 3 + "---|" + "---:|" * 5 + "---|" + ("---:|" * 3 + "---|" if ideal else "")]
+             "|" + "---|" * 3 + "---|" + "---:|" * 6 + "---|" + ("---:|" * 3 + "---|" if ideal else "")]
     for row in table_rows(records):
         relative = "" if row["relative_to_default"] is None else f"{row['relative_to_default']:.3f}"
+        cycles = "" if row["cycles_per_frame"] is None else f"{row['cycles_per_frame']:,}"
         setting = f"**{row['setting']}**" if row["setting"] == DEFAULT_SETTING else row["setting"]
         line = (f"| {row['scene']} | {row['scale']:g} | {row['mode']} | {setting} | "
-                f"{row['instructions_per_frame']:,} | {relative} | {_psnr_text(row['psnr_db'])} | "
+                f"{row['instructions_per_frame']:,} | {cycles} | {relative} | {_psnr_text(row['psnr_db'])} | "
                 f"{row['max_error']} | {row['pixels_differ_percent']:.2f} | "
                 f"{_yes_no(row['on_front'])} |")
         if ideal:
@@ -343,7 +359,7 @@ def _panel_svg(group: list[dict], title: str, ox: float, oy: float, metric: str 
     left, top = ox + PAD_L, oy + PAD_T
     right, bottom = ox + PANEL_W - PAD_R, oy + PANEL_H - PAD_B
     front = pareto_front(group, metric)
-    costs = [float(r["instructions_hart0"]) for r in group]
+    costs = [float(cost(r)) for r in group]
     exact = [r for r in group if _quality(r, metric) >= PSNR_CEILING_DB]
     finite = [_quality(r, metric) for r in group if _quality(r, metric) < PSNR_CEILING_DB and math.isfinite(_quality(r, metric))]
     # axes ranges: a little room around the points, then out to round ticks
@@ -391,28 +407,30 @@ def _panel_svg(group: list[dict], title: str, ox: float, oy: float, metric: str 
         s.append(f'<line x1="{left:.1f}" y1="{y:.1f}" x2="{right:.1f}" y2="{y:.1f}" stroke="#444444" '
                  f'stroke-dasharray="4 3"/>')
         s.append(_text(left - 6, top + EXACT_BAND / 2 + 3.5, "exact", 10, "end", ' font-style="italic"'))
-    s.append(_text((left + right) / 2, bottom + 32, "instructions / frame (hart 0)", 11, "middle"))
+    s.append(_text((left + right) / 2, bottom + 32, f"{cost_unit(group)} / frame (hart 0)", 11, "middle"))
     s.append(_text(ox + 16, (top + bottom) / 2, axis_label, 11, "middle",
                    f' transform="rotate(-90 {ox + 16:.1f} {(top + bottom) / 2:.1f})"'))
-    # the front as a step line: the best PSNR available at each budget of instructions
-    steps = sorted((r for r in group if r["setting"] in front), key=lambda r: (r["instructions_hart0"], _quality(r, metric)))
+    # the front as a step line: the best PSNR available at each budget of cycles
+    steps = sorted((r for r in group if r["setting"] in front), key=lambda r: (cost(r), _quality(r, metric)))
     if steps:
-        d = f"M{px(steps[0]['instructions_hart0']):.1f},{py(_quality(steps[0], metric)):.1f}"
+        d = f"M{px(cost(steps[0])):.1f},{py(_quality(steps[0], metric)):.1f}"
         for r in steps[1:]:
-            d += f" H{px(r['instructions_hart0']):.1f} V{py(_quality(r, metric)):.1f}"
+            d += f" H{px(cost(r)):.1f} V{py(_quality(r, metric)):.1f}"
         d += f" H{right:.1f}"
         s.append(f'<path class="front" d="{d}" fill="none" stroke="{FRONT_COLOUR}" stroke-width="2" '
                  f'stroke-opacity="0.55"/>')
     # the points, the default last so that it is drawn on top
     labels: dict[tuple[int, int], list[str]] = {}
     for r in sorted(group, key=lambda r: r["setting"] == DEFAULT_SETTING):
-        x, y = px(r["instructions_hart0"]), py(_quality(r, metric))
+        x, y = px(cost(r)), py(_quality(r, metric))
         on_front = r["setting"] in front
         value = r.get(metric)
         psnr = _psnr_text(None if value is None else float(value))
         against = "the ideal" if metric == IDEAL else "the pixel-centre reference"
         differ = r.get("pixels_differ" + suffix)
-        tip = (f"{r['setting']}: {int(round(r['instructions_hart0'])):,} instructions/frame, PSNR {psnr} dB "
+        cycles = r.get("cycles_hart0")
+        tip = (f"{r['setting']}: {int(round(r['instructions_hart0'])):,} instructions/frame"
+               f"{'' if cycles is None else f', {int(round(cycles)):,} cycles/frame'}, PSNR {psnr} dB "
                f"against {against}, max error {r.get('max_error' + suffix, '?')}, "
                f"{'?' if differ is None else f'{100 * float(differ):.2f}'} % of pixels differ"
                f"{', on the front' if on_front else ''}")
@@ -440,7 +458,7 @@ def _panel_svg(group: list[dict], title: str, ox: float, oy: float, metric: str 
     return s
 
 
-def svg_text(records: Iterable[dict], title: str = "Instructions per frame against PSNR, per precision setting") -> str:
+def svg_text(records: Iterable[dict], title: str = "Cycles per frame against PSNR, per precision setting") -> str:
     """The plot: a grid of panels, one row per scene (and scale), one column per mode; where the
     records carry PSNRs against the ideal, each scene's row is followed by a row of the same
     panels against the ideal."""
@@ -467,14 +485,14 @@ def svg_text(records: Iterable[dict], title: str = "Instructions per frame again
           _text(lx + 280, ly + 4, "default setting", 11),
           f'<line x1="{lx + 390}" y1="{ly}" x2="{lx + 420}" y2="{ly}" stroke="{FRONT_COLOUR}" stroke-width="2" '
           f'stroke-opacity="0.55"/>',
-          _text(lx + 426, ly + 4, "best PSNR within a budget of instructions (the front)", 11)]
+          _text(lx + 426, ly + 4, "best PSNR within a budget of cycles (the front)", 11)]
     for (scene, scale, mode), group in groups.items():
         for metric in metrics:
             ox = 10 + cols.index(mode) * PANEL_W
             oy = header + rows.index((scene, scale, metric)) * PANEL_H
             title = f"{scene}, scale {scale:g}, {mode}" + (", vs ideal" if metric == IDEAL else "")
             s += _panel_svg(group, title, ox, oy, metric)
-    s.append(_text(20, height - 32, "Fewer instructions (left) and higher PSNR against the float64 reference renderer "
+    s.append(_text(20, height - 32, "Fewer cycles (left) and higher PSNR against the float64 reference renderer "
                    "(up) are better; hover a point for its maximum error and share of differing pixels.", 11))
     if IDEAL in metrics:
         s.append(_text(20, height - 50, "Rows marked 'vs ideal': PSNR against the ideal image (area-averaged pixels, "
@@ -495,11 +513,12 @@ def write_quality(records: list[dict], folder: Path) -> str:
     report = "\n".join(front_report(records)) + "\n"
     (folder / "quality.csv").write_text(csv_text(records))
     (folder / "quality.md").write_text(
-        "# Precision settings: instructions per frame against error\n\n"
-        "Per scene and mode, each precision setting's instructions per frame on hart 0 (steady state) and "
+        "# Precision settings: cycles per frame against error\n\n"
+        "Per scene and mode, each precision setting's instructions and CPU cycles per frame on hart 0 (steady "
+        "state; cycles as the K210's Rocket core takes them, emulator/timing.py) and "
         "how far its frames are from the float64 reference renderer: PSNR over all frames, the largest "
         "per-channel error and the share of pixels that differ. `on front`: no other setting of the same "
-        "scene and mode needs no more instructions and reaches at least the PSNR, being better in one. "
+        "scene and mode needs no more cycles and reaches at least the PSNR, being better in one. "
         + ("The first PSNR, error and front are against the reference's pixel-centre image (its sampling is "
            "the firmware's, so they measure arithmetic); the columns `vs ideal` against its ideal image "
            "(area-averaged pixels, area-filtered textures: what a camera would see, so they measure aliasing "
