@@ -16,7 +16,7 @@ called too (each function once per stack, so recursion is not counted twice). `p
 has the table, sorted by cycles, per hart, then each frame's top functions; `profile.folded`
 has one line per call stack, "hart0;main_hart0;render_frame;raster_triangle 12345" weighted by
 cycles, which flamegraph.pl, speedscope and inferno read. A run without --profile installs
-nothing and costs nothing; with it, the model runs about 4 times slower (the bench measures it).
+nothing and costs nothing; with it, the model runs about 4 to 5 times slower.
 """
 from __future__ import annotations
 
@@ -111,7 +111,8 @@ class _HartState:
     cycles: int = 0
     function: str = UNKNOWN
     stack: list[tuple[str, int]] = field(default_factory=list)     # callers: (function, return address)
-    last_block: tuple[int, int] = (0, 0)                            # (kind, fall-through address)
+    last_block: tuple[int, int, int] = (0, 0, 0)                    # (kind, fall-through, instructions)
+    block_entered: int = 0                                          # `executed` when it was entered
 
 
 class Profiler:
@@ -134,16 +135,17 @@ class Profiler:
         index = bisect.bisect_right(self._addresses, address) - 1
         return self._names[index] if index >= 0 else UNKNOWN
 
-    def _block_kind(self, hart: "Hart", start: int, size: int) -> tuple[int, int]:
-        """(CALL or OTHER, the address after the block) of a block, decoded once."""
-        known = self._block_kinds.get(start)
+    def _block_kind(self, hart: "Hart", start: int, size: int) -> tuple[int, int, int]:
+        """(CALL or OTHER, the address after the block, its instructions), decoded once."""
+        known = self._block_kinds.get((start, size))
         if known is None:
-            offset, kind = 0, OTHER
+            offset, kind, count = 0, OTHER, 0
             while offset < size:
                 is_call, length, _ = decode_call(hart.read_u32(start + offset))
                 kind = CALL if is_call and offset + length >= size else OTHER
                 offset += length
-            known = self._block_kinds[start] = (kind, start + size)
+                count += 1
+            known = self._block_kinds[(start, size)] = (kind, start + size, count)
         return known
 
     def _account(self, hart: "Hart") -> None:
@@ -171,9 +173,11 @@ class Profiler:
     def _on_block(self, uc: unicorn.Uc, address: int, size: int, hart: "Hart") -> None:
         self._account(hart)
         state = self._states[hart.hart_id]
-        kind, after = state.last_block
+        kind, after, count = state.last_block
         function = self.function_of(address)
-        if kind == CALL and address != after:
+        # a block cut short (the turn ended in it, or an exception) did not reach its call
+        completed = hart.executed - state.block_entered >= count
+        if kind == CALL and completed and address != after:
             state.stack.append((state.function, after))
             self.figures[hart.hart_id][function].calls += 1
         else:
@@ -183,6 +187,7 @@ class Profiler:
                     break
         state.function = function
         state.last_block = self._block_kind(hart, address, size)
+        state.block_entered = hart.executed
 
     def frame(self, record: "FrameRecord") -> None:
         """A frame was shown: its share of the profile starts from here."""

@@ -197,13 +197,13 @@ def test_an_unknown_timing_model_is_refused():
         make_board(timing="fast")
 
 
-# The default card's first frames under the model before cycle timing (commit 1d70ec7, this
+# The default card's first frames under the model before cycle timing (commit 53f433e, this
 # firmware and card): virtual time each frame reached the LCD, and hart 0's and hart 1's
 # instructions since the previous frame. --timing ipc1 must reproduce them exactly. (A change to
 # the firmware or to the card changes them on purpose: take them again from
 # `python -m emulator run build/firmware.elf --sd build/card.img --frames 4 --timing ipc1`.)
-BEFORE_CYCLES = [(0.5282942486350776, [11893224, 1681]), (0.535919275930363, [1008969, 910]),
-                 (0.5435443032256485, [1008329, 910]), (0.551169330520934, [1025306, 910])]
+BEFORE_CYCLES = [(0.5282952271297012, [11893982, 1681]), (0.5359202544249867, [1009329, 910]),
+                 (0.5435452817202722, [1008685, 910]), (0.5511703090155576, [1025670, 910])]
 
 
 def test_ipc1_reproduces_the_model_before_cycle_timing(firmware, card, firmware_run, tmp_path):

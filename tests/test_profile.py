@@ -43,7 +43,7 @@ def test_exclusive_inclusive_and_calls_are_exact():
     # outer: addi, sd, 2 x (auipc, jalr), ld, addi, ret = 9 a call, 2 calls
     assert (figures["outer"].instructions, figures["outer"].calls) == (18, 2)
     assert figures["outer"].inclusive_instructions == 18 + 32
-    assert figures["outer"].cycles == figures["outer"].instructions        # one cycle each (ipc1)
+    assert figures["outer"].cycles > figures["outer"].instructions      # the Rocket timing: loads, calls cost more
     stacks = profiler.folded[0]
     assert any(path.endswith(";outer;inner") for path in stacks)
 
