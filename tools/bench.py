@@ -124,6 +124,34 @@ def firmware_figures(firmware: Path, card: Path, frames: int, check_writes: bool
     }
 
 
+PROFILE_FRAMES = 12
+PROFILE_TOP = 12
+
+
+def profile_figures(firmware: Path, card: Path, frames: int = PROFILE_FRAMES) -> dict:
+    """The default scene under --profile: hart 0's functions per steady frame (frames 1.. of
+    `frames`), by cycles, and the host time per frame with and without the profiler."""
+    from emulator.profile import Profiler
+    timings = {}
+    for profiled in (False, True):
+        board = Board(str(firmware), sd_image=str(card))
+        profiler = Profiler(board, firmware) if profiled else None
+        if profiler is not None:
+            board.on_frame = lambda record, image: profiler.frame(record)
+        board.run(frames)
+        steady = board.frames[-1].host_time_s - board.frames[0].host_time_s
+        timings[profiled] = steady / (frames - 1)
+    first, last = profiler._frame_marks[0][0], profiler._frame_marks[-1][0]
+    per_frame = sorted(((cycles - first.get(name, (0, 0))[1], instructions - first.get(name, (0, 0))[0], name)
+                        for name, (instructions, cycles) in last.items()), reverse=True)
+    total = sum(c for c, _, _ in per_frame)
+    rows = [{"function": name, "cycles_per_frame": round(c / (frames - 1)),
+             "instructions_per_frame": round(i / (frames - 1)), "share": c / total}
+            for c, i, name in per_frame[:PROFILE_TOP] if c]
+    return {"frames": frames, "hart0_per_frame": rows, "host_s_per_frame": timings[False],
+            "host_s_per_frame_profiled": timings[True], "cost": timings[True] / timings[False]}
+
+
 THESIS_MODEL_BYTES = round(38.8 * 1024)      # the thesis's model A: 400 polygons, 38.8 KiB .obj
 THESIS_TEXTURE_BYTES = round(183.2 * 1024)   # and its 250 x 250 texture, 183.2 KiB .ppm
 
@@ -544,6 +572,7 @@ def speed_figures(args: argparse.Namespace) -> None:
     board = firmware_figures(Path(args.firmware), Path(args.card), args.frames)
     checked = write_check_figures(Path(args.firmware), Path(args.card), args.frames, board)
     ipc1 = timing_figures(Path(args.firmware), Path(args.card), args.frames, board)
+    profile = profile_figures(Path(args.firmware), Path(args.card))
     with tempfile.TemporaryDirectory() as tmp:
         sd = sd_figures(Path(args.firmware), Path(tmp))
         sd_ipc1 = sd_figures(Path(args.firmware), Path(tmp), timing=TIMING_IPC1)
@@ -558,6 +587,7 @@ def speed_figures(args: argparse.Namespace) -> None:
         "sd": sd,
         "sd_ipc1": sd_ipc1,
         "thesis_start_up_ms": THESIS_START_UP_MS,
+        "profile": profile,
     }
     print(f"raw Unicorn, tight loop, no limit:         {raw:8.1f} MIPS")
     print(f"board hart, same loop, exact counting:     {counted:8.1f} MIPS  ({counted / raw:.2f} x raw)")
@@ -586,6 +616,11 @@ def speed_figures(args: argparse.Namespace) -> None:
               f"{figures['model_second_pass_ms']:.2f} ms read again and stored, texture {figures['texture_bytes']} "
               f"bytes {figures['texture_read_ms']:.2f} ms [200.75]; reset to first frame "
               f"{figures['reset_to_first_frame_ms']:.1f} ms [344.3]")
+    print(f"profile of the default scene, hart 0, per steady frame (frames 1-{profile['frames'] - 1}), by cycles; "
+          f"--profile costs {profile['cost']:.1f} x the host time per frame:")
+    for row in profile["hart0_per_frame"]:
+        print(f"  {row['function']:28} {row['cycles_per_frame']:>11,} cycles {100 * row['share']:5.1f} %  "
+              f"{row['instructions_per_frame']:>11,} instructions")
     out = ROOT / "build" / "bench.json"
     out.parent.mkdir(exist_ok=True)
     out.write_text(json.dumps(results, indent=2) + "\n")
