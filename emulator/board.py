@@ -111,6 +111,7 @@ class Board:
         self.spi1 = SpiController(1, self)
         self.peripherals: list[Peripheral] = [self.sysctl, self.fpioa, self.gpiohs, self.gpio, self.uarths,
                                               self.clint, self.plic, self.dmac, self.spi0, self.spi1]
+        self.signals = None                    # a vcd.SignalLog with --vcd
         self.timed_devices = [self.uarths, self.spi0, self.spi1, self.dmac, self.sysctl, self.clint]
         self.cold = cold
         if not cold:
@@ -230,6 +231,11 @@ class Board:
     def run_until(self, until_s: float, progress: Callable[["Board"], None] | None = None) -> RunResult:
         """Runs until `until_s` of virtual time, frames or not (Scheduler.run_until)."""
         return self.scheduler.run_until(until_s, progress)
+
+    def signal(self, at: float, name: str, value: int | None) -> None:
+        """A pin changed (wiring.py, spi.py): logged for --vcd when a log is attached."""
+        if self.signals is not None:
+            self.signals.record(at, name, value)
 
     def stop_run(self, error: BoardStop) -> None:
         """Ends the run with `error` once the current instruction has completed: for watchers

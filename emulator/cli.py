@@ -39,7 +39,7 @@ EXIT_STATUS_HELP = f"""exit status:
   6  bad input: a file or folder the command line names cannot be used: the firmware image (missing,
      unreadable, not a RISC-V ELF, a raw .bin that is empty or larger than SRAM), the card image
      (missing, truncated), the --uart-input file (missing, unreadable), the --trace-insn file (cannot
-     be written), the --gdb port (in use), the --golden folder (missing or a file) or one of its
+     be written), the --vcd file (cannot be written), the --gdb port (in use), the --golden folder (missing or a file) or one of its
      frames (not a readable PNG), the --out folder (a file of that name exists, or it cannot be
      created or written in)
   7  hardware misuse: something the real K210 would not do (e.g. CPU on an unlocked PLL)
@@ -163,6 +163,10 @@ def build_parser() -> argparse.ArgumentParser:
                      help="with --trace-insn: start the trace at this virtual time (default 0)")
     run.add_argument("--trace-to", metavar="SECONDS", type=time_seconds, default=None,
                      help="with --trace-insn: end the trace at this virtual time (default: the end of the run)")
+    run.add_argument("--vcd", metavar="FILE", type=Path, default=None,
+                     help="write the pins over virtual time as a Value Change Dump (GTKWave, sigrok): every pad a "
+                          "GPIOHS or GPIO line drives (LEDs, the LCD's reset and D/C), SPI0's and SPI1's slave "
+                          "selects, and their clocks as bursts (high while frames are on the wire)")
     run.add_argument("--profile", action="store_true",
                      help="write profile.txt (per hart, instructions and cycles per function, exclusive and "
                           "inclusive, with calls; per frame the top functions) and profile.folded (call stacks "
@@ -455,6 +459,7 @@ def main(argv: list[str] | None = None) -> int:
     from .board import Board
     from .console_watch import ConsoleWatch
     from .trace import InstructionTrace, open_trace
+    from .vcd import attach as attach_signal_log, open_vcd
     from .uart_input import UartInput
     from .golden import compare_run, load_golden_frames
     from .grab import GrabRequest, parse_grab
@@ -471,6 +476,7 @@ def main(argv: list[str] | None = None) -> int:
         uart_input = UartInput.open(args.uart_input) if args.uart_input is not None else None
         prepare_output_folder(args.out)
         trace_file = open_trace(args.trace_insn) if args.trace_insn is not None else None
+        vcd_file = open_vcd(args.vcd) if args.vcd is not None else None
     except BadInput as error:
         print(f"[board] stopped (bad-input): {error}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -496,6 +502,7 @@ def main(argv: list[str] | None = None) -> int:
     started = time.perf_counter()
     trace = None
     profiler = None
+    signal_log = None
 
     def on_frame(record, image) -> None:
         output.frame(record, image)
@@ -509,6 +516,8 @@ def main(argv: list[str] | None = None) -> int:
                       check_writes=args.check_writes, strict=args.strict, lcd_interface=args.lcd_interface,
                       cold=args.cold, timing=args.timing)
         board.uarths.input = uart_input
+        if vcd_file is not None:
+            signal_log = attach_signal_log(board)
         if args.profile:
             from .profile import Profiler
             profiler = Profiler(board, args.firmware)
@@ -587,6 +596,12 @@ def main(argv: list[str] | None = None) -> int:
     summary["cycles"] = [h.cycles for h in board.harts] if board is not None else [0, 0]
     summary["timing_warnings"] = dict(board.timing_warnings) if board is not None else {}
     summary.update(watch.summary())
+    if vcd_file is not None:
+        if signal_log is not None:
+            changes = signal_log.write(vcd_file, board.time)
+            summary["vcd"] = {"file": str(args.vcd), "value_changes": changes}
+        else:
+            vcd_file.close()
     if profiler is not None:
         try:
             summary["profile"] = profiler.write(args.out)

@@ -142,6 +142,7 @@ class SpiController(Peripheral):
         self._rx: list[int] = []
         self._raw_int = 0
         self._selected: SpiDevice | None = None
+        self._ss_low = False                    # the slave select as the pins show it (--vcd)
         self.tx_dma: "DmaChannel | None" = None
         self.rx_dma: "DmaChannel | None" = None
         self._dma_started = 0.0
@@ -154,8 +155,11 @@ class SpiController(Peripheral):
         for channel in (self.tx_dma, self.rx_dma):
             if channel is not None:
                 channel.peripheral_gone()
+        self._end_train(now)
         super().reset(now)
-        self._train = None
+        if self._ss_low and self.board is not None:
+            self._ss_low = False
+            self.board.signal(now, f"spi{self.index}_ss_n", 1)
         self._held.clear()
         self._rx.clear()
         self._raw_int = 0
@@ -228,7 +232,16 @@ class SpiController(Peripheral):
                     return device
         return None
 
+    def _end_train(self, at: float) -> None:
+        if self._train is not None and self.board is not None:
+            self.board.signal(min(at, self._train.end()), f"spi{self.index}_sclk", 0)
+        self._train = None
+
     def _update_selection(self, now: float) -> None:
+        low = bool(self.enabled and self.values[SER])
+        if low != self._ss_low and self.board is not None:
+            self._ss_low = low
+            self.board.signal(now, f"spi{self.index}_ss_n", 0 if low else 1)
         device = self._slave() if self.enabled and self.values[SER] else None
         if device is not self._selected:
             if self._selected is not None:
@@ -256,7 +269,7 @@ class SpiController(Peripheral):
         if done > train.delivered:
             self._deliver(train.take(done - train.delivered), now)
         if train.delivered == train.count and now >= train.end() - EPSILON:
-            self._train = None
+            self._end_train(now)
 
     def _deliver(self, frames: np.ndarray, now: float) -> None:
         bits = self.frame_bits
@@ -299,6 +312,8 @@ class SpiController(Peripheral):
                 self.advance(now)
             self._check_wire_format()
             train = self._train = _Train(start=now, period=self.frame_period(), bits=self.frame_bits)
+            if self.board is not None:
+                self.board.signal(now, f"spi{self.index}_sclk", 1)
         train.frames.append(values.astype(np.uint32))
         train.count += len(values)
 
@@ -482,7 +497,7 @@ class SpiController(Peripheral):
             self.values[SSIENR] = value & 1
             if was and not self.enabled:
                 # disabling halts any transfer and clears both FIFOs
-                self._train = None
+                self._end_train(now)
                 self._held.clear()
                 self._rx.clear()
                 self._raw_int = 0

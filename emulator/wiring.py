@@ -187,6 +187,7 @@ class DockWiring:
             level = self.pad_level(pad)
             if level != self._pad_levels[pad]:
                 self._pad_levels[pad] = level
+                self.board.signal(now, f"pad{pad:02d}", level)
                 self.pad_change_count += 1
                 if len(self.pad_changes) < MAX_PAD_CHANGES:
                     self.pad_changes.append((now, pad, level))

@@ -1,0 +1,91 @@
+"""--vcd: the Dock's pins over virtual time as a Value Change Dump (IEEE 1364), which GTKWave
+and sigrok (PulseView) open, so that firmware can be timed as on the bench, with an LED pin
+and a scope.
+
+Signals, as the board model knows them:
+- `padNN`: the level a GPIOHS or slow-GPIO line drives on FPIOA pad NN (z while none does):
+  LEDs (pads 12-14), the LCD's reset (37) and D/C (38), the SD card's select when a GPIO line
+  drives it, any pin firmware toggles for timing;
+- `spi0_ss_n`, `spi1_ss_n`: each controller's slave select (low while it is enabled and
+  `ser` selects a slave);
+- `spi0_sclk`, `spi1_sclk`: the serial clock as bursts: high while frames are on the wire,
+  low between; one pulse per burst instead of every edge (a 10 MHz clock over seconds would
+  be hundreds of millions of lines; the burst's length and the frame count give the rate).
+
+Events are kept in memory and written when the run ends, sorted by time, in nanoseconds.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import IO
+
+from .errors import BadInput
+
+TIMESCALE_S = 1e-9
+
+
+def open_vcd(path: Path) -> IO[str]:
+    """The VCD file, opened before the run: a path that cannot be written is bad input."""
+    try:
+        return path.open("w")
+    except OSError as error:
+        raise BadInput(f"--vcd {path}: cannot write it ({error.strerror or error})") from None
+
+
+class SignalLog:
+    """Value changes of named one-bit signals (0, 1, or None for undriven)."""
+
+    def __init__(self) -> None:
+        self.events: list[tuple[float, int, str, int | None]] = []   # (time, order, signal, value)
+        self._last: dict[str, int | None] = {}
+
+    def record(self, at: float, signal: str, value: int | None) -> None:
+        if self._last.get(signal, "unset") == value:
+            return
+        self._last[signal] = value
+        self.events.append((at, len(self.events), signal, value))
+
+    def write(self, out: IO[str], end_s: float) -> int:
+        """Writes the dump (and closes `out`); returns the number of value changes written."""
+        names = sorted({signal for _, _, signal, _ in self.events})
+        codes = {name: _identifier(n) for n, name in enumerate(names)}
+        out.write("$comment Sipeed Maix Dock board model (python -m emulator run --vcd) $end\n")
+        out.write("$timescale 1ns $end\n$scope module dock $end\n")
+        for name in names:
+            out.write(f"$var wire 1 {codes[name]} {name} $end\n")
+        out.write("$upscope $end\n$enddefinitions $end\n")
+        current = None
+        written = 0
+        for at, _, signal, value in sorted(self.events):
+            tick = round(at / TIMESCALE_S)
+            if tick != current:
+                out.write(f"#{tick}\n")
+                current = tick
+            out.write(f"{'z' if value is None else value}{codes[signal]}\n")
+            written += 1
+        end_tick = round(end_s / TIMESCALE_S)
+        if current is None or end_tick > current:
+            out.write(f"#{end_tick}\n")
+        out.close()
+        return written
+
+
+def attach(board) -> SignalLog:
+    """A log for the board's pins, with the slave selects' idle level at the start."""
+    log = SignalLog()
+    board.signals = log
+    for controller in (board.spi0, board.spi1):
+        log.record(board.time, f"spi{controller.index}_ss_n", 0 if controller._ss_low else 1)
+        log.record(board.time, f"spi{controller.index}_sclk", 0)
+    return log
+
+
+def _identifier(index: int) -> str:
+    """VCD identifier codes: printable ASCII 33..126, as short as possible."""
+    chars = []
+    while True:
+        index, digit = divmod(index, 94)
+        chars.append(chr(33 + digit))
+        if index == 0:
+            return "".join(chars)
+        index -= 1
