@@ -16,7 +16,7 @@ FW_SRCS := $(wildcard firmware/*.S)
 FW_OBJS := $(patsubst firmware/%.S,$(BUILD)/fw/%.o,$(FW_SRCS))
 FW_INCS := $(wildcard firmware/include/*.inc)
 
-.PHONY: all toolchain venv firmware c-firmware card flash-to-emulator debug test bench goldens golden-check clean
+.PHONY: all toolchain venv firmware c-firmware card flash-to-emulator flash debug test bench goldens golden-check clean
 
 all: firmware
 
@@ -92,6 +92,12 @@ flash-to-emulator: firmware venv $(CARD)
 
 test: firmware c-firmware venv $(CARD)
 	$(PYTHON) -m pytest -q -n 2
+
+# A real Dock: make flash PORT=/dev/ttyUSB0 [FLASH_BAUD=N] (tools/flash.py runs kflash)
+PORT ?=
+FLASH_BAUD ?= 1500000
+flash: firmware venv
+	$(PYTHON) tools/flash.py --port "$(PORT)" --baud $(FLASH_BAUD) $(BUILD)/firmware.bin
 
 # The default card under GDB: the board waits on 127.0.0.1:$(GDB_PORT) and prints the
 # gdb-multiarch command that attaches to it

@@ -121,6 +121,7 @@ COMMANDS = {
     "make goldens": ("dry-run", lambda r: None),
     "make goldens SCENES=gem-flat": ("dry-run", lambda r: None),
     "make debug": ("dry-run", lambda r: None),
+    "make flash PORT=/dev/ttyUSB0": ("dry-run", lambda r: None),
     'make goldens SCENE_DIRS="my-scene other-scene"': ("dry-run", lambda r: None),
     "make golden-check SCENE_DIRS=my-scene": ("dry-run", lambda r: None),
     "EXTREMES_FULL=1 make test": ("dry-run", _env_read_by_tests("EXTREMES_FULL")),
