@@ -231,3 +231,31 @@ def test_a_breakpoint_stops_before_its_instruction_and_counts_stay_exact():
     debugger.resume(0)                     # one step
     debugger.run_until_stop(lambda: False)
     assert hart.pc == symbol(board, "second") + 2 and hart.instret - at_first == 6    # c.addi
+
+
+def test_read_and_access_watchpoints_stop_after_the_access():
+    from emulator.gdbstub import Debugger
+    from k210_fixtures import make_board, program, symbol
+    board = make_board(program("""
+        la      t0, cell
+    load:
+        ld      a0, 0(t0)
+        addi    a0, a0, 1
+    store:
+        sd      a0, 0(t0)
+        nop
+    """, data="cell: .dword 41\n"))
+    debugger = Debugger(board)
+    hart = board.harts[0]
+    cell = symbol(board, "cell")
+    debugger.set_watchpoint(3, cell, 8)                 # rwatch: the load
+    debugger.resume(None)
+    event = debugger.run_until_stop(lambda: False)
+    assert event.extra == f"rwatch:{cell:x};" and hart.pc == symbol(board, "load") + 4
+    assert hart.reg(rv.UC_RISCV_REG_A0) == 41            # the load has happened
+    debugger.clear_watchpoint(3, cell, 8)
+    debugger.set_watchpoint(4, cell, 8)                 # awatch: the store is the next access
+    debugger.resume(None)
+    event = debugger.run_until_stop(lambda: False)
+    assert event.extra == f"awatch:{cell:x};" and hart.pc == symbol(board, "store") + 4
+    assert int.from_bytes(board.memory.read(cell, 8), "little") == 42
