@@ -42,6 +42,8 @@ card cannot hold at all is refused: empty, or not a whole number of 512-byte blo
 """
 from __future__ import annotations
 
+import binascii
+
 import mmap
 from pathlib import Path
 from typing import Callable
@@ -81,21 +83,19 @@ def crc7(data: bytes) -> int:
     return crc
 
 
-_CRC16_TABLE = []
-for _n in range(256):
-    _c = _n << 8
-    for _ in range(8):
-        _c = ((_c << 1) ^ 0x1021) if _c & 0x8000 else (_c << 1)
-    _CRC16_TABLE.append(_c & 0xFFFF)
-_CRC16 = np.array(_CRC16_TABLE, dtype=np.uint16)
-
-
 def crc16(data: bytes) -> int:
-    """CRC16-CCITT (x^16 + x^12 + x^5 + 1, initial 0) as SD data blocks carry it."""
+    """CRC16-CCITT (x^16 + x^12 + x^5 + 1, initial 0) as SD data blocks carry it: the standard
+    library's crc_hqx is this CRC (XMODEM's), about 20 times faster than a table loop in Python."""
+    return binascii.crc_hqx(data, 0)
+
+
+def crc16_bitwise(data: bytes) -> int:
+    """The same CRC from its definition, bit by bit (for tests)."""
     crc = 0
-    table = _CRC16_TABLE
     for byte in data:
-        crc = ((crc << 8) & 0xFFFF) ^ table[(crc >> 8) ^ byte]
+        crc ^= byte << 8
+        for _ in range(8):
+            crc = ((crc << 1) ^ 0x1021) & 0xFFFF if crc & 0x8000 else (crc << 1) & 0xFFFF
     return crc
 
 

@@ -8,7 +8,7 @@ from k210_fixtures import idle_elf, make_board  # noqa: F401
 
 from emulator.errors import BadInput
 from emulator.sdcard import (BLOCK, INIT_TIME_S, NAC_BYTES, NCR_BYTES, RULE_POWER_UP_CLOCKS, SdCard, SdImage,
-                             command_frame, crc7, crc16)
+                             command_frame, crc7, crc16, crc16_bitwise)
 
 BLOCKS = 64
 
@@ -61,6 +61,11 @@ def test_crc7_matches_the_well_known_command_crcs():
 
 def test_crc16_of_a_block_of_ff_is_the_spec_example():
     assert crc16(b"\xff" * 512) == 0x7FA1
+    import random
+    rng = random.Random(7)
+    for length in (0, 1, 2, 511, 512, 513):
+        data = bytes(rng.randrange(256) for _ in range(length))
+        assert crc16(data) == crc16_bitwise(data)
 
 
 def test_cmd0_without_power_up_clocks_is_answered_with_a_warning(image_path):
