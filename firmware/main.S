@@ -1,12 +1,32 @@
 # main.S: what each hart does after boot, and the frame handoff between them.
 #
-# Hart 0 brings the board up (clocks, pins, console, LCD, DMAC), loads
-# scene.ini and the files it names from the SD card (sd.S, fat32.S,
-# scene.S), parses the model and the texture into `scene` (obj.S, ppm.S;
-# any failure there is fatal, errors.S), releases hart 1, then
-# draws frames forever. Hart 1 sends finished frames to the LCD
-# and reports each one. After the release only hart 1 touches SPI0, the
-# DMAC and the LCD's GPIOHS lines.
+# Start-up runs on both harts at once. Hart 0 brings up what both need
+# (clocks, pins, console, the DMAC's reset) and releases hart 1; then hart 1
+# brings the LCD up (lcd.S: about 125 ms, nearly all of it the ST7789V's
+# datasheet waits, asleep in WFI) while hart 0 loads scene.ini and the files it
+# names from the SD card (sd.S, fat32.S, scene.S), parses the model and the
+# texture into `scene` (obj.S, ppm.S; any failure there is fatal, errors.S)
+# and draws frames forever. Hart 1 then sends finished frames to the LCD and
+# reports each one.
+#
+# Who owns what from the release on (nothing else is shared):
+#   hart 1 only: SPI0, DMAC channel 0 and its PLIC enable, lcd_ready, the
+#         LCD's panel state; hart 0 only: SPI1, DMAC channel 1 and its PLIC
+#         enable, the heap, `scene`, the renderer's buffers.
+#   written before the release, read-only after it: cpu_hz, .bss cleared,
+#         the console's UART set-up, the FPIOA, the DMAC's common set-up
+#         (dma_init: its reset would stop the other hart's channel).
+#   registers both change by read-modify-write: GPIOHS output_val (LCD reset
+#         and D/C on hart 1, the card's chip select on hart 0) and SYSCTL
+#         dma_sel0 (channel 0's and channel 1's request lines), each change
+#         under shared_io_lock (pins.S).
+#   the console: whole lines under console_lock (console.S), so lines of the
+#         two harts interleave but never mix.
+#   framebuffers, fb_state, fb_frame: the handoff below. Hart 0 may draw
+#         frame 0 before the LCD is up; hart 1 takes it once it is.
+#   a fatal error or a trap on hart 0: halt_request (trap.S, errors.S) after
+#         the error colour; hart 1 sees it when it next waits for a frame,
+#         after lcd_init has finished, and paints the error screen.
 #
 # Handoff: two framebuffers, frame n goes into buffer n & 1. Each buffer has
 # a state word, FB_FREE (hart 0 may draw into it) or FB_FULL (hart 1 may
@@ -17,8 +37,10 @@
 #           state[b] = FREE (release order); msip[0] = 1; print "frame N"
 # A waiting hart clears its own msip *before* reading the state, then WFIs:
 # a signal sent after the read leaves msip pending and WFI falls through, so
-# no wake-up is lost. Both walk the buffers in the same order (0, 1, 0, ...),
-# so frames reach the LCD in the order they were drawn.
+# no wake-up is lost (a signal that comes while hart 1 sleeps in lcd_init's
+# delays, which wake on the timer only, stays pending likewise). Both walk the
+# buffers in the same order (0, 1, 0, ...), so frames reach the LCD in the
+# order they were drawn.
 # A trap on either hart raises halt_request (trap.S): a waiting hart then
 # leaves its loop, hart 1 painting the error screen on the way out.
 
@@ -29,8 +51,8 @@
     .text
     .globl main_hart0
 # main_hart0
-#   What: hart 0 after .bss clearing: bring-up, SD card loading, release of
-#         hart 1, draw loop.
+#   What: hart 0 after .bss clearing: the bring-up both harts need, release
+#         of hart 1, SD card loading, draw loop.
 #   Arguments: none. Results: never returns.
 #   Clobbers: everything (it is the bottom of hart 0's call stack).
 main_hart0:
@@ -40,9 +62,10 @@ main_hart0:
     call    pins_init
     mv      a0, s0
     call    console_init
+    call    dma_init
+    call    boot_release_hart1          # hart 1 brings the LCD up meanwhile
 
-    call    console_lock                # hart 1 is parked, but a trap in here must
-                                        # see that a line was cut short
+    call    console_lock                # whole lines: hart 1 prints too
     la      a0, msg_boot
     call    console_puts
     la      a0, msg_clocks_pll0
@@ -59,14 +82,8 @@ main_hart0:
     call    console_puts
     call    console_unlock
 
-    mv      a0, s0
-    call    lcd_init
-    call    dma_init
-    la      a0, msg_lcd
-    call    console_line
-
-    # The card's files, with the LCD up so that a failure can be shown and
-    # before hart 1 (and its use of SPI0 / DMA channel 0) is released.
+    # The card's files, while hart 1 brings the LCD up; a failure is shown
+    # by hart 1 once the LCD is up (errors.S).
     call    crc_init
     call    heap_init
     call    sd_init
@@ -75,8 +92,6 @@ main_hart0:
     call    obj_parse_model             # the mesh into `scene` (obj.S)
     call    ppm_parse_texture           # the texture into `scene` (ppm.S)
     call    render_init                 # renderer buffers for this scene (render.S)
-
-    call    boot_release_hart1
 
     li      s2, 0                       # s2 = frame number n
 1:  andi    s3, s2, 1                   # s3 = buffer index b
@@ -101,11 +116,17 @@ main_hart0:
 
     .globl main_hart1
 # main_hart1
-#   What: hart 1 after its release: display loop, sending each full buffer
-#         to the LCD, handing it back and printing its frame number.
+#   What: hart 1 after its release: LCD bring-up, then the display loop,
+#         sending each full buffer to the LCD, handing it back and printing
+#         its frame number.
 #   Arguments: none. Results: never returns.
 #   Clobbers: everything (it is the bottom of hart 1's call stack).
 main_hart1:
+    la      t0, cpu_hz
+    lwu     a0, 0(t0)
+    call    lcd_init
+    la      a0, msg_lcd
+    call    console_line
     la      a0, msg_hart1
     call    console_line
     call    dma_irq_init
@@ -180,7 +201,8 @@ fb_wait_state:
     csrc    mie, t4
     li      a0, 0
     ret
-3:  csrc    mie, t4
+3:  fence   r, rw                       # acquire: the error colour stored before the request
+    csrc    mie, t4
     li      a0, 1
     ret
 
