@@ -82,6 +82,7 @@ error_begin:
 error_end:
     li      a0, '\n'
     call    console_putc
+    call    console_relay_stop          # the report is out before this hart parks
     call    console_unlock
 
     la      t0, error_code

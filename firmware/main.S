@@ -21,7 +21,10 @@
 #         dma_sel0 (channel 0's and channel 1's request lines), each change
 #         under shared_io_lock (pins.S).
 #   the console: whole lines under console_lock (console.S), so lines of the
-#         two harts interleave but never mix.
+#         two harts interleave but never mix. From the release until the LCD
+#         is up, what either hart prints waits in the console's ring and
+#         hart 1 sends it during the LCD's waits (console.S, the relay), so
+#         hart 0 does not wait on the UART while it loads.
 #   framebuffers, fb_state, fb_frame: the handoff below. Hart 0 may draw
 #         frame 0 before the LCD is up; hart 1 takes it once it is.
 #   a fatal error or a trap on hart 0: halt_request (trap.S, errors.S) after
@@ -63,6 +66,7 @@ main_hart0:
     mv      a0, s0
     call    console_init
     call    dma_init
+    call    console_relay_start         # hart 1 sends hart 0's lines while it waits
     call    boot_release_hart1          # hart 1 brings the LCD up meanwhile
 
     call    console_lock                # whole lines: hart 1 prints too
@@ -125,6 +129,9 @@ main_hart1:
     la      t0, cpu_hz
     lwu     a0, 0(t0)
     call    lcd_init
+    call    console_lock
+    call    console_relay_stop          # the lines queued meanwhile, then ours
+    call    console_unlock
     la      a0, msg_lcd
     call    console_line
     la      a0, msg_hart1
