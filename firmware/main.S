@@ -134,6 +134,11 @@ main_hart1:
     call    console_unlock
     la      a0, msg_lcd
     call    console_line
+    # A fatal error or a trap on hart 0 while the LCD came up: show it now,
+    # without announcing a display loop that will never show a frame.
+    la      t0, halt_request
+    lw      t0, 0(t0)
+    bnez    t0, 3f
     la      a0, msg_hart1
     call    console_line
     call    dma_irq_init
@@ -162,6 +167,7 @@ main_hart1:
     j       1b
 
     # Hart 0 trapped: it no longer draws and leaves SPI0 to this hart.
+3:  fence   r, rw                       # acquire: the error colour stored before the request
 2:  call    lcd_error_screen
     j       trap_park
 
