@@ -21,10 +21,11 @@
 #         dma_sel0 (channel 0's and channel 1's request lines), each change
 #         under shared_io_lock (pins.S).
 #   the console: whole lines under console_lock (console.S), so lines of the
-#         two harts interleave but never mix. From the release until the LCD
-#         is up, what either hart prints waits in the console's ring and
-#         hart 1 sends it during the LCD's waits (console.S, the relay), so
-#         hart 0 does not wait on the UART while it loads.
+#         two harts interleave but never mix. From the release until frame 0
+#         is on the LCD, what either hart prints waits in the console's ring
+#         and hart 1 sends it while it waits (for the LCD's datasheet delays,
+#         then for frame 0; console.S, the relay), so hart 0 does not wait on
+#         the UART while it loads.
 #   framebuffers, fb_state, fb_frame: the handoff below. Hart 0 may draw
 #         frame 0 before the LCD is up; hart 1 takes it once it is.
 #   a fatal error or a trap on hart 0: halt_request (trap.S, errors.S) after
@@ -120,18 +121,16 @@ main_hart0:
 
     .globl main_hart1
 # main_hart1
-#   What: hart 1 after its release: LCD bring-up, then the display loop,
-#         sending each full buffer to the LCD, handing it back and printing
-#         its frame number.
+#   What: hart 1 after its release: LCD bring-up and the console's relay
+#         (console.S) until frame 0 is out, then the display loop, sending
+#         each full buffer to the LCD, handing it back and printing its frame
+#         number.
 #   Arguments: none. Results: never returns.
 #   Clobbers: everything (it is the bottom of hart 1's call stack).
 main_hart1:
     la      t0, cpu_hz
     lwu     a0, 0(t0)
     call    lcd_init
-    call    console_lock
-    call    console_relay_stop          # the lines queued meanwhile, then ours
-    call    console_unlock
     la      a0, msg_lcd
     call    console_line
     # A fatal error or a trap on hart 0 while the LCD came up: show it now,
@@ -143,7 +142,20 @@ main_hart1:
     call    console_line
     call    dma_irq_init
 
-    li      s2, 0                       # s2 = frames shown
+    # Until hart 0 has drawn frame 0 it may still be loading and printing:
+    # keep the relay going meanwhile (fb_wait_state's WFI would not).
+4:  la      t0, halt_request
+    lw      t0, 0(t0)
+    bnez    t0, 3f
+    la      t0, fb_state
+    lw      t0, 0(t0)                   # buffer 0's state: frame 0 goes there
+    li      t1, FB_FULL
+    beq     t0, t1, 5f
+    li      a0, CONSOLE_RELAY_POLL_US
+    call    console_wait_us
+    j       4b
+
+5:  li      s2, 0                       # s2 = frames shown
 1:  andi    s3, s2, 1                   # s3 = buffer index b
     mv      a0, s3
     li      a1, FB_FULL
@@ -160,7 +172,14 @@ main_hart1:
     li      a1, FB_FREE
     li      a2, 0                       # tell hart 0
     call    fb_set_state
-    la      a0, msg_frame
+    # The relay ends once frame 0 is out (then it has nothing left to do):
+    # what it still holds goes first, then this and every later line
+    # straight to the UART.
+    bnez    s2, 6f
+    call    console_lock
+    call    console_relay_stop
+    call    console_unlock
+6:  la      a0, msg_frame
     mv      a1, s4
     call    console_line_dec
     addi    s2, s2, 1
