@@ -78,7 +78,7 @@ console_putc:
     lw      t1, 0(t0)
     la      t2, console_ring_tail
     lw      t2, 0(t2)
-    sub     t3, t1, t2
+    subw    t3, t1, t2                  # bytes held (the indices wrap at 2^32)
     li      t4, CONSOLE_RING_BYTES
     bltu    t3, t4, 6f
     addi    sp, sp, -16
