@@ -1,8 +1,8 @@
 # boot.S: reset entry of both harts, .bss clearing and the hart 1 release.
 #
 # Both harts start at _start (0x8000_0000) running the same code. Hart 0
-# clears .bss and goes on to main_hart0, which brings the board up and then
-# calls boot_release_hart1. Hart 1 parks in WFI until it sees the release
+# clears .bss and goes on to main_hart0, which brings up what both harts need
+# and then calls boot_release_hart1. Hart 1 parks in WFI until it sees the release
 # word: it must not touch .bss before then, because hart 0 is still zeroing
 # it. The release word lives in .data so it is valid (0) straight from the
 # image, before anybody has run.
@@ -113,6 +113,6 @@ boot_release_hart1:
     .balign 4
     .globl boot_release
 # boot_release: 0 in the image; BOOT_RELEASE_MAGIC once hart 0 has cleared
-# .bss and finished the board bring-up.
+# .bss and brought up what both harts need (main.S).
 boot_release:
     .word   0

@@ -4,6 +4,18 @@
 # console_lock / console_unlock; the lock word records the owner (hart id + 1)
 # so the trap handler can tell a trap inside this hart's own console output
 # from the other hart printing.
+#
+# The relay. At 115200 baud a line costs 2-7 ms of waiting on the UART, and
+# hart 0 prints about 450 bytes while it loads the card, 39 ms in all. So
+# during start-up (console_relay_start .. console_relay_stop) what any hart
+# prints goes into console_ring, and hart 1, which meanwhile sleeps through the
+# LCD's waits, copies it to the UART (console_wait_us). The ring is only ever
+# touched with the console lock held, and whoever holds the lock may move
+# bytes from it to the UART: a hart that finds it full sends its oldest byte
+# itself. When the relay stops (hart 1's LCD is up, or a fatal error or a trap
+# is being reported: that report must not depend on the other hart), the
+# ring is emptied first, so bytes reach the UART in the order they were
+# printed, and printing goes straight to the UART again.
 
     .option norelax
     .include "k210.inc"
@@ -31,33 +43,207 @@ console_init:
 
     .globl console_putc
 # console_putc
-#   What: sends one byte, waiting while the TX FIFO is full.
+#   What: prints one byte: into the ring while the relay runs (sending the
+#         ring's oldest byte first when it is full), else to the UART after
+#         whatever the ring still holds, waiting while the TX FIFO is full.
+#         The caller holds the console lock (or is alone: early boot, traps).
 #   Arguments: a0 = byte.
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 console_putc:
-    li      t0, UARTHS_BASE
+    la      t0, console_relay
+    lw      t0, 0(t0)
+    bnez    t0, 5f
+    la      t0, console_ring_head
+    lw      t1, 0(t0)
+    la      t0, console_ring_tail
+    lw      t2, 0(t0)
+    bne     t1, t2, 4f                  # the ring's bytes go first
+3:  li      t0, UARTHS_BASE
 1:  lw      t1, UARTHS_TXDATA(t0)
     bltz    t1, 1b                      # bit 31 (sign) = FIFO full
     sw      a0, UARTHS_TXDATA(t0)
     ret
+4:  addi    sp, sp, -16
+    sd      ra, 8(sp)
+    sd      a0, 0(sp)
+    call    console_drain
+    ld      a0, 0(sp)
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
+    j       3b
+
+    # Relayed: append at head (indices run freely; full at RING_BYTES apart).
+5:  la      t0, console_ring_head
+    lw      t1, 0(t0)
+    la      t2, console_ring_tail
+    lw      t2, 0(t2)
+    subw    t3, t1, t2                  # bytes held (the indices wrap at 2^32)
+    li      t4, CONSOLE_RING_BYTES
+    bltu    t3, t4, 6f
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+    sd      a0, 0(sp)
+    call    console_send_oldest
+    ld      a0, 0(sp)
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
+    j       5b
+6:  andi    t3, t1, CONSOLE_RING_MASK
+    la      t2, console_ring
+    add     t2, t2, t3
+    sb      a0, 0(t2)
+    addiw   t1, t1, 1
+    sw      t1, 0(t0)
+    ret
 
     .globl console_puts
 # console_puts
-#   What: sends a NUL-terminated string.
+#   What: prints a NUL-terminated string (console_putc for each byte).
 #   Arguments: a0 = string address.
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 console_puts:
-    li      t0, UARTHS_BASE
-1:  lbu     t2, 0(a0)
-    beqz    t2, 3f
-2:  lw      t1, UARTHS_TXDATA(t0)
-    bltz    t1, 2b
-    sw      t2, UARTHS_TXDATA(t0)
-    addi    a0, a0, 1
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+    sd      s0, 0(sp)
+    mv      s0, a0
+1:  lbu     a0, 0(s0)
+    beqz    a0, 2f
+    call    console_putc
+    addi    s0, s0, 1
     j       1b
-3:  ret
+2:  ld      s0, 0(sp)
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
+    ret
+
+# console_send_oldest (file-local)
+#   What: sends the ring's oldest byte to the UART, waiting while the TX FIFO
+#         is full. The caller holds the console lock and the ring is not
+#         empty.
+#   Arguments: none. Results: none.
+#   Clobbers: only ABI temporaries.
+console_send_oldest:
+    la      t0, console_ring_tail
+    lw      t1, 0(t0)
+    andi    t2, t1, CONSOLE_RING_MASK
+    la      t3, console_ring
+    add     t3, t3, t2
+    lbu     t3, 0(t3)
+    li      t4, UARTHS_BASE
+1:  lw      t2, UARTHS_TXDATA(t4)
+    bltz    t2, 1b
+    sw      t3, UARTHS_TXDATA(t4)
+    addiw   t1, t1, 1
+    sw      t1, 0(t0)
+    ret
+
+# console_drain (file-local)
+#   What: sends everything the ring holds to the UART, waiting on the TX
+#         FIFO. The caller holds the console lock.
+#   Arguments: none. Results: none.
+#   Clobbers: only ABI temporaries.
+console_drain:
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+1:  la      t0, console_ring_head
+    lw      t1, 0(t0)
+    la      t0, console_ring_tail
+    lw      t2, 0(t0)
+    beq     t1, t2, 2f
+    call    console_send_oldest
+    j       1b
+2:  ld      ra, 8(sp)
+    addi    sp, sp, 16
+    ret
+
+# console_pump (file-local)
+#   What: moves bytes from the ring into the UART's TX FIFO while both have
+#         some: never waits. The caller holds the console lock.
+#   Arguments: none. Results: none.
+#   Clobbers: only ABI temporaries.
+console_pump:
+    la      t0, console_ring_tail
+    lw      t1, 0(t0)
+    la      t2, console_ring_head
+    lw      t2, 0(t2)
+    li      t3, UARTHS_BASE
+    la      t4, console_ring
+1:  beq     t1, t2, 2f
+    lw      t5, UARTHS_TXDATA(t3)
+    bltz    t5, 2f                      # FIFO full: the rest waits
+    andi    t5, t1, CONSOLE_RING_MASK
+    add     t5, t5, t4
+    lbu     t5, 0(t5)
+    sw      t5, UARTHS_TXDATA(t3)
+    addiw   t1, t1, 1
+    j       1b
+2:  sw      t1, 0(t0)
+    ret
+
+    .globl console_relay_start
+# console_relay_start
+#   What: from now on what is printed waits in the ring until a hart in
+#         console_wait_us sends it (see the file's comment). Called by hart 0
+#         before it releases hart 1, which does the sending.
+#   Arguments: none. Results: none.
+#   Clobbers: only ABI temporaries.
+console_relay_start:
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+    call    console_lock
+    la      t0, console_relay
+    li      t1, 1
+    sw      t1, 0(t0)
+    call    console_unlock
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
+    ret
+
+    .globl console_relay_stop
+# console_relay_stop
+#   What: ends the relay: sends what the ring holds (waiting on the UART), and
+#         printing goes straight to the UART again. Does nothing more when the
+#         relay is not running. The caller holds the console lock (error and
+#         trap reports call it before they print).
+#   Arguments: none. Results: none.
+#   Clobbers: only ABI temporaries.
+console_relay_stop:
+    la      t0, console_relay
+    sw      zero, 0(t0)
+    j       console_drain
+
+    .globl console_wait_us
+# console_wait_us
+#   What: waits at least a0 microseconds (asleep in WFI), meanwhile sending
+#         what the relay's ring holds every CONSOLE_RELAY_POLL_US, so the UART
+#         never runs dry while there is something to send.
+#   Arguments: a0 = microseconds.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+console_wait_us:
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+    sd      s0, 0(sp)
+    call    timer_deadline
+    mv      s0, a0                      # s0 = the wait's end (mtime)
+1:  call    console_lock
+    call    console_pump
+    call    console_unlock
+    mv      a0, s0
+    call    timer_expired
+    bnez    a0, 2f
+    li      a0, CONSOLE_RELAY_POLL_US
+    call    timer_deadline
+    bltu    a0, s0, 3f
+    mv      a0, s0                      # the last piece ends with the wait
+3:  call    delay_until
+    j       1b
+2:  ld      s0, 0(sp)
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
+    ret
 
     .globl console_put_hex64
 # console_put_hex64
@@ -226,3 +412,18 @@ console_ready:
 # console_owner: 0 = free, else hart id + 1 of the hart printing a line.
 console_owner:
     .word   0
+# console_relay: 1 while printed bytes wait in the ring (console_relay_start).
+console_relay:
+    .word   0
+# console_ring_head / _tail: bytes ever put into / taken out of the ring (the
+# ring holds head - tail of them, at index & CONSOLE_RING_MASK). In .data with
+# the rest, so that an early trap finds the ring empty.
+console_ring_head:
+    .word   0
+console_ring_tail:
+    .word   0
+
+    .bss
+# console_ring: the relay's bytes (only touched with the console lock held).
+console_ring:
+    .space  CONSOLE_RING_BYTES

@@ -5,10 +5,11 @@
 # the hart parks for good. The board model treats a line starting with
 # "error <code> " as the firmware's fatal error report.
 #
-# Fatal errors are raised on hart 0 during the boot-time loading, before
-# hart 1 is released, so hart 0 still owns SPI0 and paints the screen itself.
-# Should one ever be raised after the release, the colour is stored for
-# lcd_error_screen and hart 1 is asked to paint it, as trap.S does for a trap.
+# Fatal errors are raised on hart 0 during the boot-time loading, after
+# hart 1 was released to bring the LCD up and own SPI0 (main.S): the colour is
+# stored for lcd_error_screen and hart 1 is asked to paint it, as trap.S does
+# for a trap; hart 1 does so once lcd_init has finished. Before the release
+# (no error is raised there today) hart 0 would paint the screen itself.
 #
 # Callers build a report with error_begin, console_puts / console_put_dec /
 # console_put_hex, and error_end; error_fatal, error_fatal_dec and
@@ -81,6 +82,7 @@ error_begin:
 error_end:
     li      a0, '\n'
     call    console_putc
+    call    console_relay_stop          # the report is out before this hart parks
     call    console_unlock
 
     la      t0, error_code

@@ -16,11 +16,16 @@
     .text
     .globl lcd_init
 # lcd_init
-#   What: SPI0 to its idle LCD set-up, hardware reset pulse, then SWRESET,
-#         SLPOUT, COLMOD 16-bit, MADCTL upright landscape, INVOFF, NORON,
-#         full-screen window, DISPON; marks the LCD ready for the trap
-#         handler's error screen. Runs on hart 0 before hart 1 is released.
-#   Arguments: a0 = CPU clock in Hz (for the delays).
+#   What: SPI0 to its idle LCD set-up, hardware reset pulse, then SLPOUT,
+#         COLMOD 16-bit, MADCTL upright landscape, INVOFF, NORON, full-screen
+#         window, DISPON; marks the LCD ready for the error screen. Runs on
+#         hart 1 while hart 0 loads the card (main.S): it sleeps through the
+#         datasheet's waits (st7789v.inc), about 125 ms in all, sending the
+#         console's relayed output meanwhile (console_wait_us).
+#         No SWRESET: the RESX pulse already puts every register at its
+#         default, and a SWRESET would start the 120 ms before SLPOUT again.
+#   Arguments: a0 = CPU clock in Hz (for the reset pulse; the longer waits
+#         use cpu_hz, the same clock).
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 lcd_init:
@@ -41,20 +46,12 @@ lcd_init:
     li      a0, GPIOHS_LCD_RST_BIT
     call    gpiohs_set
     li      a0, LCD_RESET_WAIT_US
-    mv      a1, s0
-    call    delay_us
-
-    li      a0, LCD_CMD_SWRESET
-    call    lcd_command
-    li      a0, LCD_RESET_WAIT_US
-    mv      a1, s0
-    call    delay_us
+    call    console_wait_us
 
     li      a0, LCD_CMD_SLPOUT
     call    lcd_command
-    li      a0, LCD_RESET_WAIT_US
-    mv      a1, s0
-    call    delay_us
+    li      a0, LCD_SLPOUT_WAIT_US
+    call    console_wait_us
 
     li      a0, LCD_CMD_COLMOD
     li      a1, COLMOD_RGB565

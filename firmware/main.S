@@ -1,12 +1,36 @@
 # main.S: what each hart does after boot, and the frame handoff between them.
 #
-# Hart 0 brings the board up (clocks, pins, console, LCD, DMAC), loads
-# scene.ini and the files it names from the SD card (sd.S, fat32.S,
-# scene.S), parses the model and the texture into `scene` (obj.S, ppm.S;
-# any failure there is fatal, errors.S), releases hart 1, then
-# draws frames forever. Hart 1 sends finished frames to the LCD
-# and reports each one. After the release only hart 1 touches SPI0, the
-# DMAC and the LCD's GPIOHS lines.
+# Start-up runs on both harts at once. Hart 0 brings up what both need
+# (clocks, pins, console, the DMAC's reset) and releases hart 1; then hart 1
+# brings the LCD up (lcd.S: about 125 ms, nearly all of it the ST7789V's
+# datasheet waits, asleep in WFI) while hart 0 loads scene.ini and the files it
+# names from the SD card (sd.S, fat32.S, scene.S), parses the model and the
+# texture into `scene` (obj.S, ppm.S; any failure there is fatal, errors.S)
+# and draws frames forever. Hart 1 then sends finished frames to the LCD and
+# reports each one.
+#
+# Who owns what from the release on (nothing else is shared):
+#   hart 1 only: SPI0, DMAC channel 0 and its PLIC enable, lcd_ready, the
+#         LCD's panel state; hart 0 only: SPI1, DMAC channel 1 and its PLIC
+#         enable, the heap, `scene`, the renderer's buffers.
+#   written before the release, read-only after it: cpu_hz, .bss cleared,
+#         the console's UART set-up, the FPIOA, the DMAC's common set-up
+#         (dma_init: its reset would stop the other hart's channel).
+#   registers both change by read-modify-write: GPIOHS output_val (LCD reset
+#         and D/C on hart 1, the card's chip select on hart 0) and SYSCTL
+#         dma_sel0 (channel 0's and channel 1's request lines), each change
+#         under shared_io_lock (pins.S).
+#   the console: whole lines under console_lock (console.S), so lines of the
+#         two harts interleave but never mix. From the release until frame 0
+#         is on the LCD, what either hart prints waits in the console's ring
+#         and hart 1 sends it while it waits (for the LCD's datasheet delays,
+#         then for frame 0; console.S, the relay), so hart 0 does not wait on
+#         the UART while it loads.
+#   framebuffers, fb_state, fb_frame: the handoff below. Hart 0 may draw
+#         frame 0 before the LCD is up; hart 1 takes it once it is.
+#   a fatal error or a trap on hart 0: halt_request (trap.S, errors.S) after
+#         the error colour; hart 1 sees it when it next waits for a frame,
+#         after lcd_init has finished, and paints the error screen.
 #
 # Handoff: two framebuffers, frame n goes into buffer n & 1. Each buffer has
 # a state word, FB_FREE (hart 0 may draw into it) or FB_FULL (hart 1 may
@@ -17,8 +41,10 @@
 #           state[b] = FREE (release order); msip[0] = 1; print "frame N"
 # A waiting hart clears its own msip *before* reading the state, then WFIs:
 # a signal sent after the read leaves msip pending and WFI falls through, so
-# no wake-up is lost. Both walk the buffers in the same order (0, 1, 0, ...),
-# so frames reach the LCD in the order they were drawn.
+# no wake-up is lost (a signal that comes while hart 1 sleeps in lcd_init's
+# delays, which wake on the timer only, stays pending likewise). Both walk the
+# buffers in the same order (0, 1, 0, ...), so frames reach the LCD in the
+# order they were drawn.
 # A trap on either hart raises halt_request (trap.S): a waiting hart then
 # leaves its loop, hart 1 painting the error screen on the way out.
 
@@ -29,8 +55,8 @@
     .text
     .globl main_hart0
 # main_hart0
-#   What: hart 0 after .bss clearing: bring-up, SD card loading, release of
-#         hart 1, draw loop.
+#   What: hart 0 after .bss clearing: the bring-up both harts need, release
+#         of hart 1, SD card loading, draw loop.
 #   Arguments: none. Results: never returns.
 #   Clobbers: everything (it is the bottom of hart 0's call stack).
 main_hart0:
@@ -40,9 +66,11 @@ main_hart0:
     call    pins_init
     mv      a0, s0
     call    console_init
+    call    dma_init
+    call    console_relay_start         # hart 1 sends hart 0's lines while it waits
+    call    boot_release_hart1          # hart 1 brings the LCD up meanwhile
 
-    call    console_lock                # hart 1 is parked, but a trap in here must
-                                        # see that a line was cut short
+    call    console_lock                # whole lines: hart 1 prints too
     la      a0, msg_boot
     call    console_puts
     la      a0, msg_clocks_pll0
@@ -59,14 +87,8 @@ main_hart0:
     call    console_puts
     call    console_unlock
 
-    mv      a0, s0
-    call    lcd_init
-    call    dma_init
-    la      a0, msg_lcd
-    call    console_line
-
-    # The card's files, with the LCD up so that a failure can be shown and
-    # before hart 1 (and its use of SPI0 / DMA channel 0) is released.
+    # The card's files, while hart 1 brings the LCD up; a failure is shown
+    # by hart 1 once the LCD is up (errors.S).
     call    crc_init
     call    heap_init
     call    sd_init
@@ -75,8 +97,6 @@ main_hart0:
     call    obj_parse_model             # the mesh into `scene` (obj.S)
     call    ppm_parse_texture           # the texture into `scene` (ppm.S)
     call    render_init                 # renderer buffers for this scene (render.S)
-
-    call    boot_release_hart1
 
     li      s2, 0                       # s2 = frame number n
 1:  andi    s3, s2, 1                   # s3 = buffer index b
@@ -101,16 +121,41 @@ main_hart0:
 
     .globl main_hart1
 # main_hart1
-#   What: hart 1 after its release: display loop, sending each full buffer
-#         to the LCD, handing it back and printing its frame number.
+#   What: hart 1 after its release: LCD bring-up and the console's relay
+#         (console.S) until frame 0 is out, then the display loop, sending
+#         each full buffer to the LCD, handing it back and printing its frame
+#         number.
 #   Arguments: none. Results: never returns.
 #   Clobbers: everything (it is the bottom of hart 1's call stack).
 main_hart1:
+    la      t0, cpu_hz
+    lwu     a0, 0(t0)
+    call    lcd_init
+    la      a0, msg_lcd
+    call    console_line
+    # A fatal error or a trap on hart 0 while the LCD came up: show it now,
+    # without announcing a display loop that will never show a frame.
+    la      t0, halt_request
+    lw      t0, 0(t0)
+    bnez    t0, 3f
     la      a0, msg_hart1
     call    console_line
     call    dma_irq_init
 
-    li      s2, 0                       # s2 = frames shown
+    # Until hart 0 has drawn frame 0 it may still be loading and printing:
+    # keep the relay going meanwhile (fb_wait_state's WFI would not).
+4:  la      t0, halt_request
+    lw      t0, 0(t0)
+    bnez    t0, 3f
+    la      t0, fb_state
+    lw      t0, 0(t0)                   # buffer 0's state: frame 0 goes there
+    li      t1, FB_FULL
+    beq     t0, t1, 5f
+    li      a0, CONSOLE_RELAY_POLL_US
+    call    console_wait_us
+    j       4b
+
+5:  li      s2, 0                       # s2 = frames shown
 1:  andi    s3, s2, 1                   # s3 = buffer index b
     mv      a0, s3
     li      a1, FB_FULL
@@ -127,13 +172,21 @@ main_hart1:
     li      a1, FB_FREE
     li      a2, 0                       # tell hart 0
     call    fb_set_state
-    la      a0, msg_frame
+    # The relay ends once frame 0 is out (then it has nothing left to do):
+    # what it still holds goes first, then this and every later line
+    # straight to the UART.
+    bnez    s2, 6f
+    call    console_lock
+    call    console_relay_stop
+    call    console_unlock
+6:  la      a0, msg_frame
     mv      a1, s4
     call    console_line_dec
     addi    s2, s2, 1
     j       1b
 
     # Hart 0 trapped: it no longer draws and leaves SPI0 to this hart.
+3:  fence   r, rw                       # acquire: the error colour stored before the request
 2:  call    lcd_error_screen
     j       trap_park
 
@@ -180,7 +233,8 @@ fb_wait_state:
     csrc    mie, t4
     li      a0, 0
     ret
-3:  csrc    mie, t4
+3:  fence   r, rw                       # acquire: the error colour stored before the request
+    csrc    mie, t4
     li      a0, 1
     ret
 

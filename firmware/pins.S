@@ -77,11 +77,19 @@ pins_init:
 #   Arguments: a0 = mask of GPIOHS lines. Results: none.
 #   Clobbers: only ABI temporaries.
 gpiohs_set:
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+    sd      a0, 0(sp)
+    call    shared_io_lock
+    ld      a0, 0(sp)
     li      t0, GPIOHS_BASE
     lw      t1, GPIOHS_OUTPUT_VAL(t0)
     or      t1, t1, a0
     sw      t1, GPIOHS_OUTPUT_VAL(t0)
     fence   o, o                        # the level is out before later device writes
+    call    shared_io_unlock
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
     ret
 
     .globl gpiohs_clear
@@ -90,10 +98,60 @@ gpiohs_set:
 #   Arguments: a0 = mask of GPIOHS lines. Results: none.
 #   Clobbers: only ABI temporaries.
 gpiohs_clear:
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+    sd      a0, 0(sp)
+    call    shared_io_lock
+    ld      a0, 0(sp)
     li      t0, GPIOHS_BASE
     lw      t1, GPIOHS_OUTPUT_VAL(t0)
     not     t2, a0
     and     t1, t1, t2
     sw      t1, GPIOHS_OUTPUT_VAL(t0)
     fence   o, o
+    call    shared_io_unlock
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
     ret
+
+    .globl shared_io_lock
+# shared_io_lock
+#   What: takes the lock on the device registers both harts change by
+#         read-modify-write: GPIOHS output_val (hart 1 drives the LCD's reset
+#         and D/C lines while hart 0 drives the SD card's chip select, all in
+#         one register) and SYSCTL dma_sel0 (DMAC channel 0 for the LCD,
+#         channel 1 for the card). Without it one hart's write could put back
+#         a bit the other had just changed. Held for a few instructions, never
+#         across a wait; a hart never takes it twice.
+#   Arguments: none. Results: none.
+#   Clobbers: only ABI temporaries.
+shared_io_lock:
+    la      t0, shared_io_owner
+    csrr    t1, mhartid
+    addi    t1, t1, 1
+1:  lr.w.aq t2, (t0)
+    bnez    t2, 1b
+    sc.w    t2, t1, (t0)
+    bnez    t2, 1b
+    fence                               # device accesses stay after the lock is ours
+    ret
+
+    .globl shared_io_unlock
+# shared_io_unlock
+#   What: gives the lock shared_io_lock took back, after this hart's device
+#         accesses under it.
+#   Arguments: none. Results: none.
+#   Clobbers: only ABI temporaries.
+shared_io_unlock:
+    la      t0, shared_io_owner
+    fence
+    amoswap.w.rl zero, zero, (t0)
+    ret
+
+# ---------------------------------------------------------------------------
+    .data
+    .balign 4
+# shared_io_owner: 0 when free, else the holder's hart id + 1. In .data: valid
+# before .bss is cleared.
+shared_io_owner:
+    .word   0

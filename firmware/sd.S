@@ -66,13 +66,16 @@ sd_init:
     call    sd_spi_setup
 
     # DMAC channel 1's handshake interface carries SSI1_RX; its interrupt
-    # reaches this hart for the WFI waits.
+    # reaches this hart for the WFI waits. The other hart may be setting
+    # channel 0's field of the same register (shared_io_lock).
+    call    shared_io_lock
     li      t0, SYSCTL_BASE
     lw      t1, SYSCTL_DMA_SEL0(t0)
     li      t2, ~SD_DMA_SEL_MASK
     and     t1, t1, t2
     ori     t1, t1, DMA_REQ_SSI1_RX << SD_DMA_SEL_SHIFT
     sw      t1, SYSCTL_DMA_SEL0(t0)
+    call    shared_io_unlock
     li      a0, SD_DMA_CHANNEL
     call    dma_irq_enable
 

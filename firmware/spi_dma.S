@@ -139,7 +139,8 @@ spi0_fill_words:
 # dma_init
 #   What: resets the DMAC, clears its common interrupts and enables it with
 #         interrupts (per-channel signals still off). Done once, by hart 0
-#         during bring-up. Needs the DMA clock (clocks_init).
+#         before it releases hart 1: the reset would stop a channel the other
+#         hart had started. Needs the DMA clock (clocks_init).
 #   Arguments: none. Results: none.
 #   Clobbers: only ABI temporaries.
 dma_init:
@@ -327,12 +328,15 @@ spi0_dma_start:
     li      a2, SPI_DMACR_TDMAE
     call    spi0_configure
 
-    # Channel 0's handshake interface carries SSI0_TX.
+    # Channel 0's handshake interface carries SSI0_TX. The other hart may be
+    # setting channel 1's field of the same register (shared_io_lock).
+    call    shared_io_lock
     li      t0, SYSCTL_BASE
     lw      t1, SYSCTL_DMA_SEL0(t0)
     andi    t1, t1, ~DMA_SEL_CH0_MASK
     ori     t1, t1, DMA_REQ_SSI0_TX << DMA_SEL_CH0_SHIFT
     sw      t1, SYSCTL_DMA_SEL0(t0)
+    call    shared_io_unlock
 
     # Channel 0: stale interrupts cleared, make sure it is off before
     # reprogramming (the registers are ignored while it runs).

@@ -28,8 +28,21 @@ delay_us:
 
     li      t2, CLINT_MTIME
     ld      t3, 0(t2)
-    add     t0, t0, t3                  # t0 = target mtime
+    add     a0, t0, t3                  # a0 = target mtime
+    # fall through
 
+    .globl delay_until
+# delay_until
+#   What: sleeps in WFI until mtime reaches a0 (returns at once when it
+#         already has), for a wait whose end was fixed earlier (see
+#         timer_deadline).
+#   Arguments: a0 = the mtime value to wait for.
+#   Results: none.
+#   Clobbers: only ABI temporaries. mie.MTIE is left clear and this hart's
+#         mtimecmp is left at all ones (never fires).
+delay_until:
+    mv      t0, a0                      # t0 = target mtime
+    li      t2, CLINT_MTIME
     csrr    t4, mhartid
     slli    t4, t4, CLINT_MTIMECMP_SHIFT
     li      t5, CLINT_MTIMECMP

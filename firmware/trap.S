@@ -102,7 +102,7 @@ trap_entry:
     call    console_putc
     j       3f
 2:  call    console_lock
-3:
+3:  call    console_relay_stop          # what is queued, then the report, by this hart
     la      a0, msg_trap_mcause
     call    console_puts
     mv      a0, s1

@@ -200,10 +200,11 @@ def test_an_unknown_timing_model_is_refused():
 # The default card's first frames under the model before cycle timing (commit 53f433e, this
 # firmware and card): virtual time each frame reached the LCD, and hart 0's and hart 1's
 # instructions since the previous frame. --timing ipc1 must reproduce them exactly. (A change to
-# the firmware or to the card changes them on purpose: take them again from
-# `python -m emulator run build/firmware.elf --sd build/card.img --frames 4 --timing ipc1`.)
-BEFORE_CYCLES = [(0.5282952271297012, [11893982, 1681]), (0.5359202544249867, [1009329, 910]),
-                 (0.5435452817202722, [1008685, 910]), (0.5511703090155576, [1025670, 910])]
+# the firmware or to the card changes them on purpose: take them again by running commit 53f433e's
+# emulator, `python -m emulator run build/firmware.elf --sd build/card.img --frames 4`, on the new
+# firmware and card.)
+BEFORE_CYCLES = [(0.13336426269646579, [11892668, 28802]), (0.14437470686519974, [1009329, 3491]),
+                 (0.1520004736145794, [1008685, 1208]), (0.1596262403639591, [1025670, 1208])]
 
 
 def test_ipc1_reproduces_the_model_before_cycle_timing(firmware, card, firmware_run, tmp_path):
