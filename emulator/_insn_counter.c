@@ -6,8 +6,9 @@
  * every instruction: it counts it, and stops the engine before the first
  * instruction past the quantum's budget. The board reads the count through
  * ctypes, so minstret/mcycle and per-frame counts are exact. It also notices
- * a hart coming round a poll loop (below), and counts the cycles the K210's
- * Rocket core would take (below: timing.py computes the table it reads).
+ * a hart coming round a poll loop (below), counts the cycles the K210's
+ * Rocket core would take (below: timing.py computes the table it reads), and
+ * stops before the CSR instructions the board answers itself (hart.py).
  *
  * It is built as a (method-less) Python extension only so that pip builds
  * it with the package; Python never calls into it, ctypes hands the address
@@ -36,6 +37,7 @@ typedef int (*uc_reg_read_fn)(void *uc, int regid, void *value);
 #define BHT_BITS 7
 #define BHT_ENTRIES (1 << BHT_BITS)
 #define RAS_ENTRIES 2
+#define BTB_INDEX_BUCKETS 128   /* a power of two, over 2 x BTB_ENTRIES */
 
 typedef struct {
     uint64_t pc[BTB_ENTRIES];
@@ -49,6 +51,9 @@ typedef struct {
     uint32_t history;
     uint32_t ras_count;
     uint32_t ras_pos;
+    /* Not Rocket's: an index to find a pc among the BTB's entries without comparing all 40
+     * (linear probing; each bucket holds an entry's number + 1, 0 when empty). */
+    uint8_t index[BTB_INDEX_BUCKETS];
 } predictor_t;
 
 typedef struct {
@@ -73,6 +78,10 @@ typedef struct {
     uint64_t mispredicts; /* statistics for the bench and the tests */
     uint64_t stall_cycles;
     predictor_t predictor;
+    /* --- CSR instructions the board answers itself (hart.py) --- */
+    const uint64_t *csr_sites; /* their addresses, a table indexed by (address >> 1) & csr_mask; or NULL */
+    uint64_t csr_mask;
+    uint64_t csr_report;  /* the site the run stopped at, counted but not executed (0: none) */
 } insn_counter_t;
 
 /* A table entry (timing.py writes them; keep the two in step). */
@@ -102,12 +111,47 @@ PyMODINIT_FUNC PyInit__insn_counter(void);
  * `body` instructions after its previous execution, the hart has run one whole iteration and is
  * about to run another: it is polling. The loop is reported and the run ends after the head.
  */
+static uint32_t btb_bucket(uint64_t pc)
+{
+    return (uint32_t)((pc >> 1) ^ (pc >> 8)) & (BTB_INDEX_BUCKETS - 1);
+}
+
+/* The BTB entry holding `pc`, or -1 (a fully associative look-up, through the index). */
 static int btb_find(const predictor_t *p, uint64_t pc)
 {
-    for (int i = 0; i < BTB_ENTRIES; i++)
-        if (p->valid[i] && p->pc[i] == pc)
-            return i;
+    for (uint32_t i = btb_bucket(pc); p->index[i]; i = (i + 1) & (BTB_INDEX_BUCKETS - 1)) {
+        int slot = p->index[i] - 1;
+        if (p->pc[slot] == pc)
+            return slot;
+    }
     return -1;
+}
+
+static void btb_index_insert(predictor_t *p, uint64_t pc, int slot)
+{
+    uint32_t i = btb_bucket(pc);
+    while (p->index[i])
+        i = (i + 1) & (BTB_INDEX_BUCKETS - 1);
+    p->index[i] = (uint8_t)(slot + 1);
+}
+
+/* Takes `pc` out of the index, moving later members of its probe run back into the gap. */
+static void btb_index_remove(predictor_t *p, uint64_t pc)
+{
+    uint32_t i = btb_bucket(pc);
+    while (p->pc[p->index[i] - 1] != pc)
+        i = (i + 1) & (BTB_INDEX_BUCKETS - 1);
+    uint32_t gap = i;
+    for (uint32_t j = (i + 1) & (BTB_INDEX_BUCKETS - 1); p->index[j]; j = (j + 1) & (BTB_INDEX_BUCKETS - 1)) {
+        uint32_t home = btb_bucket(p->pc[p->index[j] - 1]);
+        /* j's entry may fill the gap when its home bucket is not in (gap, j] (cyclically) */
+        int home_in_range = gap <= j ? (gap < home && home <= j) : (gap < home || home <= j);
+        if (!home_in_range) {
+            p->index[gap] = p->index[j];
+            gap = j;
+        }
+    }
+    p->index[gap] = 0;
 }
 
 /* Cycles the control transfer at `pc` (its table entry `e`) costs beyond its own, now that the
@@ -139,6 +183,9 @@ static uint64_t resolve_transfer(insn_counter_t *c, uint64_t pc, uint32_t e, int
         if (slot < 0) {
             slot = (int)p->next_replace;
             p->next_replace = (p->next_replace + 1) % BTB_ENTRIES;
+            if (p->valid[slot])
+                btb_index_remove(p, p->pc[slot]);
+            btb_index_insert(p, pc, slot);
         }
         p->valid[slot] = 1;
         p->pc[slot] = pc;
@@ -274,6 +321,13 @@ void count_instruction(void *uc, uint64_t address, uint32_t size, insn_counter_t
             }
             loop->last = counter->executed;
         }
+    }
+    /* A CSR the board answers (mhartid, mcycle, ...): the instruction is counted and timed like
+     * any other, then the engine stops before executing it, and Python carries it out. One look-up
+     * here, where a code hook per site would make Unicorn walk every hook on every instruction. */
+    if (counter->csr_sites != NULL && counter->csr_sites[(address >> 1) & counter->csr_mask] == address) {
+        counter->csr_report = address;
+        counter->stop(uc);
     }
 }
 

@@ -273,7 +273,7 @@ class Debugger:
             return
         types = {2: unicorn.UC_HOOK_MEM_WRITE, 3: unicorn.UC_HOOK_MEM_READ,
                  4: unicorn.UC_HOOK_MEM_WRITE | unicorn.UC_HOOK_MEM_READ}[kind]
-        self.watchpoints[key] = [hart.uc.hook_add(types, self._on_access(kind), hart, address, address + length - 1)
+        self.watchpoints[key] = [hart.add_hook(types, self._on_access(kind), hart, address, address + length - 1)
                                  for hart in self.board.harts]
 
     def clear_watchpoint(self, kind: int, address: int, length: int) -> None:

@@ -6,8 +6,9 @@ that Unicorn leaves out (see ../shared/unicorn-riscv-notes.md):
 - an exact instruction count (a native per-instruction hook, `_insn_counter.c`), and the
   cycles the instructions take on the K210's Rocket core (the same hook, from timing.py's table;
   without a table one cycle each),
-- `mhartid`, `mcycle`, `minstret`, `cycle`, `instret` and `mip` reads, by code
-  hooks on every CSR instruction that names them,
+- `mhartid`, `mcycle`, `minstret`, `cycle`, `instret` and `mip` reads: the native counter
+  stops before every CSR instruction that names them and `run` carries it out (a code hook per
+  such instruction would cost every instruction: Unicorn walks all its code hooks on each one),
 - synchronous exceptions and interrupts entering `mtvec` the way the privileged
   spec says, delivered by the board between runs,
 - `wfi`, which ends a run: the board keeps the hart asleep until an enabled
@@ -65,6 +66,7 @@ INSN_WFI = 0x10500073
 
 
 BTB_ENTRIES, BHT_ENTRIES, RAS_ENTRIES = 40, 128, 2     # _insn_counter.c's predictor sizes
+BTB_INDEX_BUCKETS = 128
 NO_LIMIT = 2**64 - 1
 
 
@@ -74,7 +76,8 @@ class _Predictor(ctypes.Structure):
                 ("valid", ctypes.c_uint8 * BTB_ENTRIES), ("is_jump", ctypes.c_uint8 * BTB_ENTRIES),
                 ("is_return", ctypes.c_uint8 * BTB_ENTRIES), ("bht", ctypes.c_uint8 * BHT_ENTRIES),
                 ("ras", ctypes.c_uint64 * RAS_ENTRIES), ("next_replace", ctypes.c_uint32),
-                ("history", ctypes.c_uint32), ("ras_count", ctypes.c_uint32), ("ras_pos", ctypes.c_uint32)]
+                ("history", ctypes.c_uint32), ("ras_count", ctypes.c_uint32), ("ras_pos", ctypes.c_uint32),
+                ("index", ctypes.c_uint8 * BTB_INDEX_BUCKETS)]
 
 
 class _Counter(ctypes.Structure):
@@ -85,7 +88,8 @@ class _Counter(ctypes.Structure):
                 ("table_base", ctypes.c_uint64), ("table_end", ctypes.c_uint64), ("reg_read", ctypes.c_void_p),
                 ("reg_x0", ctypes.c_int32), ("pending_kind", ctypes.c_int32), ("pending_pc", ctypes.c_uint64),
                 ("pending_entry", ctypes.c_uint32), ("pad", ctypes.c_uint32), ("mispredicts", ctypes.c_uint64),
-                ("stall_cycles", ctypes.c_uint64), ("predictor", _Predictor)]
+                ("stall_cycles", ctypes.c_uint64), ("predictor", _Predictor), ("csr_sites", ctypes.c_void_p),
+                ("csr_mask", ctypes.c_uint64), ("csr_report", ctypes.c_uint64)]
 
 
 _counter_lib = ctypes.CDLL(_insn_counter.__file__)
@@ -146,8 +150,9 @@ class Hart:
         self._cycle_table: timing.CycleTable | None = None   # kept alive while the counter reads it
         self._counter_hook = self.add_native_hook(unicorn.UC_HOOK_CODE, _COUNT_HOOK, self._counter, 1, 0,
                                                   "the instruction counter")
-        self._csr_sites: list[tuple[int, int]] = []
-        self._csr_hooks: list[int] = []
+        self._csr_words: dict[int, int] = {}          # address -> instruction word of each CSR site
+        self._csr_table: ctypes.Array | None = None   # the counter's table of CSR sites, kept alive here
+        self.csr_listeners: list[Callable[["Hart", int], None]] = []   # called before a CSR site is carried out
         self.poll_loops: dict[int, tuple[shared_memory.PollLoop, shared_memory.LoopSlot]] = {}
         self._loop_slots: ctypes.Array | None = None   # the counter's table of poll loops, kept alive here
         self.wait: shared_memory.Wait | None = None   # what the hart polls while WAITING
@@ -167,6 +172,14 @@ class Hart:
         if status != 0:
             raise RuntimeError(f"cannot install {what} on hart {self.hart_id}: unicorn status {status}")
         return handle.value
+
+    def add_hook(self, kind: int, callback: Callable, user_data: object, begin: int = 1, end: int = 0) -> int:
+        """A Python hook added while the hart may already have run: Unicorn 2.1.4 decides when it
+        translates code which instructions call hooks, and code translated before the hook was
+        added may never call it, so the translations are dropped. Returns the hook's handle."""
+        handle = self.uc.hook_add(kind, callback, user_data, begin, end)
+        self.uc.ctl_flush_tb()
+        return handle
 
     def remove_hook(self, handle: int) -> None:
         _ucpy.uclib.uc_hook_del(self.uc._uch, ctypes.c_size_t(handle))
@@ -254,7 +267,21 @@ class Hart:
         self._counter.limit = start + budget
         self._counter.cycle_limit = NO_LIMIT if cycle_budget is None else self._counter.cycles + cycle_budget
         self.stop_requested = False
-        self.uc.emu_start(self.pc, 0)
+        pc = self.pc
+        while True:
+            self.uc.emu_start(pc, 0)
+            site = self._counter.csr_report
+            if not site:
+                break
+            # the counter stopped at a CSR the board answers: it is counted and timed, not executed
+            self._counter.csr_report = 0
+            for listener in self.csr_listeners:
+                listener(self, site)
+            pc = self._carry_out_csr(site, self._csr_words[site])
+            if self.pending_exception is not None or self._counter.poll_report or self.stop_requested or \
+                    self._counter.executed >= self._counter.limit or self._counter.cycles >= self._counter.cycle_limit:
+                self.uc.reg_write(rv.UC_RISCV_REG_PC, pc)
+                break
         ran = self._counter.executed - start
         self.pc = self.uc.reg_read(rv.UC_RISCV_REG_PC)
         if self.pending_exception is not None:
@@ -335,48 +362,50 @@ class Hart:
     # --- CSR interception --------------------------------------------------------------
 
     def intercept_csr_sites(self, sites: list[tuple[int, int]]) -> None:
-        """Installs a hook on each (address, instruction word) that accesses an intercepted CSR."""
-        self._csr_sites.extend(sites)
-        for address, word in sites:
-            self._csr_hooks.append(self.uc.hook_add(unicorn.UC_HOOK_CODE, self._on_csr, word, address, address))
+        """Has the native counter stop before each (address, instruction word) that accesses an
+        intercepted CSR, so that `run` carries it out."""
+        self._csr_words.update(sites)
+        if not self._csr_words:
+            return
+        table, mask = _address_table(list(self._csr_words))
+        self._csr_table = table
+        self._counter.csr_sites = ctypes.addressof(table)
+        self._counter.csr_mask = mask
 
     def add_stop_hook(self, callback: Callable, user_data: object, begin: int, end: int) -> int:
         """A Python code hook (a debugger's breakpoint or step) that runs before the native
         counter on every instruction of begin..end: Unicorn calls code hooks in the order they
         were added and skips the rest once one stops the engine, so an instruction the hook
-        stops before is neither counted nor timed. The counter and the CSR hooks (which rely on
-        the counter having counted their instruction) are added again after it."""
+        stops before is neither counted nor timed. The counter is added again after it."""
         self.remove_hook(self._counter_hook)
-        for handle in self._csr_hooks:
-            self.uc.hook_del(handle)
         handle = self.uc.hook_add(unicorn.UC_HOOK_CODE, callback, user_data, begin, end)
         self._counter_hook = self.add_native_hook(unicorn.UC_HOOK_CODE, _COUNT_HOOK, self._counter, 1, 0,
                                                   "the instruction counter")
-        sites, self._csr_sites, self._csr_hooks = self._csr_sites, [], []
-        self.intercept_csr_sites(sites)
+        self.uc.ctl_flush_tb()   # see add_hook
         return handle
 
-    def _on_csr(self, uc: unicorn.Uc, address: int, size: int, word: int) -> None:
+    def _carry_out_csr(self, address: int, word: int) -> int:
+        """Executes the CSR instruction `word` at `address` (already counted); returns the pc
+        the hart goes on from: the next instruction, or the site itself when it traps."""
         csr = word >> 20
         rd = (word >> 7) & 31
         rs1 = (word >> 15) & 31
         funct3 = (word >> 12) & 7
-        operand = rs1 if funct3 & 4 else (uc.reg_read(rv.UC_RISCV_REG_X0 + rs1) if rs1 else 0)
+        operand = rs1 if funct3 & 4 else (self.reg(rv.UC_RISCV_REG_X0 + rs1) if rs1 else 0)
         writes = (funct3 & 3) == 1 or rs1 != 0
         if writes and csr in READ_ONLY_CSRS:
             # a write to a read-only CSR is an illegal instruction, as on the real hart
             self.pending_exception = PendingException(CAUSE_ILLEGAL_INSTRUCTION, address, word)
             self.retired_adjust += 1
-            uc.emu_stop()
-            return
+            return address
         old = self._csr_value(csr)
         if writes:
             op = funct3 & 3
             new = operand if op == 1 else (old | operand if op == 2 else old & ~operand)
             self._csr_write(csr, new & (2**64 - 1))
         if rd:
-            uc.reg_write(rv.UC_RISCV_REG_X0 + rd, old)
-        uc.reg_write(rv.UC_RISCV_REG_PC, address + 4)
+            self.uc.reg_write(rv.UC_RISCV_REG_X0 + rd, old)
+        return address + 4
 
     def _csr_value(self, csr: int) -> int:
         if csr in INTERRUPT_ENABLE_CSRS:
@@ -410,6 +439,21 @@ class Hart:
             self.minstret_offset = value - self.instret
         # mip: MSIP/MTIP/MEIP are read-only in mip; the writable bits belong to S/U modes,
         # which the K210 firmware here does not use. Writes are ignored like the hardware does.
+
+
+def _address_table(addresses: list[int]) -> tuple[ctypes.Array, int]:
+    """The native counter's table of CSR sites: u64 slots indexed by (address >> 1) & mask, the
+    smallest power of two at least twice their number in which no two share a slot (a look-up is
+    one compare; an empty slot holds 0, which is no instruction's address). Returns (table, mask)."""
+    size = 1
+    while size < 2 * len(addresses):
+        size *= 2
+    while len({(a >> 1) & (size - 1) for a in addresses}) < len(addresses):
+        size *= 2
+    table = (ctypes.c_uint64 * size)()
+    for address in addresses:
+        table[(address >> 1) & (size - 1)] = address
+    return table, size - 1
 
 
 def find_csr_sites(code: bytes, base: int) -> list[tuple[int, int]]:

@@ -129,7 +129,7 @@ class Profiler:
         self._states = [_HartState() for _ in board.harts]
         self._frame_marks: list[list[dict[str, tuple[int, int]]]] = []      # per frame, per hart: exclusive so far
         for hart in board.harts:
-            hart.uc.hook_add(unicorn.UC_HOOK_BLOCK, self._on_block, hart)
+            hart.add_hook(unicorn.UC_HOOK_BLOCK, self._on_block, hart)
 
     def function_of(self, address: int) -> str:
         index = bisect.bisect_right(self._addresses, address) - 1

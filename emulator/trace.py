@@ -68,13 +68,16 @@ class InstructionTrace:
 
     def _start(self, board: "Board") -> None:
         for hart in board.harts:
-            self._handles[hart.hart_id] = hart.uc.hook_add(unicorn.UC_HOOK_CODE, self._hook, hart)
+            self._handles[hart.hart_id] = hart.add_hook(unicorn.UC_HOOK_CODE, self._hook, hart)
+            # the CSR instructions the board carries out itself stop the engine before the hook above
+            hart.csr_listeners.append(self._on_csr_site)
 
     def _stop(self, board: "Board") -> None:
         for hart in board.harts:
             handle = self._handles.pop(hart.hart_id, None)
             if handle is not None:
                 hart.uc.hook_del(handle)
+                hart.csr_listeners.remove(self._on_csr_site)
             self._finish(hart)
 
     def close(self) -> None:
@@ -92,6 +95,9 @@ class InstructionTrace:
         now = self.board.scheduler.hart_now(hart)
         self._pending[hart.hart_id] = _Pending(address, text, now, [hart.reg(r) for r in GPRS],
                                                 [hart.reg(r) for r in FPRS] if floating else None)
+
+    def _on_csr_site(self, hart: "Hart", address: int) -> None:
+        self._hook(hart.uc, address, 4, hart)
 
     def _finish(self, hart: "Hart") -> None:
         """Writes the line of the hart's previous instruction, now that it has run."""
