@@ -42,6 +42,7 @@ class Fpioa(Peripheral):
 
     def __init__(self, board=None) -> None:
         super().__init__(board)
+        self._pads_by_function: dict[int, tuple[int, ...]] = {}   # looked up on every GPIO read: kept
         self._unroute_all()
 
     def _unroute_all(self) -> None:
@@ -49,6 +50,7 @@ class Fpioa(Peripheral):
         # number at reset means a pad nobody routed drives nothing.
         for pad in range(PAD_COUNT):
             self.values[4 * pad] = FUNCTION_MASK
+        self._pads_by_function.clear()
 
     def reset(self, now: float) -> None:
         super().reset(now)
@@ -60,9 +62,14 @@ class Fpioa(Peripheral):
         return self.values[4 * pad] & FUNCTION_MASK
 
     def pads_with_function(self, function: int) -> list[int]:
-        return [pad for pad in range(PAD_COUNT) if self.function_of_pad(pad) == function]
+        pads = self._pads_by_function.get(function)
+        if pads is None:
+            pads = self._pads_by_function[function] = tuple(pad for pad in range(PAD_COUNT)
+                                                            if self.function_of_pad(pad) == function)
+        return list(pads)
 
     def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
         self.values[offset] = value
+        self._pads_by_function.clear()
         if self.board is not None and offset < 4 * PAD_COUNT:
             self.board.wiring_changed(now)

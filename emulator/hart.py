@@ -296,6 +296,19 @@ class Hart:
             return RunEnd.BUDGET, ran
         return RunEnd.STOPPED, ran
 
+    def lift_limits(self) -> None:
+        """The next engine run has no instruction or cycle limit and does not stop at the CSRs the
+        board answers (Unicorn answers them: mhartid reads 0, right for hart 0 only): the bench
+        measuring Unicorn itself on hart 0. The board's own runs are not possible after this."""
+        self._counter.limit = NO_LIMIT
+        self._counter.cycle_limit = NO_LIMIT
+        self._counter.csr_sites = None
+
+    def remove_counter(self) -> None:
+        """Takes the native counter out (the bench measuring Unicorn without it): the hart counts
+        nothing from here on, so the board cannot run it any more."""
+        self.remove_hook(self._counter_hook)
+
     def request_stop(self) -> None:
         """Ends the current run once the current instruction has completed: the native
         counter stops the engine before the next instruction starts. (uc.emu_stop called

@@ -48,7 +48,8 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from emulator.board import Board  # noqa: E402
-from emulator.hart import CsrContext, Hart  # noqa: E402
+from emulator.hart import CsrContext, Hart, HartState  # noqa: E402
+from emulator.memory import SRAM_BASE  # noqa: E402
 from emulator.timing import TIMING_IPC1, TIMING_ROCKET  # noqa: E402
 from tools import quality  # noqa: E402
 
@@ -121,7 +122,64 @@ def firmware_figures(firmware: Path, card: Path, frames: int, check_writes: bool
         "share_of_host_time_executing": board.host_time_in_harts / host,
         "frames_per_host_second": frames / host,
         "virtual_fps": (frames - 1) / (board.frames[-1].virtual_time_s - board.frames[0].virtual_time_s),
+        **real_time_figures(board.frames),
     }
+
+
+def real_time_figures(frames: list) -> dict:
+    """After loading (from the first frame on): virtual seconds per host second (the real-time
+    factor; 1.0 runs as fast as a Dock) and host milliseconds per frame against virtual ones."""
+    first, last = frames[0], frames[-1]
+    host = last.host_time_s - first.host_time_s
+    virtual = last.virtual_time_s - first.virtual_time_s
+    count = len(frames) - 1
+    return {"real_time_factor": virtual / host, "host_ms_per_frame": host / count * 1e3,
+            "virtual_ms_per_frame": virtual / count * 1e3}
+
+
+def drawing_figures(firmware: Path, card: Path, rounds: int = 3) -> dict:
+    """What Unicorn itself costs on hart 0's drawing: from a steady frame's start (hart 0 asleep,
+    both framebuffers then marked free) to its next wfi, two frames drawn, run on hart 0's own
+    engine with nothing else: with the board's native counter and cycle table, with the counter
+    counting one cycle each, with no hook at all (the translations dropped before each run, so that
+    each way runs code translated for it; fastest of `rounds` each). The board's own figure per frame
+    is firmware_figures'."""
+    board = Board(str(firmware), sd_image=str(card))
+    board.run(3)
+    scheduler = board.scheduler
+    while scheduler.harts[0].state is not HartState.ASLEEP:
+        scheduler.step()
+    hart = scheduler.harts[0]
+    memory = board.memory.bytes
+    snapshot = np.array(memory, copy=True)
+    context, pc = hart.uc.context_save(), hart.pc
+    fb_state = board.image.symbol_values["fb_state"] - SRAM_BASE
+    ways = {}
+
+    def draw() -> tuple[float, int]:
+        memory[:] = snapshot
+        memory[fb_state:fb_state + 8] = 0          # both buffers free: hart 0 draws two frames
+        hart.uc.context_restore(context)
+        hart.uc.ctl_flush_tb()
+        hart.lift_limits()
+        executed = hart.executed
+        start = time.perf_counter()
+        hart.uc.emu_start(pc, 0)
+        return time.perf_counter() - start, hart.executed - executed
+
+    instructions = 0
+    for way in ("counter and Rocket cycle table", "counter, one cycle each", "no hook"):
+        if way == "counter, one cycle each":
+            hart.install_cycle_table(None)
+        elif way == "no hook":
+            hart.remove_counter()
+        best = min(draw() for _ in range(rounds))
+        instructions = best[1] or instructions
+        ways[way] = best[0]
+    board.close()
+    return {"instructions": instructions, "frames": 2,
+            "host_ms_per_frame": {way: seconds / 2 * 1e3 for way, seconds in ways.items()},
+            "mips": {way: instructions / seconds / 1e6 for way, seconds in ways.items()}}
 
 
 PROFILE_FRAMES = 12
@@ -576,6 +634,7 @@ def speed_figures(args: argparse.Namespace) -> None:
     checked = write_check_figures(Path(args.firmware), Path(args.card), args.frames, board)
     ipc1 = timing_figures(Path(args.firmware), Path(args.card), args.frames, board)
     profile = profile_figures(Path(args.firmware), Path(args.card))
+    drawing = drawing_figures(Path(args.firmware), Path(args.card))
     with tempfile.TemporaryDirectory() as tmp:
         sd = sd_figures(Path(args.firmware), Path(tmp))
         sd_ipc1 = sd_figures(Path(args.firmware), Path(tmp), timing=TIMING_IPC1)
@@ -591,6 +650,7 @@ def speed_figures(args: argparse.Namespace) -> None:
         "sd_ipc1": sd_ipc1,
         "thesis_start_up_ms": THESIS_START_UP_MS,
         "profile": profile,
+        "drawing": drawing,
     }
     print(f"raw Unicorn, tight loop, no limit:         {raw:8.1f} MIPS")
     print(f"board hart, same loop, exact counting:     {counted:8.1f} MIPS  ({counted / raw:.2f} x raw)")
@@ -600,6 +660,13 @@ def speed_figures(args: argparse.Namespace) -> None:
           f"{100 * board['share_of_host_time_executing']:.0f} % of host time is spent executing")
     print(f"  {board['frames']} frames in {board['host_time_s']:.2f} s host = {board['frames_per_host_second']:.1f} frames/s; "
           f"virtual {board['virtual_fps']:.1f} frames/s; instructions per hart {board['instructions']}")
+    print(f"  after loading: {board['host_ms_per_frame']:.1f} ms host per {board['virtual_ms_per_frame']:.2f} ms "
+          f"virtual frame, real-time factor {board['real_time_factor']:.3f} (virtual seconds per host second; "
+          f"1.0 runs as fast as a Dock)")
+    print(f"  Unicorn on hart 0's drawing alone ({drawing['instructions']:,} instructions, 2 frames, no scheduler, "
+          f"no devices), host ms per frame:")
+    for way, ms in drawing["host_ms_per_frame"].items():
+        print(f"    {way:34} {ms:7.2f} ms  {drawing['mips'][way]:7.1f} MIPS")
     print(f"board with --check-writes:                 {checked['effective_mips']:8.1f} MIPS  "
           f"({checked['ratio_to_unchecked']:.3f} x the board without; fastest of {checked['rounds']} alternating "
           f"runs each; {checked['ratio_while_executing']:.3f} x while harts execute)")
