@@ -17,90 +17,7 @@
 #include <Python.h>
 #include <stdint.h>
 
-typedef int (*uc_stop_fn)(void *uc);
-
-/* A loop that can only be polling memory (shared_memory.py finds them in the firmware). */
-typedef struct {
-    uint64_t head;       /* address of its first instruction; 0: an empty slot of the table */
-    uint64_t body;       /* instructions in one iteration, the backward branch included */
-    uint64_t last;       /* `executed` at the head's previous execution */
-    uint64_t ignore;     /* set by Python: the loop polls a device, not SRAM */
-} poll_loop_t;
-
-typedef int (*uc_reg_read_fn)(void *uc, int regid, void *value);
-
-/* Rocket's branch predictor (rocket-chip e8c8d2af7, BTB.scala): a fully associative BTB with
- * round-robin replacement, written only when a taken control transfer was mispredicted; a BHT of
- * 2-bit entries indexed by pc ^ global history, consulted and updated only for branches that hit
- * in the BTB; a return-address stack. */
-#define BTB_ENTRIES 40
-#define BHT_BITS 7
-#define BHT_ENTRIES (1 << BHT_BITS)
-#define RAS_ENTRIES 2
-#define BTB_INDEX_BUCKETS 128   /* a power of two, over 2 x BTB_ENTRIES */
-
-typedef struct {
-    uint64_t pc[BTB_ENTRIES];
-    uint64_t target[BTB_ENTRIES];
-    uint8_t valid[BTB_ENTRIES];
-    uint8_t is_jump[BTB_ENTRIES];     /* jal/jalr: predicted taken without the BHT */
-    uint8_t is_return[BTB_ENTRIES];   /* target from the RAS */
-    uint8_t bht[BHT_ENTRIES];
-    uint64_t ras[RAS_ENTRIES];
-    uint32_t next_replace;
-    uint32_t history;
-    uint32_t ras_count;
-    uint32_t ras_pos;
-    /* Not Rocket's: an index to find a pc among the BTB's entries without comparing all 40
-     * (linear probing; each bucket holds an entry's number + 1, 0 when empty). */
-    uint8_t index[BTB_INDEX_BUCKETS];
-} predictor_t;
-
-typedef struct {
-    uint64_t executed;   /* instructions started since the hart's reset */
-    uint64_t limit;      /* stop before executing instruction number limit+1 */
-    uc_stop_fn stop;     /* uc_emu_stop from the loaded libunicorn */
-    poll_loop_t *loops;  /* the poll loops, a table indexed by (address >> 1) & loop_mask; or NULL */
-    uint64_t loop_mask;
-    uint64_t poll_report; /* head of the loop the hart came round again (0: none since Python looked) */
-    /* --- cycles (timing.py) --- */
-    uint64_t cycles;      /* CPU cycles the started instructions take (= executed without a table) */
-    uint64_t cycle_limit; /* stop before an instruction starts once cycles >= cycle_limit */
-    const uint32_t *table; /* one entry per 2-byte slot of [table_base, table_end); NULL: one cycle each */
-    uint64_t table_base;
-    uint64_t table_end;
-    uc_reg_read_fn reg_read;
-    int32_t reg_x0;       /* Unicorn's register id of x0 (x1.. follow) */
-    int32_t pending_kind; /* a control transfer waiting for the next pc to be resolved (0: none) */
-    uint64_t pending_pc;
-    uint32_t pending_entry;
-    uint32_t pad;
-    uint64_t mispredicts; /* statistics for the bench and the tests */
-    uint64_t stall_cycles;
-    predictor_t predictor;
-    /* --- CSR instructions the board answers itself (hart.py) --- */
-    const uint64_t *csr_sites; /* their addresses, a table indexed by (address >> 1) & csr_mask; or NULL */
-    uint64_t csr_mask;
-    uint64_t csr_report;  /* the site the run stopped at, counted but not executed (0: none) */
-} insn_counter_t;
-
-/* A table entry (timing.py writes them; keep the two in step). */
-#define E_EXTRA(e)     ((e) & 0xFF)          /* cycles beyond the first, known statically */
-#define E_KIND(e)      (((e) >> 8) & 7)
-#define E_SIZE4(e)     (((e) >> 11) & 1)
-#define E_RS1(e)       (((e) >> 12) & 31)
-#define E_RS2(e)       (((e) >> 17) & 31)
-#define E_WORD(e)      (((e) >> 22) & 1)     /* mul/div: a *W instruction */
-#define E_LHS_SIGNED(e) (((e) >> 23) & 1)
-#define E_HI(e)        (((e) >> 24) & 1)     /* mulh*, rem* */
-#define E_DIST(e)      (((e) >> 25) & 31)    /* mul/div: instructions to the first that must wait for it */
-#define E_RHS_SIGNED(e) (((e) >> 30) & 1)    /* mul/div */
-#define E_CALL(e)      (((e) >> 30) & 1)     /* jal/jalr writing a link register */
-#define E_RETURN(e)    (((e) >> 31) & 1)     /* jalr through a link register, not writing one */
-
-enum { KIND_PLAIN = 0, KIND_BRANCH = 1, KIND_JAL = 2, KIND_JALR = 3, KIND_MUL = 4, KIND_DIV = 5 };
-
-#define MISPREDICT_PENALTY 3   /* redirect from the memory stage (Rocket.scala take_pc_mem) */
+#include "_counter.h"
 
 PyMODINIT_FUNC PyInit__insn_counter(void);
 
@@ -156,7 +73,8 @@ static void btb_index_remove(predictor_t *p, uint64_t pc)
 
 /* Cycles the control transfer at `pc` (its table entry `e`) costs beyond its own, now that the
  * next instruction's address `next` shows where it went; the predictor learns as Rocket's does. */
-static uint64_t resolve_transfer(insn_counter_t *c, uint64_t pc, uint32_t e, int kind, uint64_t next)
+uint64_t resolve_transfer(insn_counter_t *c, uint64_t pc, uint32_t e, int kind, uint64_t next,
+                          transfer_undo_t *undo)
 {
     predictor_t *p = &c->predictor;
     uint64_t fallthrough = pc + (E_SIZE4(e) ? 4 : 2);
@@ -172,6 +90,17 @@ static uint64_t resolve_transfer(insn_counter_t *c, uint64_t pc, uint32_t e, int
             predicted_target = p->ras[p->ras_pos];
     }
     int mispredicted = taken != predicted_taken || (taken && predicted_target != next);
+    if (undo != NULL) {
+        undo->used = 1;
+        undo->bht_index = bht_index;
+        undo->bht_old = p->bht[bht_index];
+        undo->history_old = p->history;
+        undo->btb_slot = -1;
+        undo->ras_count_old = p->ras_count;
+        undo->ras_pos_old = p->ras_pos;
+        undo->ras_pushed = 0;
+        undo->mispredicts_old = c->mispredicts;
+    }
     if (hit >= 0 && kind == KIND_BRANCH) {
         uint8_t v = p->bht[bht_index];
         uint8_t v1 = (v >> 1) & 1, v0 = v & 1;
@@ -180,6 +109,17 @@ static uint64_t resolve_transfer(insn_counter_t *c, uint64_t pc, uint32_t e, int
     }
     if (taken && mispredicted) {
         int slot = hit;
+        if (undo != NULL) {
+            int s = slot >= 0 ? slot : (int)p->next_replace;
+            undo->btb_slot = s;
+            undo->btb_new = slot < 0;
+            undo->pc_old = p->pc[s];
+            undo->target_old = p->target[s];
+            undo->valid_old = p->valid[s];
+            undo->is_jump_old = p->is_jump[s];
+            undo->is_return_old = p->is_return[s];
+            undo->next_replace_old = p->next_replace;
+        }
         if (slot < 0) {
             slot = (int)p->next_replace;
             p->next_replace = (p->next_replace + 1) % BTB_ENTRIES;
@@ -197,6 +137,10 @@ static uint64_t resolve_transfer(insn_counter_t *c, uint64_t pc, uint32_t e, int
         if (p->ras_count < RAS_ENTRIES)
             p->ras_count++;
         p->ras_pos = (p->ras_pos + 1) % RAS_ENTRIES;
+        if (undo != NULL) {
+            undo->ras_pushed = 1;
+            undo->ras_value_old = p->ras[p->ras_pos];
+        }
         p->ras[p->ras_pos] = fallthrough;
     } else if (kind == KIND_JALR && E_RETURN(e) && hit >= 0 && p->ras_count > 0) {
         p->ras_count--;
@@ -206,6 +150,35 @@ static uint64_t resolve_transfer(insn_counter_t *c, uint64_t pc, uint32_t e, int
         return 0;
     c->mispredicts++;
     return MISPREDICT_PENALTY;
+}
+
+/* Takes back what resolve_transfer logged in `undo` (the fast engine's block did not run). */
+void undo_transfer(insn_counter_t *c, const transfer_undo_t *undo)
+{
+    predictor_t *p = &c->predictor;
+    if (!undo->used)
+        return;
+    if (undo->ras_pushed)
+        p->ras[p->ras_pos] = undo->ras_value_old;
+    p->ras_count = undo->ras_count_old;
+    p->ras_pos = undo->ras_pos_old;
+    if (undo->btb_slot >= 0) {
+        int s = undo->btb_slot;
+        if (undo->btb_new) {
+            btb_index_remove(p, p->pc[s]);
+            if (undo->valid_old)
+                btb_index_insert(p, undo->pc_old, s);
+            p->next_replace = undo->next_replace_old;
+        }
+        p->pc[s] = undo->pc_old;
+        p->target[s] = undo->target_old;
+        p->valid[s] = undo->valid_old;
+        p->is_jump[s] = undo->is_jump_old;
+        p->is_return[s] = undo->is_return_old;
+    }
+    p->bht[undo->bht_index] = undo->bht_old;
+    p->history = undo->history_old;
+    c->mispredicts = undo->mispredicts_old;
 }
 
 static uint64_t reg(insn_counter_t *c, void *uc, uint32_t r)
@@ -226,9 +199,8 @@ static int msb(uint64_t x)   /* hardware Log2: index of the highest set bit, 0 f
  * the issue of one that waits for the result. Its states: an optional cycle negating the
  * inputs, the iterations, an optional cycle moving the remainder and one negating the result,
  * then the response (written back through the long-latency port). */
-static uint64_t muldiv_latency(insn_counter_t *c, void *uc, uint32_t e, int is_div)
+uint64_t muldiv_latency(uint32_t e, uint64_t a, uint64_t b, int is_div)
 {
-    uint64_t a = reg(c, uc, E_RS1(e)), b = reg(c, uc, E_RS2(e));
     int lhs_signed = E_LHS_SIGNED(e), rhs_signed = E_RHS_SIGNED(e), hi = E_HI(e);
     if (E_WORD(e)) {   /* the 32-bit forms sign- (or zero-) extend their inputs to 64 bits */
         a = lhs_signed ? (uint64_t)(int64_t)(int32_t)a : (uint32_t)a;
@@ -285,13 +257,14 @@ void count_instruction(void *uc, uint64_t address, uint32_t size, insn_counter_t
         return;
     }
     counter->executed++;
+    counter->last_pc = address;
     if (counter->table == NULL) {
         counter->cycles++;
     } else {
         uint64_t cost = 1;
         if (counter->pending_kind) {
             cost += resolve_transfer(counter, counter->pending_pc, counter->pending_entry,
-                                     counter->pending_kind, address);
+                                     counter->pending_kind, address, NULL);
             counter->pending_kind = 0;
         }
         if (address >= counter->table_base && address < counter->table_end) {
@@ -299,7 +272,8 @@ void count_instruction(void *uc, uint64_t address, uint32_t size, insn_counter_t
             int kind = (int)E_KIND(e);
             uint64_t extra = E_EXTRA(e);
             if (kind == KIND_MUL || kind == KIND_DIV) {
-                uint64_t latency = muldiv_latency(counter, uc, e, kind == KIND_DIV);
+                uint64_t latency = muldiv_latency(e, reg(counter, uc, E_RS1(e)), reg(counter, uc, E_RS2(e)),
+                                                  kind == KIND_DIV);
                 uint64_t distance = E_DIST(e);
                 extra += latency > distance ? latency - distance : 0;
             } else if (kind != KIND_PLAIN) {

@@ -26,7 +26,7 @@ from .errors import BoardStop
 from .fpioa import Fpioa
 from .gpio import Gpio
 from .gpiohs import Gpiohs
-from .hart import Hart
+from .hart import ENGINE_FAST, ENGINES, Hart
 from .memory import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE, Sram
 from .mmio import Peripheral
 from .plic import SOURCE_DMA0, SOURCE_GPIO, SOURCE_GPIOHS0, SOURCE_SPI0, SOURCE_SPI1, SOURCE_UARTHS, Plic
@@ -73,7 +73,8 @@ class Board:
                  on_warning: Callable[[str], None] | None = None, permissive: bool = False,
                  sd_image: str | None = None, sd_writable: bool = False,
                  sd_faults: frozenset[str] = frozenset(), check_writes: bool = False, strict: bool = False,
-                 lcd_interface: str = LCD_8080, cold: bool = False, timing: str = TIMING_ROCKET) -> None:
+                 lcd_interface: str = LCD_8080, cold: bool = False, timing: str = TIMING_ROCKET,
+                 engine: str = ENGINE_FAST) -> None:
         """check_writes: stop with StrayWrite at the first store (a hart's or a DMA channel's) into
         SRAM outside the firmware's buffers (write_watch.py; a checker, not hardware behaviour).
         strict: stop at the first access a register table does not take as it is, or that no device
@@ -84,9 +85,15 @@ class Board:
         cold: start from the reset value of every register, instead of the state the mask ROM
         leaves when it jumps to the program (bootrom.py).
         timing: what an instruction costs, "rocket" (the K210's Rocket core, timing.py) or "ipc1"
-        (one cycle each)."""
+        (one cycle each).
+        engine: "fast" runs each hart on an engine that counts whole translated blocks where that
+        gives the same counts as counting instruction by instruction, "precise" only on the one that
+        counts each instruction (hart.py); what runs and every count are the same."""
         if timing not in TIMING_MODELS:
             raise ValueError(f"unknown timing model {timing!r}: one of {', '.join(TIMING_MODELS)}")
+        if engine not in ENGINES:
+            raise ValueError(f"unknown engine {engine!r}: one of {', '.join(ENGINES)}")
+        self.engine = engine
         self.timing = timing
         self.permissive = permissive   # unimplemented registers of modelled devices warn instead of stopping
         self.on_frame = on_frame or (lambda record, image: None)
@@ -143,6 +150,8 @@ class Board:
             hart.install_cycle_table(self.cycle_table)
             hart.intercept_csr_sites(sites)
             hart.install_poll_loops(loops)
+            if engine == ENGINE_FAST:
+                hart.enable_fast_engine(self.memory.address)
             hart.pc = RESET_PC
         if check_writes:
             self.write_watch = WriteWatch(self.image, self.memory, HARTS, firmware)
@@ -344,9 +353,11 @@ class Board:
                 self.scheduler.firmware_reported_error(int(code), words)
 
     def close(self) -> None:
-        """Releases the SD card image (flushing it when writes were allowed)."""
+        """Releases the SD card image (flushing it when writes were allowed) and the harts' block caches."""
         if self.sd_image is not None:
             self.sd_image.close()
+        for hart in self.harts:
+            hart.close()
 
     # --- warnings ------------------------------------------------------------------------
 

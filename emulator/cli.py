@@ -12,6 +12,7 @@ from .errors import (EXIT_BAD_INPUT, EXIT_GOLDEN_MISMATCH, EXIT_INTERNAL, EXIT_O
                      BoardStop)
 from .sdcard import FAULTS
 from .timing import TIMING_MODELS, TIMING_ROCKET
+from .hart import ENGINE_FAST, ENGINES
 from .wiring import LCD_8080, LCD_INTERFACES
 
 PROG = "python -m emulator"
@@ -191,6 +192,10 @@ def build_parser() -> argparse.ArgumentParser:
                           "takes (result latencies, the iterative multiplier and divider, branch prediction; "
                           "mcycle and virtual time follow them); ipc1, one cycle per instruction, the model "
                           "before cycle timing")
+    run.add_argument("--engine", choices=ENGINES, default=ENGINE_FAST,
+                     help="fast (the default): each hart counts whole translated blocks where that gives the "
+                          "same counts; precise: every instruction is counted on its own (slower; what runs, "
+                          "every count and every time are the same)")
     run.add_argument("--golden", metavar="DIR", type=Path,
                      help="compare every shown frame with DIR/frame_NNNN.png of the same index; write "
                           "diff_NNNN.png for frames that differ and exit with status 9 on any mismatch")
@@ -514,7 +519,7 @@ def main(argv: list[str] | None = None) -> int:
                       on_frame=on_frame, on_warning=terminal.warning, permissive=args.permissive,
                       sd_image=args.sd, sd_writable=args.sd_writable, sd_faults=frozenset(args.sd_fault),
                       check_writes=args.check_writes, strict=args.strict, lcd_interface=args.lcd_interface,
-                      cold=args.cold, timing=args.timing)
+                      cold=args.cold, timing=args.timing, engine=args.engine)
         board.uarths.input = uart_input
         if vcd_file is not None:
             signal_log = attach_signal_log(board)

@@ -258,7 +258,7 @@ class Debugger:
     def clear_breakpoint(self, address: int) -> None:
         self.breakpoints.pop(address, None)
         for hart, handle in zip(self.board.harts, self._bp_hooks.pop(address, [])):
-            hart.uc.hook_del(handle)
+            hart.delete_hook(handle)
 
     def _on_access(self, kind: int):
         def hook(uc, access, address, size, value, hart):
@@ -278,7 +278,7 @@ class Debugger:
 
     def clear_watchpoint(self, kind: int, address: int, length: int) -> None:
         for hart, handle in zip(self.board.harts, self.watchpoints.pop((kind, address, length), [])):
-            hart.uc.hook_del(handle)
+            hart.delete_hook(handle)
 
     def clear_all(self) -> None:
         for address in list(self.breakpoints):
@@ -311,7 +311,7 @@ class Debugger:
     def _end_step(self) -> None:
         if self._step_hook is not None:
             hart, handle = self._step_hook
-            hart.uc.hook_del(handle)
+            hart.delete_hook(handle)
             self._step_hook = None
 
     def run_until_stop(self, interrupted: Callable[[], bool]) -> StopEvent:

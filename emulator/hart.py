@@ -28,6 +28,7 @@ from unicorn import riscv_const as rv
 from unicorn.unicorn_py3 import unicorn as _ucpy
 
 from . import _insn_counter, shared_memory, timing
+from .memory import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE
 
 # CSR numbers the board answers itself
 CSR_MHARTID = 0xF14
@@ -89,11 +90,23 @@ class _Counter(ctypes.Structure):
                 ("reg_x0", ctypes.c_int32), ("pending_kind", ctypes.c_int32), ("pending_pc", ctypes.c_uint64),
                 ("pending_entry", ctypes.c_uint32), ("pad", ctypes.c_uint32), ("mispredicts", ctypes.c_uint64),
                 ("stall_cycles", ctypes.c_uint64), ("predictor", _Predictor), ("csr_sites", ctypes.c_void_p),
-                ("csr_mask", ctypes.c_uint64), ("csr_report", ctypes.c_uint64)]
+                ("csr_mask", ctypes.c_uint64), ("csr_report", ctypes.c_uint64), ("blocks", ctypes.c_void_p),
+                ("handoff", ctypes.c_uint64), ("last_pc", ctypes.c_uint64)]
 
 
 _counter_lib = ctypes.CDLL(_insn_counter.__file__)
 _COUNT_HOOK = ctypes.cast(_counter_lib.count_instruction, ctypes.c_void_p)
+_BLOCK_HOOK = ctypes.cast(_counter_lib.count_block, ctypes.c_void_p)
+_counter_lib.block_state_new.restype = ctypes.c_void_p
+_counter_lib.block_state_new.argtypes = [ctypes.c_void_p, ctypes.c_uint64, ctypes.c_uint64, ctypes.c_uint64]
+_counter_lib.block_state_free.argtypes = [ctypes.c_void_p]
+_counter_lib.block_cut.restype = ctypes.c_int
+_counter_lib.block_cut.argtypes = [ctypes.c_void_p, ctypes.c_uint64]
+_counter_lib.block_statistics.argtypes = [ctypes.c_void_p, ctypes.POINTER(ctypes.c_uint64)]
+HANDOFF_BLOCK, HANDOFF_LIMIT = 1, 2      # _block_counter.c's reasons for handing a block over
+ENGINE_FAST, ENGINE_PRECISE = "fast", "precise"
+ENGINES = (ENGINE_FAST, ENGINE_PRECISE)
+PRECISE_STRETCH = 64      # instructions the precise engine runs at first after a block it was handed
 _UC_EMU_STOP = ctypes.cast(_ucpy.uclib.uc_emu_stop, ctypes.c_void_p).value
 _UC_REG_READ = ctypes.cast(_ucpy.uclib.uc_reg_read, ctypes.c_void_p).value
 
@@ -159,6 +172,12 @@ class Hart:
         self.uc.hook_add(unicorn.UC_HOOK_INTR, self._on_exception)
         self._reg_value = ctypes.c_uint64()
         self._reg_ref = ctypes.byref(self._reg_value)
+        # the fast engine (enable_fast_engine), and the hooks that keep a hart on the precise one
+        self.fast_uc: unicorn.Uc | None = None
+        self._block_state: int | None = None
+        self._fast_exception = False
+        self._hooks_needing_precision: set[int] = set()
+        self._handoffs_at: dict[int, int] = {}        # pc -> times the fast engine handed it over
 
     def add_native_hook(self, kind: int, callback: int, user_data: ctypes.Structure, begin: int, end: int,
                         what: str) -> int:
@@ -166,12 +185,11 @@ class Hart:
         begin..end (inclusive; begin > end: everywhere), called with a pointer to `user_data`,
         which the caller keeps alive as long as the hook. `what` names it in the error.
         Returns the hook's handle (for remove_hook)."""
-        handle = ctypes.c_size_t()
-        status = _ucpy.uclib.uc_hook_add(self.uc._uch, ctypes.byref(handle), kind, callback,
-                                         ctypes.byref(user_data), ctypes.c_uint64(begin), ctypes.c_uint64(end))
-        if status != 0:
-            raise RuntimeError(f"cannot install {what} on hart {self.hart_id}: unicorn status {status}")
-        return handle.value
+        handle = _add_native_hook(self.uc, kind, callback, user_data, begin, end, f"{what} on hart {self.hart_id}")
+        if callback is not _COUNT_HOOK:
+            # the fast engine does not carry other hooks (store watches, the write checker)
+            self._hooks_needing_precision.add(handle)
+        return handle
 
     def add_hook(self, kind: int, callback: Callable, user_data: object, begin: int = 1, end: int = 0) -> int:
         """A Python hook added while the hart may already have run: Unicorn 2.1.4 decides when it
@@ -179,10 +197,90 @@ class Hart:
         added may never call it, so the translations are dropped. Returns the hook's handle."""
         handle = self.uc.hook_add(kind, callback, user_data, begin, end)
         self.uc.ctl_flush_tb()
+        self._hooks_needing_precision.add(handle)
         return handle
 
     def remove_hook(self, handle: int) -> None:
+        """Removes a hook add_native_hook installed."""
+        self._hooks_needing_precision.discard(handle)
         _ucpy.uclib.uc_hook_del(self.uc._uch, ctypes.c_size_t(handle))
+
+    def delete_hook(self, handle: int) -> None:
+        """Removes a Python hook add_hook or add_stop_hook installed."""
+        self._hooks_needing_precision.discard(handle)
+        self.uc.hook_del(handle)
+
+    # --- the fast engine ---------------------------------------------------------------
+
+    def enable_fast_engine(self, sram_address: int) -> None:
+        """Gives the hart a second engine that counts whole translated blocks (_block_counter.c):
+        it maps SRAM only (the host buffer at `sram_address`, both views) and runs the hart
+        whenever no hook needs the precise engine, handing over to it for device accesses, CSRs
+        the board answers, poll loops, exceptions and the end of each turn. Counts, cycles and
+        every stop stay what the precise engine alone would give."""
+        fast = unicorn.Uc(unicorn.UC_ARCH_RISCV, unicorn.UC_MODE_RISCV64)
+        fast.mem_map_ptr(SRAM_BASE, SRAM_SIZE, unicorn.UC_PROT_ALL, sram_address)
+        fast.mem_map_ptr(SRAM_UNCACHED_BASE, SRAM_SIZE, unicorn.UC_PROT_ALL, sram_address)
+        state = _counter_lib.block_state_new(sram_address, SRAM_SIZE, SRAM_BASE, SRAM_UNCACHED_BASE)
+        if not state:
+            raise MemoryError("cannot allocate the fast engine's block cache")
+        self._block_state = state
+        self._counter.blocks = state
+        self._block_hook = _add_native_hook(fast, unicorn.UC_HOOK_BLOCK, _BLOCK_HOOK, self._counter, 1, 0,
+                                            f"the block counter on hart {self.hart_id}")
+        fast.hook_add(unicorn.UC_HOOK_INTR, self._on_fast_exception)
+        self.fast_uc = fast
+
+    def close(self) -> None:
+        """Frees the fast engine's block cache."""
+        if self._block_state is not None:
+            self._counter.blocks = None
+            _counter_lib.block_state_free(self._block_state)
+            self._block_state = None
+
+    def block_statistics(self) -> dict[str, int]:
+        """The fast engine's figures: blocks and instructions it charged whole, its hand-overs."""
+        if self._block_state is None:
+            return {}
+        out = (ctypes.c_uint64 * 5)()
+        _counter_lib.block_statistics(self._block_state, out)
+        return {"blocks": out[0], "instructions": out[1], "handoffs_block": out[2], "handoffs_limit": out[3],
+                "blocks_cached": out[4]}
+
+    def _on_fast_exception(self, uc: unicorn.Uc, intno: int, user_data: object) -> None:
+        # the precise engine runs the instruction again and takes the exception itself
+        self._fast_exception = True
+        uc.emu_stop()
+
+    def _run_fast(self, pc: int) -> tuple[int, bool, int]:
+        """Runs the hart on the fast engine from `pc` until it hands over, sleeps or stops at
+        what the precise engine must run; then the precise engine holds the hart's state again.
+        Returns the pc to go on from, whether the hart went to sleep in wfi, and why it handed
+        over (HANDOFF_*, 0 for neither)."""
+        fast, counter = self.fast_uc, self._counter
+        counter.handoff = 0
+        fast.context_restore(self.uc.context_save())
+        self._fast_exception = False
+        faulted = False
+        try:
+            fast.emu_start(pc, 0)
+        except unicorn.UcError:
+            faulted = True        # a device access or an address the precise engine decides about
+        pc = fast.reg_read(rv.UC_RISCV_REG_PC)
+        if self._fast_exception:
+            pc -= 4               # Unicorn 2.1.4 reports the pc 4 past the faulting instruction (_on_exception)
+        if _counter_lib.block_cut(ctypes.byref(counter), pc) < 0:
+            raise RuntimeError(f"hart {self.hart_id}: the fast engine stopped at 0x{pc:x}, inside no block it charged")
+        self.uc.context_restore(fast.context_save())
+        self.uc.reg_write(rv.UC_RISCV_REG_PC, pc)
+        handoff, counter.handoff = counter.handoff, 0
+        asleep = not (handoff or faulted or self._fast_exception)
+        if asleep and self.read_u32(pc - 4) != INSN_WFI:
+            raise RuntimeError(f"hart {self.hart_id}: the fast engine stopped at 0x{pc:x} for no reason it reports")
+        return pc, asleep, handoff
+
+    def _fast_usable(self) -> bool:
+        return self.fast_uc is not None and not self._hooks_needing_precision
 
     def install_poll_loops(self, loops: list[shared_memory.PollLoop]) -> None:
         """Hands the native counter the loops that can only be polling (shared_memory.py): it ends
@@ -263,25 +361,35 @@ class Hart:
         """Runs at most `budget` instructions from `self.pc`, and no instruction starts once
         `cycle_budget` cycles have been used (the last one may take a few cycles past it, as an
         instruction in flight does). Returns why it stopped and how many instructions ran."""
-        start = self._counter.executed
-        self._counter.limit = start + budget
-        self._counter.cycle_limit = NO_LIMIT if cycle_budget is None else self._counter.cycles + cycle_budget
+        counter = self._counter
+        start = counter.executed
+        turn_limit = counter.limit = start + budget
+        counter.cycle_limit = NO_LIMIT if cycle_budget is None else counter.cycles + cycle_budget
         self.stop_requested = False
         pc = self.pc
         while True:
-            self.uc.emu_start(pc, 0)
-            site = self._counter.csr_report
-            if not site:
-                break
-            # the counter stopped at a CSR the board answers: it is counted and timed, not executed
-            self._counter.csr_report = 0
-            for listener in self.csr_listeners:
-                listener(self, site)
-            pc = self._carry_out_csr(site, self._csr_words[site])
-            if self.pending_exception is not None or self._counter.poll_report or self.stop_requested or \
-                    self._counter.executed >= self._counter.limit or self._counter.cycles >= self._counter.cycle_limit:
-                self.uc.reg_write(rv.UC_RISCV_REG_PC, pc)
-                break
+            precise_limit = turn_limit
+            if self._fast_usable():
+                pc, asleep, handoff = self._run_fast(pc)
+                if asleep:
+                    self.pc = pc
+                    return RunEnd.WFI, counter.executed - start
+                if counter.executed >= turn_limit or counter.cycles >= counter.cycle_limit:
+                    self.pc = pc
+                    return RunEnd.BUDGET, counter.executed - start
+                if handoff == HANDOFF_BLOCK:
+                    precise_limit = min(turn_limit, counter.executed + self._precise_stretch(pc))
+            counter.limit = precise_limit
+            self._run_precise(pc)
+            pc = self.uc.reg_read(rv.UC_RISCV_REG_PC)
+            if precise_limit < turn_limit and counter.limit == precise_limit and counter.executed >= precise_limit \
+                    and not (self.stop_requested or self.pending_exception is not None or counter.poll_report
+                             or counter.cycles >= counter.cycle_limit or self._slept_at(pc)):
+                counter.limit = turn_limit    # the stretch the precise engine was given is done: back to fast
+                continue
+            if counter.limit == precise_limit:
+                counter.limit = turn_limit
+            break
         ran = self._counter.executed - start
         self.pc = self.uc.reg_read(rv.UC_RISCV_REG_PC)
         if self.pending_exception is not None:
@@ -295,6 +403,37 @@ class Hart:
         if ran >= budget or self._counter.cycles >= self._counter.cycle_limit:
             return RunEnd.BUDGET, ran
         return RunEnd.STOPPED, ran
+
+    def _run_precise(self, pc: int) -> None:
+        """Runs the precise engine from `pc` until its counter stops it, carrying out the CSR
+        instructions the board answers on the way."""
+        counter = self._counter
+        while True:
+            self.uc.emu_start(pc, 0)
+            site = counter.csr_report
+            if not site:
+                return
+            # the counter stopped at a CSR the board answers: it is counted and timed, not executed
+            counter.csr_report = 0
+            for listener in self.csr_listeners:
+                listener(self, site)
+            pc = self._carry_out_csr(site, self._csr_words[site])
+            if self.pending_exception is not None or counter.poll_report or self.stop_requested or \
+                    counter.executed >= counter.limit or counter.cycles >= counter.cycle_limit:
+                self.uc.reg_write(rv.UC_RISCV_REG_PC, pc)
+                return
+
+    def _slept_at(self, pc: int) -> bool:
+        """Whether the precise engine's last instruction was a wfi just before `pc`."""
+        return self._counter.last_pc == pc - 4 and self.read_u32(pc - 4) == INSN_WFI
+
+    def _precise_stretch(self, pc: int) -> int:
+        """How many instructions the precise engine runs after the fast one handed it the block at
+        `pc`: a few at first, more for a block that keeps being handed over (each hand-over costs
+        two copies of the hart's state)."""
+        seen = self._handoffs_at.get(pc, 0)
+        self._handoffs_at[pc] = seen + 1
+        return PRECISE_STRETCH << min(seen, 8)
 
     def lift_limits(self) -> None:
         """The next engine run has no instruction or cycle limit and does not stop at the CSRs the
@@ -395,6 +534,7 @@ class Hart:
         self._counter_hook = self.add_native_hook(unicorn.UC_HOOK_CODE, _COUNT_HOOK, self._counter, 1, 0,
                                                   "the instruction counter")
         self.uc.ctl_flush_tb()   # see add_hook
+        self._hooks_needing_precision.add(handle)
         return handle
 
     def _carry_out_csr(self, address: int, word: int) -> int:
@@ -452,6 +592,16 @@ class Hart:
             self.minstret_offset = value - self.instret
         # mip: MSIP/MTIP/MEIP are read-only in mip; the writable bits belong to S/U modes,
         # which the K210 firmware here does not use. Writes are ignored like the hardware does.
+
+
+def _add_native_hook(uc: unicorn.Uc, kind: int, callback: int, user_data: ctypes.Structure, begin: int, end: int,
+                     what: str) -> int:
+    handle = ctypes.c_size_t()
+    status = _ucpy.uclib.uc_hook_add(uc._uch, ctypes.byref(handle), kind, callback,
+                                     ctypes.byref(user_data), ctypes.c_uint64(begin), ctypes.c_uint64(end))
+    if status != 0:
+        raise RuntimeError(f"cannot install {what}: unicorn status {status}")
+    return handle.value
 
 
 def _address_table(addresses: list[int]) -> tuple[ctypes.Array, int]:

@@ -76,7 +76,7 @@ class InstructionTrace:
         for hart in board.harts:
             handle = self._handles.pop(hart.hart_id, None)
             if handle is not None:
-                hart.uc.hook_del(handle)
+                hart.delete_hook(handle)
                 hart.csr_listeners.remove(self._on_csr_site)
             self._finish(hart)
 

@@ -1,0 +1,122 @@
+/*
+ * What the board model's native counting hooks share: the counter each hart hands its hooks
+ * (hart.py mirrors it with ctypes: keep the two in step), the cycle table's entry layout
+ * (timing.py writes the entries), Rocket's branch predictor and its iterative multiplier.
+ * _insn_counter.c counts instruction by instruction, _block_counter.c whole translated blocks.
+ */
+#ifndef K210_COUNTER_H
+#define K210_COUNTER_H
+#include <stdint.h>
+
+typedef int (*uc_stop_fn)(void *uc);
+
+/* A loop that can only be polling memory (shared_memory.py finds them in the firmware). */
+typedef struct {
+    uint64_t head;       /* address of its first instruction; 0: an empty slot of the table */
+    uint64_t body;       /* instructions in one iteration, the backward branch included */
+    uint64_t last;       /* `executed` at the head's previous execution */
+    uint64_t ignore;     /* set by Python: the loop polls a device, not SRAM */
+} poll_loop_t;
+
+typedef int (*uc_reg_read_fn)(void *uc, int regid, void *value);
+
+/* Rocket's branch predictor (rocket-chip e8c8d2af7, BTB.scala): a fully associative BTB with
+ * round-robin replacement, written only when a taken control transfer was mispredicted; a BHT of
+ * 2-bit entries indexed by pc ^ global history, consulted and updated only for branches that hit
+ * in the BTB; a return-address stack. */
+#define BTB_ENTRIES 40
+#define BHT_BITS 7
+#define BHT_ENTRIES (1 << BHT_BITS)
+#define RAS_ENTRIES 2
+#define BTB_INDEX_BUCKETS 128   /* a power of two, over 2 x BTB_ENTRIES */
+
+typedef struct {
+    uint64_t pc[BTB_ENTRIES];
+    uint64_t target[BTB_ENTRIES];
+    uint8_t valid[BTB_ENTRIES];
+    uint8_t is_jump[BTB_ENTRIES];     /* jal/jalr: predicted taken without the BHT */
+    uint8_t is_return[BTB_ENTRIES];   /* target from the RAS */
+    uint8_t bht[BHT_ENTRIES];
+    uint64_t ras[RAS_ENTRIES];
+    uint32_t next_replace;
+    uint32_t history;
+    uint32_t ras_count;
+    uint32_t ras_pos;
+    /* Not Rocket's: an index to find a pc among the BTB's entries without comparing all 40
+     * (linear probing; each bucket holds an entry's number + 1, 0 when empty). */
+    uint8_t index[BTB_INDEX_BUCKETS];
+} predictor_t;
+
+typedef struct {
+    uint64_t executed;   /* instructions started since the hart's reset */
+    uint64_t limit;      /* stop before executing instruction number limit+1 */
+    uc_stop_fn stop;     /* uc_emu_stop from the loaded libunicorn */
+    poll_loop_t *loops;  /* the poll loops, a table indexed by (address >> 1) & loop_mask; or NULL */
+    uint64_t loop_mask;
+    uint64_t poll_report; /* head of the loop the hart came round again (0: none since Python looked) */
+    /* --- cycles (timing.py) --- */
+    uint64_t cycles;      /* CPU cycles the started instructions take (= executed without a table) */
+    uint64_t cycle_limit; /* stop before an instruction starts once cycles >= cycle_limit */
+    const uint32_t *table; /* one entry per 2-byte slot of [table_base, table_end); NULL: one cycle each */
+    uint64_t table_base;
+    uint64_t table_end;
+    uc_reg_read_fn reg_read;
+    int32_t reg_x0;       /* Unicorn's register id of x0 (x1.. follow) */
+    int32_t pending_kind; /* a control transfer waiting for the next pc to be resolved (0: none) */
+    uint64_t pending_pc;
+    uint32_t pending_entry;
+    uint32_t pad;
+    uint64_t mispredicts; /* statistics for the bench and the tests */
+    uint64_t stall_cycles;
+    predictor_t predictor;
+    /* --- CSR instructions the board answers itself (hart.py) --- */
+    const uint64_t *csr_sites; /* their addresses, a table indexed by (address >> 1) & csr_mask; or NULL */
+    uint64_t csr_mask;
+    uint64_t csr_report;  /* the site the run stopped at, counted but not executed (0: none) */
+    struct block_state *blocks; /* _block_counter.c's state (the fast engine), or NULL */
+    uint64_t handoff;     /* why the fast engine stopped before a block (HANDOFF_*; 0: it did not) */
+    uint64_t last_pc;     /* the precise engine's last counted instruction */
+} insn_counter_t;
+
+/* A table entry (timing.py writes them; keep the two in step). */
+#define E_EXTRA(e)     ((e) & 0xFF)          /* cycles beyond the first, known statically */
+#define E_KIND(e)      (((e) >> 8) & 7)
+#define E_SIZE4(e)     (((e) >> 11) & 1)
+#define E_RS1(e)       (((e) >> 12) & 31)
+#define E_RS2(e)       (((e) >> 17) & 31)
+#define E_WORD(e)      (((e) >> 22) & 1)     /* mul/div: a *W instruction */
+#define E_LHS_SIGNED(e) (((e) >> 23) & 1)
+#define E_HI(e)        (((e) >> 24) & 1)     /* mulh*, rem* */
+#define E_DIST(e)      (((e) >> 25) & 31)    /* mul/div: instructions to the first that must wait for it */
+#define E_RHS_SIGNED(e) (((e) >> 30) & 1)    /* mul/div */
+#define E_CALL(e)      (((e) >> 30) & 1)     /* jal/jalr writing a link register */
+#define E_RETURN(e)    (((e) >> 31) & 1)     /* jalr through a link register, not writing one */
+
+enum { KIND_PLAIN = 0, KIND_BRANCH = 1, KIND_JAL = 2, KIND_JALR = 3, KIND_MUL = 4, KIND_DIV = 5 };
+
+#define MISPREDICT_PENALTY 3   /* redirect from the memory stage (Rocket.scala take_pc_mem) */
+
+
+/* What one resolve_transfer changed, so that it can be taken back (undo_transfer). */
+typedef struct {
+    int used;
+    uint32_t bht_index;
+    uint8_t bht_old;
+    uint32_t history_old;
+    int btb_slot;          /* -1: the BTB was not written */
+    int btb_new;           /* the slot was taken for a pc the BTB did not hold */
+    uint64_t pc_old, target_old;
+    uint8_t valid_old, is_jump_old, is_return_old;
+    uint32_t next_replace_old;
+    uint32_t ras_count_old, ras_pos_old;
+    int ras_pushed;        /* a call pushed: ras_value_old is what its slot held */
+    uint64_t ras_value_old;
+    uint64_t mispredicts_old;
+} transfer_undo_t;
+
+uint64_t resolve_transfer(insn_counter_t *c, uint64_t pc, uint32_t e, int kind, uint64_t next,
+                          transfer_undo_t *undo);
+void undo_transfer(insn_counter_t *c, const transfer_undo_t *undo);
+uint64_t muldiv_latency(uint32_t e, uint64_t a, uint64_t b, int is_div);
+
+#endif
