@@ -86,9 +86,9 @@ block_state_t *block_state_new(const uint8_t *sram, uint64_t sram_size, uint64_t
     block_state_t *s = calloc(1, sizeof *s);
     if (s == NULL)
         return NULL;
-    s->mask = 4095;
+    s->mask = 1023;
     s->blocks = calloc(s->mask + 1, sizeof *s->blocks);
-    s->pool_cap = 65536;
+    s->pool_cap = 8192;
     s->pool = malloc(s->pool_cap * sizeof *s->pool);
     if (s->blocks == NULL || s->pool == NULL) {
         free(s->blocks);

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import ctypes
 import enum
+import weakref
 from dataclasses import dataclass
 from typing import Callable
 
@@ -226,6 +227,8 @@ class Hart:
             raise MemoryError("cannot allocate the fast engine's block cache")
         self._block_state = state
         self._counter.blocks = state
+        # freed with the hart (Board.close frees it at once)
+        self._free_block_state = weakref.finalize(self, _counter_lib.block_state_free, state)
         self._block_hook = _add_native_hook(fast, unicorn.UC_HOOK_BLOCK, _BLOCK_HOOK, self._counter, 1, 0,
                                             f"the block counter on hart {self.hart_id}")
         fast.hook_add(unicorn.UC_HOOK_INTR, self._on_fast_exception)
@@ -235,7 +238,7 @@ class Hart:
         """Frees the fast engine's block cache."""
         if self._block_state is not None:
             self._counter.blocks = None
-            _counter_lib.block_state_free(self._block_state)
+            self._free_block_state()
             self._block_state = None
 
     def block_statistics(self) -> dict[str, int]:
@@ -435,11 +438,12 @@ class Hart:
         self._handoffs_at[pc] = seen + 1
         return PRECISE_STRETCH << min(seen, 8)
 
-    def lift_limits(self) -> None:
-        """The next engine run has no instruction or cycle limit and does not stop at the CSRs the
-        board answers (Unicorn answers them: mhartid reads 0, right for hart 0 only): the bench
-        measuring Unicorn itself on hart 0. The board's own runs are not possible after this."""
-        self._counter.limit = NO_LIMIT
+    def lift_limits(self, instructions: int | None = None) -> None:
+        """The next engine run has no cycle limit, no instruction limit (or stops after
+        `instructions` more) and does not stop at the CSRs the board answers (Unicorn answers them:
+        mhartid reads 0, right for hart 0 only): the bench measuring Unicorn itself on hart 0. The
+        board's own runs are not possible after this."""
+        self._counter.limit = NO_LIMIT if instructions is None else self._counter.executed + instructions
         self._counter.cycle_limit = NO_LIMIT
         self._counter.csr_sites = None
 

@@ -48,7 +48,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from emulator.board import Board  # noqa: E402
-from emulator.hart import CsrContext, Hart, HartState  # noqa: E402
+from emulator.hart import ENGINE_FAST, ENGINE_PRECISE, CsrContext, Hart, HartState  # noqa: E402
 from emulator.memory import SRAM_BASE  # noqa: E402
 from emulator.timing import TIMING_IPC1, TIMING_ROCKET  # noqa: E402
 from tools import quality  # noqa: E402
@@ -98,8 +98,8 @@ def hart_mips(code: bytes, instructions: int, quantum: int) -> float:
 
 
 def firmware_figures(firmware: Path, card: Path, frames: int, check_writes: bool = False,
-                     timing: str = TIMING_ROCKET) -> dict:
-    board = Board(str(firmware), sd_image=str(card), check_writes=check_writes, timing=timing)
+                     timing: str = TIMING_ROCKET, engine: str = ENGINE_FAST) -> dict:
+    board = Board(str(firmware), sd_image=str(card), check_writes=check_writes, timing=timing, engine=engine)
     start = time.perf_counter()
     board.run(frames)
     host = time.perf_counter() - start
@@ -123,6 +123,8 @@ def firmware_figures(firmware: Path, card: Path, frames: int, check_writes: bool
         "frames_per_host_second": frames / host,
         "virtual_fps": (frames - 1) / (board.frames[-1].virtual_time_s - board.frames[0].virtual_time_s),
         **real_time_figures(board.frames),
+        "engine": engine,
+        "charged_share": board.harts[0].block_statistics().get("instructions", 0) / board.harts[0].executed,
     }
 
 
@@ -138,12 +140,13 @@ def real_time_figures(frames: list) -> dict:
 
 
 def drawing_figures(firmware: Path, card: Path, rounds: int = 3) -> dict:
-    """What Unicorn itself costs on hart 0's drawing: from a steady frame's start (hart 0 asleep,
-    both framebuffers then marked free) to its next wfi, two frames drawn, run on hart 0's own
-    engine with nothing else: with the board's native counter and cycle table, with the counter
-    counting one cycle each, with no hook at all (the translations dropped before each run, so that
-    each way runs code translated for it; fastest of `rounds` each). The board's own figure per frame
-    is firmware_figures'."""
+    """What hart 0's drawing costs the host per instruction, Unicorn and the counting hooks alone
+    (no scheduler, no devices): from a steady frame's start (hart 0 asleep, both framebuffers then
+    marked free), the fast engine with its block counter (after the precise engine has run the
+    wait loop's first 40 instructions, which touch the CLINT; it stops at the first device access
+    after the frame), the precise engine with the Rocket cycle table and with one cycle each (both
+    to the next wfi, two frames), and no hook at all. The translations are dropped before each run,
+    so that each way runs code translated for it; the fastest of `rounds` counts."""
     board = Board(str(firmware), sd_image=str(card))
     board.run(3)
     scheduler = board.scheduler
@@ -154,32 +157,44 @@ def drawing_figures(firmware: Path, card: Path, rounds: int = 3) -> dict:
     snapshot = np.array(memory, copy=True)
     context, pc = hart.uc.context_save(), hart.pc
     fb_state = board.image.symbol_values["fb_state"] - SRAM_BASE
-    ways = {}
 
-    def draw() -> tuple[float, int]:
+    def draw(fast: bool) -> tuple[float, int]:
         memory[:] = snapshot
-        memory[fb_state:fb_state + 8] = 0          # both buffers free: hart 0 draws two frames
+        memory[fb_state:fb_state + 8] = 0          # both buffers free: hart 0 draws on
         hart.uc.context_restore(context)
         hart.uc.ctl_flush_tb()
+        start_pc = pc
+        if fast:
+            hart.lift_limits(40)
+            hart.uc.emu_start(pc, 0)
+            start_pc = hart.uc.reg_read(unicorn.riscv_const.UC_RISCV_REG_PC)
+            hart.fast_uc.context_restore(hart.uc.context_save())
+            hart.fast_uc.ctl_flush_tb()
         hart.lift_limits()
+        engine = hart.fast_uc if fast else hart.uc
         executed = hart.executed
         start = time.perf_counter()
-        hart.uc.emu_start(pc, 0)
+        try:
+            engine.emu_start(start_pc, 0)
+        except unicorn.UcError:
+            pass                                   # the fast engine's stop at a device access
         return time.perf_counter() - start, hart.executed - executed
 
-    instructions = 0
-    for way in ("counter and Rocket cycle table", "counter, one cycle each", "no hook"):
-        if way == "counter, one cycle each":
+    ways = {}
+    for way in ("fast engine, block counter", "precise engine, Rocket cycle table", "precise engine, one cycle each",
+                "no hook"):
+        if way == "precise engine, one cycle each":
             hart.install_cycle_table(None)
         elif way == "no hook":
             hart.remove_counter()
-        best = min(draw() for _ in range(rounds))
-        instructions = best[1] or instructions
-        ways[way] = best[0]
+        runs = [draw(way.startswith("fast")) for _ in range(rounds)]
+        seconds, instructions = min(runs)
+        if way == "no hook":
+            instructions = ways["precise engine, one cycle each"]["instructions"]
+        ways[way] = {"seconds": seconds, "instructions": instructions,
+                     "ns_per_instruction": seconds / instructions * 1e9, "mips": instructions / seconds / 1e6}
     board.close()
-    return {"instructions": instructions, "frames": 2,
-            "host_ms_per_frame": {way: seconds / 2 * 1e3 for way, seconds in ways.items()},
-            "mips": {way: instructions / seconds / 1e6 for way, seconds in ways.items()}}
+    return ways
 
 
 PROFILE_FRAMES = 12
@@ -631,6 +646,7 @@ def speed_figures(args: argparse.Namespace) -> None:
     raw = raw_unicorn_mips(code, total)
     counted = hart_mips(code, total, 20_000)
     board = firmware_figures(Path(args.firmware), Path(args.card), args.frames)
+    precise = firmware_figures(Path(args.firmware), Path(args.card), args.frames, engine=ENGINE_PRECISE)
     checked = write_check_figures(Path(args.firmware), Path(args.card), args.frames, board)
     ipc1 = timing_figures(Path(args.firmware), Path(args.card), args.frames, board)
     profile = profile_figures(Path(args.firmware), Path(args.card))
@@ -651,6 +667,7 @@ def speed_figures(args: argparse.Namespace) -> None:
         "thesis_start_up_ms": THESIS_START_UP_MS,
         "profile": profile,
         "drawing": drawing,
+        "firmware_precise_engine": precise,
     }
     print(f"raw Unicorn, tight loop, no limit:         {raw:8.1f} MIPS")
     print(f"board hart, same loop, exact counting:     {counted:8.1f} MIPS  ({counted / raw:.2f} x raw)")
@@ -663,10 +680,15 @@ def speed_figures(args: argparse.Namespace) -> None:
     print(f"  after loading: {board['host_ms_per_frame']:.1f} ms host per {board['virtual_ms_per_frame']:.2f} ms "
           f"virtual frame, real-time factor {board['real_time_factor']:.3f} (virtual seconds per host second; "
           f"1.0 runs as fast as a Dock)")
-    print(f"  Unicorn on hart 0's drawing alone ({drawing['instructions']:,} instructions, 2 frames, no scheduler, "
-          f"no devices), host ms per frame:")
-    for way, ms in drawing["host_ms_per_frame"].items():
-        print(f"    {way:34} {ms:7.2f} ms  {drawing['mips'][way]:7.1f} MIPS")
+    per_frame = board["instructions_per_frame"][0]
+    print(f"  Unicorn on hart 0's drawing alone (no scheduler, no devices), host time per instruction and for "
+          f"a frame's {per_frame:,}:")
+    for way, figures in drawing.items():
+        print(f"    {way:36} {figures['ns_per_instruction']:6.2f} ns  {figures['ns_per_instruction'] * per_frame / 1e6:7.2f} ms"
+              f"  {figures['mips']:7.1f} MIPS  ({figures['instructions']:,} instructions)")
+    print(f"  the precise engine throughout (--engine precise): {precise['host_ms_per_frame']:.1f} ms host per "
+          f"frame, real-time factor {precise['real_time_factor']:.3f}, {precise['effective_mips']:.1f} MIPS; "
+          f"the fast engine charged {board['charged_share']:.1%} of hart 0's instructions whole")
     print(f"board with --check-writes:                 {checked['effective_mips']:8.1f} MIPS  "
           f"({checked['ratio_to_unchecked']:.3f} x the board without; fastest of {checked['rounds']} alternating "
           f"runs each; {checked['ratio_while_executing']:.3f} x while harts execute)")
