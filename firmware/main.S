@@ -59,6 +59,7 @@
     .equ JOB_FRAME,             8           # u64 the frame's number
     .equ JOB_CYCLES,            16          # u64 hart 1's band, cycles (hart 1 writes it)
     .equ JOB_BYTES,             24
+    .equ SIGNAL_NONE,           -1          # set_state: signal no hart
     .equ DRAW_BAND_MIN,         8           # rows each hart keeps when both draw
 # CPU cycles one frame takes on the LCD's SPI link: one byte per serial
 # clock (octal), the serial clock SPI0's source / SPI0_BAUDR_LCD, and SPI0's
@@ -237,8 +238,11 @@ main_hart1:
     sd      s6, JOB_CYCLES(t0)
     addi    a0, t0, JOB_STATE
     li      a1, JOB_DONE
-    li      a2, 0                       # tell hart 0
-    call    set_state
+    li      a2, 0                       # tell hart 0, which waits for it when
+    li      t0, LCD_HEIGHT              # this hart had rows (only then: a
+    bltu    s5, t0, 8f                  # signal it does not wait for would
+    li      a2, SIGNAL_NONE             # cut one of its other waits short)
+8:  call    set_state
     call    lcd_frame_finish
     mv      a0, s3
     li      a1, FB_FREE
@@ -334,19 +338,20 @@ fb_set_state:
 #   What: publishes a state word's new value (after every earlier memory
 #         access of this hart) and raises hart a2's software interrupt.
 #   Arguments: a0 = address of the state word, a1 = new state, a2 = hart
-#              to signal.
+#              to signal, or SIGNAL_NONE.
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 set_state:
     fence   rw, w
     amoswap.w.rl zero, a1, (a0)
+    bltz    a2, 1f                      # SIGNAL_NONE
     fence                               # state visible before the IPI
     slli    t2, a2, CLINT_MSIP_SHIFT
     li      t3, CLINT_MSIP
     add     t2, t2, t3
     li      t3, CLINT_MSIP_RAISE
     sw      t3, 0(t2)
-    ret
+1:  ret
 
 # draw_split (file-local)
 #   What: where hart 1's band of frame n begins (hart 0 draws the rows
