@@ -12,7 +12,9 @@
 # Who owns what from the release on (nothing else is shared):
 #   hart 1 only: SPI0, DMAC channel 0 and its PLIC enable, lcd_ready, the
 #         LCD's panel state; hart 0 only: SPI1, DMAC channel 1 and its PLIC
-#         enable, the heap, `scene`, the renderer's buffers.
+#         enable, the heap, `scene`, the renderer's state (render_prepare
+#         writes it while hart 1 draws nothing; both read it while they
+#         draw their bands; see "Both harts draw" below).
 #   written before the release, read-only after it: cpu_hz, .bss cleared,
 #         the console's UART set-up, the FPIOA, the DMAC's common set-up
 #         (dma_init: its reset would stop the other hart's channel).
@@ -47,6 +49,26 @@
 # order they were drawn.
 # A trap on either hart raises halt_request (trap.S): a waiting hart then
 # leaves its loop, hart 1 painting the error screen on the way out.
+#
+# Both harts draw: frame n >= 1 is split in two bands of rows, hart 0's
+# rows 0 .. s - 1 and hart 1's s .. LCD_HEIGHT - 1 (s = LCD_HEIGHT: hart 0
+# draws it all; draw_split decides, README "Rendering"), each hart's rows of
+# the colour and depth buffers its own (render_band, raster_set_band), so
+# no pixel is written by both and the frame is the one hart 0 draws alone.
+#   hart 0: wait state[b] == FREE; render_prepare (once for both); from
+#           frame 1 on post band_job (first row s, JOB_POSTED, msip[1]);
+#           draw rows 0 .. s - 1; if s < LCD_HEIGHT wait band_job ==
+#           JOB_DONE (acquire: hart 1's rows are in memory); then FULL as
+#           above
+#   hart 1: wait state[b] == FULL; start frame n's DMA; wait band_job ==
+#           JOB_POSTED (the job of frame n + 1, drawn into the other
+#           buffer, which hart 1 itself handed back); draw its rows, if
+#           any; band_job = JOB_DONE (release; msip[0] only when hart 0
+#           waits for it); wait for the DMA; FREE as above
+# Job n + 1 is taken before hart 1 frees buffer b, and hart 0 posts job
+# n + 2 only once buffer b is free: one job is in flight at a time, so
+# one state word is enough. Hart 0 does not run render_prepare again
+# before hart 1's band is done (it waits for JOB_DONE first).
 
     .option norelax
     .include "k210.inc"

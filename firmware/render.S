@@ -1,5 +1,8 @@
 # render.S: one frame of the scene: clear, then every triangle (textured or
-# flat) or every edge (wireframe).
+# flat) or every edge (wireframe). The per-frame set-up (render_prepare)
+# runs once; the drawing (render_band) runs on one hart for the whole
+# screen or on both, each for its band of rows (main.S), with per-hart
+# scratch (the hart-local block below).
 #
 # Per triangle (modes textured and flat):
 #   1. Trivial rejection: the three vertices outside the same frustum plane
