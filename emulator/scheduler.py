@@ -475,6 +475,13 @@ class Scheduler:
         if self.pending_stop is not None:
             raise self.pending_stop
         hart.time = t0 + ran / hz
+        if hart.state is HartState.ASLEEP:
+            # a wfi with an enabled interrupt already pending falls through (the privileged spec:
+            # WFI resumes when an enabled interrupt is pending, whenever it became so); without
+            # this the hart would only wake at the next change of an interrupt input
+            enabled = hart.reg(rv.UC_RISCV_REG_MIE)
+            if enabled and board.mip(hart.hart_id, hart.time, enabled):
+                hart.state = HartState.RUNNING
         self._check_waiters(hart.time, storer=hart)
         if hart.polling:
             # nothing the hart's loop does will change what it polls before the next device

@@ -20,13 +20,14 @@
 #         enters main_hart1.
 #   Arguments: none (reset state). Results: never returns.
 #   Clobbers: everything; sp ends at this hart's stack top minus the trap
-#         save area.
+#         save area, tp at mhartid << HART_LOCAL_SHIFT (k210.inc) for good.
 _start:
     # The boot ROM may leave interrupt enables behind: the firmware runs with
     # mstatus.MIE = 0 throughout and uses mie only as a WFI wake-up mask.
     csrci   mstatus, MSTATUS_MIE
     csrw    mie, zero
     csrr    a0, mhartid
+    slli    tp, a0, HART_LOCAL_SHIFT    # this hart's offset into hart-local blocks
 
     # Hart h's 16 KiB region ends at __stack_top - h * 16 KiB. Its top
     # TRAP_FRAME_SIZE bytes are the trap save area (pointed to by mscratch, so

@@ -213,12 +213,31 @@ lcd_begin_full_frame:
     .globl lcd_send_frame
 # lcd_send_frame
 #   What: sends a whole 320 x 240 RGB565 framebuffer to the LCD by DMA
-#         (sleeps in WFI while it goes). The buffer holds 32-bit words with
-#         the earlier pixel of each pair in bits 31:16.
+#         (sleeps in WFI while it goes): lcd_frame_start, then
+#         lcd_frame_finish. The buffer holds 32-bit words with the earlier
+#         pixel of each pair in bits 31:16.
 #   Arguments: a0 = framebuffer address.
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 lcd_send_frame:
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+    call    lcd_frame_start
+    call    lcd_frame_finish
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
+    ret
+
+    .globl lcd_frame_start
+# lcd_frame_start
+#   What: starts sending a whole framebuffer to the LCD (window, RAMWR,
+#         then the pixels by DMA) and returns while the DMA runs: the
+#         caller may do other work, leaving the buffer and SPI0 alone, until
+#         it calls lcd_frame_finish.
+#   Arguments: a0 = framebuffer address.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+lcd_frame_start:
     addi    sp, sp, -16
     sd      ra, 8(sp)
     sd      s0, 0(sp)
@@ -226,11 +245,19 @@ lcd_send_frame:
     call    lcd_begin_full_frame
     mv      a0, s0
     li      a1, LCD_FB_WORDS
-    call    spi0_dma_send_words
+    call    spi0_dma_send_start
     ld      s0, 0(sp)
     ld      ra, 8(sp)
     addi    sp, sp, 16
     ret
+
+    .globl lcd_frame_finish
+# lcd_frame_finish
+#   What: waits (in WFI) until the frame lcd_frame_start began is out.
+#   Arguments: none. Results: none.
+#   Clobbers: only ABI temporaries.
+lcd_frame_finish:
+    tail    spi0_dma_send_finish
 
     .globl lcd_error_screen
 # lcd_error_screen

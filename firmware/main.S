@@ -12,7 +12,9 @@
 # Who owns what from the release on (nothing else is shared):
 #   hart 1 only: SPI0, DMAC channel 0 and its PLIC enable, lcd_ready, the
 #         LCD's panel state; hart 0 only: SPI1, DMAC channel 1 and its PLIC
-#         enable, the heap, `scene`, the renderer's buffers.
+#         enable, the heap, `scene`, the renderer's state (render_prepare
+#         writes it while hart 1 draws nothing; both read it while they
+#         draw their bands; see "Both harts draw" below).
 #   written before the release, read-only after it: cpu_hz, .bss cleared,
 #         the console's UART set-up, the FPIOA, the DMAC's common set-up
 #         (dma_init: its reset would stop the other hart's channel).
@@ -47,10 +49,44 @@
 # order they were drawn.
 # A trap on either hart raises halt_request (trap.S): a waiting hart then
 # leaves its loop, hart 1 painting the error screen on the way out.
+#
+# Both harts draw: frame n >= 1 is split in two bands of rows, hart 0's
+# rows 0 .. s - 1 and hart 1's s .. LCD_HEIGHT - 1 (s = LCD_HEIGHT: hart 0
+# draws it all; draw_split decides, README "Rendering"), each hart's rows of
+# the colour and depth buffers its own (render_band, raster_set_band), so
+# no pixel is written by both and the frame is the one hart 0 draws alone.
+#   hart 0: wait state[b] == FREE; render_prepare (once for both); from
+#           frame 1 on post band_job (first row s, JOB_POSTED, msip[1]);
+#           draw rows 0 .. s - 1; if s < LCD_HEIGHT wait band_job ==
+#           JOB_DONE (acquire: hart 1's rows are in memory); then FULL as
+#           above
+#   hart 1: wait state[b] == FULL; start frame n's DMA; wait band_job ==
+#           JOB_POSTED (the job of frame n + 1, drawn into the other
+#           buffer, which hart 1 itself handed back); draw its rows, if
+#           any; band_job = JOB_DONE (release; msip[0] only when hart 0
+#           waits for it); wait for the DMA; FREE as above
+# Job n + 1 is taken before hart 1 frees buffer b, and hart 0 posts job
+# n + 2 only once buffer b is free: one job is in flight at a time, so
+# one state word is enough. Hart 0 does not run render_prepare again
+# before hart 1's band is done (it waits for JOB_DONE first).
 
     .option norelax
     .include "k210.inc"
     .include "st7789v.inc"
+    .include "scene.inc"
+
+# band_job's layout
+    .equ JOB_STATE,             0           # u32 JOB_NONE / JOB_POSTED / JOB_DONE
+    .equ JOB_FIRST,             4           # u32 first row of hart 1's band (LCD_HEIGHT: none)
+    .equ JOB_FRAME,             8           # u64 the frame's number
+    .equ JOB_CYCLES,            16          # u64 hart 1's band, cycles (hart 1 writes it)
+    .equ JOB_BYTES,             24
+    .equ SIGNAL_NONE,           -1          # set_state: signal no hart
+    .equ DRAW_BAND_MIN,         8           # rows each hart keeps when both draw
+# CPU cycles one frame takes on the LCD's SPI link: one byte per serial
+# clock (octal), the serial clock SPI0's source / SPI0_BAUDR_LCD, and SPI0's
+# source (PLL0 / 2) is the CPU's clock: 3 072 000 cycles, 7.62 ms.
+    .equ LCD_FRAME_CYCLES,      LCD_FB_BYTES * SPI0_BAUDR_LCD
 
     .text
     .globl main_hart0
@@ -104,10 +140,45 @@ main_hart0:
     li      a1, FB_FREE
     call    fb_wait_state
     bnez    a0, trap_park
+    csrr    s4, mcycle                  # s4 = the frame's start
     mv      a0, s3
     call    fb_address
     mv      a1, s2
-    call    render_frame
+    call    render_prepare              # the vertex stage, once
+    mv      a0, s2
+    call    draw_split
+    mv      s5, a0                      # s5 = hart 1's first row
+    # every frame from 1 on has a job for hart 1, maybe without rows (frame
+    # 0's comes before hart 1 takes jobs: it brings the LCD up meanwhile)
+    beqz    s2, 2f
+    la      t0, band_job
+    sw      s5, JOB_FIRST(t0)
+    sd      s2, JOB_FRAME(t0)
+    addi    a0, t0, JOB_STATE
+    li      a1, JOB_POSTED
+    li      a2, 1
+    call    set_state
+2:  csrr    s6, mcycle                  # s6 = hart 0's band's start
+    li      a0, 0
+    mv      a1, s5
+    call    render_band
+    csrr    t0, mcycle
+    sub     s6, t0, s6                  # s6 = hart 0's band, cycles
+    sub     s7, t0, s4                  # s7 = hart 0's frame, cycles
+    li      s8, 0                       # s8 = hart 1's band, cycles
+    li      t0, LCD_HEIGHT
+    beq     s5, t0, 3f                  # no rows for hart 1: no need to wait
+    la      a0, band_job + JOB_STATE
+    li      a1, JOB_DONE
+    call    wait_state
+    bnez    a0, trap_park
+    la      t0, band_job
+    ld      s8, JOB_CYCLES(t0)
+3:  mv      a0, s5
+    mv      a1, s6
+    mv      a2, s7
+    mv      a3, s8
+    call    draw_record
     slli    t0, s3, 3
     la      t1, fb_frame
     add     t1, t1, t0
@@ -167,7 +238,34 @@ main_hart1:
     ld      s4, 0(t1)                   # s4 = frame number in the buffer
     mv      a0, s3
     call    fb_address
-    call    lcd_send_frame
+    call    lcd_frame_start             # the DMA sends it meanwhile
+    # hart 0's job for the next frame, which it is drawing into the other
+    # buffer: this hart's rows of it, if any
+    la      a0, band_job + JOB_STATE
+    li      a1, JOB_POSTED
+    call    wait_state
+    bnez    a0, 2f
+    la      t0, band_job
+    lwu     s5, JOB_FIRST(t0)           # s5 = this hart's first row
+    li      s6, 0                       # s6 = its band, cycles
+    li      t0, LCD_HEIGHT
+    bgeu    s5, t0, 7f
+    csrr    s6, mcycle
+    mv      a0, s5
+    li      a1, LCD_HEIGHT
+    call    render_band
+    csrr    t0, mcycle
+    sub     s6, t0, s6
+7:  la      t0, band_job
+    sd      s6, JOB_CYCLES(t0)
+    addi    a0, t0, JOB_STATE
+    li      a1, JOB_DONE
+    li      a2, 0                       # tell hart 0, which waits for it when
+    li      t0, LCD_HEIGHT              # this hart had rows (only then: a
+    bltu    s5, t0, 8f                  # signal it does not wait for would
+    li      a2, SIGNAL_NONE             # cut one of its other waits short)
+8:  call    set_state
+    call    lcd_frame_finish
     mv      a0, s3
     li      a1, FB_FREE
     li      a2, 0                       # tell hart 0
@@ -203,17 +301,26 @@ fb_address:
     ret
 
 # fb_wait_state (file-local)
-#   What: sleeps until buffer a0's state word equals a1, woken by this hart's
-#         CLINT software interrupt. Acquire: what the other hart wrote before
-#         setting the state is visible after return. Gives up when a trap
-#         on the other hart has raised halt_request.
+#   What: wait_state on buffer a0's state word.
 #   Arguments: a0 = buffer index, a1 = wanted state.
 #   Results: a0 = 0 when the state was reached, 1 when halted.
 #   Clobbers: only ABI temporaries. Leaves this hart's msip clear.
 fb_wait_state:
     slli    t0, a0, 2
-    la      t1, fb_state
-    add     t1, t1, t0                  # t1 = &state[b]
+    la      a0, fb_state
+    add     a0, a0, t0
+    # fall through
+
+# wait_state (file-local)
+#   What: sleeps until the word at a0 equals a1, woken by this hart's
+#         CLINT software interrupt. Acquire: what the other hart wrote before
+#         setting the word is visible after return. Gives up when a trap
+#         on the other hart has raised halt_request.
+#   Arguments: a0 = address of the state word, a1 = wanted state.
+#   Results: a0 = 0 when the state was reached, 1 when halted.
+#   Clobbers: only ABI temporaries. Leaves this hart's msip clear.
+wait_state:
+    mv      t1, a0                      # t1 = &state
     csrr    t2, mhartid
     slli    t2, t2, CLINT_MSIP_SHIFT
     li      t3, CLINT_MSIP
@@ -239,24 +346,103 @@ fb_wait_state:
     ret
 
 # fb_set_state (file-local)
-#   What: publishes buffer a0's new state (after every earlier memory access
-#         of this hart) and raises hart a2's software interrupt.
+#   What: set_state on buffer a0's state word.
 #   Arguments: a0 = buffer index, a1 = new state, a2 = hart to signal.
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 fb_set_state:
     slli    t0, a0, 2
-    la      t1, fb_state
-    add     t1, t1, t0
+    la      a0, fb_state
+    add     a0, a0, t0
+    # fall through
+
+# set_state (file-local)
+#   What: publishes a state word's new value (after every earlier memory
+#         access of this hart) and raises hart a2's software interrupt.
+#   Arguments: a0 = address of the state word, a1 = new state, a2 = hart
+#              to signal, or SIGNAL_NONE.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+set_state:
     fence   rw, w
-    amoswap.w.rl zero, a1, (t1)
+    amoswap.w.rl zero, a1, (a0)
+    bltz    a2, 1f                      # SIGNAL_NONE
     fence                               # state visible before the IPI
     slli    t2, a2, CLINT_MSIP_SHIFT
     li      t3, CLINT_MSIP
     add     t2, t2, t3
     li      t3, CLINT_MSIP_RAISE
     sw      t3, 0(t2)
+1:  ret
+
+# draw_split (file-local)
+#   What: where hart 1's band of frame n begins (hart 0 draws the rows
+#         above it): LCD_HEIGHT (hart 0 draws everything) for frame 0 (hart
+#         1 brings the LCD up then), in wireframe mode (lines are cheap and
+#         not split), with harts = 1, and with harts = auto while the last
+#         frame's drawing (draw_work) took no longer than the LCD's transfer
+#         (LCD_FRAME_CYCLES): then hart 1 drawing would not show. Else
+#         draw_balance (draw_record). Depends on cycle counts only through
+#         the choice of rows, never on what is drawn.
+#   Arguments: a0 = frame number.
+#   Results: a0 = first row of hart 1's band, 1 .. LCD_HEIGHT.
+#   Clobbers: only ABI temporaries.
+draw_split:
+    beqz    a0, 8f
+    la      t0, scene
+    lwu     t1, SCENE_MODE(t0)
+    li      t2, MODE_WIREFRAME
+    beq     t1, t2, 8f
+    lwu     t1, SCENE_HARTS(t0)
+    li      t2, HARTS_ONE
+    beq     t1, t2, 8f
+    li      t2, HARTS_AUTO
+    bne     t1, t2, 1f
+    la      t0, draw_work
+    ld      t0, 0(t0)
+    li      t1, LCD_FRAME_CYCLES
+    bleu    t0, t1, 8f
+1:  la      t0, draw_balance
+    lwu     a0, 0(t0)
     ret
+8:  li      a0, LCD_HEIGHT
+    ret
+
+# draw_record (file-local)
+#   What: keeps what frame n's drawing cost for draw_split: draw_work =
+#         hart 0's cycles from render_prepare to the end of its band plus
+#         hart 1's band's (the work of one hart drawing alone, whatever the
+#         split), and, when both drew, a new draw_balance: the row where
+#         the two bands' cycles would be equal if each band's cost were
+#         spread evenly over its rows, s' = H c1 s / (c0 (H - s) + c1 s)
+#         (H = LCD_HEIGHT, s the split, c0, c1 the bands' cycles), kept
+#         within DRAW_BAND_MIN rows of either edge.
+#   Arguments: a0 = the split (draw_split), a1 = hart 0's band cycles,
+#              a2 = hart 0's frame cycles, a3 = hart 1's band cycles.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+draw_record:
+    add     t0, a2, a3
+    la      t1, draw_work
+    sd      t0, 0(t1)
+    li      t0, LCD_HEIGHT
+    bgeu    a0, t0, 9f                  # hart 0 drew alone
+    sub     t1, t0, a0                  # H - s
+    mul     t1, t1, a1                  # c0 (H - s)
+    mul     t2, a3, a0                  # c1 s
+    add     t1, t1, t2
+    beqz    t1, 9f
+    mul     t2, t2, t0                  # H c1 s
+    divu    t2, t2, t1                  # s'
+    li      t3, DRAW_BAND_MIN
+    bgeu    t2, t3, 1f
+    mv      t2, t3
+1:  li      t3, LCD_HEIGHT - DRAW_BAND_MIN
+    bleu    t2, t3, 2f
+    mv      t2, t3
+2:  la      t1, draw_balance
+    sw      t2, 0(t1)
+9:  ret
 
 # ---------------------------------------------------------------------------
     .section .rodata
@@ -285,3 +471,17 @@ fb_frame:
 # fb_state: FB_FREE / FB_FULL per buffer; 0 = FREE after .bss clearing.
 fb_state:
     .space  NUM_FRAMEBUFFERS * 4
+# band_job: hart 0's job for hart 1 (the handoff above).
+    .balign 8
+band_job:
+    .space  JOB_BYTES
+# draw_work: the last frame's drawing, cycles on both harts (draw_record).
+draw_work:
+    .space  8
+
+    .data
+    .balign 4
+# draw_balance: the row where hart 1's band begins when both draw
+# (draw_record), half the screen until both have drawn a frame.
+draw_balance:
+    .word   LCD_HEIGHT / 2

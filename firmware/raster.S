@@ -34,6 +34,10 @@
 #     the mip level the footprint picks), README "Texture filtering".
 #   - Attributes are planes: gradients per pixel from the snapped corners,
 #     re-anchored at the first inside pixel of every row.
+#   - Bands: each hart draws only the rows of its band (raster_set_band;
+#     main.S splits a frame between the harts). The planes are still set up
+#     at the bounding box's first row and stepped row by row to the band,
+#     so a pixel gets the same bits whichever hart draws it.
 
     .option norelax
     .include "k210.inc"
@@ -297,6 +301,7 @@
     fsd     fs5, RT_FSAVE2 + 8(sp)
     .if \mipmap
     la      t0, raster_mip_rho2
+    add     t0, t0, tp                  # (this hart's)
     flw     fs4, 0(t0)
     la      t0, raster_mip_table
     ld      s10, 0(t0)
@@ -529,6 +534,13 @@
     j       6b
 .endm
 
+    .if (FB_ROW_BYTES % CLEAR_UNROLL_BYTES) || (DEPTH16_ROW_BYTES % CLEAR_UNROLL_BYTES)
+    .error "raster_clear clears whole rows CLEAR_UNROLL_BYTES at a time"
+    .endif
+    .if DEPTH16_ROW_BYTES != DEPTH_ROW_BYTES >> 1
+    .error "raster_triangle steps depth rows by DEPTH_ROW_BYTES >> (16-bit depth)"
+    .endif
+
     .text
     .globl raster_begin
 # raster_begin
@@ -539,6 +551,23 @@
 raster_begin:
     la      t0, raster_fb
     sd      a0, 0(t0)
+    ret
+
+    .globl raster_set_band
+# raster_set_band
+#   What: sets the rows the calling hart draws from now on: raster_clear and
+#         raster_triangle touch rows a0 .. a1 - 1 only (the two harts draw
+#         disjoint bands of one frame, main.S). Lines (raster_segment,
+#         raster_line) ignore it. Until it is first called the band is empty.
+#   Arguments: a0 = first row, a1 = the row past the last (0 <= a0 <= a1 <=
+#              LCD_HEIGHT).
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+raster_set_band:
+    la      t0, raster_band
+    add     t0, t0, tp
+    sw      a0, BAND_FIRST(t0)
+    sw      a1, BAND_END(t0)
     ret
 
     .globl raster_set_texture
@@ -813,8 +842,10 @@ raster_set_depth:
 
     .globl raster_clear
 # raster_clear
-#   What: fills the framebuffer with one colour and, when asked, the depth
-#         buffer with the far plane (DEPTH_CLEAR or DEPTH16_CLEAR).
+#   What: fills this hart's band (raster_set_band) of the framebuffer with
+#         one colour and, when asked, of the depth buffer with the far plane
+#         (DEPTH_CLEAR or DEPTH16_CLEAR). (Rows are whole multiples of
+#         CLEAR_UNROLL_BYTES in both buffers.)
 #   Arguments: a0 = RGB565 colour, a1 = 1 to clear the depth buffer too.
 #   Results: none.
 #   Clobbers: only ABI temporaries.
@@ -825,10 +856,18 @@ raster_clear:
     or      t0, t0, t1
     slli    t1, t0, 32
     or      t0, t0, t1
+    la      t4, raster_band
+    add     t4, t4, tp
+    lwu     t5, BAND_FIRST(t4)          # t5, t6 = the band's rows
+    lwu     t6, BAND_END(t4)
+    bgeu    t5, t6, 3f                  # empty
     la      t2, raster_fb
     ld      t2, 0(t2)
-    li      t3, LCD_FB_BYTES
+    li      t4, FB_ROW_BYTES
+    mul     t3, t6, t4
     add     t3, t3, t2
+    mul     t4, t5, t4
+    add     t2, t2, t4
 1:  sd      t0, 0(t2)
     sd      t0, 8(t2)
     sd      t0, 16(t2)
@@ -848,11 +887,14 @@ raster_clear:
     li      t0, DEPTH_CLEAR             # two f32 per doubleword
     slli    t1, t0, 32
     or      t0, t0, t1
-    li      t3, DEPTH_BUFFER_BYTES
+    li      t4, DEPTH_ROW_BYTES
     j       5f
 4:  li      t0, DEPTH16_CLEAR_DWORD     # four u16 per doubleword
-    li      t3, DEPTH16_BUFFER_BYTES
-5:  add     t3, t3, t2
+    li      t4, DEPTH16_ROW_BYTES
+5:  mul     t3, t6, t4
+    add     t3, t3, t2
+    mul     t4, t5, t4
+    add     t2, t2, t4
 2:  sd      t0, 0(t2)
     sd      t0, 8(t2)
     sd      t0, 16(t2)
@@ -867,7 +909,8 @@ raster_clear:
 
     .globl raster_triangle
 # raster_triangle
-#   What: draws one triangle, depth-tested (see the file comment).
+#   What: draws the rows of one triangle that lie in this hart's band
+#         (raster_set_band), depth-tested (see the file comment).
 #   Arguments: a0 = three raster vertices in a row (RV_BYTES each,
 #              render.inc; RV_K only read with RASTER_GOURAUD, RV_S, RV_T
 #              only with RASTER_TEXTURED), a1 = 1 to drop back faces,
@@ -976,6 +1019,13 @@ raster_triangle:
     mv      a7, t3
 4:  bgt     a4, a5, 90f                 # nothing on screen
     bgt     a6, a7, 90f
+    la      t3, raster_band             # nothing in this hart's band
+    add     t3, t3, tp
+    lwu     a2, BAND_FIRST(t3)
+    bgt     a2, a7, 90f
+    lwu     a3, BAND_END(t3)
+    bge     a6, a3, 90f
+    bge     a2, a3, 90f                 # (an empty band)
     slli    a2, a4, SUBPIXEL_BITS       # a2, a3 = first pixel centre (Q4)
     addi    a2, a2, SUBPIXEL_HALF
     slli    a3, a6, SUBPIXEL_BITS
@@ -1106,6 +1156,7 @@ raster_triangle:
     fmv.w.x ft10, t3
     fmul.s  ft9, ft9, ft10
     la      t3, raster_mip_rho2
+    add     t3, t3, tp                  # (this hart's)
     fsw     ft9, 0(t3)
 62:
     # --- edge functions: s6..s8 = at the first centre of the row, s3..s5 =
@@ -1143,6 +1194,42 @@ raster_triangle:
     add     t6, t6, t0
     sub     a4, a7, a6
     addi    a4, a4, 1
+    # --- the band (raster_set_band): the rows past its end are dropped; the
+    # rows above its first are stepped over exactly as the fill loops step
+    # from row to row (integers by multiples, floats one addition a row), so
+    # every value in the band is bit for bit what a whole-screen draw gives.
+    la      t3, raster_band
+    add     t3, t3, tp
+    lwu     t0, BAND_END(t3)
+    sub     t0, t0, a6                  # rows from ymin to the band's end
+    ble     a4, t0, 63f
+    mv      a4, t0
+63: lwu     t0, BAND_FIRST(t3)
+    sub     a0, t0, a6                  # a0 = rows above the band
+    blez    a0, 65f
+    sub     a4, a4, a0
+    mul     t3, a0, s9                  # edge functions
+    add     s6, s6, t3
+    mul     t3, a0, s10
+    add     s7, s7, t3
+    mul     t3, a0, s11
+    add     s8, s8, t3
+    li      t3, FB_ROW_BYTES            # framebuffer
+    mul     t3, t3, a0
+    add     a3, a3, t3
+    add     a2, a2, t3
+    li      t3, DEPTH_ROW_BYTES         # depth (DEPTH16_ROW_BYTES = DEPTH_ROW_BYTES >> 1)
+    srl     t3, t3, t1
+    mul     t3, t3, a0
+    add     t6, t6, t3
+64: fadd.s  ft0, ft0, ft4               # the planes (unused ones too: harmless)
+    fadd.s  ft1, ft1, ft5
+    fadd.s  ft2, ft2, ft6
+    fadd.s  ft3, ft3, ft7
+    fadd.s  fs2, fs2, fs3
+    addi    a0, a0, -1
+    bnez    a0, 64b
+65:
     # --- the fill loop for these settings: raster_fills[flags | depth16 << 3]
     # (flags with RASTER_BILINEAR or RASTER_MIPMAP index past the first 16)
     slli    t1, t1, RASTER_DEPTH16_SHIFT
@@ -1393,8 +1480,17 @@ raster_depth_mode:
 # rho^2 constant (|det H| or, affine, |det J|; raster_triangle)
 raster_mip_table:
     .space  8
+# Hart-local (k210.inc HART_LOCAL_STRIDE; tp selects the copy): the rows this
+# hart draws (raster_set_band), and filter = mipmap's rho^2 constant of the
+# triangle being drawn (|det H| or, affine, |det J|; raster_triangle).
+    .balign 8
+raster_band:
+    .space  BAND_BYTES
 raster_mip_rho2:
     .space  4
+raster_hart_local_end:
+    .space  HART_LOCAL_STRIDE - (raster_hart_local_end - raster_band)
+    .space  raster_hart_local_end - raster_band     # hart 1's copy
 
     .section .rodata
 msg_mip_chain:      .asciz "mip chain"

@@ -1,5 +1,8 @@
 # render.S: one frame of the scene: clear, then every triangle (textured or
-# flat) or every edge (wireframe).
+# flat) or every edge (wireframe). The per-frame set-up (render_prepare)
+# runs once; the drawing (render_band) runs on one hart for the whole
+# screen or on both, each for its band of rows (main.S), with per-hart
+# scratch (the hart-local block below).
 #
 # Per triangle (modes textured and flat):
 #   1. Trivial rejection: the three vertices outside the same frustum plane
@@ -158,12 +161,72 @@ render_init:
 
     .globl render_frame
 # render_frame
-#   What: draws frame n of the scene into a framebuffer (file comment).
+#   What: draws frame n of the scene into a framebuffer (file comment), all
+#         of it on the calling hart: render_prepare, then render_band over
+#         the whole screen.
 #   Arguments: a0 = framebuffer (LCD_FB_BYTES, 64-aligned), a1 = frame
 #              number.
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 render_frame:
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+    call    render_prepare
+    li      a0, 0
+    li      a1, LCD_HEIGHT
+    call    render_band
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
+    ret
+
+    .globl render_prepare
+# render_prepare
+#   What: the part of frame n every band needs, done once (on hart 0): the
+#         vertex stage (vertex_transform; the vertex records into
+#         render_vertices), with shading = gouraud the normals'
+#         intensities, and the framebuffer to draw into (raster_begin).
+#         Then render_band may run on both harts at once for disjoint
+#         bands; render_prepare must not run again before every band of
+#         the frame is drawn (it rewrites what they read).
+#   Arguments: a0 = framebuffer (LCD_FB_BYTES, 64-aligned), a1 = frame
+#              number.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+render_prepare:
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+    sd      s0, 0(sp)
+    mv      s0, a0                      # s0 = framebuffer
+    mv      a0, a1
+    call    vertex_transform
+    la      t0, render_vertices
+    sd      a0, 0(t0)
+    la      t0, render_fill
+    lwu     t0, 0(t0)
+    andi    t0, t0, RASTER_GOURAUD
+    beqz    t0, 1f
+    call    normals_light
+1:  mv      a0, s0
+    call    raster_begin
+    ld      s0, 0(sp)
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
+    ret
+
+    .globl render_band
+# render_band
+#   What: draws rows a0 .. a1 - 1 of the frame render_prepare set up, on
+#         the calling hart: those rows cleared, then every triangle's pixels
+#         in them (raster_set_band; a triangle whose rows all lie outside
+#         is skipped before its lighting and texture set-up). The pixels
+#         are bit for bit those of a whole-screen draw, whichever hart
+#         draws which rows. Wireframe: the whole frame, so only ever called
+#         with the whole screen (main.S splits triangle modes only).
+#   Arguments: a0 = first row, a1 = the row past the last (0 <= a0 <= a1
+#              <= LCD_HEIGHT).
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+render_band:
     addi    sp, sp, -112
     sd      ra, 104(sp)
     sd      s0, 96(sp)
@@ -178,36 +241,31 @@ render_frame:
     sd      s9, 24(sp)
     sd      s10, 16(sp)
     sd      s11, 8(sp)
-    mv      s0, a0                      # s0 = framebuffer
-    mv      a0, a1
-    call    vertex_transform
-    mv      s1, a0                      # s1 = vertex records
-    la      t0, render_fill
-    lwu     t0, 0(t0)
-    andi    t0, t0, RASTER_GOURAUD
-    beqz    t0, 1f
-    call    normals_light
-1:
-    mv      a0, s0
-    call    raster_begin
-    la      s2, scene                   # s2 = scene
-    lwu     a0, SCENE_BACKGROUND(s2)
-    lwu     t0, SCENE_MODE(s2)
+    mv      s0, a0                      # s0 = the band's first row
+    mv      s2, a1                      # s2 = the row past its last
+    call    raster_set_band
+    la      t0, render_vertices
+    ld      s1, 0(t0)                   # s1 = vertex records
+    la      t1, scene
+    lwu     a0, SCENE_BACKGROUND(t1)
+    lwu     t0, SCENE_MODE(t1)
     addi    a1, t0, -MODE_WIREFRAME
     snez    a1, a1                      # depth only when not wireframe
     call    raster_clear
-    lwu     t0, SCENE_MODE(s2)
-    li      t1, MODE_WIREFRAME
-    bne     t0, t1, 1f
+    la      t1, scene
+    lwu     t0, SCENE_MODE(t1)
+    li      t2, MODE_WIREFRAME
+    bne     t0, t2, 1f
     mv      a0, s1
     call    render_wireframe
     j       9f
 
-1:  ld      s3, MESH_F(s2)              # s3 = face
-    lwu     s4, MESH_FCOUNT(s2)         # s4 = faces left
+1:  la      t1, scene
+    ld      s3, MESH_F(t1)              # s3 = face
+    lwu     s4, MESH_FCOUNT(t1)         # s4 = faces left
     la      t0, render_fill
     lwu     s10, 0(t0)                  # s10 = RASTER_FLAT / RASTER_TEXTURED
-    lwu     s11, SCENE_CULL(s2)         # s11 = cull
+    lwu     s11, SCENE_CULL(t1)         # s11 = cull
     beqz    s4, 9f
 2:  # s5, s6, s7 = the corners' vertex records
     ld      t0, 0(s3)
@@ -238,7 +296,7 @@ render_frame:
     # A back face in front of the near plane is dropped before the work on
     # it: the same signed area (from the same Q4 positions) raster_triangle
     # would find.
-    beqz    s11, 1f
+    beqz    s11, 10f
     andi    t0, s8, OUT_CLIP
     bnez    t0, 1f
     lw      t0, VTX_SX(s5)
@@ -254,6 +312,29 @@ render_frame:
     sub     t4, t4, t1
     mul     t3, t3, t4                  # (x2 - x0)(y1 - y0)
     bge     t2, t3, 8f                  # area >= 0: back face or degenerate
+    # Outside the band: the rows of its pixel centres as raster_triangle
+    # finds them (a clipped triangle is left to raster_triangle).
+10: andi    t0, s8, OUT_CLIP
+    bnez    t0, 1f
+    lw      t0, VTX_SY(s5)
+    lw      t1, VTX_SY(s6)
+    lw      t2, VTX_SY(s7)
+    mv      t3, t0                      # t3 = min y
+    ble     t3, t1, 11f
+    mv      t3, t1
+11: ble     t3, t2, 11f
+    mv      t3, t2
+11: mv      t4, t0                      # t4 = max y
+    bge     t4, t1, 11f
+    mv      t4, t1
+11: bge     t4, t2, 11f
+    mv      t4, t2
+11: addi    t3, t3, SUBPIXEL_CEIL       # first row: (min + 7) >> 4
+    srai    t3, t3, SUBPIXEL_BITS
+    addi    t4, t4, -SUBPIXEL_HALF      # last row: (max - 8) >> 4
+    srai    t4, t4, SUBPIXEL_BITS
+    blt     t4, s0, 8f
+    bge     t3, s2, 8f
 1:  andi    t0, s10, RASTER_GOURAUD
     bnez    t0, 20f
     mv      a0, s3
@@ -278,6 +359,7 @@ render_frame:
     # in front of the near plane and inside the guard band: the vertex
     # records' projections
     la      a0, render_rv
+    add     a0, a0, tp
     mv      t0, a0
     mv      t1, s5                      # t1 = corner 0, then t4, then t5
     mv      t4, s6
@@ -480,6 +562,7 @@ corner_light:
     la      t0, normal_light
     ld      t0, 0(t0)
     la      t1, render_rv
+    add     t1, t1, tp
     slli    t2, t2, NORMAL_LIGHT_SHIFT
     add     t2, t2, t0
     lw      t2, 0(t2)
@@ -497,6 +580,7 @@ corner_light:
     sd      ra, 8(sp)
     call    face_light                  # (a0 is still the face)
     la      t1, render_rv
+    add     t1, t1, tp
     fsw     fa0, RV_K(t1)
     fsw     fa0, RV_BYTES + RV_K(t1)
     fsw     fa0, 2 * RV_BYTES + RV_K(t1)
@@ -598,6 +682,7 @@ face_texels:
     ld      t1, MESH_T(t0)              # t1 = vt array
     lwu     t2, MESH_TCOUNT(t0)         # t2 = vt count
     la      t3, render_rv
+    add     t3, t3, tp
     li      t4, TRIANGLE_CORNERS
     li      t5, F32_ONE
     fmv.w.x ft3, t5                     # ft3 = 1
@@ -620,6 +705,7 @@ face_texels:
     bnez    t4, 1b
     # shift by whole repeats: the smallest of each into [0, 1), then scale
     la      t3, render_rv
+    add     t3, t3, tp
     flw     ft0, RV_S(t3)
     flw     ft1, RV_S + RV_BYTES(t3)
     flw     ft2, RV_S + 2 * RV_BYTES(t3)
@@ -688,7 +774,9 @@ clip_and_draw:
     # the vertex stage found them), texel coordinates and intensities
     mv      s0, a0                      # s0 = corner
     la      s1, clip_polygon_a          # s1 = its clip vertex
+    add     s1, s1, tp
     la      s2, render_rv               # s2 = its raster vertex
+    add     s2, s2, tp
     li      s7, TRIANGLE_CORNERS
 1:  ld      a0, 0(s0)
     slli    a0, a0, MESH_INDEX_LOW_SHIFT
@@ -709,7 +797,9 @@ clip_and_draw:
 
     # each plane in turn, the output of one the input of the next
     la      s0, clip_polygon_a          # s0 = the polygon
+    add     s0, s0, tp
     la      s1, clip_polygon_b          # s1 = the other buffer
+    add     s1, s1, tp
     li      s2, TRIANGLE_CORNERS        # s2 = its corners
     li      s7, 0                       # s7 = plane number (clip_planes)
 2:  mv      a0, s7
@@ -734,6 +824,7 @@ clip_and_draw:
     # project the corners into render_rv_out
     mv      s7, s2                      # s7 = corners left
     la      s1, render_rv_out
+    add     s1, s1, tp
 5:  flw     fa0, CV_X(s0)
     flw     fa1, CV_Y(s0)
     flw     fa2, CV_Z(s0)
@@ -756,6 +847,7 @@ clip_and_draw:
 
     # the fan
     la      a0, render_rv_out
+    add     a0, a0, tp
     mv      a1, s3
     mv      a2, s4
     mv      a3, s5
@@ -764,17 +856,22 @@ clip_and_draw:
 6:  addi    t0, s7, 2
     bgt     t0, s2, 9f                  # i + 1 is past the last corner
     la      a0, render_rv_fan
+    add     a0, a0, tp
     li      t0, RV_BYTES
     mul     t0, t0, s7
     la      a1, render_rv_out
+    add     a1, a1, tp
     add     a1, a1, t0
     li      a2, 2 * RV_BYTES
     call    rv_copy                     # corners i, i + 1
     la      a0, render_rv_fan + 2 * RV_BYTES
+    add     a0, a0, tp
     la      a1, render_rv_out
+    add     a1, a1, tp
     li      a2, RV_BYTES
     call    rv_copy                     # corner 0
     la      a0, render_rv_fan
+    add     a0, a0, tp
     mv      a1, s3
     mv      a2, s4
     mv      a3, s5
@@ -1029,12 +1126,16 @@ render_wireframe:
     mv      a1, t0
 2:  mv      s4, a1
     la      a1, segment_ends
+    add     a1, a1, tp
     call    vertex_clip
     mv      a0, s4
     la      a1, segment_ends + CLIP_POS_BYTES
+    add     a1, a1, tp
     call    vertex_clip
     la      a0, segment_ends
+    add     a0, a0, tp
     la      a1, segment_ends + CLIP_POS_BYTES
+    add     a1, a1, tp
     mv      a2, s3
     call    clip_segment
     beqz    a0, 8f                      # nothing left
@@ -1360,10 +1461,15 @@ edge_list:
     .space  8
 edge_count:
     .space  8
-# Scratch of one triangle: its corners for raster_triangle; when it is
-# clipped, the polygon as clip vertices (two buffers: each plane's output is
-# the next one's input), projected, and one triangle of its fan.
+# render_vertices: this frame's vertex records (render_prepare).
+render_vertices:
+    .space  8
+# Hart-local (k210.inc HART_LOCAL_STRIDE; tp selects the copy): scratch of
+# one triangle: its corners for raster_triangle; when it is clipped, the
+# polygon as clip vertices (two buffers: each plane's output is the next
+# one's input), projected, and one triangle of its fan.
     .balign 8
+render_hart_local:
 render_rv:
     .space  TRIANGLE_CORNERS * RV_BYTES
 clip_polygon_a:
@@ -1377,3 +1483,6 @@ render_rv_fan:
 # A wireframe edge cut in clip space: its ends' clip-space positions.
 segment_ends:
     .space  2 * CLIP_POS_BYTES
+render_hart_local_end:
+    .space  HART_LOCAL_STRIDE - (render_hart_local_end - render_hart_local)
+    .space  render_hart_local_end - render_hart_local   # hart 1's copy

@@ -44,6 +44,11 @@
 #             (texture filtering, raster.S; its default, 0, is the
 #             zeros scene_defaults leaves after scene_default_values)
 #
+# Not what is drawn, only how fast (main.S; the same default, 0):
+# harts       auto | 1 | 2                            auto          SCENE_HARTS
+#             (which harts draw: 1 hart 0 alone, 2 both, auto both
+#             once hart 0 alone takes longer than the LCD's transfer)
+#
 # Conventions (scene.inc): right-handed, camera at the origin looking down
 # -z (a model in view has negative z), angles in degrees about the axis.
 #
@@ -172,6 +177,7 @@ scene_keys:
     SCENE_KEY depth, SCENE_KIND_WORD, 0, 0, scene + SCENE_DEPTH, words_depth, msg_expect_depth
     SCENE_KEY snap, SCENE_KIND_WORD, 0, 0, scene + SCENE_SNAP, words_snap, msg_expect_snap
     SCENE_KEY filter, SCENE_KIND_WORD, 0, 0, scene + SCENE_FILTER, words_filter, msg_expect_filter
+    SCENE_KEY harts, SCENE_KIND_WORD, 0, 0, scene + SCENE_HARTS, words_harts, msg_expect_harts
 scene_keys_end:
 
     .balign 8
@@ -214,6 +220,11 @@ words_filter:
     .dword  word_nearest, FILTER_NEAREST
     .dword  word_bilinear, FILTER_BILINEAR
     .dword  word_mipmap, FILTER_MIPMAP
+    .dword  0
+words_harts:
+    .dword  word_auto, HARTS_AUTO
+    .dword  word_1, HARTS_ONE
+    .dword  word_2, HARTS_TWO
     .dword  0
 
     .balign 4
@@ -269,6 +280,8 @@ word_pixel:         .asciz "pixel"
 word_nearest:       .asciz "nearest"
 word_bilinear:      .asciz "bilinear"
 word_mipmap:        .asciz "mipmap"
+word_auto:          .asciz "auto"
+word_2:             .asciz "2"
 path_scene_ini:     .asciz "scene.ini"
 msg_load:           .asciz "load "
 msg_crc32:          .asciz " crc32="
@@ -301,6 +314,7 @@ msg_expect_angles:  .asciz "bad value (expected polynomial or table)"
 msg_expect_depth:   .asciz "bad value (expected int16 or float32)"
 msg_expect_snap:    .asciz "bad value (expected subpixel or pixel)"
 msg_expect_filter:  .asciz "bad value (expected nearest, bilinear or mipmap)"
+msg_expect_harts:   .asciz "bad value (expected auto, 1 or 2)"
 msg_levels:         .asciz "bad value (must be a whole number from 2 to 65)"
 
     .text

@@ -253,7 +253,8 @@ dma_wait_channel:
 #   What: sends a1 32-bit words from memory at a0 to the LCD through DMAC
 #         channel 0 (request line SSI0_TX), sleeping in WFI until the channel
 #         finishes, then acknowledges the interrupt and waits for the last
-#         frames to leave SPI0. The caller sets D/C first and must have run
+#         frames to leave SPI0: spi0_dma_send_start, then
+#         spi0_dma_send_finish. The caller sets D/C first and must have run
 #         dma_init and (on this hart) dma_irq_init.
 #   Arguments: a0 = word-aligned source address, a1 = word count
 #         (1 .. 2^22).
@@ -262,8 +263,38 @@ dma_wait_channel:
 spi0_dma_send_words:
     addi    sp, sp, -16
     sd      ra, 8(sp)
+    call    spi0_dma_send_start
+    call    spi0_dma_send_finish
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
+    ret
+
+    .globl spi0_dma_send_start
+# spi0_dma_send_start
+#   What: starts sending a1 32-bit words from memory at a0 to the LCD
+#         through DMAC channel 0 and returns at once; the words must stay
+#         as they are until spi0_dma_send_finish has returned, and SPI0 is
+#         busy until then. The caller sets D/C first and must have run
+#         dma_init and (on this hart) dma_irq_init.
+#   Arguments: a0 = word-aligned source address, a1 = word count
+#         (1 .. 2^22).
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+spi0_dma_send_start:
     li      a2, DMAC_CTL_MEM_TO_SPI32
-    call    spi0_dma_start
+    j       spi0_dma_start
+
+    .globl spi0_dma_send_finish
+# spi0_dma_send_finish
+#   What: ends what spi0_dma_send_start began: sleeps in WFI until DMAC
+#         channel 0 finishes (at once when it already has: its interrupt is
+#         still pending), acknowledges the interrupt, waits for the last
+#         frames to leave SPI0 and turns SPI0's DMA requests off.
+#   Arguments: none. Results: none.
+#   Clobbers: only ABI temporaries.
+spi0_dma_send_finish:
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
     li      a0, 0
     call    dma_wait_channel
     call    spi0_finish

@@ -22,6 +22,9 @@ the yardstick every setting is measured against.
 `filter` (`nearest`, `bilinear`, `mipmap`) is not a precision key: it chooses how the texture is
 sampled, so the reference's pixel-centre image follows it (reference/render.py) and the firmware
 can be checked against it; the ideal image ignores it (it area-filters every texture).
+
+`harts` (`auto`, `1`, `2`) says which of the K210's harts draw (firmware/main.S); the frames are the
+same whichever do, so the reference reads and checks it and ignores it.
 """
 from __future__ import annotations
 
@@ -47,10 +50,12 @@ PRECISION_WORDS: dict[str, tuple[str, ...]] = {
 }
 # Texture filtering (firmware/raster.S), the default first.
 FILTER_WORDS: tuple[str, ...] = ("nearest", "bilinear", "mipmap")
+# Which harts draw (firmware/main.S), the default first: changes how fast, never what is drawn.
+HARTS_WORDS: tuple[str, ...] = ("auto", "1", "2")
 LIGHT_LEVELS_MIN, LIGHT_LEVELS_MAX = 2, 65
 KEYS = ("model", "texture", "mode", "cull", "scale", "axis", "angle", "step", "translate",
         "fov", "near", "far", "light", "ambient", "background",
-        "interpolation", "shading", "light_levels", "angles", "depth", "snap", "filter")
+        "interpolation", "shading", "light_levels", "angles", "depth", "snap", "filter", "harts")
 VALUE_MAX = 256          # a path of this many bytes or more is too long (NUL included)
 
 
@@ -89,6 +94,8 @@ class Scene:
     snap: str = "subpixel"                       # subpixel | pixel
     # how textures are sampled (the pixel-centre image follows it)
     filter: str = "nearest"                      # nearest | bilinear | mipmap
+    # which harts draw (how fast only: the reference ignores it)
+    harts: str = "auto"                          # auto | 1 | 2
     lines: dict[str, int] = field(default_factory=dict, repr=False)   # key -> line that set it
 
 
@@ -252,8 +259,8 @@ def _set(scene: Scene, key: str, value: str, line: int) -> None:
         if value.lower() not in CULL_WORDS:
             raise SceneError(line, "bad value (expected on, off, yes, no, true, false, 1 or 0)")
         scene.cull = CULL_WORDS[value.lower()]
-    elif key in PRECISION_WORDS or key == "filter":
-        words = FILTER_WORDS if key == "filter" else PRECISION_WORDS[key]
+    elif key in PRECISION_WORDS or key in ("filter", "harts"):
+        words = FILTER_WORDS if key == "filter" else HARTS_WORDS if key == "harts" else PRECISION_WORDS[key]
         if value.lower() not in words:
             raise SceneError(line, _expected_words(words))
         setattr(scene, key, value.lower())

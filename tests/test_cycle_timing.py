@@ -203,8 +203,8 @@ def test_an_unknown_timing_model_is_refused():
 # the firmware or to the card changes them on purpose: take them again by running commit 53f433e's
 # emulator, `python -m emulator run build/firmware.elf --sd build/card.img --frames 4`, on the new
 # firmware and card.)
-BEFORE_CYCLES = [(0.13336426269646579, [11892668, 28802]), (0.14437470686519974, [1009329, 3491]),
-                 (0.1520004736145794, [1008685, 1208]), (0.1596262403639591, [1025670, 1208])]
+BEFORE_CYCLES = [(0.13386781612903456, [11937169, 29028]), (0.14487824789082063, [1016385, 3542]),
+                 (0.1525040022332524, [1015663, 1267]), (0.16012975657568415, [1032801, 1267])]
 
 
 def test_ipc1_reproduces_the_model_before_cycle_timing(firmware, card, firmware_run, tmp_path):

@@ -277,8 +277,8 @@ def test_firmware_trap_handler_runs_then_run_stops(firmware, card, tmp_path):
     data = bytearray(firmware.read_bytes())
     with firmware.open("rb") as handle:
         elf = ELFFile(handle)
-        symbol = elf.get_section_by_name(".symtab").get_symbol_by_name("render_frame")
-        assert symbol, "render_frame symbol missing"
+        symbol = elf.get_section_by_name(".symtab").get_symbol_by_name("render_band")
+        assert symbol, "render_band symbol missing"
         address = symbol[0]["st_value"]
         offset = None
         for segment in elf.iter_segments():

@@ -82,7 +82,7 @@ class Client:
 
 @needs_gdb
 def test_a_gdb_multiarch_session(firmware, card, tmp_path):
-    """The issue's session: break at render_frame, step, registers and memory, a watchpoint on a
+    """The issue's session: break at render_band, step, registers and memory, a watchpoint on a
     variable, continue to the next frame; then detach, and the run goes on to its end."""
     process, port = start_board(str(firmware), "--sd", str(card), "--frames", "3", "--out", str(tmp_path / "out"))
     script = tmp_path / "session.gdb"
@@ -90,7 +90,7 @@ def test_a_gdb_multiarch_session(firmware, card, tmp_path):
 set confirm off
 target remote 127.0.0.1:{port}
 info threads
-break *render_frame
+break *render_band
 continue
 stepi
 info registers pc ra sp
@@ -101,7 +101,7 @@ watch *(unsigned int *)&fb_state
 continue
 delete 2
 continue
-print $pc == render_frame
+print $pc == render_band
 thread 2
 print $mhartid
 detach
@@ -112,7 +112,7 @@ detach
     out = session.stdout
     assert session.returncode == 0, session.stderr + out
     assert re.search(r"\* 1 +Thread 1 \(hart 0: running\)", out) and "Thread 2 (hart 1: running)" in out
-    assert out.count("hit Breakpoint 1, ") == 2 and "in render_frame ()" in out
+    assert out.count("hit Breakpoint 1, ") == 2 and "in render_band ()" in out
     words = subprocess.run(["riscv64-unknown-elf-objdump", "-d", "--start-address=0x80000000",
                             "--stop-address=0x80000008", str(firmware)], capture_output=True, text=True).stdout
     first = re.findall(r"^\s*80000000:\s+([0-9a-f]{8})", words, re.M)

@@ -346,6 +346,26 @@ def test_wfi_with_nothing_to_wake_it_is_a_hang():
         run_to_done(board)
 
 
+def test_wfi_with_an_interrupt_already_pending_falls_through():
+    """A wfi with an enabled interrupt already pending does not sleep (the privileged spec: WFI
+    resumes when an enabled interrupt is pending), even when the other hart sleeps too and no
+    device will change an interrupt input again. (The model used to put the hart to sleep and
+    wake it only at the next change of an input: here never, a hang; in the firmware, hart 1
+    waiting for a DMA that had finished while it drew its band, with hart 0 asleep.)"""
+    board = make_board(program("""
+        li      t0, 0x02000000
+        li      t1, 1
+        sw      t1, 0(t0)                     # msip[0] = 1: pending before the wfi
+        li      t0, 1 << 3                    # MSIE; mstatus.MIE stays 0: no trap
+        csrw    mie, t0
+        wfi
+        li      s1, 1
+    """))
+    run_to_done(board)
+    assert reg(board, "s1", 0) == 1
+    assert reg(board, "mcause", 0) == 0
+
+
 def load_segments(elf: str) -> bytes:
     """The first 4 KiB of SRAM as the program's image fills them."""
     sram = Sram(fill_seed=None)

@@ -22,9 +22,10 @@ SCENE_TRANSLATE, SCENE_FOV, SCENE_NEAR, SCENE_FAR, SCENE_LIGHT, SCENE_AMBIENT, S
     40, 52, 56, 60, 64, 76, 80
 SCENE_INTERPOLATION, SCENE_SHADING, SCENE_LIGHT_LEVELS, SCENE_ANGLES, SCENE_DEPTH, SCENE_SNAP = \
     84, 88, 92, 96, 100, 104
-SCENE_SIZE = 176
+SCENE_SIZE = 184
 MESH_VCOUNT, MESH_TCOUNT, MESH_NCOUNT, MESH_FCOUNT = 108, 112, 116, 120
 SCENE_FILTER = 124
+SCENE_HARTS = 176
 MESH_V, MESH_T, MESH_N, MESH_F, TEX_W, TEX_H, TEX_PIXELS = 128, 136, 144, 152, 160, 164, 168
 
 
@@ -94,7 +95,7 @@ def test_every_key_and_an_obj_using_every_feature(firmware, tmp_path):
              "axis = 0 0 5\nangle = -30\nstep = 2.5\ntranslate = 1 -1 -4\nfov = 45\nnear = 0.5\n"
              "far = 50\nlight = 0 3 4\nambient = 0.1\nbackground = #FF8000\n"
              "interpolation = Affine\nshading = gouraud\nlight_levels = 33\nangles = table\ndepth = float32\n"
-             "snap = pixel\nfilter = MipMap\n")
+             "snap = pixel\nfilter = MipMap\nharts = 2\n")
     board = boot(tmp_path, {"/scene.ini": scene.encode(), "/m/thing.obj": obj.encode(), "/t/tex.ppm": TEXTURE})
     raw = scene_bytes(board)
     assert u32(raw, SCENE_MODE) == 1 and u32(raw, SCENE_CULL) == 0
@@ -108,6 +109,7 @@ def test_every_key_and_an_obj_using_every_feature(firmware, tmp_path):
     assert [u32(raw, o) for o in (SCENE_INTERPOLATION, SCENE_SHADING, SCENE_ANGLES, SCENE_DEPTH, SCENE_SNAP)] \
         == [1, 1, 1, 0, 1]
     assert u32(raw, SCENE_FILTER) == 2                                # mipmap
+    assert u32(raw, SCENE_HARTS) == 2
     assert f32s(board, raw, SCENE_LIGHT_LEVELS, 1) == [33]
     assert [u32(raw, o) for o in (MESH_VCOUNT, MESH_TCOUNT, MESH_NCOUNT, MESH_FCOUNT)] == [5, 2, 2, 1 + 2 + 3 + 1]
     vertices = array(board, raw, MESH_V, 5, "<3f")

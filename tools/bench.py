@@ -22,7 +22,10 @@ each), written to build/bench/:
     quality.csv, quality.md and quality.svg;
   - the ideal image's own figures per scene and mode: its host time per frame and its convergence
     (frame 0 at the default density against twice it);
-  - results.json holds every record (each names its `setting`), results.md the tables.
+  - results.json holds every record (each names its `setting`), results.md the tables;
+  - both harts drawing (issue 12): heavy scenes with `harts = 1` and `harts = 2`, cycles per
+    frame on each hart, the frame period and the speed-up, and that both show the same frames:
+    harts.json, and a table in results.md.
 
     python tools/bench.py                        (what `make bench` runs: everything)
     python tools/bench.py --quality-only --scenes cube --modes flat --settings default,gouraud
@@ -367,6 +370,69 @@ def measure(firmware: Path, folder: Path, name: str, model: str, texture: str, s
     }
 
 
+# Scenes heavy enough that hart 0 alone draws slower than the LCD takes a frame: the 5,120-triangle
+# sphere textured (256 x 256) filling most of the screen, and larger; and with filter = mipmap.
+HARTS_SCENES = [
+    ("E sphere 5,120 tri, 256x256", "models/sphere.obj", "textures/sphere.ppm", 1.2, {}),
+    ("E sphere 5,120 tri, 256x256", "models/sphere.obj", "textures/sphere.ppm", 1.5, {}),
+    ("E sphere 5,120 tri, 256x256, mipmap", "models/sphere.obj", "textures/sphere.ppm", 1.5, {"filter": "mipmap"}),
+]
+
+
+def harts_run(firmware: Path, folder: Path, model: str, texture: str, scale: float, keys: dict,
+              harts: str) -> tuple[dict, list[np.ndarray]]:
+    """One heavy scene with `harts`: steady-state cycles and instructions per frame per hart (frames
+    2.. of BENCH_FRAMES: frame 0 includes loading, and frame 1 is hart 0's alone with auto) and
+    the frame period; and the frames."""
+    from sdcard_image import build_image
+    card = folder / "harts.img"
+    scene = {"model": model, "texture": texture, "mode": "textured", "scale": str(scale), **BENCH_MOTION, **keys,
+             "harts": harts}
+    build_image(card, [folder / "assets" / "models", folder / "assets" / "textures"], scene=scene, force=True,
+                on_warning=_warn_once)
+    images: list[np.ndarray] = []
+    board = Board(str(firmware), sd_image=str(card), on_frame=lambda record, image: images.append(image))
+    try:
+        board.run(BENCH_FRAMES)
+    finally:
+        board.close()
+    steady = board.frames[2:]
+    period = (steady[-1].virtual_time_s - board.frames[1].virtual_time_s) / len(steady)
+    return {"harts": harts,
+            "cycles": [round(sum(f.cycles[h] for f in steady) / len(steady)) for h in (0, 1)],
+            "instructions": [round(sum(f.instructions[h] for f in steady) / len(steady)) for h in (0, 1)],
+            "frame_period_ms": period * 1e3, "frame_period_cycles": round(period * board.cpu_hz())}, images
+
+
+def harts_figures(firmware: Path, folder: Path) -> list[dict]:
+    """Every HARTS_SCENES scene with one hart drawing and with both: the speed-up of the frame
+    period (both are drawing-bound: the LCD takes LCD_FRAME_CYCLES, 3,072,000 cycles, a frame)."""
+    records = []
+    for name, model, texture, scale, keys in HARTS_SCENES:
+        one, one_images = harts_run(firmware, folder, model, texture, scale, keys, "1")
+        two, two_images = harts_run(firmware, folder, model, texture, scale, keys, "2")
+        same = len(one_images) == len(two_images) and all(np.array_equal(a, b) for a, b in zip(one_images, two_images))
+        records.append({"scene": name, "scale": scale, "one": one, "two": two, "same_frames": same,
+                        "speed_up": one["frame_period_ms"] / two["frame_period_ms"]})
+        print(f"[harts] {name}, scale {scale:g}: one hart {one['frame_period_ms']:.2f} ms, both "
+              f"{two['frame_period_ms']:.2f} ms, {records[-1]['speed_up']:.2f} x, frames "
+              f"{'identical' if same else 'DIFFERENT'}", file=sys.stderr, flush=True)
+    return records
+
+
+def harts_table(records: list[dict]) -> str:
+    """The table of harts_figures."""
+    lines = ["| scene | scale | one hart: cycles / frame (hart 0) | frame period (ms) | both: cycles / frame hart 0, "
+             "hart 1 | frame period (ms) | speed-up | frames |",
+             "|---|---|---:|---:|---:|---:|---:|---|"]
+    for r in records:
+        one, two = r["one"], r["two"]
+        lines.append(f"| {r['scene']} | {r['scale']:g} | {one['cycles'][0]:,} | {one['frame_period_ms']:.2f} | "
+                     f"{two['cycles'][0]:,}, {two['cycles'][1]:,} | {two['frame_period_ms']:.2f} | "
+                     f"{r['speed_up']:.2f} x | {'identical' if r['same_frames'] else 'DIFFERENT'} |")
+    return "\n".join(lines) + "\n"
+
+
 def scene_figures(firmware: Path, folder: Path, runs: list[tuple]) -> tuple[list[dict], list[str]]:
     """Every planned run (see planned_runs); returns the records and, for the runs that failed
     (a firmware that rejects a setting, a reference that cannot render it), what went wrong."""
@@ -577,6 +643,8 @@ def main() -> int:
     parser.add_argument("--scenes", help="comma-separated scenes (default: all): "
                         + ", ".join(scene_id(model) for _, model, _, _ in BENCH_SCENES))
     parser.add_argument("--modes", help="comma-separated modes (default: all): " + ", ".join(MODES))
+    parser.add_argument("--harts-only", action="store_true",
+                        help="only the heavy scenes with one and with both harts drawing (harts.json)")
     args = parser.parse_args()
     settings = _names(args.settings, list(quality.SETTINGS), "setting")
     scenes = _names(args.scenes, [scene_id(model) for _, model, _, _ in BENCH_SCENES], "scene") \
@@ -584,6 +652,8 @@ def main() -> int:
     modes = _names(args.modes, list(MODES), "mode") or list(MODES)
     renderer = not args.no_renderer and not args.quality_only
     sweep = not args.no_renderer and not args.no_quality
+    if args.harts_only:
+        return harts_main(Path(args.firmware), Path(args.out))
     if not args.quality_only and not args.no_speed:
         speed_figures(args)
     failures: list[str] = []
@@ -592,12 +662,32 @@ def main() -> int:
         with tempfile.TemporaryDirectory() as tmp:
             records, failures = scene_figures(Path(args.firmware), Path(tmp), runs)
         out = Path(args.out)
-        print(write_results(records, out, renderer, sweep))
+        printed = write_results(records, out, renderer, sweep)
+        if renderer:
+            harts_main(Path(args.firmware), out)
+        print(printed)
         print(f"{len(records)} runs of {len(runs)} written to {out}: results.json, results.md"
               + (", quality.csv, quality.md, quality.svg" if sweep else ""))
     for failure in failures:
         print(f"FAILED: {failure}")
     return 1 if failures else 0
+
+
+def harts_main(firmware: Path, out: Path) -> int:
+    """The heavy scenes with one and both harts: printed, written to OUT/harts.json and appended to
+    OUT/results.md; status 1 when two harts showed other frames than one."""
+    with tempfile.TemporaryDirectory() as tmp:
+        subprocess.run([sys.executable, str(ROOT / "tools" / "make_assets.py"), str(Path(tmp) / "assets")], check=True)
+        records = harts_figures(firmware, Path(tmp))
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "harts.json").write_text(json.dumps(records, indent=2) + "\n")
+    table = harts_table(records)
+    results = out / "results.md"
+    previous = results.read_text() if results.exists() else ""
+    results.write_text(previous + ("\n" if previous else "") + "## Both harts drawing (harts = 1 against 2)\n\n"
+                       + table)
+    print(table)
+    return 0 if all(r["same_frames"] for r in records) else 1
 
 
 def write_check_figures(firmware: Path, card: Path, frames: int, unchecked: dict, rounds: int = 2) -> dict:

@@ -8,6 +8,8 @@ writes, like the thesis's three test models:
   models/cube.obj      6 quad faces                                         + textures/cube.png  8x8
 and, for the depth precision measurements (not a thesis model):
   models/decal.obj     2 parallel quads 0.0005 apart, the far one first     + textures/decal.png 64x64
+and, a scene heavy enough for both harts to draw (issue 12):
+  models/sphere.obj    5,120 triangles, a latitude-longitude grid           + textures/sphere.png 256x256
 The textures are PNGs: the card builder turns them into PPM, as it does for users' images.
 """
 from __future__ import annotations
@@ -51,6 +53,28 @@ def torus(rings: int = 20, sides: int = 10, major: float = 0.7, minor: float = 0
             faces.append([(a, a, a), (d, d, d), (c, c, c)])
             faces.append([(a, a, a), (c, c, c), (b, b, b)])
     return _obj("torus", vertices, uvs, normals, faces)
+
+
+def sphere(segments: int = 64, bands: int = 40, radius: float = 1.0) -> str:
+    """A latitude-longitude sphere: segments * bands * 2 triangles (5,120 by default; the ones
+    at the poles are degenerate, as a grid's are), the texture once around and pole to pole."""
+    vertices, uvs, normals, faces = [], [], [], []
+    for i in range(segments + 1):
+        a = 2 * math.pi * i / segments
+        for j in range(bands + 1):
+            b = math.pi * j / bands
+            nx, ny, nz = math.sin(b) * math.cos(a), math.cos(b), math.sin(b) * math.sin(a)
+            vertices.append((radius * nx, radius * ny, radius * nz))
+            normals.append((nx, ny, nz))
+            uvs.append((i / segments, 1 - j / bands))
+    stride = bands + 1
+    for i in range(segments):
+        for j in range(bands):
+            a, b = i * stride + j + 1, (i + 1) * stride + j + 1
+            c, d = b + 1, a + 1
+            faces.append([(a, a, a), (c, c, c), (d, d, d)])
+            faces.append([(a, a, a), (b, b, b), (c, c, c)])
+    return _obj("sphere", vertices, uvs, normals, faces)
 
 
 def gem(segments: int = 16) -> str:
@@ -153,6 +177,8 @@ def main(argv: list[str]) -> int:
     texture(8, 8, 3).save(out / "textures" / "cube.png")
     (out / "models" / "decal.obj").write_text(decal())
     decal_texture().save(out / "textures" / "decal.png")
+    (out / "models" / "sphere.obj").write_text(sphere())
+    texture(256, 256, 5).save(out / "textures" / "sphere.png")
     return 0
 
 

@@ -1,0 +1,124 @@
+"""Both harts draw (issue 12, item 4; firmware/main.S, render.S render_band, raster.S bands): a
+frame split in row bands between hart 0 and hart 1 is the frame hart 0 draws alone, bit for bit,
+whatever the settings and wherever the split falls; `harts = auto` lets hart 1 draw only when
+drawing takes longer than the LCD's transfer; the scene key is read alike by the firmware and the
+host tools."""
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from extremes_support import run_scene
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "tools"))
+from make_assets import cube, sphere, texture  # noqa: E402
+
+FRAMES = 4                  # frame 0 is hart 0's alone (hart 1 brings the LCD up); 1.. are split
+# hart 1's instructions in a frame when it only sends the frame and waits, against when it draws
+# a band of a 1,024-triangle sphere (about 1.4 million): far apart either way
+HART1_IDLE_MAX = 50_000
+HART1_DRAWING_MIN = 300_000
+
+
+def ppm(width: int, height: int, seed: int) -> bytes:
+    """make_assets' texture as a binary PPM (the firmware's format)."""
+    pixels = np.asarray(texture(width, height, seed).convert("RGB"), dtype=np.uint8)
+    return f"P6\n{width} {height}\n255\n".encode() + pixels.tobytes()
+
+
+MODEL = sphere(segments=32, bands=16)           # 1,024 triangles
+TEXTURE = ppm(128, 128, 5)
+FINE_TEXTURE = ppm(256, 256, 5)
+# Filling the screen: heavier than the LCD's transfer, so that `auto` has hart 1 draw too.
+BIG = "scale = 1.4\n"
+# The settings where a band could come out differently: the plain fill (nearest texel, perspective,
+# 16-bit depth), and the fills that keep their row state on the stack (mipmap), interpolate a
+# Gouraud intensity, keep a float depth; the close-up cuts triangles at the near plane and at the
+# screen's edges (clip_and_draw, the fans drawn on both harts); the cube's faces span both bands
+# with many rows above the split, where hart 1 steps the planes down to its first row (anchoring
+# them there directly instead changes texels: this scene shows it within its frames).
+SCENES = {
+    "plain": (MODEL, TEXTURE, BIG, FRAMES),
+    "close-up": (MODEL, TEXTURE, "scale = 1.4\ntranslate = 0 0 -1.45\nfilter = mipmap\nshading = gouraud\n"
+                 "depth = float32\ncull = off\n", FRAMES),
+    "cube": (cube(), FINE_TEXTURE, "scale = 1.3\nangle = 30\naxis = 1 1 0\n", 6),
+}
+
+
+def hart1_instructions(out: Path) -> list[int]:
+    """Hart 1's instructions in each shown frame (run.json)."""
+    summary = json.loads((out / "run.json").read_text())
+    return [frame["instructions"][1] for frame in summary["frames"]]
+
+
+@pytest.fixture(scope="module")
+def runs(firmware, tmp_path_factory):
+    """Each scene with harts = 1 and harts = 2, and the plain one with the default (auto)."""
+    done = {}
+    for name, (model, texels, keys, frames) in SCENES.items():
+        for harts in ("1", "2"):
+            folder = tmp_path_factory.mktemp(f"{name}-{harts}")
+            done[name, harts] = run_scene(firmware, folder, model, keys + f"harts = {harts}\n", texture=texels,
+                                          frames=frames)
+    done["plain", "auto"] = run_scene(firmware, tmp_path_factory.mktemp("plain-auto"), MODEL, BIG, texture=TEXTURE,
+                                      frames=FRAMES)
+    return done
+
+
+@pytest.mark.parametrize("name", SCENES)
+def test_two_harts_draw_the_frames_one_hart_draws(runs, name):
+    """harts = 2 shows the frames of harts = 1 bit for bit, with hart 1 drawing a band of every
+    frame after the first (and not drawing with harts = 1)."""
+    one, two = runs[name, "1"], runs[name, "2"]
+    assert one.returncode == 0 and two.returncode == 0, (one.stderr, two.stderr)
+    for n in range(len(one.frames)):
+        differ = np.any(one.frames[n] != two.frames[n], axis=2)
+        assert not differ.any(), (f"{name}: frame {n} differs in {int(differ.sum())} pixels, rows "
+                                  f"{sorted(set(np.nonzero(differ)[0].tolist()))[:10]}...")
+    assert max(hart1_instructions(one.out)[1:]) < HART1_IDLE_MAX, "harts = 1: hart 1 drew"
+    assert min(hart1_instructions(two.out)[1:]) > (HART1_DRAWING_MIN if name != "cube" else HART1_IDLE_MAX), \
+        "harts = 2: hart 1 did not draw"
+    # the scene is not empty: the split is tested on pixels that are drawn
+    assert (one.frames[2] != one.frames[2][0, 0]).any(axis=2).mean() > 0.15
+
+
+def test_auto_draws_on_both_harts_when_drawing_is_slower_than_the_lcd(runs):
+    """auto, the default: on the screen-filling sphere hart 0 alone is slower than the LCD's
+    transfer, so hart 1 draws from frame 2 on (frame 1 is hart 0's alone too: auto decides from
+    the frame before, and frame 0 is always hart 0's), and the frames are the same."""
+    auto = runs["plain", "auto"]
+    assert auto.returncode == 0, auto.stderr
+    assert all(np.array_equal(a, b) for a, b in zip(auto.frames, runs["plain", "1"].frames))
+    assert min(hart1_instructions(auto.out)[2:]) > HART1_DRAWING_MIN
+
+
+def test_auto_leaves_the_default_card_to_hart_0(firmware_run):
+    """The default card draws far faster than the LCD takes a frame: hart 1 only sends frames."""
+    _, out, summary = firmware_run
+    assert summary is not None
+    assert max(hart1_instructions(out)[1:]) < HART1_IDLE_MAX
+
+
+@pytest.mark.parametrize("value, accepted", [("auto", True), ("1", True), ("2", True), ("AUTO", True),
+                                             ("3", False), ("two", False), ("0", False)])
+def test_harts_key_host_and_firmware_agree(firmware, tmp_path, value, accepted):
+    """The card builder's reader (reference/scene.py) takes exactly the values the firmware takes,
+    and refuses the others with the firmware's message."""
+    from reference.scene import SceneError, parse_scene
+    text = f"mode = flat\nharts = {value}\n"
+    try:
+        parse_scene(text)
+        host = None
+    except SceneError as error:
+        host = str(error)
+    run = run_scene(firmware, tmp_path, "v 0 0 -1\nv 1 0 -1\nv 0 1 -1\nf 1 2 3\n", text, frames=1)
+    if accepted:
+        assert host is None and run.returncode == 0, (host, run.stderr)
+    else:
+        assert host == "bad scene.ini line 2: bad value (expected auto, 1 or 2)"
+        assert run.returncode != 0 and f"error 9 {host}" in (run.out / "console.log").read_text()
