@@ -314,7 +314,8 @@ class SpiController(Peripheral):
         """Queues frames for the wire as written at `now` (by the CPU or the DMA)."""
         if not self.enabled:
             return
-        if not self.values[SER] or self.frame_period() == float("inf"):
+        period = self.frame_period() if self.values[SER] else float("inf")
+        if period == float("inf"):
             self._held.extend(int(v) for v in values)
             return
         train = self._train
@@ -322,7 +323,7 @@ class SpiController(Peripheral):
             if train is not None:
                 self.advance(now)
             self._check_wire_format()
-            train = self._train = _Train(start=now, period=self.frame_period(), bits=self.frame_bits)
+            train = self._train = _Train(start=now, period=period, bits=self.frame_bits)
             if self.board is not None:
                 self.board.signal(now, f"spi{self.index}_sclk", 1)
         train.frames.append(values.astype(np.uint32))
