@@ -411,7 +411,7 @@ class Bus:
         h = hart.hart_id
         gate = getattr(peripheral, "GATE", None)
         sysctl = self.board.sysctl
-        accesses, split, faulting, stable = self._accesses, self._split, self._faulting_pc, self._stable
+        accesses, split, stable = self._accesses, self._split, self._stable
         base_address = peripheral.BASE
 
         def read(uc, offset, size, user_data):
@@ -427,16 +427,20 @@ class Bus:
             if again is not None:
                 if again[0] == pc and again[1] == offset and again[2] is peripheral and now < again[4]:
                     # the same load as the last one, whose register cannot have changed: what the
-                    # device would answer, without asking it (the poll is still noted)
+                    # device would answer, without asking it (the poll is still noted). The address
+                    # may differ by its low bits: Unicorn splits a misaligned load into aligned
+                    # pieces, the first of which can be this one; then, as on the full path, the
+                    # load traps before it counts as a poll.
+                    width, rs1, imm = accesses[pc]
+                    if self._misaligned(hart, pc, width, rs1, imm, False):
+                        stable[h] = None
+                        return 0
                     scheduler.note_poll(hart, pc, offset + base_address, again[3])
                     return again[3]
                 stable[h] = None
             access = accesses.get(pc)
             width, rs1, imm = access if access is not None else self._access(hart, pc)
-            # an aligned offset the whole width long is an aligned address (device windows are
-            # 4 KiB aligned): only other accesses need the address from the base register
-            if (size != width or offset % width or faulting[h] == pc) and \
-                    self._misaligned(hart, pc, width, rs1, imm, False):
+            if self._misaligned(hart, pc, width, rs1, imm, False):
                 return 0
             try:
                 if gate is not None and gate not in sysctl.usable:
@@ -462,7 +466,7 @@ class Bus:
         h = hart.hart_id
         gate = getattr(peripheral, "GATE", None)
         sysctl = self.board.sysctl
-        accesses, faulting, stable = self._accesses, self._faulting_pc, self._stable
+        accesses, stable = self._accesses, self._stable
 
         def write(uc, offset, size, value, user_data):
             stable[h] = None
@@ -471,9 +475,7 @@ class Bus:
             pc = hart.reg(rv.UC_RISCV_REG_PC)
             access = accesses.get(pc)
             width, rs1, imm = access if access is not None else self._access(hart, pc)
-            # as in read: an aligned whole-width access needs no look at the base register
-            if (size != width or offset % width or faulting[h] == pc) and \
-                    self._misaligned(hart, pc, width, rs1, imm, True):
+            if self._misaligned(hart, pc, width, rs1, imm, True):
                 return
             if width == 8 and size == 4:
                 pending = self._split[hart.hart_id]
