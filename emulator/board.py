@@ -445,5 +445,10 @@ class Board:
             device.advance(now)
 
     def next_device_event(self, now: float) -> float | None:
-        times = [t for t in (d.next_event_time(now) for d in self.timed_devices) if t is not None and t > now]
-        return min(times) if times else None
+        # (a plain loop: the scheduler asks this several times a turn)
+        earliest = None
+        for device in self.timed_devices:
+            t = device.next_event_time(now)
+            if t is not None and t > now and (earliest is None or t < earliest):
+                earliest = t
+        return earliest

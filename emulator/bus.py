@@ -139,6 +139,11 @@ class Bus:
         self._split: list[tuple[int, int, int] | None] = [None] * harts
         self._accesses: dict[int, tuple[int, int, int]] = {}
         self._faulting_pc: list[int | None] = [None] * harts
+        # per hart, the last load if reading it again is known to give the same value with no side
+        # effect until some virtual time (Peripheral.stable_until): (pc, offset, peripheral, value,
+        # until). Only the same load again, with no other device access between, in the same turn,
+        # is answered from it; a hart polling a status register does that several times a byte.
+        self._stable: list[tuple[int, int, Peripheral, int, float] | None] = [None] * harts
         self._aliases: list[set[int]] = [set() for _ in range(harts)]    # upper halves mapped, per hart
         self.device_writes: dict[str, list[int]] = {}     # stores per device, per hart
         self.questionable: dict[str, int] = {}            # accesses the bus answered with a warning, per kind
@@ -178,6 +183,7 @@ class Bus:
 
     def turn_begins(self, hart: Hart) -> None:
         self._faulting_pc[hart.hart_id] = None
+        self._stable[hart.hart_id] = None      # the other hart and the scheduler may have changed devices
 
     def turn_ended(self, hart: Hart) -> BoardStop | None:
         """After a hart's turn: with --check-writes, the stray store that ended it, if any."""
@@ -398,22 +404,47 @@ class Bus:
         return True
 
     def _mmio_reader(self, hart: Hart, peripheral: Peripheral):
+        # Every device load of the firmware comes through here (a poll of a status register
+        # many times per byte on the SD card's bus): the common case, an aligned access whose
+        # width Unicorn passed whole, takes the shortest way to the register table.
         scheduler = self.scheduler
+        h = hart.hart_id
+        gate = getattr(peripheral, "GATE", None)
+        sysctl = self.board.sysctl
+        accesses, split, stable = self._accesses, self._split, self._stable
+        base_address = peripheral.BASE
 
         def read(uc, offset, size, user_data):
             if scheduler.pending_stop is not None:
                 return 0
             pc = hart.reg(rv.UC_RISCV_REG_PC)
-            pending = self._split[hart.hart_id]
+            pending = split[h]
             if pending is not None and pending[:2] == (pc, offset):
-                self._split[hart.hart_id] = None
+                split[h] = None
                 return pending[2]
             now = scheduler.hart_now(hart)
-            width, rs1, imm = self._access(hart, pc)
+            again = stable[h]
+            if again is not None:
+                if again[0] == pc and again[1] == offset and again[2] is peripheral and now < again[4]:
+                    # the same load as the last one, whose register cannot have changed: what the
+                    # device would answer, without asking it (the poll is still noted). The address
+                    # may differ by its low bits: Unicorn splits a misaligned load into aligned
+                    # pieces, the first of which can be this one; then, as on the full path, the
+                    # load traps before it counts as a poll.
+                    width, rs1, imm = accesses[pc]
+                    if self._misaligned(hart, pc, width, rs1, imm, False):
+                        stable[h] = None
+                        return 0
+                    scheduler.note_poll(hart, pc, offset + base_address, again[3])
+                    return again[3]
+                stable[h] = None
+            access = accesses.get(pc)
+            width, rs1, imm = access if access is not None else self._access(hart, pc)
             if self._misaligned(hart, pc, width, rs1, imm, False):
                 return 0
             try:
-                self._gate_check(peripheral)
+                if gate is not None and gate not in sysctl.usable:
+                    self._gate_check(peripheral)
                 value = self._load(hart, peripheral, offset, width, now)
             except BoardStop as error:
                 self._fail(hart, error, peripheral.BASE + offset, width, "load")
@@ -421,19 +452,29 @@ class Bus:
             if width == 8 and size == 4:
                 self._split[hart.hart_id] = (pc, offset + 4, value >> 32)
                 value &= 0xFFFF_FFFF
-            scheduler.note_poll(hart, pc, offset + peripheral.BASE, value)
+            elif size == width and scheduler.pending_stop is None:
+                until = peripheral.stable_until(offset, now)
+                if until > now:
+                    stable[h] = (pc, offset, peripheral, value, until)
+            scheduler.note_poll(hart, pc, offset + base_address, value)
             return value
         return read
 
     def _mmio_writer(self, hart: Hart, peripheral: Peripheral):
         scheduler = self.scheduler
         timed = peripheral in self._timed_set
+        h = hart.hart_id
+        gate = getattr(peripheral, "GATE", None)
+        sysctl = self.board.sysctl
+        accesses, stable = self._accesses, self._stable
 
         def write(uc, offset, size, value, user_data):
+            stable[h] = None
             if scheduler.pending_stop is not None:
                 return
             pc = hart.reg(rv.UC_RISCV_REG_PC)
-            width, rs1, imm = self._access(hart, pc)
+            access = accesses.get(pc)
+            width, rs1, imm = access if access is not None else self._access(hart, pc)
             if self._misaligned(hart, pc, width, rs1, imm, True):
                 return
             if width == 8 and size == 4:
@@ -447,7 +488,8 @@ class Bus:
             scheduler.forget_poll(hart)
             self.device_writes.setdefault(peripheral.NAME, [0] * len(self._split))[hart.hart_id] += 1
             try:
-                self._gate_check(peripheral)
+                if gate is not None and gate not in sysctl.usable:
+                    self._gate_check(peripheral)
                 self._store(hart, peripheral, offset, width, value, now)
             except BoardStop as error:
                 self._fail(hart, error, peripheral.BASE + offset, width, "store")

@@ -100,6 +100,10 @@ class Gpio(Peripheral):
         return (level_lines & matching) | (self._edges & enabled & self.values[INT_LEVEL])
 
     def irq_line(self) -> bool:
+        # Both terms of the raw status are masked by the enabled input lines: with none enabled
+        # the line is low, and the pads need not be read (the PLIC samples this on every wake check)
+        if not self.values[INT_ENABLE] & ~self.values[DIRECTION] & LINE_MASK:
+            return False
         return bool(self._raw_status() & ~self.values[INT_MASK])
 
     def wiring_changed(self, now: float) -> None:

@@ -64,6 +64,8 @@ class Peripheral:
     def __init__(self, board: "Board | None" = None) -> None:
         self.board = board
         self.values: dict[int, int] = {off: reg.reset for off, reg in self.REGISTERS.items()}
+        # lookup's answers by (offset, size, is_write): the table is fixed, and the firmware polls
+        self._found: dict[tuple[int, int, bool], tuple[int, Register]] = {}
 
     def reset(self, now: float) -> None:
         """A reset of this block (SYSCTL peri_reset): registers return to their reset values."""
@@ -73,6 +75,12 @@ class Peripheral:
 
     def lookup(self, offset: int, size: int, is_write: bool) -> tuple[int, Register]:
         """Finds the register an access hits; raises RegisterRuleViolation if none can take it."""
+        found = self._found.get((offset, size, is_write))
+        if found is None:
+            found = self._found[(offset, size, is_write)] = self._find(offset, size, is_write)
+        return found
+
+    def _find(self, offset: int, size: int, is_write: bool) -> tuple[int, Register]:
         reg = self.REGISTERS.get(offset)
         base = offset
         if reg is None and size == 4 and (offset - 4) in self.REGISTERS:
@@ -138,6 +146,15 @@ class Peripheral:
     def next_event_time(self, now: float) -> float | None:
         """The next virtual time at which this device changes state by itself (None: never)."""
         return None
+
+    def stable_until(self, offset: int, now: float) -> float:
+        """Right after a read of the register at `offset` at `now`: the virtual time before which
+        reading it again would return the same value and change nothing, in the device or
+        elsewhere (advancing the device to then included), provided no other access reaches the
+        device meanwhile; `now` or earlier: no such promise. The bus answers a hart polling the
+        register from this (bus.py); a device with a status register polled while time alone
+        changes it says so here."""
+        return now
 
     def advance(self, now: float) -> None:
         """Brings the device's time-driven state up to `now`."""

@@ -233,33 +233,35 @@ class SdCard:
     # --- byte exchange -------------------------------------------------------------------
 
     def exchange(self, mosi: np.ndarray, now: float) -> np.ndarray:
-        """The card's answer to a run of bytes clocked while it is selected."""
+        """The card's answer to a run of bytes clocked while it is selected. (Worked on as bytes:
+        most runs are one byte long, where numpy's per-call cost would dominate.)"""
+        n = len(mosi)
         if not self.selected:
-            self.powerup_clocks += 8 * len(mosi)
-            return np.full(len(mosi), 0xFF, dtype=np.uint8)
-        out = np.full(len(mosi), 0xFF, dtype=np.uint8)
-        i, n = 0, len(mosi)
+            self.powerup_clocks += 8 * n
+            return np.full(n, 0xFF, dtype=np.uint8)
+        data = mosi.tobytes()
+        out = bytearray(b"\xff" * n)
+        i = 0
         while i < n:
             if self._write_buffer is not None or (self._write_mode and not self._command):
-                out[i] = self._write_byte(int(mosi[i]), now)
+                out[i] = self._write_byte(data[i], now)
                 i += 1
                 continue
             pending = len(self._out) - self._out_pos
             if pending and not self._command:
                 # bulk path: while the host only clocks 0xFF, stream what the card has to say
-                run = mosi[i:i + pending]
-                stops = np.flatnonzero(run != 0xFF)
-                take = int(stops[0]) if len(stops) else len(run)
+                run = data[i:i + pending]
+                take = len(run) - len(run.lstrip(b"\xff"))
                 if take:
-                    out[i:i + take] = np.frombuffer(bytes(self._out[self._out_pos:self._out_pos + take]), np.uint8)
+                    out[i:i + take] = self._out[self._out_pos:self._out_pos + take]
                     self._out_pos += take
                     i += take
                     self._refill_stream()
                     continue
             out[i] = self._next_out_byte(now)
-            self._command_byte(int(mosi[i]), now)
+            self._command_byte(data[i], now)
             i += 1
-        return out
+        return np.frombuffer(out, dtype=np.uint8)
 
     def _next_out_byte(self, now: float) -> int:
         if self._out_pos < len(self._out):

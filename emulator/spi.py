@@ -57,6 +57,9 @@ EPSILON = 1e-12
 # frame boundary may come out a hair short of the whole number. A millionth of a frame is
 # far below anything the wire could resolve.
 FRAME_EPSILON = 1e-6
+# Registers whose reads have no side effect and whose values only frames on the wire change
+STATUS_REGISTERS = {TXFLR, RXFLR, SR, RISR, ISR}
+STABLE_MARGIN = 1e-5       # frames: stable_until's bounds keep this far from a frame's edge
 
 
 class SpiDevice(Protocol):
@@ -167,17 +170,18 @@ class SpiController(Peripheral):
 
     # --- configuration decoded -----------------------------------------------------------
 
+    # (bit fields spelled out: these are read on every register access)
     @property
     def frame_bits(self) -> int:
-        return field(self.values[CTRLR0], 16, 5) + 1
+        return ((self.values[CTRLR0] >> 16) & 0x1F) + 1
 
     @property
     def tmod(self) -> int:
-        return field(self.values[CTRLR0], 8, 2)
+        return (self.values[CTRLR0] >> 8) & 3
 
     @property
     def frame_format(self) -> int:
-        return field(self.values[CTRLR0], 21, 2)
+        return (self.values[CTRLR0] >> 21) & 3
 
     @property
     def enabled(self) -> bool:
@@ -260,8 +264,10 @@ class SpiController(Peripheral):
     # --- time -------------------------------------------------------------------------
 
     def advance(self, now: float) -> None:
-        """Moves frames along the wire up to `now`: DMA refills, deliveries, received frames."""
-        self._dma_refill(now)
+        """Moves frames along the wire up to `now`: DMA refills, deliveries, received frames.
+        (Called on every register access and every scheduler turn: the idle cases return early.)"""
+        if self.tx_dma is not None:
+            self._dma_refill(now)
         train = self._train
         if train is None:
             return
@@ -272,15 +278,20 @@ class SpiController(Peripheral):
             self._end_train(now)
 
     def _deliver(self, frames: np.ndarray, now: float) -> None:
-        bits = self.frame_bits
-        nbytes = bits // 8
-        data = frames.astype(">u4").view(np.uint8).reshape(-1, 4)[:, 4 - nbytes:].reshape(-1)
+        nbytes = self.frame_bits // 8
+        if nbytes == 1:
+            data = frames.astype(np.uint8)     # an 8-bit frame is its low byte
+        else:
+            data = frames.astype(">u4").view(np.uint8).reshape(-1, 4)[:, 4 - nbytes:].reshape(-1)
         device = self._selected
         if device is not None:
             reply = device.spi_transfer(data, FORMAT_LANES[self.frame_format], now)
         else:
             reply = np.full(len(data), 0xFF, dtype=np.uint8)  # MISO pulled up: nothing answers
         if self.tmod in (TMOD_TX_RX, TMOD_RX):
+            if nbytes == 1:
+                self._receive(reply.astype(np.uint32), now)
+                return
             words = reply.reshape(-1, nbytes)
             values = np.zeros(len(words), dtype=np.uint32)
             for i in range(nbytes):
@@ -292,7 +303,7 @@ class SpiController(Peripheral):
             self.rx_dma.accept_from_peripheral(values, now)
             return
         room = FIFO_DEPTH - len(self._rx)
-        self._rx.extend(int(v) for v in values[:room])
+        self._rx.extend(values[:room].tolist())
         if len(values) > room:
             self._raw_int |= INT_RXO
             # no frame count in the text: repeated overflows are counted as one warning
@@ -303,7 +314,8 @@ class SpiController(Peripheral):
         """Queues frames for the wire as written at `now` (by the CPU or the DMA)."""
         if not self.enabled:
             return
-        if not self.values[SER] or self.frame_period() == float("inf"):
+        period = self.frame_period() if self.values[SER] else float("inf")
+        if period == float("inf"):
             self._held.extend(int(v) for v in values)
             return
         train = self._train
@@ -311,7 +323,7 @@ class SpiController(Peripheral):
             if train is not None:
                 self.advance(now)
             self._check_wire_format()
-            train = self._train = _Train(start=now, period=self.frame_period(), bits=self.frame_bits)
+            train = self._train = _Train(start=now, period=period, bits=self.frame_bits)
             if self.board is not None:
                 self.board.signal(now, f"spi{self.index}_sclk", 1)
         train.frames.append(values.astype(np.uint32))
@@ -367,6 +379,24 @@ class SpiController(Peripheral):
                 times.append(train.start + arrival * train.period)
         later = [t for t in times if t > now + EPSILON]
         return min(later) if later else None
+
+    def stable_until(self, offset: int, now: float) -> float:
+        """The status registers (sr, txflr, rxflr, risr, isr: reading them changes nothing) stay
+        as they are until the next frame starts or ends on the wire, which is also when advance()
+        next has something to do. Without a DMA transmit channel only (it refills the FIFO as time
+        goes). Bounds are kept a hundred-thousandth of a frame early: the frame counts carry a
+        millionth of a frame's slack (FRAME_EPSILON)."""
+        if offset not in STATUS_REGISTERS or self.tx_dma is not None:
+            return now
+        train = self._train
+        if train is None:
+            return float("inf")         # nothing on the wire: only an access changes anything
+        if now < train.start:
+            return now
+        frames = int((now - train.start) / train.period + FRAME_EPSILON)
+        if frames >= train.count:
+            return now                  # the train is over but not yet ended
+        return train.start + (frames + 1 - STABLE_MARGIN) * train.period
 
     # --- DMA handshakes -------------------------------------------------------------------
 
@@ -437,6 +467,8 @@ class SpiController(Peripheral):
     # --- registers --------------------------------------------------------------------------
 
     def irq_line(self) -> bool:
+        if not self.values[IMR]:
+            return False        # every source masked (the PLIC samples this on every wake check)
         return bool(self._interrupts(self.board.time) & self.values[IMR])
 
     def _interrupts(self, now: float) -> int:

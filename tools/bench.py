@@ -277,6 +277,71 @@ def sd_figures(firmware: Path, folder: Path, timing: str = TIMING_ROCKET) -> dic
 
 
 # The bench's scenes; the renderer table has every scale, the precision sweep each first scale.
+LOAD_SIZES = {"64 KiB": 64 * 1024, "512 KiB": 512 * 1024, "2 MiB": 2 * 1024 * 1024, "5 MiB": 5 * 1024 * 1024}
+LOAD_MODEL = "models/cube.obj"     # the smallest model: the texture is what is measured
+
+
+def texture_of_size(size: int) -> bytes:
+    """A binary PPM of exactly `size` bytes: the largest square that fits, its header padded with
+    a comment (the firmware reads every byte of the file either way)."""
+    side = 1
+    while len(f"P6\n{side + 1} {side + 1}\n255\n") + 3 * (side + 1) ** 2 <= size:
+        side += 1
+    header = f"P6\n{side} {side}\n255\n".encode()
+    pixels = (bytes(range(256)) * (3 * side * side // 256 + 1))[:3 * side * side]
+    padding = size - len(header) - len(pixels)
+    comment = b"#" + b"-" * max(0, padding - 2) + b"\n" if padding >= 2 else b"\n" * padding
+    return header[:3] + comment + header[3:] + pixels
+
+
+def load_figures(firmware: Path, folder: Path) -> dict:
+    """Host seconds to load textures of LOAD_SIZES through the firmware: from the console's
+    "load scene.ini" line to its "load <texture>" line (fat32.S reading the file by SD block with
+    its CRC16 and CRC-32 checks), each line's time taken when its newline reaches the console
+    (hart 1 relays hart 0's lines, so both ends lag the event by the relay's backlog, alike). The
+    run stops at the texture's line (the texture's conversion and the first frame are not in it).
+    Also the virtual time of the same span."""
+    from emulator.errors import ConsoleExpectationsMet
+    from sdcard_image import build_image
+
+    figures = {}
+    for label, size in LOAD_SIZES.items():
+        name = f"load{size}"
+        (folder / name).mkdir(exist_ok=True)
+        (folder / name / "texture.ppm").write_bytes(texture_of_size(size))
+        (folder / name / "model.obj").write_bytes((ROOT / "build" / "assets" / LOAD_MODEL).read_bytes())
+        card = folder / f"{name}.img"
+        build_image(card, [folder / name], scene={"model": f"{name}/model.obj", "texture": f"{name}/texture.ppm"},
+                    force=True)
+        marks: dict[str, tuple[float, float]] = {}
+        line = bytearray()
+        board: Board | None = None
+
+        def console(byte: int) -> None:
+            if byte != 10:
+                line.append(byte)
+                return
+            text = line.decode("ascii", "replace")
+            line.clear()
+            for key in ("load scene.ini", f"load {name}/texture.ppm"):
+                if text.startswith(key):
+                    marks[key] = (time.perf_counter(), board.uarths.last_byte_time)
+            if text.startswith(f"load {name}/texture.ppm"):
+                board.stop_run(ConsoleExpectationsMet("texture loaded"))
+
+        board = Board(str(firmware), sd_image=str(card), console=console)
+        try:
+            board.run(1)
+        except ConsoleExpectationsMet:
+            pass
+        finally:
+            board.close()
+        (host0, virtual0), (host1, virtual1) = marks["load scene.ini"], marks[f"load {name}/texture.ppm"]
+        figures[label] = {"bytes": size, "host_s": host1 - host0, "virtual_ms": (virtual1 - virtual0) * 1e3,
+                          "host_s_per_mib": (host1 - host0) / (size / 2**20)}
+    return figures
+
+
 BENCH_SCENES = [
     # the thesis's three test models, at the two scales it measured each at (the `scale` key)
     ("A torus 400 tri, 250x250", "models/torus.obj", "textures/torus.ppm", (0.35, 0.175)),
@@ -636,6 +701,8 @@ def main() -> int:
     parser.add_argument("--no-renderer", action="store_true",
                         help="no per-scene runs at all (neither the renderer table nor the precision sweep)")
     parser.add_argument("--no-quality", action="store_true", help="skip the precision sweep")
+    parser.add_argument("--load-only", action="store_true",
+                        help="only the host time of loading textures through the firmware (printed)")
     parser.add_argument("--quality-only", action="store_true",
                         help="only the precision sweep: no speed figures, no renderer table")
     parser.add_argument("--settings", help="comma-separated settings for the sweep (default: all): "
@@ -650,6 +717,10 @@ def main() -> int:
     scenes = _names(args.scenes, [scene_id(model) for _, model, _, _ in BENCH_SCENES], "scene") \
         or [scene_id(model) for _, model, _, _ in BENCH_SCENES]
     modes = _names(args.modes, list(MODES), "mode") or list(MODES)
+    if args.load_only:
+        with tempfile.TemporaryDirectory() as tmp:
+            print_load_figures(load_figures(Path(args.firmware), Path(tmp)))
+        return 0
     renderer = not args.no_renderer and not args.quality_only
     sweep = not args.no_renderer and not args.no_quality
     if args.harts_only:
@@ -723,6 +794,13 @@ def timing_figures(firmware: Path, card: Path, frames: int, rocket: dict, rounds
             "host_cost_of_cycle_model": best_timed["host_time_s"] / best_flat["host_time_s"]}
 
 
+def print_load_figures(loads: dict) -> None:
+    print("loading a texture through the firmware (console's \"load scene.ini\" to \"load <texture>\" lines):")
+    for label, figures in loads.items():
+        print(f"  {label:>8}: {figures['host_s']:6.2f} s host ({figures['host_s_per_mib']:.2f} s per MiB), "
+              f"{figures['virtual_ms']:8.1f} ms virtual")
+
+
 THESIS_START_UP_MS = {"A": 344.3, "B": 122.2, "C": 87.8}   # power-up to its main loop, measured on a Dock
 
 
@@ -744,6 +822,7 @@ def speed_figures(args: argparse.Namespace) -> None:
     with tempfile.TemporaryDirectory() as tmp:
         sd = sd_figures(Path(args.firmware), Path(tmp))
         sd_ipc1 = sd_figures(Path(args.firmware), Path(tmp), timing=TIMING_IPC1)
+        loads = load_figures(Path(args.firmware), Path(tmp))
     results = {
         "raw_unicorn_mips": raw,
         "hart_with_counter_mips": counted,
@@ -754,6 +833,7 @@ def speed_figures(args: argparse.Namespace) -> None:
         "firmware_ipc1": ipc1,
         "sd": sd,
         "sd_ipc1": sd_ipc1,
+        "texture_loads": loads,
         "thesis_start_up_ms": THESIS_START_UP_MS,
         "profile": profile,
         "drawing": drawing,
@@ -798,6 +878,7 @@ def speed_figures(args: argparse.Namespace) -> None:
               f"{figures['model_second_pass_ms']:.2f} ms read again and stored, texture {figures['texture_bytes']} "
               f"bytes {figures['texture_read_ms']:.2f} ms [200.75]; reset to first frame "
               f"{figures['reset_to_first_frame_ms']:.1f} ms [344.3]")
+    print_load_figures(loads)
     print(f"profile of the default scene, hart 0, per steady frame (frames 1-{profile['frames'] - 1}), by cycles; "
           f"--profile costs {profile['cost']:.1f} x the host time per frame:")
     for row in profile["hart0_per_frame"]:
