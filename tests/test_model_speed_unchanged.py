@@ -3,9 +3,10 @@ frame's virtual time, instruction and cycle counts, every console line's time an
 pixels stay as they were before (issue 11: "the model's own speed work changes no instruction or
 cycle count of a given firmware").
 
-The figures below were taken with the emulator of commit fb8377d (before the device models' fast
-paths: the bus answering a repeated status-register poll from its last answer, bytes instead of
-numpy for one-byte SPI exchanges) on the firmware and card builder of that commit. The cards load
+The figures below were taken with the emulator of commit fb8377d (before the speed work: the device
+models' fast paths, the bus answering a repeated status-register poll from its last answer, bytes
+instead of numpy for one-byte SPI exchanges; CSRs caught by the counter; the fast engine) on the
+firmware of both harts drawing (the `harts` key). The cards load
 a texture large enough that most of the run is the SD card's SPI traffic, once healthy and once
 with every block's first CRC16 wrong (each block read again: the firmware's retry path). A change to
 the firmware changes them on purpose: take them again with `python tests/test_model_speed_unchanged.py`
@@ -70,55 +71,55 @@ def test_runs_are_as_before_the_speed_work(firmware, tmp_path, faults):
     assert seen["warnings"] == expected["warnings"]
 
 
-BEFORE: dict = {'healthy': {'frames': [(0.13286847204301078,
-                         [5069782, 28274],
-                         [7867600, 39187],
+BEFORE: dict = {'healthy': {'frames': [(0.13287177750206783,
+                         [5071417, 28323],
+                         [7869663, 39495],
                          '1c68b7264b348dde68bcdf72c02e69c59d2e0e5ccd04a813c863c8465ed1b5da'),
-                        (0.14387952911497054,
-                         [6104518, 31750],
-                         [9749175, 44045],
+                        (0.14388280727874223,
+                         [6106335, 31850],
+                         [9751529, 44486],
                          '5a089b29ba6c9e0266be6e56579f22a4f8442afd74fb140ac3800d6e55e952de')],
-             'console': [(0.001623382712985939, 'boot: hart 0 up'),
-                         (0.005442539040529366, 'clocks: PLL0 806000000 Hz, CPU 403000000 Hz'),
-                         (0.00804650926385443, 'pins: LCD, UART and SD routed'),
-                         (0.021578583705541773,
+             'console': [(0.0016266980976013235, 'boot: hart 0 up'),
+                         (0.00544585442514475, 'clocks: PLL0 806000000 Hz, CPU 403000000 Hz'),
+                         (0.008049824648469813, 'pins: LCD, UART and SD routed'),
+                         (0.021581899090157158,
                           'sd: card ready, SDHC (block addressing), 131072 blocks, SPI1 22388888 Hz'),
-                         (0.027394117204301082,
+                         (0.027397432588916467,
                           'fat32: partition at block 2048, 512-byte clusters, 126990 clusters'),
-                         (0.030258484449958652, 'load scene.ini 74 crc32=e26782a2'),
-                         (0.04855550678246602, 'load texture.ppm 76815 crc32=de4b3ef2'),
-                         (0.05141987402812359, 'load model.obj 92 crc32=3c4c9e13'),
-                         (0.05792979958643625,
+                         (0.030261799834574037, 'load scene.ini 74 crc32=e26782a2'),
+                         (0.04855882216708225, 'load texture.ppm 76815 crc32=de4b3ef2'),
+                         (0.05142318941273982, 'load model.obj 92 crc32=3c4c9e13'),
+                         (0.05793311497105248,
                           'model: 2 triangles, 4 vertices, 4 uv, 0 normals (not stored: shading flat)'),
-                         (0.05940538271298712, 'texture: 160x160'),
-                         (0.1345179385442512, 'lcd: ST7789V ready'),
-                         (0.13634071770057846, 'hart 1: display loop'),
-                         (0.1370351097601317, 'frame 0')],
+                         (0.05940869809760335, 'texture: 160x160'),
+                         (0.13452122167080205, 'lcd: ST7789V ready'),
+                         (0.1363440008271293, 'hart 1: display loop'),
+                         (0.13703839288668254, 'frame 0')],
              'warnings': []},
- 'flaky-crc': {'frames': [(0.13286847204301078,
-                           [5530696, 28274],
-                           [8443258, 39187],
+ 'flaky-crc': {'frames': [(0.13287177750206783,
+                           [5532295, 28323],
+                           [8445030, 39495],
                            '1c68b7264b348dde68bcdf72c02e69c59d2e0e5ccd04a813c863c8465ed1b5da'),
-                          (0.14387952911497054,
-                           [6565432, 31750],
-                           [10324833, 44045],
+                          (0.14388280727874223,
+                           [6567213, 31850],
+                           [10326896, 44486],
                            '5a089b29ba6c9e0266be6e56579f22a4f8442afd74fb140ac3800d6e55e952de')],
-               'console': [(0.001623382712985939, 'boot: hart 0 up'),
-                           (0.005442539040529366, 'clocks: PLL0 806000000 Hz, CPU 403000000 Hz'),
-                           (0.00804650926385443, 'pins: LCD, UART and SD routed'),
-                           (0.022078707775020683,
+               'console': [(0.0016266980976013235, 'boot: hart 0 up'),
+                           (0.00544585442514475, 'clocks: PLL0 806000000 Hz, CPU 403000000 Hz'),
+                           (0.008049824648469813, 'pins: LCD, UART and SD routed'),
+                           (0.022082023159636067,
                             'sd: card ready, SDHC (block addressing), 131072 blocks, SPI1 22388888 Hz'),
-                           (0.027894241273779992,
+                           (0.027897556658395377,
                             'fat32: partition at block 2048, 512-byte clusters, 126990 clusters'),
-                           (0.030758608519437562, 'load scene.ini 74 crc32=e26782a2'),
-                           (0.0705609658395368, 'load texture.ppm 76815 crc32=de4b3ef2'),
-                           (0.07342533308519437, 'load model.obj 92 crc32=3c4c9e13'),
-                           (0.07993525864350703,
+                           (0.030761923904052947, 'load scene.ini 74 crc32=e26782a2'),
+                           (0.07056428122415219, 'load texture.ppm 76815 crc32=de4b3ef2'),
+                           (0.07342864846980976, 'load model.obj 92 crc32=3c4c9e13'),
+                           (0.07993857402812242,
                             'model: 2 triangles, 4 vertices, 4 uv, 0 normals (not stored: shading flat)'),
-                           (0.0814108417700579, 'texture: 160x160'),
-                           (0.1345179385442512, 'lcd: ST7789V ready'),
-                           (0.13634071770057846, 'hart 1: display loop'),
-                           (0.1370351097601317, 'frame 0')],
+                           (0.08141415715467329, 'texture: 160x160'),
+                           (0.13452122167080205, 'lcd: ST7789V ready'),
+                           (0.1363440008271293, 'hart 1: display loop'),
+                           (0.13703839288668254, 'frame 0')],
                'warnings': []}}
 
 
