@@ -259,22 +259,10 @@ static uint32_t expand_rvc(uint16_t h)
     return 0;
 }
 
-/* Whether the counter's table of poll loops (or of CSR sites) holds `address`. */
 static int is_loop_head(const insn_counter_t *c, uint64_t address)
 {
-    return c->loops != NULL && c->loops[(address >> 1) & c->loop_mask].head == address;
-}
-
-static int is_csr_site(const insn_counter_t *c, uint64_t address)
-{
-    return c->csr_sites != NULL && c->csr_sites[(address >> 1) & c->csr_mask] == address;
-}
-
-static uint32_t table_entry(const insn_counter_t *c, uint64_t address)
-{
-    if (c->table == NULL || address < c->table_base || address >= c->table_end)
-        return 0;
-    return c->table[(address - c->table_base) >> 1];
+    const poll_loop_t *slot = loop_slot(c, address);
+    return slot != NULL && slot->head == address;
 }
 
 /* Decodes the block Unicorn translated at `address` (`size` bytes) into the cache. */

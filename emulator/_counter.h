@@ -114,6 +114,24 @@ typedef struct {
     uint64_t mispredicts_old;
 } transfer_undo_t;
 
+/* The counter's tables, as both counters look them up. */
+static inline int is_csr_site(const insn_counter_t *c, uint64_t address)
+{
+    return c->csr_sites != NULL && c->csr_sites[(address >> 1) & c->csr_mask] == address;
+}
+
+static inline poll_loop_t *loop_slot(const insn_counter_t *c, uint64_t address)
+{
+    return c->loops != NULL ? &c->loops[(address >> 1) & c->loop_mask] : NULL;
+}
+
+static inline uint32_t table_entry(const insn_counter_t *c, uint64_t address)
+{
+    if (c->table == NULL || address < c->table_base || address >= c->table_end)
+        return 0;
+    return c->table[(address - c->table_base) >> 1];
+}
+
 uint64_t resolve_transfer(insn_counter_t *c, uint64_t pc, uint32_t e, int kind, uint64_t next,
                           transfer_undo_t *undo);
 void undo_transfer(insn_counter_t *c, const transfer_undo_t *undo);

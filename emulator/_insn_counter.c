@@ -267,8 +267,8 @@ void count_instruction(void *uc, uint64_t address, uint32_t size, insn_counter_t
                                      counter->pending_kind, address, NULL);
             counter->pending_kind = 0;
         }
-        if (address >= counter->table_base && address < counter->table_end) {
-            uint32_t e = counter->table[(address - counter->table_base) >> 1];
+        uint32_t e = table_entry(counter, address);
+        if (e != 0) {
             int kind = (int)E_KIND(e);
             uint64_t extra = E_EXTRA(e);
             if (kind == KIND_MUL || kind == KIND_DIV) {
@@ -286,8 +286,8 @@ void count_instruction(void *uc, uint64_t address, uint32_t size, insn_counter_t
         }
         counter->cycles += cost;
     }
-    if (counter->loops != NULL) {
-        poll_loop_t *loop = &counter->loops[(address >> 1) & counter->loop_mask];
+    poll_loop_t *loop = loop_slot(counter, address);
+    if (loop != NULL) {
         if (loop->head == address) {
             if (!loop->ignore && counter->executed - loop->last == loop->body && counter->poll_report == 0) {
                 counter->poll_report = address;
@@ -299,7 +299,7 @@ void count_instruction(void *uc, uint64_t address, uint32_t size, insn_counter_t
     /* A CSR the board answers (mhartid, mcycle, ...): the instruction is counted and timed like
      * any other, then the engine stops before executing it, and Python carries it out. One look-up
      * here, where a code hook per site would make Unicorn walk every hook on every instruction. */
-    if (counter->csr_sites != NULL && counter->csr_sites[(address >> 1) & counter->csr_mask] == address) {
+    if (is_csr_site(counter, address)) {
         counter->csr_report = address;
         counter->stop(uc);
     }

@@ -609,14 +609,9 @@ def _add_native_hook(uc: unicorn.Uc, kind: int, callback: int, user_data: ctypes
 
 
 def _address_table(addresses: list[int]) -> tuple[ctypes.Array, int]:
-    """The native counter's table of CSR sites: u64 slots indexed by (address >> 1) & mask, the
-    smallest power of two at least twice their number in which no two share a slot (a look-up is
-    one compare; an empty slot holds 0, which is no instruction's address). Returns (table, mask)."""
-    size = 1
-    while size < 2 * len(addresses):
-        size *= 2
-    while len({(a >> 1) & (size - 1) for a in addresses}) < len(addresses):
-        size *= 2
+    """The native counter's table of CSR sites: u64 slots (shared_memory.collision_free_size; an
+    empty slot holds 0, which is no instruction's address). Returns (table, mask)."""
+    size = shared_memory.collision_free_size(addresses)
     table = (ctypes.c_uint64 * size)()
     for address in addresses:
         table[(address >> 1) & (size - 1)] = address

@@ -226,15 +226,21 @@ def _backward_branches(code: bytes) -> list[int]:
     return [2 * int(i) for i in np.flatnonzero(long_branch | short_branch)]
 
 
-def loop_table(loops: list[PollLoop]) -> tuple[ctypes.Array, int]:
-    """The native counter's table of poll loops: slots indexed by (head >> 1) & mask, the
-    smallest power of two at least twice the loops' number in which no two heads share a slot
-    (so that a look-up is one compare). Returns (slots, mask)."""
+def collision_free_size(addresses: list[int]) -> int:
+    """The size of a native counter's table of instruction addresses (poll-loop heads, CSR sites)
+    indexed by (address >> 1) & (size - 1): the smallest power of two at least twice their number
+    in which no two share a slot, so that a look-up is one compare."""
     size = 1
-    while size < 2 * len(loops):
+    while size < 2 * len(addresses):
         size *= 2
-    while len({(loop.head >> 1) & (size - 1) for loop in loops}) < len(loops):
+    while len({(a >> 1) & (size - 1) for a in addresses}) < len(addresses):
         size *= 2
+    return size
+
+
+def loop_table(loops: list[PollLoop]) -> tuple[ctypes.Array, int]:
+    """The native counter's table of poll loops (collision_free_size). Returns (slots, mask)."""
+    size = collision_free_size([loop.head for loop in loops])
     slots = (LoopSlot * size)()
     for loop in loops:
         slot = slots[(loop.head >> 1) & (size - 1)]
