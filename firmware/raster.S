@@ -104,6 +104,91 @@
     fmadd.s \base, \ddy, ft10, \base
 .endm
 
+# The pieces FILL and FILTERED share (registers as FILL describes them).
+# SKIP_TO_INSIDE: from the row's first pixel (2), steps the edge functions to
+#   the first pixel inside the triangle (on to 3), or to the row's end (8).
+.macro SKIP_TO_INSIDE
+2:  or      t0, s0, s1                  # skip to the first inside pixel
+    or      t0, t0, s2
+    bgez    t0, 3f
+    add     s0, s0, s3
+    add     s1, s1, s4
+    add     s2, s2, s5
+    addi    a0, a0, LCD_BYTES_PER_PIXEL
+    bltu    a0, a2, 2b
+    j       8f
+.endm
+
+# PLANES_AT_X textured, gouraud, affine
+#   The attribute planes at the span's first pixel: t0 = 2 (x - xmin).
+#   Clobbers t0, ft9.
+.macro PLANES_AT_X textured, gouraud, affine
+    srli    t0, t0, 1
+    fcvt.s.l ft9, t0
+    fmadd.s fa0, fa4, ft9, ft0
+    .if \textured
+    .if !\affine
+    fmadd.s fa1, fa5, ft9, ft1
+    .endif
+    fmadd.s fa2, fa6, ft9, ft2
+    fmadd.s fa3, fa7, ft9, ft3
+    .endif
+    .if \gouraud
+    fmadd.s fs0, fs1, ft9, fs2
+    .endif
+.endm
+
+# DEPTH_TEST depth16, gouraud
+#   The pixel's depth against the buffer's: not nearer, on to 7; nearer, the
+#   depth stored and (Gouraud) t4 = k. Clobbers t0, t1.
+.macro DEPTH_TEST depth16, gouraud
+    .if \depth16
+    lhu     t1, 0(a1)
+    fcvt.w.s t0, fa0, rtz
+    bge     t0, t1, 7f                  # not nearer
+    sh      t0, 0(a1)
+    .else
+    lw      t1, 0(a1)
+    fmv.x.w t0, fa0
+    bge     t0, t1, 7f                  # not nearer
+    sw      t0, 0(a1)
+    .endif
+    .if \gouraud
+    fcvt.wu.s t4, fs0, rne              # k (a rounding-noise negative -> 0)
+    .endif
+.endm
+
+# NEXT_PIXEL textured, gouraud, affine, depth16
+#   Steps the planes, edge functions and buffer pointers one pixel right:
+#   back to 4 while inside the triangle and the row, else on to 8.
+#   Clobbers t0.
+.macro NEXT_PIXEL textured, gouraud, affine, depth16
+    fadd.s  fa0, fa0, fa4
+    .if \textured
+    .if !\affine
+    fadd.s  fa1, fa1, fa5
+    .endif
+    fadd.s  fa2, fa2, fa6
+    fadd.s  fa3, fa3, fa7
+    .endif
+    .if \gouraud
+    fadd.s  fs0, fs0, fs1
+    .endif
+    add     s0, s0, s3
+    add     s1, s1, s4
+    add     s2, s2, s5
+    addi    a0, a0, LCD_BYTES_PER_PIXEL
+    .if \depth16
+    addi    a1, a1, DEPTH16_BYTES_PER_PIXEL
+    .else
+    addi    a1, a1, DEPTH_BYTES_PER_PIXEL
+    .endif
+    bgeu    a0, a2, 8f
+    or      t0, s0, s1
+    or      t0, t0, s2
+    bgez    t0, 4b
+.endm
+
 # FILL textured, gouraud, affine, depth16
 #   One fill loop (registers: see raster_fills): every row of the bounding
 #   box from the first inside pixel to the first outside one after it;
@@ -133,15 +218,7 @@
     mv      s1, s7
     mv      s2, s8
     mv      a0, a3
-2:  or      t0, s0, s1                  # skip to the first inside pixel
-    or      t0, t0, s2
-    bgez    t0, 3f
-    add     s0, s0, s3
-    add     s1, s1, s4
-    add     s2, s2, s5
-    addi    a0, a0, LCD_BYTES_PER_PIXEL
-    bltu    a0, a2, 2b
-    j       8f
+    SKIP_TO_INSIDE
 3:  sub     t0, a0, a3                  # 2 (x - xmin)
     .if \depth16
     add     a1, t6, t0
@@ -149,34 +226,9 @@
     slli    t1, t0, 1
     add     a1, t6, t1
     .endif
-    srli    t0, t0, 1
-    fcvt.s.l ft9, t0
-    fmadd.s fa0, fa4, ft9, ft0
-    .if \textured
-    .if !\affine
-    fmadd.s fa1, fa5, ft9, ft1
-    .endif
-    fmadd.s fa2, fa6, ft9, ft2
-    fmadd.s fa3, fa7, ft9, ft3
-    .endif
-    .if \gouraud
-    fmadd.s fs0, fs1, ft9, fs2
-    .endif
+    PLANES_AT_X \textured, \gouraud, \affine
 4:
-    .if \depth16
-    lhu     t1, 0(a1)
-    fcvt.w.s t0, fa0, rtz
-    bge     t0, t1, 7f                  # not nearer
-    sh      t0, 0(a1)
-    .else
-    lw      t1, 0(a1)
-    fmv.x.w t0, fa0
-    bge     t0, t1, 7f                  # not nearer
-    sw      t0, 0(a1)
-    .endif
-    .if \gouraud
-    fcvt.wu.s t4, fs0, rne              # k (a rounding-noise negative -> 0)
-    .endif
+    DEPTH_TEST \depth16, \gouraud
     .if \textured
     .if \affine
     fcvt.lu.s t2, fa2, rtz              # texel column, row
@@ -214,30 +266,7 @@
     xori    t2, a0, FB_PAIR_XOR
     sh      t4, 0(t2)
     .endif
-7:  fadd.s  fa0, fa0, fa4
-    .if \textured
-    .if !\affine
-    fadd.s  fa1, fa1, fa5
-    .endif
-    fadd.s  fa2, fa2, fa6
-    fadd.s  fa3, fa3, fa7
-    .endif
-    .if \gouraud
-    fadd.s  fs0, fs0, fs1
-    .endif
-    add     s0, s0, s3
-    add     s1, s1, s4
-    add     s2, s2, s5
-    addi    a0, a0, LCD_BYTES_PER_PIXEL
-    .if \depth16
-    addi    a1, a1, DEPTH16_BYTES_PER_PIXEL
-    .else
-    addi    a1, a1, DEPTH_BYTES_PER_PIXEL
-    .endif
-    bgeu    a0, a2, 8f
-    or      t0, s0, s1
-    or      t0, t0, s2
-    bgez    t0, 4b
+7:  NEXT_PIXEL \textured, \gouraud, \affine, \depth16
 8:  add     s6, s6, s9                  # next row
     add     s7, s7, s10
     add     s8, s8, s11
@@ -322,15 +351,7 @@
     ld      s1, RT_ROW_E1(sp)
     ld      s2, RT_ROW_E2(sp)
     ld      a0, RT_ROW_FB(sp)
-2:  or      t0, s0, s1                  # skip to the first inside pixel
-    or      t0, t0, s2
-    bgez    t0, 3f
-    add     s0, s0, s3
-    add     s1, s1, s4
-    add     s2, s2, s5
-    addi    a0, a0, LCD_BYTES_PER_PIXEL
-    bltu    a0, a2, 2b
-    j       8f
+    SKIP_TO_INSIDE
 3:  ld      t6, RT_ROW_FB(sp)
     sub     t0, a0, t6                  # 2 (x - xmin)
     ld      t6, RT_ROW_DEPTH(sp)
@@ -340,32 +361,9 @@
     slli    t1, t0, 1
     add     a1, t6, t1
     .endif
-    srli    t0, t0, 1
-    fcvt.s.l ft9, t0
-    fmadd.s fa0, fa4, ft9, ft0
-    .if !\affine
-    fmadd.s fa1, fa5, ft9, ft1
-    .endif
-    fmadd.s fa2, fa6, ft9, ft2
-    fmadd.s fa3, fa7, ft9, ft3
-    .if \gouraud
-    fmadd.s fs0, fs1, ft9, fs2
-    .endif
+    PLANES_AT_X 1, \gouraud, \affine
 4:
-    .if \depth16
-    lhu     t1, 0(a1)
-    fcvt.w.s t0, fa0, rtz
-    bge     t0, t1, 7f                  # not nearer
-    sh      t0, 0(a1)
-    .else
-    lw      t1, 0(a1)
-    fmv.x.w t0, fa0
-    bge     t0, t1, 7f                  # not nearer
-    sw      t0, 0(a1)
-    .endif
-    .if \gouraud
-    fcvt.wu.s t4, fs0, rne              # k (a rounding-noise negative -> 0)
-    .endif
+    DEPTH_TEST \depth16, \gouraud
     .if \affine
     fmv.s   ft10, fa2                   # 32 s, 32 t
     fmv.s   ft11, fa3
@@ -463,28 +461,7 @@
     or      t1, t1, t2
     xori    t2, a0, FB_PAIR_XOR
     sh      t1, 0(t2)
-7:  fadd.s  fa0, fa0, fa4
-    .if !\affine
-    fadd.s  fa1, fa1, fa5
-    .endif
-    fadd.s  fa2, fa2, fa6
-    fadd.s  fa3, fa3, fa7
-    .if \gouraud
-    fadd.s  fs0, fs0, fs1
-    .endif
-    add     s0, s0, s3
-    add     s1, s1, s4
-    add     s2, s2, s5
-    addi    a0, a0, LCD_BYTES_PER_PIXEL
-    .if \depth16
-    addi    a1, a1, DEPTH16_BYTES_PER_PIXEL
-    .else
-    addi    a1, a1, DEPTH_BYTES_PER_PIXEL
-    .endif
-    bgeu    a0, a2, 8f
-    or      t0, s0, s1
-    or      t0, t0, s2
-    bgez    t0, 4b
+7:  NEXT_PIXEL 1, \gouraud, \affine, \depth16
 8:  ld      t0, RT_ROW_E0(sp)           # next row
     ld      t1, RT_ROW_D0(sp)
     add     t0, t0, t1
