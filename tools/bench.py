@@ -385,25 +385,32 @@ def _warn_once(message: str) -> None:
         print(f"bench: card: {message}", file=sys.stderr, flush=True)
 
 
+def run_bench_card(firmware: Path, folder: Path, card: Path, scene: dict) -> tuple[Board, list[np.ndarray]]:
+    """Builds `card` from the bench's assets in `folder` with `scene`'s keys and runs the firmware on
+    it for BENCH_FRAMES frames; returns the (closed) board and the frames shown."""
+    from sdcard_image import build_image
+    build_image(card, [folder / "assets" / "models", folder / "assets" / "textures"], scene=scene, force=True,
+                on_warning=_warn_once)
+    images: list[np.ndarray] = []
+    board = Board(str(firmware), sd_image=str(card), on_frame=lambda record, image: images.append(image))
+    try:
+        board.run(BENCH_FRAMES)
+    finally:
+        board.close()
+    return board, images
+
+
 def measure(firmware: Path, folder: Path, name: str, model: str, texture: str, scale: float, mode: str,
             setting: str) -> dict:
     """One scene, mode and precision setting on the board model for BENCH_FRAMES frames: instructions
     per frame per hart, virtual frame time and frame rate (steady state: the first frame, which
     includes loading, is left out) and the distance of all frames from the reference renderer's
     pixel-centre and ideal images."""
-    from sdcard_image import build_image
     started = time.perf_counter()
     keys = quality.SETTINGS[setting]
     card = folder / "card.img"
     scene = {"model": model, "texture": texture, "mode": mode, "scale": str(scale), **BENCH_MOTION, **keys}
-    build_image(card, [folder / "assets" / "models", folder / "assets" / "textures"], scene=scene, force=True,
-                on_warning=_warn_once)
-    frame_images: list[np.ndarray] = []
-    board = Board(str(firmware), sd_image=str(card), on_frame=lambda record, image: frame_images.append(image))
-    try:
-        board.run(BENCH_FRAMES)
-    finally:
-        board.close()
+    board, frame_images = run_bench_card(firmware, folder, card, scene)
     compared = compare_with_reference(card, frame_images)
     steady = board.frames[1:]
     hart0 = sum(f.instructions[0] for f in steady) / len(steady)
@@ -436,18 +443,9 @@ def harts_run(firmware: Path, folder: Path, model: str, texture: str, scale: flo
     """One heavy scene with `harts`: steady-state cycles and instructions per frame per hart (frames
     2.. of BENCH_FRAMES: frame 0 includes loading, and frame 1 is hart 0's alone with auto) and
     the frame period; and the frames."""
-    from sdcard_image import build_image
-    card = folder / "harts.img"
     scene = {"model": model, "texture": texture, "mode": "textured", "scale": str(scale), **BENCH_MOTION, **keys,
              "harts": harts}
-    build_image(card, [folder / "assets" / "models", folder / "assets" / "textures"], scene=scene, force=True,
-                on_warning=_warn_once)
-    images: list[np.ndarray] = []
-    board = Board(str(firmware), sd_image=str(card), on_frame=lambda record, image: images.append(image))
-    try:
-        board.run(BENCH_FRAMES)
-    finally:
-        board.close()
+    board, images = run_bench_card(firmware, folder, folder / "harts.img", scene)
     steady = board.frames[2:]
     period = (steady[-1].virtual_time_s - board.frames[1].virtual_time_s) / len(steady)
     return {"harts": harts,
