@@ -97,19 +97,21 @@ class _Counter(ctypes.Structure):
 
 _counter_lib = ctypes.CDLL(_insn_counter.__file__)
 _COUNT_HOOK = ctypes.cast(_counter_lib.count_instruction, ctypes.c_void_p)
-_BLOCK_HOOK = ctypes.cast(_counter_lib.count_block, ctypes.c_void_p)
-_counter_lib.block_state_new.restype = ctypes.c_void_p
-_counter_lib.block_state_new.argtypes = [ctypes.c_void_p, ctypes.c_uint64, ctypes.c_uint64, ctypes.c_uint64]
-_counter_lib.block_state_free.argtypes = [ctypes.c_void_p]
-_counter_lib.block_cut.restype = ctypes.c_int
-_counter_lib.block_cut.argtypes = [ctypes.c_void_p, ctypes.c_uint64]
-_counter_lib.block_statistics.argtypes = [ctypes.c_void_p, ctypes.POINTER(ctypes.c_uint64)]
-HANDOFF_BLOCK, HANDOFF_LIMIT = 1, 2      # _block_counter.c's reasons for handing a block over
+_counter_lib.fast_state_new.restype = ctypes.c_void_p
+_counter_lib.fast_state_new.argtypes = [ctypes.c_void_p, ctypes.c_uint64, ctypes.c_uint64, ctypes.c_uint64,
+                                        ctypes.c_void_p, ctypes.c_void_p]
+_counter_lib.fast_state_free.argtypes = [ctypes.c_void_p]
+_counter_lib.fast_forget_decodings.argtypes = [ctypes.c_void_p]
+_counter_lib.fast_statistics.argtypes = [ctypes.c_void_p, ctypes.POINTER(ctypes.c_uint64)]
+_counter_lib.fast_run.restype = ctypes.c_uint64
+_counter_lib.fast_run.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_uint64]
 ENGINE_FAST, ENGINE_PRECISE = "fast", "precise"
 ENGINES = (ENGINE_FAST, ENGINE_PRECISE)
-PRECISE_STRETCH = 64      # instructions the precise engine runs at first after a block it was handed
+PRECISE_STRETCH = 32      # instructions the precise engine runs after the fast one handed it the hart
 _UC_EMU_STOP = ctypes.cast(_ucpy.uclib.uc_emu_stop, ctypes.c_void_p).value
 _UC_REG_READ = ctypes.cast(_ucpy.uclib.uc_reg_read, ctypes.c_void_p).value
+_UC_REG_READ_BATCH = ctypes.cast(_ucpy.uclib.uc_reg_read_batch, ctypes.c_void_p).value
+_UC_REG_WRITE_BATCH = ctypes.cast(_ucpy.uclib.uc_reg_write_batch, ctypes.c_void_p).value
 
 
 class HartState(enum.Enum):
@@ -174,11 +176,8 @@ class Hart:
         self._reg_value = ctypes.c_uint64()
         self._reg_ref = ctypes.byref(self._reg_value)
         # the fast engine (enable_fast_engine), and the hooks that keep a hart on the precise one
-        self.fast_uc: unicorn.Uc | None = None
-        self._block_state: int | None = None
-        self._fast_exception = False
+        self._fast_state: int | None = None
         self._hooks_needing_precision: set[int] = set()
-        self._handoffs_at: dict[int, int] = {}        # pc -> times the fast engine handed it over
 
     def add_native_hook(self, kind: int, callback: int, user_data: ctypes.Structure, begin: int, end: int,
                         what: str) -> int:
@@ -214,76 +213,47 @@ class Hart:
     # --- the fast engine ---------------------------------------------------------------
 
     def enable_fast_engine(self, sram_address: int) -> None:
-        """Gives the hart a second engine that counts whole translated blocks (_block_counter.c):
-        it maps SRAM only (the host buffer at `sram_address`, both views) and runs the hart
-        whenever no hook needs the precise engine, handing over to it for device accesses, CSRs
-        the board answers, poll loops, exceptions and the end of each turn. Counts, cycles and
+        """Gives the hart a second engine, an interpreter of the code in SRAM (_fast_engine.c; SRAM is
+        the host buffer at `sram_address`, both views), that runs the hart whenever no hook needs the
+        precise engine and counts and times each instruction as the precise engine's counter does.
+        It hands the hart over before what it does not carry out itself: device accesses, CSRs,
+        wfi, traps, atomics, floating point on NaNs or in other rounding modes. Counts, cycles and
         every stop stay what the precise engine alone would give."""
-        fast = unicorn.Uc(unicorn.UC_ARCH_RISCV, unicorn.UC_MODE_RISCV64)
-        fast.mem_map_ptr(SRAM_BASE, SRAM_SIZE, unicorn.UC_PROT_ALL, sram_address)
-        fast.mem_map_ptr(SRAM_UNCACHED_BASE, SRAM_SIZE, unicorn.UC_PROT_ALL, sram_address)
-        state = _counter_lib.block_state_new(sram_address, SRAM_SIZE, SRAM_BASE, SRAM_UNCACHED_BASE)
+        state = _counter_lib.fast_state_new(sram_address, SRAM_SIZE, SRAM_BASE, SRAM_UNCACHED_BASE,
+                                            _UC_REG_READ_BATCH, _UC_REG_WRITE_BATCH)
         if not state:
-            raise MemoryError("cannot allocate the fast engine's block cache")
-        self._block_state = state
-        self._counter.blocks = state
+            raise MemoryError("cannot allocate the fast engine")
+        self._fast_state = state
         # freed with the hart (Board.close frees it at once)
-        self._free_block_state = weakref.finalize(self, _counter_lib.block_state_free, state)
-        self._block_hook = _add_native_hook(fast, unicorn.UC_HOOK_BLOCK, _BLOCK_HOOK, self._counter, 1, 0,
-                                            f"the block counter on hart {self.hart_id}")
-        fast.hook_add(unicorn.UC_HOOK_INTR, self._on_fast_exception)
-        self.fast_uc = fast
+        self._free_fast_state = weakref.finalize(self, _counter_lib.fast_state_free, state)
 
     def close(self) -> None:
-        """Frees the fast engine's block cache."""
-        if self._block_state is not None:
-            self._counter.blocks = None
-            self._free_block_state()
-            self._block_state = None
+        """Frees the fast engine."""
+        if self._fast_state is not None:
+            self._free_fast_state()
+            self._fast_state = None
 
-    def block_statistics(self) -> dict[str, int]:
-        """The fast engine's figures: blocks and instructions it charged whole, its hand-overs."""
-        if self._block_state is None:
+    def fast_statistics(self) -> dict[str, int]:
+        """The fast engine's figures: instructions it ran, times it handed the hart over."""
+        if self._fast_state is None:
             return {}
-        out = (ctypes.c_uint64 * 5)()
-        _counter_lib.block_statistics(self._block_state, out)
-        return {"blocks": out[0], "instructions": out[1], "handoffs_block": out[2], "handoffs_limit": out[3],
-                "blocks_cached": out[4]}
+        out = (ctypes.c_uint64 * 2)()
+        _counter_lib.fast_statistics(self._fast_state, out)
+        return {"instructions": out[0], "handoffs": out[1]}
 
-    def _on_fast_exception(self, uc: unicorn.Uc, intno: int, user_data: object) -> None:
-        # the precise engine runs the instruction again and takes the exception itself
-        self._fast_exception = True
-        uc.emu_stop()
+    def _forget_decodings(self) -> None:
+        """The counter's tables changed: the fast engine decodes its instructions again."""
+        if self._fast_state is not None:
+            _counter_lib.fast_forget_decodings(self._fast_state)
 
-    def _run_fast(self, pc: int) -> tuple[int, bool, int]:
-        """Runs the hart on the fast engine from `pc` until it hands over, sleeps or stops at
-        what the precise engine must run; then the precise engine holds the hart's state again.
-        Returns the pc to go on from, whether the hart went to sleep in wfi, and why it handed
-        over (HANDOFF_*, 0 for neither)."""
-        fast, counter = self.fast_uc, self._counter
-        counter.handoff = 0
-        fast.context_restore(self.uc.context_save())
-        self._fast_exception = False
-        faulted = False
-        try:
-            fast.emu_start(pc, 0)
-        except unicorn.UcError:
-            faulted = True        # a device access or an address the precise engine decides about
-        pc = fast.reg_read(rv.UC_RISCV_REG_PC)
-        if self._fast_exception:
-            pc -= 4               # Unicorn 2.1.4 reports the pc 4 past the faulting instruction (_on_exception)
-        if _counter_lib.block_cut(ctypes.byref(counter), pc) < 0:
-            raise RuntimeError(f"hart {self.hart_id}: the fast engine stopped at 0x{pc:x}, inside no block it charged")
-        self.uc.context_restore(fast.context_save())
-        self.uc.reg_write(rv.UC_RISCV_REG_PC, pc)
-        handoff, counter.handoff = counter.handoff, 0
-        asleep = not (handoff or faulted or self._fast_exception)
-        if asleep and self.read_u32(pc - 4) != INSN_WFI:
-            raise RuntimeError(f"hart {self.hart_id}: the fast engine stopped at 0x{pc:x} for no reason it reports")
-        return pc, asleep, handoff
+    def _run_fast(self, pc: int) -> int:
+        """Runs the hart on the fast engine from `pc` until it reaches the counter's limits or an
+        instruction it hands over; the precise engine holds the hart's registers again after it.
+        Returns the pc to go on from."""
+        return _counter_lib.fast_run(self._fast_state, ctypes.byref(self._counter), self.uc._uch, pc)
 
     def _fast_usable(self) -> bool:
-        return self.fast_uc is not None and not self._hooks_needing_precision
+        return self._fast_state is not None and not self._hooks_needing_precision
 
     def install_poll_loops(self, loops: list[shared_memory.PollLoop]) -> None:
         """Hands the native counter the loops that can only be polling (shared_memory.py): it ends
@@ -296,11 +266,13 @@ class Hart:
             self.poll_loops[loop.head] = (loop, slots[(loop.head >> 1) & mask])
         self._counter.loop_mask = mask
         self._counter.loops = ctypes.addressof(slots)
+        self._forget_decodings()
 
     def install_cycle_table(self, table: timing.CycleTable | None) -> None:
         """Has the native counter charge the cycles `table` gives (timing.py) instead of one
         cycle per instruction; None: one cycle each (--timing ipc1)."""
         self._cycle_table = table
+        self._forget_decodings()
         if table is None:
             self._counter.table = None
             return
@@ -373,15 +345,14 @@ class Hart:
         while True:
             precise_limit = turn_limit
             if self._fast_usable():
-                pc, asleep, handoff = self._run_fast(pc)
-                if asleep:
-                    self.pc = pc
-                    return RunEnd.WFI, counter.executed - start
+                pc = self._run_fast(pc)
+                if counter.poll_report:
+                    break
                 if counter.executed >= turn_limit or counter.cycles >= counter.cycle_limit:
                     self.pc = pc
                     return RunEnd.BUDGET, counter.executed - start
-                if handoff == HANDOFF_BLOCK:
-                    precise_limit = min(turn_limit, counter.executed + self._precise_stretch(pc))
+                # handed over: the precise engine runs the instruction, and a few more
+                precise_limit = min(turn_limit, counter.executed + PRECISE_STRETCH)
             counter.limit = precise_limit
             self._run_precise(pc)
             pc = self.uc.reg_read(rv.UC_RISCV_REG_PC)
@@ -429,14 +400,6 @@ class Hart:
     def _slept_at(self, pc: int) -> bool:
         """Whether the precise engine's last instruction was a wfi just before `pc`."""
         return self._counter.last_pc == pc - 4 and self.read_u32(pc - 4) == INSN_WFI
-
-    def _precise_stretch(self, pc: int) -> int:
-        """How many instructions the precise engine runs after the fast one handed it the block at
-        `pc`: a few at first, more for a block that keeps being handed over (each hand-over costs
-        two copies of the hart's state)."""
-        seen = self._handoffs_at.get(pc, 0)
-        self._handoffs_at[pc] = seen + 1
-        return PRECISE_STRETCH << min(seen, 8)
 
     def lift_limits(self, instructions: int | None = None) -> None:
         """The next engine run has no cycle limit, no instruction limit (or stops after

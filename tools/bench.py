@@ -127,7 +127,7 @@ def firmware_figures(firmware: Path, card: Path, frames: int, check_writes: bool
         "virtual_fps": (frames - 1) / (board.frames[-1].virtual_time_s - board.frames[0].virtual_time_s),
         **real_time_figures(board.frames),
         "engine": engine,
-        "charged_share": board.harts[0].block_statistics().get("instructions", 0) / board.harts[0].executed,
+        "charged_share": board.harts[0].fast_statistics().get("instructions", 0) / board.harts[0].executed,
     }
 
 

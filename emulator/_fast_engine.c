@@ -1,0 +1,1049 @@
+/*
+ * The fast engine: an RV64IMAFDC interpreter for the harts' code in SRAM.
+ *
+ * Unicorn runs the firmware's drawing at about 6 ns an instruction with no hook at all, 11-15 ns
+ * with the per-instruction counter; a frame of the default card is a million instructions on
+ * hart 0, so the board model could not keep up with the Dock through Unicorn, however it counted.
+ * This interpreter decodes each instruction once (a direct-mapped cache of decoded instructions,
+ * checked against the instruction's bits on every fetch, so that code written later is decoded
+ * again), executes it on the hart's registers held here, and counts and times it exactly as
+ * _insn_counter.c's count_instruction does, with the same counter, cycle table and branch predictor.
+ *
+ * What it does not carry out it hands to the precise engine (Unicorn with the per-instruction
+ * counter, hart.py), before counting the instruction: an access to anything but SRAM or one that
+ * is not naturally aligned, CSR instructions, wfi, ecall, ebreak, mret, fence.i, LR/SC and AMOs,
+ * instructions it does not know (the precise engine raises the illegal-instruction exception),
+ * floating point on a NaN operand, with a rounding mode other than round-to-nearest-even where the
+ * result is rounded (conversions to integers take any mode), or with the FPU off. Registers move
+ * between the engines at each hand-over (fast_run loads them from Unicorn and stores them back).
+ *
+ * Floating point is the host's (IEEE 754 binary32/64, round to nearest even; x86-64 SSE detects
+ * tininess after rounding, as RISC-V does); its exception flags accumulate in the host's MXCSR
+ * while the engine runs and are added to fflags when it stops. Results follow Unicorn 2.1.4
+ * (QEMU 5.0) where it departs from the RISC-V spec of today: single-precision results other
+ * than loads are not NaN-boxed, and single-precision operands are the low 32 bits whatever the
+ * upper half holds. tests/test_fast_engine.py compares this engine with the precise one.
+ */
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <xmmintrin.h>
+
+#include "_counter.h"
+
+#define CACHE_BITS 16
+#define CACHE_SLOTS (1u << CACHE_BITS)
+
+/* fast_run's answers */
+#define STOP_HANDOFF 1   /* the instruction at pc needs the precise engine */
+#define STOP_LIMIT 2     /* the counter's instruction or cycle limit is reached */
+
+/* Unicorn's register ids (unicorn/riscv.h) */
+#define UC_X1 2
+#define UC_FFLAGS 41
+#define UC_FRM 42
+#define UC_MSTATUS 116
+#define UC_F0 158
+#define UC_PC 190
+
+#define MSTATUS_FS (3ull << 13)
+#define MSTATUS_SD (1ull << 63)
+
+/* RISC-V fflags bits */
+#define FF_NX 1
+#define FF_UF 2
+#define FF_OF 4
+#define FF_DZ 8
+#define FF_NV 16
+
+/* Every operation the interpreter carries out (HANDOFF: none, the precise engine's). */
+#define OPERATIONS(X) \
+ X(HANDOFF) X(LUI) X(AUIPC) X(JAL) X(JALR) X(BEQ) X(BNE) X(BLT) X(BGE) X(BLTU) X(BGEU) X(LB) X(LH) \
+    X(LW) X(LD) X(LBU) X(LHU) X(LWU) X(SB) X(SH) X(SW) X(SD) X(ADDI) X(SLTI) X(SLTIU) X(XORI) X(ORI) \
+    X(ANDI) X(SLLI) X(SRLI) X(SRAI) X(ADD) X(SUB) X(SLL) X(SLT) X(SLTU) X(XOR) X(SRL) X(SRA) X(OR) \
+    X(AND) X(ADDIW) X(SLLIW) X(SRLIW) X(SRAIW) X(ADDW) X(SUBW) X(SLLW) X(SRLW) X(SRAW) X(MUL) \
+    X(MULH) X(MULHSU) X(MULHU) X(DIV) X(DIVU) X(REM) X(REMU) X(MULW) X(DIVW) X(DIVUW) X(REMW) \
+    X(REMUW) X(FENCE) X(FLW) X(FLD) X(FSW) X(FSD) X(FADD_S) X(FSUB_S) X(FMUL_S) X(FDIV_S) X(FSQRT_S) \
+    X(FMADD_S) X(FMSUB_S) X(FNMSUB_S) X(FNMADD_S) X(FSGNJ_S) X(FSGNJN_S) X(FSGNJX_S) X(FMIN_S) \
+    X(FMAX_S) X(FEQ_S) X(FLT_S) X(FLE_S) X(FCLASS_S) X(FMV_X_W) X(FMV_W_X) X(FCVT_W_S) X(FCVT_WU_S) \
+    X(FCVT_L_S) X(FCVT_LU_S) X(FCVT_S_W) X(FCVT_S_WU) X(FCVT_S_L) X(FCVT_S_LU) X(FADD_D) X(FSUB_D) \
+    X(FMUL_D) X(FDIV_D) X(FSQRT_D) X(FMADD_D) X(FMSUB_D) X(FNMSUB_D) X(FNMADD_D) X(FSGNJ_D) \
+    X(FSGNJN_D) X(FSGNJX_D) X(FMIN_D) X(FMAX_D) X(FEQ_D) X(FLT_D) X(FLE_D) X(FCLASS_D) X(FMV_X_D) \
+    X(FMV_D_X) X(FCVT_W_D) X(FCVT_WU_D) X(FCVT_L_D) X(FCVT_LU_D) X(FCVT_D_W) X(FCVT_D_WU) \
+    X(FCVT_D_L) X(FCVT_D_LU) X(FCVT_S_D) X(FCVT_D_S)
+
+#define OP_ENUM(name) OP_##name,
+enum { OPERATIONS(OP_ENUM) OP_COUNT };
+#undef OP_ENUM
+
+/* One decoded instruction. rd 32 is where writes to x0 go (x[0] stays 0). */
+typedef struct {
+    uint64_t pc;       /* the address it was decoded at (0: an empty slot) */
+    uint32_t bits;     /* its bits, compressed ones in the low half */
+    uint32_t mask;     /* 0xFFFF or 0xFFFFFFFF: which fetched bits must equal `bits` */
+    int64_t imm;
+    uint32_t entry;    /* the cycle table's entry for its address */
+    uint16_t op;
+    uint8_t rd, rs1, rs2, rs3, rm;
+    uint8_t len;       /* 2 or 4 */
+    uint8_t loop_head; /* the head of a poll loop (the counter's table) */
+} insn_t;
+
+typedef int (*uc_reg_batch_fn)(void *uc, int *regs, void **values, int count);
+
+typedef struct fast_state {
+    uint64_t x[33];
+    uint64_t f[32];
+    uint64_t pc;
+    uint64_t mstatus;
+    uint64_t fflags, frm;
+    uint8_t *sram;
+    uint64_t size, base, alias;
+    uc_reg_batch_fn read_batch, write_batch;
+    uint64_t instructions;   /* statistics: instructions this engine ran */
+    uint64_t handoffs;       /* and the times it handed the hart over */
+    insn_t cache[CACHE_SLOTS];
+} fast_state_t;
+
+__attribute__((visibility("default")))
+fast_state_t *fast_state_new(uint8_t *sram, uint64_t size, uint64_t base, uint64_t alias, void *read_batch,
+                             void *write_batch)
+{
+    fast_state_t *f = calloc(1, sizeof *f);
+    if (f == NULL)
+        return NULL;
+    f->sram = sram;
+    f->size = size;
+    f->base = base;
+    f->alias = alias;
+    f->read_batch = (uc_reg_batch_fn)read_batch;
+    f->write_batch = (uc_reg_batch_fn)write_batch;
+    return f;
+}
+
+__attribute__((visibility("default")))
+void fast_state_free(fast_state_t *f)
+{
+    free(f);
+}
+
+/* The counter's tables (poll loops, cycle table) changed: decode everything again. */
+__attribute__((visibility("default")))
+void fast_forget_decodings(fast_state_t *f)
+{
+    memset(f->cache, 0, sizeof f->cache);
+}
+
+__attribute__((visibility("default")))
+void fast_statistics(const fast_state_t *f, uint64_t out[2])
+{
+    out[0] = f->instructions;
+    out[1] = f->handoffs;
+}
+
+/* The host address of `width` bytes of SRAM (`size` bytes at `sram`) at guest address `a` in
+ * either view, or NULL. */
+static inline uint8_t *sram_at(uint8_t *sram, uint64_t size, uint64_t base, uint64_t alias, uint64_t a,
+                               uint64_t width)
+{
+    uint64_t o = a - base;
+    if (o <= size - width)
+        return sram + o;
+    o = a - alias;
+    if (o <= size - width)
+        return sram + o;
+    return NULL;
+}
+
+/* --- decoding ------------------------------------------------------------------------------- */
+
+static int64_t sext(uint64_t value, int bits)
+{
+    return (int64_t)(value << (64 - bits)) >> (64 - bits);
+}
+
+static uint32_t r_type(uint32_t f7, uint32_t rs2, uint32_t rs1, uint32_t f3, uint32_t rd, uint32_t op)
+{
+    return f7 << 25 | rs2 << 20 | rs1 << 15 | f3 << 12 | rd << 7 | op;
+}
+
+static uint32_t i_type(int32_t imm, uint32_t rs1, uint32_t f3, uint32_t rd, uint32_t op)
+{
+    return ((uint32_t)imm & 0xFFF) << 20 | rs1 << 15 | f3 << 12 | rd << 7 | op;
+}
+
+static uint32_t s_type(uint32_t imm, uint32_t rs2, uint32_t rs1, uint32_t f3, uint32_t op)
+{
+    return (imm >> 5 & 0x7F) << 25 | rs2 << 20 | rs1 << 15 | f3 << 12 | (imm & 31) << 7 | op;
+}
+
+static uint32_t b_type(int32_t offset, uint32_t rs2, uint32_t rs1, uint32_t f3)
+{
+    uint32_t o = (uint32_t)offset;
+    return ((o >> 12) & 1) << 31 | ((o >> 5) & 0x3F) << 25 | rs2 << 20 | rs1 << 15 | f3 << 12
+           | ((o >> 1) & 0xF) << 8 | ((o >> 11) & 1) << 7 | 0x63;
+}
+
+static uint32_t j_type(int32_t offset, uint32_t rd)
+{
+    uint32_t o = (uint32_t)offset;
+    return ((o >> 20) & 1) << 31 | ((o >> 1) & 0x3FF) << 21 | ((o >> 11) & 1) << 20 | ((o >> 12) & 0xFF) << 12
+           | rd << 7 | 0x6F;
+}
+
+/* RVC: the 32-bit instruction a compressed one stands for (unprivileged spec, "C" Standard
+ * Extension, RV64 forms); 0 for reserved and illegal encodings and c.ebreak (the precise engine
+ * raises their exceptions). */
+static uint32_t expand_compressed(uint16_t h)
+{
+    uint32_t op = h & 3, f3 = h >> 13;
+    uint32_t rd = (h >> 7) & 31, rs2 = (h >> 2) & 31;
+    uint32_t rdp = 8 + ((h >> 2) & 7), rs1p = 8 + ((h >> 7) & 7);
+    int32_t imm6 = (int32_t)sext(((h >> 7) & 0x20) | ((h >> 2) & 0x1F), 6);
+    if (op == 0) {
+        uint32_t off_w = ((h >> 7) & 0x38) | ((h << 1) & 0x40) | ((h >> 4) & 4);
+        uint32_t off_d = ((h >> 7) & 0x38) | ((h << 1) & 0xC0);
+        switch (f3) {
+        case 0: {   /* c.addi4spn */
+            uint32_t nz = ((h >> 7) & 0x30) | ((h >> 1) & 0x3C0) | ((h >> 4) & 4) | ((h >> 2) & 8);
+            return nz ? i_type((int32_t)nz, 2, 0, rdp, 0x13) : 0;
+        }
+        case 1: return i_type((int32_t)off_d, rs1p, 3, rdp, 0x07);   /* c.fld */
+        case 2: return i_type((int32_t)off_w, rs1p, 2, rdp, 0x03);   /* c.lw */
+        case 3: return i_type((int32_t)off_d, rs1p, 3, rdp, 0x03);   /* c.ld */
+        case 5: return s_type(off_d, rdp, rs1p, 3, 0x27);             /* c.fsd */
+        case 6: return s_type(off_w, rdp, rs1p, 2, 0x23);             /* c.sw */
+        case 7: return s_type(off_d, rdp, rs1p, 3, 0x23);             /* c.sd */
+        default: return 0;
+        }
+    }
+    if (op == 1) {
+        switch (f3) {
+        case 0: return i_type(imm6, rd, 0, rd, 0x13);                  /* c.addi, c.nop */
+        case 1: return rd ? i_type(imm6, rd, 0, rd, 0x1B) : 0;        /* c.addiw */
+        case 2: return i_type(imm6, 0, 0, rd, 0x13);                   /* c.li */
+        case 3:
+            if (rd == 2) {                                             /* c.addi16sp */
+                int32_t nz = (int32_t)sext(((h >> 3) & 0x200) | ((h >> 2) & 0x10) | ((h << 1) & 0x40)
+                                           | ((h << 4) & 0x180) | ((h << 3) & 0x20), 10);
+                return nz ? i_type(nz, 2, 0, 2, 0x13) : 0;
+            }
+            return imm6 ? ((uint32_t)(imm6 << 12) | rd << 7 | 0x37) : 0;   /* c.lui */
+        case 4: {
+            uint32_t f2 = (h >> 10) & 3;
+            uint32_t shamt = ((h >> 7) & 0x20) | ((h >> 2) & 0x1F);
+            if (f2 == 0)
+                return i_type((int32_t)shamt, rs1p, 5, rs1p, 0x13);               /* c.srli */
+            if (f2 == 1)
+                return i_type((int32_t)(shamt | 0x400), rs1p, 5, rs1p, 0x13);     /* c.srai */
+            if (f2 == 2)
+                return i_type(imm6, rs1p, 7, rs1p, 0x13);                         /* c.andi */
+            uint32_t f = (h >> 5) & 3, rs2p = 8 + ((h >> 2) & 7);
+            if (!(h & 0x1000)) {
+                static const uint32_t f3s[4] = {0, 4, 6, 7};                       /* sub xor or and */
+                return r_type(f == 0 ? 0x20 : 0, rs2p, rs1p, f3s[f], rs1p, 0x33);
+            }
+            if (f == 0)
+                return r_type(0x20, rs2p, rs1p, 0, rs1p, 0x3B);                    /* c.subw */
+            if (f == 1)
+                return r_type(0, rs2p, rs1p, 0, rs1p, 0x3B);                       /* c.addw */
+            return 0;
+        }
+        case 5: {                                                                  /* c.j */
+            int32_t o = (int32_t)sext(((h >> 1) & 0x800) | ((h >> 7) & 0x10) | ((h >> 1) & 0x300)
+                                      | ((h << 2) & 0x400) | ((h >> 1) & 0x40) | ((h << 1) & 0x80)
+                                      | ((h >> 2) & 0xE) | ((h << 3) & 0x20), 12);
+            return j_type(o, 0);
+        }
+        default: {                                                                 /* c.beqz, c.bnez */
+            int32_t o = (int32_t)sext(((h >> 4) & 0x100) | ((h >> 7) & 0x18) | ((h << 1) & 0xC0)
+                                      | ((h >> 2) & 6) | ((h << 3) & 0x20), 9);
+            return b_type(o, 0, rs1p, f3 == 6 ? 0 : 1);
+        }
+        }
+    }
+    if (op == 2) {
+        uint32_t shamt = ((h >> 7) & 0x20) | ((h >> 2) & 0x1F);
+        switch (f3) {
+        case 0: return i_type((int32_t)shamt, rd, 1, rd, 0x13);                          /* c.slli */
+        case 1: return i_type((int32_t)(((h >> 7) & 0x20) | ((h >> 2) & 0x18) | ((h << 4) & 0x1C0)), 2, 3, rd,
+                              0x07);                                                     /* c.fldsp */
+        case 2: return rd ? i_type((int32_t)(((h >> 7) & 0x20) | ((h >> 2) & 0x1C) | ((h << 4) & 0xC0)), 2, 2, rd,
+                                   0x03) : 0;                                            /* c.lwsp */
+        case 3: return rd ? i_type((int32_t)(((h >> 7) & 0x20) | ((h >> 2) & 0x18) | ((h << 4) & 0x1C0)), 2, 3,
+                                   rd, 0x03) : 0;                                        /* c.ldsp */
+        case 4:
+            if (!(h & 0x1000)) {
+                if (rs2 == 0)
+                    return rd ? i_type(0, rd, 0, 0, 0x67) : 0;    /* c.jr */
+                return r_type(0, rs2, 0, 0, rd, 0x33);             /* c.mv */
+            }
+            if (rs2 == 0)
+                return rd ? i_type(0, rd, 0, 1, 0x67) : 0;         /* c.jalr; c.ebreak: the precise engine */
+            return r_type(0, rs2, rd, 0, rd, 0x33);                /* c.add */
+        case 5: return s_type(((h >> 7) & 0x38) | ((h >> 1) & 0x1C0), rs2, 2, 3, 0x27);   /* c.fsdsp */
+        case 6: return s_type(((h >> 7) & 0x3C) | ((h >> 1) & 0xC0), rs2, 2, 2, 0x23);    /* c.swsp */
+        case 7: return s_type(((h >> 7) & 0x38) | ((h >> 1) & 0x1C0), rs2, 2, 3, 0x23);   /* c.sdsp */
+        }
+    }
+    return 0;
+}
+
+static uint16_t decode_op_imm(uint32_t f3, uint32_t w, int wide)
+{
+    uint32_t top6 = w >> 26, top7 = w >> 25;
+    if (wide) {
+        switch (f3) {
+        case 0: return OP_ADDI;
+        case 1: return top6 == 0 ? OP_SLLI : OP_HANDOFF;
+        case 2: return OP_SLTI;
+        case 3: return OP_SLTIU;
+        case 4: return OP_XORI;
+        case 5: return top6 == 0 ? OP_SRLI : top6 == 0x10 ? OP_SRAI : OP_HANDOFF;
+        case 6: return OP_ORI;
+        default: return OP_ANDI;
+        }
+    }
+    switch (f3) {
+    case 0: return OP_ADDIW;
+    case 1: return top7 == 0 ? OP_SLLIW : OP_HANDOFF;
+    case 5: return top7 == 0 ? OP_SRLIW : top7 == 0x20 ? OP_SRAIW : OP_HANDOFF;
+    default: return OP_HANDOFF;
+    }
+}
+
+static uint16_t decode_op(uint32_t f3, uint32_t f7, int wide)
+{
+    if (f7 == 1) {
+        static const uint16_t m64[8] = {OP_MUL, OP_MULH, OP_MULHSU, OP_MULHU, OP_DIV, OP_DIVU, OP_REM, OP_REMU};
+        static const uint16_t m32[8] = {OP_MULW, OP_HANDOFF, OP_HANDOFF, OP_HANDOFF, OP_DIVW, OP_DIVUW, OP_REMW,
+                                        OP_REMUW};
+        return wide ? m64[f3] : m32[f3];
+    }
+    if (wide) {
+        if (f7 == 0) {
+            static const uint16_t ops[8] = {OP_ADD, OP_SLL, OP_SLT, OP_SLTU, OP_XOR, OP_SRL, OP_OR, OP_AND};
+            return ops[f3];
+        }
+        if (f7 == 0x20)
+            return f3 == 0 ? OP_SUB : f3 == 5 ? OP_SRA : OP_HANDOFF;
+        return OP_HANDOFF;
+    }
+    if (f7 == 0)
+        return f3 == 0 ? OP_ADDW : f3 == 1 ? OP_SLLW : f3 == 5 ? OP_SRLW : OP_HANDOFF;
+    if (f7 == 0x20)
+        return f3 == 0 ? OP_SUBW : f3 == 5 ? OP_SRAW : OP_HANDOFF;
+    return OP_HANDOFF;
+}
+
+/* OP-FP (0x53): funct7 names the operation and its format (bit 25: double). */
+static uint16_t decode_op_fp(uint32_t w)
+{
+    uint32_t f7 = w >> 25, f3 = (w >> 12) & 7, rs2 = (w >> 20) & 31;
+    int d = f7 & 1;
+    switch (f7 >> 2) {
+    case 0x00: return d ? OP_FADD_D : OP_FADD_S;
+    case 0x01: return d ? OP_FSUB_D : OP_FSUB_S;
+    case 0x02: return d ? OP_FMUL_D : OP_FMUL_S;
+    case 0x03: return d ? OP_FDIV_D : OP_FDIV_S;
+    case 0x0B: return rs2 ? OP_HANDOFF : d ? OP_FSQRT_D : OP_FSQRT_S;
+    case 0x04:
+        if (f3 > 2)
+            return OP_HANDOFF;
+        return d ? (uint16_t)(OP_FSGNJ_D + f3) : (uint16_t)(OP_FSGNJ_S + f3);
+    case 0x05:
+        if (f3 > 1)
+            return OP_HANDOFF;
+        return d ? (f3 ? OP_FMAX_D : OP_FMIN_D) : (f3 ? OP_FMAX_S : OP_FMIN_S);
+    case 0x08:   /* fcvt.s.d (f7 0x20), fcvt.d.s (f7 0x21) */
+        if (f7 == 0x20 && rs2 == 1)
+            return OP_FCVT_S_D;
+        if (f7 == 0x21 && rs2 == 0)
+            return OP_FCVT_D_S;
+        return OP_HANDOFF;
+    case 0x14: {
+        static const uint16_t s[3] = {OP_FLE_S, OP_FLT_S, OP_FEQ_S}, dd[3] = {OP_FLE_D, OP_FLT_D, OP_FEQ_D};
+        if (f3 > 2)
+            return OP_HANDOFF;
+        return d ? dd[f3] : s[f3];
+    }
+    case 0x18:
+        if (rs2 > 3)
+            return OP_HANDOFF;
+        return d ? (uint16_t)(OP_FCVT_W_D + rs2) : (uint16_t)(OP_FCVT_W_S + rs2);
+    case 0x1A:
+        if (rs2 > 3)
+            return OP_HANDOFF;
+        return d ? (uint16_t)(OP_FCVT_D_W + rs2) : (uint16_t)(OP_FCVT_S_W + rs2);
+    case 0x1C:
+        if (rs2 != 0)
+            return OP_HANDOFF;
+        if (f3 == 0)
+            return d ? OP_FMV_X_D : OP_FMV_X_W;
+        if (f3 == 1)
+            return d ? OP_FCLASS_D : OP_FCLASS_S;
+        return OP_HANDOFF;
+    case 0x1E:
+        if (rs2 != 0 || f3 != 0)
+            return OP_HANDOFF;
+        return d ? OP_FMV_D_X : OP_FMV_W_X;
+    default:
+        return OP_HANDOFF;
+    }
+}
+
+static void decode(const insn_counter_t *c, insn_t *in, uint64_t pc, uint32_t fetched)
+{
+    memset(in, 0, sizeof *in);
+    in->pc = pc;
+    uint32_t w;
+    if ((fetched & 3) != 3) {
+        in->len = 2;
+        in->mask = 0xFFFF;
+        in->bits = fetched & 0xFFFF;
+        w = expand_compressed((uint16_t)fetched);
+    } else {
+        in->len = 4;
+        in->mask = 0xFFFFFFFF;
+        in->bits = fetched;
+        w = fetched;
+    }
+    in->entry = table_entry(c, pc);
+    poll_loop_t *loop = loop_slot(c, pc);
+    in->loop_head = loop != NULL && loop->head == pc;
+    in->op = OP_HANDOFF;
+    if (w == 0)
+        return;
+    uint32_t opcode = w & 0x7F, f3 = (w >> 12) & 7, f7 = w >> 25;
+    uint32_t rd = (w >> 7) & 31;
+    in->rd = (uint8_t)rd;
+    in->rs1 = (uint8_t)((w >> 15) & 31);
+    in->rs2 = (uint8_t)((w >> 20) & 31);
+    in->rs3 = (uint8_t)(w >> 27);
+    in->rm = (uint8_t)f3;
+    int64_t imm_i = sext(w >> 20, 12);
+    int64_t imm_s = sext(((w >> 25) << 5) | ((w >> 7) & 31), 12);
+    uint16_t op = OP_HANDOFF;
+    int writes_x = 0;
+    switch (opcode) {
+    case 0x37: op = OP_LUI; in->imm = sext(w & 0xFFFFF000u, 32); writes_x = 1; break;
+    case 0x17: op = OP_AUIPC; in->imm = sext(w & 0xFFFFF000u, 32); writes_x = 1; break;
+    case 0x6F:
+        op = OP_JAL;
+        in->imm = sext(((w >> 31) << 20) | (((w >> 12) & 0xFF) << 12) | (((w >> 20) & 1) << 11)
+                       | (((w >> 21) & 0x3FF) << 1), 21);
+        writes_x = 1;
+        break;
+    case 0x67:
+        if (f3 == 0) {
+            op = OP_JALR;
+            in->imm = imm_i;
+            writes_x = 1;
+        }
+        break;
+    case 0x63: {
+        static const uint16_t ops[8] = {OP_BEQ, OP_BNE, OP_HANDOFF, OP_HANDOFF, OP_BLT, OP_BGE, OP_BLTU, OP_BGEU};
+        op = ops[f3];
+        in->imm = sext(((w >> 31) << 12) | (((w >> 7) & 1) << 11) | (((w >> 25) & 0x3F) << 5)
+                       | (((w >> 8) & 0xF) << 1), 13);
+        break;
+    }
+    case 0x03: {
+        static const uint16_t ops[8] = {OP_LB, OP_LH, OP_LW, OP_LD, OP_LBU, OP_LHU, OP_LWU, OP_HANDOFF};
+        op = ops[f3];
+        in->imm = imm_i;
+        writes_x = 1;
+        break;
+    }
+    case 0x23: {
+        static const uint16_t ops[8] = {OP_SB, OP_SH, OP_SW, OP_SD, OP_HANDOFF, OP_HANDOFF, OP_HANDOFF, OP_HANDOFF};
+        op = ops[f3];
+        in->imm = imm_s;
+        break;
+    }
+    case 0x13:
+    case 0x1B:
+        op = decode_op_imm(f3, w, opcode == 0x13);
+        in->imm = (op == OP_SLLI || op == OP_SRLI || op == OP_SRAI) ? (int64_t)((w >> 20) & 63)
+                  : (op == OP_SLLIW || op == OP_SRLIW || op == OP_SRAIW) ? (int64_t)((w >> 20) & 31) : imm_i;
+        writes_x = 1;
+        break;
+    case 0x33:
+    case 0x3B:
+        op = decode_op(f3, f7, opcode == 0x33);
+        writes_x = 1;
+        break;
+    case 0x0F:
+        if (f3 == 0)
+            op = OP_FENCE;   /* one hart's own accesses are in order; fence.i: the precise engine */
+        break;
+    case 0x07:
+        op = f3 == 2 ? OP_FLW : f3 == 3 ? OP_FLD : OP_HANDOFF;
+        in->imm = imm_i;
+        break;
+    case 0x27:
+        op = f3 == 2 ? OP_FSW : f3 == 3 ? OP_FSD : OP_HANDOFF;
+        in->imm = imm_s;
+        break;
+    case 0x43: case 0x47: case 0x4B: case 0x4F: {
+        uint32_t fmt = (w >> 25) & 3;
+        int which = (int)((opcode >> 2) & 3);   /* fmadd, fmsub, fnmsub, fnmadd */
+        if (fmt == 0)
+            op = (uint16_t)(OP_FMADD_S + which);
+        else if (fmt == 1)
+            op = (uint16_t)(OP_FMADD_D + which);
+        break;
+    }
+    case 0x53:
+        op = decode_op_fp(w);
+        switch (op) {
+        case OP_FEQ_S: case OP_FLT_S: case OP_FLE_S: case OP_FCLASS_S: case OP_FMV_X_W:
+        case OP_FCVT_W_S: case OP_FCVT_WU_S: case OP_FCVT_L_S: case OP_FCVT_LU_S:
+        case OP_FEQ_D: case OP_FLT_D: case OP_FLE_D: case OP_FCLASS_D: case OP_FMV_X_D:
+        case OP_FCVT_W_D: case OP_FCVT_WU_D: case OP_FCVT_L_D: case OP_FCVT_LU_D:
+            writes_x = 1;
+        default:
+            break;
+        }
+        break;
+    default:
+        break;   /* AMOs, SYSTEM, anything else: the precise engine */
+    }
+    in->op = op;
+    if (writes_x && rd == 0)
+        in->rd = 32;
+}
+
+/* --- floating point ---------------------------------------------------------------------- */
+
+static inline float as_f32(uint64_t v)
+{
+    uint32_t u = (uint32_t)v;
+    float r;
+    memcpy(&r, &u, 4);
+    return r;
+}
+
+static inline double as_f64(uint64_t v)
+{
+    double r;
+    memcpy(&r, &v, 8);
+    return r;
+}
+
+/* A single-precision result as Unicorn 2.1.4 leaves it in the register: zero-extended; a NaN the
+ * canonical one. */
+static inline uint64_t from_f32(float r)
+{
+    uint32_t u;
+    memcpy(&u, &r, 4);
+    if ((u & 0x7FFFFFFF) > 0x7F800000)
+        u = 0x7FC00000;
+    return u;
+}
+
+static inline uint64_t from_f64(double r)
+{
+    uint64_t u;
+    memcpy(&u, &r, 8);
+    if ((u & 0x7FFFFFFFFFFFFFFFull) > 0x7FF0000000000000ull)
+        u = 0x7FF8000000000000ull;
+    return u;
+}
+
+static inline int nan32(uint64_t v)
+{
+    return ((uint32_t)v & 0x7FFFFFFF) > 0x7F800000;
+}
+
+static inline int nan64(uint64_t v)
+{
+    return (v & 0x7FFFFFFFFFFFFFFFull) > 0x7FF0000000000000ull;
+}
+
+/* The RISC-V flags the host's MXCSR has collected (its denormal-operand flag has no counterpart). */
+static uint64_t flags_from_mxcsr(unsigned mxcsr)
+{
+    uint64_t flags = 0;
+    if (mxcsr & 0x01) flags |= FF_NV;
+    if (mxcsr & 0x04) flags |= FF_DZ;
+    if (mxcsr & 0x08) flags |= FF_OF;
+    if (mxcsr & 0x10) flags |= FF_UF;
+    if (mxcsr & 0x20) flags |= FF_NX;
+    return flags;
+}
+
+/* `v` rounded to an integral value in rounding mode rm (0 RNE, 1 RTZ, 2 RDN, 3 RUP, 4 RMM). */
+static inline double round_integral(double v, int rm)
+{
+    switch (rm) {
+    case 0: return nearbyint(v);   /* the host rounds to nearest even */
+    case 1: return trunc(v);
+    case 2: return floor(v);
+    case 3: return ceil(v);
+    default: return round(v);      /* halves away from zero */
+    }
+}
+
+/* A non-NaN value converted to an integer in [lo, hi_exclusive) with rounding mode rm, saturating
+ * and raising invalid out of range, inexact otherwise when the value was not integral (softfloat's
+ * rules). The rounding functions and the conversion of an integral value in range raise no host
+ * flag, so the flags are worked out here. */
+static inline int64_t convert_to_integer(double v, int rm, double lo, double hi_exclusive, int64_t lo_value,
+                                         int64_t hi_value, int is_unsigned, uint64_t *flags)
+{
+    double r = round_integral(v, rm);
+    if (r < lo) {
+        *flags |= FF_NV;
+        return lo_value;
+    }
+    if (r >= hi_exclusive) {
+        *flags |= FF_NV;
+        return hi_value;
+    }
+    if (r != v)
+        *flags |= FF_NX;
+    return is_unsigned ? (int64_t)(uint64_t)r : (int64_t)r;
+}
+
+static uint64_t classify(int sign, int exp_all_ones, int exp_zero, int frac_zero, int quiet)
+{
+    if (exp_all_ones) {
+        if (frac_zero)
+            return sign ? 1u << 0 : 1u << 7;
+        return quiet ? 1u << 9 : 1u << 8;
+    }
+    if (exp_zero) {
+        if (frac_zero)
+            return sign ? 1u << 3 : 1u << 4;
+        return sign ? 1u << 2 : 1u << 5;
+    }
+    return sign ? 1u << 1 : 1u << 6;
+}
+
+static uint64_t fclass32(uint64_t v)
+{
+    uint32_t u = (uint32_t)v, e = (u >> 23) & 0xFF, m = u & 0x7FFFFF;
+    return classify((int)(u >> 31), e == 0xFF, e == 0, m == 0, (int)((m >> 22) & 1));
+}
+
+static uint64_t fclass64(uint64_t v)
+{
+    uint64_t e = (v >> 52) & 0x7FF, m = v & 0xFFFFFFFFFFFFFull;
+    return classify((int)(v >> 63), e == 0x7FF, e == 0, m == 0, (int)((m >> 51) & 1));
+}
+
+/* --- the interpreter --------------------------------------------------------------------- */
+
+static const int x_ids[31] = {
+    2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30,
+    31, 32};
+
+static void load_state(fast_state_t *f, void *uc)
+{
+    int ids[31 + 32 + 4];
+    void *values[31 + 32 + 4];
+    int n = 0;
+    for (int i = 0; i < 31; i++) {
+        ids[n] = x_ids[i];
+        values[n++] = &f->x[i + 1];
+    }
+    for (int i = 0; i < 32; i++) {
+        ids[n] = UC_F0 + i;
+        values[n++] = &f->f[i];
+    }
+    ids[n] = UC_PC; values[n++] = &f->pc;
+    ids[n] = UC_MSTATUS; values[n++] = &f->mstatus;
+    ids[n] = UC_FFLAGS; values[n++] = &f->fflags;
+    ids[n] = UC_FRM; values[n++] = &f->frm;
+    f->read_batch(uc, ids, values, n);
+    f->x[0] = 0;
+}
+
+static void store_state(fast_state_t *f, void *uc, int fp_written, uint64_t old_fflags, uint64_t old_mstatus)
+{
+    int ids[31 + 32 + 3];
+    void *values[31 + 32 + 3];
+    int n = 0;
+    for (int i = 0; i < 31; i++) {
+        ids[n] = x_ids[i];
+        values[n++] = &f->x[i + 1];
+    }
+    if (fp_written) {
+        for (int i = 0; i < 32; i++) {
+            ids[n] = UC_F0 + i;
+            values[n++] = &f->f[i];
+        }
+    }
+    ids[n] = UC_PC; values[n++] = &f->pc;
+    if (f->fflags != old_fflags) {
+        ids[n] = UC_FFLAGS;
+        values[n++] = &f->fflags;
+    }
+    if (f->mstatus != old_mstatus) {
+        ids[n] = UC_MSTATUS;
+        values[n++] = &f->mstatus;
+    }
+    f->write_batch(uc, ids, values, n);
+}
+
+/*
+ * Runs the hart whose precise engine is `uc` from `from` until an instruction needs the precise
+ * engine (a hand-over: the instruction is not counted) or the counter's limits are reached (a
+ * poll loop's head lowers the limit as count_instruction does). The registers are read from `uc`
+ * first and written back at the end, the pc too. Returns the pc to go on from.
+ */
+__attribute__((visibility("default")))
+uint64_t fast_run(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t from)
+{
+    load_state(f, uc);
+    f->pc = from;
+    uint64_t *x = f->x;
+    uint64_t *fr = f->f;
+    uint64_t pc = f->pc;
+    const uint64_t old_fflags = f->fflags, old_mstatus = f->mstatus;
+    const int fpu_on = (f->mstatus & MSTATUS_FS) != 0;
+    int fp_written = 0;
+    uint64_t soft_flags = 0;
+    const unsigned mxcsr = _mm_getcsr();
+    _mm_setcsr(mxcsr & ~0x3Fu);
+    uint64_t executed = c->executed, cycles = c->cycles, stall = c->stall_cycles;
+    const uint64_t cycle_limit = c->cycle_limit;
+    const uint64_t start = executed;
+    int pending_kind = c->pending_kind;
+    uint64_t pending_pc = c->pending_pc;
+    uint32_t pending_entry = c->pending_entry;
+    int why;
+
+#define HAND_OVER() do { why = STOP_HANDOFF; goto out; } while (0)
+#define NEXT() do { pc += in->len; goto top; } while (0)
+/* the rounding mode an FP instruction uses (7: frm's) */
+#define RM() ((in->rm == 7) ? (int)f->frm : (int)in->rm)
+#define NEED_FPU() do { if (!fpu_on) HAND_OVER(); } while (0)
+#define NEED_RNE() do { if (!fpu_on || RM() != 0) HAND_OVER(); } while (0)
+#define NEED_VALID_RM() do { if (!fpu_on || RM() > 4) HAND_OVER(); } while (0)
+/* Counts and times the instruction exactly as count_instruction does, its operands still unwritten. */
+#define COUNT() do { \
+        executed++; \
+        uint64_t cost = 1; \
+        if (pending_kind) { \
+            cost += resolve_transfer(c, pending_pc, pending_entry, pending_kind, pc, NULL); \
+            pending_kind = 0; \
+        } \
+        uint32_t e = in->entry; \
+        if (e != 0) { \
+            int kind = (int)E_KIND(e); \
+            uint64_t extra = E_EXTRA(e); \
+            if (kind == KIND_MUL || kind == KIND_DIV) { \
+                uint64_t latency = muldiv_latency(e, x[E_RS1(e)], x[E_RS2(e)], kind == KIND_DIV); \
+                uint64_t distance = E_DIST(e); \
+                extra += latency > distance ? latency - distance : 0; \
+            } else if (kind != KIND_PLAIN) { \
+                pending_kind = kind; \
+                pending_pc = pc; \
+                pending_entry = e; \
+            } \
+            stall += extra; \
+            cost += extra; \
+        } \
+        cycles += cost; \
+        if (in->loop_head) { \
+            poll_loop_t *loop = loop_slot(c, pc); \
+            if (!loop->ignore && executed - loop->last == loop->body && c->poll_report == 0) { \
+                c->poll_report = pc; \
+                c->limit = executed; \
+            } \
+            loop->last = executed; \
+        } \
+    } while (0)
+#define LOAD(type, width, dest) do { \
+        uint64_t a = x[in->rs1] + (uint64_t)in->imm; \
+        uint8_t *h = sram_at(sram, size, base, alias, a, width); \
+        if (h == NULL || (a & (width - 1))) HAND_OVER(); \
+        COUNT(); \
+        type v; \
+        memcpy(&v, h, width); \
+        dest; \
+        NEXT(); \
+    } while (0)
+#define STORE(width, value) do { \
+        uint64_t a = x[in->rs1] + (uint64_t)in->imm; \
+        uint8_t *h = sram_at(sram, size, base, alias, a, width); \
+        if (h == NULL || (a & (width - 1))) HAND_OVER(); \
+        COUNT(); \
+        uint64_t v = (value); \
+        memcpy(h, &v, width); \
+        NEXT(); \
+    } while (0)
+#define BRANCH(cond) do { COUNT(); pc += (cond) ? (uint64_t)in->imm : in->len; goto top; } while (0)
+#define ALU(expr) do { COUNT(); x[in->rd] = (expr); NEXT(); } while (0)
+#define W(expr) ((uint64_t)(int64_t)(int32_t)(uint32_t)(expr))
+/* single precision: operands must not be NaNs (the precise engine has QEMU's NaN rules) */
+#define S1 as_f32(fr[in->rs1])
+#define S2 as_f32(fr[in->rs2])
+#define S3 as_f32(fr[in->rs3])
+#define D1 as_f64(fr[in->rs1])
+#define D2 as_f64(fr[in->rs2])
+#define D3 as_f64(fr[in->rs3])
+#define NO_NAN_S2() do { if (nan32(fr[in->rs1]) || nan32(fr[in->rs2])) HAND_OVER(); } while (0)
+#define NO_NAN_S3() do { if (nan32(fr[in->rs1]) || nan32(fr[in->rs2]) || nan32(fr[in->rs3])) HAND_OVER(); } while (0)
+#define NO_NAN_D2() do { if (nan64(fr[in->rs1]) || nan64(fr[in->rs2])) HAND_OVER(); } while (0)
+#define NO_NAN_D3() do { if (nan64(fr[in->rs1]) || nan64(fr[in->rs2]) || nan64(fr[in->rs3])) HAND_OVER(); } while (0)
+#define FRES(expr) do { COUNT(); fr[in->rd] = (expr); fp_written = 1; NEXT(); } while (0)
+#define XRES(expr) do { COUNT(); x[in->rd] = (expr); NEXT(); } while (0)
+
+#define OP_LABEL(name) &&L_OP_##name,
+    static const void *const dispatch[OP_COUNT] = { OPERATIONS(OP_LABEL) };
+#undef OP_LABEL
+    const uint64_t base = f->base, alias = f->alias, size = f->size, last_fetch = f->size - 4;
+    uint8_t *const sram = f->sram;
+    insn_t *const cache = f->cache;
+    insn_t *in;
+top:
+    if (executed >= c->limit || cycles >= cycle_limit) {
+        why = STOP_LIMIT;
+        goto out;
+    }
+    {
+        uint64_t o = pc - base;
+        if (o > last_fetch) {
+            o = pc - alias;
+            if (o > last_fetch)
+                HAND_OVER();   /* code outside SRAM (or its last two bytes) */
+        }
+        uint32_t fetched;
+        memcpy(&fetched, sram + o, 4);
+        in = &cache[(pc >> 1) & (CACHE_SLOTS - 1)];
+        if (in->pc != pc || in->bits != (fetched & in->mask))
+            decode(c, in, pc, fetched);
+    }
+    goto *dispatch[in->op];
+    {
+        L_OP_LUI: ALU((uint64_t)in->imm);
+        L_OP_AUIPC: ALU(pc + (uint64_t)in->imm);
+        L_OP_JAL: {
+            COUNT();
+            x[in->rd] = pc + in->len;
+            pc += (uint64_t)in->imm;
+            goto top;
+        }
+        L_OP_JALR: {
+            COUNT();
+            uint64_t target = (x[in->rs1] + (uint64_t)in->imm) & ~(uint64_t)1;
+            x[in->rd] = pc + in->len;
+            pc = target;
+            goto top;
+        }
+        L_OP_BEQ: BRANCH(x[in->rs1] == x[in->rs2]);
+        L_OP_BNE: BRANCH(x[in->rs1] != x[in->rs2]);
+        L_OP_BLT: BRANCH((int64_t)x[in->rs1] < (int64_t)x[in->rs2]);
+        L_OP_BGE: BRANCH((int64_t)x[in->rs1] >= (int64_t)x[in->rs2]);
+        L_OP_BLTU: BRANCH(x[in->rs1] < x[in->rs2]);
+        L_OP_BGEU: BRANCH(x[in->rs1] >= x[in->rs2]);
+        L_OP_LB: LOAD(int8_t, 1, x[in->rd] = (uint64_t)(int64_t)v);
+        L_OP_LH: LOAD(int16_t, 2, x[in->rd] = (uint64_t)(int64_t)v);
+        L_OP_LW: LOAD(int32_t, 4, x[in->rd] = (uint64_t)(int64_t)v);
+        L_OP_LD: LOAD(uint64_t, 8, x[in->rd] = v);
+        L_OP_LBU: LOAD(uint8_t, 1, x[in->rd] = v);
+        L_OP_LHU: LOAD(uint16_t, 2, x[in->rd] = v);
+        L_OP_LWU: LOAD(uint32_t, 4, x[in->rd] = v);
+        L_OP_SB: STORE(1, x[in->rs2]);
+        L_OP_SH: STORE(2, x[in->rs2]);
+        L_OP_SW: STORE(4, x[in->rs2]);
+        L_OP_SD: STORE(8, x[in->rs2]);
+        L_OP_ADDI: ALU(x[in->rs1] + (uint64_t)in->imm);
+        L_OP_SLTI: ALU((int64_t)x[in->rs1] < in->imm);
+        L_OP_SLTIU: ALU(x[in->rs1] < (uint64_t)in->imm);
+        L_OP_XORI: ALU(x[in->rs1] ^ (uint64_t)in->imm);
+        L_OP_ORI: ALU(x[in->rs1] | (uint64_t)in->imm);
+        L_OP_ANDI: ALU(x[in->rs1] & (uint64_t)in->imm);
+        L_OP_SLLI: ALU(x[in->rs1] << in->imm);
+        L_OP_SRLI: ALU(x[in->rs1] >> in->imm);
+        L_OP_SRAI: ALU((uint64_t)((int64_t)x[in->rs1] >> in->imm));
+        L_OP_ADD: ALU(x[in->rs1] + x[in->rs2]);
+        L_OP_SUB: ALU(x[in->rs1] - x[in->rs2]);
+        L_OP_SLL: ALU(x[in->rs1] << (x[in->rs2] & 63));
+        L_OP_SLT: ALU((int64_t)x[in->rs1] < (int64_t)x[in->rs2]);
+        L_OP_SLTU: ALU(x[in->rs1] < x[in->rs2]);
+        L_OP_XOR: ALU(x[in->rs1] ^ x[in->rs2]);
+        L_OP_SRL: ALU(x[in->rs1] >> (x[in->rs2] & 63));
+        L_OP_SRA: ALU((uint64_t)((int64_t)x[in->rs1] >> (x[in->rs2] & 63)));
+        L_OP_OR: ALU(x[in->rs1] | x[in->rs2]);
+        L_OP_AND: ALU(x[in->rs1] & x[in->rs2]);
+        L_OP_ADDIW: ALU(W(x[in->rs1] + (uint64_t)in->imm));
+        L_OP_SLLIW: ALU(W((uint32_t)x[in->rs1] << in->imm));
+        L_OP_SRLIW: ALU(W((uint32_t)x[in->rs1] >> in->imm));
+        L_OP_SRAIW: ALU(W((int32_t)x[in->rs1] >> in->imm));
+        L_OP_ADDW: ALU(W(x[in->rs1] + x[in->rs2]));
+        L_OP_SUBW: ALU(W(x[in->rs1] - x[in->rs2]));
+        L_OP_SLLW: ALU(W((uint32_t)x[in->rs1] << (x[in->rs2] & 31)));
+        L_OP_SRLW: ALU(W((uint32_t)x[in->rs1] >> (x[in->rs2] & 31)));
+        L_OP_SRAW: ALU(W((int32_t)x[in->rs1] >> (x[in->rs2] & 31)));
+        L_OP_MUL: ALU(x[in->rs1] * x[in->rs2]);
+        L_OP_MULH: ALU((uint64_t)(((__int128)(int64_t)x[in->rs1] * (__int128)(int64_t)x[in->rs2]) >> 64));
+        L_OP_MULHSU:
+            ALU((uint64_t)(((__int128)(int64_t)x[in->rs1] * (__int128)(unsigned __int128)x[in->rs2]) >> 64));
+        L_OP_MULHU: ALU((uint64_t)(((unsigned __int128)x[in->rs1] * (unsigned __int128)x[in->rs2]) >> 64));
+        L_OP_DIV: {
+            int64_t a = (int64_t)x[in->rs1], b = (int64_t)x[in->rs2];
+            ALU(b == 0 ? UINT64_MAX : (a == INT64_MIN && b == -1) ? (uint64_t)a : (uint64_t)(a / b));
+        }
+        L_OP_DIVU: {
+            uint64_t a = x[in->rs1], b = x[in->rs2];
+            ALU(b == 0 ? UINT64_MAX : a / b);
+        }
+        L_OP_REM: {
+            int64_t a = (int64_t)x[in->rs1], b = (int64_t)x[in->rs2];
+            ALU(b == 0 ? (uint64_t)a : (a == INT64_MIN && b == -1) ? 0 : (uint64_t)(a % b));
+        }
+        L_OP_REMU: {
+            uint64_t a = x[in->rs1], b = x[in->rs2];
+            ALU(b == 0 ? a : a % b);
+        }
+        L_OP_MULW: ALU(W((uint32_t)x[in->rs1] * (uint32_t)x[in->rs2]));
+        L_OP_DIVW: {
+            int32_t a = (int32_t)x[in->rs1], b = (int32_t)x[in->rs2];
+            ALU(b == 0 ? UINT64_MAX : (a == INT32_MIN && b == -1) ? W(a) : W(a / b));
+        }
+        L_OP_DIVUW: {
+            uint32_t a = (uint32_t)x[in->rs1], b = (uint32_t)x[in->rs2];
+            ALU(b == 0 ? UINT64_MAX : W(a / b));
+        }
+        L_OP_REMW: {
+            int32_t a = (int32_t)x[in->rs1], b = (int32_t)x[in->rs2];
+            ALU(b == 0 ? W(a) : (a == INT32_MIN && b == -1) ? 0 : W(a % b));
+        }
+        L_OP_REMUW: {
+            uint32_t a = (uint32_t)x[in->rs1], b = (uint32_t)x[in->rs2];
+            ALU(b == 0 ? W(a) : W(a % b));
+        }
+        L_OP_FENCE: COUNT(); NEXT();
+
+        /* --- floating point --- */
+        L_OP_FLW: NEED_FPU(); LOAD(uint32_t, 4, (fr[in->rd] = 0xFFFFFFFF00000000ull | v, fp_written = 1));
+        L_OP_FLD: NEED_FPU(); LOAD(uint64_t, 8, (fr[in->rd] = v, fp_written = 1));
+        L_OP_FSW: NEED_FPU(); STORE(4, fr[in->rs2]);
+        L_OP_FSD: NEED_FPU(); STORE(8, fr[in->rs2]);
+
+        L_OP_FADD_S: NEED_RNE(); NO_NAN_S2(); FRES(from_f32(S1 + S2));
+        L_OP_FSUB_S: NEED_RNE(); NO_NAN_S2(); FRES(from_f32(S1 - S2));
+        L_OP_FMUL_S: NEED_RNE(); NO_NAN_S2(); FRES(from_f32(S1 * S2));
+        L_OP_FDIV_S: NEED_RNE(); NO_NAN_S2(); FRES(from_f32(S1 / S2));
+        L_OP_FSQRT_S: NEED_RNE(); if (nan32(fr[in->rs1])) HAND_OVER(); FRES(from_f32(sqrtf(S1)));
+        L_OP_FMADD_S: NEED_RNE(); NO_NAN_S3(); FRES(from_f32(fmaf(S1, S2, S3)));
+        L_OP_FMSUB_S: NEED_RNE(); NO_NAN_S3(); FRES(from_f32(fmaf(S1, S2, -S3)));
+        L_OP_FNMSUB_S: NEED_RNE(); NO_NAN_S3(); FRES(from_f32(fmaf(-S1, S2, S3)));
+        L_OP_FNMADD_S: NEED_RNE(); NO_NAN_S3(); FRES(from_f32(fmaf(-S1, S2, -S3)));
+        /* QEMU 5.0's sign injections work on the whole register: bits 31..63 from rs2 */
+        L_OP_FSGNJ_S: NEED_FPU(); FRES((fr[in->rs2] & ~0x7FFFFFFFull) | (fr[in->rs1] & 0x7FFFFFFFull));
+        L_OP_FSGNJN_S: NEED_FPU(); FRES((~fr[in->rs2] & ~0x7FFFFFFFull) | (fr[in->rs1] & 0x7FFFFFFFull));
+        L_OP_FSGNJX_S: NEED_FPU(); FRES(fr[in->rs1] ^ (fr[in->rs2] & ~0x7FFFFFFFull));
+        L_OP_FMIN_S: {
+            NEED_FPU(); NO_NAN_S2();
+            float a = S1, b = S2;
+            FRES(from_f32((a < b || (a == b && signbit(a))) ? a : b));
+        }
+        L_OP_FMAX_S: {
+            NEED_FPU(); NO_NAN_S2();
+            float a = S1, b = S2;
+            FRES(from_f32((a > b || (a == b && !signbit(a))) ? a : b));
+        }
+        L_OP_FEQ_S: NEED_FPU(); NO_NAN_S2(); XRES(S1 == S2);
+        L_OP_FLT_S: NEED_FPU(); NO_NAN_S2(); XRES(S1 < S2);
+        L_OP_FLE_S: NEED_FPU(); NO_NAN_S2(); XRES(S1 <= S2);
+        L_OP_FCLASS_S: NEED_FPU(); XRES(fclass32(fr[in->rs1]));
+        L_OP_FMV_X_W: NEED_FPU(); XRES(W(fr[in->rs1]));
+        L_OP_FMV_W_X: NEED_FPU(); FRES(x[in->rs1] & 0xFFFFFFFFull);
+        L_OP_FCVT_W_S: NEED_VALID_RM(); if (nan32(fr[in->rs1])) HAND_OVER();
+            XRES(W(convert_to_integer(S1, RM(), -2147483648.0, 2147483648.0, INT32_MIN, INT32_MAX, 0, &soft_flags)));
+        L_OP_FCVT_WU_S: NEED_VALID_RM(); if (nan32(fr[in->rs1])) HAND_OVER();
+            XRES(W(convert_to_integer(S1, RM(), 0.0, 4294967296.0, 0, UINT32_MAX, 1, &soft_flags)));
+        L_OP_FCVT_L_S: NEED_VALID_RM(); if (nan32(fr[in->rs1])) HAND_OVER();
+            XRES((uint64_t)convert_to_integer(S1, RM(), -0x1p63, 0x1p63, INT64_MIN, INT64_MAX, 0, &soft_flags));
+        L_OP_FCVT_LU_S: NEED_VALID_RM(); if (nan32(fr[in->rs1])) HAND_OVER();
+            XRES((uint64_t)convert_to_integer(S1, RM(), 0.0, 0x1p64, 0, (int64_t)UINT64_MAX, 1, &soft_flags));
+        L_OP_FCVT_S_W: NEED_RNE(); FRES(from_f32((float)(int32_t)x[in->rs1]));
+        L_OP_FCVT_S_WU: NEED_RNE(); FRES(from_f32((float)(uint32_t)x[in->rs1]));
+        L_OP_FCVT_S_L: NEED_RNE(); FRES(from_f32((float)(int64_t)x[in->rs1]));
+        L_OP_FCVT_S_LU: NEED_RNE(); FRES(from_f32((float)x[in->rs1]));
+
+        L_OP_FADD_D: NEED_RNE(); NO_NAN_D2(); FRES(from_f64(D1 + D2));
+        L_OP_FSUB_D: NEED_RNE(); NO_NAN_D2(); FRES(from_f64(D1 - D2));
+        L_OP_FMUL_D: NEED_RNE(); NO_NAN_D2(); FRES(from_f64(D1 * D2));
+        L_OP_FDIV_D: NEED_RNE(); NO_NAN_D2(); FRES(from_f64(D1 / D2));
+        L_OP_FSQRT_D: NEED_RNE(); if (nan64(fr[in->rs1])) HAND_OVER(); FRES(from_f64(sqrt(D1)));
+        L_OP_FMADD_D: NEED_RNE(); NO_NAN_D3(); FRES(from_f64(fma(D1, D2, D3)));
+        L_OP_FMSUB_D: NEED_RNE(); NO_NAN_D3(); FRES(from_f64(fma(D1, D2, -D3)));
+        L_OP_FNMSUB_D: NEED_RNE(); NO_NAN_D3(); FRES(from_f64(fma(-D1, D2, D3)));
+        L_OP_FNMADD_D: NEED_RNE(); NO_NAN_D3(); FRES(from_f64(fma(-D1, D2, -D3)));
+        L_OP_FSGNJ_D: NEED_FPU(); FRES((fr[in->rs2] & (1ull << 63)) | (fr[in->rs1] & ~(1ull << 63)));
+        L_OP_FSGNJN_D: NEED_FPU(); FRES((~fr[in->rs2] & (1ull << 63)) | (fr[in->rs1] & ~(1ull << 63)));
+        L_OP_FSGNJX_D: NEED_FPU(); FRES(fr[in->rs1] ^ (fr[in->rs2] & (1ull << 63)));
+        L_OP_FMIN_D: {
+            NEED_FPU(); NO_NAN_D2();
+            double a = D1, b = D2;
+            FRES(from_f64((a < b || (a == b && signbit(a))) ? a : b));
+        }
+        L_OP_FMAX_D: {
+            NEED_FPU(); NO_NAN_D2();
+            double a = D1, b = D2;
+            FRES(from_f64((a > b || (a == b && !signbit(a))) ? a : b));
+        }
+        L_OP_FEQ_D: NEED_FPU(); NO_NAN_D2(); XRES(D1 == D2);
+        L_OP_FLT_D: NEED_FPU(); NO_NAN_D2(); XRES(D1 < D2);
+        L_OP_FLE_D: NEED_FPU(); NO_NAN_D2(); XRES(D1 <= D2);
+        L_OP_FCLASS_D: NEED_FPU(); XRES(fclass64(fr[in->rs1]));
+        L_OP_FMV_X_D: NEED_FPU(); XRES(fr[in->rs1]);
+        L_OP_FMV_D_X: NEED_FPU(); FRES(x[in->rs1]);
+        L_OP_FCVT_W_D: NEED_VALID_RM(); if (nan64(fr[in->rs1])) HAND_OVER();
+            XRES(W(convert_to_integer(D1, RM(), -2147483648.0, 2147483648.0, INT32_MIN, INT32_MAX, 0, &soft_flags)));
+        L_OP_FCVT_WU_D: NEED_VALID_RM(); if (nan64(fr[in->rs1])) HAND_OVER();
+            XRES(W(convert_to_integer(D1, RM(), 0.0, 4294967296.0, 0, UINT32_MAX, 1, &soft_flags)));
+        L_OP_FCVT_L_D: NEED_VALID_RM(); if (nan64(fr[in->rs1])) HAND_OVER();
+            XRES((uint64_t)convert_to_integer(D1, RM(), -0x1p63, 0x1p63, INT64_MIN, INT64_MAX, 0, &soft_flags));
+        L_OP_FCVT_LU_D: NEED_VALID_RM(); if (nan64(fr[in->rs1])) HAND_OVER();
+            XRES((uint64_t)convert_to_integer(D1, RM(), 0.0, 0x1p64, 0, (int64_t)UINT64_MAX, 1, &soft_flags));
+        L_OP_FCVT_D_W: NEED_RNE(); FRES(from_f64((double)(int32_t)x[in->rs1]));
+        L_OP_FCVT_D_WU: NEED_RNE(); FRES(from_f64((double)(uint32_t)x[in->rs1]));
+        L_OP_FCVT_D_L: NEED_RNE(); FRES(from_f64((double)(int64_t)x[in->rs1]));
+        L_OP_FCVT_D_LU: NEED_RNE(); FRES(from_f64((double)x[in->rs1]));
+        L_OP_FCVT_S_D: NEED_RNE(); if (nan64(fr[in->rs1])) HAND_OVER(); FRES(from_f32((float)D1));
+        L_OP_FCVT_D_S: NEED_VALID_RM(); if (nan32(fr[in->rs1])) HAND_OVER(); FRES(from_f64((double)S1));
+        L_OP_HANDOFF:
+            HAND_OVER();
+    }
+out:
+    f->pc = pc;
+    f->instructions += executed - start;
+    if (why == STOP_HANDOFF)
+        f->handoffs++;
+    c->executed = executed;
+    c->cycles = cycles;
+    c->pending_kind = pending_kind;
+    c->pending_pc = pending_pc;
+    c->pending_entry = pending_entry;
+    c->stall_cycles = stall;
+    if (executed != start)
+        c->last_pc = 0;   /* the precise engine's last instruction is no longer the hart's last */
+    f->fflags |= flags_from_mxcsr(_mm_getcsr()) | soft_flags;
+    _mm_setcsr(mxcsr);
+    if (fp_written && (f->mstatus & MSTATUS_FS) != MSTATUS_FS)
+        f->mstatus |= MSTATUS_FS | MSTATUS_SD;   /* QEMU marks the FPU state dirty on a write to an FP register */
+    store_state(f, uc, fp_written, old_fflags, old_mstatus);
+    return pc;
+#undef HAND_OVER
+#undef NEXT
+#undef RM
+#undef NEED_FPU
+#undef NEED_RNE
+#undef NEED_VALID_RM
+#undef COUNT
+#undef LOAD
+#undef STORE
+#undef BRANCH
+#undef ALU
+#undef W
+#undef FRES
+#undef XRES
+}
