@@ -954,7 +954,7 @@ top:
         L_OP_FLE_S: NEED_FPU(); NO_NAN_S2(); XRES(S1 <= S2);
         L_OP_FCLASS_S: NEED_FPU(); XRES(fclass32(fr[in->rs1]));
         L_OP_FMV_X_W: NEED_FPU(); XRES(W(fr[in->rs1]));
-        L_OP_FMV_W_X: NEED_FPU(); FRES(x[in->rs1] & 0xFFFFFFFFull);
+        L_OP_FMV_W_X: NEED_FPU(); FRES(x[in->rs1]);   /* QEMU 5.0 on RV64: the whole register */
         L_OP_FCVT_W_S: NEED_VALID_RM(); if (nan32(fr[in->rs1])) HAND_OVER();
             XRES(W(convert_to_integer(S1, RM(), -2147483648.0, 2147483648.0, INT32_MIN, INT32_MAX, 0, &soft_flags)));
         L_OP_FCVT_WU_S: NEED_VALID_RM(); if (nan32(fr[in->rs1])) HAND_OVER();
