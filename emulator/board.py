@@ -444,6 +444,13 @@ class Board:
         for device in self.timed_devices:
             device.advance(now)
 
+    def earliest_frame_capture(self, now: float) -> float:
+        """A time before which advancing the devices cannot capture a frame: the LCD, on SPI0, needs a
+        byte at least for each cell it has not been written since its last frame (a 12-bit pixel
+        takes one and a half)."""
+        bytes_per_frame = max(1, self.spi0.frame_bits // 8)
+        return self.spi0.earliest_delivery(-(-self.lcd.cells_missing() // bytes_per_frame), now)
+
     def next_device_event(self, now: float) -> float | None:
         # (a plain loop: the scheduler asks this several times a turn)
         earliest = None

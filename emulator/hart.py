@@ -178,6 +178,7 @@ class Hart:
         # the fast engine (enable_fast_engine), and the hooks that keep a hart on the precise one
         self._fast_state: int | None = None
         self._hooks_needing_precision: set[int] = set()
+        self.precise_runs = 0     # runs of the precise engine (the scheduler sees whether a turn had any)
 
     def add_native_hook(self, kind: int, callback: int, user_data: ctypes.Structure, begin: int, end: int,
                         what: str) -> int:
@@ -251,6 +252,10 @@ class Hart:
         instruction it hands over; the precise engine holds the hart's registers again after it.
         Returns the pc to go on from."""
         return _counter_lib.fast_run(self._fast_state, ctypes.byref(self._counter), self.uc._uch, pc)
+
+    def fast_usable(self) -> bool:
+        """Whether the hart runs on the fast engine (it has one and no hook needs the precise one)."""
+        return self._fast_usable()
 
     def _fast_usable(self) -> bool:
         return self._fast_state is not None and not self._hooks_needing_precision
@@ -382,6 +387,7 @@ class Hart:
         """Runs the precise engine from `pc` until its counter stops it, carrying out the CSR
         instructions the board answers on the way."""
         counter = self._counter
+        self.precise_runs += 1
         while True:
             self.uc.emu_start(pc, 0)
             site = counter.csr_report

@@ -49,6 +49,10 @@ WARNINGS_IN_HANG_REPORT = 6       # the most recent distinct warnings a hang rep
 MTIME_DIVIDER = 50                # mtime ticks at CPU clock / 50
 NO_POLL = (-1, -1, -1, 0)
 UNLIMITED_FRAMES = 1 << 62        # run_until: no frame count ends a turn
+# The most turns _go_on_alone runs on one call: the run loops look at the host's clock (progress
+# reports) and at the trap deadline between calls, a firmware that spins alone without devices
+# would otherwise run in one call until the hang budget.
+MAX_TURNS_ALONE = 256
 
 
 @dataclass
@@ -339,7 +343,7 @@ class Scheduler:
         # a firmware that reported an error or trapped is given its grace period even when
         # its error screen was the last frame asked for: the run ends with that error
         while len(self.frames) < frames or self._trap_deadline is not None:
-            self.step()
+            self.step(go_on_alone=True)
             if self._grabs:
                 self._run_grabs()
             if progress is not None and host_time.perf_counter() - last_progress > 0.5:
@@ -368,7 +372,7 @@ class Scheduler:
                 if self._grabs:
                     self._run_grabs()
                 break
-            self.step()
+            self.step(go_on_alone=True)
             if self._grabs:
                 self._run_grabs()
             if progress is not None and host_time.perf_counter() - last_progress > 0.5:
@@ -409,14 +413,16 @@ class Scheduler:
         while self._trap_deadline is not None:
             self.step()
 
-    def step(self) -> None:
-        """One turn (see _turn); a stop recorded by a device outside a hart's turn (a stray
-        DMA write while every hart sleeps) ends the run here."""
-        self._turn()
+    def step(self, go_on_alone: bool = False) -> None:
+        """One turn (see _turn; with go_on_alone, a hart running alone may run the turns after it
+        as well, _go_on_alone); a stop recorded by a device outside a hart's turn (a stray DMA write
+        while every hart sleeps) ends the run here. Single turns for whoever steps the board and
+        looks at it in between (the tests, the GDB server's wait for a connection)."""
+        self._turn(go_on_alone)
         if self.pending_stop is not None:
             raise self.pending_stop
 
-    def _turn(self) -> None:
+    def _turn(self, go_on_alone: bool = False) -> None:
         """One turn: the running hart that is furthest behind in virtual time runs until
         its quantum ends, the next device event, or one quantum past the other hart."""
         board = self.board
@@ -444,15 +450,18 @@ class Scheduler:
         self._take_interrupt(hart)
         t0 = hart.time
         hz = self._hz
-        horizon = t0 + self.quantum / hz
+        # what bounds every turn from now until one of them happens: a device event, a grab, run_until's end
+        outer = math.inf
         event = board.next_device_event(t0)
         if event is not None:
-            horizon = min(horizon, event)
+            outer = min(outer, event)
         if self._grabs and self._grabs[0][0] > t0:
-            horizon = min(horizon, self._grabs[0][0])
+            outer = min(outer, self._grabs[0][0])
         if self.until is not None and self.until > t0:
-            horizon = min(horizon, self.until)
+            outer = min(outer, self.until)
+        horizon = min(t0 + self.quantum / hz, outer)
         instruction_limit = None
+        alone = False
         if priority_turn:
             # one iteration of the loop it woke in, counted in instructions: its cycles vary, and a
             # turn longer than the iteration would run the woken hart on past what the storer does next
@@ -469,12 +478,16 @@ class Scheduler:
             for other in running:
                 if other is not hart:
                     horizon = min(horizon, other.time + self.quantum / hz)
+            alone = go_on_alone and len(running) == 1
         budget = max(1, math.ceil((horizon - t0) * hz - 1e-9))
         self.turn_horizon = t0 + budget / hz
+        precise_runs = hart.precise_runs
         ran = self._run_hart(hart, t0, budget, hz, instruction_limit)
         if self.pending_stop is not None:
             raise self.pending_stop
         hart.time = t0 + ran / hz
+        if alone and hart.precise_runs == precise_runs:
+            horizon = self._go_on_alone(hart, hz, outer, horizon)
         if hart.state is HartState.ASLEEP:
             # a wfi with an enabled interrupt already pending falls through (the privileged spec:
             # WFI resumes when an enabled interrupt is pending, whenever it became so); without
@@ -496,6 +509,43 @@ class Scheduler:
         if running:
             self._set_time(min(running))
         self._check_deadlines()
+
+    def _go_on_alone(self, hart: Hart, hz: float, outer: float, horizon: float) -> float:
+        """The hart ran a turn alone on the fast engine, the others asleep in wfi, and nothing in it
+        needed the board (no device access, CSR, trap or wfi: the precise engine did not run). Until
+        one of its turns does, the next turns would begin with the same state of the board and end
+        with the devices only moving on in time: no interrupt can come before the next device event
+        (`outer` bounds those), no frame be captured before the LCD has the bytes for it, nobody
+        else runs. So the hart runs them here, one after another, each exactly the turn _turn would
+        give it (same budget, from the same float time), without moving the devices on between them,
+        which is what costs the host time; the last one ends where _turn goes on as usual. Returns
+        the horizon of the last turn run (`horizon`, that of the turn _turn ran, when it ran none)."""
+        if self._trap_deadline is not None or self._draining or self._priority is not None or \
+                hart.state is not HartState.RUNNING or hart.polling or not hart.fast_usable() or \
+                any(other.state is not HartState.ASLEEP for other in self.harts if other is not hart):
+            return horizon
+        stop_at = min(outer, self.board.earliest_frame_capture(hart.time))
+        if self.until is None:
+            stop_at = min(stop_at, self._last_frame_time + self.hang_budget_s)
+        others = [other for other in self.harts if other is not hart]
+        frames = len(self.frames)
+        for _ in range(MAX_TURNS_ALONE):
+            if hart.time >= stop_at:
+                break
+            t0 = hart.time
+            horizon = min(t0 + self.quantum / hz, outer)
+            budget = max(1, math.ceil((horizon - t0) * hz - 1e-9))
+            self.turn_horizon = t0 + budget / hz
+            precise_runs = hart.precise_runs
+            ran = self._run_hart(hart, t0, budget, hz)
+            if self.pending_stop is not None:
+                raise self.pending_stop
+            hart.time = t0 + ran / hz
+            if hart.precise_runs != precise_runs or hart.state is not HartState.RUNNING or hart.polling or \
+                    len(self.frames) != frames or self._hz != hz or self._trap_deadline is not None or \
+                    any(other.state is not HartState.ASLEEP for other in others):
+                break
+        return horizon
 
     def _set_time(self, now: float) -> None:
         """Moves the board's time (the earliest time a running hart has reached) forward:

@@ -380,6 +380,20 @@ class SpiController(Peripheral):
         later = [t for t in times if t > now + EPSILON]
         return min(later) if later else None
 
+    def earliest_delivery(self, frames: int, now: float) -> float:
+        """The earliest time by which `frames` more frames than delivered so far can have reached the
+        selected device (a frame early, for safety); inf when the frames on the wire and those the TX
+        DMA still has to give are fewer (the train's end is a device event, next_event_time). Without
+        a train: now, unless nothing could start one but a register access."""
+        train = self._train
+        if train is None:
+            return now if self.tx_dma is not None and self.tx_dma.remaining() else float("inf")
+        index = train.delivered + frames
+        available = train.count + (self.tx_dma.remaining() if self.tx_dma is not None else 0)
+        if index > available:
+            return float("inf")
+        return train.start + (index - 1) * train.period
+
     def stable_until(self, offset: int, now: float) -> float:
         """The status registers (sr, txflr, rxflr, risr, isr: reading them changes nothing) stay
         as they are until the next frame starts or ends on the wire, which is also when advance()

@@ -513,6 +513,11 @@ class ST7789V:
             self._capture_frame()
             cells, colours = cells[last + 1:], colours[last + 1:]
 
+    def cells_missing(self) -> int:
+        """GRAM cells not yet written since the last frame was captured (each pixel written covers at
+        most one: the next capture is at least this many pixels away)."""
+        return PIXELS - self._covered_count
+
     def _capture_frame(self) -> None:
         self._covered[:] = False
         self._covered_count = 0
