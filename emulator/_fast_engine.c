@@ -32,8 +32,6 @@
 
 #include "_counter.h"
 
-#define CACHE_BITS 16
-#define CACHE_SLOTS (1u << CACHE_BITS)
 
 /* fast_run's answers */
 #define STOP_HANDOFF 1   /* the instruction at pc needs the precise engine */
@@ -59,7 +57,7 @@
 
 /* Every operation the interpreter carries out (HANDOFF: none, the precise engine's). */
 #define OPERATIONS(X) \
- X(HANDOFF) X(LUI) X(AUIPC) X(JAL) X(JALR) X(BEQ) X(BNE) X(BLT) X(BGE) X(BLTU) X(BGEU) X(LB) X(LH) \
+    X(HANDOFF) X(BLOCK_END) X(LUI) X(AUIPC) X(JAL) X(JALR) X(BEQ) X(BNE) X(BLT) X(BGE) X(BLTU) X(BGEU) X(LB) X(LH) \
     X(LW) X(LD) X(LBU) X(LHU) X(LWU) X(SB) X(SH) X(SW) X(SD) X(ADDI) X(SLTI) X(SLTIU) X(XORI) X(ORI) \
     X(ANDI) X(SLLI) X(SRLI) X(SRAI) X(ADD) X(SUB) X(SLL) X(SLT) X(SLTU) X(XOR) X(SRL) X(SRA) X(OR) \
     X(AND) X(ADDIW) X(SLLIW) X(SRLIW) X(SRAIW) X(ADDW) X(SUBW) X(SLLW) X(SRLW) X(SRAW) X(MUL) \
@@ -79,9 +77,7 @@ enum { OPERATIONS(OP_ENUM) OP_COUNT };
 
 /* One decoded instruction. rd 32 is where writes to x0 go (x[0] stays 0). */
 typedef struct {
-    uint64_t pc;       /* the address it was decoded at (0: an empty slot) */
-    uint32_t bits;     /* its bits, compressed ones in the low half */
-    uint32_t mask;     /* 0xFFFF or 0xFFFFFFFF: which fetched bits must equal `bits` */
+    uint64_t pc;       /* its address (OP_BLOCK_END: the next block's) */
     int64_t imm;
     uint32_t entry;    /* the cycle table's entry for its address */
     uint16_t op;
@@ -89,6 +85,23 @@ typedef struct {
     uint8_t len;       /* 2 or 4 */
     uint8_t loop_head; /* the head of a poll loop (the counter's table) */
 } insn_t;
+
+/* A straight run of decoded instructions from `pc` up to a control transfer, an instruction for
+ * the precise engine, BLOCK_MAX instructions or the end of SRAM; then an OP_BLOCK_END (not
+ * counted). Entered only after its code bytes were compared with the copy kept here, so that
+ * code written since (by a hart or a DMA) is decoded again. */
+#define BLOCK_MAX 32
+typedef struct {
+    uint64_t pc;
+    uint32_t bytes;    /* code bytes it covers */
+    uint32_t count;    /* instructions, OP_BLOCK_END not included */
+    uint8_t code[BLOCK_MAX * 4];
+    insn_t insns[BLOCK_MAX + 1];
+} block_t;
+
+#define BLOCK_INDEX_BITS 14
+#define BLOCK_INDEX_SLOTS (1u << BLOCK_INDEX_BITS)
+#define BLOCK_ARENA (4096u)   /* blocks decoded before the index is emptied and decoding starts over */
 
 typedef int (*uc_reg_batch_fn)(void *uc, int *regs, void **values, int count);
 
@@ -103,7 +116,9 @@ typedef struct fast_state {
     uc_reg_batch_fn read_batch, write_batch;
     uint64_t instructions;   /* statistics: instructions this engine ran */
     uint64_t handoffs;       /* and the times it handed the hart over */
-    insn_t cache[CACHE_SLOTS];
+    uint32_t blocks_used;    /* of the arena */
+    block_t *index[BLOCK_INDEX_SLOTS];   /* by start address, direct-mapped */
+    block_t arena[BLOCK_ARENA];
 } fast_state_t;
 
 __attribute__((visibility("default")))
@@ -132,7 +147,8 @@ void fast_state_free(fast_state_t *f)
 __attribute__((visibility("default")))
 void fast_forget_decodings(fast_state_t *f)
 {
-    memset(f->cache, 0, sizeof f->cache);
+    memset(f->index, 0, sizeof f->index);
+    f->blocks_used = 0;
 }
 
 __attribute__((visibility("default")))
@@ -400,13 +416,9 @@ static void decode(const insn_counter_t *c, insn_t *in, uint64_t pc, uint32_t fe
     uint32_t w;
     if ((fetched & 3) != 3) {
         in->len = 2;
-        in->mask = 0xFFFF;
-        in->bits = fetched & 0xFFFF;
         w = expand_compressed((uint16_t)fetched);
     } else {
         in->len = 4;
-        in->mask = 0xFFFFFFFF;
-        in->bits = fetched;
         w = fetched;
     }
     in->entry = table_entry(c, pc);
@@ -513,6 +525,58 @@ static void decode(const insn_counter_t *c, insn_t *in, uint64_t pc, uint32_t fe
     in->op = op;
     if (writes_x && rd == 0)
         in->rd = 32;
+}
+
+static int ends_block(uint16_t op)
+{
+    return op == OP_HANDOFF || op == OP_JAL || op == OP_JALR || (op >= OP_BEQ && op <= OP_BGEU);
+}
+
+/* Decodes the block at `pc` (its code starts at `code`, `room` bytes before the end of SRAM). */
+static block_t *build_block(fast_state_t *f, const insn_counter_t *c, uint64_t pc, const uint8_t *code,
+                            uint64_t room)
+{
+    if (f->blocks_used == BLOCK_ARENA) {
+        memset(f->index, 0, sizeof f->index);
+        f->blocks_used = 0;
+    }
+    block_t *b = &f->arena[f->blocks_used++];
+    b->pc = pc;
+    uint32_t n = 0, offset = 0;
+    while (n < BLOCK_MAX && offset + 4 <= room) {
+        uint32_t fetched;
+        memcpy(&fetched, code + offset, 4);
+        insn_t *in = &b->insns[n++];
+        decode(c, in, pc + offset, fetched);
+        offset += in->len;
+        if (ends_block(in->op))
+            break;
+    }
+    b->count = n;
+    b->bytes = offset;
+    memcpy(b->code, code, offset);
+    insn_t *end = &b->insns[n];
+    memset(end, 0, sizeof *end);
+    end->op = OP_BLOCK_END;
+    end->pc = pc + offset;
+    f->index[(pc >> 1) & (BLOCK_INDEX_SLOTS - 1)] = b;
+    return b;
+}
+
+/* The decoded block at `pc`, decoding it (again) when needed; NULL for code outside SRAM. */
+static inline block_t *block_at(fast_state_t *f, const insn_counter_t *c, uint64_t pc)
+{
+    uint64_t o = pc - f->base;
+    if (o > f->size - 4) {
+        o = pc - f->alias;
+        if (o > f->size - 4)
+            return NULL;   /* code outside SRAM (or its last two bytes) */
+    }
+    const uint8_t *code = f->sram + o;
+    block_t *b = f->index[(pc >> 1) & (BLOCK_INDEX_SLOTS - 1)];
+    if (b != NULL && b->pc == pc && memcmp(b->code, code, b->bytes) == 0)
+        return b;
+    return build_block(f, c, pc, code, f->size - o);
 }
 
 /* --- floating point ---------------------------------------------------------------------- */
@@ -716,8 +780,17 @@ uint64_t fast_run(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t from)
     uint32_t pending_entry = c->pending_entry;
     int why;
 
-#define HAND_OVER() do { why = STOP_HANDOFF; goto out; } while (0)
-#define NEXT() do { pc += in->len; goto top; } while (0)
+#define HAND_OVER() do { pc = in->pc; why = STOP_HANDOFF; goto out; } while (0)
+/* on to the next instruction of the block; each starts only below the counter's limits */
+#define DISPATCH() do { \
+        if (executed >= c->limit || cycles >= cycle_limit) { \
+            pc = in->pc; \
+            why = STOP_LIMIT; \
+            goto out; \
+        } \
+        goto *dispatch[in->op]; \
+    } while (0)
+#define NEXT() do { in++; DISPATCH(); } while (0)
 /* the rounding mode an FP instruction uses (7: frm's) */
 #define RM() ((in->rm == 7) ? (int)f->frm : (int)in->rm)
 #define NEED_FPU() do { if (!fpu_on) HAND_OVER(); } while (0)
@@ -728,7 +801,7 @@ uint64_t fast_run(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t from)
         executed++; \
         uint64_t cost = 1; \
         if (pending_kind) { \
-            cost += resolve_transfer(c, pending_pc, pending_entry, pending_kind, pc, NULL); \
+            cost += resolve_transfer(c, pending_pc, pending_entry, pending_kind, in->pc, NULL); \
             pending_kind = 0; \
         } \
         uint32_t e = in->entry; \
@@ -741,7 +814,7 @@ uint64_t fast_run(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t from)
                 extra += latency > distance ? latency - distance : 0; \
             } else if (kind != KIND_PLAIN) { \
                 pending_kind = kind; \
-                pending_pc = pc; \
+                pending_pc = in->pc; \
                 pending_entry = e; \
             } \
             stall += extra; \
@@ -749,9 +822,9 @@ uint64_t fast_run(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t from)
         } \
         cycles += cost; \
         if (in->loop_head) { \
-            poll_loop_t *loop = loop_slot(c, pc); \
+            poll_loop_t *loop = loop_slot(c, in->pc); \
             if (!loop->ignore && executed - loop->last == loop->body && c->poll_report == 0) { \
-                c->poll_report = pc; \
+                c->poll_report = in->pc; \
                 c->limit = executed; \
             } \
             loop->last = executed; \
@@ -776,7 +849,7 @@ uint64_t fast_run(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t from)
         memcpy(h, &v, width); \
         NEXT(); \
     } while (0)
-#define BRANCH(cond) do { COUNT(); pc += (cond) ? (uint64_t)in->imm : in->len; goto top; } while (0)
+#define BRANCH(cond) do { COUNT(); pc = in->pc + ((cond) ? (uint64_t)in->imm : in->len); goto next_block; } while (0)
 #define ALU(expr) do { COUNT(); x[in->rd] = (expr); NEXT(); } while (0)
 #define W(expr) ((uint64_t)(int64_t)(int32_t)(uint32_t)(expr))
 /* single precision: operands must not be NaNs (the precise engine has QEMU's NaN rules) */
@@ -796,44 +869,37 @@ uint64_t fast_run(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t from)
 #define OP_LABEL(name) &&L_OP_##name,
     static const void *const dispatch[OP_COUNT] = { OPERATIONS(OP_LABEL) };
 #undef OP_LABEL
-    const uint64_t base = f->base, alias = f->alias, size = f->size, last_fetch = f->size - 4;
+    const uint64_t base = f->base, alias = f->alias, size = f->size;
     uint8_t *const sram = f->sram;
-    insn_t *const cache = f->cache;
     insn_t *in;
-top:
-    if (executed >= c->limit || cycles >= cycle_limit) {
-        why = STOP_LIMIT;
-        goto out;
-    }
+next_block:
     {
-        uint64_t o = pc - base;
-        if (o > last_fetch) {
-            o = pc - alias;
-            if (o > last_fetch)
-                HAND_OVER();   /* code outside SRAM (or its last two bytes) */
+        block_t *b = block_at(f, c, pc);
+        if (b == NULL) {
+            why = STOP_HANDOFF;   /* code outside SRAM: the precise engine decides what happens */
+            goto out;
         }
-        uint32_t fetched;
-        memcpy(&fetched, sram + o, 4);
-        in = &cache[(pc >> 1) & (CACHE_SLOTS - 1)];
-        if (in->pc != pc || in->bits != (fetched & in->mask))
-            decode(c, in, pc, fetched);
+        in = b->insns;
     }
-    goto *dispatch[in->op];
+    DISPATCH();
     {
+        L_OP_BLOCK_END:
+            pc = in->pc;
+            goto next_block;
         L_OP_LUI: ALU((uint64_t)in->imm);
-        L_OP_AUIPC: ALU(pc + (uint64_t)in->imm);
+        L_OP_AUIPC: ALU(in->pc + (uint64_t)in->imm);
         L_OP_JAL: {
             COUNT();
-            x[in->rd] = pc + in->len;
-            pc += (uint64_t)in->imm;
-            goto top;
+            x[in->rd] = in->pc + in->len;
+            pc = in->pc + (uint64_t)in->imm;
+            goto next_block;
         }
         L_OP_JALR: {
             COUNT();
             uint64_t target = (x[in->rs1] + (uint64_t)in->imm) & ~(uint64_t)1;
-            x[in->rd] = pc + in->len;
+            x[in->rd] = in->pc + in->len;
             pc = target;
-            goto top;
+            goto next_block;
         }
         L_OP_BEQ: BRANCH(x[in->rs1] == x[in->rs2]);
         L_OP_BNE: BRANCH(x[in->rs1] != x[in->rs2]);
