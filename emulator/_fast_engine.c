@@ -11,7 +11,7 @@
  *
  * What it does not carry out it hands to the precise engine (Unicorn with the per-instruction
  * counter, hart.py), before counting the instruction: an access to anything but SRAM or one that
- * is not naturally aligned, CSR instructions, wfi, ecall, ebreak, mret, fence.i, LR/SC and AMOs,
+ * is not naturally aligned, CSR instructions (but reads of mhartid), wfi, ecall, ebreak, mret, fence.i, LR/SC and AMOs,
  * instructions it does not know (the precise engine raises the illegal-instruction exception),
  * floating point on a NaN operand, with a rounding mode other than round-to-nearest-even where the
  * result is rounded (conversions to integers take any mode), or with the FPU off. Registers move
@@ -57,7 +57,7 @@
 
 /* Every operation the interpreter carries out (HANDOFF: none, the precise engine's). */
 #define OPERATIONS(X) \
-    X(HANDOFF) X(BLOCK_END) X(LUI) X(AUIPC) X(JAL) X(JALR) X(BEQ) X(BNE) X(BLT) X(BGE) X(BLTU) X(BGEU) X(LB) X(LH) \
+    X(HANDOFF) X(BLOCK_END) X(MHARTID) X(LUI) X(AUIPC) X(JAL) X(JALR) X(BEQ) X(BNE) X(BLT) X(BGE) X(BLTU) X(BGEU) X(LB) X(LH) \
     X(LW) X(LD) X(LBU) X(LHU) X(LWU) X(SB) X(SH) X(SW) X(SD) X(ADDI) X(SLTI) X(SLTIU) X(XORI) X(ORI) \
     X(ANDI) X(SLLI) X(SRLI) X(SRAI) X(ADD) X(SUB) X(SLL) X(SLT) X(SLTU) X(XOR) X(SRL) X(SRA) X(OR) \
     X(AND) X(ADDIW) X(SLLIW) X(SRLIW) X(SRAIW) X(ADDW) X(SUBW) X(SLLW) X(SRLW) X(SRAW) X(MUL) \
@@ -113,6 +113,7 @@ typedef struct fast_state {
     uint64_t fflags, frm;
     uint8_t *sram;
     uint64_t size, base, alias;
+    uint64_t hart_id;
     uc_reg_batch_fn read_batch, write_batch;
     uint64_t instructions;   /* statistics: instructions this engine ran */
     uint64_t handoffs;       /* and the times it handed the hart over */
@@ -122,12 +123,13 @@ typedef struct fast_state {
 } fast_state_t;
 
 __attribute__((visibility("default")))
-fast_state_t *fast_state_new(uint8_t *sram, uint64_t size, uint64_t base, uint64_t alias, void *read_batch,
-                             void *write_batch)
+fast_state_t *fast_state_new(uint64_t hart_id, uint8_t *sram, uint64_t size, uint64_t base, uint64_t alias,
+                             void *read_batch, void *write_batch)
 {
     fast_state_t *f = calloc(1, sizeof *f);
     if (f == NULL)
         return NULL;
+    f->hart_id = hart_id;
     f->sram = sram;
     f->size = size;
     f->base = base;
@@ -485,6 +487,14 @@ static void decode(const insn_counter_t *c, insn_t *in, uint64_t pc, uint32_t fe
     case 0x3B:
         op = decode_op(f3, f7, opcode == 0x33);
         writes_x = 1;
+        break;
+    case 0x73:
+        /* a read of mhartid that writes nothing (csrr, csrrs/csrrc with x0 or a zero immediate):
+         * a constant; every other system instruction and CSR access is the precise engine's */
+        if ((w >> 20) == 0xF14 && (f3 == 2 || f3 == 3 || f3 == 6 || f3 == 7) && ((w >> 15) & 31) == 0) {
+            op = OP_MHARTID;
+            writes_x = 1;
+        }
         break;
     case 0x0F:
         if (f3 == 0)
@@ -886,6 +896,7 @@ next_block:
         L_OP_BLOCK_END:
             pc = in->pc;
             goto next_block;
+        L_OP_MHARTID: ALU(f->hart_id);
         L_OP_LUI: ALU((uint64_t)in->imm);
         L_OP_AUIPC: ALU(in->pc + (uint64_t)in->imm);
         L_OP_JAL: {

@@ -98,7 +98,7 @@ class _Counter(ctypes.Structure):
 _counter_lib = ctypes.CDLL(_insn_counter.__file__)
 _COUNT_HOOK = ctypes.cast(_counter_lib.count_instruction, ctypes.c_void_p)
 _counter_lib.fast_state_new.restype = ctypes.c_void_p
-_counter_lib.fast_state_new.argtypes = [ctypes.c_void_p, ctypes.c_uint64, ctypes.c_uint64, ctypes.c_uint64,
+_counter_lib.fast_state_new.argtypes = [ctypes.c_uint64, ctypes.c_void_p, ctypes.c_uint64, ctypes.c_uint64, ctypes.c_uint64,
                                         ctypes.c_void_p, ctypes.c_void_p]
 _counter_lib.fast_state_free.argtypes = [ctypes.c_void_p]
 _counter_lib.fast_forget_decodings.argtypes = [ctypes.c_void_p]
@@ -220,7 +220,7 @@ class Hart:
         It hands the hart over before what it does not carry out itself: device accesses, CSRs,
         wfi, traps, atomics, floating point on NaNs or in other rounding modes. Counts, cycles and
         every stop stay what the precise engine alone would give."""
-        state = _counter_lib.fast_state_new(sram_address, SRAM_SIZE, SRAM_BASE, SRAM_UNCACHED_BASE,
+        state = _counter_lib.fast_state_new(self.hart_id, sram_address, SRAM_SIZE, SRAM_BASE, SRAM_UNCACHED_BASE,
                                             _UC_REG_READ_BATCH, _UC_REG_WRITE_BATCH)
         if not state:
             raise MemoryError("cannot allocate the fast engine")
