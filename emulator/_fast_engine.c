@@ -118,6 +118,9 @@ typedef struct fast_state {
     uint64_t instructions;   /* statistics: instructions this engine ran */
     uint64_t handoffs;       /* and the times it handed the hart over */
     uint32_t blocks_used;    /* of the arena */
+    int fp_written;          /* during a run: an FP register was written */
+    uint64_t soft_flags;     /* during a run: fflags raised by conversions worked out here */
+    uint64_t entry_fflags, entry_mstatus;   /* at the run's start */
     block_t *index[BLOCK_INDEX_SLOTS];   /* by start address, direct-mapped */
     block_t arena[BLOCK_ARENA];
 } fast_state_t;
@@ -763,25 +766,17 @@ static void store_state(fast_state_t *f, void *uc, int fp_written, uint64_t old_
 }
 
 /*
- * Runs the hart whose precise engine is `uc` from `from` until an instruction needs the precise
- * engine (a hand-over: the instruction is not counted) or the counter's limits are reached (a
- * poll loop's head lowers the limit as count_instruction does). The registers are read from `uc`
- * first and written back at the end, the pc too. Returns the pc to go on from.
+ * Runs the hart from f->pc (its registers in `f`) until an instruction needs the precise engine
+ * (STOP_HANDOFF: f->pc names it, not counted) or the counter's limits are reached (STOP_LIMIT; a
+ * poll loop's head lowers the limit as count_instruction does). The host's MXCSR collects the
+ * floating-point flags meanwhile (the callers clear and read it).
  */
-__attribute__((visibility("default")))
-uint64_t fast_run(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t from)
+static int interpret(fast_state_t *f, insn_counter_t *c)
 {
-    load_state(f, uc);
-    f->pc = from;
     uint64_t *x = f->x;
     uint64_t *fr = f->f;
     uint64_t pc = f->pc;
-    const uint64_t old_fflags = f->fflags, old_mstatus = f->mstatus;
     const int fpu_on = (f->mstatus & MSTATUS_FS) != 0;
-    int fp_written = 0;
-    uint64_t soft_flags = 0;
-    const unsigned mxcsr = _mm_getcsr();
-    _mm_setcsr(mxcsr & ~0x3Fu);
     uint64_t executed = c->executed, cycles = c->cycles, stall = c->stall_cycles;
     const uint64_t cycle_limit = c->cycle_limit;
     const uint64_t start = executed;
@@ -873,7 +868,7 @@ uint64_t fast_run(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t from)
 #define NO_NAN_S3() do { if (nan32(fr[in->rs1]) || nan32(fr[in->rs2]) || nan32(fr[in->rs3])) HAND_OVER(); } while (0)
 #define NO_NAN_D2() do { if (nan64(fr[in->rs1]) || nan64(fr[in->rs2])) HAND_OVER(); } while (0)
 #define NO_NAN_D3() do { if (nan64(fr[in->rs1]) || nan64(fr[in->rs2]) || nan64(fr[in->rs3])) HAND_OVER(); } while (0)
-#define FRES(expr) do { COUNT(); fr[in->rd] = (expr); fp_written = 1; NEXT(); } while (0)
+#define FRES(expr) do { COUNT(); fr[in->rd] = (expr); f->fp_written = 1; NEXT(); } while (0)
 #define XRES(expr) do { COUNT(); x[in->rd] = (expr); NEXT(); } while (0)
 
 #define OP_LABEL(name) &&L_OP_##name,
@@ -998,8 +993,8 @@ next_block:
         L_OP_FENCE: COUNT(); NEXT();
 
         /* --- floating point --- */
-        L_OP_FLW: NEED_FPU(); LOAD(uint32_t, 4, (fr[in->rd] = 0xFFFFFFFF00000000ull | v, fp_written = 1));
-        L_OP_FLD: NEED_FPU(); LOAD(uint64_t, 8, (fr[in->rd] = v, fp_written = 1));
+        L_OP_FLW: NEED_FPU(); LOAD(uint32_t, 4, (fr[in->rd] = 0xFFFFFFFF00000000ull | v, f->fp_written = 1));
+        L_OP_FLD: NEED_FPU(); LOAD(uint64_t, 8, (fr[in->rd] = v, f->fp_written = 1));
         L_OP_FSW: NEED_FPU(); STORE(4, fr[in->rs2]);
         L_OP_FSD: NEED_FPU(); STORE(8, fr[in->rs2]);
 
@@ -1033,13 +1028,13 @@ next_block:
         L_OP_FMV_X_W: NEED_FPU(); XRES(W(fr[in->rs1]));
         L_OP_FMV_W_X: NEED_FPU(); FRES(x[in->rs1]);   /* QEMU 5.0 on RV64: the whole register */
         L_OP_FCVT_W_S: NEED_VALID_RM(); if (nan32(fr[in->rs1])) HAND_OVER();
-            XRES(W(convert_to_integer(S1, RM(), -2147483648.0, 2147483648.0, INT32_MIN, INT32_MAX, 0, &soft_flags)));
+            XRES(W(convert_to_integer(S1, RM(), -2147483648.0, 2147483648.0, INT32_MIN, INT32_MAX, 0, &f->soft_flags)));
         L_OP_FCVT_WU_S: NEED_VALID_RM(); if (nan32(fr[in->rs1])) HAND_OVER();
-            XRES(W(convert_to_integer(S1, RM(), 0.0, 4294967296.0, 0, UINT32_MAX, 1, &soft_flags)));
+            XRES(W(convert_to_integer(S1, RM(), 0.0, 4294967296.0, 0, UINT32_MAX, 1, &f->soft_flags)));
         L_OP_FCVT_L_S: NEED_VALID_RM(); if (nan32(fr[in->rs1])) HAND_OVER();
-            XRES((uint64_t)convert_to_integer(S1, RM(), -0x1p63, 0x1p63, INT64_MIN, INT64_MAX, 0, &soft_flags));
+            XRES((uint64_t)convert_to_integer(S1, RM(), -0x1p63, 0x1p63, INT64_MIN, INT64_MAX, 0, &f->soft_flags));
         L_OP_FCVT_LU_S: NEED_VALID_RM(); if (nan32(fr[in->rs1])) HAND_OVER();
-            XRES((uint64_t)convert_to_integer(S1, RM(), 0.0, 0x1p64, 0, (int64_t)UINT64_MAX, 1, &soft_flags));
+            XRES((uint64_t)convert_to_integer(S1, RM(), 0.0, 0x1p64, 0, (int64_t)UINT64_MAX, 1, &f->soft_flags));
         L_OP_FCVT_S_W: NEED_RNE(); FRES(from_f32((float)(int32_t)x[in->rs1]));
         L_OP_FCVT_S_WU: NEED_RNE(); FRES(from_f32((float)(uint32_t)x[in->rs1]));
         L_OP_FCVT_S_L: NEED_RNE(); FRES(from_f32((float)(int64_t)x[in->rs1]));
@@ -1074,13 +1069,13 @@ next_block:
         L_OP_FMV_X_D: NEED_FPU(); XRES(fr[in->rs1]);
         L_OP_FMV_D_X: NEED_FPU(); FRES(x[in->rs1]);
         L_OP_FCVT_W_D: NEED_VALID_RM(); if (nan64(fr[in->rs1])) HAND_OVER();
-            XRES(W(convert_to_integer(D1, RM(), -2147483648.0, 2147483648.0, INT32_MIN, INT32_MAX, 0, &soft_flags)));
+            XRES(W(convert_to_integer(D1, RM(), -2147483648.0, 2147483648.0, INT32_MIN, INT32_MAX, 0, &f->soft_flags)));
         L_OP_FCVT_WU_D: NEED_VALID_RM(); if (nan64(fr[in->rs1])) HAND_OVER();
-            XRES(W(convert_to_integer(D1, RM(), 0.0, 4294967296.0, 0, UINT32_MAX, 1, &soft_flags)));
+            XRES(W(convert_to_integer(D1, RM(), 0.0, 4294967296.0, 0, UINT32_MAX, 1, &f->soft_flags)));
         L_OP_FCVT_L_D: NEED_VALID_RM(); if (nan64(fr[in->rs1])) HAND_OVER();
-            XRES((uint64_t)convert_to_integer(D1, RM(), -0x1p63, 0x1p63, INT64_MIN, INT64_MAX, 0, &soft_flags));
+            XRES((uint64_t)convert_to_integer(D1, RM(), -0x1p63, 0x1p63, INT64_MIN, INT64_MAX, 0, &f->soft_flags));
         L_OP_FCVT_LU_D: NEED_VALID_RM(); if (nan64(fr[in->rs1])) HAND_OVER();
-            XRES((uint64_t)convert_to_integer(D1, RM(), 0.0, 0x1p64, 0, (int64_t)UINT64_MAX, 1, &soft_flags));
+            XRES((uint64_t)convert_to_integer(D1, RM(), 0.0, 0x1p64, 0, (int64_t)UINT64_MAX, 1, &f->soft_flags));
         L_OP_FCVT_D_W: NEED_RNE(); FRES(from_f64((double)(int32_t)x[in->rs1]));
         L_OP_FCVT_D_WU: NEED_RNE(); FRES(from_f64((double)(uint32_t)x[in->rs1]));
         L_OP_FCVT_D_L: NEED_RNE(); FRES(from_f64((double)(int64_t)x[in->rs1]));
@@ -1103,12 +1098,7 @@ out:
     c->stall_cycles = stall;
     if (executed != start)
         c->last_pc = 0;   /* the precise engine's last instruction is no longer the hart's last */
-    f->fflags |= flags_from_mxcsr(_mm_getcsr()) | soft_flags;
-    _mm_setcsr(mxcsr);
-    if (fp_written && (f->mstatus & MSTATUS_FS) != MSTATUS_FS)
-        f->mstatus |= MSTATUS_FS | MSTATUS_SD;   /* QEMU marks the FPU state dirty on a write to an FP register */
-    store_state(f, uc, fp_written, old_fflags, old_mstatus);
-    return pc;
+    return why;
 #undef HAND_OVER
 #undef NEXT
 #undef RM
@@ -1124,3 +1114,104 @@ out:
 #undef FRES
 #undef XRES
 }
+
+/* Before the interpreter runs: the hart's registers from the precise engine; the host's FP flags clear. */
+static unsigned begin_run(fast_state_t *f, void *uc, uint64_t from)
+{
+    load_state(f, uc);
+    f->pc = from;
+    f->fp_written = 0;
+    f->soft_flags = 0;
+    f->entry_fflags = f->fflags;
+    f->entry_mstatus = f->mstatus;
+    unsigned mxcsr = _mm_getcsr();
+    _mm_setcsr(mxcsr & ~0x3Fu);
+    return mxcsr;
+}
+
+/* After it: the flags it raised into fflags, the FPU state dirty if it wrote an FP register (as QEMU
+ * marks it), the registers back to the precise engine; the host's MXCSR as it was. */
+static void end_run(fast_state_t *f, void *uc, unsigned mxcsr)
+{
+    f->fflags |= flags_from_mxcsr(_mm_getcsr()) | f->soft_flags;
+    _mm_setcsr(mxcsr);
+    if (f->fp_written && (f->mstatus & MSTATUS_FS) != MSTATUS_FS)
+        f->mstatus |= MSTATUS_FS | MSTATUS_SD;
+    store_state(f, uc, f->fp_written, f->entry_fflags, f->entry_mstatus);
+}
+
+/*
+ * Runs the hart whose precise engine is `uc` from `from` until an instruction needs the precise
+ * engine (a hand-over: the instruction is not counted) or the counter's limits are reached (a
+ * poll loop's head lowers the limit as count_instruction does). The registers are read from `uc`
+ * first and written back at the end, the pc too. Returns the pc to go on from.
+ */
+__attribute__((visibility("default")))
+uint64_t fast_run(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t from)
+{
+    unsigned mxcsr = begin_run(f, uc, from);
+    interpret(f, c);
+    end_run(f, uc, mxcsr);
+    return f->pc;
+}
+
+/* The scheduler's turns of a hart running alone (scheduler.py, _go_on_alone), as fast_run_alone runs
+ * them: in, the time and clock of the first and what bounds them; out, where the last one began and
+ * how it ended. The float arithmetic is the scheduler's, operation for operation (IEEE doubles both). */
+typedef struct {
+    double t0;          /* in: when the first turn begins; out: when the last one began */
+    double hz;
+    double quantum;     /* cycles a turn */
+    double outer;       /* no turn runs past it (a device event, a grab, the run's end) */
+    double stop_at;     /* no turn begins at or after it */
+    uint64_t max_turns;
+    double horizon;     /* out: the last turn's horizon */
+    uint64_t budget;    /* out: its cycle budget */
+    uint64_t start_cycles, start_executed;   /* out: the counter when it began */
+    uint64_t turns;     /* out: turns begun */
+    uint64_t handed_over;   /* out: 1 when the last turn stopped before its end (the pc needs the precise
+                               engine, or a poll loop came round): the scheduler finishes it */
+    double end_time;    /* out, handed_over 0: when the last turn ended */
+} alone_plan_t;
+
+/*
+ * Runs the turns the scheduler would give a hart running alone, one after another, while none needs
+ * the board: each turn's budget from its start time as Scheduler._turn works it out, the counter's
+ * limits set as Hart.run sets them, the next turn beginning when the last ended. Stops after the turn
+ * that ends at or past stop_at, after max_turns, or inside a turn that hands over. Returns the pc.
+ */
+__attribute__((visibility("default")))
+uint64_t fast_run_alone(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t from, alone_plan_t *plan)
+{
+    unsigned mxcsr = begin_run(f, uc, from);
+    double t0 = plan->t0;
+    plan->turns = 0;
+    plan->handed_over = 0;
+    for (;;) {
+        double horizon = t0 + plan->quantum / plan->hz;
+        if (plan->outer < horizon)
+            horizon = plan->outer;
+        double wanted = ceil((horizon - t0) * plan->hz - 1e-9);
+        uint64_t budget = wanted > 1.0 ? (uint64_t)wanted : 1;
+        plan->t0 = t0;
+        plan->horizon = horizon;
+        plan->budget = budget;
+        plan->start_cycles = c->cycles;
+        plan->start_executed = c->executed;
+        plan->turns++;
+        c->limit = c->executed + budget;
+        c->cycle_limit = c->cycles + budget;
+        int why = interpret(f, c);
+        if (why != STOP_LIMIT || c->poll_report != 0) {
+            plan->handed_over = 1;
+            break;
+        }
+        t0 = t0 + (double)(c->cycles - plan->start_cycles) / plan->hz;
+        plan->end_time = t0;
+        if (t0 >= plan->stop_at || plan->turns >= plan->max_turns)
+            break;
+    }
+    end_run(f, uc, mxcsr);
+    return f->pc;
+}
+

@@ -105,6 +105,18 @@ _counter_lib.fast_forget_decodings.argtypes = [ctypes.c_void_p]
 _counter_lib.fast_statistics.argtypes = [ctypes.c_void_p, ctypes.POINTER(ctypes.c_uint64)]
 _counter_lib.fast_run.restype = ctypes.c_uint64
 _counter_lib.fast_run.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_uint64]
+_counter_lib.fast_run_alone.restype = ctypes.c_uint64
+_counter_lib.fast_run_alone.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_uint64,
+                                        ctypes.c_void_p]
+
+
+class AlonePlan(ctypes.Structure):
+    """_fast_engine.c's alone_plan_t: the turns of a hart running alone (Scheduler._go_on_alone)."""
+    _fields_ = [("t0", ctypes.c_double), ("hz", ctypes.c_double), ("quantum", ctypes.c_double),
+                ("outer", ctypes.c_double), ("stop_at", ctypes.c_double), ("max_turns", ctypes.c_uint64),
+                ("horizon", ctypes.c_double), ("budget", ctypes.c_uint64), ("start_cycles", ctypes.c_uint64),
+                ("start_executed", ctypes.c_uint64), ("turns", ctypes.c_uint64), ("handed_over", ctypes.c_uint64),
+                ("end_time", ctypes.c_double)]
 ENGINE_FAST, ENGINE_PRECISE = "fast", "precise"
 ENGINES = (ENGINE_FAST, ENGINE_PRECISE)
 PRECISE_STRETCH = 32      # instructions the precise engine runs after the fast one handed it the hart
@@ -257,6 +269,12 @@ class Hart:
         """Whether the hart runs on the fast engine (it has one and no hook needs the precise one)."""
         return self._fast_usable()
 
+    def run_alone(self, plan: AlonePlan) -> None:
+        """Runs the turns `plan` describes on the fast engine, from `self.pc` (fast_run_alone)."""
+        self.stop_requested = False
+        self.pc = _counter_lib.fast_run_alone(self._fast_state, ctypes.byref(self._counter), self.uc._uch, self.pc,
+                                              ctypes.byref(plan))
+
     def _fast_usable(self) -> bool:
         return self._fast_state is not None and not self._hooks_needing_precision
 
@@ -342,6 +360,8 @@ class Hart:
         `cycle_budget` cycles have been used (the last one may take a few cycles past it, as an
         instruction in flight does). Returns why it stopped and how many instructions ran."""
         counter = self._counter
+        if counter.poll_report:
+            return RunEnd.POLL, 0     # run_alone stopped at a poll loop's head: nothing runs before it is seen
         start = counter.executed
         turn_limit = counter.limit = start + budget
         counter.cycle_limit = NO_LIMIT if cycle_budget is None else counter.cycles + cycle_budget

@@ -121,6 +121,7 @@ class Scheduler:
         self._priority: tuple[Hart, int] | None = None    # a hart woken by a store, and its turn's length
         # per hart: the poll loop it last came round without waiting, and what that loop read then
         self._poll_seen: dict[int, tuple[int, list[bytes]]] = {}
+        self._alone_plan = hartmod.AlonePlan()
 
     def _mcycle_reader(self, h: int) -> Callable[[], int]:
         return lambda: self.cycles(self.hart_now(self.harts[h]))
@@ -527,25 +528,24 @@ class Scheduler:
         stop_at = min(outer, self.board.earliest_frame_capture(hart.time))
         if self.until is None:
             stop_at = min(stop_at, self._last_frame_time + self.hang_budget_s)
-        others = [other for other in self.harts if other is not hart]
-        frames = len(self.frames)
-        for _ in range(MAX_TURNS_ALONE):
-            if hart.time >= stop_at:
-                break
-            t0 = hart.time
-            horizon = min(t0 + self.quantum / hz, outer)
-            budget = max(1, math.ceil((horizon - t0) * hz - 1e-9))
-            self.turn_horizon = t0 + budget / hz
-            precise_runs = hart.precise_runs
-            ran = self._run_hart(hart, t0, budget, hz)
-            if self.pending_stop is not None:
-                raise self.pending_stop
-            hart.time = t0 + ran / hz
-            if hart.precise_runs != precise_runs or hart.state is not HartState.RUNNING or hart.polling or \
-                    len(self.frames) != frames or self._hz != hz or self._trap_deadline is not None or \
-                    any(other.state is not HartState.ASLEEP for other in others):
-                break
-        return horizon
+        if hart.time >= stop_at:
+            return horizon
+        plan = self._alone_plan
+        plan.t0, plan.hz, plan.quantum, plan.outer, plan.stop_at = hart.time, hz, self.quantum, outer, stop_at
+        plan.max_turns = MAX_TURNS_ALONE
+        started = host_time.perf_counter()
+        hart.run_alone(plan)
+        self.host_time_in_harts += host_time.perf_counter() - started
+        self.turn_horizon = plan.t0 + plan.budget / hz
+        if not plan.handed_over:
+            hart.time = plan.end_time
+            return plan.horizon
+        # the last turn stopped for the board: it goes on as _run_hart would have run it from its start
+        ran = self._run_hart(hart, plan.t0, plan.budget, hz, since=(plan.start_executed, plan.start_cycles))
+        if self.pending_stop is not None:
+            raise self.pending_stop
+        hart.time = plan.t0 + ran / hz
+        return plan.horizon
 
     def _set_time(self, now: float) -> None:
         """Moves the board's time (the earliest time a running hart has reached) forward:
@@ -556,18 +556,19 @@ class Scheduler:
         self._check_waiters(self.time)
         self._wake_sleepers(self.time)
 
-    def _run_hart(self, hart: Hart, t0: float, budget: int, hz: float, instruction_limit: int | None = None) -> int:
+    def _run_hart(self, hart: Hart, t0: float, budget: int, hz: float, instruction_limit: int | None = None,
+                  since: tuple[int, int] | None = None) -> int:
         """Runs one turn of a hart, `budget` CPU cycles and at most `instruction_limit` instructions;
-        returns how many cycles it used."""
+        returns how many cycles it used. `since`: the turn began earlier, with the hart's executed
+        instructions and cycles at these counts (_go_on_alone ran its start)."""
         bus = self.board.bus
         self.current = hart
         bus.turn_begins(hart)
+        before, cycles_before = since if since is not None else (hart.executed, hart.cycles)
         self._quantum_t0 = t0
         self._turn_hz = hz
-        self._quantum_start[hart.hart_id] = hart.cycles
+        self._quantum_start[hart.hart_id] = cycles_before
         started = host_time.perf_counter()
-        before = hart.executed
-        cycles_before = hart.cycles
         end = None
         try:
             while True:
