@@ -2,7 +2,7 @@
  * What the board model's native counting hooks share: the counter each hart hands its hooks
  * (hart.py mirrors it with ctypes: keep the two in step), the cycle table's entry layout
  * (timing.py writes the entries), Rocket's branch predictor and its iterative multiplier.
- * _insn_counter.c counts instruction by instruction, _block_counter.c whole translated blocks.
+ * _insn_counter.c counts for the precise engine (Unicorn), _fast_engine.c for the fast one.
  */
 #ifndef K210_COUNTER_H
 #define K210_COUNTER_H
@@ -73,8 +73,6 @@ typedef struct {
     const uint64_t *csr_sites; /* their addresses, a table indexed by (address >> 1) & csr_mask; or NULL */
     uint64_t csr_mask;
     uint64_t csr_report;  /* the site the run stopped at, counted but not executed (0: none) */
-    struct block_state *blocks; /* _block_counter.c's state (the fast engine), or NULL */
-    uint64_t handoff;     /* why the fast engine stopped before a block (HANDOFF_*; 0: it did not) */
     uint64_t last_pc;     /* the precise engine's last counted instruction */
 } insn_counter_t;
 
@@ -97,23 +95,6 @@ enum { KIND_PLAIN = 0, KIND_BRANCH = 1, KIND_JAL = 2, KIND_JALR = 3, KIND_MUL = 
 #define MISPREDICT_PENALTY 3   /* redirect from the memory stage (Rocket.scala take_pc_mem) */
 
 
-/* What one resolve_transfer changed, so that it can be taken back (undo_transfer). */
-typedef struct {
-    int used;
-    uint32_t bht_index;
-    uint8_t bht_old;
-    uint32_t history_old;
-    int btb_slot;          /* -1: the BTB was not written */
-    int btb_new;           /* the slot was taken for a pc the BTB did not hold */
-    uint64_t pc_old, target_old;
-    uint8_t valid_old, is_jump_old, is_return_old;
-    uint32_t next_replace_old;
-    uint32_t ras_count_old, ras_pos_old;
-    int ras_pushed;        /* a call pushed: ras_value_old is what its slot held */
-    uint64_t ras_value_old;
-    uint64_t mispredicts_old;
-} transfer_undo_t;
-
 /* The counter's tables, as both counters look them up. */
 static inline int is_csr_site(const insn_counter_t *c, uint64_t address)
 {
@@ -132,9 +113,7 @@ static inline uint32_t table_entry(const insn_counter_t *c, uint64_t address)
     return c->table[(address - c->table_base) >> 1];
 }
 
-uint64_t resolve_transfer(insn_counter_t *c, uint64_t pc, uint32_t e, int kind, uint64_t next,
-                          transfer_undo_t *undo);
-void undo_transfer(insn_counter_t *c, const transfer_undo_t *undo);
+uint64_t resolve_transfer(insn_counter_t *c, uint64_t pc, uint32_t e, int kind, uint64_t next);
 uint64_t muldiv_latency(uint32_t e, uint64_t a, uint64_t b, int is_div);
 
 #endif

@@ -806,7 +806,7 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
         executed++; \
         uint64_t cost = 1; \
         if (pending_kind) { \
-            cost += resolve_transfer(c, pending_pc, pending_entry, pending_kind, in->pc, NULL); \
+            cost += resolve_transfer(c, pending_pc, pending_entry, pending_kind, in->pc); \
             pending_kind = 0; \
         } \
         uint32_t e = in->entry; \

@@ -73,8 +73,7 @@ static void btb_index_remove(predictor_t *p, uint64_t pc)
 
 /* Cycles the control transfer at `pc` (its table entry `e`) costs beyond its own, now that the
  * next instruction's address `next` shows where it went; the predictor learns as Rocket's does. */
-uint64_t resolve_transfer(insn_counter_t *c, uint64_t pc, uint32_t e, int kind, uint64_t next,
-                          transfer_undo_t *undo)
+uint64_t resolve_transfer(insn_counter_t *c, uint64_t pc, uint32_t e, int kind, uint64_t next)
 {
     predictor_t *p = &c->predictor;
     uint64_t fallthrough = pc + (E_SIZE4(e) ? 4 : 2);
@@ -90,17 +89,6 @@ uint64_t resolve_transfer(insn_counter_t *c, uint64_t pc, uint32_t e, int kind, 
             predicted_target = p->ras[p->ras_pos];
     }
     int mispredicted = taken != predicted_taken || (taken && predicted_target != next);
-    if (undo != NULL) {
-        undo->used = 1;
-        undo->bht_index = bht_index;
-        undo->bht_old = p->bht[bht_index];
-        undo->history_old = p->history;
-        undo->btb_slot = -1;
-        undo->ras_count_old = p->ras_count;
-        undo->ras_pos_old = p->ras_pos;
-        undo->ras_pushed = 0;
-        undo->mispredicts_old = c->mispredicts;
-    }
     if (hit >= 0 && kind == KIND_BRANCH) {
         uint8_t v = p->bht[bht_index];
         uint8_t v1 = (v >> 1) & 1, v0 = v & 1;
@@ -109,17 +97,6 @@ uint64_t resolve_transfer(insn_counter_t *c, uint64_t pc, uint32_t e, int kind, 
     }
     if (taken && mispredicted) {
         int slot = hit;
-        if (undo != NULL) {
-            int s = slot >= 0 ? slot : (int)p->next_replace;
-            undo->btb_slot = s;
-            undo->btb_new = slot < 0;
-            undo->pc_old = p->pc[s];
-            undo->target_old = p->target[s];
-            undo->valid_old = p->valid[s];
-            undo->is_jump_old = p->is_jump[s];
-            undo->is_return_old = p->is_return[s];
-            undo->next_replace_old = p->next_replace;
-        }
         if (slot < 0) {
             slot = (int)p->next_replace;
             p->next_replace = (p->next_replace + 1) % BTB_ENTRIES;
@@ -137,10 +114,6 @@ uint64_t resolve_transfer(insn_counter_t *c, uint64_t pc, uint32_t e, int kind, 
         if (p->ras_count < RAS_ENTRIES)
             p->ras_count++;
         p->ras_pos = (p->ras_pos + 1) % RAS_ENTRIES;
-        if (undo != NULL) {
-            undo->ras_pushed = 1;
-            undo->ras_value_old = p->ras[p->ras_pos];
-        }
         p->ras[p->ras_pos] = fallthrough;
     } else if (kind == KIND_JALR && E_RETURN(e) && hit >= 0 && p->ras_count > 0) {
         p->ras_count--;
@@ -150,35 +123,6 @@ uint64_t resolve_transfer(insn_counter_t *c, uint64_t pc, uint32_t e, int kind, 
         return 0;
     c->mispredicts++;
     return MISPREDICT_PENALTY;
-}
-
-/* Takes back what resolve_transfer logged in `undo` (the fast engine's block did not run). */
-void undo_transfer(insn_counter_t *c, const transfer_undo_t *undo)
-{
-    predictor_t *p = &c->predictor;
-    if (!undo->used)
-        return;
-    if (undo->ras_pushed)
-        p->ras[p->ras_pos] = undo->ras_value_old;
-    p->ras_count = undo->ras_count_old;
-    p->ras_pos = undo->ras_pos_old;
-    if (undo->btb_slot >= 0) {
-        int s = undo->btb_slot;
-        if (undo->btb_new) {
-            btb_index_remove(p, p->pc[s]);
-            if (undo->valid_old)
-                btb_index_insert(p, undo->pc_old, s);
-            p->next_replace = undo->next_replace_old;
-        }
-        p->pc[s] = undo->pc_old;
-        p->target[s] = undo->target_old;
-        p->valid[s] = undo->valid_old;
-        p->is_jump[s] = undo->is_jump_old;
-        p->is_return[s] = undo->is_return_old;
-    }
-    p->bht[undo->bht_index] = undo->bht_old;
-    p->history = undo->history_old;
-    c->mispredicts = undo->mispredicts_old;
 }
 
 static uint64_t reg(insn_counter_t *c, void *uc, uint32_t r)
@@ -264,7 +208,7 @@ void count_instruction(void *uc, uint64_t address, uint32_t size, insn_counter_t
         uint64_t cost = 1;
         if (counter->pending_kind) {
             cost += resolve_transfer(counter, counter->pending_pc, counter->pending_entry,
-                                     counter->pending_kind, address, NULL);
+                                     counter->pending_kind, address);
             counter->pending_kind = 0;
         }
         uint32_t e = table_entry(counter, address);

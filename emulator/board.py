@@ -86,9 +86,9 @@ class Board:
         leaves when it jumps to the program (bootrom.py).
         timing: what an instruction costs, "rocket" (the K210's Rocket core, timing.py) or "ipc1"
         (one cycle each).
-        engine: "fast" runs each hart on an engine that counts whole translated blocks where that
-        gives the same counts as counting instruction by instruction, "precise" only on the one that
-        counts each instruction (hart.py); what runs and every count are the same."""
+        engine: "fast" runs each hart on our interpreter of the code in SRAM where it can, handing
+        the rest to Unicorn, "precise" on Unicorn alone, counting each instruction (hart.py,
+        _fast_engine.c); what runs and every count are the same."""
         if timing not in TIMING_MODELS:
             raise ValueError(f"unknown timing model {timing!r}: one of {', '.join(TIMING_MODELS)}")
         if engine not in ENGINES:

@@ -193,9 +193,9 @@ def build_parser() -> argparse.ArgumentParser:
                           "mcycle and virtual time follow them); ipc1, one cycle per instruction, the model "
                           "before cycle timing")
     run.add_argument("--engine", choices=ENGINES, default=ENGINE_FAST,
-                     help="fast (the default): each hart counts whole translated blocks where that gives the "
-                          "same counts; precise: every instruction is counted on its own (slower; what runs, "
-                          "every count and every time are the same)")
+                     help="fast (the default): the harts' code in SRAM runs on the model's own interpreter, "
+                          "the rest on Unicorn; precise: everything on Unicorn, each instruction counted by a "
+                          "hook (slower; what runs, every count and every time are the same)")
     run.add_argument("--golden", metavar="DIR", type=Path,
                      help="compare every shown frame with DIR/frame_NNNN.png of the same index; write "
                           "diff_NNNN.png for frames that differ and exit with status 9 on any mismatch")

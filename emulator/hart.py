@@ -91,8 +91,7 @@ class _Counter(ctypes.Structure):
                 ("reg_x0", ctypes.c_int32), ("pending_kind", ctypes.c_int32), ("pending_pc", ctypes.c_uint64),
                 ("pending_entry", ctypes.c_uint32), ("pad", ctypes.c_uint32), ("mispredicts", ctypes.c_uint64),
                 ("stall_cycles", ctypes.c_uint64), ("predictor", _Predictor), ("csr_sites", ctypes.c_void_p),
-                ("csr_mask", ctypes.c_uint64), ("csr_report", ctypes.c_uint64), ("blocks", ctypes.c_void_p),
-                ("handoff", ctypes.c_uint64), ("last_pc", ctypes.c_uint64)]
+                ("csr_mask", ctypes.c_uint64), ("csr_report", ctypes.c_uint64), ("last_pc", ctypes.c_uint64)]
 
 
 _counter_lib = ctypes.CDLL(_insn_counter.__file__)

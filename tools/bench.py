@@ -127,7 +127,7 @@ def firmware_figures(firmware: Path, card: Path, frames: int, check_writes: bool
         "virtual_fps": (frames - 1) / (board.frames[-1].virtual_time_s - board.frames[0].virtual_time_s),
         **real_time_figures(board.frames),
         "engine": engine,
-        "charged_share": board.harts[0].fast_statistics().get("instructions", 0) / board.harts[0].executed,
+        "fast_share": board.harts[0].fast_statistics().get("instructions", 0) / board.harts[0].executed,
     }
 
 
@@ -843,7 +843,7 @@ def speed_figures(args: argparse.Namespace) -> None:
               f"  {figures['mips']:7.1f} MIPS  ({figures['instructions']:,} instructions)")
     print(f"  the precise engine throughout (--engine precise): {precise['host_ms_per_frame']:.1f} ms host per "
           f"frame, real-time factor {precise['real_time_factor']:.3f}, {precise['effective_mips']:.1f} MIPS; "
-          f"the fast engine charged {board['charged_share']:.1%} of hart 0's instructions whole")
+          f"the fast engine ran {board['fast_share']:.1%} of hart 0's instructions")
     print(f"board with --check-writes:                 {checked['effective_mips']:8.1f} MIPS  "
           f"({checked['ratio_to_unchecked']:.3f} x the board without; fastest of {checked['rounds']} alternating "
           f"runs each; {checked['ratio_while_executing']:.3f} x while harts execute)")
