@@ -6,7 +6,8 @@ from setuptools import Extension, setup
 
 setup(ext_modules=[Extension("emulator._insn_counter", ["emulator/_insn_counter.c", "emulator/_fast_engine.c"],
                              depends=["emulator/_counter.h"], libraries=["m"],
-                             # the guest's floating point is the host's: no fused or reordered operations
-                             extra_compile_args=["-O2", "-ffp-contract=off", "-fno-fast-math"]),
+                             # the guest's floating point is the host's: no fused or reordered operations; the
+                             # counters' shared functions called directly, not through the PLT
+                             extra_compile_args=["-O2", "-ffp-contract=off", "-fno-fast-math", "-fvisibility=hidden"]),
                    Extension("emulator._write_watch", ["emulator/_write_watch.c"]),
                    Extension("emulator._poll_watch", ["emulator/_poll_watch.c"])])

@@ -95,7 +95,7 @@ typedef struct {
     uint64_t pc;
     uint32_t bytes;    /* code bytes it covers */
     uint32_t count;    /* instructions, OP_BLOCK_END not included */
-    uint8_t code[BLOCK_MAX * 4];
+    uint8_t code[BLOCK_MAX * 4 + 8];   /* zeros after `bytes` (same_code reads whole words) */
     insn_t insns[BLOCK_MAX + 1];
 } block_t;
 
@@ -567,6 +567,7 @@ static block_t *build_block(fast_state_t *f, const insn_counter_t *c, uint64_t p
     }
     b->count = n;
     b->bytes = offset;
+    memset(b->code, 0, sizeof b->code);
     memcpy(b->code, code, offset);
     insn_t *end = &b->insns[n];
     memset(end, 0, sizeof *end);
@@ -576,8 +577,32 @@ static block_t *build_block(fast_state_t *f, const insn_counter_t *c, uint64_t p
     return b;
 }
 
+/* Whether the code at `code` is still what block `b` was decoded from (a word at a time: blocks
+ * are a few words long, and memcmp's call and generality cost more than the comparison). */
+static inline int same_code(const block_t *b, const uint8_t *code, uint64_t room)
+{
+    uint32_t n = b->bytes, i = 0;
+    for (; i + 8 <= n; i += 8) {
+        uint64_t now, then;
+        memcpy(&now, code + i, 8);
+        memcpy(&then, b->code + i, 8);
+        if (now != then)
+            return 0;
+    }
+    if (i < n) {
+        uint64_t now = 0, then;
+        memcpy(&now, code + i, room - i >= 8 ? 8 : room - i);
+        memcpy(&then, b->code + i, 8);
+        uint64_t mask = ~0ull >> (64 - 8 * (n - i));
+        if ((now ^ then) & mask)
+            return 0;
+    }
+    return 1;
+}
+
 /* The decoded block at `pc`, decoding it (again) when needed; NULL for code outside SRAM. */
-static inline block_t *block_at(fast_state_t *f, const insn_counter_t *c, uint64_t pc)
+static inline __attribute__((always_inline)) block_t *block_at(fast_state_t *f, const insn_counter_t *c,
+                                                                 uint64_t pc)
 {
     uint64_t o = pc - f->base;
     if (o > f->size - 4) {
@@ -587,7 +612,7 @@ static inline block_t *block_at(fast_state_t *f, const insn_counter_t *c, uint64
     }
     const uint8_t *code = f->sram + o;
     block_t *b = f->index[(pc >> 1) & (BLOCK_INDEX_SLOTS - 1)];
-    if (b != NULL && b->pc == pc && memcmp(b->code, code, b->bytes) == 0)
+    if (b != NULL && b->pc == pc && same_code(b, code, f->size - o))
         return b;
     return build_block(f, c, pc, code, f->size - o);
 }

@@ -394,3 +394,37 @@ def test_integer_instructions_at_the_extremes_are_the_precise_engines(seed):
     fast = run_on(ENGINE_FAST, source, data)
     assert state(fast) == state(precise)
     assert fast.harts[0].fast_statistics()["instructions"] > 0.8 * fast.harts[0].executed
+
+
+# A routine on a page of its own, patched between calls: the first call adds 1, the patched one 5
+# (an addi's immediate rewritten), as a loader or a debugger would change code.
+PATCHED_CODE = """
+    la      s0, patched
+    li      s2, 3
+1:  jal     patched
+    jal     patched
+    lw      t0, 0(s0)
+    li      t1, 0x00400000            # the immediate field's bit for +4 more
+    add     t0, t0, t1
+    sw      t0, 0(s0)
+    fence.i
+    addi    s2, s2, -1
+    bnez    s2, 1b
+    j       2f
+    .balign 4096
+    .option push
+    .option norvc                     # a 32-bit addi, whose immediate is bits 31..20
+patched:
+    addi    s3, s3, 1
+    ret
+    .option pop
+    .balign 4096
+2:
+"""
+
+
+def test_code_written_after_it_ran_runs_as_written():
+    precise = run_on(ENGINE_PRECISE, PATCHED_CODE)
+    fast = run_on(ENGINE_FAST, PATCHED_CODE)
+    assert reg(precise, "s3") == 2 * (1 + 5 + 9)
+    assert state(fast) == state(precise)
