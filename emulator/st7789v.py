@@ -133,6 +133,7 @@ RULE_SLEEP_TOGGLE = "ST7789V SLPIN/SLPOUT within 120 ms of the last sleep change
 TIMING_RULES = (RULE_RESET_PULSE, RULE_AFTER_RESET, RULE_AFTER_SLEEP, RULE_SLEEP_TOGGLE)
 
 PIXELS = 240 * 320
+DEFERRED_LIMIT = 1 << 22   # pixel bytes kept back at most (a small window rewritten over and over)
 # Seed of the power-up GRAM noise: real GRAM powers up random, a fixed seed keeps
 # runs reproducible while still showing garbage if firmware never clears the screen.
 POWER_ON_GRAM_SEED = 0x7789
@@ -195,6 +196,8 @@ class ST7789V:
         self._gram = rng.integers(0, 1 << 18, PIXELS, dtype=np.uint32)  # flat, row * 240 + column
         self._covered = np.zeros(PIXELS, dtype=bool)
         self._covered_count = 0
+        self._deferred: list[np.ndarray] = []     # pixel bytes received and not yet stored
+        self._deferred_bytes = 0
 
         self._resx_high = True
         self._resx_low_since = 0.0
@@ -260,6 +263,7 @@ class ST7789V:
     def gram(self) -> np.ndarray:
         """Physical GRAM, (320 rows, 240 columns) of packed 18-bit colours
         R6 << 12 | G6 << 6 | B6 (read-only view)."""
+        self._store_deferred_pixels()
         view = self._gram.reshape(self.HEIGHT, self.WIDTH).view()
         view.flags.writeable = False
         return view
@@ -272,6 +276,7 @@ class ST7789V:
         high = bool(level)
         if high == self._resx_high:
             return
+        self._store_deferred_pixels()
         self._resx_high = high
         if not high:
             self._resx_low_since = now_s
@@ -295,6 +300,7 @@ class ST7789V:
         """CSX. Deselecting pauses the transfer: a RAMWR and a half-received
         parameter list carry on after re-selection, but the bits of a pixel that
         was not complete are lost."""
+        self._store_deferred_pixels()
         self._selected = bool(selected)
         if not self._selected:
             self._pending = self._pending[:0]
@@ -315,6 +321,7 @@ class ST7789V:
             self._warn(now_s, f"{data.size} byte(s) sent while CSX is high: ignored")
             return
         if dc == 0:
+            self._store_deferred_pixels()
             for code in data.tolist():
                 self._receive_command(code, now_s)
         else:
@@ -325,6 +332,7 @@ class ST7789V:
     def shown_image(self) -> np.ndarray:
         """(240, 320, 3) uint8 RGB as seen on the Maix Dock: PNG pixel (x, y) is
         GRAM row 319 - x, column y. Black while sleeping or with the display off."""
+        self._store_deferred_pixels()
         if self._regs.sleeping or not self._regs.display_on:
             return np.zeros((self.WIDTH, self.HEIGHT, 3), dtype=np.uint8)
         upright = self._gram.reshape(self.HEIGHT, self.WIDTH)[::-1, :].T
@@ -457,6 +465,23 @@ class ST7789V:
     # --- pixels ---------------------------------------------------------------------------
 
     def _receive_pixel_bytes(self, data: np.ndarray) -> None:
+        """Pixel bytes of a RAMWR. Decoding them costs the host most per call, not per byte, so
+        they are kept until they could finish a frame (a pixel is 1.5 bytes at least, and writes
+        at most one cell not yet covered), or until anything else reaches the chip or someone
+        looks at GRAM; then stored in one go, in the order they came, which captures a frame in
+        the same call as storing them at once would."""
+        self._deferred.append(np.array(data, dtype=np.uint8))
+        self._deferred_bytes += data.size
+        if 2 * self._deferred_bytes >= 3 * (PIXELS - self._covered_count) or self._deferred_bytes > DEFERRED_LIMIT:
+            self._store_deferred_pixels()
+
+    def _store_deferred_pixels(self) -> None:
+        if not self._deferred:
+            return
+        chunks, self._deferred, self._deferred_bytes = self._deferred, [], 0
+        self._decode_and_store(chunks[0] if len(chunks) == 1 else np.concatenate(chunks))
+
+    def _decode_and_store(self, data: np.ndarray) -> None:
         """Turns wire bytes into packed 18-bit colours, carrying an incomplete
         pixel over to the next call, and stores them."""
         fmt = self._regs.colmod & 0x07
@@ -516,6 +541,7 @@ class ST7789V:
     def cells_missing(self) -> int:
         """GRAM cells not yet written since the last frame was captured (each pixel written covers at
         most one: the next capture is at least this many pixels away)."""
+        self._store_deferred_pixels()
         return PIXELS - self._covered_count
 
     def _capture_frame(self) -> None:
