@@ -539,10 +539,11 @@ class ST7789V:
             cells, colours = cells[last + 1:], colours[last + 1:]
 
     def cells_missing(self) -> int:
-        """GRAM cells not yet written since the last frame was captured (each pixel written covers at
-        most one: the next capture is at least this many pixels away)."""
-        self._store_deferred_pixels()
-        return PIXELS - self._covered_count
+        """At least how many GRAM cells are still to be written before the next frame is captured:
+        those not written since the last capture, less one for each pixel the bytes kept back could
+        make (each pixel writes one cell at most; the next capture is at least this many pixels away)."""
+        most_pixels = -(-2 * (self._deferred_bytes + self._pending.size) // 3)   # 1.5 bytes a pixel at least
+        return max(0, PIXELS - self._covered_count - most_pixels)
 
     def _capture_frame(self) -> None:
         self._covered[:] = False
