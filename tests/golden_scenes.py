@@ -28,6 +28,11 @@ SCENES: dict[str, tuple[dict[str, str] | None, int]] = {
     "torus-mipmap": ({"model": "models/torus.obj", "texture": "textures/torus.ppm", "mode": "textured",
                       "scale": "0.35", "translate": "0 0 -3", "axis": "1 1 0", "angle": "17", "step": "3",
                       "shading": "gouraud", "filter": "mipmap"}, 3),
+    # antialias = edge: the torus's silhouettes (outer, and inner where it folds) by coverage,
+    # textured
+    "torus-edge": ({"model": "models/torus.obj", "texture": "textures/torus.ppm", "mode": "textured",
+                    "scale": "0.8", "translate": "0 0 -3", "axis": "1 0.6 0.2", "angle": "40", "step": "4",
+                    "background": "200 220 255", "antialias": "edge"}, 3),
     "torus-wireframe": ({"model": "models/torus.obj", "texture": "textures/torus.ppm", "mode": "wireframe",
                          "translate": "0 0 -2.8", "axis": "1 0.6 0.2", "angle": "40", "step": "4"}, 3),
 }

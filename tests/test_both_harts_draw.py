@@ -47,6 +47,10 @@ SCENES = {
     "close-up": (MODEL, TEXTURE, "scale = 1.4\ntranslate = 0 0 -1.45\nfilter = mipmap\nshading = gouraud\n"
                  "depth = float32\ncull = off\n", FRAMES),
     "cube": (cube(), FINE_TEXTURE, "scale = 1.3\nangle = 30\naxis = 1 1 0\n", 6),
+    # antialias = edge: silhouette triangles in the coverage fills, whose grown boxes and moved-out
+    # edge functions are stepped to hart 1's band like the others (the filtered one keeps the
+    # pixel's coverage on the stack; Gouraud's k clamped)
+    "edge": (MODEL, TEXTURE, BIG + "antialias = edge\nfilter = bilinear\nshading = gouraud\n", FRAMES),
 }
 
 

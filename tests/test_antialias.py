@@ -1,0 +1,117 @@
+"""Antialiasing (scene.ini `antialias`; firmware/raster.S coverage fills, render.S adjacency),
+driven through the board model: each setting against the reference renderer's ideal image
+(reference/ideal.py) within a stated tolerance, closed meshes without seams, and the key read
+alike by the firmware and the host tools. (Golden frames: tests/golden_scenes.py; one hart
+against two: tests/test_both_harts_draw.py; extremes and memory: tests/test_extremes.py.)"""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import reference
+from conftest import ROOT
+from extremes_support import outline_mask, run_scene
+
+sys.path.insert(0, str(ROOT / "tools"))
+from make_assets import cube, sphere  # noqa: E402
+
+FRAMES = 2
+# Flat and lit at intensity 1 (ambient 1): every face the same colour, so what differs from the
+# ideal image is the edges alone. The sphere repeats its vertices along its texture seam (as
+# exporters do where texture coordinates jump) and at its poles; `angle` turns the seam to face
+# the camera, so that an edge across it that let the background through would show.
+SPHERE = (sphere(segments=24, bands=12), "mode = flat\nambient = 1\nbackground = 255 0 0\n"
+          "translate = 0 0 -2.5\naxis = 0.3 1 0\nangle = -96\n")
+# Both windings drawn (cull off): the silhouette is where front faces meet back faces.
+CUBE = (cube(), "mode = flat\nambient = 1\nbackground = 0 0 255\naxis = 1 1 0\nangle = 20\ncull = off\n")
+SCENES = {"sphere": SPHERE, "cube": CUBE}
+# PSNR against the ideal image of the last frame, one run each (2026-11-23): sphere 36.4 dB off,
+# 45.2 dB edge; cube 39.1 dB off, 43.8 dB edge. The tolerances leave about a dB.
+EDGE_MIN_DB = {"sphere": 44.0, "cube": 42.5}
+EDGE_GAIN_MIN_DB = 4.0
+# A seam: a pixel well inside the silhouette (all its 3 x 3 neighbours fully covered in the
+# ideal image) that shows the background. Inside, every pixel must keep at least this share of
+# the ideal colour's distance from the background (a half-covered pixel would keep a half).
+SEAM_SHARE = 0.9
+
+
+def psnr(a: np.ndarray, b: np.ndarray) -> float:
+    mse = np.mean((np.asarray(a, dtype=np.float64) - np.asarray(b, dtype=np.float64)) ** 2)
+    return float("inf") if mse == 0 else 10 * np.log10(255.0 ** 2 / mse)
+
+
+@pytest.fixture(scope="module")
+def runs(firmware, tmp_path_factory):
+    """Each scene with antialias = off and edge, and the ideal image of its last frame."""
+    done = {}
+    for name, (model, keys) in SCENES.items():
+        for setting in ("off", "edge"):
+            run = run_scene(firmware, tmp_path_factory.mktemp(f"{name}-{setting}"), model,
+                            keys + f"antialias = {setting}\n", frames=FRAMES)
+            assert run.returncode == 0, run.stderr + run.console
+            done[name, setting] = run
+        scene, mesh, texture = reference.load_card_image(done[name, "off"].card)
+        done[name, "ideal"] = reference.render_ideal_image(scene, mesh, texture, FRAMES - 1)
+    return done
+
+
+@pytest.mark.parametrize("name", SCENES)
+def test_edge_antialiasing_approaches_the_ideal_image(runs, name):
+    """Coverage at the silhouette takes the frame within EDGE_MIN_DB of the ideal image, and at
+    least EDGE_GAIN_MIN_DB closer than pixel centres alone."""
+    ideal = runs[name, "ideal"]
+    off, edge = (psnr(runs[name, setting].frames[-1], ideal) for setting in ("off", "edge"))
+    assert edge >= EDGE_MIN_DB[name] and edge >= off + EDGE_GAIN_MIN_DB, (off, edge)
+
+
+@pytest.mark.parametrize("name", SCENES)
+def test_closed_meshes_show_no_seams(runs, name):
+    """No pixel inside a closed mesh's silhouette lets the background through: the edges the
+    mesh's triangles share are drawn hard (the tie rule: each pixel centre once), only where the
+    surface ends or folds away is a pixel blended with what is behind."""
+    ideal = runs[name, "ideal"].astype(np.int64)
+    background = runs[name, "off"].background.astype(np.int64)
+    covered = np.abs(ideal - background).sum(axis=-1) > 0
+    inside = covered.copy()
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            inside &= np.roll(np.roll(covered, dy, axis=0), dx, axis=1)
+    frame = runs[name, "edge"].frames[-1].astype(np.int64)
+    kept = np.abs(frame - background).sum(axis=-1) / np.abs(ideal - background).sum(axis=-1).clip(1)
+    assert inside.sum() > 5000
+    seams = inside & (kept < SEAM_SHARE)
+    assert not seams.any(), f"{int(seams.sum())} pixels, e.g. {np.argwhere(seams)[:5].tolist()}"
+
+
+@pytest.mark.parametrize("name", SCENES)
+def test_edge_antialiasing_changes_only_edge_pixels(runs, name):
+    """Flat faces: antialiasing changes no pixel away from the outline of what off draws (the
+    coverage fill draws a whole pixel exactly as the plain fill does), and it changes some."""
+    off, edge = runs[name, "off"].frames[-1], runs[name, "edge"].frames[-1]
+    changed = np.any(off != edge, axis=-1)
+    assert changed.sum() > 50
+    assert not (changed & ~outline_mask(off)).any()
+
+
+@pytest.mark.parametrize("value, accepted", [("off", True), ("Edge", True), ("on", False), ("", False)])
+def test_antialias_key_host_and_firmware_agree(firmware, tmp_path, value, accepted):
+    """The card builder's reader (reference/scene.py) takes exactly the values the firmware takes,
+    and refuses the others with the firmware's message (error 9)."""
+    from reference.scene import SceneError, parse_scene
+    text = f"mode = flat\nantialias = {value}\n"
+    try:
+        parse_scene(text)
+        host = None
+    except SceneError as error:
+        host = str(error)
+    run = run_scene(firmware, tmp_path, "v 0 0 -1\nv 1 0 -1\nv 0 1 -1\nf 1 2 3\n", text, frames=1)
+    if accepted:
+        assert host is None and run.returncode == 0, (host, run.stderr)
+    else:
+        expected = ("bad scene.ini line 2: malformed line (no value)" if not value else
+                    "bad scene.ini line 2: bad value (expected off or edge)")
+        assert host == expected
+        assert run.returncode == 8 and f"error 9 {host}" in run.console
