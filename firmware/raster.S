@@ -741,6 +741,114 @@ raster_set_band:
     sw      a1, BAND_END(t0)
     ret
 
+    .globl raster_set_sample
+# raster_set_sample
+#   What: antialias = supersample: the sample the calling hart's triangles
+#         are drawn for from now on (raster_triangle moves their corners by
+#         minus the offset, so pixel centres sample the offset's point).
+#   Arguments: a0, a1 = the offset from the pixel centre, x and y in Q4
+#              (0, 0: the centre, as without supersampling).
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+raster_set_sample:
+    la      t0, raster_sample
+    add     t0, t0, tp
+    sw      a0, SAMPLE_OFFSET_X(t0)
+    sw      a1, SAMPLE_OFFSET_Y(t0)
+    ret
+
+    .globl raster_set_sums
+# raster_set_sums
+#   What: sets the sums buffer of raster_accumulate and raster_resolve.
+#   Arguments: a0 = the buffer (SUM_BUFFER_BYTES).
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+raster_set_sums:
+    la      t0, raster_sums
+    sd      a0, 0(t0)
+    ret
+
+# SUMS_BAND
+#   t0 = the framebuffer at the calling hart's band, t1 = past its end,
+#   t2 = the sums at the band (the same pixel order); empty band: on to 9.
+#   Clobbers t3, t4.
+.macro SUMS_BAND
+    la      t3, raster_band
+    add     t3, t3, tp
+    lwu     t4, BAND_FIRST(t3)
+    lwu     t1, BAND_END(t3)
+    bgeu    t4, t1, 9f
+    li      t3, LCD_WIDTH
+    mul     t4, t4, t3                  # first pixel
+    mul     t1, t1, t3                  # past the last
+    la      t3, raster_sums
+    ld      t2, 0(t3)
+    slli    t3, t4, SUM_SHIFT
+    add     t2, t2, t3
+    la      t3, raster_fb
+    ld      t0, 0(t3)
+    slli    t1, t1, FB_PIXEL_SHIFT
+    add     t1, t1, t0
+    slli    t4, t4, FB_PIXEL_SHIFT
+    add     t0, t0, t4
+.endm
+
+    .globl raster_accumulate
+# raster_accumulate
+#   What: antialias = supersample: adds the calling hart's band of the
+#         framebuffer (one sample's colours) to the sums (render.inc SUM_*),
+#         or starts them with it.
+#   Arguments: a0 = 1 for the first sample (the sums are set), 0 to add.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+raster_accumulate:
+    SUMS_BAND
+    li      t5, SUM_R_MASK
+1:  lhu     t3, 0(t0)                   # c spread into the sum's fields
+    andi    t4, t3, SUM_B_MASK
+    andi    t6, t3, SUM_G_MASK
+    slli    t6, t6, SUM_G_SHIFT
+    or      t4, t4, t6
+    and     t6, t3, t5
+    slli    t6, t6, SUM_R_SHIFT
+    or      t4, t4, t6
+    bnez    a0, 2f
+    lwu     t3, 0(t2)
+    add     t4, t4, t3
+2:  sw      t4, 0(t2)
+    addi    t0, t0, LCD_BYTES_PER_PIXEL
+    addi    t2, t2, SUM_BYTES_PER_PIXEL
+    bltu    t0, t1, 1b
+9:  ret
+
+    .globl raster_resolve
+# raster_resolve
+#   What: antialias = supersample: the calling hart's band of the
+#         framebuffer = each pixel's mean of its samples, per channel
+#         rounded to nearest (halves up), from the sums.
+#   Arguments: none. Results: none.
+#   Clobbers: only ABI temporaries.
+raster_resolve:
+    SUMS_BAND
+    li      t5, SUM_ROUND
+1:  lwu     t3, 0(t2)
+    add     t3, t3, t5
+    srli    t3, t3, SUM_MEAN_SHIFT
+    andi    t4, t3, SUM_B_MASK          # B
+    srli    t6, t3, MEAN_G_SHIFT
+    andi    t6, t6, MEAN_G_MASK
+    slli    t6, t6, RGB565_G_SHIFT
+    or      t4, t4, t6                  # G
+    srli    t6, t3, MEAN_R_SHIFT
+    andi    t6, t6, SUM_B_MASK          # (R is five bits too)
+    slli    t6, t6, RGB565_R_SHIFT
+    or      t4, t4, t6
+    sh      t4, 0(t0)
+    addi    t0, t0, LCD_BYTES_PER_PIXEL
+    addi    t2, t2, SUM_BYTES_PER_PIXEL
+    bltu    t0, t1, 1b
+9:  ret
+
     .globl raster_set_texture
 # raster_set_texture
 #   What: sets the texture of textured fills.
@@ -1129,6 +1237,16 @@ raster_triangle:
     lw      s3, RV_Y(t1)
     lw      s4, RV_X(t2)
     lw      s5, RV_Y(t2)
+    la      t3, raster_sample           # antialias = supersample: the corners
+    add     t3, t3, tp                  # moved by minus the sample's offset
+    lw      a4, SAMPLE_OFFSET_X(t3)     # (0, 0 otherwise)
+    lw      a5, SAMPLE_OFFSET_Y(t3)
+    sub     s0, s0, a4
+    sub     s2, s2, a4
+    sub     s4, s4, a4
+    sub     s1, s1, a5
+    sub     s3, s3, a5
+    sub     s5, s5, a5
     # s6 = signed area (Q8) = (x1 - x0)(y2 - y0) - (x2 - x0)(y1 - y0)
     sub     a4, s2, s0
     sub     a5, s5, s1
@@ -1715,6 +1833,9 @@ raster_depth_mode:
 # rho^2 constant (|det H| or, affine, |det J|; raster_triangle)
 raster_mip_table:
     .space  8
+# antialias = supersample: the sums of the samples (raster_set_sums)
+raster_sums:
+    .space  8
 # Hart-local (k210.inc HART_LOCAL_STRIDE; tp selects the copy): the rows this
 # hart draws (raster_set_band), and filter = mipmap's rho^2 constant of the
 # triangle being drawn (|det H| or, affine, |det J|; raster_triangle).
@@ -1723,6 +1844,9 @@ raster_band:
     .space  BAND_BYTES
 raster_mip_rho2:
     .space  4
+    .balign 8
+raster_sample:
+    .space  SAMPLE_BYTES
 raster_hart_local_end:
     .space  HART_LOCAL_STRIDE - (raster_hart_local_end - raster_band)
     .space  raster_hart_local_end - raster_band     # hart 1's copy

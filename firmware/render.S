@@ -106,14 +106,18 @@ render_init:
     j       31f
 3:  la      t0, render_fill
     sw      t1, 0(t0)
-31: lwu     t0, SCENE_ANTIALIAS(s0)     # antialias = edge: the coverage fills
+31: lwu     t0, SCENE_ANTIALIAS(s0)     # antialias = edge: the coverage fills;
+    li      t1, RASTER_EDGE_AA          # supersample: the frame drawn per sample
     li      t2, ANTIALIAS_EDGE
-    bne     t0, t2, 32f
-    la      t0, render_fill
-    lwu     t1, 0(t0)
-    ori     t1, t1, RASTER_EDGE_AA
-    sw      t1, 0(t0)
-32:
+    beq     t0, t2, 32f
+    li      t1, RASTER_SUPERSAMPLE
+    li      t2, ANTIALIAS_SUPERSAMPLE
+    bne     t0, t2, 33f
+32: la      t0, render_fill
+    lwu     t2, 0(t0)
+    or      t2, t2, t1
+    sw      t2, 0(t0)
+33:
 
     # The light quantisation: levels - 1 and LIGHT_ONE / (levels - 1).
     la      t0, light_quantum
@@ -158,8 +162,17 @@ render_init:
     andi    t0, t0, RASTER_EDGE_AA
     beqz    t0, 81f
     call    adjacency_build
-    # filter = mipmap: the mip chain, built from the texture in memory
+    # antialias = supersample: the sums of the samples
 81: la      t0, render_fill
+    lwu     t0, 0(t0)
+    andi    t0, t0, RASTER_SUPERSAMPLE
+    beqz    t0, 82f
+    li      a0, SUM_BUFFER_BYTES
+    la      a1, msg_supersample_sums
+    call    heap_alloc_or_fail
+    call    raster_set_sums
+    # filter = mipmap: the mip chain, built from the texture in memory
+82: la      t0, render_fill
     lwu     t0, 0(t0)
     andi    t0, t0, RASTER_MIPMAP
     beqz    t0, 9f
@@ -272,8 +285,85 @@ render_band:
     mv      a0, s1
     call    render_wireframe
     j       9f
+1:  la      t0, render_fill
+    lwu     t0, 0(t0)
+    andi    t0, t0, RASTER_SUPERSAMPLE
+    bnez    t0, 2f
+    mv      a0, s0
+    mv      a1, s2
+    mv      a2, s1
+    call    draw_triangles
+    j       9f
+    # antialias = supersample: the band drawn once per sample, each time
+    # cleared, its colours summed; then the sums' means (raster.S)
+2:  li      s3, 0                       # s3 = sample
+3:  la      t0, supersample_offsets
+    slli    t1, s3, SAMPLE_OFFSET_SHIFT
+    add     t0, t0, t1
+    lw      a0, SAMPLE_OFFSET_X(t0)
+    lw      a1, SAMPLE_OFFSET_Y(t0)
+    call    raster_set_sample
+    beqz    s3, 4f                      # (sample 0's clear is done)
+    la      t1, scene
+    lwu     a0, SCENE_BACKGROUND(t1)
+    li      a1, 1
+    call    raster_clear
+4:  mv      a0, s0
+    mv      a1, s2
+    mv      a2, s1
+    call    draw_triangles
+    seqz    a0, s3                      # the first sample starts the sums
+    call    raster_accumulate
+    addi    s3, s3, 1
+    li      t0, SUPERSAMPLES
+    bltu    s3, t0, 3b
+    call    raster_resolve
+    li      a0, 0
+    li      a1, 0
+    call    raster_set_sample
+9:  ld      s11, 8(sp)
+    ld      s10, 16(sp)
+    ld      s9, 24(sp)
+    ld      s8, 32(sp)
+    ld      s7, 40(sp)
+    ld      s6, 48(sp)
+    ld      s5, 56(sp)
+    ld      s4, 64(sp)
+    ld      s3, 72(sp)
+    ld      s2, 80(sp)
+    ld      s1, 88(sp)
+    ld      s0, 96(sp)
+    ld      ra, 104(sp)
+    addi    sp, sp, 112
+    ret
 
-1:  la      t1, scene
+# draw_triangles (file-local)
+#   What: every triangle's pixels in rows a0 .. a1 - 1 (render_band's loop:
+#         the file comment's steps; a triangle whose rows all lie outside is
+#         skipped before its lighting and texture set-up).
+#   Arguments: a0 = first row, a1 = the row past the last, a2 = vertex
+#              records.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+draw_triangles:
+    addi    sp, sp, -112
+    sd      ra, 104(sp)
+    sd      s0, 96(sp)
+    sd      s1, 88(sp)
+    sd      s2, 80(sp)
+    sd      s3, 72(sp)
+    sd      s4, 64(sp)
+    sd      s5, 56(sp)
+    sd      s6, 48(sp)
+    sd      s7, 40(sp)
+    sd      s8, 32(sp)
+    sd      s9, 24(sp)
+    sd      s10, 16(sp)
+    sd      s11, 8(sp)
+    mv      s0, a0                      # s0 = the band's first row
+    mv      s2, a1                      # s2 = the row past its last
+    mv      s1, a2                      # s1 = vertex records
+    la      t1, scene
     ld      s3, MESH_F(t1)              # s3 = face
     lwu     s4, MESH_FCOUNT(t1)         # s4 = faces left
     la      t0, render_fill
@@ -342,10 +432,11 @@ render_band:
     mv      t4, t1
 11: bge     t4, t2, 11f
     mv      t4, t2
-11: andi    t0, s10, RASTER_EDGE_AA
+11: andi    t0, s10, RASTER_EDGE_AA | RASTER_SUPERSAMPLE
     beqz    t0, 12f
     addi    t3, t3, -AA_BOX_GROW        # coverage reaches half a pixel further
-    addi    t4, t4, AA_BOX_GROW         # (raster_triangle's grown box)
+    addi    t4, t4, AA_BOX_GROW         # (raster_triangle's grown box), samples
+                                        # lie up to 3/8 of a pixel off the centre
 12: addi    t3, t3, SUBPIXEL_CEIL       # first row: (min + 7) >> 4
     srai    t3, t3, SUBPIXEL_BITS
     addi    t4, t4, -SUBPIXEL_HALF      # last row: (max - 8) >> 4
@@ -1805,6 +1896,19 @@ clip_planes:
     .error "clip_planes lists five planes"
 .endif
 msg_edge_list:      .asciz "edge list"
+msg_supersample_sums: .asciz "supersample sums"
+    .balign 4
+# The samples of antialias = supersample (render.inc SAMPLE_OFFSET_*): each
+# sample's offset from the pixel centre in Q4, a rotated grid.
+supersample_offsets:
+    .word   2, 6
+    .word   6, -2
+    .word   -2, -6
+    .word   -6, 2
+supersample_offsets_end:
+.if supersample_offsets_end - supersample_offsets != SUPERSAMPLES * SAMPLE_OFFSET_BYTES
+    .error "supersample_offsets must list SUPERSAMPLES offsets"
+.endif
 msg_adjacency:      .asciz "adjacency"
 msg_adjacency_keys: .asciz "adjacency keys"
 msg_canonical_vertices: .asciz "canonical vertices"

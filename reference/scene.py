@@ -26,7 +26,7 @@ can be checked against it; the ideal image ignores it (it area-filters every tex
 `harts` (`auto`, `1`, `2`) says which of the K210's harts draw (firmware/main.S); the frames are the
 same whichever do, so the reference reads and checks it and ignores it.
 
-`antialias` (`off`, `edge`) chooses how the firmware approaches the ideal image at edges
+`antialias` (`off`, `edge`, `supersample`) chooses how the firmware approaches the ideal image at edges
 (firmware/raster.S); the pixel-centre image samples pixel centres whatever it says and the ideal
 image is the ideal whatever it says, so the reference reads and checks it and ignores it.
 """
@@ -57,7 +57,7 @@ FILTER_WORDS: tuple[str, ...] = ("nearest", "bilinear", "mipmap")
 # Which harts draw (firmware/main.S), the default first: changes how fast, never what is drawn.
 HARTS_WORDS: tuple[str, ...] = ("auto", "1", "2")
 # Antialiasing (firmware/raster.S), the default first: the reference renders the same images whatever it is.
-ANTIALIAS_WORDS: tuple[str, ...] = ("off", "edge")
+ANTIALIAS_WORDS: tuple[str, ...] = ("off", "edge", "supersample")
 # The keys taking one word that are not precision keys -> the words allowed, the default first.
 OTHER_WORDS: dict[str, tuple[str, ...]] = {"filter": FILTER_WORDS, "harts": HARTS_WORDS,
                                            "antialias": ANTIALIAS_WORDS}
@@ -107,7 +107,7 @@ class Scene:
     # which harts draw (how fast only: the reference ignores it)
     harts: str = "auto"                          # auto | 1 | 2
     # how edges are antialiased (the reference ignores it: its images are the yardsticks)
-    antialias: str = "off"                       # off | edge
+    antialias: str = "off"                       # off | edge | supersample
     lines: dict[str, int] = field(default_factory=dict, repr=False)   # key -> line that set it
 
 

@@ -221,7 +221,7 @@ class HeapLayout:
 NEEDED = ("HEAP_ALIGN", "FAT_SECTOR_BYTES", "MESH_V_BYTES", "MESH_T_BYTES", "MESH_N_BYTES", "MESH_F_BYTES",
           "VTX_BYTES", "WORLD_POS_BYTES", "EDGE_BYTES", "EDGES_PER_TRIANGLE", "DEPTH_BUFFER_BYTES", "DEPTH16_BUFFER_BYTES",
           "NORMAL_LIGHT_SHIFT", "TEX_PIXEL_BYTES", "OBJ_WINDOW_BYTES", "MIP_TABLE_BYTES", "ADJ_BYTES",
-          "ADJ_FACE_BYTES", "ADJ_KEY_BYTES")
+          "ADJ_FACE_BYTES", "ADJ_KEY_BYTES", "SUM_BUFFER_BYTES")
 
 
 def heap_layout(elf: Path) -> HeapLayout:
@@ -292,6 +292,7 @@ def boot_allocations(layout: HeapLayout, texture: int | None, vertices: int, tex
     the triangle adjacency (render.S adjacency_build: ADJ_FACE_BYTES a triangle, kept; then, given
     back at the end, the canonical vertex indices (ADJ_BYTES a vertex), the vertices' sort keys
     (ADJ_KEY_BYTES a vertex, given back first) and the edges' (three ADJ_KEY_BYTES a triangle)),
+    with `antialias = supersample` the sums of the samples (SUM_BUFFER_BYTES),
     and last, with
     `filter = mipmap` (mipmap = the texture's (width, height)), the mip chain (raster.S
     raster_build_mips: `mip_chain_bytes`); each of these blocks is
@@ -339,6 +340,8 @@ def boot_allocations(layout: HeapLayout, texture: int | None, vertices: int, tex
             blocks.append(("normal intensities", normals << layout.NORMAL_LIGHT_SHIFT))
         if antialias == "edge":
             blocks.append(("adjacency", triangles * layout.ADJ_FACE_BYTES))
+        if antialias == "supersample":
+            blocks.append(("supersample sums", layout.SUM_BUFFER_BYTES))
         if mipmap is not None and texture is not None:
             blocks.append(("mip chain", mip_chain_bytes(layout, *mipmap)))
     for name, size in blocks:

@@ -28,10 +28,13 @@ SPHERE = (sphere(segments=24, bands=12), "mode = flat\nambient = 1\nbackground =
 # Both windings drawn (cull off): the silhouette is where front faces meet back faces.
 CUBE = (cube(), "mode = flat\nambient = 1\nbackground = 0 0 255\naxis = 1 1 0\nangle = 20\ncull = off\n")
 SCENES = {"sphere": SPHERE, "cube": CUBE}
-# PSNR against the ideal image of the last frame, one run each (2026-11-23): sphere 36.4 dB off,
-# 45.2 dB edge; cube 39.1 dB off, 43.8 dB edge. The tolerances leave about a dB.
-EDGE_MIN_DB = {"sphere": 44.0, "cube": 42.5}
-EDGE_GAIN_MIN_DB = 4.0
+SETTINGS = ("off", "edge", "supersample")
+# PSNR against the ideal image of the last frame, one run each (2026-11-23): sphere 36.2 dB off,
+# 45.3 dB edge, 44.5 dB supersample; cube 39.1 dB off, 43.8 dB edge, 48.3 dB supersample. The
+# tolerances leave about a dB.
+MIN_DB = {("sphere", "edge"): 44.0, ("cube", "edge"): 42.5,
+          ("sphere", "supersample"): 43.5, ("cube", "supersample"): 47.0}
+GAIN_MIN_DB = 4.0
 # A seam: a pixel well inside the silhouette (all its 3 x 3 neighbours fully covered in the
 # ideal image) that shows the background. Inside, every pixel must keep at least this share of
 # the ideal colour's distance from the background (a half-covered pixel would keep a half).
@@ -45,10 +48,10 @@ def psnr(a: np.ndarray, b: np.ndarray) -> float:
 
 @pytest.fixture(scope="module")
 def runs(firmware, tmp_path_factory):
-    """Each scene with antialias = off and edge, and the ideal image of its last frame."""
+    """Each scene with every antialias setting, and the ideal image of its last frame."""
     done = {}
     for name, (model, keys) in SCENES.items():
-        for setting in ("off", "edge"):
+        for setting in SETTINGS:
             run = run_scene(firmware, tmp_path_factory.mktemp(f"{name}-{setting}"), model,
                             keys + f"antialias = {setting}\n", frames=FRAMES)
             assert run.returncode == 0, run.stderr + run.console
@@ -58,17 +61,19 @@ def runs(firmware, tmp_path_factory):
     return done
 
 
+@pytest.mark.parametrize("setting", SETTINGS[1:])
 @pytest.mark.parametrize("name", SCENES)
-def test_edge_antialiasing_approaches_the_ideal_image(runs, name):
-    """Coverage at the silhouette takes the frame within EDGE_MIN_DB of the ideal image, and at
-    least EDGE_GAIN_MIN_DB closer than pixel centres alone."""
+def test_antialiasing_approaches_the_ideal_image(runs, name, setting):
+    """Coverage at the silhouette (edge), or four samples a pixel (supersample), takes the frame
+    within MIN_DB of the ideal image, and at least GAIN_MIN_DB closer than pixel centres alone."""
     ideal = runs[name, "ideal"]
-    off, edge = (psnr(runs[name, setting].frames[-1], ideal) for setting in ("off", "edge"))
-    assert edge >= EDGE_MIN_DB[name] and edge >= off + EDGE_GAIN_MIN_DB, (off, edge)
+    off, better = (psnr(runs[name, s].frames[-1], ideal) for s in ("off", setting))
+    assert better >= MIN_DB[name, setting] and better >= off + GAIN_MIN_DB, (off, better)
 
 
+@pytest.mark.parametrize("setting", SETTINGS[1:])
 @pytest.mark.parametrize("name", SCENES)
-def test_closed_meshes_show_no_seams(runs, name):
+def test_closed_meshes_show_no_seams(runs, name, setting):
     """No pixel inside a closed mesh's silhouette lets the background through: the edges the
     mesh's triangles share are drawn hard (the tie rule: each pixel centre once), only where the
     surface ends or folds away is a pixel blended with what is behind."""
@@ -79,24 +84,27 @@ def test_closed_meshes_show_no_seams(runs, name):
     for dy in (-1, 0, 1):
         for dx in (-1, 0, 1):
             inside &= np.roll(np.roll(covered, dy, axis=0), dx, axis=1)
-    frame = runs[name, "edge"].frames[-1].astype(np.int64)
+    frame = runs[name, setting].frames[-1].astype(np.int64)
     kept = np.abs(frame - background).sum(axis=-1) / np.abs(ideal - background).sum(axis=-1).clip(1)
     assert inside.sum() > 5000
     seams = inside & (kept < SEAM_SHARE)
     assert not seams.any(), f"{int(seams.sum())} pixels, e.g. {np.argwhere(seams)[:5].tolist()}"
 
 
+@pytest.mark.parametrize("setting", SETTINGS[1:])
 @pytest.mark.parametrize("name", SCENES)
-def test_edge_antialiasing_changes_only_edge_pixels(runs, name):
-    """Flat faces: antialiasing changes no pixel away from the outline of what off draws (the
-    coverage fill draws a whole pixel exactly as the plain fill does), and it changes some."""
-    off, edge = runs[name, "off"].frames[-1], runs[name, "edge"].frames[-1]
+def test_antialiasing_changes_only_edge_pixels(runs, name, setting):
+    """Faces of one colour: antialiasing changes no pixel away from the outline of what off draws
+    (the coverage fill draws a whole pixel as the plain fill does; four samples of one colour
+    average to it), and it changes some."""
+    off, edge = runs[name, "off"].frames[-1], runs[name, setting].frames[-1]
     changed = np.any(off != edge, axis=-1)
     assert changed.sum() > 50
     assert not (changed & ~outline_mask(off)).any()
 
 
-@pytest.mark.parametrize("value, accepted", [("off", True), ("Edge", True), ("on", False), ("", False)])
+@pytest.mark.parametrize("value, accepted", [("off", True), ("Edge", True), ("SuperSample", True), ("on", False),
+                                             ("", False)])
 def test_antialias_key_host_and_firmware_agree(firmware, tmp_path, value, accepted):
     """The card builder's reader (reference/scene.py) takes exactly the values the firmware takes,
     and refuses the others with the firmware's message (error 9)."""
@@ -112,6 +120,6 @@ def test_antialias_key_host_and_firmware_agree(firmware, tmp_path, value, accept
         assert host is None and run.returncode == 0, (host, run.stderr)
     else:
         expected = ("bad scene.ini line 2: malformed line (no value)" if not value else
-                    "bad scene.ini line 2: bad value (expected off or edge)")
+                    "bad scene.ini line 2: bad value (expected off, edge or supersample)")
         assert host == expected
         assert run.returncode == 8 and f"error 9 {host}" in run.console

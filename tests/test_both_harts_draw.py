@@ -51,6 +51,8 @@ SCENES = {
     # edge functions are stepped to hart 1's band like the others (the filtered one keeps the
     # pixel's coverage on the stack; Gouraud's k clamped)
     "edge": (MODEL, TEXTURE, BIG + "antialias = edge\nfilter = bilinear\nshading = gouraud\n", FRAMES),
+    # antialias = supersample: each hart draws its band once per sample, sums and resolves it
+    "supersample": (MODEL, TEXTURE, "antialias = supersample\nfilter = mipmap\n", FRAMES),
 }
 
 
