@@ -1768,6 +1768,157 @@ raster_segment:
     jr      t6
 9:  ret
 
+    .globl raster_aa_line
+# raster_aa_line
+#   What: antialias = edge or supersample, wireframe: a line 1 pixel wide
+#         drawn by coverage (the reference's ideal wireframe: the points
+#         within half a pixel of the segment), a Wu-style walk along the
+#         major axis: per column (row, for a steep line) the band of the
+#         line's thickness across it, h = |segment| / |major extent| pixels
+#         about the line's centre there, and each pixel its overlap with the
+#         band times the share of the column inside the segment, which is
+#         lengthened by half a pixel of its length at each end (the round
+#         ends' reach). Each coverage a (1/64) blends the colour over the
+#         framebuffer's pixel as the coverage fills do (c a + old (64 - a))
+#         / 64; where lines cross, coverages combine as 1 - (1 - a1)(1 -
+#         a2). Columns are clamped to the screen and pixels off it skipped,
+#         so any finite ends are safe. No depth test.
+#   Arguments: fa0, fa1 = one end, fa2, fa3 = the other, screen positions in
+#              pixels (pixel (x, y) covers [x, x + 1) x [y, y + 1), y down);
+#              a0 = RGB565 colour.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+raster_aa_line:
+    li      t0, F32_HALF
+    fmv.w.x fa7, t0                     # fa7 = 1/2
+    li      t0, F32_ONE
+    fmv.w.x ft2, t0                     # ft2 = 1
+    li      t0, F32_AA_FULL
+    fmv.w.x ft3, t0                     # ft3 = 64
+    li      t4, RGB565_SPREAD_MASK
+    slli    t3, a0, RGB565_SPREAD_SHIFT
+    or      t3, t3, a0
+    and     t3, t3, t4                  # t3 = the colour, spread
+    li      t5, LIGHT_ROUND_SPREAD
+    # u, v = the major and minor axis (a7 = 1: u is y), a6, a5 = their sizes
+    fsub.s  ft0, fa2, fa0
+    fsub.s  ft1, fa3, fa1
+    fabs.s  ft4, ft0
+    fabs.s  ft5, ft1
+    li      a7, 0
+    li      a6, LCD_WIDTH
+    li      a5, LCD_HEIGHT
+    flt.s   t0, ft4, ft5
+    beqz    t0, 1f
+    li      a7, 1
+    li      a6, LCD_HEIGHT
+    li      a5, LCD_WIDTH
+    fmv.s   ft6, fa0
+    fmv.s   fa0, fa1
+    fmv.s   fa1, ft6
+    fmv.s   ft6, fa2
+    fmv.s   fa2, fa3
+    fmv.s   fa3, ft6
+    fmv.s   ft6, ft0
+    fmv.s   ft0, ft1
+    fmv.s   ft1, ft6
+1:  flt.s   t0, fa2, fa0                # from the end of smaller u
+    beqz    t0, 2f
+    fmv.s   ft6, fa0
+    fmv.s   fa0, fa2
+    fmv.s   fa2, ft6
+    fmv.s   ft6, fa1
+    fmv.s   fa1, fa3
+    fmv.s   fa3, ft6
+    fneg.s  ft0, ft0
+    fneg.s  ft1, ft1
+    # ft0 = du >= 0, ft1 = dv; ft5 = slope dv / du, ft6 = h / 2, ft7, ft8 =
+    # the lengthened segment's u range (a point: slope 0, h 1, half a pixel)
+2:  fmul.s  ft4, ft0, ft0
+    fmadd.s ft4, ft1, ft1, ft4
+    fsqrt.s ft4, ft4                    # |segment|
+    fmv.w.x ft5, zero
+    fmv.s   ft6, fa7
+    fmv.s   ft9, fa7                    # ft9 = the lengthening along u
+    fmv.w.x ft10, zero
+    feq.s   t0, ft0, ft10
+    bnez    t0, 3f
+    fdiv.s  ft5, ft1, ft0
+    fdiv.s  ft6, ft4, ft0
+    fmul.s  ft6, ft6, fa7
+    fdiv.s  ft9, ft0, ft4
+    fmul.s  ft9, ft9, fa7
+3:  fsub.s  ft7, fa0, ft9
+    fadd.s  ft8, fa2, ft9
+    fcvt.w.s t1, ft7, rdn               # t1 = first column (saturating)
+    fcvt.w.s t2, ft8, rdn               # t2 = last column
+    bgez    t1, 4f
+    li      t1, 0
+4:  addi    t0, a6, -1
+    ble     t2, t0, 5f
+    mv      t2, t0
+5:  bgt     t1, t2, 9f
+    # column t1: fa4 = its share inside the segment, ft10, ft11 = the band
+6:  fcvt.s.w ft9, t1
+    fadd.s  fa5, ft9, ft2               # i + 1
+    fmin.s  fa4, ft8, fa5
+    fmax.s  fa6, ft7, ft9
+    fsub.s  fa4, fa4, fa6
+    fadd.s  fa6, ft9, fa7               # the column's centre
+    fsub.s  fa6, fa6, fa0
+    fmadd.s fa6, ft5, fa6, fa1          # the line's v there
+    fsub.s  ft10, fa6, ft6
+    fadd.s  ft11, fa6, ft6
+    fcvt.w.s t6, ft10, rdn              # t6 = first row of the band
+    fcvt.w.s a1, ft11, rdn              # a1 = its last
+7:  bgt     t6, a1, 8f
+    bltz    t6, 71f                     # off the screen
+    bge     t6, a5, 71f
+    fcvt.s.w fa5, t6
+    fadd.s  fa6, fa5, ft2
+    fmin.s  fa6, fa6, ft11
+    fmax.s  fa5, fa5, ft10
+    fsub.s  fa5, fa6, fa5               # the overlap
+    fmul.s  fa5, fa5, fa4
+    fmul.s  fa5, fa5, ft3
+    fcvt.w.s a2, fa5, rne               # a
+    blez    a2, 71f
+    li      t0, AA_FULL
+    ble     a2, t0, 72f
+    mv      a2, t0
+72: mv      a3, t1                      # x, y
+    mv      a4, t6
+    beqz    a7, 73f
+    mv      a3, t6
+    mv      a4, t1
+73: xori    a3, a3, 1                   # the pixel's address (see the file comment)
+    li      t0, LCD_WIDTH
+    mul     a4, a4, t0
+    add     a3, a3, a4
+    slli    a3, a3, FB_PIXEL_SHIFT
+    la      t0, raster_fb
+    ld      t0, 0(t0)
+    add     a3, a3, t0
+    lhu     a4, 0(a3)                   # what is behind, spread
+    slli    t0, a4, RGB565_SPREAD_SHIFT
+    or      a4, a4, t0
+    and     a4, a4, t4
+    sub     t0, t3, a4                  # (c a + old (64 - a)) / 64, rounded
+    mul     t0, t0, a2
+    slli    a4, a4, AA_SHIFT
+    add     t0, t0, a4
+    add     t0, t0, t5
+    srli    t0, t0, AA_SHIFT
+    and     t0, t0, t4
+    srli    a4, t0, RGB565_SPREAD_SHIFT
+    or      t0, t0, a4
+    sh      t0, 0(a3)
+71: addi    t6, t6, 1
+    j       7b
+8:  addi    t1, t1, 1
+    ble     t1, t2, 6b
+9:  ret
+
     .globl raster_line
 # raster_line
 #   What: a line between two on-screen pixels, both ends included

@@ -1277,7 +1277,13 @@ render_wireframe:
     fcvt.s.w fa3, a3
     fmul.s  fa3, fa3, ft0
     li      a0, WIRE_COLOUR
-    call    raster_segment
+    la      t0, scene                   # antialias: lines by coverage
+    lwu     t0, SCENE_ANTIALIAS(t0)
+    li      t1, ANTIALIAS_OFF
+    beq     t0, t1, 5f
+    call    raster_aa_line
+    j       8f
+5:  call    raster_segment
 8:  addi    s1, s1, EDGE_BYTES
     addi    s2, s2, -1
     bnez    s2, 1b

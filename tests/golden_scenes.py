@@ -39,6 +39,10 @@ SCENES: dict[str, tuple[dict[str, str] | None, int]] = {
                          "light": "-0.4 0.6 1", "antialias": "supersample"}, 3),
     "torus-wireframe": ({"model": "models/torus.obj", "texture": "textures/torus.ppm", "mode": "wireframe",
                          "translate": "0 0 -2.8", "axis": "1 0.6 0.2", "angle": "40", "step": "4"}, 3),
+    # antialias = edge in wireframe: the same torus, lines by coverage
+    "torus-wireframe-aa": ({"model": "models/torus.obj", "texture": "textures/torus.ppm", "mode": "wireframe",
+                            "translate": "0 0 -2.8", "axis": "1 0.6 0.2", "angle": "40", "step": "4",
+                            "antialias": "edge"}, 3),
 }
 
 

@@ -16,7 +16,7 @@ from conftest import ROOT
 from extremes_support import outline_mask, run_scene
 
 sys.path.insert(0, str(ROOT / "tools"))
-from make_assets import cube, sphere  # noqa: E402
+from make_assets import cube, sphere, torus  # noqa: E402
 
 FRAMES = 2
 # Flat and lit at intensity 1 (ambient 1): every face the same colour, so what differs from the
@@ -123,3 +123,55 @@ def test_antialias_key_host_and_firmware_agree(firmware, tmp_path, value, accept
                     "bad scene.ini line 2: bad value (expected off, edge or supersample)")
         assert host == expected
         assert run.returncode == 8 and f"error 9 {host}" in run.console
+
+
+# --------------------------------------------------------------------------- wireframe
+
+# The golden wireframe torus: hundreds of lines at every slope, crossing.
+WIREFRAME = (torus(), "mode = wireframe\ntranslate = 0 0 -2.8\naxis = 1 0.6 0.2\nangle = 40\n")
+# One run (2026-11-23), the last frame against the ideal: 18.5 dB off (Bresenham), 31.6 dB with
+# coverage lines; what is left is mostly the crossings (blended twice where the ideal counts
+# the union once).
+WIREFRAME_MIN_DB = 30.5
+WIREFRAME_GAIN_MIN_DB = 10.0
+
+
+@pytest.fixture(scope="module")
+def wire_runs(firmware, tmp_path_factory):
+    model, keys = WIREFRAME
+    done = {setting: run_scene(firmware, tmp_path_factory.mktemp(f"wire-{setting}"), model,
+                               keys + f"antialias = {setting}\n", frames=FRAMES) for setting in SETTINGS}
+    assert all(run.returncode == 0 for run in done.values()), [run.stderr for run in done.values()]
+    scene, mesh, texture = reference.load_card_image(done["off"].card)
+    done["ideal"] = reference.render_ideal_image(scene, mesh, texture, FRAMES - 1)
+    return done
+
+
+def test_wireframe_lines_by_coverage_approach_the_ideal_image(wire_runs):
+    """antialias = edge draws every line 1 pixel wide by coverage (raster.S raster_aa_line), far
+    closer to the ideal wireframe than Bresenham's steps; supersample draws the same lines."""
+    ideal = wire_runs["ideal"]
+    off, edge = (psnr(wire_runs[s].frames[-1], ideal) for s in ("off", "edge"))
+    assert edge >= WIREFRAME_MIN_DB and edge >= off + WIREFRAME_GAIN_MIN_DB, (off, edge)
+    assert all(np.array_equal(a, b) for a, b in zip(wire_runs["edge"].frames, wire_runs["supersample"].frames))
+
+
+def test_wireframe_line_coverage_is_its_area(firmware, tmp_path):
+    """Analytic lines: a horizontal edge through pixel centres covers its row whole (white) and
+    nothing above or below; one along the border between two rows covers each half (the
+    background and white blended half and half, rounded to nearest per RGB565 channel)."""
+    # fov 90 at z = -1: 120 pixels a unit, y = 0 on the border between rows 119 and 120
+    # (each a triangle with a repeated corner: one line, and a dot at its end, off these columns)
+    model = ("v -0.5 0.4 -1\nv 0.5 0.4 -1\nf 1 2 2\n"
+             "v -0.5 -0.004166667 -1\nv 0.5 -0.004166667 -1\nf 3 4 4\n")
+    run = run_scene(firmware, tmp_path, model, "mode = wireframe\nfov = 90\ntranslate = 0 0 0\nstep = 0\n"
+                    "background = 0 0 0\nantialias = edge\n", frames=1)
+    assert run.returncode == 0, run.stderr + run.console
+    frame = run.frames[0].astype(int)
+    middle = frame[:, 140:180]                              # columns well inside both lines
+    # y = 0.4: 120 - 48 = 72 pixels above the centre line, on the border of rows 71 and 72
+    assert (middle[70] == 0).all() and (middle[73] == 0).all()
+    half = reference.rgb565_to_rgb888(np.array([(16 << 11) | (32 << 5) | 16]))[0]
+    assert (middle[71] == half).all() and (middle[72] == half).all(), (middle[71, 0], middle[72, 0])
+    # y = -0.5 pixel: through the centres of row 120
+    assert (middle[120] == 255).all() and (middle[119] == 0).all() and (middle[121] == 0).all()

@@ -581,6 +581,23 @@ def test_extremes_with_antialiasing(firmware, tmp_path, name, setting):
             assert result.drawn_shown > result.drawn_ref // 2, f"frame {n}: {result}"
 
 
+@pytest.mark.parametrize("name", ["wireframe-crossing-and-floor", "beyond-the-q4-range"])
+def test_extreme_wireframes_with_coverage_lines(firmware, tmp_path, name):
+    """Wireframe lines by coverage (antialias = edge) cut at the near plane and the guard band,
+    thousands of pixels long, off the screen at both ends: no trap, hang or stray store, and
+    every drawn pixel within one pixel of one of the reference's line pixels and the other way
+    round (a coverage line is up to three pixels across where Bresenham's is one)."""
+    model, scene = ((BEYOND_Q4, "translate = 0 0 0\nstep = 3\naxis = 0 0 1\nmode = wireframe\n")
+                    if name == "beyond-the-q4-range"
+                    else NEAR_AND_HUGE[name])
+    run = run_scene(firmware, tmp_path, model, scene + "antialias = edge\n")
+    assert run.returncode == 0, run.stderr + run.console
+    for n in range(FRAMES):
+        shown, ref = (np.any(f != run.background, axis=-1) for f in (run.frames[n], run.reference(n)))
+        assert within_one_pixel(shown, ref) and within_one_pixel(ref, shown), f"frame {n}"
+        assert ref.sum() > 100 or name == "beyond-the-q4-range"     # (its edges lie off the screen)
+
+
 def test_edge_antialiasing_adjacency_too_large_for_memory(firmware, layout, tmp_path):
     """antialias = edge needs the triangle adjacency (ADJ_FACE_BYTES a triangle) and, while it is
     built, the sort keys of the edges (three ADJ_KEY_BYTES a triangle): the largest model without

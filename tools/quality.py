@@ -45,13 +45,15 @@ SETTINGS: dict[str, dict[str, str]] = {
     "bilinear":      {"filter": "bilinear"},
     "mipmap":        {"filter": "mipmap"},
     "edge-aa":       {"antialias": "edge"},
+    "supersample":   {"antialias": "supersample"},
     "thesis":        {"interpolation": "affine", "shading": "flat", "light_levels": "33", "angles": "table",
                       "depth": "int16", "snap": "pixel"},
     "best":          {"interpolation": "perspective", "shading": "gouraud", "depth": "float32"},
 }
 DEFAULT_SETTING = "default"
-# Wireframe has no texture, light or depth buffer: only the angles and the snapping change it.
-WIREFRAME_SETTINGS = ("default", "angle-table", "pixel-snap")
+# Wireframe has no texture, light or depth buffer: only the angles, the snapping and antialiased
+# lines change it (edge and supersample draw the same lines: edge-aa stands for both).
+WIREFRAME_SETTINGS = ("default", "angle-table", "pixel-snap", "edge-aa")
 # Texture filtering changes only what a texture draws: swept in textured mode alone.
 TEXTURE_SETTINGS = ("bilinear", "mipmap")
 
