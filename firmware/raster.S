@@ -38,6 +38,18 @@
 #     main.S splits a frame between the harts). The planes are still set up
 #     at the bounding box's first row and stepped row by row to the band,
 #     so a pixel gets the same bits whichever hart draws it.
+#   - antialias = edge (RASTER_EDGE_AA): a triangle with a silhouette edge
+#     (SILHOUETTE: the mesh ends there, or folds away) is drawn by a
+#     coverage fill (FILL / FILTERED with aa): its box grown by half a
+#     pixel, its silhouette edges' functions moved out by half a pixel, and
+#     each pixel blended over what is behind by its coverage (render.inc
+#     AA_*); its other edges stay hard, so closed meshes show no seams.
+#   - antialias = supersample: raster_set_sample moves the corners by minus
+#     a sample's offset, raster_accumulate sums the samples' frames and
+#     leaves their means (render.S draws each band once per sample).
+#
+# Lines: raster_segment / raster_line (Bresenham's), or raster_aa_line (by
+# coverage, for antialiased wireframes).
 
     .option norelax
     .include "k210.inc"
@@ -759,7 +771,7 @@ raster_set_sample:
 
     .globl raster_set_sums
 # raster_set_sums
-#   What: sets the sums buffer of raster_accumulate and raster_resolve.
+#   What: sets the sums buffer of raster_accumulate.
 #   Arguments: a0 = the buffer (SUM_BUFFER_BYTES).
 #   Results: none.
 #   Clobbers: only ABI temporaries.
@@ -795,55 +807,43 @@ raster_set_sums:
 
     .globl raster_accumulate
 # raster_accumulate
-#   What: antialias = supersample: adds the calling hart's band of the
-#         framebuffer (one sample's colours) to the sums (render.inc SUM_*),
-#         or starts them with it.
-#   Arguments: a0 = 1 for the first sample (the sums are set), 0 to add.
+#   What: antialias = supersample: the calling hart's band of the
+#         framebuffer (one sample's colours) into the sums (render.inc
+#         SUM_*): the first sample sets them, the others add to them, and
+#         the last, added, leaves each pixel's mean in the framebuffer,
+#         per channel rounded to nearest (halves up).
+#   Arguments: a0 = SAMPLE_FIRST, SAMPLE_MORE or SAMPLE_LAST.
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 raster_accumulate:
     SUMS_BAND
-    li      t5, SUM_R_MASK
+    li      t5, SUM_RB_MASK
+    li      a1, SUM_ROUND
+    li      a2, SUM_R_MASK
+    li      a3, SAMPLE_LAST
 1:  lhu     t3, 0(t0)                   # c spread into the sum's fields
-    andi    t4, t3, SUM_B_MASK
+    and     t4, t3, t5
     andi    t6, t3, SUM_G_MASK
     slli    t6, t6, SUM_G_SHIFT
     or      t4, t4, t6
-    and     t6, t3, t5
-    slli    t6, t6, SUM_R_SHIFT
-    or      t4, t4, t6
-    bnez    a0, 2f
+    beqz    a0, 2f                      # (SAMPLE_FIRST)
     lwu     t3, 0(t2)
     add     t4, t4, t3
+    beq     a0, a3, 3f
 2:  sw      t4, 0(t2)
     addi    t0, t0, LCD_BYTES_PER_PIXEL
     addi    t2, t2, SUM_BYTES_PER_PIXEL
     bltu    t0, t1, 1b
-9:  ret
-
-    .globl raster_resolve
-# raster_resolve
-#   What: antialias = supersample: the calling hart's band of the
-#         framebuffer = each pixel's mean of its samples, per channel
-#         rounded to nearest (halves up), from the sums.
-#   Arguments: none. Results: none.
-#   Clobbers: only ABI temporaries.
-raster_resolve:
-    SUMS_BAND
-    li      t5, SUM_ROUND
-1:  lwu     t3, 0(t2)
-    add     t3, t3, t5
-    srli    t3, t3, SUM_MEAN_SHIFT
-    andi    t4, t3, SUM_B_MASK          # B
-    srli    t6, t3, MEAN_G_SHIFT
-    andi    t6, t6, MEAN_G_MASK
-    slli    t6, t6, RGB565_G_SHIFT
-    or      t4, t4, t6                  # G
-    srli    t6, t3, MEAN_R_SHIFT
-    andi    t6, t6, SUM_B_MASK          # (R is five bits too)
-    slli    t6, t6, RGB565_R_SHIFT
-    or      t4, t4, t6
-    sh      t4, 0(t0)
+    ret
+3:  add     t4, t4, a1                  # the last: the mean
+    srli    t4, t4, SUM_MEAN_SHIFT
+    andi    t3, t4, SUM_B_MASK          # (each mean where one sample's channel
+    and     t6, t4, a2                  # is in the sum, the remainders below it)
+    or      t3, t3, t6
+    srli    t6, t4, SUM_G_SHIFT
+    andi    t6, t6, SUM_G_MASK
+    or      t3, t3, t6
+    sh      t3, 0(t0)
     addi    t0, t0, LCD_BYTES_PER_PIXEL
     addi    t2, t2, SUM_BYTES_PER_PIXEL
     bltu    t0, t1, 1b
@@ -1198,9 +1198,14 @@ raster_clear:
 #              0 .. LIGHT_ONE (unused with RASTER_GOURAUD), a3 = RASTER_*
 #              flags (render.inc). The depth format is raster_set_depth's.
 #   Results: none.
+#         With RASTER_EDGE_AA the corners' RV_OPP_* say what lies across
+#         each edge (silhouette or not: a coverage fill for a silhouette).
+#         The corners are moved by minus this hart's sample offset
+#         (raster_set_sample; 0, 0 unless supersampling).
 #   Clobbers: only ABI temporaries. The pixel loops use every integer
 #         register but sp, gp and tp (ra holds a constant, saved here), every
-#         temporary and argument float register, and fs0..fs3 (saved here;
+#         temporary and argument float register, and fs0..fs3 and fs6..fs8
+#         (saved here: the Gouraud intensity, the coverage fills' scales;
 #         the filtered fills save and use fs4, fs5 too).
 raster_triangle:
     addi    sp, sp, -RT_FRAME

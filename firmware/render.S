@@ -37,13 +37,19 @@
 #      to be exact in Q4 and in the attribute planes. Without it, a corner
 #      projecting beyond 2^23 pixels would be clamped, bending the triangle.
 #   5. raster_triangle: back-face culling (SCENE_CULL), fill, depth test.
+#      With antialias = edge each corner also says what lies across the edge
+#      opposite it (aa_neighbours, from the adjacency adjacency_build makes at
+#      render_init), so that raster_triangle antialiases silhouette edges
+#      only; with antialias = supersample render_band draws its band once per
+#      sample and takes the means (raster.S).
 #
 # Wireframe: the mesh's unique edges (each edge shared by two triangles
 # once: built at render_init by sorting (min, max) index pairs) are drawn in
 # WIRE_COLOUR over the background, without depth test or culling: trivially
 # rejected by outcodes, cut at the near plane and the guard band in clip
 # space (Liang-Barsky), clipped to the screen and drawn with Bresenham's
-# algorithm (raster_segment).
+# algorithm (raster_segment), or by coverage with antialias on
+# (raster_aa_line).
 
     .option norelax
     .include "k210.inc"
@@ -244,7 +250,9 @@ render_prepare:
 #   What: draws rows a0 .. a1 - 1 of the frame render_prepare set up, on
 #         the calling hart: those rows cleared, then every triangle's pixels
 #         in them (raster_set_band; a triangle whose rows all lie outside
-#         is skipped before its lighting and texture set-up). The pixels
+#         is skipped before its lighting and texture set-up: draw_triangles;
+#         with antialias = supersample once per sample, cleared each time,
+#         the samples summed and their means kept). The pixels
 #         are bit for bit those of a whole-screen draw, whichever hart
 #         draws which rows. Wireframe: the whole frame, so only ever called
 #         with the whole screen (main.S splits triangle modes only).
@@ -312,12 +320,16 @@ render_band:
     mv      a1, s2
     mv      a2, s1
     call    draw_triangles
-    seqz    a0, s3                      # the first sample starts the sums
-    call    raster_accumulate
+    li      a0, SAMPLE_FIRST            # the first sample starts the sums,
+    beqz    s3, 5f                      # the last leaves the means
+    li      a0, SAMPLE_MORE
+    li      t0, SUPERSAMPLES - 1
+    bne     s3, t0, 5f
+    li      a0, SAMPLE_LAST
+5:  call    raster_accumulate
     addi    s3, s3, 1
     li      t0, SUPERSAMPLES
     bltu    s3, t0, 3b
-    call    raster_resolve
     li      a0, 0
     li      a1, 0
     call    raster_set_sample
