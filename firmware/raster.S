@@ -38,6 +38,18 @@
 #     main.S splits a frame between the harts). The planes are still set up
 #     at the bounding box's first row and stepped row by row to the band,
 #     so a pixel gets the same bits whichever hart draws it.
+#   - antialias = edge (RASTER_EDGE_AA): a triangle with a silhouette edge
+#     (SILHOUETTE: the mesh ends there, or folds away) is drawn by a
+#     coverage fill (FILL / FILTERED with aa): its box grown by half a
+#     pixel, its silhouette edges' functions moved out by half a pixel, and
+#     each pixel blended over what is behind by its coverage (render.inc
+#     AA_*); its other edges stay hard, so closed meshes show no seams.
+#   - antialias = supersample: raster_set_sample moves the corners by minus
+#     a sample's offset, raster_accumulate sums the samples' frames and
+#     leaves their means (render.S draws each band once per sample).
+#
+# Lines: raster_segment / raster_line (Bresenham's), or raster_aa_line (by
+# coverage, for antialiased wireframes).
 
     .option norelax
     .include "k210.inc"
@@ -60,7 +72,9 @@
     .equ RT_ROW_DEPTH,          192         # depth at (xmin, row)
     .equ RT_ROW_LEFT,           200         # rows left
     .equ RT_FSAVE2,             208         # fs4, fs5
-    .equ RT_FRAME,              224
+    .equ RT_FSAVE3,             224         # fs6, fs7, fs8 (the coverage fills' scales)
+    .equ RT_AA,                 248         # the filtered coverage fills' pixel coverage
+    .equ RT_FRAME,              256
 
 # EDGE xa, ya, xb, yb, E, A, B
 #   The edge function of the edge a -> b at the first pixel centre
@@ -102,6 +116,66 @@
     fnmsub.s \ddy, \v1, fa2, ft8        # (d2 dx1 - d1 dx2) / area
     fmadd.s \base, \ddx, ft9, \v0
     fmadd.s \base, \ddy, ft10, \base
+.endm
+
+# SILHOUETTE rec, xa, ya, xb, yb, bit
+#   antialias = edge: sets RASTER_SILHOUETTE_SHIFT + bit in t5 when the edge
+#   a -> b (the triangle inside on its E >= 0 side) is a silhouette: the
+#   corner record rec (opposite the edge) says the mesh ends there
+#   (OPP_OPEN), or its neighbour's far corner lies on this triangle's side
+#   of the edge, E > 0 (the surface folds away: one of the two faces turns
+#   its back). On the other side the two are one surface, drawn hard, so no
+#   background shows between them; exactly on the line (a degenerate
+#   neighbour), or OPP_HARD, hard too. Clobbers a0..a3.
+.macro SILHOUETTE rec, xa, ya, xb, yb, bit
+    lwu     a0, RV_OPP_KIND(\rec)
+    li      a1, OPP_OPEN
+    beq     a0, a1, .Lsilhouette\@
+    li      a1, OPP_CORNER
+    bne     a0, a1, .Lhard\@
+    lw      a2, RV_OPP_X(\rec)
+    lw      a3, RV_OPP_Y(\rec)
+    sub     a0, \xb, \xa               # dx
+    sub     a1, \yb, \ya               # dy
+    sub     a3, a3, \ya
+    mul     a3, a0, a3                  # dx (cy - ya)
+    sub     a2, a2, \xa
+    mul     a2, a1, a2                  # dy (cx - xa)
+    sub     a3, a3, a2
+    blez    a3, .Lhard\@
+.Lsilhouette\@:
+    ori     t5, t5, 1 << (RASTER_SILHOUETTE_SHIFT + \bit)
+.Lhard\@:
+.endm
+
+# AA_EDGE bit, E, A, B, scale
+#   A coverage fill's edge (render.inc AA_*): a silhouette edge's function
+#   E moved out by M = ceil(8 |edge|) (sqrt(A^2 + B^2) = 16 |edge| from its
+#   steps), scale = AA_HALF / M; a hard edge's by 1, scale = AA_FULL.
+#   Clobbers t0, ft9, ft10.
+.macro AA_EDGE bit, E, A, B, scale
+    andi    t0, t5, 1 << (RASTER_SILHOUETTE_SHIFT + \bit)
+    bnez    t0, .Lsilhouette\@
+    addi    \E, \E, 1
+    li      t0, F32_AA_FULL
+    fmv.w.x \scale, t0
+    j       .Ldone\@
+.Lsilhouette\@:
+    fcvt.s.l ft9, \A
+    fmul.s  ft9, ft9, ft9
+    fcvt.s.l ft10, \B
+    fmadd.s ft9, ft10, ft10, ft9
+    fsqrt.s ft9, ft9                    # 16 |edge|
+    li      t0, F32_HALF
+    fmv.w.x ft10, t0
+    fmul.s  ft9, ft9, ft10
+    fcvt.l.s t0, ft9, rup               # M
+    add     \E, \E, t0
+    fcvt.s.l ft9, t0
+    li      t0, F32_AA_HALF
+    fmv.w.x ft10, t0
+    fdiv.s  \scale, ft10, ft9
+.Ldone\@:
 .endm
 
 # The pieces FILL and FILTERED share (registers as FILL describes them).
@@ -189,14 +263,94 @@
     bgez    t0, 4b
 .endm
 
-# FILL textured, gouraud, affine, depth16
+# The pieces of the coverage fills (antialias = edge; render.inc AA_*).
+# COVERAGE: t1 = the pixel's coverage a (0 .. AA_FULL, or more: whole) from
+#   the moved-out edge functions s0..s2 and their scales fs6..fs8 (the least
+#   of the three); none, on to 7. Clobbers ft9, ft10.
+.macro COVERAGE
+    fcvt.s.l ft9, s0
+    fmul.s  ft9, ft9, fs6
+    fcvt.s.l ft10, s1
+    fmul.s  ft10, ft10, fs7
+    fmin.s  ft9, ft9, ft10
+    fcvt.s.l ft10, s2
+    fmul.s  ft10, ft10, fs8
+    fmin.s  ft9, ft9, ft10
+    fcvt.w.s t1, ft9, rne
+    blez    t1, 7f                      # no coverage
+.endm
+
+# DEPTH_TEST_AA depth16, gouraud
+#   DEPTH_TEST for a pixel of coverage t1: the depth test at the pixel
+#   centre (the planes extended past the edge for a pixel whose centre is
+#   outside), the depth stored only when at least half the pixel is covered
+#   (as the tie rule stores it without antialiasing), so what is drawn later
+#   behind a partly covered pixel still blends into it. Gouraud's k is
+#   clamped to LIGHT_ONE (extended past the corners it can exceed it).
+#   Clobbers t0, t3.
+.macro DEPTH_TEST_AA depth16, gouraud
+    .if \depth16
+    lhu     t3, 0(a1)
+    fcvt.w.s t0, fa0, rtz
+    bge     t0, t3, 7f                  # not nearer
+    li      t3, AA_DEPTH_WRITE
+    blt     t1, t3, .Ldepth_kept\@
+    sh      t0, 0(a1)
+    .else
+    lw      t3, 0(a1)
+    fmv.x.w t0, fa0
+    bge     t0, t3, 7f                  # not nearer
+    li      t3, AA_DEPTH_WRITE
+    blt     t1, t3, .Ldepth_kept\@
+    sw      t0, 0(a1)
+    .endif
+.Ldepth_kept\@:
+    .if \gouraud
+    fcvt.wu.s t4, fs0, rne              # k (a rounding-noise negative -> 0)
+    li      t3, LIGHT_ONE
+    ble     t4, t3, .Lk_ok\@
+    mv      t4, t3
+.Lk_ok\@:
+    .endif
+.endm
+
+# BLEND_COVERAGE
+#   t2 = the spread colour (RGB565_SPREAD_MASK) drawn over the framebuffer's
+#   pixel (at a0 ^ FB_PAIR_XOR) by coverage t1: (c a + old (64 - a)) / 64 per
+#   channel, rounded to nearest, in one multiplication as the light is (the
+#   fields' borrows cancel: every field's result fits it); a whole pixel
+#   keeps c. Needs t5 = RGB565_SPREAD_MASK, ra = LIGHT_ROUND_SPREAD.
+#   Clobbers t0, t3.
+.macro BLEND_COVERAGE
+    li      t3, AA_FULL
+    bge     t1, t3, .Lwhole\@
+    xori    t3, a0, FB_PAIR_XOR
+    lhu     t0, 0(t3)                   # what is behind
+    slli    t3, t0, RGB565_SPREAD_SHIFT
+    or      t0, t0, t3
+    and     t0, t0, t5
+    sub     t2, t2, t0
+    mul     t2, t2, t1
+    slli    t0, t0, AA_SHIFT
+    add     t2, t2, t0
+    add     t2, t2, ra
+    srli    t2, t2, AA_SHIFT
+    and     t2, t2, t5
+.Lwhole\@:
+.endm
+
+# FILL textured, gouraud, affine, depth16, aa
 #   One fill loop (registers: see raster_fills): every row of the bounding
 #   box from the first inside pixel to the first outside one after it;
 #   per pixel the depth test, then the colour: the flat colour t4, the base
 #   colour a5 times the Gouraud intensity, or the texel (perspective-correct
 #   or affine, nearest, repeating) times the face's or the Gouraud
-#   intensity. Ends at 90 (raster_triangle's epilogue).
-.macro FILL textured, gouraud, affine, depth16
+#   intensity. With aa (a coverage fill, antialias = edge), the edge
+#   functions are moved out by half a pixel on silhouette edges (raster_
+#   triangle), and each pixel's colour is blended by its coverage
+#   (COVERAGE, DEPTH_TEST_AA, BLEND_COVERAGE). Ends at 90 (raster_triangle's
+#   epilogue).
+.macro FILL textured, gouraud, affine, depth16, aa=0
     .if \textured
     la      t0, raster_texture
     ld      a5, 0(t0)
@@ -206,7 +360,7 @@
     ld      a7, 0(t0)
     .endif
     li      t5, RGB565_SPREAD_MASK
-    .if \textured || \gouraud
+    .if \textured || \gouraud || \aa
     li      ra, LIGHT_ROUND_SPREAD
     .endif
     .if \gouraud && !\textured
@@ -228,7 +382,12 @@
     .endif
     PLANES_AT_X \textured, \gouraud, \affine
 4:
+    .if \aa
+    COVERAGE
+    DEPTH_TEST_AA \depth16, \gouraud
+    .else
     DEPTH_TEST \depth16, \gouraud
+    .endif
     .if \textured
     .if \affine
     fcvt.lu.s t2, fa2, rtz              # texel column, row
@@ -258,6 +417,18 @@
     add     t2, t2, ra                  # rounded to nearest
     srli    t2, t2, LIGHT_SHIFT
     and     t2, t2, t5
+    .if \aa
+    BLEND_COVERAGE
+    .endif
+    srli    t3, t2, RGB565_SPREAD_SHIFT
+    or      t2, t2, t3
+    xori    t3, a0, FB_PAIR_XOR
+    sh      t2, 0(t3)
+    .elseif \aa
+    slli    t2, t4, RGB565_SPREAD_SHIFT # the flat colour, spread
+    or      t2, t2, t4
+    and     t2, t2, t5
+    BLEND_COVERAGE
     srli    t3, t2, RGB565_SPREAD_SHIFT
     or      t2, t2, t3
     xori    t3, a0, FB_PAIR_XOR
@@ -315,8 +486,10 @@
 #   and fs5 are saved here. Registers of the span loop beyond FILL's:
 #   s9 BLEND_SPREAD_MUL, t5 BLEND_SPREAD_MASK, ra BLEND_ROUND, s10 the level
 #   table's entry for level 0 (mipmap); temporaries t0..t3, t6, a3, a4,
-#   s6 (fx), s7 (fy), s8 (x1), fs5. Ends at 90 (raster_triangle's epilogue).
-.macro FILTERED gouraud, affine, depth16, mipmap
+#   s6 (fx), s7 (fy), s8 (x1), fs5. With aa, a coverage fill as FILL's,
+#   the coverage kept on the stack (RT_AA) over the texel blend. Ends at 90
+#   (raster_triangle's epilogue).
+.macro FILTERED gouraud, affine, depth16, mipmap, aa=0
     sd      s6, RT_ROW_E0(sp)
     sd      s7, RT_ROW_E1(sp)
     sd      s8, RT_ROW_E2(sp)
@@ -363,7 +536,13 @@
     .endif
     PLANES_AT_X 1, \gouraud, \affine
 4:
+    .if \aa
+    COVERAGE
+    DEPTH_TEST_AA \depth16, \gouraud
+    sd      t1, RT_AA(sp)
+    .else
     DEPTH_TEST \depth16, \gouraud
+    .endif
     .if \affine
     fmv.s   ft10, fa2                   # 32 s, 32 t
     fmv.s   ft11, fa3
@@ -459,6 +638,33 @@
     srli    t2, t0, BLEND_B_SHIFT
     andi    t2, t2, BLEND_B_MASK
     or      t1, t1, t2
+    .if \aa
+    # the lit texel t1 over what is behind, by the coverage (BLEND_COVERAGE's
+    # arithmetic with this loop's registers)
+    ld      t6, RT_AA(sp)
+    li      t3, AA_FULL
+    bge     t6, t3, .Lwhole\@
+    li      t0, RGB565_SPREAD_MASK
+    slli    t3, t1, RGB565_SPREAD_SHIFT
+    or      t2, t1, t3
+    and     t2, t2, t0
+    xori    t3, a0, FB_PAIR_XOR
+    lhu     t1, 0(t3)                   # what is behind
+    slli    t3, t1, RGB565_SPREAD_SHIFT
+    or      t1, t1, t3
+    and     t1, t1, t0
+    sub     t2, t2, t1
+    mul     t2, t2, t6
+    slli    t1, t1, AA_SHIFT
+    add     t2, t2, t1
+    li      t1, LIGHT_ROUND_SPREAD
+    add     t2, t2, t1
+    srli    t2, t2, AA_SHIFT
+    and     t2, t2, t0
+    srli    t1, t2, RGB565_SPREAD_SHIFT
+    or      t1, t1, t2
+.Lwhole\@:
+    .endif
     xori    t2, a0, FB_PAIR_XOR
     sh      t1, 0(t2)
 7:  NEXT_PIXEL 1, \gouraud, \affine, \depth16
@@ -546,6 +752,102 @@ raster_set_band:
     sw      a0, BAND_FIRST(t0)
     sw      a1, BAND_END(t0)
     ret
+
+    .globl raster_set_sample
+# raster_set_sample
+#   What: antialias = supersample: the sample the calling hart's triangles
+#         are drawn for from now on (raster_triangle moves their corners by
+#         minus the offset, so pixel centres sample the offset's point).
+#   Arguments: a0, a1 = the offset from the pixel centre, x and y in Q4
+#              (0, 0: the centre, as without supersampling).
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+raster_set_sample:
+    la      t0, raster_sample
+    add     t0, t0, tp
+    sw      a0, SAMPLE_OFFSET_X(t0)
+    sw      a1, SAMPLE_OFFSET_Y(t0)
+    ret
+
+    .globl raster_set_sums
+# raster_set_sums
+#   What: sets the sums buffer of raster_accumulate.
+#   Arguments: a0 = the buffer (SUM_BUFFER_BYTES).
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+raster_set_sums:
+    la      t0, raster_sums
+    sd      a0, 0(t0)
+    ret
+
+# SUMS_BAND
+#   t0 = the framebuffer at the calling hart's band, t1 = past its end,
+#   t2 = the sums at the band (the same pixel order); empty band: on to 9.
+#   Clobbers t3, t4.
+.macro SUMS_BAND
+    la      t3, raster_band
+    add     t3, t3, tp
+    lwu     t4, BAND_FIRST(t3)
+    lwu     t1, BAND_END(t3)
+    bgeu    t4, t1, 9f
+    li      t3, LCD_WIDTH
+    mul     t4, t4, t3                  # first pixel
+    mul     t1, t1, t3                  # past the last
+    la      t3, raster_sums
+    ld      t2, 0(t3)
+    slli    t3, t4, SUM_SHIFT
+    add     t2, t2, t3
+    la      t3, raster_fb
+    ld      t0, 0(t3)
+    slli    t1, t1, FB_PIXEL_SHIFT
+    add     t1, t1, t0
+    slli    t4, t4, FB_PIXEL_SHIFT
+    add     t0, t0, t4
+.endm
+
+    .globl raster_accumulate
+# raster_accumulate
+#   What: antialias = supersample: the calling hart's band of the
+#         framebuffer (one sample's colours) into the sums (render.inc
+#         SUM_*): the first sample sets them, the others add to them, and
+#         the last, added, leaves each pixel's mean in the framebuffer,
+#         per channel rounded to nearest (halves up).
+#   Arguments: a0 = SAMPLE_FIRST, SAMPLE_MORE or SAMPLE_LAST.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+raster_accumulate:
+    SUMS_BAND
+    li      t5, SUM_RB_MASK
+    li      a1, SUM_ROUND
+    li      a2, SUM_R_MASK
+    li      a3, SAMPLE_LAST
+1:  lhu     t3, 0(t0)                   # c spread into the sum's fields
+    and     t4, t3, t5
+    andi    t6, t3, SUM_G_MASK
+    slli    t6, t6, SUM_G_SHIFT
+    or      t4, t4, t6
+    beqz    a0, 2f                      # (SAMPLE_FIRST)
+    lwu     t3, 0(t2)
+    add     t4, t4, t3
+    beq     a0, a3, 3f
+2:  sw      t4, 0(t2)
+    addi    t0, t0, LCD_BYTES_PER_PIXEL
+    addi    t2, t2, SUM_BYTES_PER_PIXEL
+    bltu    t0, t1, 1b
+    ret
+3:  add     t4, t4, a1                  # the last: the mean
+    srli    t4, t4, SUM_MEAN_SHIFT
+    andi    t3, t4, SUM_B_MASK          # (each mean where one sample's channel
+    and     t6, t4, a2                  # is in the sum, the remainders below it)
+    or      t3, t3, t6
+    srli    t6, t4, SUM_G_SHIFT
+    andi    t6, t6, SUM_G_MASK
+    or      t3, t3, t6
+    sh      t3, 0(t0)
+    addi    t0, t0, LCD_BYTES_PER_PIXEL
+    addi    t2, t2, SUM_BYTES_PER_PIXEL
+    bltu    t0, t1, 1b
+9:  ret
 
     .globl raster_set_texture
 # raster_set_texture
@@ -896,9 +1198,14 @@ raster_clear:
 #              0 .. LIGHT_ONE (unused with RASTER_GOURAUD), a3 = RASTER_*
 #              flags (render.inc). The depth format is raster_set_depth's.
 #   Results: none.
+#         With RASTER_EDGE_AA the corners' RV_OPP_* say what lies across
+#         each edge (silhouette or not: a coverage fill for a silhouette).
+#         The corners are moved by minus this hart's sample offset
+#         (raster_set_sample; 0, 0 unless supersampling).
 #   Clobbers: only ABI temporaries. The pixel loops use every integer
 #         register but sp, gp and tp (ra holds a constant, saved here), every
-#         temporary and argument float register, and fs0..fs3 (saved here;
+#         temporary and argument float register, and fs0..fs3 and fs6..fs8
+#         (saved here: the Gouraud intensity, the coverage fills' scales;
 #         the filtered fills save and use fs4, fs5 too).
 raster_triangle:
     addi    sp, sp, -RT_FRAME
@@ -918,6 +1225,9 @@ raster_triangle:
     fsd     fs1, RT_FSAVE + 8(sp)
     fsd     fs2, RT_FSAVE + 16(sp)
     fsd     fs3, RT_FSAVE + 24(sp)
+    fsd     fs6, RT_FSAVE3 + 0(sp)
+    fsd     fs7, RT_FSAVE3 + 8(sp)
+    fsd     fs8, RT_FSAVE3 + 16(sp)
     sd      ra, RT_RA(sp)
     mv      t4, a2                      # t4 = colour / intensity (kept to the end)
     mv      t5, a3                      # t5 = RASTER_* flags (until the loops)
@@ -932,6 +1242,16 @@ raster_triangle:
     lw      s3, RV_Y(t1)
     lw      s4, RV_X(t2)
     lw      s5, RV_Y(t2)
+    la      t3, raster_sample           # antialias = supersample: the corners
+    add     t3, t3, tp                  # moved by minus the sample's offset
+    lw      a4, SAMPLE_OFFSET_X(t3)     # (0, 0 otherwise)
+    lw      a5, SAMPLE_OFFSET_Y(t3)
+    sub     s0, s0, a4
+    sub     s2, s2, a4
+    sub     s4, s4, a4
+    sub     s1, s1, a5
+    sub     s3, s3, a5
+    sub     s5, s5, a5
     # s6 = signed area (Q8) = (x1 - x0)(y2 - y0) - (x2 - x0)(y1 - y0)
     sub     a4, s2, s0
     sub     a5, s5, s1
@@ -955,6 +1275,14 @@ raster_triangle:
     mv      s5, t3
     neg     s6, s6
 2:
+    # --- antialias = edge: which edges are silhouettes (RASTER_SILHOUETTE_*
+    # in t5); edge k runs from corner k + 1 to corner k + 2
+    andi    t3, t5, RASTER_EDGE_AA
+    beqz    t3, 29f
+    SILHOUETTE t0, s2, s3, s4, s5, 0
+    SILHOUETTE t1, s4, s5, s0, s1, 1
+    SILHOUETTE t2, s0, s1, s2, s3, 2
+29:
     # --- bounding box of the pixel centres: a4..a7 = xmin, xmax, ymin, ymax
     mv      a4, s0                      # min x
     ble     a4, s2, 3f
@@ -976,7 +1304,14 @@ raster_triangle:
     mv      a7, s3
 3:  bge     a7, s5, 3f
     mv      a7, s5
-3:  addi    a4, a4, SUBPIXEL_CEIL       # first centre >= min: (min + 7) >> 4
+3:  li      t3, RASTER_SILHOUETTE_MASK  # coverage reaches half a pixel past
+    and     t3, t5, t3                  # a silhouette edge: the box grows
+    beqz    t3, 39f
+    addi    a4, a4, -AA_BOX_GROW
+    addi    a5, a5, AA_BOX_GROW
+    addi    a6, a6, -AA_BOX_GROW
+    addi    a7, a7, AA_BOX_GROW
+39: addi    a4, a4, SUBPIXEL_CEIL       # first centre >= min: (min + 7) >> 4
     srai    a4, a4, SUBPIXEL_BITS
     addi    a5, a5, -SUBPIXEL_HALF      # last centre <= max: (max - 8) >> 4
     srai    a5, a5, SUBPIXEL_BITS
@@ -1144,7 +1479,15 @@ raster_triangle:
     mv      s3, t0
     mv      s4, t1
     mv      s5, t2
-
+    # coverage fills: silhouette edges moved out by half a pixel, hard ones
+    # by one Q8 unit, and the scales that make their coverage (render.inc)
+    li      t3, RASTER_SILHOUETTE_MASK
+    and     t3, t5, t3
+    beqz    t3, 69f
+    AA_EDGE 0, s6, s3, s9, fs6
+    AA_EDGE 1, s7, s4, s10, fs7
+    AA_EDGE 2, s8, s5, s11, fs8
+69:
     # --- pointers: a3 = framebuffer at (xmin, row), a2 = its end of row
     # (past xmax), t6 = depth at (xmin, row), a4 = rows left
     la      t3, raster_fb
@@ -1208,10 +1551,16 @@ raster_triangle:
     bnez    a0, 64b
 65:
     # --- the fill loop for these settings: raster_fills[flags | depth16 << 3]
-    # (flags with RASTER_BILINEAR or RASTER_MIPMAP index past the first 16)
+    # (flags with RASTER_BILINEAR or RASTER_MIPMAP index past the first 16),
+    # RASTER_FILLS further for a coverage fill (a silhouette edge)
     slli    t1, t1, RASTER_DEPTH16_SHIFT
-    or      t0, t5, t1
-    slli    t0, t0, 3
+    andi    t0, t5, RASTER_FILL_INDEX_MASK
+    or      t0, t0, t1
+    li      t3, RASTER_SILHOUETTE_MASK
+    and     t3, t5, t3
+    beqz    t3, 66f
+    addi    t0, t0, RASTER_FILLS
+66: slli    t0, t0, 3
     la      t3, raster_fills
     add     t3, t3, t0
     ld      t3, 0(t3)
@@ -1260,6 +1609,35 @@ fill_mipmap_d16:        FILTERED 0, 0, 1, 1
 fill_mipmap_gouraud_d16: FILTERED 1, 0, 1, 1
 fill_mipmap_affine_d16: FILTERED 0, 1, 1, 1
 fill_mipmap_affine_gouraud_d16: FILTERED 1, 1, 1, 1
+# the coverage fills (antialias = edge, a triangle with a silhouette edge)
+aa_flat:                FILL 0, 0, 0, 0, 1
+aa_flat_gouraud:        FILL 0, 1, 0, 0, 1
+aa_textured:            FILL 1, 0, 0, 0, 1
+aa_textured_gouraud:    FILL 1, 1, 0, 0, 1
+aa_affine:              FILL 1, 0, 1, 0, 1
+aa_affine_gouraud:      FILL 1, 1, 1, 0, 1
+aa_flat_d16:            FILL 0, 0, 0, 1, 1
+aa_flat_gouraud_d16:    FILL 0, 1, 0, 1, 1
+aa_textured_d16:        FILL 1, 0, 0, 1, 1
+aa_textured_gouraud_d16: FILL 1, 1, 0, 1, 1
+aa_affine_d16:          FILL 1, 0, 1, 1, 1
+aa_affine_gouraud_d16:  FILL 1, 1, 1, 1, 1
+aa_bilinear:            FILTERED 0, 0, 0, 0, 1
+aa_bilinear_gouraud:    FILTERED 1, 0, 0, 0, 1
+aa_bilinear_affine:     FILTERED 0, 1, 0, 0, 1
+aa_bilinear_affine_gouraud:FILTERED 1, 1, 0, 0, 1
+aa_bilinear_d16:        FILTERED 0, 0, 1, 0, 1
+aa_bilinear_gouraud_d16:FILTERED 1, 0, 1, 0, 1
+aa_bilinear_affine_d16: FILTERED 0, 1, 1, 0, 1
+aa_bilinear_affine_gouraud_d16:FILTERED 1, 1, 1, 0, 1
+aa_mipmap:              FILTERED 0, 0, 0, 1, 1
+aa_mipmap_gouraud:      FILTERED 1, 0, 0, 1, 1
+aa_mipmap_affine:       FILTERED 0, 1, 0, 1, 1
+aa_mipmap_affine_gouraud:FILTERED 1, 1, 0, 1, 1
+aa_mipmap_d16:          FILTERED 0, 0, 1, 1, 1
+aa_mipmap_gouraud_d16:  FILTERED 1, 0, 1, 1, 1
+aa_mipmap_affine_d16:   FILTERED 0, 1, 1, 1, 1
+aa_mipmap_affine_gouraud_d16:FILTERED 1, 1, 1, 1, 1
 
 90: ld      s0, RT_SAVE + 0(sp)
     ld      s1, RT_SAVE + 8(sp)
@@ -1277,6 +1655,9 @@ fill_mipmap_affine_gouraud_d16: FILTERED 1, 1, 1, 1
     fld     fs1, RT_FSAVE + 8(sp)
     fld     fs2, RT_FSAVE + 16(sp)
     fld     fs3, RT_FSAVE + 24(sp)
+    fld     fs6, RT_FSAVE3 + 0(sp)
+    fld     fs7, RT_FSAVE3 + 8(sp)
+    fld     fs8, RT_FSAVE3 + 16(sp)
     ld      ra, RT_RA(sp)
     addi    sp, sp, RT_FRAME
     ret
@@ -1392,6 +1773,157 @@ raster_segment:
     jr      t6
 9:  ret
 
+    .globl raster_aa_line
+# raster_aa_line
+#   What: antialias = edge or supersample, wireframe: a line 1 pixel wide
+#         drawn by coverage (the reference's ideal wireframe: the points
+#         within half a pixel of the segment), a Wu-style walk along the
+#         major axis: per column (row, for a steep line) the band of the
+#         line's thickness across it, h = |segment| / |major extent| pixels
+#         about the line's centre there, and each pixel its overlap with the
+#         band times the share of the column inside the segment, which is
+#         lengthened by half a pixel of its length at each end (the round
+#         ends' reach). Each coverage a (1/64) blends the colour over the
+#         framebuffer's pixel as the coverage fills do (c a + old (64 - a))
+#         / 64; where lines cross, coverages combine as 1 - (1 - a1)(1 -
+#         a2). Columns are clamped to the screen and pixels off it skipped,
+#         so any finite ends are safe. No depth test.
+#   Arguments: fa0, fa1 = one end, fa2, fa3 = the other, screen positions in
+#              pixels (pixel (x, y) covers [x, x + 1) x [y, y + 1), y down);
+#              a0 = RGB565 colour.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+raster_aa_line:
+    li      t0, F32_HALF
+    fmv.w.x fa7, t0                     # fa7 = 1/2
+    li      t0, F32_ONE
+    fmv.w.x ft2, t0                     # ft2 = 1
+    li      t0, F32_AA_FULL
+    fmv.w.x ft3, t0                     # ft3 = 64
+    li      t4, RGB565_SPREAD_MASK
+    slli    t3, a0, RGB565_SPREAD_SHIFT
+    or      t3, t3, a0
+    and     t3, t3, t4                  # t3 = the colour, spread
+    li      t5, LIGHT_ROUND_SPREAD
+    # u, v = the major and minor axis (a7 = 1: u is y), a6, a5 = their sizes
+    fsub.s  ft0, fa2, fa0
+    fsub.s  ft1, fa3, fa1
+    fabs.s  ft4, ft0
+    fabs.s  ft5, ft1
+    li      a7, 0
+    li      a6, LCD_WIDTH
+    li      a5, LCD_HEIGHT
+    flt.s   t0, ft4, ft5
+    beqz    t0, 1f
+    li      a7, 1
+    li      a6, LCD_HEIGHT
+    li      a5, LCD_WIDTH
+    fmv.s   ft6, fa0
+    fmv.s   fa0, fa1
+    fmv.s   fa1, ft6
+    fmv.s   ft6, fa2
+    fmv.s   fa2, fa3
+    fmv.s   fa3, ft6
+    fmv.s   ft6, ft0
+    fmv.s   ft0, ft1
+    fmv.s   ft1, ft6
+1:  flt.s   t0, fa2, fa0                # from the end of smaller u
+    beqz    t0, 2f
+    fmv.s   ft6, fa0
+    fmv.s   fa0, fa2
+    fmv.s   fa2, ft6
+    fmv.s   ft6, fa1
+    fmv.s   fa1, fa3
+    fmv.s   fa3, ft6
+    fneg.s  ft0, ft0
+    fneg.s  ft1, ft1
+    # ft0 = du >= 0, ft1 = dv; ft5 = slope dv / du, ft6 = h / 2, ft7, ft8 =
+    # the lengthened segment's u range (a point: slope 0, h 1, half a pixel)
+2:  fmul.s  ft4, ft0, ft0
+    fmadd.s ft4, ft1, ft1, ft4
+    fsqrt.s ft4, ft4                    # |segment|
+    fmv.w.x ft5, zero
+    fmv.s   ft6, fa7
+    fmv.s   ft9, fa7                    # ft9 = the lengthening along u
+    fmv.w.x ft10, zero
+    feq.s   t0, ft0, ft10
+    bnez    t0, 3f
+    fdiv.s  ft5, ft1, ft0
+    fdiv.s  ft6, ft4, ft0
+    fmul.s  ft6, ft6, fa7
+    fdiv.s  ft9, ft0, ft4
+    fmul.s  ft9, ft9, fa7
+3:  fsub.s  ft7, fa0, ft9
+    fadd.s  ft8, fa2, ft9
+    fcvt.w.s t1, ft7, rdn               # t1 = first column (saturating)
+    fcvt.w.s t2, ft8, rdn               # t2 = last column
+    bgez    t1, 4f
+    li      t1, 0
+4:  addi    t0, a6, -1
+    ble     t2, t0, 5f
+    mv      t2, t0
+5:  bgt     t1, t2, 9f
+    # column t1: fa4 = its share inside the segment, ft10, ft11 = the band
+6:  fcvt.s.w ft9, t1
+    fadd.s  fa5, ft9, ft2               # i + 1
+    fmin.s  fa4, ft8, fa5
+    fmax.s  fa6, ft7, ft9
+    fsub.s  fa4, fa4, fa6
+    fadd.s  fa6, ft9, fa7               # the column's centre
+    fsub.s  fa6, fa6, fa0
+    fmadd.s fa6, ft5, fa6, fa1          # the line's v there
+    fsub.s  ft10, fa6, ft6
+    fadd.s  ft11, fa6, ft6
+    fcvt.w.s t6, ft10, rdn              # t6 = first row of the band
+    fcvt.w.s a1, ft11, rdn              # a1 = its last
+7:  bgt     t6, a1, 8f
+    bltz    t6, 71f                     # off the screen
+    bge     t6, a5, 71f
+    fcvt.s.w fa5, t6
+    fadd.s  fa6, fa5, ft2
+    fmin.s  fa6, fa6, ft11
+    fmax.s  fa5, fa5, ft10
+    fsub.s  fa5, fa6, fa5               # the overlap
+    fmul.s  fa5, fa5, fa4
+    fmul.s  fa5, fa5, ft3
+    fcvt.w.s a2, fa5, rne               # a
+    blez    a2, 71f
+    li      t0, AA_FULL
+    ble     a2, t0, 72f
+    mv      a2, t0
+72: mv      a3, t1                      # x, y
+    mv      a4, t6
+    beqz    a7, 73f
+    mv      a3, t6
+    mv      a4, t1
+73: xori    a3, a3, 1                   # the pixel's address (see the file comment)
+    li      t0, LCD_WIDTH
+    mul     a4, a4, t0
+    add     a3, a3, a4
+    slli    a3, a3, FB_PIXEL_SHIFT
+    la      t0, raster_fb
+    ld      t0, 0(t0)
+    add     a3, a3, t0
+    lhu     a4, 0(a3)                   # what is behind, spread
+    slli    t0, a4, RGB565_SPREAD_SHIFT
+    or      a4, a4, t0
+    and     a4, a4, t4
+    sub     t0, t3, a4                  # (c a + old (64 - a)) / 64, rounded
+    mul     t0, t0, a2
+    slli    a4, a4, AA_SHIFT
+    add     t0, t0, a4
+    add     t0, t0, t5
+    srli    t0, t0, AA_SHIFT
+    and     t0, t0, t4
+    srli    a4, t0, RGB565_SPREAD_SHIFT
+    or      t0, t0, a4
+    sh      t0, 0(a3)
+71: addi    t6, t6, 1
+    j       7b
+8:  addi    t1, t1, 1
+    ble     t1, t2, 6b
+9:  ret
+
     .globl raster_line
 # raster_line
 #   What: a line between two on-screen pixels, both ends included
@@ -1457,6 +1989,9 @@ raster_depth_mode:
 # rho^2 constant (|det H| or, affine, |det J|; raster_triangle)
 raster_mip_table:
     .space  8
+# antialias = supersample: the sums of the samples (raster_set_sums)
+raster_sums:
+    .space  8
 # Hart-local (k210.inc HART_LOCAL_STRIDE; tp selects the copy): the rows this
 # hart draws (raster_set_band), and filter = mipmap's rho^2 constant of the
 # triangle being drawn (|det H| or, affine, |det J|; raster_triangle).
@@ -1465,6 +2000,9 @@ raster_band:
     .space  BAND_BYTES
 raster_mip_rho2:
     .space  4
+    .balign 8
+raster_sample:
+    .space  SAMPLE_BYTES
 raster_hart_local_end:
     .space  HART_LOCAL_STRIDE - (raster_hart_local_end - raster_band)
     .space  raster_hart_local_end - raster_band     # hart 1's copy
@@ -1490,7 +2028,20 @@ raster_fills:
     .dword  fill_flat, fill_mipmap_affine, fill_flat_gouraud, fill_mipmap_affine_gouraud
     .dword  fill_flat_d16, fill_mipmap_d16, fill_flat_gouraud_d16, fill_mipmap_gouraud_d16
     .dword  fill_flat_d16, fill_mipmap_affine_d16, fill_flat_gouraud_d16, fill_mipmap_affine_gouraud_d16
+# the coverage fills, in the same order (RASTER_FILLS + the same index)
+    .dword  aa_flat, aa_textured, aa_flat_gouraud, aa_textured_gouraud
+    .dword  aa_flat, aa_affine, aa_flat_gouraud, aa_affine_gouraud
+    .dword  aa_flat_d16, aa_textured_d16, aa_flat_gouraud_d16, aa_textured_gouraud_d16
+    .dword  aa_flat_d16, aa_affine_d16, aa_flat_gouraud_d16, aa_affine_gouraud_d16
+    .dword  aa_flat, aa_bilinear, aa_flat_gouraud, aa_bilinear_gouraud
+    .dword  aa_flat, aa_bilinear_affine, aa_flat_gouraud, aa_bilinear_affine_gouraud
+    .dword  aa_flat_d16, aa_bilinear_d16, aa_flat_gouraud_d16, aa_bilinear_gouraud_d16
+    .dword  aa_flat_d16, aa_bilinear_affine_d16, aa_flat_gouraud_d16, aa_bilinear_affine_gouraud_d16
+    .dword  aa_flat, aa_mipmap, aa_flat_gouraud, aa_mipmap_gouraud
+    .dword  aa_flat, aa_mipmap_affine, aa_flat_gouraud, aa_mipmap_affine_gouraud
+    .dword  aa_flat_d16, aa_mipmap_d16, aa_flat_gouraud_d16, aa_mipmap_gouraud_d16
+    .dword  aa_flat_d16, aa_mipmap_affine_d16, aa_flat_gouraud_d16, aa_mipmap_affine_gouraud_d16
 raster_fills_end:
-    .if (raster_fills_end - raster_fills) != RASTER_FILLS * 8
-    .error "raster_fills must have RASTER_FILLS entries"
+    .if (raster_fills_end - raster_fills) != 2 * RASTER_FILLS * 8
+    .error "raster_fills must have 2 RASTER_FILLS entries"
     .endif

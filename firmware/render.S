@@ -37,13 +37,19 @@
 #      to be exact in Q4 and in the attribute planes. Without it, a corner
 #      projecting beyond 2^23 pixels would be clamped, bending the triangle.
 #   5. raster_triangle: back-face culling (SCENE_CULL), fill, depth test.
+#      With antialias = edge each corner also says what lies across the edge
+#      opposite it (aa_neighbours, from the adjacency adjacency_build makes at
+#      render_init), so that raster_triangle antialiases silhouette edges
+#      only; with antialias = supersample render_band draws its band once per
+#      sample and takes the means (raster.S).
 #
 # Wireframe: the mesh's unique edges (each edge shared by two triangles
 # once: built at render_init by sorting (min, max) index pairs) are drawn in
 # WIRE_COLOUR over the background, without depth test or culling: trivially
 # rejected by outcodes, cut at the near plane and the guard band in clip
 # space (Liang-Barsky), clipped to the screen and drawn with Bresenham's
-# algorithm (raster_segment).
+# algorithm (raster_segment), or by coverage with antialias on
+# (raster_aa_line).
 
     .option norelax
     .include "k210.inc"
@@ -106,7 +112,18 @@ render_init:
     j       31f
 3:  la      t0, render_fill
     sw      t1, 0(t0)
-31:
+31: lwu     t0, SCENE_ANTIALIAS(s0)     # antialias = edge: the coverage fills;
+    li      t1, RASTER_EDGE_AA          # supersample: the frame drawn per sample
+    li      t2, ANTIALIAS_EDGE
+    beq     t0, t2, 32f
+    li      t1, RASTER_SUPERSAMPLE
+    li      t2, ANTIALIAS_SUPERSAMPLE
+    bne     t0, t2, 33f
+32: la      t0, render_fill
+    lwu     t2, 0(t0)
+    or      t2, t2, t1
+    sw      t2, 0(t0)
+33:
 
     # The light quantisation: levels - 1 and LIGHT_ONE / (levels - 1).
     la      t0, light_quantum
@@ -145,8 +162,23 @@ render_init:
     call    heap_alloc_or_fail
     la      t0, normal_light
     sd      a0, 0(t0)
-    # filter = mipmap: the mip chain, built from the texture in memory
+    # antialias = edge: what lies across each triangle edge
 8:  la      t0, render_fill
+    lwu     t0, 0(t0)
+    andi    t0, t0, RASTER_EDGE_AA
+    beqz    t0, 81f
+    call    adjacency_build
+    # antialias = supersample: the sums of the samples
+81: la      t0, render_fill
+    lwu     t0, 0(t0)
+    andi    t0, t0, RASTER_SUPERSAMPLE
+    beqz    t0, 82f
+    li      a0, SUM_BUFFER_BYTES
+    la      a1, msg_supersample_sums
+    call    heap_alloc_or_fail
+    call    raster_set_sums
+    # filter = mipmap: the mip chain, built from the texture in memory
+82: la      t0, render_fill
     lwu     t0, 0(t0)
     andi    t0, t0, RASTER_MIPMAP
     beqz    t0, 9f
@@ -218,7 +250,9 @@ render_prepare:
 #   What: draws rows a0 .. a1 - 1 of the frame render_prepare set up, on
 #         the calling hart: those rows cleared, then every triangle's pixels
 #         in them (raster_set_band; a triangle whose rows all lie outside
-#         is skipped before its lighting and texture set-up). The pixels
+#         is skipped before its lighting and texture set-up: draw_triangles;
+#         with antialias = supersample once per sample, cleared each time,
+#         the samples summed and their means kept). The pixels
 #         are bit for bit those of a whole-screen draw, whichever hart
 #         draws which rows. Wireframe: the whole frame, so only ever called
 #         with the whole screen (main.S splits triangle modes only).
@@ -259,8 +293,89 @@ render_band:
     mv      a0, s1
     call    render_wireframe
     j       9f
+1:  la      t0, render_fill
+    lwu     t0, 0(t0)
+    andi    t0, t0, RASTER_SUPERSAMPLE
+    bnez    t0, 2f
+    mv      a0, s0
+    mv      a1, s2
+    mv      a2, s1
+    call    draw_triangles
+    j       9f
+    # antialias = supersample: the band drawn once per sample, each time
+    # cleared, its colours summed; then the sums' means (raster.S)
+2:  li      s3, 0                       # s3 = sample
+3:  la      t0, supersample_offsets
+    slli    t1, s3, SAMPLE_OFFSET_SHIFT
+    add     t0, t0, t1
+    lw      a0, SAMPLE_OFFSET_X(t0)
+    lw      a1, SAMPLE_OFFSET_Y(t0)
+    call    raster_set_sample
+    beqz    s3, 4f                      # (sample 0's clear is done)
+    la      t1, scene
+    lwu     a0, SCENE_BACKGROUND(t1)
+    li      a1, 1
+    call    raster_clear
+4:  mv      a0, s0
+    mv      a1, s2
+    mv      a2, s1
+    call    draw_triangles
+    li      a0, SAMPLE_FIRST            # the first sample starts the sums,
+    beqz    s3, 5f                      # the last leaves the means
+    li      a0, SAMPLE_MORE
+    li      t0, SUPERSAMPLES - 1
+    bne     s3, t0, 5f
+    li      a0, SAMPLE_LAST
+5:  call    raster_accumulate
+    addi    s3, s3, 1
+    li      t0, SUPERSAMPLES
+    bltu    s3, t0, 3b
+    li      a0, 0
+    li      a1, 0
+    call    raster_set_sample
+9:  ld      s11, 8(sp)
+    ld      s10, 16(sp)
+    ld      s9, 24(sp)
+    ld      s8, 32(sp)
+    ld      s7, 40(sp)
+    ld      s6, 48(sp)
+    ld      s5, 56(sp)
+    ld      s4, 64(sp)
+    ld      s3, 72(sp)
+    ld      s2, 80(sp)
+    ld      s1, 88(sp)
+    ld      s0, 96(sp)
+    ld      ra, 104(sp)
+    addi    sp, sp, 112
+    ret
 
-1:  la      t1, scene
+# draw_triangles (file-local)
+#   What: every triangle's pixels in rows a0 .. a1 - 1 (render_band's loop:
+#         the file comment's steps; a triangle whose rows all lie outside is
+#         skipped before its lighting and texture set-up).
+#   Arguments: a0 = first row, a1 = the row past the last, a2 = vertex
+#              records.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+draw_triangles:
+    addi    sp, sp, -112
+    sd      ra, 104(sp)
+    sd      s0, 96(sp)
+    sd      s1, 88(sp)
+    sd      s2, 80(sp)
+    sd      s3, 72(sp)
+    sd      s4, 64(sp)
+    sd      s5, 56(sp)
+    sd      s6, 48(sp)
+    sd      s7, 40(sp)
+    sd      s8, 32(sp)
+    sd      s9, 24(sp)
+    sd      s10, 16(sp)
+    sd      s11, 8(sp)
+    mv      s0, a0                      # s0 = the band's first row
+    mv      s2, a1                      # s2 = the row past its last
+    mv      s1, a2                      # s1 = vertex records
+    la      t1, scene
     ld      s3, MESH_F(t1)              # s3 = face
     lwu     s4, MESH_FCOUNT(t1)         # s4 = faces left
     la      t0, render_fill
@@ -329,7 +444,12 @@ render_band:
     mv      t4, t1
 11: bge     t4, t2, 11f
     mv      t4, t2
-11: addi    t3, t3, SUBPIXEL_CEIL       # first row: (min + 7) >> 4
+11: andi    t0, s10, RASTER_EDGE_AA | RASTER_SUPERSAMPLE
+    beqz    t0, 12f
+    addi    t3, t3, -AA_BOX_GROW        # coverage reaches half a pixel further
+    addi    t4, t4, AA_BOX_GROW         # (raster_triangle's grown box), samples
+                                        # lie up to 3/8 of a pixel off the centre
+12: addi    t3, t3, SUBPIXEL_CEIL       # first row: (min + 7) >> 4
     srai    t3, t3, SUBPIXEL_BITS
     addi    t4, t4, -SUBPIXEL_HALF      # last row: (max - 8) >> 4
     srai    t4, t4, SUBPIXEL_BITS
@@ -378,15 +498,25 @@ render_band:
     mv      t4, t5
     addi    t2, t2, -1
     bnez    t2, 5b
+    andi    t0, s10, RASTER_EDGE_AA
+    beqz    t0, 7f
+    mv      a0, s3
+    mv      a1, s1
+    la      a2, render_rv
+    add     a2, a2, tp
+    call    aa_neighbours
+7:  la      a0, render_rv
+    add     a0, a0, tp
     mv      a1, s11
     mv      a2, s9
     mv      a3, s10
     call    raster_triangle
     j       8f
+    # cut in clip space: drawn hard (the fan's corners carry no neighbours)
 6:  mv      a0, s3
     mv      a3, s11
     mv      a4, s9
-    mv      a5, s10
+    andi    a5, s10, ~RASTER_EDGE_AA
     mv      a6, s8
     call    clip_and_draw
 8:  addi    s3, s3, MESH_F_BYTES
@@ -1159,7 +1289,13 @@ render_wireframe:
     fcvt.s.w fa3, a3
     fmul.s  fa3, fa3, ft0
     li      a0, WIRE_COLOUR
-    call    raster_segment
+    la      t0, scene                   # antialias: lines by coverage
+    lwu     t0, SCENE_ANTIALIAS(t0)
+    li      t1, ANTIALIAS_OFF
+    beq     t0, t1, 5f
+    call    raster_aa_line
+    j       8f
+5:  call    raster_segment
 8:  addi    s1, s1, EDGE_BYTES
     addi    s2, s2, -1
     bnez    s2, 1b
@@ -1296,6 +1432,345 @@ segment_point:
     flw     ft2, CLIP_POS_W(a1)
     fsub.s  ft2, ft2, ft1
     fmadd.s fa3, ft2, ft0, ft1
+    ret
+
+# aa_neighbours (file-local)
+#   What: antialias = edge: each corner's RV_OPP_* (render.inc) from the
+#         adjacency (adjacency_build) and this frame's vertex records: the
+#         far corner of the neighbour across the edge opposite the corner
+#         (OPP_CORNER, its Q4 screen position), OPP_OPEN where the mesh ends,
+#         OPP_HARD where there are several neighbours or the far corner is
+#         cut in clip space (not projected).
+#   Arguments: a0 = the face (in MESH_F), a1 = vertex records, a2 = its
+#              three raster vertices.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+aa_neighbours:
+    la      t0, scene
+    ld      t1, MESH_F(t0)
+    sub     t1, a0, t1
+    srli    t1, t1, ADJ_FACE_FROM_MESH_F
+    la      t0, adjacency
+    ld      t0, 0(t0)
+    add     t0, t0, t1                  # t0 = the face's entries
+    li      t3, TRIANGLE_CORNERS
+1:  lwu     t1, 0(t0)
+    li      t4, ADJ_OPEN
+    beq     t1, t4, 2f
+    li      t4, ADJ_MANY
+    beq     t1, t4, 3f
+    li      t4, VTX_BYTES
+    mul     t1, t1, t4
+    add     t1, t1, a1
+    lw      t4, VTX_OUTCODE(t1)
+    andi    t4, t4, OUT_CLIP
+    bnez    t4, 3f
+    lw      t4, VTX_SX(t1)
+    sw      t4, RV_OPP_X(a2)
+    lw      t4, VTX_SY(t1)
+    sw      t4, RV_OPP_Y(a2)
+    li      t4, OPP_CORNER
+    j       4f
+2:  li      t4, OPP_OPEN
+    j       4f
+3:  li      t4, OPP_HARD
+4:  sw      t4, RV_OPP_KIND(a2)
+    addi    t0, t0, ADJ_BYTES
+    addi    a2, a2, RV_BYTES
+    addi    t3, t3, -1
+    bnez    t3, 1b
+    ret
+
+# CANON_COORD reg, addr
+#   vertex_canon's view of one coordinate: its bit pattern with -0 as +0
+#   (ft0 must hold +0). Clobbers ft1.
+.macro CANON_COORD reg, addr
+    flw     ft1, \addr
+    fadd.s  ft1, ft1, ft0
+    fmv.x.w \reg, ft1
+    slli    \reg, \reg, 32             # zero-extended
+    srli    \reg, \reg, 32
+.endm
+
+# vertex_canon (file-local)
+#   What: for adjacency_build, each vertex's canonical index: the smallest
+#         index of a vertex with the same position bits (x, y, z). One key
+#         per vertex, (hash of the position) << MESH_INDEX_BITS | index,
+#         sorted (sort_u64) in a block given back before returning; within a
+#         run of one hash (ascending index) a vertex takes the first earlier
+#         one at the same position (a collision of two positions only leaves
+#         them apart).
+#   Arguments: none.
+#   Results: a0 = the indices (a heap block, u32 each; the last block).
+#   Clobbers: only ABI temporaries.
+vertex_canon:
+    addi    sp, sp, -48
+    sd      ra, 40(sp)
+    sd      s0, 32(sp)
+    sd      s1, 24(sp)
+    sd      s2, 16(sp)
+    sd      s3, 8(sp)
+    la      t0, scene
+    lwu     s0, MESH_VCOUNT(t0)         # s0 = vertices
+    ld      s3, MESH_V(t0)              # s3 = their positions
+    slli    a0, s0, ADJ_SHIFT
+    la      a1, msg_canonical_vertices
+    call    heap_alloc_or_fail
+    mv      s1, a0                      # s1 = canonical indices
+    slli    a0, s0, ADJ_KEY_SHIFT
+    la      a1, msg_vertex_keys
+    call    heap_alloc_or_fail
+    mv      s2, a0                      # s2 = keys
+    li      t0, 0                       # t0 = vertex
+    li      t5, CANON_HASH_X
+    li      t6, CANON_HASH_Y
+    li      a2, CANON_HASH_Z
+    fmv.w.x ft0, zero                   # + 0: -0 becomes +0 (a position
+                                        # written "-0.000000" is the same point)
+1:  bgeu    t0, s0, 2f
+    li      t1, MESH_V_BYTES
+    mul     t1, t1, t0
+    add     t1, t1, s3
+    CANON_COORD t2, 0(t1)
+    mul     t2, t2, t5
+    CANON_COORD t3, 4(t1)
+    mul     t3, t3, t6
+    xor     t2, t2, t3
+    CANON_COORD t3, 8(t1)
+    mul     t3, t3, a2
+    xor     t2, t2, t3
+    srli    t3, t2, CANON_HASH_FOLD     # the high bits into the kept ones
+    xor     t2, t2, t3
+    srli    t2, t2, MESH_INDEX_BITS     # hash << MESH_INDEX_BITS | index
+    slli    t2, t2, MESH_INDEX_BITS
+    or      t2, t2, t0
+    slli    t1, t0, ADJ_KEY_SHIFT
+    add     t1, t1, s2
+    sd      t2, 0(t1)
+    addi    t0, t0, 1
+    j       1b
+2:  mv      a0, s2
+    mv      a1, s0
+    call    sort_u64
+    li      t0, 0                       # t0 = key
+3:  bgeu    t0, s0, 9f
+    slli    t1, t0, ADJ_KEY_SHIFT
+    add     t1, t1, s2
+    ld      t2, 0(t1)                   # t2 = this key
+    slli    a3, t2, MESH_INDEX_LOW_SHIFT
+    srli    a3, a3, MESH_INDEX_LOW_SHIFT    # a3 = its vertex
+    mv      a4, a3                      # a4 = its canonical index
+    li      t3, MESH_V_BYTES
+    mul     a5, a3, t3
+    add     a5, a5, s3                  # a5 -> its position
+    mv      t4, t0                      # t4 = earlier keys of the same hash
+4:  beqz    t4, 8f
+    addi    t4, t4, -1
+    slli    t1, t4, ADJ_KEY_SHIFT
+    add     t1, t1, s2
+    ld      t1, 0(t1)
+    xor     t3, t1, t2
+    srli    t3, t3, MESH_INDEX_BITS
+    bnez    t3, 8f                      # another hash: the run's start
+    slli    t1, t1, MESH_INDEX_LOW_SHIFT
+    srli    t1, t1, MESH_INDEX_LOW_SHIFT    # t1 = the earlier vertex
+    li      t3, MESH_V_BYTES
+    mul     t3, t1, t3
+    add     t3, t3, s3
+    CANON_COORD a6, 0(t3)
+    CANON_COORD a7, 0(a5)
+    bne     a6, a7, 4b
+    CANON_COORD a6, 4(t3)
+    CANON_COORD a7, 4(a5)
+    bne     a6, a7, 4b
+    CANON_COORD a6, 8(t3)
+    CANON_COORD a7, 8(a5)
+    bne     a6, a7, 4b
+    mv      a4, t1                      # the same position: the earliest wins
+    j       4b
+8:  slli    t1, a3, ADJ_SHIFT
+    add     t1, t1, s1
+    sw      a4, 0(t1)
+    addi    t0, t0, 1
+    j       3b
+9:  mv      a0, s2
+    call    heap_release
+    mv      a0, s1
+    ld      s3, 8(sp)
+    ld      s2, 16(sp)
+    ld      s1, 24(sp)
+    ld      s0, 32(sp)
+    ld      ra, 40(sp)
+    addi    sp, sp, 48
+    ret
+
+# adjacency_build (file-local)
+#   What: antialias = edge: the triangle adjacency (render.inc ADJ_*) into
+#         a heap block (adjacency). Vertices are matched by position, not
+#         index (vertex_canon): models repeat a vertex where its texture
+#         coordinates or normal change (a seam), and the triangles on the
+#         two sides are still one surface. Then one key per triangle edge,
+#         sorted (sort_u64), and each run of keys with one vertex pair: a
+#         single key is ADJ_OPEN, a pair points each at the other's far
+#         corner, three or more are ADJ_MANY. The keys and the canonical
+#         indices live in blocks given back afterwards. Fatal when the heap
+#         is short (heap_alloc_or_fail).
+#   Arguments: none. Results: none.
+#   Clobbers: only ABI temporaries.
+adjacency_build:
+    addi    sp, sp, -64
+    sd      ra, 56(sp)
+    sd      s0, 48(sp)
+    sd      s1, 40(sp)
+    sd      s2, 32(sp)
+    sd      s3, 24(sp)
+    sd      s4, 16(sp)
+    sd      s5, 8(sp)
+    la      t0, scene
+    lwu     s0, MESH_FCOUNT(t0)         # s0 = triangles
+    ld      s3, MESH_F(t0)              # s3 = the triangles' corners
+    li      t1, ADJ_FACE_BYTES
+    mul     a0, s0, t1
+    la      a1, msg_adjacency
+    call    heap_alloc_or_fail
+    mv      s1, a0                      # s1 = adjacency
+    la      t0, adjacency
+    sd      a0, 0(t0)
+    call    vertex_canon
+    mv      s5, a0                      # s5 = canonical vertex indices
+    li      t1, TRIANGLE_CORNERS * ADJ_KEY_BYTES
+    mul     a0, s0, t1
+    la      a1, msg_adjacency_keys
+    call    heap_alloc_or_fail
+    mv      s2, a0                      # s2 = keys
+    # the keys: triangle t (a3), corner k (a4): the edge of corners k + 1, k + 2
+    mv      t3, s2
+    li      a3, 0
+1:  bgeu    a3, s0, 5f
+    li      t0, MESH_F_BYTES
+    mul     t0, t0, a3
+    add     t0, t0, s3                  # t0 -> corners
+    li      a4, 0
+2:  li      t1, TRIANGLE_CORNERS
+    addi    t2, a4, 1
+    remu    t2, t2, t1
+    slli    t2, t2, MESH_CORNER_SHIFT
+    add     t2, t2, t0
+    ld      a1, 0(t2)
+    slli    a1, a1, MESH_INDEX_LOW_SHIFT
+    srli    a1, a1, MESH_INDEX_LOW_SHIFT
+    slli    a1, a1, ADJ_SHIFT
+    add     a1, a1, s5
+    lwu     a1, 0(a1)                   # canonical
+    addi    t2, a4, 2
+    remu    t2, t2, t1
+    slli    t2, t2, MESH_CORNER_SHIFT
+    add     t2, t2, t0
+    ld      a2, 0(t2)
+    slli    a2, a2, MESH_INDEX_LOW_SHIFT
+    srli    a2, a2, MESH_INDEX_LOW_SHIFT
+    slli    a2, a2, ADJ_SHIFT
+    add     a2, a2, s5
+    lwu     a2, 0(a2)
+    bleu    a1, a2, 3f
+    mv      t1, a1
+    mv      a1, a2
+    mv      a2, t1
+3:  slli    a1, a1, ADJ_KEY_MIN_SHIFT
+    slli    a2, a2, ADJ_KEY_MAX_SHIFT
+    or      a1, a1, a2
+    slli    a2, a3, ADJ_KEY_FACE_SHIFT
+    or      a1, a1, a2
+    or      a1, a1, a4
+    sd      a1, 0(t3)
+    addi    t3, t3, ADJ_KEY_BYTES
+    addi    a4, a4, 1
+    li      t1, TRIANGLE_CORNERS
+    bltu    a4, t1, 2b
+    addi    a3, a3, 1
+    j       1b
+5:  li      t1, TRIANGLE_CORNERS
+    mul     s4, s0, t1                  # s4 = keys
+    mv      a0, s2
+    mv      a1, s4
+    call    sort_u64
+    sd      s5, 0(sp)                   # (given back at the end, the keys with it)
+    # the runs: s5 = the run's first key's index, t5 = past its last
+    li      s5, 0
+6:  bgeu    s5, s4, 9f
+    slli    t0, s5, ADJ_KEY_SHIFT
+    add     t0, t0, s2
+    ld      t0, 0(t0)
+    srli    t0, t0, ADJ_KEY_MAX_SHIFT   # t0 = the vertex pair
+    addi    t5, s5, 1
+7:  bgeu    t5, s4, 8f
+    slli    t1, t5, ADJ_KEY_SHIFT
+    add     t1, t1, s2
+    ld      t1, 0(t1)
+    srli    t1, t1, ADJ_KEY_MAX_SHIFT
+    bne     t1, t0, 8f
+    addi    t5, t5, 1
+    j       7b
+8:  sub     t6, t5, s5                  # t6 = the run's length
+    li      t1, 2
+    beq     t6, t1, 10f
+    li      a5, ADJ_OPEN                # one triangle, or (below) many
+    li      t1, 1
+    beq     t6, t1, 11f
+    li      a5, ADJ_MANY
+11: mv      t4, s5                      # every key of the run gets a5
+12: bgeu    t4, t5, 13f
+    slli    t1, t4, ADJ_KEY_SHIFT
+    add     t1, t1, s2
+    ld      a0, 0(t1)
+    jal     t2, 21f
+    sw      a5, 0(a1)
+    addi    t4, t4, 1
+    j       12b
+13: mv      s5, t5
+    j       6b
+10: slli    t1, s5, ADJ_KEY_SHIFT      # a pair: each gets the other's far corner
+    add     t1, t1, s2
+    ld      a0, 0(t1)
+    jal     t2, 21f
+    mv      a6, a0                      # a6, a7 = the first's far corner, entry
+    mv      a7, a1
+    ld      a0, ADJ_KEY_BYTES(t1)
+    jal     t2, 21f
+    sw      a6, 0(a1)
+    sw      a0, 0(a7)
+    j       13b
+    # 21: key a0's triangle corner: a0 = its vertex index (the far corner
+    # of the key's edge), a1 = its adjacency entry (returns through t2;
+    # clobbers t0, t3)
+21: srli    t0, a0, ADJ_KEY_FACE_SHIFT
+    li      t3, (1 << ADJ_KEY_FACE_BITS) - 1
+    and     t0, t0, t3                  # t0 = triangle
+    andi    a0, a0, ADJ_KEY_CORNER_MASK # a0 = k
+    li      t3, ADJ_FACE_BYTES
+    mul     a1, t0, t3
+    add     a1, a1, s1
+    slli    t3, a0, ADJ_SHIFT
+    add     a1, a1, t3
+    li      t3, MESH_F_BYTES
+    mul     t0, t0, t3
+    add     t0, t0, s3
+    slli    t3, a0, MESH_CORNER_SHIFT
+    add     t0, t0, t3
+    ld      a0, 0(t0)
+    slli    a0, a0, MESH_INDEX_LOW_SHIFT
+    srli    a0, a0, MESH_INDEX_LOW_SHIFT
+    jr      t2
+9:  ld      a0, 0(sp)                   # the canonical indices and the keys
+    call    heap_release                # are not needed any more
+    ld      s5, 8(sp)
+    ld      s4, 16(sp)
+    ld      s3, 24(sp)
+    ld      s2, 32(sp)
+    ld      s1, 40(sp)
+    ld      s0, 48(sp)
+    ld      ra, 56(sp)
+    addi    sp, sp, 64
     ret
 
 # edges_build (file-local)
@@ -1439,6 +1914,23 @@ clip_planes:
     .error "clip_planes lists five planes"
 .endif
 msg_edge_list:      .asciz "edge list"
+msg_supersample_sums: .asciz "supersample sums"
+    .balign 4
+# The samples of antialias = supersample (render.inc SAMPLE_OFFSET_*): each
+# sample's offset from the pixel centre in Q4, a rotated grid.
+supersample_offsets:
+    .word   2, 6
+    .word   6, -2
+    .word   -2, -6
+    .word   -6, 2
+supersample_offsets_end:
+.if supersample_offsets_end - supersample_offsets != SUPERSAMPLES * SAMPLE_OFFSET_BYTES
+    .error "supersample_offsets must list SUPERSAMPLES offsets"
+.endif
+msg_adjacency:      .asciz "adjacency"
+msg_adjacency_keys: .asciz "adjacency keys"
+msg_canonical_vertices: .asciz "canonical vertices"
+msg_vertex_keys:    .asciz "vertex keys"
 msg_depth_buffer:   .asciz "depth buffer"
 msg_normal_intensities: .asciz "normal intensities"
 
@@ -1460,6 +1952,10 @@ light_quantum:
 edge_list:
     .space  8
 edge_count:
+    .space  8
+# adjacency: address (heap) of the triangle adjacency (antialias = edge;
+# adjacency_build).
+adjacency:
     .space  8
 # render_vertices: this frame's vertex records (render_prepare).
 render_vertices:

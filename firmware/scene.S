@@ -43,6 +43,10 @@
 # filter      nearest | bilinear | mipmap             nearest       SCENE_FILTER
 #             (texture filtering, raster.S; its default, 0, is the
 #             zeros scene_defaults leaves after scene_default_values)
+# antialias   off | edge | supersample                off           SCENE_ANTIALIAS
+#             (edge: silhouette pixels blended by their coverage,
+#             raster.S; supersample: four samples a pixel, render.S;
+#             the same zero default)
 #
 # Not what is drawn, only how fast (main.S; the same default, 0):
 # harts       auto | 1 | 2                            auto          SCENE_HARTS
@@ -178,6 +182,7 @@ scene_keys:
     SCENE_KEY snap, SCENE_KIND_WORD, 0, 0, scene + SCENE_SNAP, words_snap, msg_expect_snap
     SCENE_KEY filter, SCENE_KIND_WORD, 0, 0, scene + SCENE_FILTER, words_filter, msg_expect_filter
     SCENE_KEY harts, SCENE_KIND_WORD, 0, 0, scene + SCENE_HARTS, words_harts, msg_expect_harts
+    SCENE_KEY antialias, SCENE_KIND_WORD, 0, 0, scene + SCENE_ANTIALIAS, words_antialias, msg_expect_antialias
 scene_keys_end:
 
     .balign 8
@@ -225,6 +230,11 @@ words_harts:
     .dword  word_auto, HARTS_AUTO
     .dword  word_1, HARTS_ONE
     .dword  word_2, HARTS_TWO
+    .dword  0
+words_antialias:
+    .dword  word_off, ANTIALIAS_OFF
+    .dword  word_edge, ANTIALIAS_EDGE
+    .dword  word_supersample, ANTIALIAS_SUPERSAMPLE
     .dword  0
 
     .balign 4
@@ -282,6 +292,8 @@ word_bilinear:      .asciz "bilinear"
 word_mipmap:        .asciz "mipmap"
 word_auto:          .asciz "auto"
 word_2:             .asciz "2"
+word_edge:          .asciz "edge"
+word_supersample:   .asciz "supersample"
 path_scene_ini:     .asciz "scene.ini"
 msg_load:           .asciz "load "
 msg_crc32:          .asciz " crc32="
@@ -315,6 +327,7 @@ msg_expect_depth:   .asciz "bad value (expected int16 or float32)"
 msg_expect_snap:    .asciz "bad value (expected subpixel or pixel)"
 msg_expect_filter:  .asciz "bad value (expected nearest, bilinear or mipmap)"
 msg_expect_harts:   .asciz "bad value (expected auto, 1 or 2)"
+msg_expect_antialias: .asciz "bad value (expected off, edge or supersample)"
 msg_levels:         .asciz "bad value (must be a whole number from 2 to 65)"
 
     .text

@@ -25,6 +25,10 @@ can be checked against it; the ideal image ignores it (it area-filters every tex
 
 `harts` (`auto`, `1`, `2`) says which of the K210's harts draw (firmware/main.S); the frames are the
 same whichever do, so the reference reads and checks it and ignores it.
+
+`antialias` (`off`, `edge`, `supersample`) chooses how the firmware approaches the ideal image at edges
+(firmware/raster.S); the pixel-centre image samples pixel centres whatever it says and the ideal
+image is the ideal whatever it says, so the reference reads and checks it and ignores it.
 """
 from __future__ import annotations
 
@@ -52,10 +56,16 @@ PRECISION_WORDS: dict[str, tuple[str, ...]] = {
 FILTER_WORDS: tuple[str, ...] = ("nearest", "bilinear", "mipmap")
 # Which harts draw (firmware/main.S), the default first: changes how fast, never what is drawn.
 HARTS_WORDS: tuple[str, ...] = ("auto", "1", "2")
+# Antialiasing (firmware/raster.S), the default first: the reference renders the same images whatever it is.
+ANTIALIAS_WORDS: tuple[str, ...] = ("off", "edge", "supersample")
+# The keys taking one word that are not precision keys -> the words allowed, the default first.
+OTHER_WORDS: dict[str, tuple[str, ...]] = {"filter": FILTER_WORDS, "harts": HARTS_WORDS,
+                                           "antialias": ANTIALIAS_WORDS}
 LIGHT_LEVELS_MIN, LIGHT_LEVELS_MAX = 2, 65
 KEYS = ("model", "texture", "mode", "cull", "scale", "axis", "angle", "step", "translate",
         "fov", "near", "far", "light", "ambient", "background",
-        "interpolation", "shading", "light_levels", "angles", "depth", "snap", "filter", "harts")
+        "interpolation", "shading", "light_levels", "angles", "depth", "snap", "filter", "harts",
+        "antialias")
 VALUE_MAX = 256          # a path of this many bytes or more is too long (NUL included)
 
 
@@ -96,6 +106,8 @@ class Scene:
     filter: str = "nearest"                      # nearest | bilinear | mipmap
     # which harts draw (how fast only: the reference ignores it)
     harts: str = "auto"                          # auto | 1 | 2
+    # how edges are antialiased (the reference ignores it: its images are the yardsticks)
+    antialias: str = "off"                       # off | edge | supersample
     lines: dict[str, int] = field(default_factory=dict, repr=False)   # key -> line that set it
 
 
@@ -259,8 +271,8 @@ def _set(scene: Scene, key: str, value: str, line: int) -> None:
         if value.lower() not in CULL_WORDS:
             raise SceneError(line, "bad value (expected on, off, yes, no, true, false, 1 or 0)")
         scene.cull = CULL_WORDS[value.lower()]
-    elif key in PRECISION_WORDS or key in ("filter", "harts"):
-        words = FILTER_WORDS if key == "filter" else HARTS_WORDS if key == "harts" else PRECISION_WORDS[key]
+    elif key in PRECISION_WORDS or key in OTHER_WORDS:
+        words = OTHER_WORDS[key] if key in OTHER_WORDS else PRECISION_WORDS[key]
         if value.lower() not in words:
             raise SceneError(line, _expected_words(words))
         setattr(scene, key, value.lower())

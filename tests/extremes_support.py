@@ -220,7 +220,8 @@ class HeapLayout:
 
 NEEDED = ("HEAP_ALIGN", "FAT_SECTOR_BYTES", "MESH_V_BYTES", "MESH_T_BYTES", "MESH_N_BYTES", "MESH_F_BYTES",
           "VTX_BYTES", "WORLD_POS_BYTES", "EDGE_BYTES", "EDGES_PER_TRIANGLE", "DEPTH_BUFFER_BYTES", "DEPTH16_BUFFER_BYTES",
-          "NORMAL_LIGHT_SHIFT", "TEX_PIXEL_BYTES", "OBJ_WINDOW_BYTES", "MIP_TABLE_BYTES")
+          "NORMAL_LIGHT_SHIFT", "TEX_PIXEL_BYTES", "OBJ_WINDOW_BYTES", "MIP_TABLE_BYTES", "ADJ_BYTES",
+          "ADJ_FACE_BYTES", "ADJ_KEY_BYTES", "SUM_BUFFER_BYTES")
 
 
 def heap_layout(elf: Path) -> HeapLayout:
@@ -271,7 +272,8 @@ class Heap:
 
 def boot_allocations(layout: HeapLayout, texture: int | None, vertices: int, texcoords: int, normals: int,
                      triangles: int, wireframe: bool = False, depth: str = "int16", gouraud: bool = False,
-                     scene_ini: int | None = None, mipmap: tuple[int, int] | None = None) -> tuple[str, Heap]:
+                     scene_ini: int | None = None, mipmap: tuple[int, int] | None = None,
+                     antialias: str = "off") -> tuple[str, Heap]:
     """Replays the firmware's heap use at boot, given the sizes of the files (texture: bytes of
     texture.ppm, None for none; scene_ini likewise) and the model's counts. The model's text
     takes no part: obj.S reads it through a window. In order: scene.S scene_load (scene.ini if
@@ -286,7 +288,12 @@ def boot_allocations(layout: HeapLayout, texture: int | None, vertices: int, tex
     list, or else the
     depth buffer (DEPTH16_BUFFER_BYTES for `depth = int16`, the default; DEPTH_BUFFER_BYTES for
     float32) and, with `shading = gouraud`, one f32 per normal (MESH_NCOUNT <<
-    NORMAL_LIGHT_SHIFT; heap.S's heap_alloc of 0 bytes always succeeds), and last, with
+    NORMAL_LIGHT_SHIFT; heap.S's heap_alloc of 0 bytes always succeeds), with `antialias = edge`
+    the triangle adjacency (render.S adjacency_build: ADJ_FACE_BYTES a triangle, kept; then, given
+    back at the end, the canonical vertex indices (ADJ_BYTES a vertex), the vertices' sort keys
+    (ADJ_KEY_BYTES a vertex, given back first) and the edges' (three ADJ_KEY_BYTES a triangle)),
+    with `antialias = supersample` the sums of the samples (SUM_BUFFER_BYTES),
+    and last, with
     `filter = mipmap` (mipmap = the texture's (width, height)), the mip chain (raster.S
     raster_build_mips: `mip_chain_bytes`); each of these blocks is
     error 12 "model too large for memory (<block>: n bytes needed, m bytes free)".
@@ -331,12 +338,35 @@ def boot_allocations(layout: HeapLayout, texture: int | None, vertices: int, tex
                        layout.DEPTH16_BUFFER_BYTES if depth == "int16" else layout.DEPTH_BUFFER_BYTES))
         if gouraud:
             blocks.append(("normal intensities", normals << layout.NORMAL_LIGHT_SHIFT))
+        if antialias == "edge":
+            blocks.append(("adjacency", triangles * layout.ADJ_FACE_BYTES))
+        if antialias == "supersample":
+            blocks.append(("supersample sums", layout.SUM_BUFFER_BYTES))
         if mipmap is not None and texture is not None:
             blocks.append(("mip chain", mip_chain_bytes(layout, *mipmap)))
     for name, size in blocks:
         if heap.alloc_or_fail(name, size) is None:
             return "error 12", heap
+        if name == "adjacency" and not _adjacency_scratch(heap, layout, vertices, triangles):
+            return "error 12", heap
     return "ok", heap
+
+
+def _adjacency_scratch(heap: Heap, layout: HeapLayout, vertices: int, triangles: int) -> bool:
+    """render.S adjacency_build's blocks after the adjacency, all given back before it returns:
+    the canonical vertex indices, the vertices' sort keys (given back at once), the edges' sort
+    keys. False (with heap.failed set) when one does not fit."""
+    canonical = heap.alloc_or_fail("canonical vertices", vertices * layout.ADJ_BYTES)
+    if canonical is None:
+        return False
+    keys = heap.alloc_or_fail("vertex keys", vertices * layout.ADJ_KEY_BYTES)
+    if keys is None:
+        return False
+    heap.release(keys)
+    if heap.alloc_or_fail("adjacency keys", triangles * layout.EDGES_PER_TRIANGLE * layout.ADJ_KEY_BYTES) is None:
+        return False
+    heap.release(canonical)
+    return True
 
 
 def mip_chain_bytes(layout: HeapLayout, width: int, height: int) -> int:

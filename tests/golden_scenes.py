@@ -28,8 +28,21 @@ SCENES: dict[str, tuple[dict[str, str] | None, int]] = {
     "torus-mipmap": ({"model": "models/torus.obj", "texture": "textures/torus.ppm", "mode": "textured",
                       "scale": "0.35", "translate": "0 0 -3", "axis": "1 1 0", "angle": "17", "step": "3",
                       "shading": "gouraud", "filter": "mipmap"}, 3),
+    # antialias = edge: the torus's silhouettes (outer, and inner where it folds) by coverage,
+    # textured
+    "torus-edge": ({"model": "models/torus.obj", "texture": "textures/torus.ppm", "mode": "textured",
+                    "scale": "0.8", "translate": "0 0 -3", "axis": "1 0.6 0.2", "angle": "40", "step": "4",
+                    "background": "200 220 255", "antialias": "edge"}, 3),
+    # antialias = supersample: the gem's facets, four samples a pixel
+    "gem-supersample": ({"model": "models/gem.obj", "texture": "textures/gem.ppm", "mode": "flat",
+                         "translate": "0 0 -3", "axis": "0.2 1 0", "angle": "10", "step": "6", "ambient": "0.3",
+                         "light": "-0.4 0.6 1", "antialias": "supersample"}, 3),
     "torus-wireframe": ({"model": "models/torus.obj", "texture": "textures/torus.ppm", "mode": "wireframe",
                          "translate": "0 0 -2.8", "axis": "1 0.6 0.2", "angle": "40", "step": "4"}, 3),
+    # antialias = edge in wireframe: the same torus, lines by coverage
+    "torus-wireframe-aa": ({"model": "models/torus.obj", "texture": "textures/torus.ppm", "mode": "wireframe",
+                            "translate": "0 0 -2.8", "axis": "1 0.6 0.2", "angle": "40", "step": "4",
+                            "antialias": "edge"}, 3),
 }
 
 

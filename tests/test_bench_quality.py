@@ -34,20 +34,20 @@ def test_settings_are_ordered_default_first_and_use_known_keys_and_values():
     names = list(quality.SETTINGS)
     assert names[0] == quality.DEFAULT_SETTING == "default" and quality.SETTINGS["default"] == {}
     assert names == ["default", "affine", "gouraud", "light-33", "light-9", "angle-table", "depth-float32",
-                     "pixel-snap", "bilinear", "mipmap", "thesis", "best"]
+                     "pixel-snap", "bilinear", "mipmap", "edge-aa", "supersample", "thesis", "best"]
     for name, keys in quality.SETTINGS.items():
         for key, value in keys.items():
             assert value in quality.PRECISION_KEYS[key], (name, key, value)
     assert quality.SETTINGS["thesis"] == {"interpolation": "affine", "shading": "flat", "light_levels": "33",
                                           "angles": "table", "depth": "int16", "snap": "pixel"}
     # the single-knob settings differ from the default in exactly one key, and not in its default value
-    for name in names[1:10]:
+    for name in names[1:12]:
         (key, value), = quality.SETTINGS[name].items()
         assert value != quality.PRECISION_KEYS[key][0]
 
 
 def test_wireframe_sweeps_only_the_settings_that_change_it():
-    assert quality.settings_for_mode("wireframe") == ["default", "angle-table", "pixel-snap"]
+    assert quality.settings_for_mode("wireframe") == ["default", "angle-table", "pixel-snap", "edge-aa"]
     # texture filtering only in textured mode
     assert quality.settings_for_mode("textured") == list(quality.SETTINGS)
     assert quality.settings_for_mode("flat") == [n for n in quality.SETTINGS if n not in ("bilinear", "mipmap")]
@@ -206,7 +206,7 @@ def test_bench_plans_each_run_once():
     # renderer table: every scale and mode, default settings
     assert all((name, scale, mode, "default") in keys
                for name, _, _, scales in bench.BENCH_SCENES for scale in scales for mode in bench.MODES)
-    # sweep: first scale only; wireframe only its three settings
+    # sweep: first scale only; wireframe only its own settings
     per_scene = 2 * len(quality.SETTINGS) - len(quality.TEXTURE_SETTINGS) + len(quality.WIREFRAME_SETTINGS)
     second_scales = sum(len(scales) - 1 for _, _, _, scales in bench.BENCH_SCENES)
     assert len(runs) == len(bench.BENCH_SCENES) * per_scene + second_scales * len(bench.MODES)

@@ -47,6 +47,12 @@ SCENES = {
     "close-up": (MODEL, TEXTURE, "scale = 1.4\ntranslate = 0 0 -1.45\nfilter = mipmap\nshading = gouraud\n"
                  "depth = float32\ncull = off\n", FRAMES),
     "cube": (cube(), FINE_TEXTURE, "scale = 1.3\nangle = 30\naxis = 1 1 0\n", 6),
+    # antialias = edge: silhouette triangles in the coverage fills, whose grown boxes and moved-out
+    # edge functions are stepped to hart 1's band like the others (the filtered one keeps the
+    # pixel's coverage on the stack; Gouraud's k clamped)
+    "edge": (MODEL, TEXTURE, BIG + "antialias = edge\nfilter = bilinear\nshading = gouraud\n", 3),
+    # antialias = supersample: each hart draws its band once per sample, sums and resolves it
+    "supersample": (MODEL, TEXTURE, "antialias = supersample\nfilter = mipmap\n", 3),
 }
 
 
@@ -122,3 +128,18 @@ def test_harts_key_host_and_firmware_agree(firmware, tmp_path, value, accepted):
     else:
         assert host == "bad scene.ini line 2: bad value (expected auto, 1 or 2)"
         assert run.returncode != 0 and f"error 9 {host}" in (run.out / "console.log").read_text()
+
+
+def test_a_silhouette_fringe_below_the_split_is_drawn_by_hart_1(firmware, tmp_path):
+    """antialias = edge: a quad's bottom edge 0.2 pixel below the first split row's top (row 120,
+    where frame 1 splits): no pixel centre of the quad lies in hart 1's band, but row 120 is
+    covered a fifth by the edge's half-pixel reach, so hart 1 must not skip the quad (render.S
+    grows the band test by half a pixel as raster_triangle grows the box): frames the same."""
+    # fov 90 at z = -1: 120 pixels a unit; y = -0.2 / 120 is screen row 120.2
+    quad = "v -0.5 -0.0016667 -1\nv 0.5 -0.0016667 -1\nv 0.5 0.5 -1\nv -0.5 0.5 -1\nf 1 2 3 4\n"
+    keys = "mode = flat\nfov = 90\ntranslate = 0 0 0\nstep = 0\nantialias = edge\n"
+    one, two = (run_scene(firmware, tmp_path / harts, quad, keys + f"harts = {harts}\n", frames=2)
+                for harts in ("1", "2"))
+    assert one.returncode == 0 and two.returncode == 0, (one.stderr, two.stderr)
+    assert np.any(one.frames[1][120] != one.frames[1][121])           # the fringe is there
+    assert np.array_equal(one.frames[1], two.frames[1])

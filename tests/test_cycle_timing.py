@@ -198,13 +198,13 @@ def test_an_unknown_timing_model_is_refused():
 
 
 # The default card's first frames under the model before cycle timing (commit 53f433e, this
-# firmware and card): virtual time each frame reached the LCD, and hart 0's and hart 1's
-# instructions since the previous frame. --timing ipc1 must reproduce them exactly. (A change to
+# firmware and card, taken again on the firmware of antialiasing): virtual time each frame reached
+# the LCD, and hart 0's and hart 1's instructions since the previous frame. --timing ipc1 must reproduce them exactly. (A change to
 # the firmware or to the card changes them on purpose: take them again by running commit 53f433e's
 # emulator, `python -m emulator run build/firmware.elf --sd build/card.img --frames 4`, on the new
 # firmware and card.)
-BEFORE_CYCLES = [(0.13386781612903456, [11937169, 29028]), (0.14487824789082063, [1016385, 3542]),
-                 (0.1525040022332524, [1015663, 1267]), (0.16012975657568415, [1032801, 1267])]
+BEFORE_CYCLES = [(0.13436821480562672, [11950494, 29239]), (0.14485785252274785, [1022908, 3200]),
+                 (0.15248360686517962, [1022114, 1267]), (0.16010936120761138, [1039396, 1267])]
 
 
 def test_ipc1_reproduces_the_model_before_cycle_timing(firmware, card, firmware_run, tmp_path):

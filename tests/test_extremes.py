@@ -547,6 +547,87 @@ def test_near_plane_and_huge_triangles(firmware, tmp_path, name):
             assert result.beyond_lighting <= OUTLINE_BUDGET, f"frame {n}: {result}"
 
 
+# The extreme triangle scenes again with antialias = edge (the coverage fills and the adjacency:
+# planes extended past an edge, coverage from edge functions of 1e6-pixel triangles, slivers,
+# repeated vertices, triangles cut at the near plane beside ones that are not).
+EDGE_AA_CASES = {name: AGREEING[name] for name in ("coordinates-around-1e6", "repeated-vertices",
+                                                   "sliver-thousands-long")}
+EDGE_AA_CASES.update({name: NEAR_AND_HUGE[name] for name in ("crossing-the-near-plane-cull-off",
+                                                             "floor-around-the-camera")})
+
+
+@pytest.mark.parametrize("setting", ["edge", "supersample"])
+@pytest.mark.parametrize("name", EDGE_AA_CASES)
+def test_extremes_with_antialiasing(firmware, tmp_path, name, setting):
+    """No trap, hang, error or stray store, and the reference's pixel-centre frames within the
+    lighting tolerance everywhere but on the reference's outline: antialiasing only blends pixels
+    that an edge crosses or passes within half a pixel of (edge: coverage; supersample: samples
+    3/8 of a pixel off the centre), each of which has a neighbour of another colour. Something is
+    drawn where the reference draws. Supersampling also sees edges just off the screen, from
+    the pixels of its outermost rows and columns, where the reference's outline (of what is on
+    the screen) cannot show them: those pixels are exempt."""
+    model, scene = EDGE_AA_CASES[name]
+    run = run_scene(firmware, tmp_path, model, scene + f"antialias = {setting}\n")
+    assert run.returncode == 0, run.stderr + run.console
+    for n in range(FRAMES):
+        result = run.compare(n)
+        ref = run.reference(n)
+        off = ~lighting_ok(run.frames[n], ref) & ~outline_mask(ref)
+        if setting == "supersample":
+            off[0, :] = off[-1, :] = off[:, 0] = off[:, -1] = False
+        assert not off.any(), f"frame {n}: {result}, {np.argwhere(off)[:5].tolist()}"
+        if result.drawn_ref > 100:
+            assert result.drawn_shown > result.drawn_ref // 2, f"frame {n}: {result}"
+
+
+@pytest.mark.parametrize("name", ["wireframe-crossing-and-floor", "beyond-the-q4-range"])
+def test_extreme_wireframes_with_coverage_lines(firmware, tmp_path, name):
+    """Wireframe lines by coverage (antialias = edge) cut at the near plane and the guard band,
+    thousands of pixels long, off the screen at both ends: no trap, hang or stray store, and
+    every drawn pixel within one pixel of one of the reference's line pixels and the other way
+    round (a coverage line is up to three pixels across where Bresenham's is one)."""
+    model, scene = ((BEYOND_Q4, "translate = 0 0 0\nstep = 3\naxis = 0 0 1\nmode = wireframe\n")
+                    if name == "beyond-the-q4-range"
+                    else NEAR_AND_HUGE[name])
+    run = run_scene(firmware, tmp_path, model, scene + "antialias = edge\n")
+    assert run.returncode == 0, run.stderr + run.console
+    for n in range(FRAMES):
+        shown, ref = (np.any(f != run.background, axis=-1) for f in (run.frames[n], run.reference(n)))
+        assert within_one_pixel(shown, ref) and within_one_pixel(ref, shown), f"frame {n}"
+        assert ref.sum() > 100 or name == "beyond-the-q4-range"     # (its edges lie off the screen)
+
+
+def test_edge_antialiasing_adjacency_too_large_for_memory(firmware, layout, tmp_path):
+    """antialias = edge needs the triangle adjacency (ADJ_FACE_BYTES a triangle) and, while it is
+    built, the sort keys of the edges (three ADJ_KEY_BYTES a triangle): the largest model without
+    antialiasing fails with error 12 naming the block the replay says (extremes_support.
+    boot_allocations, antialias = edge), where the same model draws with antialias = off."""
+    most, _ = limits(lambda n: model_outcomes(layout, n), 1, layout.size // layout.MESH_F_BYTES + 1)
+    assert boot_allocations(layout, len(TEXTURE), 3, 0, 0, most)[0] == "ok"
+    outcome, heap = boot_allocations(layout, len(TEXTURE), 3, 0, 0, most, antialias="edge")
+    assert outcome == "error 12" and heap.failed.startswith("error 12 model too large for memory (adjacency: ")
+    run = run_scene(firmware, tmp_path, fan_model(most), "antialias = edge\n", texture=TEXTURE, frames=1)
+    assert run.returncode == 8, run.stderr + run.console
+    assert (run.error_line() or "") == heap.failed, (heap.failed, run.console)
+    # the largest that fits with the adjacency: its keys are the block that fails one triangle on
+    fits = largest(lambda n: boot_allocations(layout, len(TEXTURE), 3, 0, 0, n, antialias="edge")[0] == "ok",
+                   1, most)
+    _, heap = boot_allocations(layout, len(TEXTURE), 3, 0, 0, fits + 1, antialias="edge")
+    assert heap.failed.startswith("error 12 model too large for memory (adjacency keys: ")
+
+
+def test_supersampling_sums_too_large_for_memory(firmware, layout, tmp_path):
+    """antialias = supersample needs the sums of the samples (SUM_BUFFER_BYTES, a u32 a pixel):
+    the largest model without antialiasing fails with error 12 naming that block."""
+    most, _ = limits(lambda n: model_outcomes(layout, n), 1, layout.size // layout.MESH_F_BYTES + 1)
+    outcome, heap = boot_allocations(layout, len(TEXTURE), 3, 0, 0, most, antialias="supersample")
+    assert outcome == "error 12" and heap.failed.startswith(
+        f"error 12 model too large for memory (supersample sums: {layout.SUM_BUFFER_BYTES} bytes needed, ")
+    run = run_scene(firmware, tmp_path, fan_model(most), "antialias = supersample\n", texture=TEXTURE, frames=1)
+    assert run.returncode == 8, run.stderr + run.console
+    assert (run.error_line() or "") == heap.failed, (heap.failed, run.console)
+
+
 def test_wholly_behind_the_camera_draws_nothing(firmware, tmp_path):
     """Both windings, culling off, behind the camera (z > 0), huge, and between the eye and the
     near plane: every frame is the background, exactly."""

@@ -21,14 +21,14 @@ from collections.abc import Iterable
 from pathlib import Path
 from xml.sax.saxutils import escape
 
-from reference.scene import FILTER_WORDS, LIGHT_LEVELS_MAX, LIGHT_LEVELS_MIN, PRECISION_WORDS
+from reference.scene import ANTIALIAS_WORDS, FILTER_WORDS, LIGHT_LEVELS_MAX, LIGHT_LEVELS_MIN, PRECISION_WORDS
 
 # --- the settings ---------------------------------------------------------------------------------
 
 # The firmware's precision keys in scene.ini and the values each takes, default first (the
 # reference renderer checks them exactly as the firmware does, so its tables serve here), and
 # the texture filter, which the reference's pixel-centre image follows.
-PRECISION_KEYS = {**PRECISION_WORDS, "filter": FILTER_WORDS,
+PRECISION_KEYS = {**PRECISION_WORDS, "filter": FILTER_WORDS, "antialias": ANTIALIAS_WORDS,
                   "light_levels": tuple(str(n) for n in range(LIGHT_LEVELS_MAX, LIGHT_LEVELS_MIN - 1, -1))}
 
 # Every setting the bench sweeps, in the order the tables list them: name -> scene.ini keys added
@@ -44,13 +44,16 @@ SETTINGS: dict[str, dict[str, str]] = {
     "pixel-snap":    {"snap": "pixel"},
     "bilinear":      {"filter": "bilinear"},
     "mipmap":        {"filter": "mipmap"},
+    "edge-aa":       {"antialias": "edge"},
+    "supersample":   {"antialias": "supersample"},
     "thesis":        {"interpolation": "affine", "shading": "flat", "light_levels": "33", "angles": "table",
                       "depth": "int16", "snap": "pixel"},
     "best":          {"interpolation": "perspective", "shading": "gouraud", "depth": "float32"},
 }
 DEFAULT_SETTING = "default"
-# Wireframe has no texture, light or depth buffer: only the angles and the snapping change it.
-WIREFRAME_SETTINGS = ("default", "angle-table", "pixel-snap")
+# Wireframe has no texture, light or depth buffer: only the angles, the snapping and antialiased
+# lines change it (edge and supersample draw the same lines: edge-aa stands for both).
+WIREFRAME_SETTINGS = ("default", "angle-table", "pixel-snap", "edge-aa")
 # Texture filtering changes only what a texture draws: swept in textured mode alone.
 TEXTURE_SETTINGS = ("bilinear", "mipmap")
 
