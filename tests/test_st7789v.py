@@ -720,3 +720,24 @@ def test_full_frame_in_one_write() -> None:
     assert np.array_equal(frames[0], expected)
     assert np.array_equal(lcd.shown_image(), expected)
     assert lcd.warnings == []
+
+
+@pytest.mark.parametrize("colmod, bytes_per_pixel", [(0x55, 2), (0x66, 3), (0x53, 1.5)])
+def test_pixels_kept_back_still_capture_in_the_call_that_completes_the_frame(colmod, bytes_per_pixel) -> None:
+    """Pixel bytes are decoded in one go when they could finish a frame: the frame is captured in
+    the very write that brings its last pixel, and cells_missing never claims more cells to go
+    than there are (the scheduler's turns alone rely on it as a lower bound)."""
+    frames: list[np.ndarray] = []
+    host = ready_host(madctl=0xA0, colmod=colmod, on_frame=frames.append)
+    host.window(0, 319, 0, 239)
+    host.cmd(RAMWR)
+    total = int(320 * 240 * bytes_per_pixel)
+    payload = np.random.default_rng(7).integers(0, 256, total + 999, dtype=np.uint8)
+    sent = 0
+    for chunk in np.array_split(payload, 97):
+        host.data(chunk)
+        sent += chunk.size
+        pixels_complete = int(sent / bytes_per_pixel)
+        assert len(frames) == (2 if sent >= total else 1), f"after {sent} bytes"
+        if sent < total:
+            assert host.lcd.cells_missing() <= 320 * 240 - pixels_complete
