@@ -55,6 +55,8 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 from typing import Callable
 
+import functools
+
 import numpy as np
 
 # --- command codes (datasheet "System Function Command Table 1") ---------------------
@@ -500,6 +502,11 @@ class ST7789V:
         self._pending = units[count * per_pixel:].copy()
         if count == 0:
             return
+        if fmt == COLMOD_16BIT:
+            # a 16-bit pixel is two bytes, big-endian on the wire: one look-up gives its GRAM colour
+            pairs = np.ascontiguousarray(units[:count * 2]).view(">u2")
+            self._store_pixels(_colours_of_16_bit_pixels(bool(self._regs.madctl & MADCTL_BGR))[pairs])
+            return
         fields = units[:count * per_pixel].reshape(count, per_pixel).astype(np.uint32)
         red, green, blue = _decode_pixels(fields, fmt)
         if self._regs.madctl & MADCTL_BGR:
@@ -524,6 +531,12 @@ class ST7789V:
         if not self._window_all_on_panel:
             on_panel = cells >= 0
             cells, colours = cells[on_panel], colours[on_panel]
+        elif self._covered_count == 0 and cells.size == PIXELS:
+            # a whole-panel window written whole from nothing covered: every cell once, the last
+            # one completes the frame (the common case: a firmware sending frame after frame)
+            self._gram[cells] = colours
+            self._capture_frame()
+            return
         while cells.size:
             fresh = ~self._covered[cells]
             fresh_count = int(np.count_nonzero(fresh))
@@ -623,6 +636,19 @@ def _map_positions(geometry: _WindowGeometry, positions: np.ndarray) -> np.ndarr
     cells = row * ST7789V.WIDTH + column
     cells[~on_panel] = -1
     return cells
+
+
+@functools.lru_cache(maxsize=2)
+def _colours_of_16_bit_pixels(bgr: bool) -> np.ndarray:
+    """The packed 18-bit GRAM colour of every 16-bit pixel value by _decode_pixels' rule, red and
+    blue swapped when MADCTL's BGR bit is set (65,536 entries, read-only)."""
+    values = np.arange(1 << 16, dtype=np.uint32)
+    red, green, blue = _decode_pixels(np.stack((values >> 8, values & 0xFF), axis=1), COLMOD_16BIT)
+    if bgr:
+        red, blue = blue, red
+    table = (red << 12) | (green << 6) | blue
+    table.flags.writeable = False
+    return table
 
 
 def _decode_pixels(fields: np.ndarray, fmt: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
