@@ -515,6 +515,7 @@ class Hart:
         self._csr_table = table
         self._counter.csr_sites = ctypes.addressof(table)
         self._counter.csr_mask = mask
+        self._forget_decodings()
 
     def add_stop_hook(self, callback: Callable, user_data: object, begin: int, end: int) -> int:
         """A Python code hook (a debugger's breakpoint or step) that runs before the native

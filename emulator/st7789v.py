@@ -468,13 +468,13 @@ class ST7789V:
 
     def _receive_pixel_bytes(self, data: np.ndarray) -> None:
         """Pixel bytes of a RAMWR. Decoding them costs the host most per call, not per byte, so
-        they are kept until they could finish a frame (a pixel is 1.5 bytes at least, and writes
-        at most one cell not yet covered), or until anything else reaches the chip or someone
-        looks at GRAM; then stored in one go, in the order they came, which captures a frame in
-        the same call as storing them at once would."""
+        they are kept until they could finish a frame (cells_missing reaches 0: with the part of
+        a pixel carried over, they could make as many pixels as there are cells to write), or
+        until anything else reaches the chip or someone looks at GRAM; then stored in one go, in
+        the order they came, which captures a frame in the same call as storing them at once would."""
         self._deferred.append(np.array(data, dtype=np.uint8))
         self._deferred_bytes += data.size
-        if 2 * self._deferred_bytes >= 3 * (PIXELS - self._covered_count) or self._deferred_bytes > DEFERRED_LIMIT:
+        if self.cells_missing() == 0 or self._deferred_bytes > DEFERRED_LIMIT:
             self._store_deferred_pixels()
 
     def _store_deferred_pixels(self) -> None:

@@ -741,3 +741,17 @@ def test_pixels_kept_back_still_capture_in_the_call_that_completes_the_frame(col
         assert len(frames) == (2 if sent >= total else 1), f"after {sent} bytes"
         if sent < total:
             assert host.lcd.cells_missing() <= 320 * 240 - pixels_complete
+
+
+def test_a_last_byte_completing_a_carried_over_pixel_captures_the_frame_at_once() -> None:
+    """The frame's last pixel begun in one write and finished by a single byte in the next: that
+    byte's write captures the frame (the half pixel carried over counts towards it)."""
+    frames: list[np.ndarray] = []
+    host = ready_host(madctl=0xA0, colmod=0x55, on_frame=frames.append)
+    host.window(0, 319, 0, 239)
+    host.cmd(RAMWR)
+    payload = np.random.default_rng(8).integers(0, 256, 320 * 240 * 2, dtype=np.uint8)
+    host.data(payload[:-1])
+    assert len(frames) == 1
+    host.data(payload[-1:])
+    assert len(frames) == 2
