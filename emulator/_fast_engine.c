@@ -9,9 +9,15 @@
  * again), executes it on the hart's registers held here, and counts and times it exactly as
  * _insn_counter.c's count_instruction does, with the same counter, cycle table and branch predictor.
  *
+ * An integer load or store that is naturally aligned and falls in a device window (fast_set_windows)
+ * is counted and then left to the caller (STOP_DEVICE, the access described in the state's `dev`):
+ * the board carries it out with the hart's registers still held here, and fast_resume completes it
+ * (a load's value into its register) and goes on. A device access therefore costs a return to
+ * Python, not a run of the precise engine with the registers moved there and back.
+ *
  * What it does not carry out it hands to the precise engine (Unicorn with the per-instruction
- * counter, hart.py), before counting the instruction: an access to anything but SRAM or one that
- * is not naturally aligned, CSR instructions (but reads of mhartid), wfi, ecall, ebreak, mret, fence.i, LR/SC and AMOs,
+ * counter, hart.py), before counting the instruction: any other access outside SRAM (a misaligned
+ * one, which traps or is split as Unicorn splits it; one outside the windows), CSR instructions (but reads of mhartid), wfi, ecall, ebreak, mret, fence.i, LR/SC and AMOs,
  * instructions it does not know (the precise engine raises the illegal-instruction exception),
  * floating point on a NaN operand, with a rounding mode other than round-to-nearest-even where the
  * result is rounded (conversions to integers take any mode), or with the FPU off. Registers move
@@ -36,6 +42,7 @@
 /* fast_run's answers */
 #define STOP_HANDOFF 1   /* the instruction at pc needs the precise engine */
 #define STOP_LIMIT 2     /* the counter's instruction or cycle limit is reached */
+#define STOP_DEVICE 3    /* the load or store at pc, counted, accesses a device: see `dev` */
 
 /* Unicorn's register ids (unicorn/riscv.h) */
 #define UC_X1 2
@@ -91,7 +98,8 @@ typedef struct {
     uint8_t loop_head; /* the head of a poll loop (the counter's table) */
 } insn_t;
 
-/* A straight run of decoded instructions from `pc` up to a control transfer, an instruction for
+/* A straight run of decoded instructions from `pc` up to a jump (a conditional branch taken leaves
+ * it in the middle), an instruction for
  * the precise engine, BLOCK_MAX instructions or the end of SRAM; then an OP_BLOCK_END (not
  * counted). Entered only after its code bytes were compared with the copy kept here, so that
  * code written since (by a hart or a DMA) is decoded again. */
@@ -104,24 +112,46 @@ typedef struct {
     insn_t insns[BLOCK_MAX + 1];
 } block_t;
 
-#define BLOCK_INDEX_BITS 14
+#define BLOCK_INDEX_BITS 16
 #define BLOCK_INDEX_SLOTS (1u << BLOCK_INDEX_BITS)
 #define BLOCK_ARENA (4096u)   /* blocks decoded before the index is emptied and decoding starts over */
 
 typedef int (*uc_reg_batch_fn)(void *uc, int *regs, void **values, int count);
 
+#define MAX_WINDOWS 64
+
+/* A device access the interpreter stopped at (STOP_DEVICE), counted but not carried out. */
+typedef struct {
+    uint64_t address;
+    uint64_t value;      /* a store's value */
+    uint64_t next_pc;
+    uint32_t width;      /* bytes */
+    uint32_t is_store;
+    uint32_t window;     /* which of fast_set_windows' windows */
+    uint32_t rd;         /* a load's destination (32: x0's sink) */
+    uint32_t sign_bits;  /* a load's width in bits to sign-extend from; 0: zero-extended */
+    uint32_t pad;
+} device_access_t;
+
+/* hart.py's _FastHead mirrors the fields up to `dev` */
 typedef struct fast_state {
     uint64_t x[33];
     uint64_t f[32];
     uint64_t pc;
     uint64_t mstatus;
     uint64_t fflags, frm;
+    device_access_t dev;
+    uint32_t windows;        /* device windows in window_base/window_end */
+    uint32_t devices_here;   /* during a run: device accesses stop with STOP_DEVICE (else hand over) */
+    uint64_t window_base[MAX_WINDOWS], window_end[MAX_WINDOWS];
+    unsigned host_mxcsr;     /* the host's MXCSR while the guest's is in place */
     uint8_t *sram;
     uint64_t size, base, alias;
     uint64_t hart_id;
     uc_reg_batch_fn read_batch, write_batch;
     uint64_t instructions;   /* statistics: instructions this engine ran */
     uint64_t handoffs;       /* and the times it handed the hart over */
+    uint64_t blocks_built;   /* and the blocks it decoded */
     uint32_t blocks_used;    /* of the arena */
     int fp_written;          /* during a run: an FP register was written */
     uint64_t soft_flags;     /* during a run: fflags raised by conversions worked out here */
@@ -161,9 +191,34 @@ void fast_forget_decodings(fast_state_t *f)
     f->blocks_used = 0;
 }
 
+/* The device windows (physical addresses base..end-1) whose aligned integer accesses the interpreter
+ * leaves to the caller (STOP_DEVICE); at most MAX_WINDOWS (returns 0 if more). */
 __attribute__((visibility("default")))
-void fast_statistics(const fast_state_t *f, uint64_t out[2])
+int fast_set_windows(fast_state_t *f, const uint64_t *bases, const uint64_t *ends, uint32_t count)
 {
+    if (count > MAX_WINDOWS)
+        return 0;
+    for (uint32_t i = 0; i < count; i++) {
+        f->window_base[i] = bases[i];
+        f->window_end[i] = ends[i];
+    }
+    f->windows = count;
+    return 1;
+}
+
+/* The window holding `width` bytes at `a`, or -1. */
+static inline int device_window(const fast_state_t *f, uint64_t a, uint64_t width)
+{
+    for (uint32_t i = 0; i < f->windows; i++)
+        if (a >= f->window_base[i] && a + width <= f->window_end[i])
+            return (int)i;
+    return -1;
+}
+
+__attribute__((visibility("default")))
+void fast_statistics(const fast_state_t *f, uint64_t out[3])
+{
+    out[2] = f->blocks_built;
     out[0] = f->instructions;
     out[1] = f->handoffs;
 }
@@ -548,9 +603,11 @@ static void decode(const insn_counter_t *c, insn_t *in, uint64_t pc, uint32_t fe
         in->rd = 32;
 }
 
+/* Conditional branches do not end a block: the way not taken goes on in it (fewer block entries,
+ * each of which looks the block up and compares its code). */
 static int ends_block(uint16_t op)
 {
-    return op == OP_HANDOFF || op == OP_JAL || op == OP_JALR || (op >= OP_BEQ && op <= OP_BGEU);
+    return op == OP_HANDOFF || op == OP_JAL || op == OP_JALR;
 }
 
 /* Decodes the block at `pc` (its code starts at `code`, `room` bytes before the end of SRAM). */
@@ -562,6 +619,7 @@ static block_t *build_block(fast_state_t *f, const insn_counter_t *c, uint64_t p
         f->blocks_used = 0;
     }
     block_t *b = &f->arena[f->blocks_used++];
+    f->blocks_built++;
     b->pc = pc;
     uint32_t n = 0, offset = 0;
     while (n < BLOCK_MAX && offset + 4 <= room) {
@@ -599,7 +657,10 @@ static inline int same_code(const block_t *b, const uint8_t *code, uint64_t room
     }
     if (i < n) {
         uint64_t now = 0, then;
-        memcpy(&now, code + i, room - i >= 8 ? 8 : room - i);
+        if (room - i >= 8)
+            memcpy(&now, code + i, 8);
+        else
+            memcpy(&now, code + i, room - i);
         memcpy(&then, b->code + i, 8);
         uint64_t mask = ~0ull >> (64 - 8 * (n - i));
         if ((now ^ then) & mask)
@@ -868,6 +929,52 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
             loop->last = executed; \
         } \
     } while (0)
+/* an aligned access in a device window: counted, described in f->dev, left to the caller */
+#define DEVICE(nbytes, storing, stored, dest_reg, sign_from) do { \
+        if ((a & (nbytes - 1)) == 0 && f->devices_here) { \
+            int w = device_window(f, a, nbytes); \
+            if (w >= 0) { \
+                COUNT(); \
+                f->dev.address = a; \
+                f->dev.value = (stored); \
+                f->dev.next_pc = in->pc + in->len; \
+                f->dev.width = nbytes; \
+                f->dev.is_store = storing; \
+                f->dev.window = (uint32_t)w; \
+                f->dev.rd = dest_reg; \
+                f->dev.sign_bits = sign_from; \
+                pc = in->pc; \
+                why = STOP_DEVICE; \
+                goto out; \
+            } \
+        } \
+        HAND_OVER(); \
+    } while (0)
+#define XLOAD(type, width, sign) do { \
+        uint64_t a = x[in->rs1] + (uint64_t)in->imm; \
+        uint8_t *h = sram_at(sram, size, base, alias, a, width); \
+        if (h == NULL || (a & (width - 1))) { \
+            if (h == NULL) DEVICE(width, 0, 0, in->rd, sign); \
+            HAND_OVER(); \
+        } \
+        COUNT(); \
+        type v; \
+        memcpy(&v, h, width); \
+        x[in->rd] = (uint64_t)v; \
+        NEXT(); \
+    } while (0)
+#define XSTORE(width) do { \
+        uint64_t a = x[in->rs1] + (uint64_t)in->imm; \
+        uint8_t *h = sram_at(sram, size, base, alias, a, width); \
+        if (h == NULL || (a & (width - 1))) { \
+            if (h == NULL) DEVICE(width, 1, x[in->rs2], 0, 0); \
+            HAND_OVER(); \
+        } \
+        COUNT(); \
+        uint64_t v = x[in->rs2]; \
+        memcpy(h, &v, width); \
+        NEXT(); \
+    } while (0)
 #define LOAD(type, width, dest) do { \
         uint64_t a = x[in->rs1] + (uint64_t)in->imm; \
         uint8_t *h = sram_at(sram, size, base, alias, a, width); \
@@ -887,7 +994,14 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
         memcpy(h, &v, width); \
         NEXT(); \
     } while (0)
-#define BRANCH(cond) do { COUNT(); pc = in->pc + ((cond) ? (uint64_t)in->imm : in->len); goto next_block; } while (0)
+#define BRANCH(cond) do { \
+        COUNT(); \
+        if (cond) { \
+            pc = in->pc + (uint64_t)in->imm; \
+            goto next_block; \
+        } \
+        NEXT(); \
+    } while (0)
 #define ALU(expr) do { COUNT(); x[in->rd] = (expr); NEXT(); } while (0)
 #define W(expr) ((uint64_t)(int64_t)(int32_t)(uint32_t)(expr))
 /* single precision: operands must not be NaNs (the precise engine has QEMU's NaN rules) */
@@ -946,17 +1060,17 @@ next_block:
         L_OP_BGE: BRANCH((int64_t)x[in->rs1] >= (int64_t)x[in->rs2]);
         L_OP_BLTU: BRANCH(x[in->rs1] < x[in->rs2]);
         L_OP_BGEU: BRANCH(x[in->rs1] >= x[in->rs2]);
-        L_OP_LB: LOAD(int8_t, 1, x[in->rd] = (uint64_t)(int64_t)v);
-        L_OP_LH: LOAD(int16_t, 2, x[in->rd] = (uint64_t)(int64_t)v);
-        L_OP_LW: LOAD(int32_t, 4, x[in->rd] = (uint64_t)(int64_t)v);
-        L_OP_LD: LOAD(uint64_t, 8, x[in->rd] = v);
-        L_OP_LBU: LOAD(uint8_t, 1, x[in->rd] = v);
-        L_OP_LHU: LOAD(uint16_t, 2, x[in->rd] = v);
-        L_OP_LWU: LOAD(uint32_t, 4, x[in->rd] = v);
-        L_OP_SB: STORE(1, x[in->rs2]);
-        L_OP_SH: STORE(2, x[in->rs2]);
-        L_OP_SW: STORE(4, x[in->rs2]);
-        L_OP_SD: STORE(8, x[in->rs2]);
+        L_OP_LB: XLOAD(int8_t, 1, 8);
+        L_OP_LH: XLOAD(int16_t, 2, 16);
+        L_OP_LW: XLOAD(int32_t, 4, 32);
+        L_OP_LD: XLOAD(uint64_t, 8, 0);
+        L_OP_LBU: XLOAD(uint8_t, 1, 0);
+        L_OP_LHU: XLOAD(uint16_t, 2, 0);
+        L_OP_LWU: XLOAD(uint32_t, 4, 0);
+        L_OP_SB: XSTORE(1);
+        L_OP_SH: XSTORE(2);
+        L_OP_SW: XSTORE(4);
+        L_OP_SD: XSTORE(8);
         L_OP_ADDI: ALU(x[in->rs1] + (uint64_t)in->imm);
         L_OP_SLTI: ALU((int64_t)x[in->rs1] < in->imm);
         L_OP_SLTIU: ALU(x[in->rs1] < (uint64_t)in->imm);
@@ -1141,6 +1255,9 @@ out:
 #undef COUNT
 #undef LOAD
 #undef STORE
+#undef DEVICE
+#undef XLOAD
+#undef XSTORE
 #undef BRANCH
 #undef ALU
 #undef W
@@ -1148,8 +1265,22 @@ out:
 #undef XRES
 }
 
-/* Before the interpreter runs: the hart's registers from the precise engine; the host's FP flags clear. */
-static unsigned begin_run(fast_state_t *f, void *uc, uint64_t from)
+/* The guest's MXCSR in place of the host's (see MXCSR_FOR_GUEST), and back: the flags the guest
+ * raised meanwhile are kept, so that Python running between (a device access) adds none. */
+static void enter_guest_fp(fast_state_t *f)
+{
+    f->host_mxcsr = _mm_getcsr();
+    _mm_setcsr(MXCSR_FOR_GUEST);
+}
+
+static void leave_guest_fp(fast_state_t *f)
+{
+    f->soft_flags |= flags_from_mxcsr(_mm_getcsr());
+    _mm_setcsr(f->host_mxcsr);
+}
+
+/* Before the interpreter runs: the hart's registers from the precise engine. */
+static void begin_run(fast_state_t *f, void *uc, uint64_t from)
 {
     load_state(f, uc);
     f->pc = from;
@@ -1157,35 +1288,66 @@ static unsigned begin_run(fast_state_t *f, void *uc, uint64_t from)
     f->soft_flags = 0;
     f->entry_fflags = f->fflags;
     f->entry_mstatus = f->mstatus;
-    unsigned mxcsr = _mm_getcsr();
-    _mm_setcsr(MXCSR_FOR_GUEST);
-    return mxcsr;
 }
 
 /* After it: the flags it raised into fflags, the FPU state dirty if it wrote an FP register (as QEMU
- * marks it), the registers back to the precise engine; the host's MXCSR as it was. */
-static void end_run(fast_state_t *f, void *uc, unsigned mxcsr)
+ * marks it), the registers back to the precise engine. */
+static void end_run(fast_state_t *f, void *uc)
 {
-    f->fflags |= flags_from_mxcsr(_mm_getcsr()) | f->soft_flags;
-    _mm_setcsr(mxcsr);
+    f->fflags |= f->soft_flags;
     if (f->fp_written && (f->mstatus & MSTATUS_FS) != MSTATUS_FS)
         f->mstatus |= MSTATUS_FS | MSTATUS_SD;
     store_state(f, uc, f->fp_written, f->entry_fflags, f->entry_mstatus);
 }
 
+/* Interprets from f->pc; a stop other than at a device access ends the run. */
+static int interpret_on(fast_state_t *f, insn_counter_t *c, void *uc)
+{
+    enter_guest_fp(f);
+    int why = interpret(f, c);
+    leave_guest_fp(f);
+    if (why != STOP_DEVICE)
+        end_run(f, uc);
+    return why;
+}
+
 /*
  * Runs the hart whose precise engine is `uc` from `from` until an instruction needs the precise
- * engine (a hand-over: the instruction is not counted) or the counter's limits are reached (a
- * poll loop's head lowers the limit as count_instruction does). The registers are read from `uc`
- * first and written back at the end, the pc too. Returns the pc to go on from.
+ * engine (STOP_HANDOFF: the instruction is not counted), the counter's limits are reached
+ * (STOP_LIMIT; a poll loop's head lowers the limit as count_instruction does), or a device access
+ * (STOP_DEVICE). The registers are read from `uc` first; they are written back, the pc too (f->pc),
+ * when the run ends: at a device access it has not ended, and the caller carries the access out and
+ * calls fast_resume (or fast_abandon).
  */
 __attribute__((visibility("default")))
-uint64_t fast_run(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t from)
+int fast_run(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t from)
 {
-    unsigned mxcsr = begin_run(f, uc, from);
-    interpret(f, c);
-    end_run(f, uc, mxcsr);
-    return f->pc;
+    begin_run(f, uc, from);
+    f->devices_here = f->windows != 0;
+    return interpret_on(f, c, uc);
+}
+
+/* After STOP_DEVICE: completes the access (a load's `value`, as the instruction extends it, into its
+ * register) and goes on as fast_run does. */
+__attribute__((visibility("default")))
+int fast_resume(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t value)
+{
+    device_access_t *d = &f->dev;
+    if (!d->is_store) {
+        if (d->width < 8)
+            value &= (1ull << (8 * d->width)) - 1;
+        f->x[d->rd] = d->sign_bits ? (uint64_t)sext(value, (int)d->sign_bits) : value;
+    }
+    f->pc = d->next_pc;
+    return interpret_on(f, c, uc);
+}
+
+/* After STOP_DEVICE: ends the run with the access not carried out (it trapped, or the board failed):
+ * the registers back to the precise engine, the pc at the access. */
+__attribute__((visibility("default")))
+void fast_abandon(fast_state_t *f, void *uc)
+{
+    end_run(f, uc);
 }
 
 /* The scheduler's turns of a hart running alone (scheduler.py, _go_on_alone), as fast_run_alone runs
@@ -1216,7 +1378,9 @@ typedef struct {
 __attribute__((visibility("default")))
 uint64_t fast_run_alone(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t from, alone_plan_t *plan)
 {
-    unsigned mxcsr = begin_run(f, uc, from);
+    begin_run(f, uc, from);
+    f->devices_here = 0;   /* a device access ends the turns here: the scheduler finishes that turn */
+    enter_guest_fp(f);
     double t0 = plan->t0;
     plan->turns = 0;
     plan->handed_over = 0;
@@ -1244,7 +1408,8 @@ uint64_t fast_run_alone(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t f
         if (t0 >= plan->stop_at || plan->turns >= plan->max_turns)
             break;
     }
-    end_run(f, uc, mxcsr);
+    leave_guest_fp(f);
+    end_run(f, uc);
     return f->pc;
 }
 

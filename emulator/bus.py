@@ -37,7 +37,7 @@ address, or, with --strict, stop the run (exit status 5):
 """
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Callable
 
 import unicorn
 from unicorn import riscv_const as rv
@@ -156,6 +156,7 @@ class Bus:
         self._map_windows(hart, 0)
         uc.hook_add(unicorn.UC_HOOK_MEM_UNMAPPED | unicorn.UC_HOOK_MEM_FETCH_PROT | unicorn.UC_HOOK_MEM_READ_PROT
                     | unicorn.UC_HOOK_MEM_WRITE_PROT, self._unmapped(hart))
+        hart.attach_devices([(p.BASE, p.BASE + p.SIZE) for p in self.peripherals], self._direct_access())
 
     def _map_windows(self, hart: Hart, upper: int) -> None:
         """Maps SRAM's two views and every device window at `upper` (0, or an upper half of the
@@ -202,7 +203,7 @@ class Bus:
         """'hart H at pc P <symbol> (instruction): <direction> of N bytes at A'; the pc is the
         hart's current one unless given (a store the run has already gone past)."""
         if pc is None:
-            pc = hart.uc.reg_read(rv.UC_RISCV_REG_PC)
+            pc = hart.reg(rv.UC_RISCV_REG_PC)
         where = symbolize(self.board.image.symbols, pc)
         where = f" <{where}>" if where else ""
         return (f"hart {hart.hart_id} at pc 0x{pc:08x}{where} ({self.board.disassemble_at(pc)}): "
@@ -404,15 +405,12 @@ class Bus:
         return True
 
     def _mmio_reader(self, hart: Hart, peripheral: Peripheral):
-        # Every device load of the firmware comes through here (a poll of a status register
-        # many times per byte on the SD card's bus): the common case, an aligned access whose
-        # width Unicorn passed whole, takes the shortest way to the register table.
+        """Unicorn's read callback for a device window: what Unicorn adds to an access (its pc, the
+        pieces it splits a 64-bit load into, misaligned loads) before device_load."""
         scheduler = self.scheduler
         h = hart.hart_id
-        gate = getattr(peripheral, "GATE", None)
-        sysctl = self.board.sysctl
         accesses, split, stable = self._accesses, self._split, self._stable
-        base_address = peripheral.BASE
+        load = self._device_loader(hart, peripheral)
 
         def read(uc, offset, size, user_data):
             if scheduler.pending_stop is not None:
@@ -422,26 +420,43 @@ class Bus:
             if pending is not None and pending[:2] == (pc, offset):
                 split[h] = None
                 return pending[2]
+            access = accesses.get(pc)
+            width, rs1, imm = access if access is not None else self._access(hart, pc)
+            # Unicorn splits a misaligned load into aligned pieces, the first of which can look like
+            # an aligned load: the load traps before it reaches the device or counts as a poll
+            if self._misaligned(hart, pc, width, rs1, imm, False):
+                stable[h] = None
+                return 0
+            value = load(pc, offset, width, size == width)
+            if width == 8 and size == 4:
+                split[h] = (pc, offset + 4, value >> 32)
+                value &= 0xFFFF_FFFF
+            return value
+        return read
+
+    def _device_loader(self, hart: Hart, peripheral: Peripheral):
+        """A load of `width` bytes at `offset` of the device by the instruction at pc, aligned (the
+        callers have checked): its value. Every device load of the firmware comes through here (a
+        poll of a status register many times per byte on the SD card's bus), so the common case
+        takes the shortest way to the register table. `whole`: the caller hands over the value whole
+        (Unicorn, splitting a 64-bit load, does not), so a stable answer may be kept."""
+        scheduler = self.scheduler
+        h = hart.hart_id
+        gate = getattr(peripheral, "GATE", None)
+        sysctl = self.board.sysctl
+        stable = self._stable
+        base_address = peripheral.BASE
+
+        def load(pc: int, offset: int, width: int, whole: bool) -> int:
             now = scheduler.hart_now(hart)
             again = stable[h]
             if again is not None:
                 if again[0] == pc and again[1] == offset and again[2] is peripheral and now < again[4]:
                     # the same load as the last one, whose register cannot have changed: what the
-                    # device would answer, without asking it (the poll is still noted). The address
-                    # may differ by its low bits: Unicorn splits a misaligned load into aligned
-                    # pieces, the first of which can be this one; then, as on the full path, the
-                    # load traps before it counts as a poll.
-                    width, rs1, imm = accesses[pc]
-                    if self._misaligned(hart, pc, width, rs1, imm, False):
-                        stable[h] = None
-                        return 0
+                    # device would answer, without asking it (the poll is still noted)
                     scheduler.note_poll(hart, pc, offset + base_address, again[3])
                     return again[3]
                 stable[h] = None
-            access = accesses.get(pc)
-            width, rs1, imm = access if access is not None else self._access(hart, pc)
-            if self._misaligned(hart, pc, width, rs1, imm, False):
-                return 0
             try:
                 if gate is not None and gate not in sysctl.usable:
                     self._gate_check(peripheral)
@@ -449,24 +464,21 @@ class Bus:
             except BoardStop as error:
                 self._fail(hart, error, peripheral.BASE + offset, width, "load")
                 return 0
-            if width == 8 and size == 4:
-                self._split[hart.hart_id] = (pc, offset + 4, value >> 32)
-                value &= 0xFFFF_FFFF
-            elif size == width and scheduler.pending_stop is None:
+            if whole and scheduler.pending_stop is None:
                 until = peripheral.stable_until(offset, now)
                 if until > now:
                     stable[h] = (pc, offset, peripheral, value, until)
             scheduler.note_poll(hart, pc, offset + base_address, value)
             return value
-        return read
+        return load
 
     def _mmio_writer(self, hart: Hart, peripheral: Peripheral):
+        """Unicorn's write callback for a device window: what Unicorn adds to an access (its pc, the
+        pieces it splits a 64-bit store into, misaligned stores) before device_store."""
         scheduler = self.scheduler
-        timed = peripheral in self._timed_set
         h = hart.hart_id
-        gate = getattr(peripheral, "GATE", None)
-        sysctl = self.board.sysctl
-        accesses, stable = self._accesses, self._stable
+        accesses, stable, split = self._accesses, self._stable, self._split
+        store = self._device_storer(hart, peripheral)
 
         def write(uc, offset, size, value, user_data):
             stable[h] = None
@@ -478,15 +490,28 @@ class Bus:
             if self._misaligned(hart, pc, width, rs1, imm, True):
                 return
             if width == 8 and size == 4:
-                pending = self._split[hart.hart_id]
+                pending = split[h]
                 if pending is None or pending[:2] != (pc, offset):
-                    self._split[hart.hart_id] = (pc, offset + 4, value & 0xFFFF_FFFF)
+                    split[h] = (pc, offset + 4, value & 0xFFFF_FFFF)
                     return
-                self._split[hart.hart_id] = None
+                split[h] = None
                 offset, value = offset - 4, pending[2] | (value & 0xFFFF_FFFF) << 32
+            store(offset, width, value)
+        return write
+
+    def _device_storer(self, hart: Hart, peripheral: Peripheral):
+        """A store of `width` bytes of `value` at `offset` of the device, aligned (the callers have
+        checked)."""
+        scheduler = self.scheduler
+        timed = peripheral in self._timed_set
+        gate = getattr(peripheral, "GATE", None)
+        sysctl = self.board.sysctl
+        device_writes, harts = self.device_writes, len(self._split)
+
+        def store(offset: int, width: int, value: int) -> None:
             now = scheduler.hart_now(hart)
             scheduler.forget_poll(hart)
-            self.device_writes.setdefault(peripheral.NAME, [0] * len(self._split))[hart.hart_id] += 1
+            device_writes.setdefault(peripheral.NAME, [0] * harts)[hart.hart_id] += 1
             try:
                 if gate is not None and gate not in sysctl.usable:
                     self._gate_check(peripheral)
@@ -502,7 +527,36 @@ class Bus:
                 event = self.board.next_device_event(now)
                 if event is not None and event < scheduler.turn_horizon:
                     hart.request_stop()
-        return write
+        return store
+
+    def _direct_access(self):
+        """The device accesses the fast engine leaves to the bus (Hart.attach_devices): aligned,
+        whole, in the window of self.peripherals[window]; the hart's registers are the fast engine's
+        meanwhile (Hart.reg reads them)."""
+        scheduler = self.scheduler
+        stable = self._stable
+        loaders: dict[tuple[int, int], Callable] = {}
+        storers: dict[tuple[int, int], Callable] = {}
+
+        def access(hart: Hart, window: int, address: int, width: int, is_store: bool, value: int, pc: int) -> int:
+            peripheral = self.peripherals[window]
+            key = (hart.hart_id, window)
+            if is_store:
+                stable[hart.hart_id] = None
+                if scheduler.pending_stop is not None:
+                    return 0
+                storer = storers.get(key)
+                if storer is None:
+                    storer = storers[key] = self._device_storer(hart, peripheral)
+                storer(address - peripheral.BASE, width, value)
+                return 0
+            if scheduler.pending_stop is not None:
+                return 0
+            loader = loaders.get(key)
+            if loader is None:
+                loader = loaders[key] = self._device_loader(hart, peripheral)
+            return loader(pc, address - peripheral.BASE, width, True)
+        return access
 
     # --- what the buses do with accesses a register table does not take as they are -----------
 

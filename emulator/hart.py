@@ -102,11 +102,37 @@ _counter_lib.fast_state_new.argtypes = [ctypes.c_uint64, ctypes.c_void_p, ctypes
 _counter_lib.fast_state_free.argtypes = [ctypes.c_void_p]
 _counter_lib.fast_forget_decodings.argtypes = [ctypes.c_void_p]
 _counter_lib.fast_statistics.argtypes = [ctypes.c_void_p, ctypes.POINTER(ctypes.c_uint64)]
-_counter_lib.fast_run.restype = ctypes.c_uint64
+_counter_lib.fast_run.restype = ctypes.c_int
 _counter_lib.fast_run.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_uint64]
+_counter_lib.fast_resume.restype = ctypes.c_int
+_counter_lib.fast_resume.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_uint64]
+_counter_lib.fast_abandon.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
+_counter_lib.fast_set_windows.restype = ctypes.c_int
+_counter_lib.fast_set_windows.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_uint32]
+_STOP_DEVICE = 3      # _fast_engine.c's answer: a device access, counted, for the board to carry out
 _counter_lib.fast_run_alone.restype = ctypes.c_uint64
 _counter_lib.fast_run_alone.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_uint64,
                                         ctypes.c_void_p]
+
+
+class _DeviceAccess(ctypes.Structure):
+    """_fast_engine.c's device_access_t: the access the interpreter stopped at (STOP_DEVICE)."""
+    _fields_ = [("address", ctypes.c_uint64), ("value", ctypes.c_uint64), ("next_pc", ctypes.c_uint64),
+                ("width", ctypes.c_uint32), ("is_store", ctypes.c_uint32), ("window", ctypes.c_uint32),
+                ("rd", ctypes.c_uint32), ("sign_bits", ctypes.c_uint32), ("pad", ctypes.c_uint32)]
+
+
+class _FastHead(ctypes.Structure):
+    """The start of _fast_engine.c's fast_state_t: the hart's registers while the interpreter holds
+    them, and the device access it stopped at."""
+    _fields_ = [("x", ctypes.c_uint64 * 33), ("f", ctypes.c_uint64 * 32), ("pc", ctypes.c_uint64),
+                ("mstatus", ctypes.c_uint64), ("fflags", ctypes.c_uint64), ("frm", ctypes.c_uint64),
+                ("dev", _DeviceAccess)]
+
+
+# A device access the fast engine leaves to the board: (hart, window index, address, width in bytes,
+# is a store, the stored value, pc) -> the loaded value (0 for a store)
+DeviceAccess = Callable[["Hart", int, int, int, bool, int, int], int]
 
 
 class AlonePlan(ctypes.Structure):
@@ -188,8 +214,13 @@ class Hart:
         self._reg_ref = ctypes.byref(self._reg_value)
         # the fast engine (enable_fast_engine), and the hooks that keep a hart on the precise one
         self._fast_state: int | None = None
+        self._fast_head: _FastHead | None = None
         self._hooks_needing_precision: set[int] = set()
         self.precise_runs = 0     # runs of the precise engine (the scheduler sees whether a turn had any)
+        self.device_accesses = 0  # device accesses the fast engine left to the board (likewise)
+        self._device_access: DeviceAccess | None = None
+        self._device_windows: list[tuple[int, int]] = []
+        self._holding = False     # the fast engine holds the registers during a device access
 
     def add_native_hook(self, kind: int, callback: int, user_data: ctypes.Structure, begin: int, end: int,
                         what: str) -> int:
@@ -236,8 +267,29 @@ class Hart:
         if not state:
             raise MemoryError("cannot allocate the fast engine")
         self._fast_state = state
+        self._fast_head = _FastHead.from_address(state)
         # freed with the hart (Board.close frees it at once)
         self._free_fast_state = weakref.finalize(self, _counter_lib.fast_state_free, state)
+        self._give_windows()
+
+    def attach_devices(self, windows: list[tuple[int, int]], access: DeviceAccess) -> None:
+        """Has the fast engine leave the naturally aligned integer loads and stores that fall in
+        `windows` ((base, end) physical address ranges, the devices the bus maps) to `access`, with the
+        hart's registers still held by it: a device access costs a call, not a run of the precise
+        engine. `access` gets the window's index in `windows`. Other accesses outside SRAM (misaligned,
+        FP, elsewhere) still go to the precise engine."""
+        self._device_windows = list(windows)
+        self._device_access = access
+        self._give_windows()
+
+    def _give_windows(self) -> None:
+        if self._fast_state is None or not self._device_windows:
+            return
+        count = len(self._device_windows)
+        bases = (ctypes.c_uint64 * count)(*(base for base, _ in self._device_windows))
+        ends = (ctypes.c_uint64 * count)(*(end for _, end in self._device_windows))
+        if not _counter_lib.fast_set_windows(self._fast_state, bases, ends, count):
+            raise ValueError(f"the fast engine takes at most 64 device windows, not {count}")
 
     def close(self) -> None:
         """Frees the fast engine."""
@@ -246,12 +298,13 @@ class Hart:
             self._fast_state = None
 
     def fast_statistics(self) -> dict[str, int]:
-        """The fast engine's figures: instructions it ran, times it handed the hart over."""
+        """The fast engine's figures: instructions it ran, times it handed the hart over, blocks it
+        decoded (again after a change of their code or a collision in its index)."""
         if self._fast_state is None:
             return {}
-        out = (ctypes.c_uint64 * 2)()
+        out = (ctypes.c_uint64 * 3)()
         _counter_lib.fast_statistics(self._fast_state, out)
-        return {"instructions": out[0], "handoffs": out[1]}
+        return {"instructions": out[0], "handoffs": out[1], "blocks_decoded": out[2]}
 
     def _forget_decodings(self) -> None:
         """The counter's tables changed: the fast engine decodes its instructions again."""
@@ -260,9 +313,27 @@ class Hart:
 
     def _run_fast(self, pc: int) -> int:
         """Runs the hart on the fast engine from `pc` until it reaches the counter's limits or an
-        instruction it hands over; the precise engine holds the hart's registers again after it.
-        Returns the pc to go on from."""
-        return _counter_lib.fast_run(self._fast_state, ctypes.byref(self._counter), self.uc._uch, pc)
+        instruction it hands over, carrying out the device accesses it stops at on the way; the
+        precise engine holds the hart's registers again after it. Returns the pc to go on from."""
+        state, counter, uc = self._fast_state, ctypes.byref(self._counter), self.uc._uch
+        why = _counter_lib.fast_run(state, counter, uc, pc)
+        while why == _STOP_DEVICE:
+            dev = self._fast_head.dev
+            self.device_accesses += 1
+            self._holding = True
+            try:
+                value = self._device_access(self, dev.window, dev.address, dev.width, bool(dev.is_store), dev.value,
+                                            self._fast_head.pc)
+            except BaseException:
+                self._holding = False
+                _counter_lib.fast_abandon(state, uc)
+                raise
+            self._holding = False
+            if self.pending_exception is not None:
+                _counter_lib.fast_abandon(state, uc)    # the access trapped: it does not complete
+                break
+            why = _counter_lib.fast_resume(state, counter, uc, value)
+        return self._fast_head.pc
 
     def fast_usable(self) -> bool:
         """Whether the hart runs on the fast engine (it has one and no hook needs the precise one)."""
@@ -321,8 +392,26 @@ class Hart:
 
     def reg(self, register: int) -> int:
         """A register's value, read straight through Unicorn's C API (the MMIO paths call
-        this on every device access, where the Python wrapper's overhead shows)."""
+        this on every device access, where the Python wrapper's overhead shows), or from the fast
+        engine while it holds the registers (a device access it left to the board)."""
+        if self._holding:
+            return self._held_reg(register)
         _ucpy.uclib.uc_reg_read(self.uc._uch, register, self._reg_ref)
+        return self._reg_value.value
+
+    def _held_reg(self, register: int) -> int:
+        head = self._fast_head
+        if rv.UC_RISCV_REG_X0 <= register <= rv.UC_RISCV_REG_X31:
+            return head.x[register - rv.UC_RISCV_REG_X0] if register != rv.UC_RISCV_REG_X0 else 0
+        if rv.UC_RISCV_REG_F0 <= register <= rv.UC_RISCV_REG_F31:
+            return head.f[register - rv.UC_RISCV_REG_F0]
+        if register == rv.UC_RISCV_REG_PC:
+            return head.pc
+        if register == rv.UC_RISCV_REG_MSTATUS:
+            return head.mstatus
+        if register in (rv.UC_RISCV_REG_FFLAGS, rv.UC_RISCV_REG_FRM, rv.UC_RISCV_REG_FCSR):
+            raise RuntimeError("fcsr read while the fast engine holds the registers")
+        _ucpy.uclib.uc_reg_read(self.uc._uch, register, self._reg_ref)   # a CSR the fast engine never writes
         return self._reg_value.value
 
     # --- counters --------------------------------------------------------------------
@@ -370,7 +459,7 @@ class Hart:
             precise_limit = turn_limit
             if self._fast_usable():
                 pc = self._run_fast(pc)
-                if counter.poll_report:
+                if counter.poll_report or self.stop_requested or self.pending_exception is not None:
                     break
                 if counter.executed >= turn_limit or counter.cycles >= counter.cycle_limit:
                     self.pc = pc

@@ -482,12 +482,12 @@ class Scheduler:
             alone = go_on_alone and len(running) == 1
         budget = max(1, math.ceil((horizon - t0) * hz - 1e-9))
         self.turn_horizon = t0 + budget / hz
-        precise_runs = hart.precise_runs
+        precise_runs, device_accesses = hart.precise_runs, hart.device_accesses
         ran = self._run_hart(hart, t0, budget, hz, instruction_limit)
         if self.pending_stop is not None:
             raise self.pending_stop
         hart.time = t0 + ran / hz
-        if alone and hart.precise_runs == precise_runs:
+        if alone and hart.precise_runs == precise_runs and hart.device_accesses == device_accesses:
             horizon = self._go_on_alone(hart, hz, outer, horizon)
         if hart.state is HartState.ASLEEP:
             # a wfi with an enabled interrupt already pending falls through (the privileged spec:
@@ -513,7 +513,8 @@ class Scheduler:
 
     def _go_on_alone(self, hart: Hart, hz: float, outer: float, horizon: float) -> float:
         """The hart ran a turn alone on the fast engine, the others asleep in wfi, and nothing in it
-        needed the board (no device access, CSR, trap or wfi: the precise engine did not run). Until
+        needed the board (no device access, CSR, trap or wfi: the precise engine did not run, and the
+        fast one left no device access to the bus). Until
         one of its turns does, the next turns would begin with the same state of the board and end
         with the devices only moving on in time: no interrupt can come before the next device event
         (`outer` bounds those), no frame be captured before the LCD has the bytes for it, nobody

@@ -194,6 +194,57 @@ def test_exceptions_are_taken_where_the_precise_engine_takes_them():
     assert fast.harts[0].retired_adjust == precise.harts[0].retired_adjust == 1
 
 
+# Device loads and stores of every width and extension, compressed and not: the fast engine carries
+# them out itself (the bus answering while it holds the registers), the narrow and 64-bit ones with
+# the bus's warnings naming the instruction (its pc is the fast engine's then).
+DEVICE_ACCESSES = """
+    li      s0, 0x02004000            # CLINT mtimecmp0: a 64-bit register, narrow accesses allowed
+    li      t0, 0x8182838485868788
+    sd      t0, 0(s0)
+    c.ld    a0, 0(s0)                 # compressed (2-byte): the engine goes on after it
+    ld      t3, 0(s0)
+    lw      a1, 4(s0)
+    lwu     a2, 4(s0)
+    lh      a3, 6(s0)
+    lhu     a4, 2(s0)
+    lb      a5, 7(s0)
+    lbu     a6, 5(s0)
+    li      t1, 0x7F
+    sb      t1, 7(s0)                 # narrow stores covering no whole field (warnings)
+    sh      t1, 0(s0)
+    sw      t1, 4(s0)
+    ld      a7, 0(s0)
+    c.sw    a1, 0(s0)
+    c.lw    s1, 0(s0)
+    ld      s6, 0(s0)
+    li      t4, 0x0C000008            # PLIC priorities 2 and 3: 32-bit registers
+    li      t2, 0x0000000500000003
+    sd      t2, 0(t4)                 # a 64-bit store: two 32-bit ones (a warning)
+    ld      s2, 0(t4)                 # likewise
+    lb      s3, 4(t4)                 # a narrow load of a 32-bit register (a warning)
+    li      t0, -1
+    sd      t0, 0(s0)                 # mtimecmp back to no interrupt
+"""
+
+
+def test_device_accesses_are_carried_out_by_the_fast_engine_as_by_the_precise_one():
+    precise = run_on(ENGINE_PRECISE, DEVICE_ACCESSES)
+    fast = run_on(ENGINE_FAST, DEVICE_ACCESSES)
+    assert reg(precise, "a0") == reg(precise, "t3") == 0x8182838485868788
+    assert reg(precise, "a1") == 2**64 - 2**32 + 0x81828384 and reg(precise, "a2") == 0x81828384
+    assert reg(precise, "a3") == 2**64 - 0x10000 + 0x8182 and reg(precise, "a4") == 0x8586
+    assert reg(precise, "a5") == 2**64 - 0x7F and reg(precise, "a6") == 0x83
+    # the byte and halfword stores cover no whole 32-bit field of mtimecmp: the router ignores them
+    assert reg(precise, "a7") == 0x0000007F85868788 and reg(precise, "s1") == 2**64 - 2**32 + 0x81828384
+    assert reg(precise, "s6") == 0x0000007F81828384
+    assert reg(precise, "s2") == 0x0000000500000003 and reg(precise, "s3") == 5
+    assert state(fast) == state(precise)
+    assert fast.warnings == precise.warnings and len(precise.warnings) == 9
+    assert "(lb s3, 4(t4)): load of 1 bytes at 0x0c00000c" in precise.warnings[-1]
+    assert fast.harts[0].device_accesses == 20 and precise.harts[0].device_accesses == 0
+    assert fast.bus.device_writes == precise.bus.device_writes
+
+
 def _run_json(firmware, tmp_path, engine: str, *args: str) -> tuple[dict, dict]:
     out = tmp_path / engine
     result = run_emulator("run", str(firmware), "--out", str(out), "--quiet", "--engine", engine, *args)
