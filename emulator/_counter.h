@@ -1,7 +1,8 @@
 /*
  * What the board model's native counting hooks share: the counter each hart hands its hooks
  * (hart.py mirrors it with ctypes: keep the two in step), the cycle table's entry layout
- * (timing.py writes the entries), Rocket's branch predictor and its iterative multiplier.
+ * (timing.py writes the entries), the state of Rocket's branch predictor (_rocket_timing.h times
+ * the transfers and the multiplier).
  * _insn_counter.c counts for the precise engine (Unicorn), _fast_engine.c for the fast one.
  */
 #ifndef K210_COUNTER_H
@@ -112,8 +113,5 @@ static inline uint32_t table_entry(const insn_counter_t *c, uint64_t address)
         return 0;
     return c->table[(address - c->table_base) >> 1];
 }
-
-uint64_t resolve_transfer(insn_counter_t *c, uint64_t pc, uint32_t e, int kind, uint64_t next);
-uint64_t muldiv_latency(uint32_t e, uint64_t a, uint64_t b, int is_div);
 
 #endif

@@ -4,10 +4,11 @@
  * Unicorn runs the firmware's drawing at about 6 ns an instruction with no hook at all, 11-15 ns
  * with the per-instruction counter; a frame of the default card is a million instructions on
  * hart 0, so the board model could not keep up with the Dock through Unicorn, however it counted.
- * This interpreter decodes each instruction once (a direct-mapped cache of decoded instructions,
- * checked against the instruction's bits on every fetch, so that code written later is decoded
- * again), executes it on the hart's registers held here, and counts and times it exactly as
- * _insn_counter.c's count_instruction does, with the same counter, cycle table and branch predictor.
+ * This interpreter decodes each straight run of instructions once into a block (block_t: its code
+ * bytes are compared with a kept copy before it runs, once per epoch, so that code written later is
+ * decoded again), executes it on the hart's registers held here, and counts and times each
+ * instruction exactly as _insn_counter.c's count_instruction does, with the same counter, cycle
+ * table and branch predictor (_rocket_timing.h).
  *
  * An integer load or store that is naturally aligned and falls in a device window (fast_set_windows)
  * is counted and then left to the caller (STOP_DEVICE, the access described in the state's `dev`):
@@ -37,6 +38,7 @@
 #include <xmmintrin.h>
 
 #include "_counter.h"
+#include "_rocket_timing.h"
 
 
 /* fast_run's answers */
@@ -102,12 +104,15 @@ typedef struct {
  * it in the middle), an instruction for
  * the precise engine, BLOCK_MAX instructions or the end of SRAM; then an OP_BLOCK_END (not
  * counted). Entered only after its code bytes were compared with the copy kept here, so that
- * code written since (by a hart or a DMA) is decoded again. */
+ * code written since (by a hart or a DMA) is decoded again: once in each epoch, a stretch in which
+ * nothing but the interpreter itself wrote SRAM and it wrote none of the decoded code (an epoch
+ * begins with each call of the interpreter and with each such store of its own). */
 #define BLOCK_MAX 32
 typedef struct {
     uint64_t pc;
     uint32_t bytes;    /* code bytes it covers */
     uint32_t count;    /* instructions, OP_BLOCK_END not included */
+    uint64_t checked;  /* the fast_state's epoch in which its code was last compared */
     uint8_t code[BLOCK_MAX * 4 + 8];   /* zeros after `bytes` (same_code reads whole words) */
     insn_t insns[BLOCK_MAX + 1];
 } block_t;
@@ -145,6 +150,8 @@ typedef struct fast_state {
     uint32_t devices_here;   /* during a run: device accesses stop with STOP_DEVICE (else hand over) */
     uint64_t window_base[MAX_WINDOWS], window_end[MAX_WINDOWS];
     unsigned host_mxcsr;     /* the host's MXCSR while the guest's is in place */
+    uint64_t epoch;          /* see block_t.checked */
+    const uint8_t *code_lo, *code_hi;   /* the SRAM bytes some decoded block covers lie in [lo, hi) */
     uint8_t *sram;
     uint64_t size, base, alias;
     uint64_t hart_id;
@@ -174,6 +181,8 @@ fast_state_t *fast_state_new(uint64_t hart_id, uint8_t *sram, uint64_t size, uin
     f->alias = alias;
     f->read_batch = (uc_reg_batch_fn)read_batch;
     f->write_batch = (uc_reg_batch_fn)write_batch;
+    f->code_lo = sram + size;
+    f->code_hi = sram;
     return f;
 }
 
@@ -189,6 +198,8 @@ void fast_forget_decodings(fast_state_t *f)
 {
     memset(f->index, 0, sizeof f->index);
     f->blocks_used = 0;
+    f->code_lo = f->sram + f->size;
+    f->code_hi = f->sram;
 }
 
 /* The device windows (physical addresses base..end-1) whose aligned integer accesses the interpreter
@@ -621,6 +632,7 @@ static block_t *build_block(fast_state_t *f, const insn_counter_t *c, uint64_t p
     block_t *b = &f->arena[f->blocks_used++];
     f->blocks_built++;
     b->pc = pc;
+    b->checked = f->epoch;
     uint32_t n = 0, offset = 0;
     while (n < BLOCK_MAX && offset + 4 <= room) {
         uint32_t fetched;
@@ -633,6 +645,10 @@ static block_t *build_block(fast_state_t *f, const insn_counter_t *c, uint64_t p
     }
     b->count = n;
     b->bytes = offset;
+    if (code < f->code_lo)
+        f->code_lo = code;
+    if (code + offset > f->code_hi)
+        f->code_hi = code + offset;
     memset(b->code, 0, sizeof b->code);
     memcpy(b->code, code, offset);
     insn_t *end = &b->insns[n];
@@ -681,8 +697,10 @@ static inline __attribute__((always_inline)) block_t *block_at(fast_state_t *f, 
     }
     const uint8_t *code = f->sram + o;
     block_t *b = f->index[(pc >> 1) & (BLOCK_INDEX_SLOTS - 1)];
-    if (b != NULL && b->pc == pc && same_code(b, code, f->size - o))
+    if (b != NULL && b->pc == pc && (b->checked == f->epoch || same_code(b, code, f->size - o))) {
+        b->checked = f->epoch;
         return b;
+    }
     return build_block(f, c, pc, code, f->size - o);
 }
 
@@ -867,6 +885,7 @@ static void store_state(fast_state_t *f, void *uc, int fp_written, uint64_t old_
  */
 static int interpret(fast_state_t *f, insn_counter_t *c)
 {
+    f->epoch++;   /* SRAM may have been written since the last call: code is compared again */
     uint64_t *x = f->x;
     uint64_t *fr = f->f;
     uint64_t pc = f->pc;
@@ -929,6 +948,8 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
             loop->last = executed; \
         } \
     } while (0)
+/* a store into decoded code: its blocks are compared with their code again at their next entry */
+#define WROTE(h, width) do { if ((h) < f->code_hi && (h) + (width) > f->code_lo) f->epoch++; } while (0)
 /* an aligned access in a device window: counted, described in f->dev, left to the caller */
 #define DEVICE(nbytes, storing, stored, dest_reg, sign_from) do { \
         if ((a & (nbytes - 1)) == 0 && f->devices_here) { \
@@ -973,6 +994,7 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
         COUNT(); \
         uint64_t v = x[in->rs2]; \
         memcpy(h, &v, width); \
+        WROTE(h, width); \
         NEXT(); \
     } while (0)
 #define LOAD(type, width, dest) do { \
@@ -992,6 +1014,7 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
         COUNT(); \
         uint64_t v = (value); \
         memcpy(h, &v, width); \
+        WROTE(h, width); \
         NEXT(); \
     } while (0)
 #define BRANCH(cond) do { \
@@ -1256,6 +1279,7 @@ out:
 #undef LOAD
 #undef STORE
 #undef DEVICE
+#undef WROTE
 #undef XLOAD
 #undef XSTORE
 #undef BRANCH

@@ -1,0 +1,166 @@
+/*
+ * Rocket's branch predictor and its iterative multiplier/divider as both counters time them
+ * (_insn_counter.c for the precise engine, _fast_engine.c for the fast one): inline in each, since
+ * the fast engine resolves a control transfer every few instructions.
+ */
+#ifndef K210_ROCKET_TIMING_H
+#define K210_ROCKET_TIMING_H
+#include "_counter.h"
+
+static inline uint32_t btb_bucket(uint64_t pc)
+{
+    return (uint32_t)((pc >> 1) ^ (pc >> 8)) & (BTB_INDEX_BUCKETS - 1);
+}
+
+/* The BTB entry holding `pc`, or -1 (a fully associative look-up, through the index). */
+static inline int btb_find(const predictor_t *p, uint64_t pc)
+{
+    for (uint32_t i = btb_bucket(pc); p->index[i]; i = (i + 1) & (BTB_INDEX_BUCKETS - 1)) {
+        int slot = p->index[i] - 1;
+        if (p->pc[slot] == pc)
+            return slot;
+    }
+    return -1;
+}
+
+static inline void btb_index_insert(predictor_t *p, uint64_t pc, int slot)
+{
+    uint32_t i = btb_bucket(pc);
+    while (p->index[i])
+        i = (i + 1) & (BTB_INDEX_BUCKETS - 1);
+    p->index[i] = (uint8_t)(slot + 1);
+}
+
+/* Takes `pc` out of the index, moving later members of its probe run back into the gap. */
+static inline void btb_index_remove(predictor_t *p, uint64_t pc)
+{
+    uint32_t i = btb_bucket(pc);
+    while (p->pc[p->index[i] - 1] != pc)
+        i = (i + 1) & (BTB_INDEX_BUCKETS - 1);
+    uint32_t gap = i;
+    for (uint32_t j = (i + 1) & (BTB_INDEX_BUCKETS - 1); p->index[j]; j = (j + 1) & (BTB_INDEX_BUCKETS - 1)) {
+        uint32_t home = btb_bucket(p->pc[p->index[j] - 1]);
+        /* j's entry may fill the gap when its home bucket is not in (gap, j] (cyclically) */
+        int home_in_range = gap <= j ? (gap < home && home <= j) : (gap < home || home <= j);
+        if (!home_in_range) {
+            p->index[gap] = p->index[j];
+            gap = j;
+        }
+    }
+    p->index[gap] = 0;
+}
+
+/* Cycles the control transfer at `pc` (its table entry `e`) costs beyond its own, now that the
+ * next instruction's address `next` shows where it went; the predictor learns as Rocket's does. */
+static inline uint64_t resolve_transfer(insn_counter_t *c, uint64_t pc, uint32_t e, int kind, uint64_t next)
+{
+    predictor_t *p = &c->predictor;
+    uint64_t fallthrough = pc + (E_SIZE4(e) ? 4 : 2);
+    int taken = next != fallthrough || kind != KIND_BRANCH;
+    int hit = btb_find(p, pc);
+    int predicted_taken = 0;
+    uint64_t predicted_target = 0;
+    uint32_t bht_index = (uint32_t)((pc >> 1) ^ p->history) & (BHT_ENTRIES - 1);
+    if (hit >= 0) {
+        predicted_taken = p->is_jump[hit] || (p->bht[bht_index] & 1);
+        predicted_target = p->target[hit];
+        if (p->is_return[hit] && p->ras_count > 0)
+            predicted_target = p->ras[p->ras_pos];
+    }
+    int mispredicted = taken != predicted_taken || (taken && predicted_target != next);
+    if (hit >= 0 && kind == KIND_BRANCH) {
+        uint8_t v = p->bht[bht_index];
+        uint8_t v1 = (v >> 1) & 1, v0 = v & 1;
+        p->bht[bht_index] = (uint8_t)((taken << 1) | ((v1 & v0) | ((v1 | v0) & taken)));
+        p->history = ((uint32_t)taken << (BHT_BITS - 1)) | (p->history >> 1);
+    }
+    if (taken && mispredicted) {
+        int slot = hit;
+        if (slot < 0) {
+            slot = (int)p->next_replace;
+            p->next_replace = (p->next_replace + 1) % BTB_ENTRIES;
+            if (p->valid[slot])
+                btb_index_remove(p, p->pc[slot]);
+            btb_index_insert(p, pc, slot);
+        }
+        p->valid[slot] = 1;
+        p->pc[slot] = pc;
+        p->target[slot] = next;
+        p->is_jump[slot] = kind != KIND_BRANCH;
+        p->is_return[slot] = kind == KIND_JALR && E_RETURN(e);
+    }
+    if ((kind == KIND_JAL || kind == KIND_JALR) && E_CALL(e)) {
+        if (p->ras_count < RAS_ENTRIES)
+            p->ras_count++;
+        p->ras_pos = (p->ras_pos + 1) % RAS_ENTRIES;
+        p->ras[p->ras_pos] = fallthrough;
+    } else if (kind == KIND_JALR && E_RETURN(e) && hit >= 0 && p->ras_count > 0) {
+        p->ras_count--;
+        p->ras_pos = (p->ras_pos + RAS_ENTRIES - 1) % RAS_ENTRIES;
+    }
+    if (!mispredicted)
+        return 0;
+    c->mispredicts++;
+    return MISPREDICT_PENALTY;
+}
+
+static inline int msb(uint64_t x)   /* hardware Log2: index of the highest set bit, 0 for 0 */
+{
+    return x ? 63 - __builtin_clzll(x) : 0;
+}
+
+/* Rocket's iterative MulDiv (Multiplier.scala) with the big core's parameters: mulUnroll 8,
+ * mulEarlyOut, divEarlyOut. Returns the result latency: cycles from the instruction's issue to
+ * the issue of one that waits for the result. Its states: an optional cycle negating the
+ * inputs, the iterations, an optional cycle moving the remainder and one negating the result,
+ * then the response (written back through the long-latency port). */
+static inline uint64_t muldiv_latency(uint32_t e, uint64_t a, uint64_t b, int is_div)
+{
+    int lhs_signed = E_LHS_SIGNED(e), rhs_signed = E_RHS_SIGNED(e), hi = E_HI(e);
+    if (E_WORD(e)) {   /* the 32-bit forms sign- (or zero-) extend their inputs to 64 bits */
+        a = lhs_signed ? (uint64_t)(int64_t)(int32_t)a : (uint32_t)a;
+        b = rhs_signed ? (uint64_t)(int64_t)(int32_t)b : (uint32_t)b;
+    }
+    int lhs_sign = lhs_signed && (a >> 63);
+    int rhs_sign = rhs_signed && (b >> 63);
+    uint64_t cycles = 1;                       /* the request, in the execute stage */
+    if (!is_div) {
+        if (lhs_sign) {
+            cycles++;
+            a = -a;
+        }
+        uint64_t iterations = 8;               /* 64 bits, 8 a cycle */
+        if (!hi) {
+            for (uint64_t n = 1; n < 7; n++)   /* early out once the multiplier's rest is zero */
+                if ((a >> (8 * n)) == 0) {
+                    iterations = n + 1;
+                    break;
+                }
+        }
+        cycles += iterations + (hi ? 1 : 0);
+        return cycles;
+    }
+    int neg_out = hi ? lhs_sign : lhs_sign != rhs_sign;
+    if (lhs_sign || rhs_sign)
+        cycles++;
+    if (lhs_sign)
+        a = -a;
+    if (rhs_sign)
+        b = -b;
+    uint64_t iterations = 65;                  /* count 0..64, one quotient bit each */
+    if (b != 0) {
+        int divisor_msb = msb(b), dividend_msb = msb(a);
+        int zero = divisor_msb > dividend_msb;
+        int position = (63 + divisor_msb - dividend_msb) & 63;
+        if (position > 0 || zero) {
+            int shift = zero ? 63 : position;
+            iterations = 1 + (uint64_t)(64 - shift + 1);
+        }
+    } else if (!hi) {
+        neg_out = 0;
+    }
+    cycles += iterations + (hi ? 1 : 0) + (neg_out ? 1 : 0);
+    return cycles;
+}
+
+#endif
