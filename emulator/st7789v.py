@@ -553,10 +553,16 @@ class ST7789V:
 
     def cells_missing(self) -> int:
         """At least how many GRAM cells are still to be written before the next frame is captured:
-        those not written since the last capture, less one for each pixel the bytes kept back could
-        make (each pixel writes one cell at most; the next capture is at least this many pixels away)."""
-        most_pixels = -(-2 * (self._deferred_bytes + self._pending.size) // 3)   # 1.5 bytes a pixel at least
-        return max(0, PIXELS - self._covered_count - most_pixels)
+        those not written since the last capture, less one for each pixel the bytes kept back make
+        (each pixel writes one cell at most; the next capture is at least this many pixels away).
+        The bytes kept back are all in the current pixel format: a COLMOD, like any command, stores
+        them first."""
+        if self._regs.colmod & 0x07 == COLMOD_12BIT:
+            pixels = (self._pending.size + 2 * self._deferred_bytes) // 3     # nibbles, 3 a pixel
+        else:
+            per_pixel = 2 if self._regs.colmod & 0x07 == COLMOD_16BIT else 3
+            pixels = (self._pending.size + self._deferred_bytes) // per_pixel
+        return max(0, PIXELS - self._covered_count - pixels)
 
     def _capture_frame(self) -> None:
         self._covered[:] = False
