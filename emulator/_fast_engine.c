@@ -138,7 +138,20 @@ typedef struct {
     uint32_t pad;
 } device_access_t;
 
-/* hart.py's _FastHead mirrors the fields up to `dev` */
+/* The last device load, which the bus says would give the same value, changing nothing, while the
+ * hart's time (t0 + (cycles - start) / hz, Scheduler.hart_now's arithmetic) is before `until` and no
+ * other device access comes between: the same load again is answered here, counted as a poll as
+ * Scheduler.note_poll counts it (a hart polling a status register does it many times a byte). */
+typedef struct {
+    uint64_t pc, address, value;   /* the load, and the value the device gave (before extension) */
+    double until, t0, hz;
+    uint64_t start;
+    uint32_t width, armed;
+    uint32_t repeats, needed;      /* note_poll's count of identical reads so far, POLL_REPEATS */
+    uint32_t answered, polling;    /* out: loads answered here; the count reached `needed` */
+} repeat_t;
+
+/* hart.py's _FastHead mirrors the fields up to `rep` */
 typedef struct fast_state {
     uint64_t x[33];
     uint64_t f[32];
@@ -146,6 +159,7 @@ typedef struct fast_state {
     uint64_t mstatus;
     uint64_t fflags, frm;
     device_access_t dev;
+    repeat_t rep;
     uint32_t windows;        /* device windows in window_base/window_end */
     uint32_t devices_here;   /* during a run: device accesses stop with STOP_DEVICE (else hand over) */
     uint64_t window_base[MAX_WINDOWS], window_end[MAX_WINDOWS];
@@ -253,6 +267,14 @@ static inline uint8_t *sram_at(uint8_t *sram, uint64_t size, uint64_t base, uint
 static int64_t sext(uint64_t value, int bits)
 {
     return (int64_t)(value << (64 - bits)) >> (64 - bits);
+}
+
+/* A loaded value of `width` bytes as the load extends it (sign_bits: its sign bit's place + 1; 0: zero-extended). */
+static inline uint64_t extend(uint64_t value, uint64_t width, uint32_t sign_bits)
+{
+    if (width < 8)
+        value &= (1ull << (8 * width)) - 1;
+    return sign_bits ? (uint64_t)sext(value, (int)sign_bits) : value;
 }
 
 static uint32_t r_type(uint32_t f7, uint32_t rs2, uint32_t rs1, uint32_t f3, uint32_t rd, uint32_t op)
@@ -892,6 +914,7 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
     const int fpu_on = (f->mstatus & MSTATUS_FS) != 0;
     uint64_t executed = c->executed, cycles = c->cycles, stall = c->stall_cycles;
     const uint64_t cycle_limit = c->cycle_limit;
+    uint64_t limit = c->limit;   /* (only a poll loop's head lowers it during the call) */
     const uint64_t start = executed;
     int pending_kind = c->pending_kind;
     uint64_t pending_pc = c->pending_pc;
@@ -901,7 +924,7 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
 #define HAND_OVER() do { pc = in->pc; why = STOP_HANDOFF; goto out; } while (0)
 /* on to the next instruction of the block; each starts only below the counter's limits */
 #define DISPATCH() do { \
-        if (executed >= c->limit || cycles >= cycle_limit) { \
+        if (executed >= limit || cycles >= cycle_limit) { \
             pc = in->pc; \
             why = STOP_LIMIT; \
             goto out; \
@@ -943,7 +966,7 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
             poll_loop_t *loop = loop_slot(c, in->pc); \
             if (!loop->ignore && executed - loop->last == loop->body && c->poll_report == 0) { \
                 c->poll_report = in->pc; \
-                c->limit = executed; \
+                c->limit = limit = executed; \
             } \
             loop->last = executed; \
         } \
@@ -956,6 +979,19 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
             int w = device_window(f, a, nbytes); \
             if (w >= 0) { \
                 COUNT(); \
+                if (!(storing) && f->rep.armed && in->pc == f->rep.pc && a == f->rep.address \
+                        && nbytes == f->rep.width \
+                        && f->rep.t0 + (double)(cycles - f->rep.start) / f->rep.hz < f->rep.until) { \
+                    f->rep.answered++; \
+                    if (++f->rep.repeats >= f->rep.needed) { \
+                        f->rep.polling = 1;   /* note_poll: the hart polls; its turn ends here */ \
+                        f->rep.repeats = 0; \
+                        if (executed < limit) \
+                            c->limit = limit = executed; \
+                    } \
+                    x[dest_reg] = extend(f->rep.value, nbytes, sign_from); \
+                    NEXT(); \
+                } \
                 f->dev.address = a; \
                 f->dev.value = (stored); \
                 f->dev.next_pc = in->pc + in->len; \
@@ -1348,6 +1384,7 @@ int fast_run(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t from)
 {
     begin_run(f, uc, from);
     f->devices_here = f->windows != 0;
+    f->rep.armed = 0;
     return interpret_on(f, c, uc);
 }
 
@@ -1357,11 +1394,8 @@ __attribute__((visibility("default")))
 int fast_resume(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t value)
 {
     device_access_t *d = &f->dev;
-    if (!d->is_store) {
-        if (d->width < 8)
-            value &= (1ull << (8 * d->width)) - 1;
-        f->x[d->rd] = d->sign_bits ? (uint64_t)sext(value, (int)d->sign_bits) : value;
-    }
+    if (!d->is_store)
+        f->x[d->rd] = extend(value, d->width, d->sign_bits);
     f->pc = d->next_pc;
     return interpret_on(f, c, uc);
 }

@@ -46,6 +46,7 @@ from . import hart as hartmod
 from .elf import symbolize
 from .errors import BoardStop, FirmwareTrap, HardwareMisuse, RegisterRuleViolation, StrayWrite, UnmodelledAccess
 from .hart import Hart
+from .scheduler import POLL_REPEATS
 from .memory import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE
 from .mmio import BUS_AHB, BUS_APB, BUS_TILELINK, Peripheral, Register
 from .write_watch import describe as describe_stray
@@ -156,7 +157,8 @@ class Bus:
         self._map_windows(hart, 0)
         uc.hook_add(unicorn.UC_HOOK_MEM_UNMAPPED | unicorn.UC_HOOK_MEM_FETCH_PROT | unicorn.UC_HOOK_MEM_READ_PROT
                     | unicorn.UC_HOOK_MEM_WRITE_PROT, self._unmapped(hart))
-        hart.attach_devices([(p.BASE, p.BASE + p.SIZE) for p in self.peripherals], self._direct_access())
+        hart.attach_devices([(p.BASE, p.BASE + p.SIZE) for p in self.peripherals], self._direct_access(),
+                            self.scheduler.repeats_answered)
 
     def _map_windows(self, hart: Hart, upper: int) -> None:
         """Maps SRAM's two views and every device window at `upper` (0, or an upper half of the
@@ -555,7 +557,18 @@ class Bus:
             loader = loaders.get(key)
             if loader is None:
                 loader = loaders[key] = self._device_loader(hart, peripheral)
-            return loader(pc, address - peripheral.BASE, width, True)
+            offset = address - peripheral.BASE
+            value = loader(pc, offset, width, True)
+            again = stable[hart.hart_id]
+            if again is not None and again[0] == pc and again[1] == offset and again[2] is peripheral and \
+                    not hart.stop_requested and scheduler.pending_stop is None:
+                # the same load again would be answered from `again` (the loader's first case): the
+                # fast engine does that itself, no call per poll
+                repeats = scheduler.poll_count(hart, pc, address, value)
+                if repeats:
+                    hart.arm_repeats(pc, address, width, value, again[4], scheduler.turn_clock(hart), repeats,
+                                     POLL_REPEATS)
+            return value
         return access
 
     # --- what the buses do with accesses a register table does not take as they are -----------

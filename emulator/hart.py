@@ -122,17 +122,29 @@ class _DeviceAccess(ctypes.Structure):
                 ("rd", ctypes.c_uint32), ("sign_bits", ctypes.c_uint32), ("pad", ctypes.c_uint32)]
 
 
+class _Repeat(ctypes.Structure):
+    """_fast_engine.c's repeat_t: a device load the interpreter answers again itself (arm_repeats)."""
+    _fields_ = [("pc", ctypes.c_uint64), ("address", ctypes.c_uint64), ("value", ctypes.c_uint64),
+                ("until", ctypes.c_double), ("t0", ctypes.c_double), ("hz", ctypes.c_double),
+                ("start", ctypes.c_uint64), ("width", ctypes.c_uint32), ("armed", ctypes.c_uint32),
+                ("repeats", ctypes.c_uint32), ("needed", ctypes.c_uint32), ("answered", ctypes.c_uint32),
+                ("polling", ctypes.c_uint32)]
+
+
 class _FastHead(ctypes.Structure):
     """The start of _fast_engine.c's fast_state_t: the hart's registers while the interpreter holds
-    them, and the device access it stopped at."""
+    them, the device access it stopped at, the load it answers again itself."""
     _fields_ = [("x", ctypes.c_uint64 * 33), ("f", ctypes.c_uint64 * 32), ("pc", ctypes.c_uint64),
                 ("mstatus", ctypes.c_uint64), ("fflags", ctypes.c_uint64), ("frm", ctypes.c_uint64),
-                ("dev", _DeviceAccess)]
+                ("dev", _DeviceAccess), ("rep", _Repeat)]
 
 
 # A device access the fast engine leaves to the board: (hart, window index, address, width in bytes,
 # is a store, the stored value, pc) -> the loaded value (0 for a store)
 DeviceAccess = Callable[["Hart", int, int, int, bool, int, int], int]
+# The fast engine answered an armed load again (arm_repeats): (hart, pc, address, value, the poll
+# count now, whether it reached the count that makes the hart a poller)
+RepeatsAnswered = Callable[["Hart", int, int, int, int, bool], None]
 
 
 class AlonePlan(ctypes.Structure):
@@ -224,6 +236,7 @@ class Hart:
         self.device_accesses = 0  # device accesses the fast engine left to the board (likewise)
         self._device_access: DeviceAccess | None = None
         self._device_windows: list[tuple[int, int]] = []
+        self._repeats_answered: RepeatsAnswered | None = None
         self._holding = False     # the fast engine holds the registers during a device access
 
     def add_native_hook(self, kind: int, callback: int, user_data: ctypes.Structure, begin: int, end: int,
@@ -276,14 +289,17 @@ class Hart:
         self._free_fast_state = weakref.finalize(self, _counter_lib.fast_state_free, state)
         self._give_windows()
 
-    def attach_devices(self, windows: list[tuple[int, int]], access: DeviceAccess) -> None:
+    def attach_devices(self, windows: list[tuple[int, int]], access: DeviceAccess,
+                       repeats_answered: RepeatsAnswered | None = None) -> None:
         """Has the fast engine leave the naturally aligned integer loads and stores that fall in
         `windows` ((base, end) physical address ranges, the devices the bus maps) to `access`, with the
         hart's registers still held by it: a device access costs a call, not a run of the precise
         engine. `access` gets the window's index in `windows`. Other accesses outside SRAM (misaligned,
-        FP, elsewhere) still go to the precise engine."""
+        FP, elsewhere) still go to the precise engine. `repeats_answered` hears of the loads the
+        fast engine answered again itself (arm_repeats), before anything else reaches the board."""
         self._device_windows = list(windows)
         self._device_access = access
+        self._repeats_answered = repeats_answered
         self._give_windows()
 
     def _give_windows(self) -> None:
@@ -315,13 +331,35 @@ class Hart:
         if self._fast_state is not None:
             _counter_lib.fast_forget_decodings(self._fast_state)
 
+    def arm_repeats(self, pc: int, address: int, width: int, value: int, until: float, clock: tuple[float, int, float],
+                    repeats: int, needed: int) -> None:
+        """During a device access the fast engine stopped at (a load of `width` bytes at `address` by
+        the instruction at `pc`, which gave `value`): the same load again gives the same value and
+        changes nothing while the hart's time is before `until` (clock: the turn's t0, start cycles
+        and frequency, as Scheduler.hart_now works the time out) and no other device access comes
+        between. The fast engine answers it so itself, counting each as a poll from `repeats` on; at
+        `needed` the hart polls, and its run ends there (the board hears it through repeats_answered)."""
+        rep = self._fast_head.rep
+        rep.pc, rep.address, rep.width, rep.value, rep.until = pc, address, width, value, until
+        rep.t0, rep.start, rep.hz = clock
+        rep.repeats, rep.needed, rep.answered, rep.polling, rep.armed = repeats, needed, 0, 0, 1
+
     def _run_fast(self, pc: int) -> int:
         """Runs the hart on the fast engine from `pc` until it reaches the counter's limits or an
         instruction it hands over, carrying out the device accesses it stops at on the way; the
         precise engine holds the hart's registers again after it. Returns the pc to go on from."""
         state, counter, uc = self._fast_state, ctypes.byref(self._counter), self.uc._uch
+        rep = self._fast_head.rep
         why = _counter_lib.fast_run(state, counter, uc, pc)
-        while why == _STOP_DEVICE:
+        while True:
+            if rep.armed:
+                rep.armed = 0     # armed for one stretch of the interpreter: the board may change anything now
+                if rep.answered:
+                    self._holding = why == _STOP_DEVICE
+                    self._repeats_answered(self, rep.pc, rep.address, rep.value, rep.repeats, bool(rep.polling))
+                    self._holding = False
+            if why != _STOP_DEVICE:
+                break
             dev = self._fast_head.dev
             self.device_accesses += 1
             self._holding = True

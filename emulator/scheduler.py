@@ -188,6 +188,23 @@ class Scheduler:
             repeats = 1
         self._poll[hart.hart_id] = (pc, address, value, repeats)
 
+    def poll_count(self, hart: Hart, pc: int, address: int, value: int) -> int:
+        """How many identical reads note_poll has counted that this one would continue (0: none)."""
+        last_pc, last_address, last_value, repeats = self._poll[hart.hart_id]
+        return repeats if (pc, address, value) == (last_pc, last_address, last_value) else 0
+
+    def repeats_answered(self, hart: Hart, pc: int, address: int, value: int, repeats: int, polling: bool) -> None:
+        """The fast engine answered the same read again itself (Hart.arm_repeats), counting the
+        reads as note_poll does: its count now, and whether it found the hart polling."""
+        self._poll[hart.hart_id] = (pc, address, value, repeats)
+        if polling:
+            hart.polling = True
+            hart.request_stop()
+
+    def turn_clock(self, hart: Hart) -> tuple[float, int, float]:
+        """The running hart's time is t0 + (cycles - start) / hz (hart_now): (t0, start, hz)."""
+        return self._quantum_t0, self._quantum_start[hart.hart_id], self._turn_hz
+
     def forget_poll(self, hart: Hart) -> None:
         """A store to a device: whatever the hart polled next may change because of it."""
         self._poll[hart.hart_id] = NO_POLL
