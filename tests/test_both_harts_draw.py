@@ -1,5 +1,6 @@
-"""Both harts draw (issue 12, item 4; firmware/main.S, render.S render_band, raster.S bands): a
-frame split in row bands between hart 0 and hart 1 is the frame hart 0 draws alone, bit for bit,
+"""Both harts draw (issue 12, item 4; firmware/main.S, render.S render_vertex_share and
+render_band, raster.S bands): a frame whose vertex stage is split in two shares and whose rows are
+split in two bands between hart 0 and hart 1 is the frame hart 0 draws alone, bit for bit,
 whatever the settings and wherever the split falls; `harts = auto` lets hart 1 draw only when
 drawing takes longer than the LCD's transfer; the scene key is read alike by the firmware and the
 host tools."""
