@@ -37,7 +37,7 @@ TEXTURE = ppm(128, 128, 5)
 FINE_TEXTURE = ppm(256, 256, 5)
 
 
-RACE_SIDE = 32              # the race grid's vertices a side: 1,024, and 1,024 behind the camera
+RACE_SIDE = 24              # the race grid's vertices a side: 576, and 576 behind the camera
 
 
 def race_grid(grid_share: int) -> str:
