@@ -13,8 +13,9 @@
 #   hart 1 only: SPI0, DMAC channel 0 and its PLIC enable, lcd_ready, the
 #         LCD's panel state; hart 0 only: SPI1, DMAC channel 1 and its PLIC
 #         enable, the heap, `scene`, the renderer's state (render_prepare
-#         writes it while hart 1 draws nothing; both read it while they
-#         draw their bands; see "Both harts draw" below).
+#         writes it while hart 1 draws nothing; when both draw, each then
+#         writes its share of the vertex records, and both read all of
+#         them while they draw their bands; see "Both harts draw" below).
 #   written before the release, read-only after it: cpu_hz, .bss cleared,
 #         the console's UART set-up, the FPIOA, the DMAC's common set-up
 #         (dma_init: its reset would stop the other hart's channel).
@@ -55,20 +56,33 @@
 # draws it all; draw_split decides, README "Rendering"), each hart's rows of
 # the colour and depth buffers its own (render_band, raster_set_band), so
 # no pixel is written by both and the frame is the one hart 0 draws alone.
-#   hart 0: wait state[b] == FREE; render_prepare (once for both); from
-#           frame 1 on post band_job (first row s, JOB_POSTED, msip[1]);
-#           draw rows 0 .. s - 1; if s < LCD_HEIGHT wait band_job ==
-#           JOB_DONE (acquire: hart 1's rows are in memory); then FULL as
-#           above
+# The vertex stage before it is split too when hart 1 has rows: each hart
+# fills the records of its share of the vertices (render_vertex_share,
+# VERTEX_SHARES of them), and neither draws before both shares are in
+# memory (a barrier: one word per hart in the job, SHARE_DONE).
+#   hart 0: wait state[b] == FREE; render_prepare (the matrices, once for
+#           both); from frame 1 on post band_job (first row s, both
+#           shares SHARE_PENDING, JOB_POSTED, msip[1]); its share of the
+#           vertex stage (all of it when s = LCD_HEIGHT); if s <
+#           LCD_HEIGHT: share 0 = SHARE_DONE (release, msip[1]), wait
+#           share 1 == SHARE_DONE (acquire); draw rows 0 .. s - 1; if s <
+#           LCD_HEIGHT wait band_job == JOB_DONE (acquire: hart 1's rows
+#           are in memory); then FULL as above
 #   hart 1: wait state[b] == FULL; start frame n's DMA; wait band_job ==
 #           JOB_POSTED (the job of frame n + 1, drawn into the other
-#           buffer, which hart 1 itself handed back); draw its rows, if
-#           any; band_job = JOB_DONE (release; msip[0] only when hart 0
-#           waits for it); wait for the DMA; FREE as above
+#           buffer, which hart 1 itself handed back); if it has rows: its
+#           share of the vertex stage, share 1 = SHARE_DONE (release,
+#           msip[0]), wait share 0 == SHARE_DONE (acquire), draw its rows;
+#           band_job = JOB_DONE (release; msip[0] only when hart 0 waits
+#           for it); wait for the DMA; FREE as above
 # Job n + 1 is taken before hart 1 frees buffer b, and hart 0 posts job
 # n + 2 only once buffer b is free: one job is in flight at a time, so
-# one state word is enough. Hart 0 does not run render_prepare again
-# before hart 1's band is done (it waits for JOB_DONE first).
+# one state word and one word per share are enough (hart 0 resets the
+# shares' words before it posts, when hart 1 no longer reads them). Hart
+# 0 does not run render_prepare again before hart 1's band is done (it
+# waits for JOB_DONE first). Each share's word is written by its hart
+# only, so each waits for a word that nothing changes after it is set:
+# whichever hart comes to the barrier second finds the other's word set.
 
     .option norelax
     .include "k210.inc"
@@ -80,7 +94,10 @@
     .equ JOB_FIRST,             4           # u32 first row of hart 1's band (LCD_HEIGHT: none)
     .equ JOB_FRAME,             8           # u64 the frame's number
     .equ JOB_CYCLES,            16          # u64 hart 1's band, cycles (hart 1 writes it)
-    .equ JOB_BYTES,             24
+    .equ JOB_SHARE_CYCLES,      24          # u64 hart 1's share of the vertex stage, cycles (hart 1)
+    .equ JOB_SHARE0,            32          # u32 SHARE_PENDING / SHARE_DONE: hart 0's share
+    .equ JOB_SHARE1,            36          # u32 the same, hart 1's (hart 1 writes it)
+    .equ JOB_BYTES,             40
     .equ SIGNAL_NONE,           -1          # set_state: signal no hart
     .equ DRAW_BAND_MIN,         8           # rows each hart keeps when both draw
 # CPU cycles one frame takes on the LCD's SPI link: one byte per serial
@@ -144,37 +161,61 @@ main_hart0:
     mv      a0, s3
     call    fb_address
     mv      a1, s2
-    call    render_prepare              # the vertex stage, once
+    call    render_prepare              # the matrices, once
     mv      a0, s2
     call    draw_split
     mv      s5, a0                      # s5 = hart 1's first row
+    li      s9, 1                       # s9 = the vertex stage's shares: all hart 0's,
+    li      t0, LCD_HEIGHT              # or one per hart when both draw
+    beq     s5, t0, 2f
+    li      s9, VERTEX_SHARES
     # every frame from 1 on has a job for hart 1, maybe without rows (frame
     # 0's comes before hart 1 takes jobs: it brings the LCD up meanwhile)
-    beqz    s2, 2f
+2:  beqz    s2, 3f
     la      t0, band_job
     sw      s5, JOB_FIRST(t0)
     sd      s2, JOB_FRAME(t0)
+    li      t1, SHARE_PENDING
+    sw      t1, JOB_SHARE0(t0)
+    sw      t1, JOB_SHARE1(t0)
     addi    a0, t0, JOB_STATE
     li      a1, JOB_POSTED
     li      a2, 1
     call    set_state
-2:  csrr    s6, mcycle                  # s6 = hart 0's band's start
+3:  li      a0, 0                       # this hart's share of the vertex stage
+    mv      a1, s9
+    call    render_vertex_share
+    csrr    t0, mcycle
+    sub     s10, t0, s4                 # s10 = hart 0's cycles so far
+    li      t0, LCD_HEIGHT
+    beq     s5, t0, 4f                  # hart 1 draws nothing: no one waits
+    la      a0, band_job + JOB_SHARE0   # hart 1 may draw once it is done
+    li      a1, SHARE_DONE
+    li      a2, 1
+    call    set_state
+    la      a0, band_job + JOB_SHARE1   # this hart draws once hart 1's is
+    li      a1, SHARE_DONE
+    call    wait_state
+    bnez    a0, trap_park
+4:  csrr    s6, mcycle                  # s6 = hart 0's band's start
     li      a0, 0
     mv      a1, s5
     call    render_band
     csrr    t0, mcycle
     sub     s6, t0, s6                  # s6 = hart 0's band, cycles
-    sub     s7, t0, s4                  # s7 = hart 0's frame, cycles
+    add     s7, s10, s6                 # s7 = hart 0's frame, cycles (not waiting)
     li      s8, 0                       # s8 = hart 1's band, cycles
     li      t0, LCD_HEIGHT
-    beq     s5, t0, 3f                  # no rows for hart 1: no need to wait
+    beq     s5, t0, 5f                  # no rows for hart 1: no need to wait
     la      a0, band_job + JOB_STATE
     li      a1, JOB_DONE
     call    wait_state
     bnez    a0, trap_park
     la      t0, band_job
     ld      s8, JOB_CYCLES(t0)
-3:  mv      a0, s5
+    ld      t1, JOB_SHARE_CYCLES(t0)
+    add     s7, s7, t1                  # and hart 1's share of the vertex stage
+5:  mv      a0, s5
     mv      a1, s6
     mv      a2, s7
     mv      a3, s8
@@ -248,8 +289,23 @@ main_hart1:
     la      t0, band_job
     lwu     s5, JOB_FIRST(t0)           # s5 = this hart's first row
     li      s6, 0                       # s6 = its band, cycles
-    li      t0, LCD_HEIGHT
-    bgeu    s5, t0, 7f
+    li      s7, 0                       # s7 = its share of the vertex stage, cycles
+    li      t1, LCD_HEIGHT
+    bgeu    s5, t1, 7f
+    csrr    s7, mcycle
+    li      a0, 1                       # share 1 of the vertex stage
+    li      a1, VERTEX_SHARES
+    call    render_vertex_share
+    csrr    t0, mcycle
+    sub     s7, t0, s7
+    la      a0, band_job + JOB_SHARE1
+    li      a1, SHARE_DONE
+    li      a2, 0                       # tell hart 0, which waits for it
+    call    set_state
+    la      a0, band_job + JOB_SHARE0   # hart 0's share of it
+    li      a1, SHARE_DONE
+    call    wait_state
+    bnez    a0, 2f
     csrr    s6, mcycle
     mv      a0, s5
     li      a1, LCD_HEIGHT
@@ -258,6 +314,7 @@ main_hart1:
     sub     s6, t0, s6
 7:  la      t0, band_job
     sd      s6, JOB_CYCLES(t0)
+    sd      s7, JOB_SHARE_CYCLES(t0)
     addi    a0, t0, JOB_STATE
     li      a1, JOB_DONE
     li      a2, 0                       # tell hart 0, which waits for it when
@@ -410,15 +467,18 @@ draw_split:
 
 # draw_record (file-local)
 #   What: keeps what frame n's drawing cost for draw_split: draw_work =
-#         hart 0's cycles from render_prepare to the end of its band plus
-#         hart 1's band's (the work of one hart drawing alone, whatever the
-#         split), and, when both drew, a new draw_balance: the row where
+#         hart 0's cycles from render_prepare to the end of its band, but
+#         for its wait at the vertex stage's barrier, plus hart 1's share
+#         of the vertex stage and its band (the work of one hart drawing
+#         alone, whatever the split), and, when both drew, a new
+#         draw_balance: the row where
 #         the two bands' cycles would be equal if each band's cost were
 #         spread evenly over its rows, s' = H c1 s / (c0 (H - s) + c1 s)
 #         (H = LCD_HEIGHT, s the split, c0, c1 the bands' cycles), kept
 #         within DRAW_BAND_MIN rows of either edge.
 #   Arguments: a0 = the split (draw_split), a1 = hart 0's band cycles,
-#              a2 = hart 0's frame cycles, a3 = hart 1's band cycles.
+#              a2 = the frame's cycles on both harts but for the bands'
+#              of hart 1 and the barrier's wait, a3 = hart 1's band cycles.
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 draw_record:

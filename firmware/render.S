@@ -1,8 +1,9 @@
 # render.S: one frame of the scene: clear, then every triangle (textured or
 # flat) or every edge (wireframe). The per-frame set-up (render_prepare)
-# runs once; the drawing (render_band) runs on one hart for the whole
-# screen or on both, each for its band of rows (main.S), with per-hart
-# scratch (the hart-local block below).
+# runs once; the vertex stage (render_vertex_share) and the drawing
+# (render_band) run on one hart for the whole mesh and screen or on both,
+# each for its share of the vertices and its band of rows (main.S), with
+# per-hart scratch (the hart-local block below).
 #
 # Per triangle (modes textured and flat):
 #   1. Trivial rejection: the three vertices outside the same frustum plane
@@ -194,8 +195,8 @@ render_init:
     .globl render_frame
 # render_frame
 #   What: draws frame n of the scene into a framebuffer (file comment), all
-#         of it on the calling hart: render_prepare, then render_band over
-#         the whole screen.
+#         of it on the calling hart: render_prepare, render_vertex_share of
+#         the whole vertex stage, then render_band over the whole screen.
 #   Arguments: a0 = framebuffer (LCD_FB_BYTES, 64-aligned), a1 = frame
 #              number.
 #   Results: none.
@@ -205,6 +206,9 @@ render_frame:
     sd      ra, 8(sp)
     call    render_prepare
     li      a0, 0
+    li      a1, 1
+    call    render_vertex_share
+    li      a0, 0
     li      a1, LCD_HEIGHT
     call    render_band
     ld      ra, 8(sp)
@@ -213,13 +217,14 @@ render_frame:
 
     .globl render_prepare
 # render_prepare
-#   What: the part of frame n every band needs, done once (on hart 0): the
-#         vertex stage (vertex_transform; the vertex records into
-#         render_vertices), with shading = gouraud the normals'
-#         intensities, and the framebuffer to draw into (raster_begin).
-#         Then render_band may run on both harts at once for disjoint
-#         bands; render_prepare must not run again before every band of
-#         the frame is drawn (it rewrites what they read).
+#   What: the part of frame n done once, on hart 0, before any other: this
+#         frame's matrices (vertex_setup), the vertex records' address into
+#         render_vertices and the framebuffer to draw into (raster_begin).
+#         Then the vertex stage (render_vertex_share, on one hart or split
+#         between both), and once all of it is done, render_band, maybe on
+#         both harts at once for disjoint bands. render_prepare must not run
+#         again before every band of the frame is drawn (it rewrites what
+#         they read).
 #   Arguments: a0 = framebuffer (LCD_FB_BYTES, 64-aligned), a1 = frame
 #              number.
 #   Results: none.
@@ -230,19 +235,75 @@ render_prepare:
     sd      s0, 0(sp)
     mv      s0, a0                      # s0 = framebuffer
     mv      a0, a1
-    call    vertex_transform
+    call    vertex_setup
     la      t0, render_vertices
     sd      a0, 0(t0)
-    la      t0, render_fill
-    lwu     t0, 0(t0)
-    andi    t0, t0, RASTER_GOURAUD
-    beqz    t0, 1f
-    call    normals_light
-1:  mv      a0, s0
+    mv      a0, s0
     call    raster_begin
     ld      s0, 0(sp)
     ld      ra, 8(sp)
     addi    sp, sp, 16
+    ret
+
+    .globl render_vertex_share
+# render_vertex_share
+#   What: share a0 of a1 of frame n's vertex stage, after render_prepare:
+#         the vertex records (and flat shading's world positions) of mesh
+#         vertices [a0 V / a1, (a0 + 1) V / a1) (vertex_range), and with
+#         shading = gouraud the intensities of normals [a0 N / a1,
+#         (a0 + 1) N / a1) (normals_light); V, N the mesh's counts. The
+#         shares of one frame may run on both harts at once; each item is
+#         computed as in one pass over all, so the records are the same
+#         however the stage is split. Every share must be done before any
+#         render_band of the frame.
+#   Arguments: a0 = the share (0 .. a1 - 1), a1 = the number of shares
+#              (1 or 2).
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+render_vertex_share:
+    addi    sp, sp, -32
+    sd      ra, 24(sp)
+    sd      s0, 16(sp)
+    sd      s1, 8(sp)
+    mv      s0, a0                      # s0 = the share
+    mv      s1, a1                      # s1 = the number of shares
+    la      t0, scene
+    lwu     a0, MESH_VCOUNT(t0)
+    mv      a1, s0
+    mv      a2, s1
+    call    share_range
+    call    vertex_range
+    la      t0, render_fill
+    lwu     t0, 0(t0)
+    andi    t0, t0, RASTER_GOURAUD
+    beqz    t0, 9f
+    la      t0, scene
+    lwu     a0, MESH_NCOUNT(t0)
+    mv      a1, s0
+    mv      a2, s1
+    call    share_range
+    call    normals_light
+9:  ld      s1, 8(sp)
+    ld      s0, 16(sp)
+    ld      ra, 24(sp)
+    addi    sp, sp, 32
+    ret
+
+# share_range (file-local)
+#   What: share a1 of a2 of the items 0 .. a0 - 1: [a1 a0 / a2, (a1 + 1)
+#         a0 / a2), so that the shares, in order, cover every item once
+#         (whatever a0: odd, smaller than a2, 0).
+#   Arguments: a0 = the number of items (< 2^32), a1 = the share, a2 = the
+#              number of shares.
+#   Results: a0 = first item, a1 = the item past the last.
+#   Clobbers: only ABI temporaries.
+share_range:
+    mul     t0, a0, a1
+    divu    t0, t0, a2
+    addi    t1, a1, 1
+    mul     t1, a0, t1
+    divu    a1, t1, a2
+    mv      a0, t0
     ret
 
     .globl render_band
@@ -719,13 +780,15 @@ corner_light:
     ret
 
 # normals_light (file-local)
-#   What: Gouraud: this frame's intensity of every mesh normal into
+#   What: Gouraud: this frame's intensity of mesh normals a0 .. a1 - 1 into
 #         normal_light: n' = R C n, with R the frame's rotation
 #         (vertex_rotation) and C = diag(sy sz, sx sz, sx sy) the cofactor
 #         matrix of the scale (det(S) S^-T: normals stay perpendicular to
 #         the scaled surface, and a zero scale gives a zero normal, hence
 #         the ambient), then light_level(n' . L / |n'|).
-#   Arguments: none. Results: none.
+#   Arguments: a0 = first normal, a1 = the normal past the last (0 <= a0
+#              <= a1 <= MESH_NCOUNT).
+#   Results: none.
 #   Clobbers: only ABI temporaries. The loop keeps M = R C in ft3..ft11
 #         and L in fa4..fa6.
 normals_light:
@@ -734,12 +797,17 @@ normals_light:
     sd      s0, 16(sp)
     sd      s1, 8(sp)
     sd      s2, 0(sp)
-    la      t0, scene
-    ld      s0, MESH_N(t0)              # s0 = normal
-    lwu     s1, MESH_NCOUNT(t0)         # s1 = normals left
-    la      t1, normal_light
-    ld      s2, 0(t1)                   # s2 = its intensity
+    sub     s1, a1, a0                  # s1 = normals left
     beqz    s1, 9f
+    la      t0, scene
+    ld      s0, MESH_N(t0)
+    li      t1, MESH_N_BYTES
+    mul     t1, t1, a0
+    add     s0, s0, t1                  # s0 = normal
+    la      t1, normal_light
+    ld      s2, 0(t1)
+    slli    t1, a0, NORMAL_LIGHT_SHIFT
+    add     s2, s2, t1                  # s2 = its intensity
     flw     fa0, SCENE_SCALE(t0)        # C = fa1, fa2, fa3
     flw     fa1, SCENE_SCALE + 4(t0)
     flw     fa2, SCENE_SCALE + 8(t0)

@@ -1,8 +1,10 @@
 # vertex.S: the per-frame vertex stage. Once a frame it builds the model
 # matrix (scale, rotation by a quaternion about SCENE_AXIS by SCENE_ANGLE +
 # frame * SCENE_STEP, translation), the perspective projection (SCENE_FOV,
-# aspect LCD_WIDTH / LCD_HEIGHT, SCENE_NEAR, SCENE_FAR) and their product,
-# then transforms every mesh vertex once into a VTX_BYTES record (render.inc):
+# aspect LCD_WIDTH / LCD_HEIGHT, SCENE_NEAR, SCENE_FAR) and their product
+# (vertex_setup), then transforms every mesh vertex once into a VTX_BYTES
+# record (vertex_range, over the whole mesh or, when both harts draw, each
+# hart over its share of it: render.S render_vertex_share; render.inc):
 #   outcode (which frustum planes its clip-space position is outside of, and
 #   whether it lies beyond the guard band), and, for vertices in front of the
 #   near plane and inside the guard band, the projected screen position in
@@ -67,20 +69,19 @@ vertex_init:
     addi    sp, sp, 16
     ret
 
-    .globl vertex_transform
-# vertex_transform
-#   What: builds this frame's matrices and fills every vertex record (see
-#         the file comment).
+    .globl vertex_setup
+# vertex_setup
+#   What: builds this frame's matrices (the model matrix, the projection
+#         and their product: see the file comment), which vertex_range,
+#         vertex_clip and face_world read. Once a frame, before any
+#         vertex_range of the frame (on both harts: render.S).
 #   Arguments: a0 = frame number (unsigned).
 #   Results: a0 = the vertex records (VTX_BYTES each, in mesh order).
 #   Clobbers: only ABI temporaries.
-vertex_transform:
-    addi    sp, sp, -64
-    sd      ra, 56(sp)
-    sd      s0, 48(sp)
-    sd      s1, 40(sp)
-    sd      s2, 32(sp)
-    sd      s3, 24(sp)
+vertex_setup:
+    addi    sp, sp, -16
+    sd      ra, 8(sp)
+    sd      s0, 0(sp)
     la      s0, scene
 
     # angle = start + frame * step, in double so that long runs keep it exact
@@ -116,13 +117,50 @@ vertex_transform:
     la      a1, vertex_projection
     la      a2, vertex_model
     call    mat4_mul
-
-    # --- every vertex: clip = P M p, outcode, projection.
-    ld      s1, MESH_V(s0)              # s1 = mesh position
-    lwu     s2, MESH_VCOUNT(s0)         # s2 = vertices left
     la      t0, vertex_records
-    ld      s3, 0(t0)                   # s3 = record
+    ld      a0, 0(t0)
+    ld      s0, 0(sp)
+    ld      ra, 8(sp)
+    addi    sp, sp, 16
+    ret
+
+    .globl vertex_range
+# vertex_range
+#   What: fills the vertex records of mesh vertices a0 .. a1 - 1 from this
+#         frame's matrices (vertex_setup), and with flat shading their
+#         world-space positions (file comment). A vertex's results depend
+#         on nothing but the vertex and the matrices, so the two harts may
+#         each fill a disjoint range at once (render.S render_vertex_share)
+#         and the records are those of one pass over all of them.
+#   Arguments: a0 = first vertex, a1 = the vertex past the last (0 <= a0 <=
+#              a1 <= MESH_VCOUNT).
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+vertex_range:
+    addi    sp, sp, -64
+    sd      ra, 56(sp)
+    sd      s0, 48(sp)
+    sd      s1, 40(sp)
+    sd      s2, 32(sp)
+    sd      s3, 24(sp)
+    sd      s4, 16(sp)
+    sd      s5, 8(sp)
+    la      s0, scene
+    mv      s4, a0                      # s4 = first vertex
+    sub     s5, a1, a0                  # s5 = vertices in the range
+    mv      s2, s5                      # s2 = vertices left
     beqz    s2, 9f
+
+    # --- every vertex of the range: clip = P M p, outcode, projection.
+    ld      s1, MESH_V(s0)
+    li      t0, MESH_V_BYTES
+    mul     t0, t0, s4
+    add     s1, s1, t0                  # s1 = mesh position
+    la      t0, vertex_records
+    ld      s3, 0(t0)
+    li      t0, VTX_BYTES
+    mul     t0, t0, s4
+    add     s3, s3, t0                  # s3 = record
     # The MVP's rows x, y, z stay in fs0..fs11 (callee-saved: kept on the
     # stack meanwhile); row w is loaded per vertex. The products are those of
     # vertex_clip, in the same order.
@@ -216,10 +254,16 @@ vertex_transform:
     # Flat shading: every vertex's world-space position, M p, with the model
     # matrix's top rows in fs0..fs11 (face_world's products, in its order).
     la      t0, vertex_world_array
-    ld      s3, 0(t0)                   # s3 = world position
+    ld      s3, 0(t0)
     beqz    s3, 8f
+    li      t0, WORLD_POS_BYTES
+    mul     t0, t0, s4
+    add     s3, s3, t0                  # s3 = world position
     ld      s1, MESH_V(s0)
-    lwu     s2, MESH_VCOUNT(s0)
+    li      t0, MESH_V_BYTES
+    mul     t0, t0, s4
+    add     s1, s1, t0                  # s1 = mesh position
+    mv      s2, s5                      # s2 = vertices left
     la      t0, vertex_model
     flw     fs0, 0(t0)
     flw     fs1, 4(t0)
@@ -266,8 +310,8 @@ vertex_transform:
     fld     fs10, 80(sp)
     fld     fs11, 88(sp)
     addi    sp, sp, 96
-9:  la      t0, vertex_records
-    ld      a0, 0(t0)
+9:  ld      s5, 8(sp)
+    ld      s4, 16(sp)
     ld      s3, 24(sp)
     ld      s2, 32(sp)
     ld      s1, 40(sp)
@@ -279,7 +323,7 @@ vertex_transform:
     .globl vertex_clip
 # vertex_clip
 #   What: a mesh vertex's clip-space position this frame, P M p, exactly as
-#         vertex_transform computed it for its outcode and projection (the
+#         vertex_range computed it for its outcode and projection (the
 #         same products in the same order), for the triangles and edges cut
 #         in clip space.
 #   Arguments: a0 = the vertex's index, a1 = where to write x, y, z, w
@@ -316,7 +360,7 @@ vertex_clip:
 #   What: the world-space positions this frame, M p, of a triangle's three
 #         corners (a face normal where vertex_world_array is not kept:
 #         Gouraud shading's faces without normals), with the model matrix's
-#         products in the order of vertex_transform's.
+#         products in the order of vertex_range's.
 #   Arguments: a0 = the triangle (MESH_F_BYTES), a1 = where to write the
 #              corners' x, y, z (TRIANGLE_CORNERS * WORLD_POS_BYTES).
 #   Results: none.

@@ -1,5 +1,6 @@
-"""Both harts draw (issue 12, item 4; firmware/main.S, render.S render_band, raster.S bands): a
-frame split in row bands between hart 0 and hart 1 is the frame hart 0 draws alone, bit for bit,
+"""Both harts draw (issue 12, item 4; firmware/main.S, render.S render_vertex_share and
+render_band, raster.S bands): a frame whose vertex stage is split in two shares and whose rows are
+split in two bands between hart 0 and hart 1 is the frame hart 0 draws alone, bit for bit,
 whatever the settings and wherever the split falls; `harts = auto` lets hart 1 draw only when
 drawing takes longer than the LCD's transfer; the scene key is read alike by the firmware and the
 host tools."""
@@ -31,9 +32,47 @@ def ppm(width: int, height: int, seed: int) -> bytes:
     return f"P6\n{width} {height}\n255\n".encode() + pixels.tobytes()
 
 
-MODEL = sphere(segments=32, bands=16)           # 1,024 triangles
+MODEL = sphere(segments=32, bands=16)           # 1,024 triangles, 561 vertices (an odd count)
 TEXTURE = ppm(128, 128, 5)
 FINE_TEXTURE = ppm(256, 256, 5)
+
+
+RACE_SIDE = 24              # the race grid's vertices a side: 576, and 576 behind the camera
+
+
+def race_grid(grid_share: int) -> str:
+    """A bumpy grid of RACE_SIDE x RACE_SIDE vertices filling the screen, and as many vertices
+    behind the camera that no face uses, so that each hart's share of the vertex stage (render.S
+    render_vertex_share: the first half of the vertices, the second) is either the whole grid
+    (every vertex projected: the dearer share) or only the hidden ones (never projected: the
+    cheaper share, done well before the other). The hart with the cheap share must still wait for
+    the other's before drawing: the grid's last vertices lie in its band and the faces that use
+    them come first, so that drawing on early would read last frame's records.
+    `grid_share` 0: the grid first, hart 1 the early one (its band is the bottom: the grid's rows
+    run top to bottom); 1: the grid second, hart 0 the early one (rows bottom to top)."""
+    rows = range(RACE_SIDE) if grid_share == 0 else range(RACE_SIDE - 1, -1, -1)
+    grid, uvs = [], []
+    for j in rows:                                   # j = 0: the top row
+        for i in range(RACE_SIDE):
+            u, v = i / (RACE_SIDE - 1), 1 - j / (RACE_SIDE - 1)
+            grid.append((2.8 * u - 1.4, 2.1 * v - 1.05, 0.08 * ((i * 7 + j * 3) % 5)))
+            uvs.append((u, v))
+    hidden = [(0.0, 0.0, 5.0)] * len(grid)
+    vertices = grid + hidden if grid_share == 0 else hidden + grid
+    base = 0 if grid_share == 0 else len(hidden)
+    faces = []
+    for r in range(RACE_SIDE - 2, -1, -1):           # the last rows' faces first
+        for i in range(RACE_SIDE - 1):
+            a, b = base + r * RACE_SIDE + i + 1, base + (r + 1) * RACE_SIDE + i + 1
+            t = r * RACE_SIDE + i + 1
+            faces.append([(a, t), (b, t + RACE_SIDE), (b + 1, t + RACE_SIDE + 1)])
+            faces.append([(a, t), (b + 1, t + RACE_SIDE + 1), (a + 1, t + 1)])
+    return "\n".join([*(f"v {x:.6f} {y:.6f} {z:.6f}" for x, y, z in vertices),
+                      *(f"vt {u:.6f} {v:.6f}" for u, v in uvs),
+                      *(f"f {p}/{q} {r}/{w} {m}/{n}" for (p, q), (r, w), (m, n) in faces)]) + "\n"
+
+
+RACE_KEYS = "translate = 0 0 -2\ncull = off\n"
 # Filling the screen: heavier than the LCD's transfer, so that `auto` has hart 1 draw too.
 BIG = "scale = 1.4\n"
 # The settings where a band could come out differently: the plain fill (nearest texel, perspective,
@@ -53,6 +92,9 @@ SCENES = {
     "edge": (MODEL, TEXTURE, BIG + "antialias = edge\nfilter = bilinear\nshading = gouraud\n", 3),
     # antialias = supersample: each hart draws its band once per sample, sums and resolves it
     "supersample": (MODEL, TEXTURE, "antialias = supersample\nfilter = mipmap\n", 3),
+    # the vertex stage in two shares of unequal cost: each hart waits for the other's share
+    "race-hart1-early": (race_grid(0), TEXTURE, RACE_KEYS, 3),
+    "race-hart0-early": (race_grid(1), TEXTURE, RACE_KEYS, 3),
 }
 
 

@@ -3,8 +3,9 @@ position, z / w, 1 / w); the clip-space and world-space positions are computed a
 triangle is cut or lit flat (vertex.S vertex_clip, face_world). Those must be the values the
 vertex stage itself used, bit for bit, or a clipped triangle's cut corners would not meet its
 neighbours' and flat lighting would differ from the reference. Driven on the board model's CPU
-through tests/firmware_calls.py: vertex_transform on a generated mesh, then each vertex asked
-again."""
+through tests/firmware_calls.py: vertex_setup and vertex_range on a generated mesh, then each
+vertex asked again. When both harts draw, each fills its share of the vertex stage
+(render.S render_vertex_share): the shares together must fill what one pass fills."""
 from __future__ import annotations
 
 import struct
@@ -38,7 +39,7 @@ def set_scene(fw: FirmwareCaller, positions: np.ndarray, mesh_at: int, records_a
 
 
 def world_array(fw: FirmwareCaller, address: int) -> None:
-    """Where vertex_transform keeps world positions (vertex_world_array; vertex_init sets it for
+    """Where vertex_range keeps world positions (vertex_world_array; vertex_init sets it for
     flat shading), or 0 for none."""
     fw.write(fw.symbol("vertex_world_array"), struct.pack("<Q", address))
 
@@ -62,7 +63,8 @@ def test_vertex_clip_and_world_give_the_vertex_stage_values(fw):
     set_scene(fw, positions, mesh_at, records_at)
     world_array(fw, world_at)
     frame = 3
-    assert fw.call("vertex_transform", [frame]).a[0] == records_at
+    assert fw.call("vertex_setup", [frame]).a[0] == records_at
+    fw.call("vertex_range", [0, VERTICES])
 
     out_clip = fw.symbol("OUT_NEAR") | fw.symbol("OUT_GUARD")
     offsets = {name: fw.symbol(name) for name in ("VTX_OUTCODE", "VTX_SX", "VTX_SY", "VTX_ZW", "VTX_Q")}
@@ -103,4 +105,67 @@ def test_vertex_clip_and_world_give_the_vertex_stage_values(fw):
     near, guard = fw.symbol("OUT_NEAR"), fw.symbol("OUT_GUARD")
     assert 0 in kinds and any(k & near for k in kinds) and any(k & guard for k in kinds), \
         f"the mesh should have vertices inside, behind the near plane and beyond the guard band: {kinds}"
+
+
+
+POISON_BYTE = 0xA5          # what the arrays hold before the vertex stage fills them
+GUARD = 64                  # bytes after each array that no share may write
+
+
+def set_gouraud(fw: FirmwareCaller, normals: np.ndarray, normals_at: int, light_at: int) -> None:
+    """shading = gouraud as render_init leaves it: the RASTER_GOURAUD fill, the mesh's normals,
+    where their intensities go, the light, the ambient and 65 light levels."""
+    scene = fw.symbol("scene")
+    fw.write(scene + fw.symbol("MESH_NCOUNT"), struct.pack("<I", len(normals)))
+    fw.write(scene + fw.symbol("MESH_N"), struct.pack("<Q", normals_at))
+    fw.write_f32(normals_at, normals.reshape(-1))
+    fw.write_f32(scene + fw.symbol("SCENE_LIGHT"), [0.36, 0.48, 0.8])
+    fw.write_f32(scene + fw.symbol("SCENE_AMBIENT"), [0.2])
+    fw.write(fw.symbol("render_fill"), struct.pack("<I", fw.symbol("RASTER_GOURAUD")))
+    fw.write(fw.symbol("normal_light"), struct.pack("<Q", light_at))
+    fw.write_f32(fw.symbol("light_quantum"), [64.0, 1.0])       # 65 levels: LIGHT_ONE / 64 a level
+
+
+@pytest.mark.parametrize("vertices, normals", [(401, 57), (64, 64), (3, 0), (2, 3), (1, 1), (0, 0)])
+def test_the_vertex_stage_in_two_shares_fills_what_one_pass_fills(fw, vertices, normals):
+    """render_vertex_share (main.S: hart 0 runs share 0, hart 1 share 1 when both draw): the two
+    shares fill every vertex record, flat shading's world position and Gouraud's normal
+    intensity once, bit for bit as the whole stage in one share does, in either order, and
+    nothing past the arrays, whatever the counts (odd, fewer than the shares, none)."""
+    rng = np.random.default_rng(vertices)
+    # mostly in view, the last two behind the near plane and beyond the guard band (outcode only)
+    positions = rng.uniform(-1.5, 1.5, (vertices, 3)).astype(np.float32)
+    positions[max(0, vertices - 2):] = np.array([[0, 0, 3.5], [400, -400, 0]], np.float32)[:min(2, vertices)]
+    unit = rng.normal(size=(normals, 3))
+    unit = (unit / np.linalg.norm(unit, axis=1, keepdims=True)).astype(np.float32)
+    vtx_bytes, world_bytes = fw.symbol("VTX_BYTES"), fw.symbol("WORLD_POS_BYTES")
+    mesh_at = fw.scratch
+    normals_at = mesh_at + positions.nbytes + GUARD
+    arrays = {"records": (normals_at + unit.nbytes + GUARD, vertices * vtx_bytes)}
+    arrays["world"] = (arrays["records"][0] + arrays["records"][1] + GUARD, vertices * world_bytes)
+    arrays["light"] = (arrays["world"][0] + arrays["world"][1] + GUARD, normals * fw.symbol("NORMAL_LIGHT_BYTES"))
+    set_scene(fw, positions, mesh_at, arrays["records"][0])
+    world_array(fw, arrays["world"][0])
+    set_gouraud(fw, unit, normals_at, arrays["light"][0])
+    fw.call("vertex_setup", [5])
+
+    def fill(shares: list[tuple[int, int]]) -> dict[str, bytes]:
+        """The arrays (and the guard after each) after the given render_vertex_share calls."""
+        for at, size in arrays.values():
+            fw.write(at, bytes([POISON_BYTE]) * (size + GUARD))
+        for share, count in shares:
+            fw.call("render_vertex_share", [share, count])
+        return {name: fw.read(at, size + GUARD) for name, (at, size) in arrays.items()}
+
+    one = fill([(0, 1)])
+    assert fill([(0, 2), (1, 2)]) == one
+    assert fill([(1, 2), (0, 2)]) == one
+    untouched = bytes([POISON_BYTE]) * GUARD
+    assert all(one[name][-GUARD:] == untouched for name in arrays), "a share wrote past its array"
+    records = one["records"]
+    outcode = fw.symbol("VTX_OUTCODE")
+    assert all(records[i * vtx_bytes + outcode:i * vtx_bytes + outcode + 4] != untouched[:4]
+               for i in range(vertices)), "a vertex record was left unfilled"
+    assert untouched[:4] not in [one["world"][i:i + 4] for i in range(0, vertices * world_bytes, 4)]
+    assert untouched[:4] not in [one["light"][i:i + 4] for i in range(0, arrays["light"][1], 4)]
 
