@@ -6,7 +6,8 @@ from setuptools import Extension, setup
 
 setup(ext_modules=[Extension("emulator._insn_counter", ["emulator/_insn_counter.c", "emulator/_fast_engine.c"],
                              depends=["emulator/_counter.h", "emulator/_rocket_timing.h"], libraries=["m"],
-                             # the guest's floating point is the host's: no fused or reordered operations
+                             # the guest's floating point is the host's: no fused or reordered operations; the
+                             # fast engine's entry points exported, its helpers not
                              extra_compile_args=["-O2", "-ffp-contract=off", "-fno-fast-math", "-fvisibility=hidden"]),
                    Extension("emulator._write_watch", ["emulator/_write_watch.c"]),
                    Extension("emulator._poll_watch", ["emulator/_poll_watch.c"])])

@@ -139,13 +139,12 @@ typedef struct {
 } device_access_t;
 
 /* The last device load, which the bus says would give the same value, changing nothing, while the
- * hart's time (t0 + (cycles - start) / hz, Scheduler.hart_now's arithmetic) is before `until` and no
- * other device access comes between: the same load again is answered here, counted as a poll as
+ * hart's cycle count is below `until` and no other device access comes between: the same load again is answered here, counted as a poll as
  * Scheduler.note_poll counts it (a hart polling a status register does it many times a byte). */
 typedef struct {
     uint64_t pc, address, value;   /* the load, and the value the device gave (before extension) */
-    double until, t0, hz;
-    uint64_t start;
+    uint64_t until;                /* the hart's cycle count at which that stops (hart.py works it out: no
+                                      float arithmetic here, where the guest's MXCSR collects flags) */
     uint32_t width, armed;
     uint32_t repeats, needed;      /* note_poll's count of identical reads so far, POLL_REPEATS */
     uint32_t answered, polling;    /* out: loads answered here; the count reached `needed` */
@@ -243,9 +242,9 @@ static inline int device_window(const fast_state_t *f, uint64_t a, uint64_t widt
 __attribute__((visibility("default")))
 void fast_statistics(const fast_state_t *f, uint64_t out[3])
 {
-    out[2] = f->blocks_built;
     out[0] = f->instructions;
     out[1] = f->handoffs;
+    out[2] = f->blocks_built;
 }
 
 /* The host address of `width` bytes of SRAM (`size` bytes at `sram`) at guest address `a` in
@@ -696,9 +695,9 @@ static inline int same_code(const block_t *b, const uint8_t *code, uint64_t room
     if (i < n) {
         uint64_t now = 0, then;
         if (room - i >= 8)
-            memcpy(&now, code + i, 8);
+            memcpy(&now, code + i, 8);          /* a fixed-size copy: one load */
         else
-            memcpy(&now, code + i, room - i);
+            memcpy(&now, code + i, room - i);   /* the block ends by SRAM's end: no reading past it */
         memcpy(&then, b->code + i, 8);
         uint64_t mask = ~0ull >> (64 - 8 * (n - i));
         if ((now ^ then) & mask)
@@ -901,9 +900,11 @@ static void store_state(fast_state_t *f, void *uc, int fp_written, uint64_t old_
 
 /*
  * Runs the hart from f->pc (its registers in `f`) until an instruction needs the precise engine
- * (STOP_HANDOFF: f->pc names it, not counted) or the counter's limits are reached (STOP_LIMIT; a
+ * (STOP_HANDOFF: f->pc names it, not counted), a device access is left to the caller (STOP_DEVICE:
+ * f->pc names it, counted; f->dev describes it) or the counter's limits are reached (STOP_LIMIT; a
  * poll loop's head lowers the limit as count_instruction does). The host's MXCSR collects the
- * floating-point flags meanwhile (the callers clear and read it).
+ * floating-point flags meanwhile (the callers set the guest's and collect them: no float arithmetic
+ * of the board's own belongs in here).
  */
 static int interpret(fast_state_t *f, insn_counter_t *c)
 {
@@ -914,7 +915,8 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
     const int fpu_on = (f->mstatus & MSTATUS_FS) != 0;
     uint64_t executed = c->executed, cycles = c->cycles, stall = c->stall_cycles;
     const uint64_t cycle_limit = c->cycle_limit;
-    uint64_t limit = c->limit;   /* (only a poll loop's head lowers it during the call) */
+    uint64_t limit = c->limit;   /* (a poll loop's head or a poll answered here lowers it during the call) */
+    uint64_t block_epoch = 0;    /* f->epoch when the current block was entered */
     const uint64_t start = executed;
     int pending_kind = c->pending_kind;
     uint64_t pending_pc = c->pending_pc;
@@ -980,8 +982,7 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
             if (w >= 0) { \
                 COUNT(); \
                 if (!(storing) && f->rep.armed && in->pc == f->rep.pc && a == f->rep.address \
-                        && nbytes == f->rep.width \
-                        && f->rep.t0 + (double)(cycles - f->rep.start) / f->rep.hz < f->rep.until) { \
+                        && nbytes == f->rep.width && cycles < f->rep.until) { \
                     f->rep.answered++; \
                     if (++f->rep.repeats >= f->rep.needed) { \
                         f->rep.polling = 1;   /* note_poll: the hart polls; its turn ends here */ \
@@ -1053,10 +1054,16 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
         WROTE(h, width); \
         NEXT(); \
     } while (0)
+/* not taken: on in the block, unless the interpreter stored into decoded code since the block began
+ * (QEMU ends its translated blocks at branches, so the code after one runs as it is now) */
 #define BRANCH(cond) do { \
         COUNT(); \
         if (cond) { \
             pc = in->pc + (uint64_t)in->imm; \
+            goto next_block; \
+        } \
+        if (f->epoch != block_epoch) { \
+            pc = in->pc + in->len; \
             goto next_block; \
         } \
         NEXT(); \
@@ -1084,6 +1091,7 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
     uint8_t *const sram = f->sram;
     insn_t *in;
 next_block:
+    block_epoch = f->epoch;
     {
         block_t *b = block_at(f, c, pc);
         if (b == NULL) {
@@ -1438,7 +1446,6 @@ uint64_t fast_run_alone(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t f
 {
     begin_run(f, uc, from);
     f->devices_here = 0;   /* a device access ends the turns here: the scheduler finishes that turn */
-    enter_guest_fp(f);
     double t0 = plan->t0;
     plan->turns = 0;
     plan->handed_over = 0;
@@ -1456,7 +1463,9 @@ uint64_t fast_run_alone(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t f
         plan->turns++;
         c->limit = c->executed + budget;
         c->cycle_limit = c->cycles + budget;
+        enter_guest_fp(f);   /* (the turns' own arithmetic must not raise the guest's flags) */
         int why = interpret(f, c);
+        leave_guest_fp(f);
         if (why != STOP_LIMIT || c->poll_report != 0) {
             plan->handed_over = 1;
             break;
@@ -1466,7 +1475,6 @@ uint64_t fast_run_alone(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t f
         if (t0 >= plan->stop_at || plan->turns >= plan->max_turns)
             break;
     }
-    leave_guest_fp(f);
     end_run(f, uc);
     return f->pc;
 }

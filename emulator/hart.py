@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import ctypes
 import enum
+import math
 import weakref
 from dataclasses import dataclass
 from typing import Callable
@@ -125,8 +126,7 @@ class _DeviceAccess(ctypes.Structure):
 class _Repeat(ctypes.Structure):
     """_fast_engine.c's repeat_t: a device load the interpreter answers again itself (arm_repeats)."""
     _fields_ = [("pc", ctypes.c_uint64), ("address", ctypes.c_uint64), ("value", ctypes.c_uint64),
-                ("until", ctypes.c_double), ("t0", ctypes.c_double), ("hz", ctypes.c_double),
-                ("start", ctypes.c_uint64), ("width", ctypes.c_uint32), ("armed", ctypes.c_uint32),
+                ("until", ctypes.c_uint64), ("width", ctypes.c_uint32), ("armed", ctypes.c_uint32),
                 ("repeats", ctypes.c_uint32), ("needed", ctypes.c_uint32), ("answered", ctypes.c_uint32),
                 ("polling", ctypes.c_uint32)]
 
@@ -303,6 +303,7 @@ class Hart:
         self._give_windows()
 
     def _give_windows(self) -> None:
+        """Hands the device windows to the fast engine once both exist (the bus may attach first)."""
         if self._fast_state is None or not self._device_windows:
             return
         count = len(self._device_windows)
@@ -340,8 +341,8 @@ class Hart:
         between. The fast engine answers it so itself, counting each as a poll from `repeats` on; at
         `needed` the hart polls, and its run ends there (the board hears it through repeats_answered)."""
         rep = self._fast_head.rep
-        rep.pc, rep.address, rep.width, rep.value, rep.until = pc, address, width, value, until
-        rep.t0, rep.start, rep.hz = clock
+        rep.pc, rep.address, rep.width, rep.value = pc, address, width, value
+        rep.until = _first_cycle_at(until, *clock)
         rep.repeats, rep.needed, rep.answered, rep.polling, rep.armed = repeats, needed, 0, 0, 1
 
     def _run_fast(self, pc: int) -> int:
@@ -372,6 +373,7 @@ class Hart:
                 raise
             self._holding = False
             if self.pending_exception is not None:
+                # (defensive: the bus raises no exception for the aligned accesses it gets here today)
                 _counter_lib.fast_abandon(state, uc)    # the access trapped: it does not complete
                 break
             why = _counter_lib.fast_resume(state, counter, uc, value)
@@ -442,6 +444,7 @@ class Hart:
         return self._reg_value.value
 
     def _held_reg(self, register: int) -> int:
+        """A register's value while the fast engine holds them (a device access it left to the bus)."""
         head = self._fast_head
         if rv.UC_RISCV_REG_X0 <= register <= rv.UC_RISCV_REG_X31:
             return head.x[register - rv.UC_RISCV_REG_X0] if register != rv.UC_RISCV_REG_X0 else 0
@@ -716,6 +719,19 @@ class Hart:
             self.minstret_offset = value - self.instret
         # mip: MSIP/MTIP/MEIP are read-only in mip; the writable bits belong to S/U modes,
         # which the K210 firmware here does not use. Writes are ignored like the hardware does.
+
+
+def _first_cycle_at(until: float, t0: float, start: int, hz: float) -> int:
+    """The least cycle count c at which the hart's time t0 + (c - start) / hz (Scheduler.hart_now's
+    arithmetic, operation for operation) is `until` or later; NO_LIMIT if never."""
+    if not until < math.inf:
+        return NO_LIMIT
+    c = max(start, start + math.ceil((until - t0) * hz) - 2)
+    while t0 + (c - start) / hz < until:      # the estimate is a cycle or two early; float rounding decides
+        c += 1
+    while c > start and t0 + (c - 1 - start) / hz >= until:
+        c -= 1
+    return min(c, NO_LIMIT)
 
 
 def _add_native_hook(uc: unicorn.Uc, kind: int, callback: int, user_data: ctypes.Structure, begin: int, end: int,
