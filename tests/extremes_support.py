@@ -90,6 +90,29 @@ def run_scene(firmware: Path, folder: Path, model: str | bytes, scene: str | Non
     return run
 
 
+ONE_TRIANGLE = "v 0 0 -1\nv 1 0 -1\nv 0 1 -1\nf 1 2 3\n"
+EXIT_BAD_INPUT = 8     # the board's exit status when the firmware reports a fatal error (README)
+
+
+def check_scene_key_agreement(firmware: Path, folder: Path, key: str, value: str, refusal: str | None) -> None:
+    """`key = value` on line 2 of a scene.ini: the card builder's reader (reference/scene.py) and the
+    firmware both take it (refusal None), or both refuse it with the same message, the firmware's
+    error 9 ending the run with the board's status for a fatal error."""
+    from reference.scene import SceneError, parse_scene
+    text = f"mode = flat\n{key} = {value}\n"
+    try:
+        parse_scene(text)
+        host = None
+    except SceneError as error:
+        host = str(error)
+    run = run_scene(firmware, folder, ONE_TRIANGLE, text, frames=1)
+    if refusal is None:
+        assert host is None and run.returncode == 0, (host, run.stderr)
+    else:
+        assert host == refusal
+        assert run.returncode == EXIT_BAD_INPUT and f"error 9 {host}" in run.console, (run.returncode, run.stderr)
+
+
 # --------------------------------------------------------------------------- comparisons
 
 def rgb565_channels(image: np.ndarray) -> np.ndarray:

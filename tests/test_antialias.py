@@ -13,7 +13,7 @@ import pytest
 
 import reference
 from conftest import ROOT
-from extremes_support import outline_mask, run_scene
+from extremes_support import check_scene_key_agreement, outline_mask, run_scene
 
 sys.path.insert(0, str(ROOT / "tools"))
 from make_assets import cube, sphere, torus  # noqa: E402
@@ -106,23 +106,11 @@ def test_antialiasing_changes_only_edge_pixels(runs, name, setting):
 @pytest.mark.parametrize("value, accepted", [("off", True), ("Edge", True), ("SuperSample", True), ("on", False),
                                              ("", False)])
 def test_antialias_key_host_and_firmware_agree(firmware, tmp_path, value, accepted):
-    """The card builder's reader (reference/scene.py) takes exactly the values the firmware takes,
-    and refuses the others with the firmware's message (error 9)."""
-    from reference.scene import SceneError, parse_scene
-    text = f"mode = flat\nantialias = {value}\n"
-    try:
-        parse_scene(text)
-        host = None
-    except SceneError as error:
-        host = str(error)
-    run = run_scene(firmware, tmp_path, "v 0 0 -1\nv 1 0 -1\nv 0 1 -1\nf 1 2 3\n", text, frames=1)
-    if accepted:
-        assert host is None and run.returncode == 0, (host, run.stderr)
-    else:
-        expected = ("bad scene.ini line 2: malformed line (no value)" if not value else
-                    "bad scene.ini line 2: bad value (expected off, edge or supersample)")
-        assert host == expected
-        assert run.returncode == 8 and f"error 9 {host}" in run.console
+    """The card builder's reader takes exactly the values the firmware takes, and refuses the
+    others with the firmware's message (error 9)."""
+    refusal = None if accepted else ("bad scene.ini line 2: malformed line (no value)" if not value else
+                                     "bad scene.ini line 2: bad value (expected off, edge or supersample)")
+    check_scene_key_agreement(firmware, tmp_path, "antialias", value, refusal)
 
 
 # --------------------------------------------------------------------------- wireframe

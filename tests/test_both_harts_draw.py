@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from extremes_support import run_scene
+from extremes_support import check_scene_key_agreement, run_scene
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "tools"))
@@ -155,21 +155,10 @@ def test_auto_leaves_the_default_card_to_hart_0(firmware_run):
 @pytest.mark.parametrize("value, accepted", [("auto", True), ("1", True), ("2", True), ("AUTO", True),
                                              ("3", False), ("two", False), ("0", False)])
 def test_harts_key_host_and_firmware_agree(firmware, tmp_path, value, accepted):
-    """The card builder's reader (reference/scene.py) takes exactly the values the firmware takes,
-    and refuses the others with the firmware's message."""
-    from reference.scene import SceneError, parse_scene
-    text = f"mode = flat\nharts = {value}\n"
-    try:
-        parse_scene(text)
-        host = None
-    except SceneError as error:
-        host = str(error)
-    run = run_scene(firmware, tmp_path, "v 0 0 -1\nv 1 0 -1\nv 0 1 -1\nf 1 2 3\n", text, frames=1)
-    if accepted:
-        assert host is None and run.returncode == 0, (host, run.stderr)
-    else:
-        assert host == "bad scene.ini line 2: bad value (expected auto, 1 or 2)"
-        assert run.returncode != 0 and f"error 9 {host}" in (run.out / "console.log").read_text()
+    """The card builder's reader takes exactly the values the firmware takes, and refuses the
+    others with the firmware's message (error 9)."""
+    refusal = None if accepted else "bad scene.ini line 2: bad value (expected auto, 1 or 2)"
+    check_scene_key_agreement(firmware, tmp_path, "harts", value, refusal)
 
 
 def test_a_silhouette_fringe_below_the_split_is_drawn_by_hart_1(firmware, tmp_path):
