@@ -111,6 +111,11 @@ def run_on(engine: str, source: str, data: str = "", timing: str = TIMING_ROCKET
     return board
 
 
+def run_on_both(source: str, data: str = "", timing: str = TIMING_ROCKET):
+    """The program run on the precise engine, then on the fast one: (precise board, fast board)."""
+    return run_on(ENGINE_PRECISE, source, data, timing), run_on(ENGINE_FAST, source, data, timing)
+
+
 def state(board) -> dict:
     """What both engines must agree on (fflags too: the board's own float arithmetic between a hart's
     instructions must not raise the guest's flags)."""
@@ -122,8 +127,7 @@ def state(board) -> dict:
 
 @pytest.mark.parametrize("timing", [TIMING_ROCKET, TIMING_IPC1])
 def test_multiply_and_divide_operands_are_worked_out_as_the_precise_engine_reads_them(timing):
-    precise = run_on(ENGINE_PRECISE, MULDIV_WALK, MULDIV_DATA, timing)
-    fast = run_on(ENGINE_FAST, MULDIV_WALK, MULDIV_DATA, timing)
+    precise, fast = run_on_both(MULDIV_WALK, MULDIV_DATA, timing)
     assert state(fast) == state(precise)
     charged = fast.harts[0].fast_statistics()
     # the walk ran on the fast engine (not handed over throughout), its multiplies timed there
@@ -148,8 +152,7 @@ STORE_THEN_LOAD = """
 
 
 def test_an_operand_stored_just_before_is_the_one_timed():
-    precise = run_on(ENGINE_PRECISE, STORE_THEN_LOAD, MULDIV_DATA)
-    fast = run_on(ENGINE_FAST, STORE_THEN_LOAD, MULDIV_DATA)
+    precise, fast = run_on_both(STORE_THEN_LOAD, MULDIV_DATA)
     assert state(fast) == state(precise)
     assert fast.harts[0].fast_statistics()["instructions"] > 0.9 * fast.harts[0].executed
 
@@ -176,8 +179,7 @@ RESERVATION = """
 
 
 def test_a_reservation_survives_a_hand_over_between_the_engines():
-    precise = run_on(ENGINE_PRECISE, RESERVATION, ".balign 4096\nword: .dword 0")
-    fast = run_on(ENGINE_FAST, RESERVATION, ".balign 4096\nword: .dword 0")
+    precise, fast = run_on_both(RESERVATION, ".balign 4096\nword: .dword 0")
     assert reg(precise, "s3") == 0 and reg(precise, "s4") == 50
     assert state(fast) == state(precise)
     # between each lr.d and its sc.d the fast engine ran some of the additions
@@ -208,8 +210,7 @@ handler:
 
 
 def test_exceptions_are_taken_where_the_precise_engine_takes_them():
-    precise = run_on(ENGINE_PRECISE, TRAPS)
-    fast = run_on(ENGINE_FAST, TRAPS)
+    precise, fast = run_on_both(TRAPS)
     assert reg(precise, "s3") == 1 and reg(precise, "s4") == 1
     assert state(fast) == state(precise)
     assert fast.harts[0].retired_adjust == precise.harts[0].retired_adjust == 1
@@ -249,8 +250,7 @@ DEVICE_ACCESSES = """
 
 
 def test_device_accesses_are_carried_out_by_the_fast_engine_as_by_the_precise_one():
-    precise = run_on(ENGINE_PRECISE, DEVICE_ACCESSES)
-    fast = run_on(ENGINE_FAST, DEVICE_ACCESSES)
+    precise, fast = run_on_both(DEVICE_ACCESSES)
     assert reg(precise, "a0") == reg(precise, "t3") == 0x8182838485868788
     assert reg(precise, "a1") == 2**64 - 2**32 + 0x81828384 and reg(precise, "a2") == 0x81828384
     assert reg(precise, "a3") == 2**64 - 0x10000 + 0x8182 and reg(precise, "a4") == 0x8586
@@ -438,8 +438,7 @@ def fp_state(board) -> dict:
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_floating_point_at_the_extremes_is_the_precise_engines(seed):
     source, data = _fp_walk(seed, 700)
-    precise = run_on(ENGINE_PRECISE, source, data)
-    fast = run_on(ENGINE_FAST, source, data)
+    precise, fast = run_on_both(source, data)
     assert fp_state(fast) == fp_state(precise)
     # most of it ran on the fast engine: the operands are special, not mostly NaNs
     assert fast.harts[0].fast_statistics()["instructions"] > 0.5 * fast.harts[0].executed
@@ -499,8 +498,7 @@ def _integer_walk(seed: int, length: int) -> tuple[str, str]:
 @pytest.mark.parametrize("seed", [1, 2])
 def test_integer_instructions_at_the_extremes_are_the_precise_engines(seed):
     source, data = _integer_walk(seed, 1500)
-    precise = run_on(ENGINE_PRECISE, source, data)
-    fast = run_on(ENGINE_FAST, source, data)
+    precise, fast = run_on_both(source, data)
     assert state(fast) == state(precise)
     assert fast.harts[0].fast_statistics()["instructions"] > 0.8 * fast.harts[0].executed
 
@@ -540,8 +538,7 @@ def test_code_written_after_it_ran_runs_as_written(fence):
     # without fence.i the fast engine runs it all in one call: its own store into decoded code is
     # what makes it compare the routine's code again (QEMU sees the store to a translated page)
     source = PATCHED_CODE if fence else PATCHED_CODE.replace("    fence.i ", "    # no fence.i ")
-    precise = run_on(ENGINE_PRECISE, source)
-    fast = run_on(ENGINE_FAST, source)
+    precise, fast = run_on_both(source)
     assert reg(precise, "s3") == 2 * (1 + 5 + 9)
     assert state(fast) == state(precise)
     if not fence:
@@ -573,8 +570,7 @@ patched_site:
 
 
 def test_code_stored_after_a_branch_not_taken_runs_as_stored():
-    precise = run_on(ENGINE_PRECISE, PATCHED_AFTER_A_BRANCH)
-    fast = run_on(ENGINE_FAST, PATCHED_AFTER_A_BRANCH)
+    precise, fast = run_on_both(PATCHED_AFTER_A_BRANCH)
     assert reg(precise, "s3") == 100
     assert state(fast) == state(precise)
 
