@@ -574,3 +574,27 @@ def test_code_stored_after_a_branch_not_taken_runs_as_stored():
     assert reg(precise, "s3") == 100
     assert state(fast) == state(precise)
 
+
+
+# Long enough for the scheduler's turns alone (hart 1 sleeps in wfi): their float arithmetic must not
+# reach the guest's fflags
+LONG_LOOP = """
+    li      s1, 100000
+1:  addi    s2, s2, 3
+    addi    s1, s1, -1
+    bnez    s1, 1b
+"""
+
+
+def test_the_turns_alone_leave_the_guests_flags_alone():
+    boards = []
+    for engine in (ENGINE_PRECISE, ENGINE_FAST):
+        board = make_board(program(FPU_ON + LONG_LOOP), engine=engine)
+        turns_alone = []
+        run_alone = board.harts[0].run_alone
+        board.harts[0].run_alone = lambda plan: (turns_alone.append(plan), run_alone(plan))
+        board.run_until(0.02)      # (the scheduler's own run: stepping keeps single turns)
+        boards.append(board)
+    precise, fast = boards
+    assert turns_alone, "no turns alone"
+    assert state(fast) == state(precise) and state(fast)["fflags"] == 0
