@@ -121,7 +121,8 @@ def _scene_bytes(text: str) -> bytes:
 
 def _partition_geometry(image: Path) -> tuple[int, int, int, int, int]:
     """(partition start byte, reserved sectors, FAT count, sectors per FAT, sectors per cluster)."""
-    raw = image.read_bytes()[:1024 * 1024 + 512] if image.stat().st_size > 1024 * 1024 else image.read_bytes()
+    with image.open("rb") as handle:
+        raw = handle.read(1024 * 1024 + 512)        # the MBR and, 1 MiB in, the first partition's BPB
     start = int.from_bytes(raw[446 + 8:446 + 12], "little") * 512
     bpb = raw[start:start + 512]
     return (start, int.from_bytes(bpb[0x0E:0x10], "little"), bpb[0x10],
