@@ -3,6 +3,7 @@ first) and one board-model run of it is shared by every test that looks at its o
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -66,6 +67,27 @@ def make_card(folder: Path, files: dict[str, bytes]) -> Path:
                 writer.makedirs(parent)
             writer.write(path, data)
     return card
+
+
+def copy_card(source: Path, target: Path) -> Path:
+    """A copy of a card image that keeps its holes: only the parts holding data are copied
+    (shutil.copyfile would write all 64 MiB of a card that holds a few). The copy reads back
+    byte for byte as the source."""
+    with open(source, "rb") as src, open(target, "wb") as dst:
+        size = os.fstat(src.fileno()).st_size
+        offset = 0
+        while offset < size:
+            try:
+                start = os.lseek(src.fileno(), offset, os.SEEK_DATA)
+            except OSError:             # ENXIO: nothing but a hole up to the end
+                break
+            end = os.lseek(src.fileno(), start, os.SEEK_HOLE)
+            src.seek(start)
+            dst.seek(start)
+            dst.write(src.read(end - start))
+            offset = end
+        dst.truncate(size)
+    return target
 
 
 @pytest.fixture(scope="session")

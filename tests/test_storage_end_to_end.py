@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import json
 import re
-import shutil
 import subprocess
 import zlib
 from pathlib import Path
@@ -14,7 +13,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from conftest import ROOT, make_card, run_emulator
+from conftest import ROOT, copy_card, make_card, run_emulator
 from firmware_calls import FirmwareCaller
 from sdcard_image.fat32 import CardWriter
 from sdcard_image.layouts import (cluster_chain, delete_leaving_entries, directory_entries, fill_directory,
@@ -138,7 +137,7 @@ def run_scene(firmware: Path, image: Path, scene: str, tmp_path: Path, *extra: s
     """Copies the card, puts `scene` into its scene.ini placeholder and boots the firmware."""
     tmp_path.mkdir(parents=True, exist_ok=True)
     card = tmp_path / "card.img"
-    shutil.copyfile(image, card)
+    copy_card(image, card)
     chain = cluster_chain(card, "/scene.ini")
     with card.open("r+b") as handle:
         handle.seek(_cluster_offset(card, chain[0]))
@@ -439,7 +438,7 @@ def test_only_textured_mode_needs_its_texture(firmware, loader_card, tmp_path, m
 def test_file_too_large_for_memory(firmware, loader_card, tmp_path):
     """A texture is loaded whole (a model is not: obj.S reads it through a window)."""
     image = tmp_path / "huge.img"
-    shutil.copyfile(loader_card[0], image)
+    copy_card(loader_card[0], image)
     huge = tmp_path / "huge.bin"
     huge.write_bytes(bytes(7 * 1024 * 1024))       # more than the 6 MiB of SRAM
     subprocess.run(["mcopy", "-i", f"{image}@@1M", str(huge), "::/huge.ppm"], check=True)
@@ -457,7 +456,7 @@ def _fat_entry_offsets(image: Path, cluster: int) -> list[int]:
 @pytest.mark.parametrize("damage", ["loop", "out-of-range"])
 def test_corrupt_chain(firmware, loader_card, tmp_path, damage):
     image = tmp_path / "corrupt.img"
-    shutil.copyfile(loader_card[0], image)
+    copy_card(loader_card[0], image)
     chain = cluster_chain(image, "/frag/fragmented.obj")
     target = chain[0] if damage == "loop" else 0x0FFF_FFF0
     with image.open("r+b") as handle:
