@@ -31,6 +31,7 @@ from copy import copy
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
 from fs.errors import DirectoryExists, FileExists, ResourceNotFound
 from fs.path import normpath, split
 from fs.subfs import SubFS
@@ -532,13 +533,12 @@ _FSINFO_FREE = 0x1E8
 def fix_fsinfo(image: Path) -> None:
     """Rewrites free count and next-free hint of both FSInfo sectors from the FAT."""
     with rawfat.Fat32Volume(image) as vol:
-        free = 0
-        first_free = None
-        for cluster in range(2, vol.boot.cluster_count + 2):
-            if vol.fat_entry(cluster) == 0:
-                free += 1
-                if first_free is None:
-                    first_free = cluster
+        # every data cluster's entry at once (a loop over 127,000 entries of a 64 MiB card took
+        # longer than writing the card's files)
+        entries = np.frombuffer(vol.fat, dtype=np.uint32)[2:vol.boot.cluster_count + 2] & rawfat.FAT_ENTRY_MASK
+        free_clusters = np.flatnonzero(entries == 0)
+        free = int(free_clusters.size)
+        first_free = int(free_clusters[0]) + 2 if free else None
         sectors = [vol.boot.fsinfo_sector]
         if vol.boot.backup_boot_sector:
             sectors.append(vol.boot.backup_boot_sector + vol.boot.fsinfo_sector)
