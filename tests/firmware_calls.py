@@ -25,6 +25,8 @@ their low 32 bits.
 """
 from __future__ import annotations
 
+import functools
+import struct
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterable, Sequence
@@ -88,15 +90,31 @@ class CallResult:
         return signed(self.a[n], bits)
 
 
+ELF64_SYMBOL = struct.Struct("<IBBHQQ")     # st_name, st_info, st_other, st_shndx, st_value, st_size
+
+
 def elf_symbols(path: Path) -> dict[str, set[int]]:
     """Every named symbol of the ELF (file-local labels and .equ constants too) -> its values.
-    A name defined in several files with different values maps to all of them."""
+    A name defined in several files with different values maps to all of them. The symbol
+    table is read as the array of ELF64 entries it is (the firmware's has about 8,700: pyelftools
+    takes half a second to parse them one by one), once per file version."""
+    stat = Path(path).stat()
+    return {name: set(found) for name, found in _elf_symbols(str(path), stat.st_mtime_ns, stat.st_size).items()}
+
+
+@functools.lru_cache(maxsize=8)
+def _elf_symbols(path: str, mtime_ns: int, size: int) -> dict[str, frozenset[int]]:
     values: dict[str, set[int]] = {}
     with open(path, "rb") as handle:
-        for symbol in ELFFile(handle).get_section_by_name(".symtab").iter_symbols():
-            if symbol.name and not symbol.name.startswith("$"):
-                values.setdefault(symbol.name, set()).add(symbol["st_value"])
-    return values
+        elf = ELFFile(handle)
+        assert elf.elfclass == 64 and elf.little_endian, f"{path}: not a little-endian ELF64"
+        symtab = elf.get_section_by_name(".symtab")
+        names = elf.get_section(symtab["sh_link"]).data()
+        for name_offset, _, _, _, value, _ in ELF64_SYMBOL.iter_unpack(symtab.data()):
+            name = names[name_offset:names.index(b"\0", name_offset)].decode()
+            if name and not name.startswith("$"):
+                values.setdefault(name, set()).add(value)
+    return {name: frozenset(found) for name, found in values.items()}
 
 
 class FirmwareCaller:
