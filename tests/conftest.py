@@ -45,6 +45,16 @@ def card() -> Path:
 
 
 @pytest.fixture(scope="session")
+def assets(tmp_path_factory) -> Path:
+    """The generated models and textures (tools/make_assets.py), made once a session for the
+    tests that build cards of their own from them: afresh, not build/assets, which could be older
+    than the script. Read-only: a test writes its cards elsewhere."""
+    folder = tmp_path_factory.mktemp("assets")
+    subprocess.run([sys.executable, str(ROOT / "tools" / "make_assets.py"), str(folder)], check=True)
+    return folder
+
+
+@pytest.fixture(scope="session")
 def firmware_run(firmware, card, tmp_path_factory):
     """One run of the firmware for the golden frames, shared by the end-to-end tests."""
     out = tmp_path_factory.mktemp("firmware_run")

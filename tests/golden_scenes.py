@@ -46,16 +46,19 @@ SCENES: dict[str, tuple[dict[str, str] | None, int]] = {
 }
 
 
-def scene_card(name: str, folder: Path) -> Path:
-    """The card for a golden scene (built in `folder` unless it is the default card)."""
+def scene_card(name: str, folder: Path, assets: Path | None = None) -> Path:
+    """The card for a golden scene (built in `folder` unless it is the default card), from the
+    generated models and textures in `assets` (tools/make_assets.py's output), or else generated
+    into folder/assets."""
     scene, _ = SCENES[name]
     if scene is None:
         subprocess.run(["make", "-s", "build/card.img"], cwd=ROOT, check=True)
         return DEFAULT_CARD
     from sdcard_image import build_image
-    assets = folder / "assets"
-    if not assets.exists():
-        subprocess.run([sys.executable, str(ROOT / "tools" / "make_assets.py"), str(assets)], check=True)
+    if assets is None:
+        assets = folder / "assets"
+        if not assets.exists():
+            subprocess.run([sys.executable, str(ROOT / "tools" / "make_assets.py"), str(assets)], check=True)
     card = folder / f"{name}.img"
     build_image(card, [assets / "models", assets / "textures"], scene=scene, force=True)
     return card

@@ -103,10 +103,10 @@ def test_console_has_a_line_per_boot_stage(firmware_run):
 
 
 @pytest.mark.parametrize("name", SCENES)
-def test_scene_matches_its_golden_frames(name, firmware, tmp_path):
+def test_scene_matches_its_golden_frames(name, firmware, assets, tmp_path):
     """Every golden scene, every frame, exactly (regenerate deliberately with `make goldens`)."""
     _, frames = SCENES[name]
-    card = scene_card(name, tmp_path)
+    card = scene_card(name, tmp_path, assets)
     out = tmp_path / "out"
     result = run_emulator("run", str(firmware), "--sd", str(card), "--frames", str(frames), "--out", str(out),
                           "--quiet", "--golden", str(GOLDEN / name))
@@ -115,14 +115,6 @@ def test_scene_matches_its_golden_frames(name, firmware, tmp_path):
     assert result.returncode == 0, "\n".join(
         [result.stderr] + [f"frame {c['index']}: {c['problem'] or c['differing_pixels']} differing; diff {c['diff_image']}"
                            for c in problems])
-
-
-@pytest.fixture(scope="module")
-def assets(tmp_path_factory) -> Path:
-    """The generated models and textures (tools/make_assets.py), once for this module."""
-    folder = tmp_path_factory.mktemp("assets")
-    subprocess.run([sys.executable, str(ROOT / "tools" / "make_assets.py"), str(folder)], check=True)
-    return folder
 
 
 @pytest.mark.parametrize("name,mode", [("gem-flat", "flat"), ("torus-wireframe", "wireframe")])

@@ -519,8 +519,8 @@ def test_load_files_skips_the_texture_unless_textured(mode):
 
 @pytest.fixture(scope="module")
 def golden_cards(tmp_path_factory):
-    """A folder for the golden scenes' cards; scene_card generates the assets in it afresh (a
-    copy of build/assets could be older than tools/make_assets.py)."""
+    """A folder for the golden scenes' cards (built from the `assets` fixture's models and
+    textures, generated afresh: a copy of build/assets could be older than tools/make_assets.py)."""
     return tmp_path_factory.mktemp("reference-cards")
 
 
@@ -540,7 +540,7 @@ def _without_normals(mesh: Mesh) -> Mesh:
 
 
 @pytest.mark.parametrize("name", sorted(SCENES))
-def test_first_golden_frame_agrees_loosely_with_the_firmware(name, golden_cards):
+def test_first_golden_frame_agrees_loosely_with_the_firmware(name, golden_cards, assets):
     """A convention check (projection, coverage, texel addressing, lighting formula), so the
     reference is compared lit per face, like the firmware's flat shading: its ideal lights per
     pixel from the vertex normals, which on the torus's smooth normals is a real difference in
@@ -552,7 +552,7 @@ def test_first_golden_frame_agrees_loosely_with_the_firmware(name, golden_cards)
             pytest.skip("no build/card.img (make card)")
         card = DEFAULT_CARD
     else:
-        card = scene_card(name, golden_cards)
+        card = scene_card(name, golden_cards, assets)
     scene, mesh, texture = load_card_image(card)
     golden = np.asarray(Image.open(GOLDEN / name / "frame_0000.png").convert("RGB"))
     per_face = render_image(scene, _without_normals(mesh), texture, 0)

@@ -333,24 +333,22 @@ def test_line_coverage_matches_dense_sampling():
 # --------------------------------------------------------------------------- whole scenes
 
 @pytest.fixture(scope="module")
-def assets(tmp_path_factory) -> Path:
-    folder = tmp_path_factory.mktemp("ideal-assets")
-    subprocess.run([sys.executable, str(ROOT / "tools" / "make_assets.py"), str(folder)], check=True)
-    return folder
+def cards(tmp_path_factory) -> Path:
+    return tmp_path_factory.mktemp("ideal-cards")
 
 
-def _card(assets: Path, **keys) -> tuple:
+def _card(assets: Path, cards: Path, **keys) -> tuple:
     from sdcard_image import build_image
-    card = assets / "card.img"
+    card = cards / "card.img"
     build_image(card, [assets / "models", assets / "textures"], scene=keys, force=True, on_warning=lambda _: None)
     return load_card_image(card)
 
 
-def test_at_one_sample_a_pixel_flat_mode_is_the_pixel_centre_image(assets):
+def test_at_one_sample_a_pixel_flat_mode_is_the_pixel_centre_image(assets, cards):
     """With one sample at each pixel's centre the ideal image is the pixel-centre image wherever
     textures are not involved: the same triangles, near-plane cut, culling, depth order, Phong
     lighting (the torus has smooth normals) and rounding."""
-    scene, mesh, texture = _card(assets, model="models/torus.obj", texture="textures/torus.ppm", mode="flat",
+    scene, mesh, texture = _card(assets, cards, model="models/torus.obj", texture="textures/torus.ppm", mode="flat",
                                  translate="0 0.1 -0.75", near="0.5", axis="1 0.6 0.2", angle="40",
                                  light="0.3 0.5 1", ambient="0.2")
     frame = render_frame(scene, mesh, texture, 0)
@@ -365,12 +363,12 @@ def _psnr(a: np.ndarray, b: np.ndarray) -> float:
     return math.inf if mse == 0 else 10 * math.log10(255 ** 2 / mse)
 
 
-def test_the_ideal_image_has_converged_at_the_default_density(assets):
+def test_the_ideal_image_has_converged_at_the_default_density(assets, cards):
     """The bench's gem (tools/bench.py: scale 0.9, translate 0 0 -3, angle 17, step 3), textured,
     frame 0, over the gem's bounding box: 8 x 8 samples against 16 x 16 differ by an RMS below
     1 / 316 of full scale (PSNR above 50 dB; over the whole frame one run measured 60.3 dB,
     README), at least 10 dB closer than the pixel-centre image is to either."""
-    scene, mesh, texture = _card(assets, model="models/gem.obj", texture="textures/gem.ppm", mode="textured",
+    scene, mesh, texture = _card(assets, cards, model="models/gem.obj", texture="textures/gem.ppm", mode="textured",
                                  scale="0.9", translate="0 0 -3", angle="17", step="3")
     box = (100, 62, 219, 178)                  # the gem's pixels in frame 0, and a pixel more
     eight = render_ideal_image(scene, mesh, texture, 0, density=8, region=box)

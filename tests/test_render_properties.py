@@ -9,21 +9,12 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from conftest import ROOT, run_emulator
+from conftest import run_emulator
 from sdcard_image import build_image
 
 WIDTH, HEIGHT = 320, 240
 BACKGROUND = (0, 0, 0)
 BACKGROUND_KEY = "0 0 0"
-
-
-@pytest.fixture(scope="session")
-def assets(tmp_path_factory) -> Path:
-    folder = tmp_path_factory.mktemp("assets")
-    import subprocess
-    import sys
-    subprocess.run([sys.executable, str(ROOT / "tools" / "make_assets.py"), str(folder)], check=True)
-    return folder
 
 
 def render(firmware: Path, assets: Path, tmp_path: Path, frames: int, **scene: str) -> list[np.ndarray]:
