@@ -56,10 +56,12 @@ def assets(tmp_path_factory) -> Path:
 
 @pytest.fixture(scope="session")
 def firmware_run(firmware, card, tmp_path_factory):
-    """One run of the firmware for the golden frames, shared by the end-to-end tests."""
+    """One run of the firmware on the default card, as `make flash-to-emulator` runs it, shared
+    by the end-to-end tests: GOLDEN_FRAMES frames, held against the default scene's golden frames
+    (--golden only compares after the run: the run is the plain one; a mismatch is status 9)."""
     out = tmp_path_factory.mktemp("firmware_run")
     result = run_emulator("run", str(firmware), "--sd", str(card), "--frames", str(GOLDEN_FRAMES),
-                          "--out", str(out), "--quiet")
+                          "--out", str(out), "--quiet", "--golden", str(GOLDEN / "default"))
     summary = json.loads((out / "run.json").read_text()) if (out / "run.json").exists() else None
     return result, out, summary
 

@@ -15,7 +15,8 @@ import json
 
 import pytest
 
-from conftest import run_emulator
+from conftest import GOLDEN_FRAMES, run_emulator
+from emulator.cli import build_parser
 from emulator.hart import ENGINE_FAST, ENGINE_PRECISE, PRECISE_STRETCH
 from emulator.timing import TIMING_IPC1, TIMING_ROCKET
 from k210_fixtures import RecordingDevice, at_done, make_board, program, reg, run_to_done, run_until, symbol
@@ -320,11 +321,16 @@ def _same(fast: dict, precise: dict) -> None:
         [{k: v for k, v in f.items() if k not in host} for f in precise["frames"]]
 
 
-def test_the_firmware_runs_alike_on_both_engines(firmware, card, tmp_path):
-    fast, fast_frames = _run_json(firmware, tmp_path, ENGINE_FAST, "--sd", str(card), "--frames", "3")
-    precise, precise_frames = _run_json(firmware, tmp_path, ENGINE_PRECISE, "--sd", str(card), "--frames", "3")
+def test_the_firmware_runs_alike_on_both_engines(firmware, card, firmware_run, tmp_path):
+    """The shared run of the default card (firmware_run) is the fast engine's, the default."""
+    assert build_parser().parse_args(["run", str(firmware)]).engine == ENGINE_FAST
+    result, out, fast = firmware_run
+    assert result.returncode == 0, result.stderr
+    fast_frames = {p.name: p.read_bytes() for p in out.glob("frame_*.png")}
+    precise, precise_frames = _run_json(firmware, tmp_path, ENGINE_PRECISE, "--sd", str(card),
+                                        "--frames", str(GOLDEN_FRAMES))
     _same(fast, precise)
-    assert fast_frames == precise_frames and len(fast_frames) == 3
+    assert fast_frames == precise_frames and len(fast_frames) == GOLDEN_FRAMES
 
 
 @pytest.mark.parametrize("name", ["blink", "lcd_demo"])

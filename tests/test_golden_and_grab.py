@@ -27,8 +27,10 @@ def goldens(tmp_path):
     return folder
 
 
-def test_matching_frames_pass(firmware, card, tmp_path, goldens):
-    result, summary = _run(firmware, card, tmp_path / "out", "--golden", str(goldens))
+def test_matching_frames_pass(firmware_run):
+    """The shared run of the default card is held against the default scene's goldens."""
+    result, _, summary = firmware_run
+    assert summary["golden"]["folder"] == str(GOLDEN / "default")
     assert result.returncode == 0, result.stderr
     assert all(frame["matches"] for frame in summary["golden"]["frames"])
     assert len(summary["golden"]["frames"]) == GOLDEN_FRAMES
