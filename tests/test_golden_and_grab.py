@@ -43,16 +43,29 @@ def _nudge(path, box, delta):
     Image.fromarray(image.astype(np.uint8)).save(path)
 
 
-def test_a_differing_frame_fails_with_a_diff_image(firmware, card, tmp_path, goldens):
-    _nudge(goldens / "frame_0002.png", (100, 50, 109, 54), -3)   # 10 x 5 pixels, 3 levels darker
+@pytest.fixture(scope="module")
+def mismatch_run(firmware, card, tmp_path_factory):
+    """One run against goldens with two faults: frame 2 differs in a 10 x 5 box (3 levels darker)
+    and frame 3 is missing; frames 0 and 1 are the real goldens. Returns (result, run.json, out)."""
+    folder = tmp_path_factory.mktemp("mismatch")
+    goldens = folder / "golden"
+    shutil.copytree(GOLDEN / "default", goldens)
+    _nudge(goldens / "frame_0002.png", (100, 50, 109, 54), -3)
+    (goldens / "frame_0003.png").unlink()
+    result, summary = _run(firmware, card, folder / "out", "--golden", str(goldens))
+    return result, summary, folder / "out"
+
+
+def test_a_differing_frame_fails_with_a_diff_image(mismatch_run):
+    result, summary, out = mismatch_run
     # (the region must not be black, or darker would change nothing)
     assert np.asarray(Image.open(GOLDEN / "default" / "frame_0002.png"))[50:55, 100:110].min() >= 3
-    result, summary = _run(firmware, card, tmp_path / "out", "--golden", str(goldens))
     assert result.returncode == 9, result.stderr
+    assert [frame["matches"] for frame in summary["golden"]["frames"][:2]] == [True, True]
     frame = summary["golden"]["frames"][2]
     assert not frame["matches"] and frame["differing_pixels"] == 50
     assert frame["bounding_box"] == [100, 50, 109, 54] and frame["max_channel_error"] == 3
-    assert (tmp_path / "out" / "diff_0002.png").exists()
+    assert (out / "diff_0002.png").exists()
     assert "50 pixels differ" in result.stderr and summary["exit"] == "golden-mismatch"
 
 
@@ -63,11 +76,13 @@ def test_tolerance(firmware, card, tmp_path, goldens, tolerance, status):
     assert result.returncode == status, result.stderr
 
 
-def test_a_missing_golden_frame_is_a_mismatch(firmware, card, tmp_path, goldens):
-    (goldens / "frame_0003.png").unlink()
-    result, summary = _run(firmware, card, tmp_path / "out", "--golden", str(goldens))
+def test_a_missing_golden_frame_is_a_mismatch(mismatch_run):
+    """Frame 3's golden is missing (mismatch_run): counted with frame 2's difference."""
+    result, summary, _ = mismatch_run
     assert result.returncode == 9
+    assert not summary["golden"]["frames"][3]["matches"]
     assert "no golden frame" in summary["golden"]["frames"][3]["problem"]
+    assert summary["message"] == "2 of 4 frames differ from " + summary["golden"]["folder"]
 
 
 def test_grab_reads_the_buffers_at_the_requested_time(firmware, card, tmp_path, firmware_run):
