@@ -187,21 +187,29 @@ def _unit(vector) -> np.ndarray:
     return vector / np.linalg.norm(vector)
 
 
-def _phong_lit(scene: Scene, world_corners, world_normals, sx: float, sy: float) -> int:
-    """0xC618 lit as the ideal does at screen point (sx, sy) of a triangle seen with the default
+def _dot3(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Dot products of 3-vectors along the last axis, summed x + y + z."""
+    return u[..., 0] * v[..., 0] + u[..., 1] * v[..., 1] + u[..., 2] * v[..., 2]
+
+
+def _phong_lit(scene: Scene, world_corners, world_normals, sx: np.ndarray, sy: np.ndarray) -> np.ndarray:
+    """0xC618 lit as the ideal does at screen points (sx, sy) of a triangle seen with the default
     camera: the ray through the point meets the triangle's plane at p; N = sum b_i n_i with b the
-    barycentric coordinates of p in 3D (what perspective-correct interpolation computes), unit."""
+    barycentric coordinates of p in 3D (what perspective-correct interpolation computes), unit.
+    One point per element of sx, sy (the same arithmetic as point by point, done at once)."""
     a, b, c = (np.asarray(p, float) for p in world_corners)
-    ray = np.array(_to_world(sx, sy, -1.0))
+    sx, sy = np.asarray(sx, float), np.asarray(sy, float)
+    ray = np.stack(np.broadcast_arrays(*_to_world(sx, sy, -1.0)), axis=-1)
     plane = np.cross(b - a, c - a)
-    p = ray * (plane @ a) / (plane @ ray)
+    p = ray * ((plane @ a) / _dot3(ray, plane))[..., None]
     total = plane @ plane
-    weights = [np.cross(c - b, p - b) @ plane / total, np.cross(a - c, p - c) @ plane / total,
-               np.cross(b - a, p - a) @ plane / total]
-    normal = sum(w * np.asarray(n, float) for w, n in zip(weights, world_normals))
-    length = np.linalg.norm(normal)
-    intensity = scene.ambient if length == 0 else max(scene.ambient, float(normal @ np.array(scene.light)) / length)
-    return int(shade(FLAT_COLOUR, intensity))
+    weights = [_dot3(np.cross(c - b, p - b), plane) / total, _dot3(np.cross(a - c, p - c), plane) / total,
+               _dot3(np.cross(b - a, p - a), plane) / total]
+    normal = sum(w[..., None] * np.asarray(n, float) for w, n in zip(weights, world_normals))
+    length = np.linalg.norm(normal, axis=-1)
+    lit = _dot3(normal, np.array(scene.light)) / np.where(length == 0, 1.0, length)
+    intensity = np.where(length == 0, scene.ambient, np.maximum(scene.ambient, lit))
+    return shade(FLAT_COLOUR, intensity).astype(np.int64)
 
 
 def test_a_model_without_normals_is_lit_per_face():
@@ -288,7 +296,7 @@ def test_normals_are_interpolated_perspective_correctly_and_through_the_near_cut
     frame = render_frame(scene, _mesh([a, b, c], [(0, 1, 2)], normals=normals), None, 0)
     ys, xs = np.nonzero(frame != BG)
     assert len(ys) > 3000
-    expected = [_phong_lit(scene, (a, b, c), normals, x + 0.5, y + 0.5) for y, x in zip(ys, xs)]
+    expected = _phong_lit(scene, (a, b, c), normals, xs + 0.5, ys + 0.5)
     assert np.array_equal(frame[ys, xs], expected)
     assert len(np.unique(frame[ys, xs])) > 20
 
