@@ -1,12 +1,19 @@
 """Shared fixtures: the firmware is built once (by `make firmware`, which `make test` runs
-first) and one board-model run of it is shared by every test that looks at its output."""
+first) and one board-model run of it is shared by every test that looks at its output.
+
+Under pytest-xdist each worker has its own session; what is costly and the same for all of them
+(the shared run, the generated assets) is made once, by the first worker that asks, in a folder
+the workers share (`shared_by_workers`)."""
 from __future__ import annotations
 
+import fcntl
 import json
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
+from typing import Callable
 
 import pytest
 
@@ -24,24 +31,54 @@ def run_emulator(*args: str, timeout: float = 600) -> subprocess.CompletedProces
                           text=True, timeout=timeout)
 
 
+def _session_root(tmp_path_factory) -> Path:
+    """The temporary folder of the whole session: the workers' folders lie in it under xdist."""
+    root = tmp_path_factory.getbasetemp()
+    return root.parent if os.environ.get("PYTEST_XDIST_WORKER") else root
+
+
+def _make(tmp_path_factory, target: str) -> None:
+    """`make -s target`, one worker at a time (two makes rebuilding the same files at once would
+    write them over each other)."""
+    with open(_session_root(tmp_path_factory) / "make.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        subprocess.run(["make", "-s", target], cwd=ROOT, check=True)
+
+
 @pytest.fixture(scope="session")
-def firmware() -> Path:
-    subprocess.run(["make", "-s", "build/firmware.elf"], cwd=ROOT, check=True)
+def firmware(tmp_path_factory) -> Path:
+    _make(tmp_path_factory, "build/firmware.elf")
     return FIRMWARE
 
 
 @pytest.fixture(scope="session")
-def c_firmware() -> Path:
+def c_firmware(tmp_path_factory) -> Path:
     """The C test firmware (tests/firmware/), built by the Makefile's rule into build/cfw."""
-    subprocess.run(["make", "-s", "c-firmware"], cwd=ROOT, check=True)
+    _make(tmp_path_factory, "c-firmware")
     return ROOT / "build" / "cfw"
 
 
 @pytest.fixture(scope="session")
-def card() -> Path:
+def card(tmp_path_factory) -> Path:
     """The default card `make flash-to-emulator` uses (generated models and textures)."""
-    subprocess.run(["make", "-s", "build/card.img"], cwd=ROOT, check=True)
+    _make(tmp_path_factory, "build/card.img")
     return CARD
+
+
+def shared_by_workers(tmp_path_factory, name: str, make: Callable[[Path], None]) -> Path:
+    """A folder made once for the whole test session: `make` fills it, in the first pytest-xdist
+    worker that asks; the others wait for it (a lock) and take it as it is. It lies beside the
+    workers' own temporary folders (pytest removes it with them)."""
+    root = _session_root(tmp_path_factory)
+    folder = root / f"shared-{name}"
+    with open(root / f"shared-{name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not (folder / ".made").exists():
+            shutil.rmtree(folder, ignore_errors=True)
+            folder.mkdir()
+            make(folder)
+            (folder / ".made").touch()
+    return folder
 
 
 @pytest.fixture(scope="session")
@@ -49,19 +86,25 @@ def assets(tmp_path_factory) -> Path:
     """The generated models and textures (tools/make_assets.py), made once a session for the
     tests that build cards of their own from them: afresh, not build/assets, which could be older
     than the script. Read-only: a test writes its cards elsewhere."""
-    folder = tmp_path_factory.mktemp("assets")
-    subprocess.run([sys.executable, str(ROOT / "tools" / "make_assets.py"), str(folder)], check=True)
-    return folder
+    def make(folder: Path) -> None:
+        subprocess.run([sys.executable, str(ROOT / "tools" / "make_assets.py"), str(folder)], check=True)
+    return shared_by_workers(tmp_path_factory, "assets", make)
 
 
 @pytest.fixture(scope="session")
 def firmware_run(firmware, card, tmp_path_factory):
     """One run of the firmware on the default card, as `make flash-to-emulator` runs it, shared
     by the end-to-end tests: GOLDEN_FRAMES frames, held against the default scene's golden frames
-    (--golden only compares after the run: the run is the plain one; a mismatch is status 9)."""
-    out = tmp_path_factory.mktemp("firmware_run")
-    result = run_emulator("run", str(firmware), "--sd", str(card), "--frames", str(GOLDEN_FRAMES),
-                          "--out", str(out), "--quiet", "--golden", str(GOLDEN / "default"))
+    (--golden only compares after the run: the run is the plain one; a mismatch is status 9).
+    Returns (the command's result, its --out folder, run.json or None)."""
+    def make(folder: Path) -> None:
+        result = run_emulator("run", str(firmware), "--sd", str(card), "--frames", str(GOLDEN_FRAMES),
+                              "--out", str(folder / "out"), "--quiet", "--golden", str(GOLDEN / "default"))
+        (folder / "result.json").write_text(json.dumps({"args": result.args, "returncode": result.returncode,
+                                                        "stdout": result.stdout, "stderr": result.stderr}))
+    folder = shared_by_workers(tmp_path_factory, "firmware_run", make)
+    result = subprocess.CompletedProcess(**json.loads((folder / "result.json").read_text()))
+    out = folder / "out"
     summary = json.loads((out / "run.json").read_text()) if (out / "run.json").exists() else None
     return result, out, summary
 
