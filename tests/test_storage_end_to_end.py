@@ -4,6 +4,7 @@ must end in its own error code, console line and error screen colour."""
 from __future__ import annotations
 
 import json
+import pickle
 import re
 import subprocess
 import zlib
@@ -13,7 +14,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from conftest import ROOT, copy_card, make_card, run_emulator
+from conftest import ROOT, copy_card, make_card, run_emulator, shared_by_workers
 from firmware_calls import FirmwareCaller
 from sdcard_image.fat32 import CardWriter
 from sdcard_image.layouts import (cluster_chain, delete_leaving_entries, directory_entries, fill_directory,
@@ -71,8 +72,14 @@ def _padding(count: int) -> bytes:
 @pytest.fixture(scope="session")
 def loader_card(tmp_path_factory):
     """One card with every layout the loader must cope with, all files valid models or
-    textures; returns (image, {card path: bytes})."""
-    image = tmp_path_factory.mktemp("loader") / "card.img"
+    textures (made once for all xdist workers); returns (image, {card path: bytes})."""
+    folder = shared_by_workers(tmp_path_factory, "loader_card", _make_loader_card)
+    return folder / "card.img", pickle.loads((folder / "files.pickle").read_bytes())
+
+
+def _make_loader_card(folder: Path) -> None:
+    """loader_card's image (folder/card.img) and its files (folder/files.pickle)."""
+    image = folder / "card.img"
     files: dict[str, bytes] = {}
     with CardWriter.create(image, 64) as writer:
         cluster = writer.bytes_per_cluster
@@ -109,7 +116,7 @@ def loader_card(tmp_path_factory):
         writer.write("/scene.ini", _scene_bytes(""))
     assert len(cluster_chain(image, "/many")) >= 3
     assert is_fragmented(cluster_chain(image, "/frag/fragmented.obj"))
-    return image, files
+    (folder / "files.pickle").write_bytes(pickle.dumps(files))
 
 
 def _scene_bytes(text: str) -> bytes:
