@@ -90,10 +90,8 @@ card: $(CARD)
 flash-to-emulator: firmware venv $(CARD)
 	$(PYTHON) -m emulator run $(BUILD)/firmware.elf --sd $(CARD) --frames $(FRAMES) --out $(BUILD)/frames
 
-# --dist loadgroup: tests marked xdist_group("name") run on one worker, so that the module
-# fixture they share is made once (tests/test_both_harts_draw.py and others)
 test: firmware c-firmware venv $(CARD)
-	$(PYTHON) -m pytest -q -n 2 --dist loadgroup
+	$(PYTHON) -m pytest -q -n 2
 
 # A real Dock: make flash PORT=/dev/ttyUSB0 [FLASH_BAUD=N] (tools/flash.py runs kflash)
 PORT ?=

@@ -25,11 +25,6 @@ CARD = ROOT / "build" / "card.img"
 GOLDEN_FRAMES = 4   # frames of the default scene the shared run shows
 
 
-def pytest_configure(config) -> None:
-    # pytest-xdist's mark (make test runs --dist loadgroup), declared for runs without xdist
-    config.addinivalue_line("markers", "xdist_group(name): run on one xdist worker with the rest of its group")
-
-
 def run_emulator(*args: str, timeout: float = 600) -> subprocess.CompletedProcess:
     """Runs `python -m emulator` exactly as a user would."""
     return subprocess.run([sys.executable, "-m", "emulator", *args], cwd=ROOT, capture_output=True,

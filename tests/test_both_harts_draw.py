@@ -118,7 +118,6 @@ def runs(firmware, tmp_path_factory):
     return done
 
 
-@pytest.mark.xdist_group("both_harts_runs")
 @pytest.mark.parametrize("name", SCENES)
 def test_two_harts_draw_the_frames_one_hart_draws(runs, name):
     """harts = 2 shows the frames of harts = 1 bit for bit, with hart 1 drawing a band of every
@@ -136,7 +135,6 @@ def test_two_harts_draw_the_frames_one_hart_draws(runs, name):
     assert (one.frames[2] != one.frames[2][0, 0]).any(axis=2).mean() > 0.15
 
 
-@pytest.mark.xdist_group("both_harts_runs")
 def test_auto_draws_on_both_harts_when_drawing_is_slower_than_the_lcd(runs):
     """auto, the default: on the screen-filling sphere hart 0 alone is slower than the LCD's
     transfer, so hart 1 draws from frame 2 on (frame 1 is hart 0's alone too: auto decides from

@@ -56,7 +56,6 @@ def mismatch_run(firmware, card, tmp_path_factory):
     return result, summary, folder / "out"
 
 
-@pytest.mark.xdist_group("mismatch_run")
 def test_a_differing_frame_fails_with_a_diff_image(mismatch_run):
     result, summary, out = mismatch_run
     # (the region must not be black, or darker would change nothing)
@@ -77,7 +76,6 @@ def test_tolerance(firmware, card, tmp_path, goldens, tolerance, status):
     assert result.returncode == status, result.stderr
 
 
-@pytest.mark.xdist_group("mismatch_run")
 def test_a_missing_golden_frame_is_a_mismatch(mismatch_run):
     """Frame 3's golden is missing (mismatch_run): counted with frame 2's difference."""
     result, summary, _ = mismatch_run

@@ -60,7 +60,6 @@ def torus_default(firmware, torus_files, tmp_path_factory):
     return _run(firmware, tmp_path_factory.mktemp("default"), model, texture, TORUS_SCENE)
 
 
-@pytest.mark.xdist_group("torus_default")
 @pytest.mark.parametrize("name", SINGLE_KNOBS)
 def test_every_setting_changes_the_frames_or_their_cost(firmware, torus_files, torus_default, tmp_path, name):
     """A key the firmware accepted but ignored would pass every other test: here each one must
@@ -100,7 +99,6 @@ def test_gouraud_on_a_model_without_normals_is_flat_shading(firmware, tmp_path):
     assert all(np.array_equal(a, b) for a, b in zip(flat, gouraud))
 
 
-@pytest.mark.xdist_group("torus_default")
 def test_gouraud_is_nearer_the_smooth_reference_on_a_smooth_model(firmware, torus_files, torus_default, tmp_path):
     model, texture = torus_files
     gouraud, _, card = _run(firmware, tmp_path, model, texture, {**TORUS_SCENE, "shading": "gouraud"})

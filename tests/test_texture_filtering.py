@@ -81,7 +81,6 @@ def far_runs(firmware, tmp_path_factory):
 LIMIT_BEYOND_ONE_STEP = {"nearest": 150, "bilinear": 30, "mipmap": 30}
 
 
-@pytest.mark.xdist_group("magnified_runs")
 @pytest.mark.parametrize("name", FILTERS)
 def test_magnified_texture_against_the_reference_with_the_same_filter(magnified_runs, name):
     """Where both draw, every RGB565 channel is the reference's or one step off (bilinear: the
@@ -108,7 +107,6 @@ def test_magnified_texture_against_the_reference_with_the_same_filter(magnified_
         assert psnr(image, ref) > 36, (name, n, psnr(image, ref))
 
 
-@pytest.mark.xdist_group("magnified_runs")
 def test_magnified_mipmap_samples_level_0_as_bilinear(magnified_runs):
     """A magnified texture's footprint is under a texel: level 0 everywhere, so the mip chain's
     frames are bilinear's, and bilinear's are not nearest's."""
