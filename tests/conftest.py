@@ -9,11 +9,12 @@ from __future__ import annotations
 import fcntl
 import json
 import os
+import pickle
 import shutil
 import subprocess
 import sys
 from pathlib import Path
-from typing import Callable
+from typing import Callable, TypeVar
 
 import pytest
 
@@ -23,6 +24,7 @@ ROOT = Path(__file__).resolve().parent.parent
 FIRMWARE = ROOT / "build" / "firmware.elf"
 CARD = ROOT / "build" / "card.img"
 GOLDEN_FRAMES = 4   # frames of the default scene the shared run shows
+T = TypeVar("T")
 
 
 def run_emulator(*args: str, timeout: float = 600) -> subprocess.CompletedProcess:
@@ -81,6 +83,16 @@ def shared_by_workers(tmp_path_factory, name: str, make: Callable[[Path], None])
     return folder
 
 
+def shared_value(tmp_path_factory, name: str, compute: Callable[[Path], T]) -> T:
+    """compute(folder), computed once for the whole test session (shared_by_workers) and handed
+    to every worker that asks as it was returned (pickled beside what compute wrote in `folder`):
+    for the module fixtures whose tests pytest-xdist may share out between its workers."""
+    def make(folder: Path) -> None:
+        (folder / "value.pickle").write_bytes(pickle.dumps(compute(folder)))
+    folder = shared_by_workers(tmp_path_factory, name, make)
+    return pickle.loads((folder / "value.pickle").read_bytes())
+
+
 @pytest.fixture(scope="session")
 def assets(tmp_path_factory) -> Path:
     """The generated models and textures (tools/make_assets.py), made once a session for the
@@ -97,16 +109,13 @@ def firmware_run(firmware, card, tmp_path_factory):
     by the end-to-end tests: GOLDEN_FRAMES frames, held against the default scene's golden frames
     (--golden only compares after the run: the run is the plain one; a mismatch is status 9).
     Returns (the command's result, its --out folder, run.json or None)."""
-    def make(folder: Path) -> None:
+    def run(folder: Path):
+        out = folder / "out"
         result = run_emulator("run", str(firmware), "--sd", str(card), "--frames", str(GOLDEN_FRAMES),
-                              "--out", str(folder / "out"), "--quiet", "--golden", str(GOLDEN / "default"))
-        (folder / "result.json").write_text(json.dumps({"args": result.args, "returncode": result.returncode,
-                                                        "stdout": result.stdout, "stderr": result.stderr}))
-    folder = shared_by_workers(tmp_path_factory, "firmware_run", make)
-    result = subprocess.CompletedProcess(**json.loads((folder / "result.json").read_text()))
-    out = folder / "out"
-    summary = json.loads((out / "run.json").read_text()) if (out / "run.json").exists() else None
-    return result, out, summary
+                              "--out", str(out), "--quiet", "--golden", str(GOLDEN / "default"))
+        summary = json.loads((out / "run.json").read_text()) if (out / "run.json").exists() else None
+        return result, out, summary
+    return shared_value(tmp_path_factory, "firmware_run", run)
 
 
 def make_card(folder: Path, files: dict[str, bytes]) -> Path:

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from conftest import shared_value
 from extremes_support import check_scene_key_agreement, run_scene
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -106,16 +107,17 @@ def hart1_instructions(out: Path) -> list[int]:
 
 @pytest.fixture(scope="module")
 def runs(firmware, tmp_path_factory):
-    """Each scene with harts = 1 and harts = 2, and the plain one with the default (auto)."""
-    done = {}
-    for name, (model, texels, keys, frames) in SCENES.items():
-        for harts in ("1", "2"):
-            folder = tmp_path_factory.mktemp(f"{name}-{harts}")
-            done[name, harts] = run_scene(firmware, folder, model, keys + f"harts = {harts}\n", texture=texels,
-                                          frames=frames)
-    done["plain", "auto"] = run_scene(firmware, tmp_path_factory.mktemp("plain-auto"), MODEL, BIG, texture=TEXTURE,
-                                      frames=FRAMES)
-    return done
+    """Each scene with harts = 1 and harts = 2, and the plain one with the default (auto): made
+    once for all xdist workers."""
+    def make(folder: Path) -> dict:
+        done = {}
+        for name, (model, texels, keys, frames) in SCENES.items():
+            for harts in ("1", "2"):
+                done[name, harts] = run_scene(firmware, folder / f"{name}-{harts}", model, keys + f"harts = {harts}\n",
+                                              texture=texels, frames=frames)
+        done["plain", "auto"] = run_scene(firmware, folder / "plain-auto", MODEL, BIG, texture=TEXTURE, frames=FRAMES)
+        return done
+    return shared_value(tmp_path_factory, "both_harts_runs", make)
 
 
 @pytest.mark.parametrize("name", SCENES)

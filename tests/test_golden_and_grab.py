@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from conftest import GOLDEN, GOLDEN_FRAMES, ROOT, run_emulator
+from conftest import GOLDEN, GOLDEN_FRAMES, ROOT, run_emulator, shared_value
 from emulator.grab import parse_grab, rgb565_image
 
 
@@ -46,14 +46,16 @@ def _nudge(path, box, delta):
 @pytest.fixture(scope="module")
 def mismatch_run(firmware, card, tmp_path_factory):
     """One run against goldens with two faults: frame 2 differs in a 10 x 5 box (3 levels darker)
-    and frame 3 is missing; frames 0 and 1 are the real goldens. Returns (result, run.json, out)."""
-    folder = tmp_path_factory.mktemp("mismatch")
-    goldens = folder / "golden"
-    shutil.copytree(GOLDEN / "default", goldens)
-    _nudge(goldens / "frame_0002.png", (100, 50, 109, 54), -3)
-    (goldens / "frame_0003.png").unlink()
-    result, summary = _run(firmware, card, folder / "out", "--golden", str(goldens))
-    return result, summary, folder / "out"
+    and frame 3 is missing; frames 0 and 1 are the real goldens. Returns (result, run.json, out);
+    made once for all xdist workers."""
+    def make(folder):
+        goldens = folder / "golden"
+        shutil.copytree(GOLDEN / "default", goldens)
+        _nudge(goldens / "frame_0002.png", (100, 50, 109, 54), -3)
+        (goldens / "frame_0003.png").unlink()
+        result, summary = _run(firmware, card, folder / "out", "--golden", str(goldens))
+        return result, summary, folder / "out"
+    return shared_value(tmp_path_factory, "mismatch_run", make)
 
 
 def test_a_differing_frame_fails_with_a_diff_image(mismatch_run):

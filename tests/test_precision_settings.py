@@ -13,7 +13,7 @@ import pytest
 from PIL import Image
 
 import reference
-from conftest import ROOT, make_card, run_emulator
+from conftest import ROOT, make_card, run_emulator, shared_value
 
 sys.path.insert(0, str(ROOT / "tools"))
 import make_assets  # noqa: E402  (tools/ is not a package on the path)
@@ -56,8 +56,10 @@ SINGLE_KNOBS = {name: quality.SETTINGS[name]
 
 @pytest.fixture(scope="module")
 def torus_default(firmware, torus_files, tmp_path_factory):
+    """The torus scene with every setting at its default (made once for all xdist workers)."""
     model, texture = torus_files
-    return _run(firmware, tmp_path_factory.mktemp("default"), model, texture, TORUS_SCENE)
+    return shared_value(tmp_path_factory, "torus_default", lambda folder: _run(firmware, folder, model, texture,
+                                                                               TORUS_SCENE))
 
 
 @pytest.mark.parametrize("name", SINGLE_KNOBS)

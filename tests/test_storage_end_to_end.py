@@ -4,7 +4,6 @@ must end in its own error code, console line and error screen colour."""
 from __future__ import annotations
 
 import json
-import pickle
 import re
 import subprocess
 import zlib
@@ -14,7 +13,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from conftest import ROOT, copy_card, make_card, run_emulator, shared_by_workers
+from conftest import ROOT, copy_card, make_card, run_emulator, shared_value
 from firmware_calls import FirmwareCaller
 from sdcard_image.fat32 import CardWriter
 from sdcard_image.layouts import (cluster_chain, delete_leaving_entries, directory_entries, fill_directory,
@@ -73,12 +72,10 @@ def _padding(count: int) -> bytes:
 def loader_card(tmp_path_factory):
     """One card with every layout the loader must cope with, all files valid models or
     textures (made once for all xdist workers); returns (image, {card path: bytes})."""
-    folder = shared_by_workers(tmp_path_factory, "loader_card", _make_loader_card)
-    return folder / "card.img", pickle.loads((folder / "files.pickle").read_bytes())
+    return shared_value(tmp_path_factory, "loader_card", _make_loader_card)
 
 
-def _make_loader_card(folder: Path) -> None:
-    """loader_card's image (folder/card.img) and its files (folder/files.pickle)."""
+def _make_loader_card(folder: Path) -> tuple[Path, dict[str, bytes]]:
     image = folder / "card.img"
     files: dict[str, bytes] = {}
     with CardWriter.create(image, 64) as writer:
@@ -116,7 +113,7 @@ def _make_loader_card(folder: Path) -> None:
         writer.write("/scene.ini", _scene_bytes(""))
     assert len(cluster_chain(image, "/many")) >= 3
     assert is_fragmented(cluster_chain(image, "/frag/fragmented.obj"))
-    (folder / "files.pickle").write_bytes(pickle.dumps(files))
+    return image, files
 
 
 def _scene_bytes(text: str) -> bytes:

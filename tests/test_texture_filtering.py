@@ -12,7 +12,7 @@ import pytest
 from PIL import Image
 
 import reference
-from conftest import make_card, run_emulator
+from conftest import make_card, run_emulator, shared_value
 
 FILTERS = ("nearest", "bilinear", "mipmap")
 
@@ -62,9 +62,11 @@ FAR = {"ambient": "1", "translate": "0 0 -6", "axis": "1 0 0", "angle": "-60", "
 
 @pytest.fixture(scope="module")
 def magnified_runs(firmware, tmp_path_factory):
+    """Each filter on the magnified texture (made once for all xdist workers)."""
     texture = _ppm(np.random.default_rng(3).integers(0, 256, (16, 16, 3)))
-    return {name: run(firmware, tmp_path_factory.mktemp(f"magnified-{name}"), quad(), texture,
-                      {**MAGNIFIED, "filter": name}, frames=2) for name in FILTERS}
+    return shared_value(tmp_path_factory, "magnified_runs", lambda folder: {
+        name: run(firmware, folder / name, quad(), texture, {**MAGNIFIED, "filter": name}, frames=2)
+        for name in FILTERS})
 
 
 @pytest.fixture(scope="module")
