@@ -89,12 +89,16 @@ def test_a_missing_golden_frame_is_a_mismatch(mismatch_run):
 
 def test_grab_reads_the_buffers_at_the_requested_time(firmware, card, tmp_path, firmware_run):
     """Just before frame 0 has been sent, framebuffer 0 still holds frame 0 (hart 0 only draws
-    frame 2 into it once the transfer is done): a grab then equals the frame the LCD showed."""
+    frame 2 into it once the transfer is done): a grab then equals the frame the LCD showed.
+    Both grabs fall before frame 0 is shown: a run of one frame takes them."""
     _, first_out, first = firmware_run
     shown_at = first["frames"][0]["virtual_time_s"]
     at = f"{shown_at - 2e-6:.7f}"
+    assert 0.05 < shown_at
     out = tmp_path / "out"
-    result, summary = _run(firmware, card, out, "--grab", f"framebuffers@{at}:pairs", "--grab", "gram@0.05")
+    result = run_emulator("run", str(firmware), "--sd", str(card), "--frames", "1", "--out", str(out), "--quiet",
+                          "--grab", f"framebuffers@{at}:pairs", "--grab", "gram@0.05")
+    summary = json.loads((out / "run.json").read_text())
     assert result.returncode == 0, result.stderr
     grabs = {g["request"].split("@")[0]: g for g in summary["grabs"]}
     assert grabs["framebuffers"]["virtual_time_s"] == pytest.approx(float(at))
