@@ -34,9 +34,12 @@ def run_emulator(*args: str, timeout: float = 600) -> subprocess.CompletedProces
 
 
 def _session_root(tmp_path_factory) -> Path:
-    """The temporary folder of the whole session: the workers' folders lie in it under xdist."""
+    """The temporary folder of the whole session: under xdist each worker's folder, popen-gwN,
+    lies in it. (The worker id alone does not say it: a pytest that a test starts inherits the
+    PYTEST_XDIST_WORKER variable, but has a session and a folder of its own.)"""
     root = tmp_path_factory.getbasetemp()
-    return root.parent if os.environ.get("PYTEST_XDIST_WORKER") else root
+    worker = os.environ.get("PYTEST_XDIST_WORKER")
+    return root.parent if worker and root.name == f"popen-{worker}" else root
 
 
 def _make(tmp_path_factory, target: str) -> None:
