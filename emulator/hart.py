@@ -161,6 +161,13 @@ ENGINES = (ENGINE_FAST, ENGINE_PRECISE)
 # engine costs tens of microseconds whatever it runs: 4 (a lock's lr/bnez/sc/bnez) measured the
 # least precise time a frame on the default card (0.24 ms, against 1.17 with 32, 0.34 with 1).
 PRECISE_STRETCH = 4
+# When the fast engine runs fewer than PRECISE_STRETCH instructions between two hand-overs, the hart
+# hands over nearly every instruction (one spinning on a lock's lr.w while the other hart holds it:
+# millions of hand-overs in a run that ends in an error, hart 0 sending its console lines at the
+# UART's pace). The next stretch is then twice as long, up to PRECISE_STRETCH_MAX (a wrong guess
+# costs one stretch run on Unicorn); a fast run any longer brings it back to PRECISE_STRETCH. Only
+# host time changes: both engines run, count and time alike.
+PRECISE_STRETCH_MAX = 4096
 _UC_EMU_STOP = ctypes.cast(_ucpy.uclib.uc_emu_stop, ctypes.c_void_p).value
 _UC_REG_READ = ctypes.cast(_ucpy.uclib.uc_reg_read, ctypes.c_void_p).value
 _UC_REG_READ_BATCH = ctypes.cast(_ucpy.uclib.uc_reg_read_batch, ctypes.c_void_p).value
@@ -233,6 +240,7 @@ class Hart:
         self._fast_head: _FastHead | None = None
         self._hooks_needing_precision: set[int] = set()
         self.precise_runs = 0     # runs of the precise engine (the scheduler sees whether a turn had any)
+        self._precise_stretch = PRECISE_STRETCH
         self.device_accesses = 0  # device accesses the fast engine left to the board (likewise)
         self._device_access: DeviceAccess | None = None
         self._device_windows: list[tuple[int, int]] = []
@@ -503,6 +511,7 @@ class Hart:
         while True:
             precise_limit = turn_limit
             if self._fast_usable():
+                fast_from = counter.executed
                 pc = self._run_fast(pc)
                 if counter.poll_report or self.stop_requested or self.pending_exception is not None:
                     break
@@ -510,7 +519,9 @@ class Hart:
                     self.pc = pc
                     return RunEnd.BUDGET, counter.executed - start
                 # handed over: the precise engine runs the instruction, and a few more
-                precise_limit = min(turn_limit, counter.executed + PRECISE_STRETCH)
+                self._precise_stretch = (min(2 * self._precise_stretch, PRECISE_STRETCH_MAX)
+                                         if counter.executed - fast_from < PRECISE_STRETCH else PRECISE_STRETCH)
+                precise_limit = min(turn_limit, counter.executed + self._precise_stretch)
             counter.limit = precise_limit
             self._run_precise(pc)
             pc = self.uc.reg_read(rv.UC_RISCV_REG_PC)

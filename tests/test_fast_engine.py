@@ -188,6 +188,33 @@ def test_a_reservation_survives_a_hand_over_between_the_engines():
     assert fast.harts[0].fast_statistics()["instructions"] >= 50 * (7 - PRECISE_STRETCH + 1)
 
 
+# A loop around an instruction the fast engine hands over (a hart spinning on a lock's lr.w while
+# the other holds it), then a loop it runs itself.
+SPIN = """
+    la      s0, word
+    li      s1, 20000
+1:  lr.w    t0, (s0)
+    addi    s1, s1, -1
+    bnez    s1, 1b
+    li      s2, 20000
+2:  addi    s3, s3, 3
+    addi    s2, s2, -1
+    bnez    s2, 2b
+"""
+
+
+def test_a_loop_handing_over_each_round_stays_on_the_precise_engine_until_it_ends():
+    """The precise engine's stretch grows while the fast engine runs next to nothing between hand-
+    overs (each precise run costs tens of microseconds: one every few instructions made an error
+    run's spinning hart 1 take 10 s), and shrinks again once the fast engine has code to run."""
+    precise = run_on(ENGINE_PRECISE, SPIN, ".balign 4096\nword: .dword 0")
+    fast = run_on(ENGINE_FAST, SPIN, ".balign 4096\nword: .dword 0")
+    assert reg(precise, "s3") == 60000
+    assert state(fast) == state(precise)
+    assert fast.harts[0].precise_runs < 100       # about 10,000 with a stretch of 4 each time
+    assert fast.harts[0].fast_statistics()["instructions"] > 0.9 * 60000   # the second loop
+
+
 TRAPS = """
     la      t0, handler
     csrw    mtvec, t0
