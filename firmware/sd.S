@@ -394,7 +394,8 @@ sd_csd_blocks:
 #         bad block (or an error token) is read again from that block,
 #         SD_READ_RETRIES times, then error 4. Each block that passed its
 #         check is handed to the hook, in order, once (the hook must not
-#         touch SPI1, GPIOHS7 or DMAC channel 1).
+#         touch SPI1, GPIOHS7 or DMAC channel 1, and it runs with mie.MEIE
+#         set: a wfi in it would wake for any external interrupt).
 #   Arguments: a0 = first block number, a1 = block count (0 does nothing),
 #         a2 = destination (a1 * 512 bytes; any alignment), a3 = hook or 0,
 #         a4 = hook context. The hook is called as hook(a0 = the block's
@@ -425,7 +426,9 @@ sd_read_blocks:
     li      s3, 0                       # s3 = failures of block s4 so far
     li      s4, -1                      # s4 = block that failed last
     la      s8, sd_stage                # s8 = staging buffer of block s0
-    beqz    s1, 90f
+    beqz    s1, 91f
+    li      t0, MIE_MEIE                # WFI wakes for the DMA's interrupt
+    csrs    mie, t0                     # throughout (dma_sleep_channel)
     # s7 = 1 while block s0 - 1 is received but not checked: it is in the
     # other staging buffer (sd_stage_other), due at s2 - 512.
     # s9 = bytes of block s0's data already at the start of s8's buffer.
@@ -444,8 +447,10 @@ sd_read_blocks:
     slli    a1, a1, SD_BLOCK_SHIFT      # standard capacity: byte address
 12: mv      a0, s5
     call    sd_command
-    beqz    a0, 15f
-    mv      s9, a0
+    bnez    a0, 14f
+    call    sd_receive_setup
+    j       15f
+14: mv      s9, a0
     call    sd_deselect
     li      t0, SD_R1_NONE
     beq     s9, t0, 13f
@@ -480,7 +485,7 @@ sd_read_blocks:
     call    sd_check_block
     seqz    s11, a0
 22: li      a0, SD_DMA_CHANNEL
-    call    dma_wait_channel
+    call    dma_sleep_channel
     bnez    s11, 50f
     li      s7, 1
     addi    s0, s0, 1
@@ -566,7 +571,9 @@ sd_read_blocks:
     la      a3, msg_crc_block_tail
     call    error_fatal_dec
 
-90: ld      s11, 8(sp)
+90: li      t0, MIE_MEIE
+    csrc    mie, t0
+91: ld      s11, 8(sp)
     ld      s10, 16(sp)
     ld      s9, 24(sp)
     ld      s8, 32(sp)
@@ -692,30 +699,16 @@ sd_wait_token:
     addi    sp, sp, 16
     ret
 
-# sd_receive_start (file-local)
-#   What: starts receiving a1 bytes (after a data token) into memory by
-#         DMA: SPI1 receive-only for a1 frames with RX DMA requests, DMAC
-#         channel 1 from SPI1's data register to a0, one dummy write to
-#         start the clock. Returns at once; dma_wait_channel(SD_DMA_CHANNEL)
-#         waits for the end, after which SPI1 stays receive-only until
-#         sd_transfer_mode.
-#   Arguments: a0 = destination, a1 = byte count (1 .. SD_STAGE_BYTES).
-#   Results: none.
+# sd_receive_setup (file-local)
+#   What: DMAC channel 1 set up for receiving from SPI1 (its configuration,
+#         source, control and interrupt enables, stale interrupts cleared),
+#         once per read command: sd_receive_start then gives each block only
+#         its destination and length. The channel is idle (dma_wait_channel
+#         saw the last block done) and nothing else uses it; the DMAC keeps
+#         these registers from one block to the next.
+#   Arguments: none. Results: none.
 #   Clobbers: only ABI temporaries.
-sd_receive_start:
-    addi    sp, sp, -32
-    sd      ra, 24(sp)
-    sd      s0, 16(sp)
-    sd      s1, 8(sp)
-    mv      s0, a0
-    addi    s1, a1, -1                  # s1 = frames - 1 (ctrlr1, block_ts)
-
-    li      a0, SD_CTRLR0_RX_ONLY
-    mv      a1, s1
-    li      a2, SPI_DMACR_RDMAE
-    call    sd_spi_mode
-
-    # Channel 1: stale interrupts cleared, off before reprogramming.
+sd_receive_setup:
     li      t0, DMAC_BASE
     li      t1, DMAC_CH_INTCLEAR_ALL
     sd      t1, SD_DMAC_CH + DMAC_CH_INTCLEAR(t0)
@@ -726,13 +719,44 @@ sd_receive_start:
     sd      t1, SD_DMAC_CH + DMAC_CH_CFG(t0)
     li      t1, SPI1_DR_ADDR
     sd      t1, SD_DMAC_CH + DMAC_CH_SAR(t0)
-    sd      s0, SD_DMAC_CH + DMAC_CH_DAR(t0)
-    sd      s1, SD_DMAC_CH + DMAC_CH_BLOCK_TS(t0)
     li      t1, SD_DMAC_CTL
     sd      t1, SD_DMAC_CH + DMAC_CH_CTL(t0)
     li      t1, DMAC_CH_INT_BLOCK_DONE
     sd      t1, SD_DMAC_CH + DMAC_CH_INTSTATUS_EN(t0)
     sd      t1, SD_DMAC_CH + DMAC_CH_INTSIGNAL_EN(t0)
+    ret
+
+# sd_receive_start (file-local)
+#   What: starts receiving a1 bytes (after a data token) into memory by
+#         DMA: SPI1 receive-only for a1 frames with RX DMA requests (set up
+#         only when it is not so already: SPI1 starts another a1 frames at
+#         each write to its data register), DMAC channel 1 (sd_receive_setup)
+#         from SPI1's data register to a0, one dummy write to start the
+#         clock. Returns at once; dma_sleep_channel(SD_DMA_CHANNEL) waits for
+#         the end, after which SPI1 stays receive-only until sd_transfer_mode.
+#   Arguments: a0 = destination, a1 = byte count (1 .. SD_STAGE_BYTES).
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+sd_receive_start:
+    addi    sp, sp, -32
+    sd      ra, 24(sp)
+    sd      s0, 16(sp)
+    sd      s1, 8(sp)
+    mv      s0, a0
+    mv      s1, a1
+    la      t0, sd_rx_frames
+    lwu     t1, 0(t0)
+    beq     t1, a1, 1f
+    sw      a1, 0(t0)
+    li      a0, SD_CTRLR0_RX_ONLY
+    addi    a1, a1, -1                  # ctrlr1 = frames - 1
+    li      a2, SPI_DMACR_RDMAE
+    call    sd_spi_mode
+
+1:  li      t0, DMAC_BASE
+    sd      s0, SD_DMAC_CH + DMAC_CH_DAR(t0)
+    addi    t1, s1, -1                  # block_ts = items - 1
+    sd      t1, SD_DMAC_CH + DMAC_CH_BLOCK_TS(t0)
     fence   rw, o                       # earlier accesses to the buffer come first
     li      t1, SD_DMAC_CHEN | SD_DMAC_CHEN_WE
     sd      t1, DMAC_CHEN(t0)
@@ -754,6 +778,8 @@ sd_receive_start:
 #   Arguments: none. Results: none.
 #   Clobbers: only ABI temporaries.
 sd_transfer_mode:
+    la      t0, sd_rx_frames
+    sw      zero, 0(t0)
     li      a0, SD_CTRLR0_TX_RX
     li      a1, 0
     li      a2, 0
@@ -1043,6 +1069,8 @@ sd_xchg:
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 sd_spi_setup:
+    la      t0, sd_rx_frames
+    sw      zero, 0(t0)
     li      t0, SPI1_BASE
     sw      zero, SPI_SSIENR(t0)
     sw      a0, SPI_BAUDR(t0)
@@ -1117,6 +1145,10 @@ msg_crc_cmd_tail:   .asciz " response keeps reporting a CRC error"
     .balign 4
 # sd_ccs: 1 = block-addressed card (SDHC/SDXC), 0 = byte-addressed (SDSC).
 sd_ccs:
+    .space  4
+# sd_rx_frames: the frames SPI1's receive-only mode is set up for (its
+# ctrlr1 + 1), 0 when SPI1 is in transmit-and-receive mode.
+sd_rx_frames:
     .space  4
     .balign 8
     .globl sd_capacity
