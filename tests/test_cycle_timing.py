@@ -204,8 +204,8 @@ def test_an_unknown_timing_model_is_refused():
 # the firmware or to the card changes them on purpose: take them again by running commit 53f433e's
 # emulator, `python -m emulator run build/firmware.elf --sd build/card.img --frames 4`, on the new
 # firmware and card.)
-BEFORE_CYCLES = [(0.13386838271298573, [12045348, 29027]), (0.1448788144747718, [1022976, 3549]),
-                 (0.15250456881720356, [1022182, 1266]), (0.16013032315963532, [1039464, 1266])]
+BEFORE_CYCLES = [(0.133675993134822, [12045841, 28867]), (0.14512041993382885, [1022976, 3834]),
+                 (0.1527461742762606, [1022182, 1266]), (0.16037192861869237, [1039464, 1266])]
 
 
 def test_ipc1_reproduces_the_model_before_cycle_timing(firmware, card, firmware_run, tmp_path):
