@@ -413,13 +413,16 @@ class Board:
             high.append(SOURCE_SPI0)
         if self.spi1.irq_line():
             high.append(SOURCE_SPI1)
-        high.extend(SOURCE_DMA0 + n for n in range(6) if self.dmac.irq_line(n))
+        dma = self.dmac.irq_lines()
+        if dma:
+            high.extend(SOURCE_DMA0 + n for n in range(6) if dma >> n & 1)
         if self.gpio.irq_line():
             high.append(SOURCE_GPIO)
         if self.uarths.irq_line():
             high.append(SOURCE_UARTHS)
         lines = self.gpiohs.irq_lines()
-        high.extend(SOURCE_GPIOHS0 + n for n in range(32) if lines >> n & 1)
+        if lines:
+            high.extend(SOURCE_GPIOHS0 + n for n in range(32) if lines >> n & 1)
         return high
 
     def mip(self, h: int, now: float, mask: int = ~0) -> int:

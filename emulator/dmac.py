@@ -35,6 +35,11 @@ INT_BLOCK_TFR_DONE, INT_DMA_TFR_DONE = 1, 2
 WIDTH_BYTES = {0: 1, 1: 2, 2: 4, 3: 8}
 # memory-to-memory copies move one 64-bit AXI beat per bus clock (ACLK = CPU clock)
 MEM2MEM_BYTES_PER_CYCLE = 8
+# a channel's set-up registers: they take effect when the channel starts
+_SETUP_REGISTERS = frozenset({SAR, DAR, BLOCK_TS, CTL, CH_CFG, LLP})
+# each channel's (intstatus, intsignal_en) offsets: its interrupt line is high when they share a bit
+_IRQ_REGISTERS = [(CH_BASE + CH_STRIDE * n + CH_INTSTATUS, CH_BASE + CH_STRIDE * n + INTSIGNAL_EN)
+                  for n in range(CHANNELS)]
 
 
 def _channel_registers() -> dict[int, Register]:
@@ -176,9 +181,18 @@ class Dmac(Peripheral):
         self.board.interrupts_may_have_changed(t.done_at)
 
     def irq_line(self, n: int) -> bool:
-        if not self.values[CFG] & CFG_INT_EN:
-            return False
-        return bool(self.values[self._ch(n, CH_INTSTATUS)] & self.values[self._ch(n, INTSIGNAL_EN)])
+        return bool(self.irq_lines() >> n & 1)
+
+    def irq_lines(self) -> int:
+        """Every channel's interrupt line, channel n in bit n (the PLIC samples them all at once)."""
+        values = self.values
+        if not values[CFG] & CFG_INT_EN:
+            return 0
+        lines = 0
+        for n, (status, signal) in enumerate(_IRQ_REGISTERS):
+            if values[status] & values[signal]:
+                lines |= 1 << n
+        return lines
 
     def describe_wait(self) -> str | None:
         for channel in self.channels:
@@ -200,6 +214,12 @@ class Dmac(Peripheral):
         return self.values[offset]
 
     def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
+        if offset >= CH_BASE and (offset - CH_BASE) % CH_STRIDE in _SETUP_REGISTERS and \
+                self.channels[(offset - CH_BASE) // CH_STRIDE].transfer is None:
+            # an idle channel's set-up: nothing the devices do until now depends on it (its start, at
+            # chen, does), so they need not catch up first (the firmware writes these for every block)
+            self.values[offset] = value
+            return
         self.board.advance_devices(now)
         if offset == RESET:
             if value & 1:

@@ -15,7 +15,8 @@ Layer Simplified Specification describes SPI mode:
   SDHC), CMD17/CMD18 (single/multiple block read, until CMD12), CMD24/CMD25
   (single/multiple block write), CMD12 (stop: a stuff byte, R1, then busy);
 - Ncr: responses come NCR_BYTES bytes after the command; read data come NAC_BYTES
-  bytes after the response, as a 0xFE token, 512 bytes and their CRC16;
+  bytes after the response (and after the previous block in a CMD18 stream), as a
+  0xFE token, 512 bytes and their CRC16 (the "varying-nac" fault varies the gap);
 - CRC7 is checked on CMD0 and CMD8 always, and on every command after CMD59(1);
   a bad CRC answers R1 with the CRC-error bit and the command is not executed.
   CRC16 of written blocks is checked while CRC checking is on;
@@ -55,6 +56,7 @@ from .errors import BadInput
 BLOCK = 512
 NCR_BYTES = 1            # bytes of 0xFF between a command and its response (spec: 1..8)
 NAC_BYTES = 8            # bytes of 0xFF between a read command's response and its data token
+VARYING_NAC_MAX = 24     # the "varying-nac" fault's longest gap: 1 .. 24 bytes, every value in 24 blocks
 STOP_BUSY_BYTES = 4      # busy (0x00) bytes after CMD12
 WRITE_BUSY_S = 250e-6    # programming time after a written block
 INIT_TIME_S = 10e-3      # initialisation time after the first ACMD41
@@ -185,6 +187,9 @@ FAULTS = {
     "no-init": "ACMD41 never completes: the card stays idle (the firmware should time out)",
     "bad-crc": "every data block (the CSD and CID registers too) is sent with a wrong CRC16",
     "flaky-crc": "the first time each block (or register) is sent its CRC16 is wrong; a retry gets it right",
+    "varying-nac": f"the gap before each data block's token (Nac) varies from block to block, 1 to "
+                   f"{VARYING_NAC_MAX} bytes of 0xFF, as a slower card's read access time does (else "
+                   f"always {NAC_BYTES})",
 }
 
 
@@ -200,6 +205,7 @@ class SdCard:
             raise BadInput(f"unknown SD card fault(s): {', '.join(sorted(unknown))} (known: {', '.join(FAULTS)})")
         self.faults = frozenset(faults)
         self._blocks_sent: set[int | str] = set()
+        self.commands: dict[int, int] = {}      # command index -> times received (whole frames)
         self.image = image
         self.warn = warn or (lambda text: None)
         self.strict = strict
@@ -285,12 +291,21 @@ class SdCard:
                 self._reading += 1
 
     def _queue_block(self, block: int) -> None:
+        gap = b"\xff" * self._read_gap(block)
         if block >= self.image.blocks:
-            self._say(b"\xff" * NAC_BYTES + bytes([ERROR_TOKEN_OUT_OF_RANGE]))
+            self._say(gap + bytes([ERROR_TOKEN_OUT_OF_RANGE]))
             self._reading = None
             return
         data = self.image.read(block)
-        self._say(b"\xff" * NAC_BYTES + bytes([TOKEN_START]) + data + self._data_crc(data, block).to_bytes(2, "big"))
+        self._say(gap + bytes([TOKEN_START]) + data + self._data_crc(data, block).to_bytes(2, "big"))
+
+    def _read_gap(self, block: int) -> int:
+        """Bytes of 0xFF before block `block`'s data token (Nac): fixed, or with the "varying-nac"
+        fault 1 .. VARYING_NAC_MAX, each value once in any VARYING_NAC_MAX consecutive blocks (7 and
+        24 are coprime)."""
+        if "varying-nac" in self.faults:
+            return 1 + block * 7 % VARYING_NAC_MAX
+        return NAC_BYTES
 
     def _data_crc(self, data: bytes, key: int | str) -> int:
         """The CRC16 sent with a data block (a block, key = its number, or a register, key = its
@@ -318,6 +333,7 @@ class SdCard:
 
     def _execute(self, frame: bytes, now: float) -> None:
         index = frame[0] & 0x3F
+        self.commands[index] = self.commands.get(index, 0) + 1
         argument = int.from_bytes(frame[1:5], "big")
         app = self.app_command
         self.app_command = False

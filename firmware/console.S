@@ -78,9 +78,9 @@ console_putc:
     lw      t1, 0(t0)
     la      t2, console_ring_tail
     lw      t2, 0(t2)
-    subw    t3, t1, t2                  # bytes held (the indices wrap at 2^32)
+    subw    t5, t1, t2                  # t5 = bytes held (the indices wrap at 2^32)
     li      t4, CONSOLE_RING_BYTES
-    bltu    t3, t4, 6f
+    bltu    t5, t4, 6f
     addi    sp, sp, -16
     sd      ra, 8(sp)
     sd      a0, 0(sp)
@@ -95,7 +95,17 @@ console_putc:
     sb      a0, 0(t2)
     addiw   t1, t1, 1
     sw      t1, 0(t0)
-    ret
+    # The first byte in an empty ring wakes the relaying hart if it sleeps
+    # in console_relay_until (its software interrupt; it clears it itself).
+    bnez    t5, 7f
+    srli    t3, tp, HART_LOCAL_SHIFT    # mhartid (boot.S)
+    li      t4, CONSOLE_RELAY_HART
+    beq     t3, t4, 7f
+    fence   w, o                        # the byte is in the ring before the signal
+    li      t0, CLINT_MSIP + (CONSOLE_RELAY_HART << CLINT_MSIP_SHIFT)
+    li      t1, CLINT_MSIP_RAISE
+    sw      t1, 0(t0)
+7:  ret
 
     .globl console_puts
 # console_puts
@@ -243,6 +253,78 @@ console_wait_us:
 2:  ld      s0, 0(sp)
     ld      ra, 8(sp)
     addi    sp, sp, 16
+    ret
+
+    .globl console_relay_until
+# console_relay_until
+#   What: the relay while this hart has nothing else to do: sends what the
+#         ring holds as the UART's FIFO takes it, until the word at a0 equals
+#         a1 or halt_request is raised. Asleep in WFI meanwhile, woken by this
+#         hart's software interrupt (the other hart raises it when it puts a
+#         byte into an empty ring, sets the word, or halts; it is cleared
+#         before the reads, as in main.S's protocol) or, while bytes wait for
+#         room in the FIFO, every CONSOLE_RELAY_POLL_US: an idle relay costs
+#         no wake-ups. Acquire, as wait_state (main.S).
+#   Arguments: a0 = address of the word, a1 = wanted value.
+#   Results: a0 = 0 when the word was reached, 1 when halted.
+#   Clobbers: only ABI temporaries. Leaves this hart's msip clear and its
+#         timer off.
+console_relay_until:
+    addi    sp, sp, -48
+    sd      ra, 40(sp)
+    sd      s0, 32(sp)
+    sd      s1, 24(sp)
+    sd      s2, 16(sp)
+    sd      s3, 8(sp)
+    mv      s0, a0
+    mv      s1, a1
+    srli    t0, tp, HART_LOCAL_SHIFT    # mhartid (boot.S)
+    slli    t1, t0, CLINT_MSIP_SHIFT
+    li      s2, CLINT_MSIP
+    add     s2, s2, t1                  # s2 = &msip[this hart]
+    slli    t1, t0, CLINT_MTIMECMP_SHIFT
+    li      s3, CLINT_MTIMECMP
+    add     s3, s3, t1                  # s3 = &mtimecmp[this hart]
+    li      t0, MIE_MSIE | MIE_MTIE
+    csrs    mie, t0
+1:  sw      zero, 0(s2)
+    fence                               # the clear lands before the reads
+    la      t0, halt_request
+    lw      t0, 0(t0)
+    bnez    t0, 3f
+    lw      t0, 0(s0)
+    beq     t0, s1, 2f
+    call    console_lock
+    call    console_pump
+    call    console_unlock
+    # Bytes left (the FIFO was full): look again in CONSOLE_RELAY_POLL_US.
+    # None: sleep until signalled (a byte added since our read signals).
+    la      t0, console_ring_head
+    lw      t1, 0(t0)
+    la      t0, console_ring_tail
+    lw      t2, 0(t0)
+    li      a0, MTIMECMP_NEVER
+    beq     t1, t2, 4f
+    li      a0, CONSOLE_RELAY_POLL_US
+    call    timer_deadline
+4:  sd      a0, 0(s3)                   # (also drops an earlier MTIP)
+    wfi
+    j       1b
+2:  li      s1, 0
+    j       5f
+3:  li      s1, 1
+5:  li      t0, MTIMECMP_NEVER
+    sd      t0, 0(s3)                   # drops MTIP before MTIE goes away
+    li      t0, MIE_MSIE | MIE_MTIE
+    csrc    mie, t0
+    fence   r, rw                       # acquire: what was written before the word
+    mv      a0, s1
+    ld      s3, 8(sp)
+    ld      s2, 16(sp)
+    ld      s1, 24(sp)
+    ld      s0, 32(sp)
+    ld      ra, 40(sp)
+    addi    sp, sp, 48
     ret
 
     .globl console_put_hex64

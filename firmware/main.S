@@ -256,18 +256,12 @@ main_hart1:
 
     # Until hart 0 has drawn frame 0 it may still be loading and printing:
     # keep the relay going meanwhile (fb_wait_state's WFI would not).
-4:  la      t0, halt_request
-    lw      t0, 0(t0)
-    bnez    t0, 3f
-    la      t0, fb_state
-    lw      t0, 0(t0)                   # buffer 0's state: frame 0 goes there
-    li      t1, FB_FULL
-    beq     t0, t1, 5f
-    li      a0, CONSOLE_RELAY_POLL_US
-    call    console_wait_us
-    j       4b
+    la      a0, fb_state                # buffer 0's state: frame 0 goes there
+    li      a1, FB_FULL
+    call    console_relay_until
+    bnez    a0, 3f
 
-5:  li      s2, 0                       # s2 = frames shown
+    li      s2, 0                       # s2 = frames shown
 1:  andi    s3, s2, 1                   # s3 = buffer index b
     mv      a0, s3
     li      a1, FB_FULL

@@ -219,18 +219,34 @@ dma_irq_enable:
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 dma_wait_channel:
-    li      t0, DMAC_BASE
-    li      t2, 1
-    sll     t2, t2, a0                  # t2 = the channel's chen bit
     li      t3, MIE_MEIE
     csrs    mie, t3
-1:  wfi
+    li      t4, 1                       # t4 = 1: clear mie.MEIE after the wait
+    j       1f
+
+    .globl dma_sleep_channel
+# dma_sleep_channel
+#   What: dma_wait_channel for a caller that keeps mie.MEIE set across a
+#         series of waits (sd_read_blocks, one per SD block): no write to mie
+#         (each would end the hart's run in the board model, and costs a CSR
+#         access on the chip). mstatus.MIE stays 0, so MEIE only wakes WFI.
+#   Arguments: a0 = DMAC channel (0 .. 5).
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+dma_sleep_channel:
+    li      t4, 0
+1:  li      t0, DMAC_BASE
+    li      t2, 1
+    sll     t2, t2, a0                  # t2 = the channel's chen bit
+2:  wfi
     ld      t1, DMAC_CHEN(t0)
     and     t1, t1, t2
-    bnez    t1, 1b
+    bnez    t1, 2b
+    beqz    t4, 3f
+    li      t3, MIE_MEIE
     csrc    mie, t3
 
-    # Claim, quiet the source, complete: completing while the DMAC still
+3:  # Claim, quiet the source, complete: completing while the DMAC still
     # asserts the (level) interrupt would make the PLIC raise it again.
     csrr    t4, mhartid
     slli    t4, t4, PLIC_CONTEXT_SHIFT
@@ -243,9 +259,9 @@ dma_wait_channel:
     sd      t2, DMAC_CH0 + DMAC_CH_INTCLEAR(t1)
     li      t2, DMAC_COM_INTCLEAR_ALL
     sd      t2, DMAC_COM_INTCLEAR(t0)
-    beqz    t6, 2f                      # nothing claimed: nothing to complete
+    beqz    t6, 4f                      # nothing claimed: nothing to complete
     sw      t6, 0(t5)
-2:  fence                               # what the DMAC wrote is read after this
+4:  fence                               # what the DMAC wrote is read after this
     ret
 
     .globl spi0_dma_send_words

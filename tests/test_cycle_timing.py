@@ -198,14 +198,14 @@ def test_an_unknown_timing_model_is_refused():
 
 
 # The default card's first frames under the model before cycle timing (commit 53f433e, this
-# firmware and card, taken again on the firmware that splits the vertex stage between the harts):
+# firmware and card, taken again on the firmware that reads SD blocks with a lookahead):
 # virtual time each frame reached the LCD, and hart 0's and hart 1's instructions since the previous
 # frame. --timing ipc1 must reproduce them exactly. (A change to
 # the firmware or to the card changes them on purpose: take them again by running commit 53f433e's
 # emulator, `python -m emulator run build/firmware.elf --sd build/card.img --frames 4`, on the new
 # firmware and card.)
-BEFORE_CYCLES = [(0.13436824044665235, [11950637, 29241]), (0.1448578781637735, [1022976, 3202]),
-                 (0.15248363250620525, [1022182, 1261]), (0.16010938684863701, [1039464, 1261])]
+BEFORE_CYCLES = [(0.133675993134822, [12045841, 28867]), (0.14512041993382885, [1022976, 3834]),
+                 (0.1527461742762606, [1022182, 1266]), (0.16037192861869237, [1039464, 1266])]
 
 
 def test_ipc1_reproduces_the_model_before_cycle_timing(firmware, card, firmware_run, tmp_path):

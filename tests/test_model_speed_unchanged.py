@@ -6,8 +6,11 @@ cycle count of a given firmware").
 The figures below were taken with the emulator of commit fb8377d (before the speed work: the device
 models' fast paths, the bus answering a repeated status-register poll from its last answer, bytes
 instead of numpy for one-byte SPI exchanges; CSRs caught by the counter; the fast engine) on the
-firmware that splits the vertex stage between the harts when both draw (the vertex stage in a
-set-up and a share, the band job 16 bytes longer: frames unchanged). The cards load
+firmware that reads SD blocks with a lookahead (each block by DMA with its CRC16 and the next
+block's gap and token in a staging buffer, no byte-by-byte token wait within a stream, the DMA
+channel set up once per command, mie.MEIE set once per read; hart 1 relaying the console asleep
+until hart 0 prints rather than waking every 500 us: 14,042 fewer instructions on hart 0 by the
+first frame, frames unchanged). The cards load
 a texture large enough that most of the run is the SD card's SPI traffic, once healthy and once
 with every block's first CRC16 wrong (each block read again: the firmware's retry path). A change to
 the firmware changes them on purpose: take them again with `python tests/test_model_speed_unchanged.py`
@@ -72,57 +75,56 @@ def test_runs_are_as_before_the_speed_work(firmware, tmp_path, faults):
     assert seen["warnings"] == expected["warnings"]
 
 
-BEFORE: dict = {'healthy': {'frames': [(0.1328719263854425,
-                         [5071837, 28328],
-                         [7869871, 39492],
+BEFORE: dict = {'healthy': {'frames': [(0.1328725723738627,
+                         [5057795, 28410],
+                         [7849848, 39390],
                          '1c68b7264b348dde68bcdf72c02e69c59d2e0e5ccd04a813c863c8465ed1b5da'),
-                        (0.14388297105045436,
-                         [6106938, 31857],
-                         [9751979, 44482],
+                        (0.1438836120760954,
+                         [6092896, 31947],
+                         [9734317, 44385],
                          '5a089b29ba6c9e0266be6e56579f22a4f8442afd74fb140ac3800d6e55e952de')],
-             'console': [(0.0016268519437551698, 'boot: hart 0 up'),
-                         (0.005446008271298597, 'clocks: PLL0 806000000 Hz, CPU 403000000 Hz'),
-                         (0.00804997849462366, 'pins: LCD, UART and SD routed'),
-                         (0.021582052936311002,
+             'console': [(0.001627262200165426, 'boot: hart 0 up'),
+                         (0.005446418527708853, 'clocks: PLL0 806000000 Hz, CPU 403000000 Hz'),
+                         (0.008050388751033916, 'pins: LCD, UART and SD routed'),
+                         (0.02158246319272126,
                           'sd: card ready, SDHC (block addressing), 131072 blocks, SPI1 22388888 Hz'),
-                         (0.02739758643507031,
+                         (0.027397996691480568,
                           'fat32: partition at block 2048, 512-byte clusters, 126990 clusters'),
-                         (0.03026195368072788, 'load scene.ini 74 crc32=e26782a2'),
-                         (0.04855897601323526, 'load texture.ppm 76815 crc32=de4b3ef2'),
-                         (0.05142334325889283, 'load model.obj 92 crc32=3c4c9e13'),
-                         (0.05793326881720549,
+                         (0.03026236393713814, 'load scene.ini 74 crc32=e26782a2'),
+                         (0.04855938626964434, 'load texture.ppm 76815 crc32=de4b3ef2'),
+                         (0.05142375351530191, 'load model.obj 92 crc32=3c4c9e13'),
+                         (0.05793367907361457,
                           'model: 2 triangles, 4 vertices, 4 uv, 0 normals (not stored: shading flat)'),
-                         (0.059408851943756356, 'texture: 160x160'),
-                         (0.13452137055417673, 'lcd: ST7789V ready'),
-                         (0.136344149710504, 'hart 1: display loop'),
-                         (0.13703854177005723, 'frame 0')],
+                         (0.05940926220016544, 'texture: 160x160'),
+                         (0.13452201654259693, 'lcd: ST7789V ready'),
+                         (0.1363447956989242, 'hart 1: display loop'),
+                         (0.13703918775847743, 'frame 0')],
              'warnings': []},
- 'flaky-crc': {'frames': [(0.1328719263854425,
-                           [5532694, 28328],
-                           [8445246, 39492],
+ 'flaky-crc': {'frames': [(0.1328725723738627,
+                           [5395438, 28410],
+                           [8270527, 39390],
                            '1c68b7264b348dde68bcdf72c02e69c59d2e0e5ccd04a813c863c8465ed1b5da'),
-                          (0.14388297105045436,
-                           [6567795, 31857],
-                           [10327354, 44482],
+                          (0.1438836120760954,
+                           [6430539, 31947],
+                           [10154996, 44385],
                            '5a089b29ba6c9e0266be6e56579f22a4f8442afd74fb140ac3800d6e55e952de')],
-               'console': [(0.0016268519437551698, 'boot: hart 0 up'),
-                           (0.005446008271298597, 'clocks: PLL0 806000000 Hz, CPU 403000000 Hz'),
-                           (0.00804997849462366, 'pins: LCD, UART and SD routed'),
-                           (0.02208217700578991,
+               'console': [(0.001627262200165426, 'boot: hart 0 up'),
+                           (0.005446418527708853, 'clocks: PLL0 806000000 Hz, CPU 403000000 Hz'),
+                           (0.008050388751033916, 'pins: LCD, UART and SD routed'),
+                           (0.02208258726220017,
                             'sd: card ready, SDHC (block addressing), 131072 blocks, SPI1 22388888 Hz'),
-                           (0.02789771050454922,
+                           (0.027898120760959478,
                             'fat32: partition at block 2048, 512-byte clusters, 126990 clusters'),
-                           (0.03076207775020679, 'load scene.ini 74 crc32=e26782a2'),
-                           (0.07056443507030603, 'load texture.ppm 76815 crc32=de4b3ef2'),
-                           (0.0734288023159636, 'load model.obj 92 crc32=3c4c9e13'),
-                           (0.07993872787427626,
+                           (0.030762488006617048, 'load scene.ini 74 crc32=e26782a2'),
+                           (0.06556360463192966, 'load texture.ppm 76815 crc32=de4b3ef2'),
+                           (0.06842797187758723, 'load model.obj 92 crc32=3c4c9e13'),
+                           (0.07493789743589989,
                             'model: 2 triangles, 4 vertices, 4 uv, 0 normals (not stored: shading flat)'),
-                           (0.08141431100082713, 'texture: 160x160'),
-                           (0.13452137055417673, 'lcd: ST7789V ready'),
-                           (0.136344149710504, 'hart 1: display loop'),
-                           (0.13703854177005723, 'frame 0')],
+                           (0.07641348056245076, 'texture: 160x160'),
+                           (0.13452201654259693, 'lcd: ST7789V ready'),
+                           (0.1363447956989242, 'hart 1: display loop'),
+                           (0.13703918775847743, 'frame 0')],
                'warnings': []}}
-
 
 if __name__ == "__main__":
     import pprint

@@ -7,8 +7,8 @@ import pytest
 from k210_fixtures import idle_elf, make_board  # noqa: F401
 
 from emulator.errors import BadInput
-from emulator.sdcard import (BLOCK, INIT_TIME_S, NAC_BYTES, NCR_BYTES, RULE_POWER_UP_CLOCKS, SdCard, SdImage,
-                             command_frame, crc7, crc16, crc16_bitwise)
+from emulator.sdcard import (BLOCK, INIT_TIME_S, NAC_BYTES, NCR_BYTES, RULE_POWER_UP_CLOCKS, VARYING_NAC_MAX, SdCard,
+                             SdImage, command_frame, crc7, crc16, crc16_bitwise)
 
 BLOCKS = 64
 
@@ -37,15 +37,15 @@ def command(card: SdCard, index: int, argument: int, reply_bytes: int, now: floa
     return clock(card, b"\xff" * reply_bytes, now)
 
 
-def powered(image_path, writable=False) -> SdCard:
-    card = SdCard(SdImage(image_path, writable=writable))
+def powered(image_path, writable=False, faults: frozenset[str] = frozenset()) -> SdCard:
+    card = SdCard(SdImage(image_path, writable=writable), faults=faults)
     clock(card, b"\xff" * 10)            # 80 clocks with CS high
     card.set_selected(True, 0.0)
     return card
 
 
-def initialised(image_path, writable=False) -> SdCard:
-    card = powered(image_path, writable)
+def initialised(image_path, writable=False, faults: frozenset[str] = frozenset()) -> SdCard:
+    card = powered(image_path, writable, faults)
     command(card, 0, 0, 2)
     command(card, 8, 0x1AA, 6)
     for now in (0.0, INIT_TIME_S):
@@ -188,6 +188,23 @@ def test_cmd18_streams_blocks_until_cmd12(image_path):
     # one stuff byte, R1, busy, then released
     assert after[0] == 0xFF and after[1] == 0x00
     assert after[2:6] == b"\x00" * 4 and after[6:] == b"\xff" * 6
+
+
+def test_varying_nac_gives_every_gap_from_1_to_its_maximum_in_a_stream(image_path):
+    card = initialised(image_path, faults=frozenset({"varying-nac"}))
+    first = 10
+    stream = command(card, 18, first, NCR_BYTES + 1 + VARYING_NAC_MAX * (VARYING_NAC_MAX + 1 + BLOCK + 2))
+    stream = stream[NCR_BYTES + 1:]
+    gaps = []
+    for n in range(VARYING_NAC_MAX):
+        gap = len(stream) - len(stream.lstrip(b"\xff"))
+        gaps.append(gap)
+        assert stream[gap] == 0xFE
+        block = stream[gap + 1:gap + 1 + BLOCK]
+        assert block == _pattern(first + n)
+        assert int.from_bytes(stream[gap + 1 + BLOCK:gap + 3 + BLOCK], "big") == crc16(block)
+        stream = stream[gap + 3 + BLOCK:]
+    assert sorted(gaps) == list(range(1, VARYING_NAC_MAX + 1))
 
 
 def test_cmd59_turns_crc_checking_on_for_every_command(image_path):

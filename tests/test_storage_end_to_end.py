@@ -222,6 +222,39 @@ def test_a_block_with_a_bad_crc_is_read_again(firmware, loader_card, tmp_path):
     assert _load_line("frag/fragmented.obj", files["/frag/fragmented.obj"]) in console
 
 
+def _read_commands(firmware: Path, card: Path, faults: frozenset[str]) -> tuple[dict[int, int], str]:
+    """Runs the card to its first frame through the Board API; the read commands the card received
+    (CMD17, CMD18) and the console."""
+    from emulator.board import Board
+    board = Board(str(firmware), sd_image=str(card), sd_faults=faults)
+    try:
+        board.run(1)
+    finally:
+        board.close()
+    commands = board.wiring.sd_slot.card.commands
+    return {17: commands.get(17, 0), 18: commands.get(18, 0)}, "".join(line + "\n" for _, line in board.console_lines)
+
+
+def test_blocks_whose_token_gaps_vary_load_byte_for_byte_without_reading_any_again(firmware, tmp_path):
+    """sd_read_blocks looks for each next token among the SD_LOOKAHEAD_BYTES it receives after a block
+    (gaps of 1 .. 15 bytes: the token at every place there, the data after it kept) and waits for a
+    later one byte by byte (16 .. 24). No block fails its check on the way: the card gets the same
+    read commands as with its usual gap of 8 (a block read wrong is read again, by a new command)."""
+    from sdcard_image import build_image
+    model = obj_bytes(60 * 512 + 77, "sixty-one blocks")
+    (tmp_path / "files").mkdir()
+    (tmp_path / "files" / "model.obj").write_bytes(model)
+    card = tmp_path / "card.img"
+    build_image(card, [tmp_path / "files"], scene={"model": "files/model.obj", "mode": "wireframe"}, force=True)
+    varying, console = _read_commands(firmware, card, frozenset({"varying-nac"}))
+    assert _load_line("files/model.obj", model) in console
+    usual, _ = _read_commands(firmware, card, frozenset())
+    assert varying == usual
+    # with a first CRC16 wrong, every block is read again: still loaded byte for byte
+    _, console = _read_commands(firmware, card, frozenset({"varying-nac", "flaky-crc"}))
+    assert _load_line("files/model.obj", model) in console
+
+
 # --- failures ---------------------------------------------------------------------------------
 
 def assert_error(result, console: str, out: Path, code: int, words: str) -> None:
