@@ -191,17 +191,16 @@ lcd_set_window:
     ret
 
 # lcd_begin_full_frame (file-local)
-#   What: full-screen window, RAMWR, D/C high: the LCD now takes pixels.
+#   What: RAMWR, D/C high: the LCD now takes a whole screen of pixels. The
+#         window is the whole screen, as lcd_init set it and nothing changes
+#         it, and RAMWR starts writing at the window's first pixel (ST7789V
+#         datasheet, RAMWR: the column and page registers go back to the
+#         start column and page), so it is not sent again each frame.
 #   Arguments: none. Results: none.
 #   Clobbers: only ABI temporaries.
 lcd_begin_full_frame:
     addi    sp, sp, -16
     sd      ra, 8(sp)
-    li      a0, 0
-    li      a1, 0
-    li      a2, LCD_WIDTH - 1
-    li      a3, LCD_HEIGHT - 1
-    call    lcd_set_window
     li      a0, LCD_CMD_RAMWR
     call    lcd_command
     li      a0, GPIOHS_LCD_DC_BIT
@@ -230,7 +229,7 @@ lcd_send_frame:
 
     .globl lcd_frame_start
 # lcd_frame_start
-#   What: starts sending a whole framebuffer to the LCD (window, RAMWR,
+#   What: starts sending a whole framebuffer to the LCD (RAMWR,
 #         then the pixels by DMA) and returns while the DMA runs: the
 #         caller may do other work, leaving the buffer and SPI0 alone, until
 #         it calls lcd_frame_finish.

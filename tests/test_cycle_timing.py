@@ -204,8 +204,8 @@ def test_an_unknown_timing_model_is_refused():
 # the firmware or to the card changes them on purpose: take them again by running commit 53f433e's
 # emulator, `python -m emulator run build/firmware.elf --sd build/card.img --frames 4`, on the new
 # firmware and card.)
-BEFORE_CYCLES = [(0.133675993134822, [12045841, 28867]), (0.14512041993382885, [1022976, 3834]),
-                 (0.1527461742762606, [1022182, 1266]), (0.16037192861869237, [1039464, 1266])]
+BEFORE_CYCLES = [(0.13367447948717934, [12045841, 28319]), (0.1451173926385435, [1022976, 3286]),
+                 (0.1527416333333326, [1022182, 718]), (0.1603658740281217, [1039464, 718])]
 
 
 def test_ipc1_reproduces_the_model_before_cycle_timing(firmware, card, firmware_run, tmp_path):
