@@ -13,14 +13,15 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 from PIL import Image
 
 from .ideal import DEFAULT_DENSITY, DENSITY_MAX, LINE_ROWS_PER_DENSITY, render_ideal_image
 from .load import load_card_folder, load_card_image
-from .obj import ModelError
+from .obj import Mesh, ModelError
 from .ppm import TextureError
 from .render import render_image
-from .scene import SceneError
+from .scene import Scene, SceneError
 
 EXIT_OK = 0
 EXIT_OUTPUT = 1
@@ -86,6 +87,37 @@ def _prepare_output(folder: Path) -> str | None:
     return None
 
 
+def load_source(source: Path, folder: bool) -> tuple[Scene, Mesh, np.ndarray | None] | int:
+    """The scene, model and texture of a folder laid out like a card (folder) or of a card image;
+    or, when they cannot be read, the exit status after the message on stderr (EXIT_STATUS_HELP)."""
+    from sdcard_image import SdImageError, UsageError
+    try:
+        if folder:
+            if not source.is_dir():
+                print(f"error: {source}: no such folder", file=sys.stderr)
+                return EXIT_USAGE
+            return load_card_folder(source)
+        if not source.is_file():
+            print(f"error: {source}: no such image file", file=sys.stderr)
+            return EXIT_USAGE
+        return load_card_image(source)
+    except (SceneError, ModelError, TextureError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_BAD_FILE
+    except UsageError as exc:          # a file the scene names is not on the card
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except SdImageError as exc:
+        print(f"error: {source}: not a readable card image: {exc}", file=sys.stderr)
+        return EXIT_BAD_CARD
+    except FileNotFoundError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except OSError as exc:
+        print(f"error: {source}: cannot read: {exc.strerror}", file=sys.stderr)
+        return EXIT_USAGE
+
+
 def main(argv: list[str] | None = None) -> int:
     """Runs the command line; returns the exit status."""
     parser = _parser()
@@ -97,34 +129,10 @@ def main(argv: list[str] | None = None) -> int:
     density = DEFAULT_DENSITY if args.density is None else args.density
     if not 1 <= density <= DENSITY_MAX:
         parser.error(f"--density must be from 1 to {DENSITY_MAX}")
-    from sdcard_image import SdImageError, UsageError
-    try:
-        source = Path(args.source)
-        if args.command == "render":
-            if not source.is_dir():
-                print(f"error: {source}: no such folder", file=sys.stderr)
-                return EXIT_USAGE
-            scene, mesh, texture = load_card_folder(source)
-        else:
-            if not source.is_file():
-                print(f"error: {source}: no such image file", file=sys.stderr)
-                return EXIT_USAGE
-            scene, mesh, texture = load_card_image(source)
-    except (SceneError, ModelError, TextureError) as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return EXIT_BAD_FILE
-    except UsageError as exc:          # a file the scene names is not on the card
-        print(f"error: {exc}", file=sys.stderr)
-        return EXIT_USAGE
-    except SdImageError as exc:
-        print(f"error: {args.source}: not a readable card image: {exc}", file=sys.stderr)
-        return EXIT_BAD_CARD
-    except FileNotFoundError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return EXIT_USAGE
-    except OSError as exc:
-        print(f"error: {args.source}: cannot read: {exc.strerror}", file=sys.stderr)
-        return EXIT_USAGE
+    loaded = load_source(Path(args.source), folder=args.command == "render")
+    if isinstance(loaded, int):
+        return loaded
+    scene, mesh, texture = loaded
     problem = _prepare_output(args.out)
     if problem:
         print(f"error: {problem}", file=sys.stderr)

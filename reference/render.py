@@ -261,6 +261,44 @@ class Target:
         self.depth = np.ones((HEIGHT, WIDTH), dtype=np.float64)
 
 
+def front_facing(screen: np.ndarray, cull: bool) -> tuple[list[int], float] | None:
+    """The corner order that puts a triangle's screen corners (3, 2) in positive order, and its
+    area then (twice the triangle's), or None: degenerate, or a back face culled."""
+    (x0, y0), (x1, y1), (x2, y2) = screen
+    area = (x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0)
+    if area == 0 or not math.isfinite(area):
+        return None
+    if area > 0:
+        return None if cull else ([0, 1, 2], area)      # a back face
+    return [0, 2, 1], -area                             # a front face: into positive order
+
+
+def pixel_bounds(screen: np.ndarray) -> tuple[int, int, int, int] | None:
+    """(xmin, xmax, ymin, ymax): the pixels whose centres the corners' box holds, on the screen;
+    None when there are none."""
+    xmin = max(0, math.ceil(screen[:, 0].min() - 0.5))
+    xmax = min(WIDTH - 1, math.floor(screen[:, 0].max() - 0.5))
+    ymin = max(0, math.ceil(screen[:, 1].min() - 0.5))
+    ymax = min(HEIGHT - 1, math.floor(screen[:, 1].max() - 0.5))
+    if xmin > xmax or ymin > ymax:
+        return None
+    return xmin, xmax, ymin, ymax
+
+
+def coverage(screen: np.ndarray, area: float, px: np.ndarray, py: np.ndarray) -> tuple[np.ndarray, list[np.ndarray]]:
+    """Which of the points (px, py) a triangle in positive order (front_facing) covers, by the
+    edge functions and the top-left rule, and each corner's barycentric weight there (the edge
+    opposite it over `area`)."""
+    inside = np.ones(np.shape(px), dtype=bool)
+    weights = []
+    for i in range(3):
+        a, b = screen[(i + 1) % 3], screen[(i + 2) % 3]
+        e = edge_function(a, b, px, py)
+        inside &= (e >= 0) if owns_ties(a, b) else (e > 0)
+        weights.append(e / area)
+    return inside, weights
+
+
 def raster_triangle(target: Target, screen: np.ndarray, zw: np.ndarray, q: np.ndarray,
                     cull: bool, colour: int | None, uv: np.ndarray | None = None,
                     texture: np.ndarray | None = None, lighting: Lighting = UNLIT,
@@ -268,36 +306,21 @@ def raster_triangle(target: Target, screen: np.ndarray, zw: np.ndarray, q: np.nd
     """One triangle given by its screen corners (3, 2), z/w (3,), 1/w (3,): `colour`, or
     textured (uv (3, 2) per corner, perspective-correct, sampled as `filter` says), each pixel
     lit by `lighting`."""
-    (x0, y0), (x1, y1), (x2, y2) = screen
-    area = (x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0)
-    if area == 0 or not math.isfinite(area):
+    facing = front_facing(screen, cull)
+    if facing is None:
         return
-    order = [0, 1, 2]
-    if area > 0:
-        if cull:
-            return                      # back face
-    else:
-        order = [0, 2, 1]               # front face: into positive order
-        area = -area
+    order, area = facing
     screen, zw, q = screen[order], zw[order], q[order]
     if uv is not None:
         uv = uv[order]
     if lighting.normals is not None:
         lighting = replace(lighting, normals=lighting.normals[order])
-    xmin = max(0, math.ceil(screen[:, 0].min() - 0.5))
-    xmax = min(WIDTH - 1, math.floor(screen[:, 0].max() - 0.5))
-    ymin = max(0, math.ceil(screen[:, 1].min() - 0.5))
-    ymax = min(HEIGHT - 1, math.floor(screen[:, 1].max() - 0.5))
-    if xmin > xmax or ymin > ymax:
+    bounds = pixel_bounds(screen)
+    if bounds is None:
         return
+    xmin, xmax, ymin, ymax = bounds
     px, py = np.meshgrid(np.arange(xmin, xmax + 1) + 0.5, np.arange(ymin, ymax + 1) + 0.5)
-    inside = np.ones(px.shape, dtype=bool)
-    weights = []                       # barycentric weight of corner i: edge opposite it / area
-    for i in range(3):
-        a, b = screen[(i + 1) % 3], screen[(i + 2) % 3]
-        e = edge_function(a, b, px, py)
-        inside &= (e >= 0) if owns_ties(a, b) else (e > 0)
-        weights.append(e / area)
+    inside, weights = coverage(screen, area, px, py)
     if not inside.any():
         return
     l0, l1, l2 = (w[inside] for w in weights)

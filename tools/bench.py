@@ -721,12 +721,29 @@ def main() -> int:
         printed = write_results(records, out, renderer, sweep)
         if renderer:
             harts_main(Path(args.firmware), out)
+            macro_zbuffer_main(out)
         print(printed)
         print(f"{len(records)} runs of {len(runs)} written to {out}: results.json, results.md"
               + (", quality.csv, quality.md, quality.svg" if sweep else ""))
     for failure in failures:
         print(f"FAILED: {failure}")
     return 1 if failures else 0
+
+
+def macro_zbuffer_main(out: Path) -> None:
+    """Issue 12's macro pre-removal, simulated on the bench's scenes (tools/macro_zbuffer.py: what the
+    Transputer seed's macro Z-buffer would skip, per tile size): printed, written to
+    OUT/macro_zbuffer.json and appended to OUT/results.md."""
+    import macro_zbuffer
+    records = macro_zbuffer.report()
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "macro_zbuffer.json").write_text(json.dumps(records, indent=2) + "\n")
+    lines = macro_zbuffer.format_report(records)
+    results = out / "results.md"
+    previous = results.read_text() if results.exists() else ""
+    results.write_text(previous + ("\n" if previous else "") + "## Macro Z-buffer, simulated\n\n```\n"
+                       + "\n".join(lines) + "\n```\n")
+    print("\n".join(lines))
 
 
 def harts_main(firmware: Path, out: Path) -> int:
