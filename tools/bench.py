@@ -25,7 +25,9 @@ each), written to build/bench/:
   - results.json holds every record (each names its `setting`), results.md the tables;
   - both harts drawing (issue 12): heavy scenes with `harts = 1` and `harts = 2`, cycles per
     frame on each hart, the frame period and the speed-up, and that both show the same frames:
-    harts.json, and a table in results.md.
+    harts.json, and a table in results.md;
+  - macro pre-removal (issue 12): the Transputer seed's macro Z-buffer simulated on the scenes
+    (tools/macro_zbuffer.py): what it would skip per tile size: macro_zbuffer.json, and results.md.
 
     python tools/bench.py                        (what `make bench` runs: everything)
     python tools/bench.py --quality-only --scenes cube --modes flat --settings default,gouraud
