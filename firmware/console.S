@@ -9,7 +9,10 @@
 # hart 0 prints about 450 bytes while it loads the card, 39 ms in all. So
 # during start-up (console_relay_start .. console_relay_stop) what any hart
 # prints goes into console_ring, and hart 1, which meanwhile sleeps through the
-# LCD's waits, copies it to the UART (console_wait_us). The ring is only ever
+# LCD's waits, copies it to the UART (console_wait_us, every
+# CONSOLE_RELAY_POLL_US); once the LCD is up it sleeps until hart 0 puts a
+# byte into the empty ring, which raises hart 1's software interrupt
+# (console_relay_until), until frame 0 is ready. The ring is only ever
 # touched with the console lock held, and whoever holds the lock may move
 # bytes from it to the UART: a hart that finds it full sends its oldest byte
 # itself. When the relay stops (hart 1's LCD is up, or a fatal error or a trap
