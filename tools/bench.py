@@ -732,6 +732,13 @@ def main() -> int:
     return 1 if failures else 0
 
 
+def append_to_results(out: Path, heading: str, text: str) -> None:
+    """A section (`## heading`, then text) added at the end of OUT/results.md."""
+    results = out / "results.md"
+    previous = results.read_text() if results.exists() else ""
+    results.write_text(previous + ("\n" if previous else "") + f"## {heading}\n\n" + text)
+
+
 def macro_zbuffer_main(out: Path) -> None:
     """Issue 12's macro pre-removal, simulated on the bench's scenes (tools/macro_zbuffer.py: what the
     Transputer seed's macro Z-buffer would skip, per tile size): printed, written to
@@ -741,10 +748,7 @@ def macro_zbuffer_main(out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
     (out / "macro_zbuffer.json").write_text(json.dumps(records, indent=2) + "\n")
     lines = macro_zbuffer.format_report(records)
-    results = out / "results.md"
-    previous = results.read_text() if results.exists() else ""
-    results.write_text(previous + ("\n" if previous else "") + "## Macro Z-buffer, simulated\n\n```\n"
-                       + "\n".join(lines) + "\n```\n")
+    append_to_results(out, "Macro Z-buffer, simulated", "```\n" + "\n".join(lines) + "\n```\n")
     print("\n".join(lines))
 
 
@@ -757,10 +761,7 @@ def harts_main(firmware: Path, out: Path) -> int:
     out.mkdir(parents=True, exist_ok=True)
     (out / "harts.json").write_text(json.dumps(records, indent=2) + "\n")
     table = harts_table(records)
-    results = out / "results.md"
-    previous = results.read_text() if results.exists() else ""
-    results.write_text(previous + ("\n" if previous else "") + "## Both harts drawing (harts = 1 against 2)\n\n"
-                       + table)
+    append_to_results(out, "Both harts drawing (harts = 1 against 2)", table)
     print(table)
     return 0 if all(r["same_frames"] for r in records) else 1
 

@@ -82,17 +82,19 @@ class MacroZBuffer:
         farthest depth there (at a corner: depth is affine in screen space)."""
         rows, columns = self.tiles(bounds)
         side = self.side
-        for ty in range(rows.start, rows.stop):
-            for tx in range(columns.start, columns.stop):
-                if (tx + 1) * side > render.WIDTH or (ty + 1) * side > render.HEIGHT:
-                    continue                       # a tile cut by the screen's edge is never whole
-                x0, x1 = tx * side + 0.5, (tx + 1) * side - 0.5
-                y0, y1 = ty * side + 0.5, (ty + 1) * side - 0.5
-                px, py = np.array([x0, x1, x0, x1]), np.array([y0, y0, y1, y1])
-                inside, weights = render.coverage(screen, area, px, py)
-                if inside.all():
-                    farthest = float((weights[0] * zw[0] + weights[1] * zw[1] + weights[2] * zw[2]).max())
-                    self.far[ty, tx] = min(self.far[ty, tx], farthest)
+        ty, tx = np.mgrid[rows, columns]
+        whole = ((tx + 1) * side <= render.WIDTH) & ((ty + 1) * side <= render.HEIGHT)
+        ty, tx = ty[whole], tx[whole]          # a tile cut by the screen's edge is never whole
+        if not len(ty):
+            return
+        # each tile's four corner pixel centres, (tiles, 4)
+        px = (tx * side)[:, None] + np.array([0.5, side - 0.5, 0.5, side - 0.5])
+        py = (ty * side)[:, None] + np.array([0.5, 0.5, side - 0.5, side - 0.5])
+        inside, weights = render.coverage(screen, area, px, py)
+        covered = inside.all(axis=1)
+        farthest = (weights[0] * zw[0] + weights[1] * zw[1] + weights[2] * zw[2]).max(axis=1)
+        ty, tx, farthest = ty[covered], tx[covered], farthest[covered]
+        self.far[ty, tx] = np.minimum(self.far[ty, tx], farthest)
 
 
 def simulate(scene: Scene, mesh: Mesh, frames: int, sides: tuple[int, ...] = TILE_SIDES) -> SceneCounts:
