@@ -90,7 +90,10 @@ card: $(CARD)
 flash-to-emulator: firmware venv $(CARD)
 	$(PYTHON) -m emulator run $(BUILD)/firmware.elf --sd $(CARD) --frames $(FRAMES) --out $(BUILD)/frames
 
+# compileall first: each test starts `python -m emulator` a few hundred times, and where
+# PYTHONDONTWRITEBYTECODE is set no import would otherwise leave the compiled modules behind.
 test: firmware c-firmware venv $(CARD)
+	$(PYTHON) -m compileall -q emulator reference sdcard_image tools tests
 	$(PYTHON) -m pytest -q -n 2
 
 # A real Dock: make flash PORT=/dev/ttyUSB0 [FLASH_BAUD=N] (tools/flash.py runs kflash)

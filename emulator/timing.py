@@ -63,8 +63,12 @@ multiplier configuration is not published: Rocket's default big core is taken.
 from __future__ import annotations
 
 import enum
+import hashlib
+import os
+import tempfile
 from dataclasses import dataclass
 from functools import lru_cache
+from pathlib import Path
 
 import numpy as np
 
@@ -302,22 +306,24 @@ def _waits_for(producer: Insn, insn: Insn) -> bool:
     return bool(producer.unit) and producer.unit == insn.unit
 
 
-def _distance(code: bytes, offset: int, producer: Insn) -> int:
-    """Instructions from the producer at `offset` to the first one that waits for it, in the
-    straight run after it (the instruction after the run's control transfer counts as waiting)."""
-    position = offset + producer.size
+def _distance(insns: list[Insn], slot: int, producer: Insn) -> int:
+    """Instructions from the producer at `slot` (of `insns`, one per 2-byte slot of a code
+    range) to the first one that waits for it, in the straight run after it (the instruction
+    after the run's control transfer counts as waiting)."""
+    position = slot + producer.size // 2
     for distance in range(1, WINDOW):
-        if position + 2 > len(code):
+        if position >= len(insns):
             return distance
-        insn = decode(int.from_bytes(code[position:position + 4].ljust(4, b"\0"), "little"))
+        insn = insns[position]
         if _waits_for(producer, insn):
             return distance
         if insn.ends_run:
             return distance + 1
-        position += insn.size
+        position += insn.size // 2
     return WINDOW
 
 
+@lru_cache(maxsize=65536)
 def entry(insn: Insn, distance: int) -> int:
     """The native counter's table entry for an instruction (_insn_counter.c E_* macros)."""
     extra = insn.extra
@@ -346,6 +352,24 @@ class CycleTable:
 _TABLES: dict[tuple, CycleTable] = {}     # by code: boards of one firmware share its table (read only)
 _TABLES_KEPT = 8
 
+# Built tables are also kept on disk, so that each new process (every `python -m emulator run`)
+# does not decode the firmware again: a fifth of a second for ours, more than many short runs
+# take. A file is named by a digest of this module's source (the decoding and the figures) and
+# of the code, so a changed model or firmware never reads a stale table. A cache that cannot be
+# read or written is passed over: the table is then built as without one.
+CACHE_ENVIRONMENT = "K210_MODEL_CACHE"     # a folder to use instead of the user's cache folder
+_CACHE_FILES_KEPT = 32
+
+
+def table_cache_folder() -> Path:
+    """Where tables are kept: $K210_MODEL_CACHE, else $XDG_CACHE_HOME/k210-board-model, else
+    ~/.cache/k210-board-model."""
+    chosen = os.environ.get(CACHE_ENVIRONMENT)
+    if chosen:
+        return Path(chosen)
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "k210-board-model"
+
 
 def build_table(code_ranges: list[tuple[int, bytes]]) -> CycleTable | None:
     """The cycle table of the firmware's code: every 2-byte-aligned position is decoded as if an
@@ -355,25 +379,72 @@ def build_table(code_ranges: list[tuple[int, bytes]]) -> CycleTable | None:
     key = tuple((address, bytes(code)) for address, code in code_ranges)
     table = _TABLES.get(key)
     if table is None:
-        table = _build_table(code_ranges)
+        digest = _digest(key)
+        table = _read_cached(digest, code_ranges)
+        if table is None:
+            table = _build_table(code_ranges)
+            _write_cached(digest, table)
         if len(_TABLES) >= _TABLES_KEPT:
             _TABLES.pop(next(iter(_TABLES)))
         _TABLES[key] = table
     return table
 
 
-def _build_table(code_ranges: list[tuple[int, bytes]]) -> CycleTable:
+def _digest(key: tuple) -> str:
+    digest = hashlib.sha256(Path(__file__).read_bytes())
+    for address, code in key:
+        digest.update(address.to_bytes(8, "little") + len(code).to_bytes(8, "little") + code)
+    return digest.hexdigest()
+
+
+def _table_bounds(code_ranges: list[tuple[int, bytes]]) -> tuple[int, int]:
     base = min(address for address, _ in code_ranges) & ~1
     end = max(address + len(code) for address, code in code_ranges)
-    entries = np.zeros((end - base + 1) // 2, dtype=np.uint32)
+    return base, (end - base + 1) // 2
+
+
+def _read_cached(digest: str, code_ranges: list[tuple[int, bytes]]) -> CycleTable | None:
+    """The table kept under `digest`, or None when there is none of the right length."""
+    base, slots = _table_bounds(code_ranges)
+    try:
+        entries = np.fromfile(table_cache_folder() / f"{digest}.u32", dtype="<u4")
+    except (OSError, ValueError):
+        return None
+    if len(entries) != slots:
+        return None
+    return CycleTable(base, entries.astype(np.uint32))
+
+
+def _write_cached(digest: str, table: CycleTable) -> None:
+    """Writes the table under its digest (whole or not at all: another process may be reading)
+    and keeps only the newest _CACHE_FILES_KEPT tables."""
+    folder = table_cache_folder()
+    part = None
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=folder, suffix=".part", delete=False) as handle:
+            part = Path(handle.name)
+            handle.write(table.entries.astype("<u4").tobytes())
+        os.replace(part, folder / f"{digest}.u32")
+        part = None
+        kept = sorted(folder.glob("*.u32"), key=lambda path: path.stat().st_mtime)
+        for stale in kept[:-_CACHE_FILES_KEPT]:
+            stale.unlink(missing_ok=True)
+    except OSError:
+        if part is not None:
+            part.unlink(missing_ok=True)
+
+
+def _build_table(code_ranges: list[tuple[int, bytes]]) -> CycleTable:
+    base, slots = _table_bounds(code_ranges)
+    entries = np.zeros(slots, dtype=np.uint32)
     for address, code in code_ranges:
         first = (address - base + 1) // 2
-        for slot in range(first, first + len(code) // 2):
-            offset = 2 * slot - (address - base)
-            if offset + 2 > len(code):
-                break
-            insn = decode(int.from_bytes(code[offset:offset + 4].ljust(4, b"\0"), "little"))
+        start = 2 * first - (address - base)
+        insns = [decode(int.from_bytes(code[offset:offset + 4].ljust(4, b"\0"), "little"))
+                 for offset in range(start, len(code) - 1, 2)]
+        for index, insn in enumerate(insns):
             # a call's link register is read by the return, far later: no stall is charged for it
             needs_distance = (insn.latency > 1 and not insn.ends_run) or insn.kind in (Kind.MUL, Kind.DIV)
-            entries[slot] = entry(insn, _distance(code, offset, insn) if needs_distance else WINDOW)
+            entries[first + index] = entry(insn, _distance(insns, index, insn) if needs_distance else WINDOW)
     return CycleTable(base, entries)

@@ -42,6 +42,16 @@ def _session_root(tmp_path_factory) -> Path:
     return root.parent if worker and root.name == f"popen-{worker}" else root
 
 
+@pytest.fixture(scope="session", autouse=True)
+def model_cache(tmp_path_factory) -> Path:
+    """The board model's cache of cycle tables (emulator/timing.py) for this session: shared by
+    the workers and the commands the tests run, kept out of the user's own cache folder."""
+    from emulator.timing import CACHE_ENVIRONMENT
+    folder = _session_root(tmp_path_factory) / "model-cache"
+    os.environ[CACHE_ENVIRONMENT] = str(folder)
+    return folder
+
+
 def _make(tmp_path_factory, target: str) -> None:
     """`make -s target`, one worker at a time (two makes rebuilding the same files at once would
     write them over each other)."""

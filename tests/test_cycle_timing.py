@@ -192,6 +192,46 @@ def test_the_decoder_knows_compressed_and_wide_forms():
     assert decode(0x00054503).latency == LATENCY["load_subword"]   # lbu a0, 0(a0)
 
 
+def test_a_built_cycle_table_is_kept_on_disk_and_read_back(firmware, tmp_path, monkeypatch):
+    """A new process reads the table the last one built (timing._TABLES is per process): the same
+    entries, from a file named by the code and the model; a file of the wrong length or a folder
+    that cannot be made only mean the table is built again."""
+    from emulator import timing
+    from emulator.elf import load_elf
+    from emulator.memory import Sram
+    code = load_elf(firmware, Sram()).code_ranges
+    cache = tmp_path / "cache"
+    monkeypatch.setenv(timing.CACHE_ENVIRONMENT, str(cache))
+    real_build = timing._build_table
+
+    def build_table(ranges):
+        """As a new process: nothing in memory; building counted."""
+        monkeypatch.setattr(timing, "_TABLES", {})
+        counted = []
+        monkeypatch.setattr(timing, "_build_table", lambda r: counted.append(r) or real_build(r))
+        return timing.build_table(ranges), len(counted)
+
+    built, builds = build_table(code)
+    kept = list(cache.glob("*.u32"))
+    assert builds == 1 and len(kept) == 1 and kept[0].stat().st_size == 4 * len(built.entries)
+    read, builds = build_table(code)
+    assert builds == 0 and read.base == built.base and (read.entries == built.entries).all()
+
+    kept[0].write_bytes(kept[0].read_bytes()[:-4])          # cut short: not taken, written again
+    again, builds = build_table(code)
+    assert builds == 1 and (again.entries == built.entries).all()
+    assert kept[0].stat().st_size == 4 * len(built.entries)
+
+    changed = [(address, data[:-2] + b"\x01\x00") for address, data in code]   # a c.nop at the end
+    _, builds = build_table(changed)
+    assert builds == 1 and len(list(cache.glob("*.u32"))) == 2 and not list(cache.glob("*.part"))
+
+    (tmp_path / "file").write_text("not a folder")
+    monkeypatch.setenv(timing.CACHE_ENVIRONMENT, str(tmp_path / "file" / "cache"))
+    elsewhere, builds = build_table(code)
+    assert builds == 1 and (elsewhere.entries == built.entries).all()
+
+
 def test_an_unknown_timing_model_is_refused():
     with pytest.raises(ValueError, match="unknown timing model 'fast'"):
         make_board(timing="fast")
