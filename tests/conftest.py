@@ -13,6 +13,7 @@ import pickle
 import shutil
 import subprocess
 import sys
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Callable, TypeVar
 
@@ -25,6 +26,7 @@ FIRMWARE = ROOT / "build" / "firmware.elf"
 CARD = ROOT / "build" / "card.img"
 GOLDEN_FRAMES = 4   # frames of the default scene the shared run shows
 T = TypeVar("T")
+K = TypeVar("K")
 
 
 def run_emulator(*args: str, timeout: float = 600) -> subprocess.CompletedProcess:
@@ -106,6 +108,15 @@ def shared_value(tmp_path_factory, name: str, compute: Callable[[Path], T]) -> T
     return pickle.loads((folder / "value.pickle").read_bytes())
 
 
+def run_together(jobs: dict[K, Callable[[], T]]) -> dict[K, T]:
+    """Each job's result, the jobs run two at a time: they are board-model runs, each a process
+    of its own that the test only waits for, so a fixture that makes several keeps both cores
+    busy while the other xdist worker waits for it (shared_value)."""
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        futures = {key: pool.submit(job) for key, job in jobs.items()}
+        return {key: future.result() for key, future in futures.items()}
+
+
 @pytest.fixture(scope="session")
 def assets(tmp_path_factory) -> Path:
     """The generated models and textures (tools/make_assets.py), made once a session for the
@@ -129,6 +140,20 @@ def firmware_run(firmware, card, tmp_path_factory):
         summary = json.loads((out / "run.json").read_text()) if (out / "run.json").exists() else None
         return result, out, summary
     return shared_value(tmp_path_factory, "firmware_run", run)
+
+
+@pytest.fixture(scope="session")
+def golden_card(tmp_path_factory, assets) -> Callable[[str], Path]:
+    """golden_card(name): the card of a golden scene (golden_scenes.scene_card), built once for the
+    whole session (the end-to-end and the reference tests both read each one; boards open cards
+    read-only)."""
+    from golden_scenes import scene_card, scene_card_path
+
+    def card(name: str) -> Path:
+        folder = shared_by_workers(tmp_path_factory, f"golden-card-{name}",
+                                   lambda folder: scene_card(name, folder, assets))
+        return scene_card_path(name, folder)
+    return card
 
 
 def make_card(folder: Path, files: dict[str, bytes]) -> Path:

@@ -46,6 +46,11 @@ SCENES: dict[str, tuple[dict[str, str] | None, int]] = {
 }
 
 
+def scene_card_path(name: str, folder: Path) -> Path:
+    """Where scene_card(name, folder) puts the card."""
+    return DEFAULT_CARD if SCENES[name][0] is None else folder / f"{name}.img"
+
+
 def scene_card(name: str, folder: Path, assets: Path | None = None) -> Path:
     """The card for a golden scene (built in `folder` unless it is the default card), from the
     generated models and textures in `assets` (tools/make_assets.py's output), or else generated
@@ -59,6 +64,6 @@ def scene_card(name: str, folder: Path, assets: Path | None = None) -> Path:
         assets = folder / "assets"
         if not assets.exists():
             subprocess.run([sys.executable, str(ROOT / "tools" / "make_assets.py"), str(assets)], check=True)
-    card = folder / f"{name}.img"
+    card = scene_card_path(name, folder)
     build_image(card, [assets / "models", assets / "textures"], scene=scene, force=True)
     return card

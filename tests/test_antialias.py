@@ -5,6 +5,7 @@ alike by the firmware and the host tools. (Golden frames: tests/golden_scenes.py
 against two: tests/test_both_harts_draw.py; extremes and memory: tests/test_extremes.py.)"""
 from __future__ import annotations
 
+import functools
 import sys
 from pathlib import Path
 
@@ -12,7 +13,7 @@ import numpy as np
 import pytest
 
 import reference
-from conftest import ROOT
+from conftest import ROOT, run_together, shared_value
 from extremes_support import check_scene_key_agreement, outline_mask, run_scene
 
 sys.path.insert(0, str(ROOT / "tools"))
@@ -48,16 +49,19 @@ def psnr(a: np.ndarray, b: np.ndarray) -> float:
 
 @pytest.fixture(scope="module")
 def runs(firmware, tmp_path_factory):
-    """Each scene with every antialias setting, and the ideal image of its last frame."""
-    done = {}
-    for name, (model, keys) in SCENES.items():
-        for setting in SETTINGS:
-            run = run_scene(firmware, tmp_path_factory.mktemp(f"{name}-{setting}"), model,
-                            keys + f"antialias = {setting}\n", frames=FRAMES)
-            assert run.returncode == 0, run.stderr + run.console
-            done[name, setting] = run
-        scene, mesh, texture = reference.load_card_image(done[name, "off"].card)
-        done[name, "ideal"] = reference.render_ideal_image(scene, mesh, texture, FRAMES - 1)
+    """Each scene with every antialias setting, and the ideal image of its last frame (made once
+    for all xdist workers)."""
+    def make(folder: Path) -> dict:
+        done = run_together({(name, setting): functools.partial(
+            run_scene, firmware, folder / f"{name}-{setting}", model, keys + f"antialias = {setting}\n", frames=FRAMES)
+            for name, (model, keys) in SCENES.items() for setting in SETTINGS})
+        for name in SCENES:
+            scene, mesh, texture = reference.load_card_image(done[name, "off"].card)
+            done[name, "ideal"] = reference.render_ideal_image(scene, mesh, texture, FRAMES - 1)
+        return done
+    done = shared_value(tmp_path_factory, "antialias_runs", make)
+    failed = [run.stderr + run.console for key, run in done.items() if key[1] != "ideal" and run.returncode != 0]
+    assert not failed, failed
     return done
 
 
@@ -126,12 +130,19 @@ WIREFRAME_GAIN_MIN_DB = 10.0
 
 @pytest.fixture(scope="module")
 def wire_runs(firmware, tmp_path_factory):
+    """The wireframe with every antialias setting, and the ideal image of its last frame (made
+    once for all xdist workers)."""
     model, keys = WIREFRAME
-    done = {setting: run_scene(firmware, tmp_path_factory.mktemp(f"wire-{setting}"), model,
-                               keys + f"antialias = {setting}\n", frames=FRAMES) for setting in SETTINGS}
-    assert all(run.returncode == 0 for run in done.values()), [run.stderr for run in done.values()]
-    scene, mesh, texture = reference.load_card_image(done["off"].card)
-    done["ideal"] = reference.render_ideal_image(scene, mesh, texture, FRAMES - 1)
+
+    def make(folder: Path) -> dict:
+        done = run_together({setting: functools.partial(run_scene, firmware, folder / f"wire-{setting}", model,
+                                                         keys + f"antialias = {setting}\n", frames=FRAMES)
+                             for setting in SETTINGS})
+        scene, mesh, texture = reference.load_card_image(done["off"].card)
+        done["ideal"] = reference.render_ideal_image(scene, mesh, texture, FRAMES - 1)
+        return done
+    done = shared_value(tmp_path_factory, "antialias_wire_runs", make)
+    assert all(done[setting].returncode == 0 for setting in SETTINGS), [done[s].stderr for s in SETTINGS]
     return done
 
 

@@ -6,6 +6,7 @@ drawing takes longer than the LCD's transfer; the scene key is read alike by the
 host tools."""
 from __future__ import annotations
 
+import functools
 import json
 import sys
 from pathlib import Path
@@ -13,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import shared_value
+from conftest import run_together, shared_value
 from extremes_support import check_scene_key_agreement, run_scene
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -110,13 +111,12 @@ def runs(firmware, tmp_path_factory):
     """Each scene with harts = 1 and harts = 2, and the plain one with the default (auto): made
     once for all xdist workers."""
     def make(folder: Path) -> dict:
-        done = {}
-        for name, (model, texels, keys, frames) in SCENES.items():
-            for harts in ("1", "2"):
-                done[name, harts] = run_scene(firmware, folder / f"{name}-{harts}", model, keys + f"harts = {harts}\n",
-                                              texture=texels, frames=frames)
-        done["plain", "auto"] = run_scene(firmware, folder / "plain-auto", MODEL, BIG, texture=TEXTURE, frames=FRAMES)
-        return done
+        jobs = {(name, harts): functools.partial(run_scene, firmware, folder / f"{name}-{harts}", model,
+                                                 keys + f"harts = {harts}\n", texture=texels, frames=frames)
+                for name, (model, texels, keys, frames) in SCENES.items() for harts in ("1", "2")}
+        jobs["plain", "auto"] = functools.partial(run_scene, firmware, folder / "plain-auto", MODEL, BIG,
+                                                  texture=TEXTURE, frames=FRAMES)
+        return run_together(jobs)
     return shared_value(tmp_path_factory, "both_harts_runs", make)
 
 

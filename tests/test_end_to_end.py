@@ -15,7 +15,7 @@ from PIL import Image
 
 from conftest import GOLDEN, GOLDEN_FRAMES, ROOT, run_emulator
 
-from golden_scenes import SCENES, scene_card
+from golden_scenes import SCENES
 
 BOOT_STAGES = ["boot: hart 0 up", "clocks:", "pins:", "lcd: ST7789V ready", "hart 1: display loop"]
 
@@ -103,7 +103,7 @@ def test_console_has_a_line_per_boot_stage(firmware_run):
 
 
 @pytest.mark.parametrize("name", SCENES)
-def test_scene_matches_its_golden_frames(name, firmware, assets, firmware_run, tmp_path):
+def test_scene_matches_its_golden_frames(name, firmware, golden_card, firmware_run, tmp_path):
     """Every golden scene, every frame, exactly (regenerate deliberately with `make goldens`).
     The default scene's run is the shared one (firmware_run: the default card with --golden)."""
     _, frames = SCENES[name]
@@ -111,7 +111,7 @@ def test_scene_matches_its_golden_frames(name, firmware, assets, firmware_run, t
         result, out, summary = firmware_run
         assert frames == GOLDEN_FRAMES and len(summary["golden"]["frames"]) == frames
     else:
-        card = scene_card(name, tmp_path, assets)
+        card = golden_card(name)
         out = tmp_path / "out"
         result = run_emulator("run", str(firmware), "--sd", str(card), "--frames", str(frames), "--out", str(out),
                               "--quiet", "--golden", str(GOLDEN / name))

@@ -17,7 +17,7 @@ ROOT = Path(__file__).resolve().parent.parent
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from golden_scenes import DEFAULT_CARD, GOLDEN, SCENES, scene_card  # noqa: E402
+from golden_scenes import DEFAULT_CARD, GOLDEN, SCENES  # noqa: E402
 from reference import (Mesh, ModelError, Scene, SceneError, TextureError, load_card_image,  # noqa: E402
                        load_files, parse_obj, parse_ppm, parse_scene, render_frame, render_ideal_frame,
                        render_image)
@@ -525,13 +525,6 @@ def test_load_files_skips_the_texture_unless_textured(mode):
 
 # --------------------------------------------------------------------------- the firmware's goldens
 
-@pytest.fixture(scope="module")
-def golden_cards(tmp_path_factory):
-    """A folder for the golden scenes' cards (built from the `assets` fixture's models and
-    textures, generated afresh: a copy of build/assets could be older than tools/make_assets.py)."""
-    return tmp_path_factory.mktemp("reference-cards")
-
-
 def _agreement(mine: np.ndarray, theirs: np.ndarray) -> tuple[float, float, float]:
     """(share of identical pixels, share within 8 levels per channel, PSNR in dB) of two RGB images."""
     mine, theirs = mine.astype(int), theirs.astype(int)
@@ -548,7 +541,7 @@ def _without_normals(mesh: Mesh) -> Mesh:
 
 
 @pytest.mark.parametrize("name", sorted(SCENES))
-def test_first_golden_frame_agrees_loosely_with_the_firmware(name, golden_cards, assets):
+def test_first_golden_frame_agrees_loosely_with_the_firmware(name, golden_card):
     """A convention check (projection, coverage, texel addressing, lighting formula), so the
     reference is compared lit per face, like the firmware's flat shading: its ideal lights per
     pixel from the vertex normals, which on the torus's smooth normals is a real difference in
@@ -560,7 +553,7 @@ def test_first_golden_frame_agrees_loosely_with_the_firmware(name, golden_cards,
             pytest.skip("no build/card.img (make card)")
         card = DEFAULT_CARD
     else:
-        card = scene_card(name, golden_cards, assets)
+        card = golden_card(name)
     scene, mesh, texture = load_card_image(card)
     golden = np.asarray(Image.open(GOLDEN / name / "frame_0000.png").convert("RGB"))
     per_face = render_image(scene, _without_normals(mesh), texture, 0)

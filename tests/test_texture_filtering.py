@@ -4,6 +4,7 @@ against the ideal image (reference/ideal.py), where a minified checkerboard show
 filters buy: nearest texels alias, bilinear less, the mip chain averages it to grey."""
 from __future__ import annotations
 
+import functools
 import json
 from pathlib import Path
 
@@ -12,7 +13,7 @@ import pytest
 from PIL import Image
 
 import reference
-from conftest import make_card, run_emulator, shared_value
+from conftest import make_card, run_emulator, run_together, shared_value
 
 FILTERS = ("nearest", "bilinear", "mipmap")
 
@@ -64,17 +65,19 @@ FAR = {"ambient": "1", "translate": "0 0 -6", "axis": "1 0 0", "angle": "-60", "
 def magnified_runs(firmware, tmp_path_factory):
     """Each filter on the magnified texture (made once for all xdist workers)."""
     texture = _ppm(np.random.default_rng(3).integers(0, 256, (16, 16, 3)))
-    return shared_value(tmp_path_factory, "magnified_runs", lambda folder: {
-        name: run(firmware, folder / name, quad(), texture, {**MAGNIFIED, "filter": name}, frames=2)
-        for name in FILTERS})
+    return shared_value(tmp_path_factory, "magnified_runs", lambda folder: run_together({
+        name: functools.partial(run, firmware, folder / name, quad(), texture, {**MAGNIFIED, "filter": name}, frames=2)
+        for name in FILTERS}))
 
 
 @pytest.fixture(scope="module")
 def far_runs(firmware, tmp_path_factory):
+    """Each filter on the far checkerboard (made once for all xdist workers)."""
     check = np.indices((256, 256)).sum(axis=0) % 2 * 255
     texture = _ppm(np.repeat(check[..., None], 3, axis=-1))
-    return {name: run(firmware, tmp_path_factory.mktemp(f"far-{name}"), quad(), texture, {**FAR, "filter": name})
-            for name in FILTERS}
+    return shared_value(tmp_path_factory, "far_runs", lambda folder: run_together({
+        name: functools.partial(run, firmware, folder / f"far-{name}", quad(), texture, {**FAR, "filter": name})
+        for name in FILTERS}))
 
 
 # Pixels (of about 24 000) where a channel is more than one RGB565 step from the reference's:
