@@ -25,6 +25,7 @@ from sdcard_image import (BadInputError, CorruptImageError, ImageTooSmallError, 
                           UsageError, build_image, list_image, read_file)
 from sdcard_image import cli, fat32, image as image_mod, layouts
 from sdcard_image.convert import CardPlan, PlacedFile
+from reference.obj import parse_obj
 from sdcard_image.objcheck import check_obj
 from sdcard_image.ppm import parse_ppm
 
@@ -536,6 +537,24 @@ def test_obj_errors_name_file_and_line(text, line, message):
     assert str(info.value).startswith(f"m.obj:{line}: {message}")
     assert str(info.value).endswith("(firmware error 10)")
     assert "vertexs" not in str(info.value)
+
+
+def test_a_model_is_parsed_once_a_process_and_a_refused_one_each_time(monkeypatch):
+    """Cards built one after another from the same models (the bench, the tests) parse each model
+    once; a refused model is parsed and named again every time."""
+    from sdcard_image import objcheck
+    parsed = []
+    monkeypatch.setattr(objcheck, "parse_obj", lambda data: parsed.append(data) or parse_obj(data))
+    monkeypatch.setattr(objcheck, "_PASSED", {})
+    model = CUBE_OBJ + b"# this test's own copy\n"
+    assert check_obj(model, "a.obj") == check_obj(model, "b.obj")
+    assert len(parsed) == 1
+    assert check_obj(model + b"\n").triangles == 7 and len(parsed) == 2    # other bytes: parsed
+    broken = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n"
+    for name in ("x.obj", "y.obj"):
+        with pytest.raises(BadInputError, match=f"^{name}:4: vertex index out of range"):
+            check_obj(broken, name)
+    assert len(parsed) == 4
 
 
 def test_bad_obj_on_command_line_exits_3_with_line(tmp_path):
