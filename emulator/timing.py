@@ -406,18 +406,23 @@ def _table_bounds(code_ranges: list[tuple[int, bytes]]) -> tuple[int, int]:
 def _read_cached(digest: str, code_ranges: list[tuple[int, bytes]]) -> CycleTable | None:
     """The table kept under `digest`, or None when there is none of the right length."""
     base, slots = _table_bounds(code_ranges)
+    path = table_cache_folder() / f"{digest}.u32"
     try:
-        entries = np.fromfile(table_cache_folder() / f"{digest}.u32", dtype="<u4")
+        entries = np.fromfile(path, dtype="<u4")
     except (OSError, ValueError):
         return None
     if len(entries) != slots:
         return None
+    try:
+        os.utime(path)              # the tables kept are the ones used last, not written last
+    except OSError:
+        pass
     return CycleTable(base, entries.astype(np.uint32))
 
 
 def _write_cached(digest: str, table: CycleTable) -> None:
     """Writes the table under its digest (whole or not at all: another process may be reading)
-    and keeps only the newest _CACHE_FILES_KEPT tables."""
+    and keeps only the _CACHE_FILES_KEPT tables used last."""
     folder = table_cache_folder()
     part = None
     try:

@@ -10,6 +10,7 @@ instructions cost.
 from __future__ import annotations
 
 import json
+import os
 
 import pytest
 
@@ -214,8 +215,10 @@ def test_a_built_cycle_table_is_kept_on_disk_and_read_back(firmware, tmp_path, m
     built, builds = build_table(code)
     kept = list(cache.glob("*.u32"))
     assert builds == 1 and len(kept) == 1 and kept[0].stat().st_size == 4 * len(built.entries)
+    os.utime(kept[0], (1, 1))
     read, builds = build_table(code)
     assert builds == 0 and read.base == built.base and (read.entries == built.entries).all()
+    assert kept[0].stat().st_mtime > 1                        # a table read is kept as one used last
 
     kept[0].write_bytes(kept[0].read_bytes()[:-4])          # cut short: not taken, written again
     again, builds = build_table(code)
