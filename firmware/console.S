@@ -9,10 +9,11 @@
 # hart 0 prints about 450 bytes while it loads the card, 39 ms in all. So
 # during start-up (console_relay_start .. console_relay_stop) what any hart
 # prints goes into console_ring, and hart 1, which meanwhile sleeps through the
-# LCD's waits, copies it to the UART (console_wait_us, every
-# CONSOLE_RELAY_POLL_US); once the LCD is up it sleeps until hart 0 puts a
-# byte into the empty ring, which raises hart 1's software interrupt
-# (console_relay_until), until frame 0 is ready. The ring is only ever
+# LCD's waits, copies it to the UART (console_wait_us); during those waits
+# and once the LCD is up (console_relay_until, until frame 0 is ready) it
+# sleeps until hart 0 puts a byte into the empty ring, which raises hart 1's
+# software interrupt, and looks again every CONSOLE_RELAY_POLL_US only while
+# bytes wait for room in the UART's FIFO. The ring is only ever
 # touched with the console lock held, and whoever holds the lock may move
 # bytes from it to the UART: a hart that finds it full sends its oldest byte
 # itself. When the relay stops (hart 1's LCD is up, or a fatal error or a trap
@@ -99,7 +100,8 @@ console_putc:
     addiw   t1, t1, 1
     sw      t1, 0(t0)
     # The first byte in an empty ring wakes the relaying hart if it sleeps
-    # in console_relay_until (its software interrupt; it clears it itself).
+    # in console_wait_us or console_relay_until (its software interrupt; it
+    # clears it itself).
     bnez    t5, 7f
     srli    t3, tp, HART_LOCAL_SHIFT    # mhartid (boot.S)
     li      t4, CONSOLE_RELAY_HART
@@ -230,32 +232,64 @@ console_relay_stop:
     .globl console_wait_us
 # console_wait_us
 #   What: waits at least a0 microseconds (asleep in WFI), meanwhile sending
-#         what the relay's ring holds every CONSOLE_RELAY_POLL_US, so the UART
-#         never runs dry while there is something to send.
+#         what the relay's ring holds, so the UART never runs dry while there
+#         is something to send: woken by this hart's software interrupt (the
+#         other hart raises it when it puts a byte into the empty ring) and,
+#         while bytes wait for room in the FIFO, every CONSOLE_RELAY_POLL_US.
+#         An empty ring costs no wake-ups until the wait ends.
 #   Arguments: a0 = microseconds.
 #   Results: none.
-#   Clobbers: only ABI temporaries.
+#   Clobbers: only ABI temporaries. Leaves this hart's msip clear and its
+#         timer off.
 console_wait_us:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
-    sd      s0, 0(sp)
+    addi    sp, sp, -32
+    sd      ra, 24(sp)
+    sd      s0, 16(sp)
+    sd      s1, 8(sp)
+    sd      s2, 0(sp)
     call    timer_deadline
     mv      s0, a0                      # s0 = the wait's end (mtime)
-1:  call    console_lock
+    srli    t0, tp, HART_LOCAL_SHIFT    # mhartid (boot.S)
+    slli    t1, t0, CLINT_MSIP_SHIFT
+    li      s1, CLINT_MSIP
+    add     s1, s1, t1                  # s1 = &msip[this hart]
+    slli    t1, t0, CLINT_MTIMECMP_SHIFT
+    li      s2, CLINT_MTIMECMP
+    add     s2, s2, t1                  # s2 = &mtimecmp[this hart]
+    li      t0, MIE_MSIE | MIE_MTIE
+    csrs    mie, t0
+1:  sw      zero, 0(s1)
+    fence                               # the clear lands before the ring is read
+    call    console_lock
     call    console_pump
     call    console_unlock
     mv      a0, s0
     call    timer_expired
     bnez    a0, 2f
+    # Bytes left (the FIFO was full): look again in CONSOLE_RELAY_POLL_US, or
+    # at the end if that comes first. None: sleep to the end unless signalled.
+    la      t0, console_ring_head
+    lw      t1, 0(t0)
+    la      t0, console_ring_tail
+    lw      t2, 0(t0)
+    mv      a0, s0
+    beq     t1, t2, 3f
     li      a0, CONSOLE_RELAY_POLL_US
     call    timer_deadline
     bltu    a0, s0, 3f
-    mv      a0, s0                      # the last piece ends with the wait
-3:  call    delay_until
+    mv      a0, s0
+3:  sd      a0, 0(s2)                   # (also drops an earlier MTIP)
+    wfi
     j       1b
-2:  ld      s0, 0(sp)
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+2:  li      t0, MTIMECMP_NEVER
+    sd      t0, 0(s2)                   # drops MTIP before MTIE goes away
+    li      t0, MIE_MSIE | MIE_MTIE
+    csrc    mie, t0
+    ld      s2, 0(sp)
+    ld      s1, 8(sp)
+    ld      s0, 16(sp)
+    ld      ra, 24(sp)
+    addi    sp, sp, 32
     ret
 
     .globl console_relay_until

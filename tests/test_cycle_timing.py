@@ -241,14 +241,15 @@ def test_an_unknown_timing_model_is_refused():
 
 
 # The default card's first frames under the model before cycle timing (commit 53f433e, this
-# firmware and card, taken again on the firmware that reads SD blocks with a lookahead):
+# firmware and card, taken again on the firmware whose hart 1 sleeps through the LCD's waits until
+# hart 0 prints):
 # virtual time each frame reached the LCD, and hart 0's and hart 1's instructions since the previous
 # frame. --timing ipc1 must reproduce them exactly. (A change to
 # the firmware or to the card changes them on purpose: take them again by running commit 53f433e's
 # emulator, `python -m emulator run build/firmware.elf --sd build/card.img --frames 4`, on the new
 # firmware and card.)
-BEFORE_CYCLES = [(0.13367447948717934, [12045841, 28319]), (0.1451173926385435, [1022976, 3286]),
-                 (0.1527416333333326, [1022182, 718]), (0.1603658740281217, [1039464, 718])]
+BEFORE_CYCLES = [(0.1336744794871794, [12045745, 13286]), (0.1448569956162111, [1022976, 3115]),
+                 (0.1524812363110002, [1022182, 718]), (0.16010547700578928, [1039464, 718])]
 
 
 def test_ipc1_reproduces_the_model_before_cycle_timing(firmware, card, firmware_run, tmp_path):
