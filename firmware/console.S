@@ -249,42 +249,17 @@ console_wait_us:
     sd      s2, 0(sp)
     call    timer_deadline
     mv      s0, a0                      # s0 = the wait's end (mtime)
-    srli    t0, tp, HART_LOCAL_SHIFT    # mhartid (boot.S)
-    slli    t1, t0, CLINT_MSIP_SHIFT
-    li      s1, CLINT_MSIP
-    add     s1, s1, t1                  # s1 = &msip[this hart]
-    slli    t1, t0, CLINT_MTIMECMP_SHIFT
-    li      s2, CLINT_MTIMECMP
-    add     s2, s2, t1                  # s2 = &mtimecmp[this hart]
-    li      t0, MIE_MSIE | MIE_MTIE
-    csrs    mie, t0
+    call    console_relay_sleep_begin
+    mv      s1, a0                      # s1 = &msip[this hart]
+    mv      s2, a1                      # s2 = &mtimecmp[this hart]
 1:  sw      zero, 0(s1)
     fence                               # the clear lands before the ring is read
-    call    console_lock
-    call    console_pump
-    call    console_unlock
     mv      a0, s0
-    call    timer_expired
-    bnez    a0, 2f
-    # Bytes left (the FIFO was full): look again in CONSOLE_RELAY_POLL_US, or
-    # at the end if that comes first. None: sleep to the end unless signalled.
-    la      t0, console_ring_head
-    lw      t1, 0(t0)
-    la      t0, console_ring_tail
-    lw      t2, 0(t0)
-    mv      a0, s0
-    beq     t1, t2, 3f
-    li      a0, CONSOLE_RELAY_POLL_US
-    call    timer_deadline
-    bltu    a0, s0, 3f
-    mv      a0, s0
-3:  sd      a0, 0(s2)                   # (also drops an earlier MTIP)
-    wfi
-    j       1b
-2:  li      t0, MTIMECMP_NEVER
-    sd      t0, 0(s2)                   # drops MTIP before MTIE goes away
-    li      t0, MIE_MSIE | MIE_MTIE
-    csrc    mie, t0
+    mv      a1, s2
+    call    console_relay_nap
+    beqz    a0, 1b
+    mv      a0, s2
+    call    console_relay_sleep_end
     ld      s2, 0(sp)
     ld      s1, 8(sp)
     ld      s0, 16(sp)
@@ -315,15 +290,9 @@ console_relay_until:
     sd      s3, 8(sp)
     mv      s0, a0
     mv      s1, a1
-    srli    t0, tp, HART_LOCAL_SHIFT    # mhartid (boot.S)
-    slli    t1, t0, CLINT_MSIP_SHIFT
-    li      s2, CLINT_MSIP
-    add     s2, s2, t1                  # s2 = &msip[this hart]
-    slli    t1, t0, CLINT_MTIMECMP_SHIFT
-    li      s3, CLINT_MTIMECMP
-    add     s3, s3, t1                  # s3 = &mtimecmp[this hart]
-    li      t0, MIE_MSIE | MIE_MTIE
-    csrs    mie, t0
+    call    console_relay_sleep_begin
+    mv      s2, a0                      # s2 = &msip[this hart]
+    mv      s3, a1                      # s3 = &mtimecmp[this hart]
 1:  sw      zero, 0(s2)
     fence                               # the clear lands before the reads
     la      t0, halt_request
@@ -331,29 +300,15 @@ console_relay_until:
     bnez    t0, 3f
     lw      t0, 0(s0)
     beq     t0, s1, 2f
-    call    console_lock
-    call    console_pump
-    call    console_unlock
-    # Bytes left (the FIFO was full): look again in CONSOLE_RELAY_POLL_US.
-    # None: sleep until signalled (a byte added since our read signals).
-    la      t0, console_ring_head
-    lw      t1, 0(t0)
-    la      t0, console_ring_tail
-    lw      t2, 0(t0)
-    li      a0, MTIMECMP_NEVER
-    beq     t1, t2, 4f
-    li      a0, CONSOLE_RELAY_POLL_US
-    call    timer_deadline
-4:  sd      a0, 0(s3)                   # (also drops an earlier MTIP)
-    wfi
+    li      a0, MTIMECMP_NEVER          # no end: only a signal (or bytes left) wakes it
+    mv      a1, s3
+    call    console_relay_nap
     j       1b
 2:  li      s1, 0
     j       5f
 3:  li      s1, 1
-5:  li      t0, MTIMECMP_NEVER
-    sd      t0, 0(s3)                   # drops MTIP before MTIE goes away
-    li      t0, MIE_MSIE | MIE_MTIE
-    csrc    mie, t0
+5:  mv      a0, s3
+    call    console_relay_sleep_end
     fence   r, rw                       # acquire: what was written before the word
     mv      a0, s1
     ld      s3, 8(sp)
@@ -362,6 +317,82 @@ console_relay_until:
     ld      s0, 32(sp)
     ld      ra, 40(sp)
     addi    sp, sp, 48
+    ret
+
+# console_relay_sleep_begin (file-local)
+#   What: lets this hart's software interrupt and timer wake it from WFI
+#         (mie.MSIE, mie.MTIE; mstatus.MIE stays as it is), for the relay's
+#         sleeps (console_relay_nap).
+#   Arguments: none.
+#   Results: a0 = &msip[this hart], a1 = &mtimecmp[this hart].
+#   Clobbers: only ABI temporaries.
+console_relay_sleep_begin:
+    srli    t0, tp, HART_LOCAL_SHIFT    # mhartid (boot.S)
+    slli    t1, t0, CLINT_MSIP_SHIFT
+    li      a0, CLINT_MSIP
+    add     a0, a0, t1
+    slli    t1, t0, CLINT_MTIMECMP_SHIFT
+    li      a1, CLINT_MTIMECMP
+    add     a1, a1, t1
+    li      t0, MIE_MSIE | MIE_MTIE
+    csrs    mie, t0
+    ret
+
+# console_relay_sleep_end (file-local)
+#   What: ends the relay's sleeps: this hart's timer off (which drops MTIP
+#         before MTIE goes away), mie.MSIE and mie.MTIE clear.
+#   Arguments: a0 = &mtimecmp[this hart].
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+console_relay_sleep_end:
+    li      t0, MTIMECMP_NEVER
+    sd      t0, 0(a0)
+    li      t0, MIE_MSIE | MIE_MTIE
+    csrc    mie, t0
+    ret
+
+# console_relay_nap (file-local)
+#   What: one round of the relay's sleep: sends what the ring holds as the
+#         UART's FIFO takes it; then, unless mtime has reached a0, sleeps in
+#         WFI until this hart's software interrupt, a0, or (bytes left: the
+#         FIFO was full) CONSOLE_RELAY_POLL_US from now, whichever comes
+#         first. The caller has cleared its msip before reading what it waits
+#         for (a byte added since then signals) and called
+#         console_relay_sleep_begin.
+#   Arguments: a0 = the latest wake-up (mtime; MTIMECMP_NEVER: none),
+#         a1 = &mtimecmp[this hart].
+#   Results: a0 = 1 when mtime had reached a0 (no sleep), else 0.
+#   Clobbers: only ABI temporaries.
+console_relay_nap:
+    addi    sp, sp, -32
+    sd      ra, 24(sp)
+    sd      s0, 16(sp)
+    sd      s1, 8(sp)
+    mv      s0, a0
+    mv      s1, a1
+    call    console_lock
+    call    console_pump
+    call    console_unlock
+    mv      a0, s0
+    call    timer_expired
+    bnez    a0, 2f
+    la      t0, console_ring_head
+    lw      t1, 0(t0)
+    la      t0, console_ring_tail
+    lw      t2, 0(t0)
+    mv      a0, s0
+    beq     t1, t2, 1f
+    li      a0, CONSOLE_RELAY_POLL_US
+    call    timer_deadline
+    bltu    a0, s0, 1f
+    mv      a0, s0
+1:  sd      a0, 0(s1)                   # (also drops an earlier MTIP)
+    wfi
+    li      a0, 0
+2:  ld      s1, 8(sp)
+    ld      s0, 16(sp)
+    ld      ra, 24(sp)
+    addi    sp, sp, 32
     ret
 
     .globl console_put_hex64
