@@ -1974,6 +1974,391 @@ raster_aa_line:
     ble     t1, t2, 6b
 9:  ret
 
+    .globl raster_set_union
+# raster_set_union
+#   What: antialias = supersample, wireframe: sets the union lines' buffer
+#         (render.inc WIRE_*) and clears it: every cell 0, every row's span
+#         empty. raster_union_resolve leaves it so again after each frame.
+#   Arguments: a0 = the buffer (WIRE_BUFFER_BYTES, 8-aligned).
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+raster_set_union:
+    la      t0, raster_union
+    sd      a0, 0(t0)
+    li      t1, WIRE_CELLS_BYTES
+    add     t1, t1, a0
+1:  sd      zero, 0(a0)
+    sd      zero, 8(a0)
+    addi    a0, a0, WIRE_PIXEL_BYTES
+    bltu    a0, t1, 1b
+    li      t1, LCD_HEIGHT
+    li      t2, WIRE_SPAN_EMPTY
+2:  sw      t2, 0(a0)
+    addi    a0, a0, WIRE_SPAN_BYTES
+    addi    t1, t1, -1
+    bnez    t1, 2b
+    ret
+
+# WIRE_MERGE cell, fl, fh: adds [fl, fh] (1/64 of a pixel, 0 <= fl < fh <=
+# WIRE_CELL_FULL) to the cell at address \cell (render.inc WIRE_*): the
+# union kept as the extents [0, L] and [1 - R, 1]. Clobbers t5, t6, a4, a5.
+.macro WIRE_MERGE cell, fl, fh
+    lhu     t5, 0(\cell)
+    andi    t6, t5, WIRE_CELL_L_MASK    # t6 = L
+    srli    t5, t5, WIRE_CELL_R_SHIFT   # t5 = R
+    li      a4, WIRE_CELL_FULL
+    bnez    \fl, 81f
+    bgeu    t6, \fh, 85f                # from the left side: L = max(L, fh)
+    mv      t6, \fh
+    j       85f
+81: bne     \fh, a4, 82f
+    sub     a5, a4, \fl                 # to the right side: R = max(R, 64 - fl)
+    bgeu    t5, a5, 85f
+    mv      t5, a5
+    j       85f
+82: bltu    t6, \fl, 83f
+    bgeu    t6, \fh, 85f                # overlapping [0, L]
+    mv      t6, \fh
+    j       85f
+83: sub     a5, a4, t5
+    bltu    \fh, a5, 84f
+    sub     a5, a4, \fl                 # overlapping [1 - R, 1]
+    bgeu    t5, a5, 85f
+    mv      t5, a5
+    j       85f
+84: sub     a5, \fh, \fl                # touching neither (a round end): its
+    bltu    t5, t6, 86f                 # length to the smaller extent
+    add     t6, t6, a5
+    j       85f
+86: add     t5, t5, a5
+85: add     a5, t6, t5
+    bltu    a5, a4, 87f
+    mv      t6, a4                      # all of it
+    li      t5, 0
+87: slli    t5, t5, WIRE_CELL_R_SHIFT
+    or      t5, t5, t6
+    sh      t5, 0(\cell)
+.endm
+
+    .globl raster_union_line
+# raster_union_line
+#   What: antialias = supersample, wireframe: adds a line 1 pixel wide (the
+#         points within half a pixel of the segment, its round ends
+#         included: the ideal wireframe's capsule) to the union lines'
+#         cells (render.inc WIRE_*; raster_set_union). Per sub-row y = (j +
+#         1/2) / 8 the capsule's crossing, exact along x: the hull of its
+#         crossings with the end discs (x_e -+ sqrt(1/4 - (y - y_e)^2))
+#         and with the rectangle the segment sweeps, the strip within half
+#         a pixel of its line (x = x_a + (y - y_a) dx / dy -+ |s| / (2 |dy|))
+#         cut by the slab of points projecting onto it (x = x_a - (y - y_a)
+#         dy / dx, + |s|^2 / dx); a horizontal strip or a vertical slab
+#         bounds y instead of x. The crossing, clamped to the screen and in
+#         1/64 pixel, is merged into each pixel's cell (WIRE_MERGE; the
+#         pixels wholly inside set full) and the row's span widened. Rows
+#         are clamped to the screen, so any finite ends are safe; nothing
+#         is drawn until raster_union_resolve. In the middle of a line
+#         (no disc or slab reaching beyond the strip) only the strip is
+#         computed. Register use: a leaf, all temporaries, s0 and s1 saved.
+#   Arguments: fa0, fa1 = one end, fa2, fa3 = the other, screen positions in
+#              pixels (pixel (x, y) covers [x, x + 1) x [y, y + 1), y down).
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+raster_union_line:
+    addi    sp, sp, -16
+    sd      s0, 8(sp)
+    sd      s1, 0(sp)
+    li      s0, 1                       # s0 .. s1 = the middle sub-rows (none)
+    li      s1, 0
+    li      t0, F32_WIRE_FAR
+    fmv.w.x ft11, t0                    # ft11 = FAR
+    fneg.s  ft6, ft11                   # ft6, ft7 = the y - y_a range where
+    fmv.s   ft7, ft11                   # strip and slab cross the row
+    li      t0, F32_HALF
+    fmv.w.x ft8, t0                     # ft8 = 1/2 (for now)
+    fsub.s  ft9, fa2, fa0               # ft9 = dx
+    fsub.s  ft10, fa3, fa1              # ft10 = dy
+    fmul.s  fa4, ft9, ft9
+    fmadd.s fa4, ft10, ft10, fa4        # fa4 = |s|^2
+    fsqrt.s fa5, fa4                    # fa5 = |s|
+    fmv.w.x fa6, zero
+    feq.s   t1, ft9, fa6                # t1: dx = 0
+    feq.s   t2, ft10, fa6               # t2: dy = 0
+    and     t0, t1, t2
+    beqz    t0, 1f
+    fmv.s   ft6, ft11                   # a point: the discs only
+    fneg.s  ft7, ft11
+    j       3f
+    # the strip: ft0 = its x change per y, -ft2, ft2 = its sides' offsets
+1:  bnez    t2, 11f
+    fdiv.s  ft0, ft9, ft10
+    fabs.s  fa7, ft10
+    fdiv.s  ft2, fa5, fa7
+    fmul.s  ft2, ft2, ft8               # |s| / (2 |dy|)
+    # the middle: the sub-rows whose strip crossing lies inside the slab
+    # (its ends project m = |dx| / (2 |s|) from its centre's along y), where
+    # the ends' discs do not reach beyond it either: y - y_a in [min(0, dy)
+    # + m, max(0, dy) - m]
+    fabs.s  fa7, ft9
+    fdiv.s  fa7, fa7, fa5
+    fmul.s  fa7, fa7, ft8               # m
+    li      t0, F32_WIRE_SUBROWS
+    fmv.w.x ft3, t0                     # (8, for now)
+    fmin.s  ft1, ft10, fa6
+    fadd.s  ft1, ft1, fa7
+    fadd.s  ft1, ft1, fa1
+    fmul.s  ft1, ft1, ft3
+    fsub.s  ft1, ft1, ft8
+    fcvt.w.s s0, ft1, rup
+    fmax.s  ft1, ft10, fa6
+    fsub.s  ft1, ft1, fa7
+    fadd.s  ft1, ft1, fa1
+    fmul.s  ft1, ft1, ft3
+    fsub.s  ft1, ft1, ft8
+    fcvt.w.s s1, ft1, rdn
+    j       2f
+11: fmv.w.x ft0, zero                   # horizontal: |y - y_a| <= 1/2
+    fmv.s   ft2, ft11
+    fneg.s  ft6, ft8
+    fmv.s   ft7, ft8
+    # the slab: ft3 = its x change per y, ft4, ft5 = its sides' offsets
+2:  bnez    t1, 21f
+    fdiv.s  ft3, ft10, ft9
+    fneg.s  ft3, ft3
+    fdiv.s  fa7, fa4, ft9               # |s|^2 / dx
+    fmin.s  ft4, fa7, fa6
+    fmax.s  ft5, fa7, fa6
+    j       3f
+21: fmv.w.x ft3, zero                   # vertical: 0 <= (y - y_a) / dy <= 1
+    fneg.s  ft4, ft11
+    fmv.s   ft5, ft11
+    fmin.s  fa7, ft10, fa6
+    fmax.s  ft6, ft6, fa7
+    fmax.s  fa7, ft10, fa6
+    fmin.s  ft7, ft7, fa7
+    # the sub-rows j the capsule reaches, a0 .. a1 (clamped to the screen)
+3:  li      t0, F32_WIRE_SUBROWS
+    fmv.w.x ft9, t0                     # ft9 = 8
+    fmin.s  fa4, fa1, fa3
+    fsub.s  fa4, fa4, ft8
+    fmul.s  fa4, fa4, ft9
+    fsub.s  fa4, fa4, ft8
+    fcvt.w.s a0, fa4, rup               # first: ceil(8 (top - 1/2) - 1/2)
+    fmax.s  fa4, fa1, fa3
+    fadd.s  fa4, fa4, ft8
+    fmul.s  fa4, fa4, ft9
+    fsub.s  fa4, fa4, ft8
+    fcvt.w.s a1, fa4, rdn               # last: floor(8 (bottom + 1/2) - 1/2)
+    bgez    a0, 31f
+    li      a0, 0
+31: li      t0, WIRE_SUBROW_LAST
+    ble     a1, t0, 32f
+    mv      a1, t0
+32: bgt     a0, a1, 9f
+    slli    t0, a0, 1                   # fa4 = y = (2 j + 1) / 16, exact
+    addi    t0, t0, 1
+    fcvt.s.w fa4, t0
+    li      t0, F32_WIRE_HALF_SUBROW
+    fmv.w.x fa5, t0
+    fmul.s  fa4, fa4, fa5
+    li      t0, F32_WIRE_SUBROW
+    fmv.w.x ft9, t0                     # ft9 = 1/8, the step
+    li      t0, F32_WIRE_RADIUS2
+    fmv.w.x ft8, t0                     # ft8 = 1/4
+    li      t0, F32_AA_FULL
+    fmv.w.x ft10, t0                    # ft10 = 64
+    la      t0, raster_union
+    ld      a2, 0(t0)                   # a2 = the cells
+    li      t0, WIRE_CELLS_BYTES
+    add     a3, a2, t0                  # a3 = the spans
+    li      a7, WIRE_ROW_BYTES
+
+    # sub-row a0: fa7, fa6 = the crossing's low and high x (ft1, fa5
+    # scratch); in the middle, the strip's
+4:  blt     a0, s0, 40f
+    bgt     a0, s1, 40f
+    fsub.s  fa5, fa4, fa1
+    fmadd.s ft1, fa5, ft0, fa0
+    fsub.s  fa7, ft1, ft2
+    fadd.s  fa6, ft1, ft2
+    j       43f
+40: fneg.s  fa6, ft11
+    fmv.s   fa7, ft11
+    fsub.s  fa5, fa4, fa1               # y - y_a
+    flt.s   t0, fa5, ft6
+    bnez    t0, 41f
+    flt.s   t0, ft7, fa5
+    bnez    t0, 41f
+    fmadd.s ft1, fa5, ft0, fa0          # the strip
+    fsub.s  fa7, ft1, ft2
+    fadd.s  fa6, ft1, ft2
+    fmadd.s ft1, fa5, ft3, fa0          # the slab
+    fadd.s  fa5, ft1, ft4
+    fmax.s  fa7, fa7, fa5
+    fadd.s  fa5, ft1, ft5
+    fmin.s  fa6, fa6, fa5
+    flt.s   t0, fa6, fa7
+    beqz    t0, 41f
+    fneg.s  fa6, ft11                   # (an empty cut: nothing)
+    fmv.s   fa7, ft11
+41: fsub.s  fa5, fa4, fa1               # end a's disc: 1/4 - (y - y_a)^2
+    fnmsub.s fa5, fa5, fa5, ft8
+    fmv.w.x ft1, zero
+    flt.s   t0, fa5, ft1
+    bnez    t0, 42f
+    fsqrt.s fa5, fa5
+    fsub.s  ft1, fa0, fa5
+    fmin.s  fa7, fa7, ft1
+    fadd.s  ft1, fa0, fa5
+    fmax.s  fa6, fa6, ft1
+42: fsub.s  fa5, fa4, fa3               # end b's
+    fnmsub.s fa5, fa5, fa5, ft8
+    fmv.w.x ft1, zero
+    flt.s   t0, fa5, ft1
+    bnez    t0, 43f
+    fsqrt.s fa5, fa5
+    fsub.s  ft1, fa2, fa5
+    fmin.s  fa7, fa7, ft1
+    fadd.s  ft1, fa2, fa5
+    fmax.s  fa6, fa6, ft1
+43: flt.s   t0, fa7, fa6
+    beqz    t0, 8f                      # nothing on this sub-row
+    fmul.s  fa7, fa7, ft10
+    fcvt.w.s t1, fa7, rne               # t1 = low x, 1/64 pixel
+    fmul.s  fa6, fa6, ft10
+    fcvt.w.s t2, fa6, rne               # t2 = high x
+    bgez    t1, 44f
+    li      t1, 0
+44: li      t0, WIRE_X_END
+    ble     t2, t0, 45f
+    mv      t2, t0
+45: bge     t1, t2, 8f
+    mv      a6, t2                      # a6 = high x, clamped
+    # the pixels p0 = t3 .. p1 = t4 of row a0 >> 3, its sub-row a0 & 7
+    srli    t3, t1, WIRE_CELL_SHIFT
+    addi    t4, t2, -1
+    srli    t4, t4, WIRE_CELL_SHIFT
+    srli    t0, a0, WIRE_SUBROW_SHIFT
+    slli    t6, t0, WIRE_SPAN_SHIFT     # the row's span: [min, max]
+    add     t6, t6, a3
+    lhu     t5, WIRE_SPAN_FIRST(t6)
+    bleu    t5, t3, 46f
+    sh      t3, WIRE_SPAN_FIRST(t6)
+46: lhu     t5, WIRE_SPAN_END(t6)
+    addi    a4, t4, 1
+    bgeu    t5, a4, 47f
+    sh      a4, WIRE_SPAN_END(t6)
+47: mul     t0, t0, a7                  # the row's cells
+    add     t0, t0, a2
+    andi    t6, a0, WIRE_SUBROWS - 1
+    slli    t6, t6, 1                   # (WIRE_CELL_BYTES)
+    add     t0, t0, t6
+    slli    t6, t3, WIRE_PIXEL_SHIFT
+    add     t0, t0, t6                  # t0 = pixel p0's cell
+    slli    t6, t3, WIRE_CELL_SHIFT
+    sub     t1, t1, t6                  # t1 = fl in p0
+    sub     t2, t2, t6                  # t2 = fh in p0 (beyond 64: more pixels)
+    bne     t3, t4, 5f
+    WIRE_MERGE t0, t1, t2               # one pixel
+    j       8f
+5:  li      t2, WIRE_CELL_FULL
+    WIRE_MERGE t0, t1, t2               # p0: to its right side
+    li      t1, WIRE_CELL_FULL
+    sub     t3, t4, t3                  # the pixels after p0
+6:  addi    t0, t0, WIRE_PIXEL_BYTES
+    addi    t3, t3, -1
+    beqz    t3, 7f
+    sh      t1, 0(t0)                   # wholly inside (full: L 64, R 0)
+    j       6b
+7:  slli    t6, t4, WIRE_CELL_SHIFT     # p1: from its left side
+    sub     t2, a6, t6
+    WIRE_MERGE t0, zero, t2
+8:  fadd.s  fa4, fa4, ft9
+    addi    a0, a0, 1
+    ble     a0, a1, 4b
+9:  ld      s1, 0(sp)
+    ld      s0, 8(sp)
+    addi    sp, sp, 16
+    ret
+
+    .globl raster_union_resolve
+# raster_union_resolve
+#   What: antialias = supersample, wireframe: draws the union lines' pixels
+#         (raster_union_line) into the framebuffer, which holds the cleared
+#         background: each pixel within a row's span whose cells cover some
+#         of it, coverage a = its cells' sum / 8 in 1/64 (rounded), blends
+#         the line colour over the background (c a + bg (64 - a)) / 64,
+#         rounded per channel as the coverage fills. Its cells and the
+#         spans are cleared for the next frame.
+#   Arguments: a0 = the lines' RGB565 colour, a1 = the background's.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+raster_union_resolve:
+    li      t4, RGB565_SPREAD_MASK
+    slli    t3, a0, RGB565_SPREAD_SHIFT
+    or      t3, t3, a0
+    and     t3, t3, t4
+    slli    t5, a1, RGB565_SPREAD_SHIFT
+    or      t5, t5, a1
+    and     t5, t5, t4
+    sub     a3, t3, t5                  # a3 = (c - bg), spread
+    slli    a4, t5, AA_SHIFT
+    li      t6, LIGHT_ROUND_SPREAD
+    add     a4, a4, t6                  # a4 = bg 64 + the rounding
+    la      t0, raster_fb
+    ld      a0, 0(t0)                   # a0 = the framebuffer's row
+    la      t0, raster_union
+    ld      a1, 0(t0)                   # a1 = the row's cells
+    li      t0, WIRE_CELLS_BYTES
+    add     a2, a1, t0                  # a2 = its span
+    li      a5, LCD_HEIGHT
+    li      a6, WIRE_BYTE_LANES
+    li      a7, WIRE_LANE_SUM
+1:  lwu     t1, 0(a2)
+    srli    t2, t1, 16                  # (WIRE_SPAN_END)
+    slli    t1, t1, 48
+    srli    t1, t1, 48                  # t1 = first column, t2 = past the last
+    bgeu    t1, t2, 8f
+    li      t0, WIRE_SPAN_EMPTY
+    sw      t0, 0(a2)
+    slli    t0, t1, WIRE_PIXEL_SHIFT
+    add     t0, t0, a1                  # t0 = column t1's cells
+2:  ld      t3, 0(t0)
+    ld      t5, 8(t0)
+    or      t6, t3, t5
+    beqz    t6, 3f
+    sd      zero, 0(t0)
+    sd      zero, 8(t0)
+    add     t3, t3, t5                  # bytes: at most 2 x 64, no carry
+    srli    t5, t3, 8
+    and     t5, t5, a6
+    and     t3, t3, a6
+    add     t3, t3, t5                  # four u16 lanes
+    mul     t3, t3, a7
+    srli    t3, t3, WIRE_LANE_SUM_SHIFT # the sum, 1/512
+    addi    t3, t3, WIRE_SUM_ROUND
+    srli    t3, t3, WIRE_SUM_SHIFT      # a, 1/64
+    mul     t3, t3, a3
+    add     t3, t3, a4
+    srli    t3, t3, AA_SHIFT
+    and     t3, t3, t4
+    srli    t5, t3, RGB565_SPREAD_SHIFT
+    or      t3, t3, t5
+    xori    t5, t1, 1                   # the pixel's address (file comment)
+    slli    t5, t5, FB_PIXEL_SHIFT
+    add     t5, t5, a0
+    sh      t3, 0(t5)
+3:  addi    t0, t0, WIRE_PIXEL_BYTES
+    addi    t1, t1, 1
+    bltu    t1, t2, 2b
+8:  li      t0, FB_ROW_BYTES
+    add     a0, a0, t0
+    li      t0, WIRE_ROW_BYTES
+    add     a1, a1, t0
+    addi    a2, a2, WIRE_SPAN_BYTES
+    addi    a5, a5, -1
+    bnez    a5, 1b
+    ret
+
     .globl raster_line
 # raster_line
 #   What: a line between two on-screen pixels, both ends included
@@ -2041,6 +2426,10 @@ raster_mip_table:
     .space  8
 # antialias = supersample: the sums of the samples (raster_set_sums)
 raster_sums:
+    .space  8
+# antialias = supersample, wireframe: the union lines' cells and spans
+# (raster_set_union)
+raster_union:
     .space  8
 # Hart-local (k210.inc HART_LOCAL_STRIDE; tp selects the copy): the rows this
 # hart draws (raster_set_band), and filter = mipmap's rho^2 constant of the

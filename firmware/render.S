@@ -142,6 +142,15 @@ render_init:
     li      t2, MODE_WIREFRAME
     bne     t1, t2, 4f
     call    edges_build
+    # antialias = supersample: the union lines' cells
+    la      t0, render_fill
+    lwu     t0, 0(t0)
+    andi    t0, t0, RASTER_SUPERSAMPLE
+    beqz    t0, 9f
+    li      a0, WIRE_BUFFER_BYTES
+    la      a1, msg_wire_cells
+    call    heap_alloc_or_fail
+    call    raster_set_union
     j       9f
     # Triangles: the depth buffer, and the Gouraud intensities of the normals.
 4:  li      a0, DEPTH_BUFFER_BYTES
@@ -1357,17 +1366,28 @@ render_wireframe:
     fcvt.s.w fa3, a3
     fmul.s  fa3, fa3, ft0
     li      a0, WIRE_COLOUR
-    la      t0, scene                   # antialias: lines by coverage
-    lwu     t0, SCENE_ANTIALIAS(t0)
+    la      t0, scene                   # antialias: lines by coverage, or
+    lwu     t0, SCENE_ANTIALIAS(t0)     # (supersample) their union's
+    li      t1, ANTIALIAS_SUPERSAMPLE
+    beq     t0, t1, 6f
     li      t1, ANTIALIAS_OFF
     beq     t0, t1, 5f
     call    raster_aa_line
+    j       8f
+6:  call    raster_union_line
     j       8f
 5:  call    raster_segment
 8:  addi    s1, s1, EDGE_BYTES
     addi    s2, s2, -1
     bnez    s2, 1b
-9:  ld      s4, 16(sp)
+9:  la      t1, scene                   # supersample: the union drawn
+    lwu     t0, SCENE_ANTIALIAS(t1)
+    li      t2, ANTIALIAS_SUPERSAMPLE
+    bne     t0, t2, 10f
+    li      a0, WIRE_COLOUR
+    lwu     a1, SCENE_BACKGROUND(t1)
+    call    raster_union_resolve
+10: ld      s4, 16(sp)
     ld      s3, 24(sp)
     ld      s2, 32(sp)
     ld      s1, 40(sp)
@@ -1983,6 +2003,7 @@ clip_planes:
 .endif
 msg_edge_list:      .asciz "edge list"
 msg_supersample_sums: .asciz "supersample sums"
+msg_wire_cells:     .asciz "line coverage cells"
     .balign 4
 # The samples of antialias = supersample (render.inc SAMPLE_OFFSET_*): each
 # sample's offset from the pixel centre in Q4, a rotated grid.
