@@ -244,7 +244,7 @@ class HeapLayout:
 NEEDED = ("HEAP_ALIGN", "FAT_SECTOR_BYTES", "MESH_V_BYTES", "MESH_T_BYTES", "MESH_N_BYTES", "MESH_F_BYTES",
           "VTX_BYTES", "WORLD_POS_BYTES", "EDGE_BYTES", "EDGES_PER_TRIANGLE", "DEPTH_BUFFER_BYTES", "DEPTH16_BUFFER_BYTES",
           "NORMAL_LIGHT_SHIFT", "TEX_PIXEL_BYTES", "OBJ_WINDOW_BYTES", "MIP_TABLE_BYTES", "ADJ_BYTES",
-          "ADJ_FACE_BYTES", "ADJ_KEY_BYTES", "SUM_BUFFER_BYTES")
+          "ADJ_FACE_BYTES", "ADJ_KEY_BYTES", "SUM_BUFFER_BYTES", "WIRE_BUFFER_BYTES")
 
 
 def heap_layout(elf: Path) -> HeapLayout:
@@ -308,7 +308,8 @@ def boot_allocations(layout: HeapLayout, texture: int | None, vertices: int, tex
     bytes needed, m bytes free"; normals only with `shading = gouraud` in a lit mode; the second
     pass's window after them, given back), render.S render_init: vertex.S vertex_init's vertex
     records and, with flat shading in a lit mode, the world positions; then the wireframe edge
-    list, or else the
+    list (and, with `antialias = supersample`, the union lines' cells and spans,
+    WIRE_BUFFER_BYTES), or else the
     depth buffer (DEPTH16_BUFFER_BYTES for `depth = int16`, the default; DEPTH_BUFFER_BYTES for
     float32) and, with `shading = gouraud`, one f32 per normal (MESH_NCOUNT <<
     NORMAL_LIGHT_SHIFT; heap.S's heap_alloc of 0 bytes always succeeds), with `antialias = edge`
@@ -356,6 +357,8 @@ def boot_allocations(layout: HeapLayout, texture: int | None, vertices: int, tex
         blocks.append(("world positions", vertices * layout.WORLD_POS_BYTES))
     if wireframe:
         blocks.append(("edge list", triangles * layout.EDGES_PER_TRIANGLE * layout.EDGE_BYTES))
+        if antialias == "supersample":
+            blocks.append(("line coverage cells", layout.WIRE_BUFFER_BYTES))
     else:
         blocks.append(("depth buffer",
                        layout.DEPTH16_BUFFER_BYTES if depth == "int16" else layout.DEPTH_BUFFER_BYTES))

@@ -43,6 +43,11 @@ SCENES: dict[str, tuple[dict[str, str] | None, int]] = {
     "torus-wireframe-aa": ({"model": "models/torus.obj", "texture": "textures/torus.ppm", "mode": "wireframe",
                             "translate": "0 0 -2.8", "axis": "1 0.6 0.2", "angle": "40", "step": "4",
                             "antialias": "edge"}, 3),
+    # antialias = supersample in wireframe: the union of the lines (crossings and vertices counted
+    # once)
+    "torus-wireframe-supersample": ({"model": "models/torus.obj", "texture": "textures/torus.ppm",
+                                     "mode": "wireframe", "translate": "0 0 -2.8", "axis": "1 0.6 0.2",
+                                     "angle": "40", "step": "4", "antialias": "supersample"}, 3),
 }
 
 

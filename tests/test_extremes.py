@@ -580,16 +580,18 @@ def test_extremes_with_antialiasing(firmware, tmp_path, name, setting):
             assert result.drawn_shown > result.drawn_ref // 2, f"frame {n}: {result}"
 
 
+@pytest.mark.parametrize("setting", ["edge", "supersample"])
 @pytest.mark.parametrize("name", ["wireframe-crossing-and-floor", "beyond-the-q4-range"])
-def test_extreme_wireframes_with_coverage_lines(firmware, tmp_path, name):
-    """Wireframe lines by coverage (antialias = edge) cut at the near plane and the guard band,
-    thousands of pixels long, off the screen at both ends: no trap, hang or stray store, and
-    every drawn pixel within one pixel of one of the reference's line pixels and the other way
-    round (a coverage line is up to three pixels across where Bresenham's is one)."""
+def test_extreme_wireframes_with_coverage_lines(firmware, tmp_path, name, setting):
+    """Wireframe lines by coverage (antialias = edge) and their union (supersample) cut at the
+    near plane and the guard band, thousands of pixels long, off the screen at both ends: no
+    trap, hang or stray store, and every drawn pixel within one pixel of one of the reference's
+    line pixels and the other way round (a coverage line is up to three pixels across where
+    Bresenham's is one)."""
     model, scene = ((BEYOND_Q4, "translate = 0 0 0\nstep = 3\naxis = 0 0 1\nmode = wireframe\n")
                     if name == "beyond-the-q4-range"
                     else NEAR_AND_HUGE[name])
-    run = run_scene(firmware, tmp_path, model, scene + "antialias = edge\n")
+    run = run_scene(firmware, tmp_path, model, scene + f"antialias = {setting}\n")
     assert run.returncode == 0, run.stderr + run.console
     for n in range(FRAMES):
         shown, ref = (np.any(f != run.background, axis=-1) for f in (run.frames[n], run.reference(n)))
@@ -624,6 +626,23 @@ def test_supersampling_sums_too_large_for_memory(firmware, layout, tmp_path):
     assert outcome == "error 12" and heap.failed.startswith(
         f"error 12 model too large for memory (supersample sums: {layout.SUM_BUFFER_BYTES} bytes needed, ")
     run = run_scene(firmware, tmp_path, fan_model(most), "antialias = supersample\n", texture=TEXTURE, frames=1)
+    assert run.returncode == 8, run.stderr + run.console
+    assert (run.error_line() or "") == heap.failed, (heap.failed, run.console)
+
+
+def test_union_line_cells_too_large_for_memory(firmware, layout, tmp_path):
+    """antialias = supersample in wireframe mode needs the union lines' cells and spans
+    (WIRE_BUFFER_BYTES, 16 bytes a pixel): a wireframe model that fits without them but not with
+    them fails with error 12 naming that block (the replay, extremes_support.boot_allocations;
+    its bytes free, in the firmware's line too, say that all before it fitted as replayed)."""
+    def fits(antialias: str):
+        return lambda n: boot_allocations(layout, None, 3, 0, 0, n, wireframe=True, antialias=antialias)[0] == "ok"
+    most = largest(fits("supersample"), 1, layout.size // layout.MESH_F_BYTES + 1)
+    assert fits("edge")(most + 1)
+    outcome, heap = boot_allocations(layout, None, 3, 0, 0, most + 1, wireframe=True, antialias="supersample")
+    assert outcome == "error 12" and heap.failed.startswith(
+        f"error 12 model too large for memory (line coverage cells: {layout.WIRE_BUFFER_BYTES} bytes needed, ")
+    run = run_scene(firmware, tmp_path, fan_model(most + 1), "mode = wireframe\nantialias = supersample\n", frames=1)
     assert run.returncode == 8, run.stderr + run.console
     assert (run.error_line() or "") == heap.failed, (heap.failed, run.console)
 
