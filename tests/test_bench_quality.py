@@ -48,7 +48,8 @@ def test_settings_are_ordered_default_first_and_use_known_keys_and_values():
 
 
 def test_wireframe_sweeps_only_the_settings_that_change_it():
-    assert quality.settings_for_mode("wireframe") == ["default", "angle-table", "pixel-snap", "edge-aa"]
+    assert quality.settings_for_mode("wireframe") == ["default", "angle-table", "pixel-snap", "edge-aa",
+                                                      "supersample"]
     # texture filtering only in textured mode
     assert quality.settings_for_mode("textured") == list(quality.SETTINGS)
     assert quality.settings_for_mode("flat") == [n for n in quality.SETTINGS if n not in ("bilinear", "mipmap")]

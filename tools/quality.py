@@ -56,8 +56,8 @@ SETTINGS: dict[str, dict[str, str]] = {
 }
 DEFAULT_SETTING = "default"
 # Wireframe has no texture, light or depth buffer: only the angles, the snapping and antialiased
-# lines change it (edge and supersample draw the same lines: edge-aa stands for both).
-WIREFRAME_SETTINGS = ("default", "angle-table", "pixel-snap", "edge-aa")
+# lines change it (edge: each line by coverage; supersample: their union, the most accurate).
+WIREFRAME_SETTINGS = ("default", "angle-table", "pixel-snap", "edge-aa", "supersample")
 # Texture filtering changes only what a texture draws: swept in textured mode alone.
 TEXTURE_SETTINGS = ("bilinear", "mipmap")
 
