@@ -48,8 +48,9 @@
 #     a sample's offset, raster_accumulate sums the samples' frames and
 #     leaves their means (render.S draws each band once per sample).
 #
-# Lines: raster_segment / raster_line (Bresenham's), or raster_aa_line (by
-# coverage, for antialiased wireframes).
+# Lines: raster_segment / raster_line (Bresenham's), raster_aa_line (by
+# coverage, antialias = edge wireframes), or raster_union_line and
+# raster_union_resolve (their union, antialias = supersample wireframes).
 
     .option norelax
     .include "k210.inc"
@@ -1806,7 +1807,7 @@ raster_segment:
 
     .globl raster_aa_line
 # raster_aa_line
-#   What: antialias = edge or supersample, wireframe: a line 1 pixel wide
+#   What: antialias = edge, wireframe: a line 1 pixel wide
 #         drawn by coverage (the reference's ideal wireframe: the points
 #         within half a pixel of the segment), a Wu-style walk along the
 #         major axis: per column (row, for a steep line) the band of the

@@ -49,8 +49,9 @@
 # WIRE_COLOUR over the background, without depth test or culling: trivially
 # rejected by outcodes, cut at the near plane and the guard band in clip
 # space (Liang-Barsky), clipped to the screen and drawn with Bresenham's
-# algorithm (raster_segment), or by coverage with antialias on
-# (raster_aa_line).
+# algorithm (raster_segment), by coverage with antialias = edge
+# (raster_aa_line), or as their union with antialias = supersample
+# (raster_union_line, then raster_union_resolve once all are in).
 
     .option norelax
     .include "k210.inc"
