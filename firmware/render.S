@@ -65,7 +65,8 @@
 #   What: prepares the renderer once the scene is loaded: vertex records,
 #         the texture (textured mode with a texture; else flat fills) and
 #         its filtering (with filter = mipmap its mip chain, the last block
-#         allocated), and in wireframe mode the unique edge list. Running
+#         allocated), and in wireframe mode the unique edge list (and with
+#         antialias = supersample the union lines' cells). Running
 #         out of heap is fatal (heap_alloc_or_fail).
 #   Arguments: none. Results: none.
 #   Clobbers: only ABI temporaries.
