@@ -1774,37 +1774,6 @@ raster_segment:
     jr      t6
 9:  ret
 
-# The pieces of raster_aa_line (its registers: ft2 = 1, fa7 = 1/2, ft4 = 0,
-# fa2 = half the change of the band's edges across the column's part, fa3 =
-# 1 / the change (2 fa2), a0 = 1 when the change is too small for it).
-# AA_LINE_H e, tmp: e = H(e), the integral of clamp(x, 0, 1) from 0 to e:
-# 0, e^2 / 2, then e - 1/2 (clamp(e)^2 / 2 + max(e - 1, 0)).
-.macro AA_LINE_H e, tmp
-    fsub.s  \tmp, \e, ft2
-    fmax.s  \tmp, \tmp, ft4
-    fmax.s  \e, \e, ft4
-    fmin.s  \e, \e, ft2
-    fmul.s  \e, \e, \e
-    fmul.s  \e, \e, fa7
-    fadd.s  \e, \e, \tmp
-.endm
-# AA_LINE_MEAN out, mid, e0, tmp: out = the mean of clamp(e, 0, 1) for e
-# linear across the part, mid at its middle: (H(mid + fa2) - H(mid - fa2)) /
-# (2 fa2), or clamp(mid, 0, 1) when a0 = 1. mid is kept; e0, tmp clobbered.
-.macro AA_LINE_MEAN out, mid, e0, tmp
-    beqz    a0, 1f
-    fmax.s  \out, \mid, ft4
-    fmin.s  \out, \out, ft2
-    j       2f
-1:  fsub.s  \e0, \mid, fa2
-    AA_LINE_H \e0, \tmp
-    fadd.s  \out, \mid, fa2
-    AA_LINE_H \out, \tmp
-    fsub.s  \out, \out, \e0
-    fmul.s  \out, \out, fa3
-2:
-.endm
-
     .globl raster_aa_line
 # raster_aa_line
 #   What: antialias = edge, wireframe: a line 1 pixel wide
@@ -1812,12 +1781,10 @@ raster_segment:
 #         within half a pixel of the segment), a Wu-style walk along the
 #         major axis: per column (row, for a steep line) the band of the
 #         line's thickness across it, h = |segment| / |major extent| pixels
-#         about the line's centre, and each pixel its exact area inside the
-#         band over the part of the column inside the segment (lengthened by
-#         half a pixel of its length at each end: the round ends' reach):
-#         the mean over that part of clamp(top - row) - clamp(bottom - row),
-#         each edge linear across it, (H(e1) - H(e0)) / (e1 - e0) with H the
-#         integral of clamp(e, 0, 1), times the part's share of the column. Each coverage a (1/64) blends the colour over the
+#         about the line's centre there, and each pixel its overlap with the
+#         band times the share of the column inside the segment, which is
+#         lengthened by half a pixel of its length at each end (the round
+#         ends' reach). Each coverage a (1/64) blends the colour over the
 #         framebuffer's pixel as the coverage fills do (c a + old (64 - a))
 #         / 64; where lines cross, coverages combine as 1 - (1 - a1)(1 -
 #         a2). Columns are clamped to the screen and pixels off it skipped,
@@ -1897,46 +1864,29 @@ raster_aa_line:
     ble     t2, t0, 5f
     mv      t2, t0
 5:  bgt     t1, t2, 9f
-    fmv.w.x ft4, zero                   # ft4 = 0 (|segment| is done with)
-    # column t1, the part [u0, u1] of it inside the segment: fa4 = its share
-    # times 64, ft10, ft11 = the band's bottom and top at its middle, fa2 =
-    # half their change across it, fa3 = 1 / the change (a0 = 1: too small,
-    # the middle's values are used)
+    # column t1: fa4 = its share inside the segment, ft10, ft11 = the band
 6:  fcvt.s.w ft9, t1
     fadd.s  fa5, ft9, ft2               # i + 1
-    fmin.s  fa4, ft8, fa5               # u1
-    fmax.s  fa6, ft7, ft9               # u0
-    fadd.s  fa5, fa4, fa6
-    fmul.s  fa5, fa5, fa7               # the part's middle
-    fsub.s  fa4, fa4, fa6               # its share
-    fsub.s  fa5, fa5, fa0
-    fmadd.s fa5, ft5, fa5, fa1          # the line's v there
-    fsub.s  ft10, fa5, ft6
-    fadd.s  ft11, fa5, ft6
-    fmul.s  fa2, ft5, fa4
-    fmul.s  fa2, fa2, fa7               # half the change across the part
-    fabs.s  fa6, fa2
-    li      t0, F32_AA_LINE_FLAT
-    fmv.w.x fa3, t0
-    flt.s   a0, fa6, fa3
-    bnez    a0, 61f
-    fadd.s  fa3, fa2, fa2
-    fdiv.s  fa3, ft2, fa3
-61: fmul.s  fa4, fa4, ft3
-    fsub.s  fa5, ft10, fa6
-    fcvt.w.s t6, fa5, rdn               # t6 = first row the band reaches
-    fadd.s  fa5, ft11, fa6
-    fcvt.w.s a1, fa5, rdn               # a1 = the last
+    fmin.s  fa4, ft8, fa5
+    fmax.s  fa6, ft7, ft9
+    fsub.s  fa4, fa4, fa6
+    fadd.s  fa6, ft9, fa7               # the column's centre
+    fsub.s  fa6, fa6, fa0
+    fmadd.s fa6, ft5, fa6, fa1          # the line's v there
+    fsub.s  ft10, fa6, ft6
+    fadd.s  ft11, fa6, ft6
+    fcvt.w.s t6, ft10, rdn              # t6 = first row of the band
+    fcvt.w.s a1, ft11, rdn              # a1 = its last
 7:  bgt     t6, a1, 8f
     bltz    t6, 71f                     # off the screen
     bge     t6, a5, 71f
-    fcvt.s.w ft9, t6
-    fsub.s  ft1, ft11, ft9              # the top's height in the row, at the middle
-    fsub.s  ft9, ft10, ft9              # the bottom's
-    AA_LINE_MEAN fa6, ft1, fa5, ft0     # fa6 = the mean of clamp(top - row)
-    AA_LINE_MEAN fa5, ft9, ft1, ft0     # fa5 = the bottom's
-    fsub.s  fa5, fa6, fa5               # the pixel's share of the band
+    fcvt.s.w fa5, t6
+    fadd.s  fa6, fa5, ft2
+    fmin.s  fa6, fa6, ft11
+    fmax.s  fa5, fa5, ft10
+    fsub.s  fa5, fa6, fa5               # the overlap
     fmul.s  fa5, fa5, fa4
+    fmul.s  fa5, fa5, ft3
     fcvt.w.s a2, fa5, rne               # a
     blez    a2, 71f
     li      t0, AA_FULL
