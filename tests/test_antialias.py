@@ -124,7 +124,7 @@ WIREFRAME = (torus(), "mode = wireframe\ntranslate = 0 0 -2.8\naxis = 1 0.6 0.2\
 # One run (2026-11-23), the last frame against the ideal: 18.5 dB off (Bresenham), 31.6 dB with
 # coverage lines; what is left is mostly the crossings (blended twice where the ideal counts
 # the union once) and the vertices. Union lines (supersample) count those once: 43.8 dB (one run,
-# 2026-11-23, with edge at 32.0).
+# 2026-11-23, with edge at 31.6).
 WIREFRAME_MIN_DB = 30.5
 WIREFRAME_GAIN_MIN_DB = 10.0
 WIRE_UNION_DB = 42.8
