@@ -1991,6 +1991,23 @@ raster_set_union:
     sh      t5, 0(\cell)
 .endm
 
+# WIRE_DISC x, y: widens the crossing [fa7, fa6] of sub-row fa4 by the disc
+# of radius 1/2 about (\x, \y), where the row meets it: x -+ sqrt(1/4 - (fa4
+# - y)^2) (ft8 = 1/4). Clobbers t0, ft1, fa5.
+.macro WIRE_DISC x, y
+    fsub.s  fa5, fa4, \y
+    fnmsub.s fa5, fa5, fa5, ft8
+    fmv.w.x ft1, zero
+    flt.s   t0, fa5, ft1
+    bnez    t0, 88f
+    fsqrt.s fa5, fa5
+    fsub.s  ft1, \x, fa5
+    fmin.s  fa7, fa7, ft1
+    fadd.s  ft1, \x, fa5
+    fmax.s  fa6, fa6, ft1
+88:
+.endm
+
     .globl raster_union_line
 # raster_union_line
 #   What: antialias = supersample, wireframe: adds a line 1 pixel wide (the
@@ -2151,26 +2168,8 @@ raster_union_line:
     beqz    t0, 41f
     fneg.s  fa6, ft11                   # (an empty cut: nothing)
     fmv.s   fa7, ft11
-41: fsub.s  fa5, fa4, fa1               # end a's disc: 1/4 - (y - y_a)^2
-    fnmsub.s fa5, fa5, fa5, ft8
-    fmv.w.x ft1, zero
-    flt.s   t0, fa5, ft1
-    bnez    t0, 42f
-    fsqrt.s fa5, fa5
-    fsub.s  ft1, fa0, fa5
-    fmin.s  fa7, fa7, ft1
-    fadd.s  ft1, fa0, fa5
-    fmax.s  fa6, fa6, ft1
-42: fsub.s  fa5, fa4, fa3               # end b's
-    fnmsub.s fa5, fa5, fa5, ft8
-    fmv.w.x ft1, zero
-    flt.s   t0, fa5, ft1
-    bnez    t0, 43f
-    fsqrt.s fa5, fa5
-    fsub.s  ft1, fa2, fa5
-    fmin.s  fa7, fa7, ft1
-    fadd.s  ft1, fa2, fa5
-    fmax.s  fa6, fa6, ft1
+41: WIRE_DISC fa0, fa1                  # the ends' discs
+    WIRE_DISC fa2, fa3
 43: flt.s   t0, fa7, fa6
     beqz    t0, 8f                      # nothing on this sub-row
     fmul.s  fa7, fa7, ft10
@@ -2201,7 +2200,7 @@ raster_union_line:
 47: mul     t0, t0, a7                  # the row's cells
     add     t0, t0, a2
     andi    t6, a0, WIRE_SUBROWS - 1
-    slli    t6, t6, 1                   # (WIRE_CELL_BYTES)
+    slli    t6, t6, WIRE_CELL_BYTES_SHIFT
     add     t0, t0, t6
     slli    t6, t3, WIRE_PIXEL_SHIFT
     add     t0, t0, t6                  # t0 = pixel p0's cell
@@ -2264,10 +2263,8 @@ raster_union_resolve:
     li      a5, LCD_HEIGHT
     li      a6, WIRE_BYTE_LANES
     li      a7, WIRE_LANE_SUM
-1:  lwu     t1, 0(a2)
-    srli    t2, t1, 16                  # (WIRE_SPAN_END)
-    slli    t1, t1, 48
-    srli    t1, t1, 48                  # t1 = first column, t2 = past the last
+1:  lhu     t1, WIRE_SPAN_FIRST(a2)     # t1 = first column, t2 = past the last
+    lhu     t2, WIRE_SPAN_END(a2)
     bgeu    t1, t2, 8f
     li      t0, WIRE_SPAN_EMPTY
     sw      t0, 0(a2)
