@@ -1991,6 +1991,15 @@ raster_set_union:
     sh      t5, 0(\cell)
 .endm
 
+# WIRE_SUBROW out, y, eight, mode: the sub-row index of height y: the first
+# (mode rup) or last (rdn) j whose centre (j + 1/2) / 8 is at or past (before)
+# y, \out = 8 y - 1/2 rounded so (\eight = 8, ft8 = 1/2; \y clobbered).
+.macro WIRE_SUBROW out, y, eight, mode
+    fmul.s  \y, \y, \eight
+    fsub.s  \y, \y, ft8
+    fcvt.w.s \out, \y, \mode
+.endm
+
 # WIRE_DISC x, y: widens the crossing [fa7, fa6] of sub-row fa4 by the disc
 # of radius 1/2 about (\x, \y), where the row meets it: x -+ sqrt(1/4 - (fa4
 # - y)^2) (ft8 = 1/4). Clobbers t0, ft1, fa5.
@@ -2074,15 +2083,11 @@ raster_union_line:
     fmin.s  ft1, ft10, fa6
     fadd.s  ft1, ft1, fa7
     fadd.s  ft1, ft1, fa1
-    fmul.s  ft1, ft1, ft3
-    fsub.s  ft1, ft1, ft8
-    fcvt.w.s s0, ft1, rup
+    WIRE_SUBROW s0, ft1, ft3, rup
     fmax.s  ft1, ft10, fa6
     fsub.s  ft1, ft1, fa7
     fadd.s  ft1, ft1, fa1
-    fmul.s  ft1, ft1, ft3
-    fsub.s  ft1, ft1, ft8
-    fcvt.w.s s1, ft1, rdn
+    WIRE_SUBROW s1, ft1, ft3, rdn
     j       2f
 11: fmv.w.x ft0, zero                   # horizontal: |y - y_a| <= 1/2
     fmv.s   ft2, ft11
@@ -2108,14 +2113,10 @@ raster_union_line:
     fmv.w.x ft9, t0                     # ft9 = 8
     fmin.s  fa4, fa1, fa3
     fsub.s  fa4, fa4, ft8
-    fmul.s  fa4, fa4, ft9
-    fsub.s  fa4, fa4, ft8
-    fcvt.w.s a0, fa4, rup               # first: ceil(8 (top - 1/2) - 1/2)
+    WIRE_SUBROW a0, fa4, ft9, rup       # first: ceil(8 (top - 1/2) - 1/2)
     fmax.s  fa4, fa1, fa3
     fadd.s  fa4, fa4, ft8
-    fmul.s  fa4, fa4, ft9
-    fsub.s  fa4, fa4, ft8
-    fcvt.w.s a1, fa4, rdn               # last: floor(8 (bottom + 1/2) - 1/2)
+    WIRE_SUBROW a1, fa4, ft9, rdn       # last: floor(8 (bottom + 1/2) - 1/2)
     bgez    a0, 31f
     li      a0, 0
 31: li      t0, WIRE_SUBROW_LAST
