@@ -333,6 +333,29 @@ def test_pyfatfs_geometry_matches_plan_and_fsck(tmp_path, size_mib):
     assert result.returncode == 0, result.stdout + result.stderr
 
 
+def test_the_fat_is_read_as_pyfatfs_reads_it(special, tmp_path):
+    """CardFat reads a FAT32 table in one go: the same entries as pyfatfs' own reading (the
+    reserved top bits cleared), and the same warning when the two FATs differ."""
+    from pyfatfs.PyFatFS import PyFatFS
+    card = shutil.copy(special.image, tmp_path / "card.img")
+    twin = shutil.copy(special.image, tmp_path / "twin.img")
+    ours = fat32.CardFS(str(card), PART_OFFSET)
+    entries = list(ours.fs.fat)
+    ours.fs.close()
+    theirs = PyFatFS(str(twin), offset=PART_OFFSET)
+    assert entries == theirs.fs.fat
+    assert any(entry not in (0, 0x0FFF_FFFF, 0x0FFF_FFF8) for entry in entries)   # chains, not only ends
+    theirs.close()
+    raw = Raw(card)
+    with open(card, "r+b") as f:       # the first FAT's entry 3 with its reserved bits set
+        f.seek(PART_OFFSET + raw.rsvd * 512 + 3 * 4)
+        f.write(struct.pack("<I", 0xF000_0000 | entries[3]))
+    with pytest.warns(UserWarning, match="One or more FATs differ"):
+        ours = fat32.CardFS(str(card), PART_OFFSET)
+    assert ours.fs.fat[:8] == entries[:8]
+    ours.fs.close()
+
+
 def test_fsck_finds_no_errors(sample_img, tmp_path):
     result = fsck(sample_img, tmp_path)
     assert result.returncode == 0, result.stdout + result.stderr
