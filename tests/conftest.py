@@ -19,6 +19,7 @@ from typing import Callable, TypeVar
 
 import pytest
 
+from emulator_runs import run_emulator  # noqa: F401  (re-exported for the tests)
 from golden_scenes import GOLDEN  # noqa: F401  (re-exported for the tests)
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -29,10 +30,6 @@ T = TypeVar("T")
 K = TypeVar("K")
 
 
-def run_emulator(*args: str, timeout: float = 600) -> subprocess.CompletedProcess:
-    """Runs `python -m emulator` exactly as a user would."""
-    return subprocess.run([sys.executable, "-m", "emulator", *args], cwd=ROOT, capture_output=True,
-                          text=True, timeout=timeout)
 
 
 def _session_root(tmp_path_factory) -> Path:

@@ -1,0 +1,171 @@
+"""`python -m emulator` runs for the tests, each in a process of its own, without paying for the
+interpreter's start and the board model's imports each time (about 0.2 s a run, some 270 runs a
+suite).
+
+A server process (`python tests/emulator_runs.py`, one per test process, started at the first
+run) imports the board model once and forks a child for each run the tests ask for. The child
+sets the asking test's working folder and environment, writes its standard output and error to
+files the test names, runs the package's `__main__` as `python -m emulator` would, and exits with
+its status; the server reports the status back. What differs from a run started from the shell
+is only what was imported before the command line was read.
+
+The tests that check the command as a user types it (test_readme_commands.py, the `--help` and
+bad-option tests) still start `python -m emulator` themselves.
+
+Protocol, one JSON object a line: the test sends {"args", "cwd", "env", "stdout", "stderr"}; the
+server answers {"pid"} once the child exists and {"status"} once it has ended (the exit status, or
+minus the signal that ended it, as subprocess reports it).
+"""
+from __future__ import annotations
+
+import atexit
+import json
+import os
+import runpy
+import select
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+import traceback
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+COMMAND = [sys.executable, "-m", "emulator"]
+
+
+# --- the server ----------------------------------------------------------------------------
+
+def _run_child(request: dict) -> None:
+    """In the forked child: becomes the `python -m emulator` run `request` describes; never returns."""
+    status = 1
+    try:
+        os.chdir(request["cwd"])
+        os.environ.clear()
+        os.environ.update(request["env"])
+        nothing = os.open(os.devnull, os.O_RDONLY)
+        out = os.open(request["stdout"], os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+        err = os.open(request["stderr"], os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+        for source, target in ((nothing, 0), (out, 1), (err, 2)):
+            os.dup2(source, target)
+            os.close(source)
+        # the streams a fresh interpreter would make for files: block-buffered output, line-buffered errors
+        sys.stdin = open(0, "r", closefd=False)
+        sys.stdout = open(1, "w", closefd=False)
+        sys.stderr = open(2, "w", buffering=1, errors="backslashreplace", closefd=False)
+        sys.argv = [str(ROOT / "emulator" / "__main__.py"), *request["args"]]
+        try:
+            runpy.run_module("emulator", run_name="__main__", alter_sys=True)
+            status = 0
+        except SystemExit as end:
+            if end.code is None:
+                status = 0
+            elif isinstance(end.code, int):
+                status = end.code
+            else:
+                print(end.code, file=sys.stderr)
+                status = 1
+        except BaseException:
+            traceback.print_exc()
+            status = 1
+        sys.stdout.flush()
+        sys.stderr.flush()
+    finally:
+        os._exit(status & 0xFF)
+
+
+def serve() -> None:
+    """Reads requests from standard input until it ends, answering on standard output."""
+    import emulator.cli  # noqa: F401  (what every run imports, once, before the forks)
+    import emulator.board  # noqa: F401
+    import emulator.console_watch, emulator.golden, emulator.trace, emulator.uart_input, emulator.vcd  # noqa: F401,E401
+    import PIL.Image, PIL.PngImagePlugin  # noqa: F401,E401
+    from emulator.memory import POWER_ON_SEED, power_on_pattern
+    power_on_pattern(POWER_ON_SEED)
+    answers = sys.stdout
+    for line in sys.stdin:
+        request = json.loads(line)
+        pid = os.fork()
+        if pid == 0:
+            _run_child(request)
+        answers.write(json.dumps({"pid": pid}) + "\n")
+        answers.flush()
+        _, wait_status = os.waitpid(pid, 0)
+        answers.write(json.dumps({"status": os.waitstatus_to_exitcode(wait_status)}) + "\n")
+        answers.flush()
+
+
+# --- the tests' side -----------------------------------------------------------------------
+
+class _Server:
+    """A server of this test process (started when a run finds none idle, ended with the process)."""
+
+    def __init__(self) -> None:
+        # one BLAS thread: the server forks, and the board model does no linear algebra
+        environment = dict(os.environ, OPENBLAS_NUM_THREADS="1")
+        self.process = subprocess.Popen([sys.executable, __file__], cwd=ROOT, env=environment,
+                                        stdin=subprocess.PIPE, stdout=subprocess.PIPE, bufsize=0)
+        self._received = b""     # answers read from the pipe and not yet taken
+        atexit.register(self.close)
+
+    def close(self) -> None:
+        if self.process.poll() is None:
+            self.process.stdin.close()
+            self.process.wait()
+
+    def _answer(self, timeout: float | None) -> dict | None:
+        """The server's next answer, or None when `timeout` seconds pass first."""
+        pipe = self.process.stdout.fileno()
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while b"\n" not in self._received:
+            if deadline is not None:
+                ready, _, _ = select.select([pipe], [], [], max(0.0, deadline - time.monotonic()))
+                if not ready:
+                    return None
+            chunk = os.read(pipe, 4096)
+            if not chunk:
+                raise RuntimeError(f"the emulator run server ended (status {self.process.poll()})")
+            self._received += chunk
+        line, self._received = self._received.split(b"\n", 1)
+        return json.loads(line)
+
+    def run(self, args: list[str], timeout: float) -> subprocess.CompletedProcess:
+        with tempfile.TemporaryDirectory(prefix="emulator-run-") as folder:
+            out, err = Path(folder) / "stdout", Path(folder) / "stderr"
+            request = {"args": list(args), "cwd": str(ROOT), "env": dict(os.environ),
+                       "stdout": str(out), "stderr": str(err)}
+            self.process.stdin.write(json.dumps(request).encode() + b"\n")
+            pid = self._answer(None)["pid"]
+            answer = self._answer(timeout)
+            if answer is None:
+                os.kill(pid, signal.SIGKILL)
+                self._answer(None)
+                raise subprocess.TimeoutExpired([*COMMAND, *args], timeout, out.read_bytes(), err.read_bytes())
+            return subprocess.CompletedProcess([*COMMAND, *args], answer["status"],
+                                               out.read_text(errors="replace"), err.read_text(errors="replace"))
+
+
+_idle_servers: list[_Server] = []
+_servers_lock = threading.Lock()
+
+
+def run_emulator(*args: str, timeout: float = 600) -> subprocess.CompletedProcess:
+    """Runs `python -m emulator args` in a process of its own (see the module's docstring), from
+    the project's root; its output as text, as subprocess.run(..., capture_output=True, text=True)
+    gives it. Runs asked for at once (from threads) each get a server of their own."""
+    with _servers_lock:
+        server = _idle_servers.pop() if _idle_servers else None
+    if server is None or server.process.poll() is not None:
+        server = _Server()
+    try:
+        return server.run(list(args), timeout)
+    finally:
+        with _servers_lock:
+            _idle_servers.append(server)
+
+
+if __name__ == "__main__":
+    sys.path.insert(0, str(ROOT))
+    serve()
