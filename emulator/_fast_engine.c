@@ -39,6 +39,7 @@
 
 #include "_counter.h"
 #include "_rocket_timing.h"
+#include "_write_check.h"
 
 
 /* fast_run's answers */
@@ -176,6 +177,7 @@ typedef struct fast_state {
     int fp_written;          /* during a run: an FP register was written */
     uint64_t soft_flags;     /* during a run: fflags raised by conversions worked out here */
     uint64_t entry_fflags, entry_mstatus;   /* at the run's start */
+    write_watch_t *write_watch;   /* --check-writes: this hart's store check (NULL: none) */
     block_t *index[BLOCK_INDEX_SLOTS];   /* by start address, direct-mapped */
     block_t arena[BLOCK_ARENA];
 } fast_state_t;
@@ -237,6 +239,14 @@ static inline int device_window(const fast_state_t *f, uint64_t a, uint64_t widt
         if (a >= f->window_base[i] && a + width <= f->window_end[i])
             return (int)i;
     return -1;
+}
+
+/* --check-writes: the interpreter checks its SRAM stores against `watch` (write_watch.py) as the precise
+ * engine's hook does; NULL: it checks none. */
+__attribute__((visibility("default")))
+void fast_set_write_watch(fast_state_t *f, write_watch_t *watch)
+{
+    f->write_watch = watch;
 }
 
 __attribute__((visibility("default")))
@@ -975,6 +985,18 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
     } while (0)
 /* a store into decoded code: its blocks are compared with their code again at their next entry */
 #define WROTE(h, width) do { if ((h) < f->code_hi && (h) + (width) > f->code_lo) f->epoch++; } while (0)
+/* --check-writes: the first store outside the hart's buffers is recorded (it has landed, as with the precise
+ * engine's hook), and the hart stops before its next instruction */
+#define WATCHED(a, h, width) do { \
+        write_watch_t *watch_ = f->write_watch; \
+        if (watch_ != NULL && !watch_->stray) { \
+            uint64_t region_, next_; \
+            if (write_check_strays(watch_, (uint64_t)((h) - sram), width, &region_, &next_)) { \
+                write_check_record(watch_, a, width, in->pc, region_, next_); \
+                c->limit = limit = executed; \
+            } \
+        } \
+    } while (0)
 /* an aligned access in a device window: counted, described in f->dev, left to the caller */
 #define DEVICE(nbytes, storing, stored, dest_reg, sign_from) do { \
         if ((a & (nbytes - 1)) == 0 && f->devices_here) { \
@@ -1032,6 +1054,7 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
         uint64_t v = x[in->rs2]; \
         memcpy(h, &v, width); \
         WROTE(h, width); \
+        WATCHED(a, h, width); \
         NEXT(); \
     } while (0)
 #define LOAD(type, width, dest) do { \
@@ -1052,6 +1075,7 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
         uint64_t v = (value); \
         memcpy(h, &v, width); \
         WROTE(h, width); \
+        WATCHED(a, h, width); \
         NEXT(); \
     } while (0)
 /* not taken: on in the block, unless the interpreter stored into decoded code since the block began
@@ -1466,7 +1490,7 @@ uint64_t fast_run_alone(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t f
         enter_guest_fp(f);   /* (the turns' own arithmetic must not raise the guest's flags) */
         int why = interpret(f, c);
         leave_guest_fp(f);
-        if (why != STOP_LIMIT || c->poll_report != 0) {
+        if (why != STOP_LIMIT || c->poll_report != 0 || (f->write_watch != NULL && f->write_watch->stray)) {
             plan->handed_over = 1;
             break;
         }

@@ -111,6 +111,7 @@ _counter_lib.fast_abandon.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
 _counter_lib.fast_set_windows.restype = ctypes.c_int
 _counter_lib.fast_set_windows.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_uint32]
 _STOP_DEVICE = 3      # _fast_engine.c's answer: a device access, counted, for the board to carry out
+_counter_lib.fast_set_write_watch.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
 _counter_lib.fast_run_alone.restype = ctypes.c_uint64
 _counter_lib.fast_run_alone.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_uint64,
                                         ctypes.c_void_p]
@@ -244,6 +245,7 @@ class Hart:
         self.device_accesses = 0  # device accesses the fast engine left to the board (likewise)
         self._device_access: DeviceAccess | None = None
         self._device_windows: list[tuple[int, int]] = []
+        self._write_watch: ctypes.Structure | None = None   # --check-writes (attach_write_watch)
         self._repeats_answered: RepeatsAnswered | None = None
         self._holding = False     # the fast engine holds the registers during a device access
 
@@ -296,6 +298,7 @@ class Hart:
         # freed with the hart (Board.close frees it at once)
         self._free_fast_state = weakref.finalize(self, _counter_lib.fast_state_free, state)
         self._give_windows()
+        self._give_write_watch()
 
     def attach_devices(self, windows: list[tuple[int, int]], access: DeviceAccess,
                        repeats_answered: RepeatsAnswered | None = None) -> None:
@@ -309,6 +312,25 @@ class Hart:
         self._device_access = access
         self._repeats_answered = repeats_answered
         self._give_windows()
+
+    def attach_write_watch(self, watch: ctypes.Structure, check: int, views: list[tuple[int, int]],
+                           what: str) -> None:
+        """--check-writes: `check` (a C function's address, _write_watch.c's check_write) checks the
+        precise engine's stores in `views` ((first, last) addresses) against `watch` (its
+        write_watch_t, which the caller keeps alive); the fast engine checks its own stores against
+        the same table (_write_check.h), so the hart stays on it. After a stray store `watch.stray`
+        is set and the hart stops before its next instruction, on either engine."""
+        for first, last in views:
+            _add_native_hook(self.uc, unicorn.UC_HOOK_MEM_WRITE, check, watch, first, last, f"{what} on hart {self.hart_id}")
+        self._write_watch = watch
+        self._give_write_watch()
+
+    def _give_write_watch(self) -> None:
+        if self._fast_state is not None and self._write_watch is not None:
+            _counter_lib.fast_set_write_watch(self._fast_state, ctypes.byref(self._write_watch))
+
+    def _stray_store_made(self) -> bool:
+        return self._write_watch is not None and bool(self._write_watch.stray)
 
     def _give_windows(self) -> None:
         """Hands the device windows to the fast engine once both exist (the bus may attach first)."""
@@ -503,6 +525,8 @@ class Hart:
         counter = self._counter
         if counter.poll_report:
             return RunEnd.POLL, 0     # run_alone stopped at a poll loop's head: nothing runs before it is seen
+        if self._stray_store_made():
+            return RunEnd.STOPPED, 0  # run_alone stopped after a stray store: the board ends the run
         start = counter.executed
         turn_limit = counter.limit = start + budget
         counter.cycle_limit = NO_LIMIT if cycle_budget is None else counter.cycles + cycle_budget
@@ -513,7 +537,8 @@ class Hart:
             if self._fast_usable():
                 fast_from = counter.executed
                 pc = self._run_fast(pc)
-                if counter.poll_report or self.stop_requested or self.pending_exception is not None:
+                if counter.poll_report or self.stop_requested or self.pending_exception is not None or \
+                        self._stray_store_made():
                     break
                 if counter.executed >= turn_limit or counter.cycles >= counter.cycle_limit:
                     self.pc = pc

@@ -37,11 +37,12 @@ __stack_top, __stack_hart0_top, __stack_hart1_top, __stack_bottom), such as the 
 programs, gets only its read-only segments checked; the rest of SRAM counts as writable, and
 the board warns once that only code and constants are checked.
 
-How: the harts' stores are checked by a native Unicorn UC_HOOK_MEM_WRITE callback
-(`_write_watch.c`, one per SRAM view per hart) over a table of regions that tiles SRAM; a
-Python hook on every store would be far too slow. The stray store itself lands (this is a
-watchpoint, not protection); the hart stops before its next instruction, and the board turns
-the record into StrayWrite. Device (MMIO) stores are not SRAM and are not checked here.
+How: the harts' stores are checked in C over a table of regions that tiles SRAM
+(`_write_check.h`): on the fast engine by the interpreter after each store into SRAM, on the
+precise engine by a native Unicorn UC_HOOK_MEM_WRITE callback (`_write_watch.c`, one per SRAM
+view per hart); a Python hook on every store would be far too slow. The stray store itself
+lands (this is a watchpoint, not protection); the hart stops before its next instruction, and
+the board turns the record into StrayWrite. Device (MMIO) stores are not SRAM and are not checked here.
 """
 from __future__ import annotations
 
@@ -49,7 +50,6 @@ import ctypes
 import enum
 from dataclasses import dataclass
 
-from unicorn import UC_HOOK_MEM_WRITE
 from unicorn import riscv_const as rv
 from unicorn.unicorn_py3 import unicorn as _ucpy
 
@@ -59,7 +59,7 @@ from .errors import BadInput
 from .hart import Hart
 from .memory import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE, Sram
 
-WATCH_MAX_REGIONS = 24   # _write_watch.c's table size
+WATCH_MAX_REGIONS = 24   # _write_check.h's table size
 
 CODE = "code and constants"
 HEAP_UNALLOCATED = "heap not allocated"
@@ -145,7 +145,7 @@ def _tile(layers: list[tuple[int, int, Rule, str]]) -> list[Region]:
             regions.append(Region(lo, hi, rule, name))
     if len(regions) > WATCH_MAX_REGIONS:
         raise BadInput(f"--check-writes: the firmware's memory map has {len(regions)} regions; the checker "
-                       f"takes {WATCH_MAX_REGIONS} (_write_watch.c WATCH_MAX_REGIONS)")
+                       f"takes {WATCH_MAX_REGIONS} (_write_check.h WATCH_MAX_REGIONS)")
     return regions
 
 
@@ -226,7 +226,7 @@ class _Region(ctypes.Structure):
 
 
 class _Watch(ctypes.Structure):
-    """write_watch_t of _write_watch.c, field for field."""
+    """write_watch_t of _write_check.h, field for field."""
 
     _fields_ = [("cached_base", ctypes.c_uint64), ("uncached_base", ctypes.c_uint64),
                 ("sram_size", ctypes.c_uint64), ("sram", ctypes.c_void_p), ("heap_next_offset", ctypes.c_uint64),
@@ -263,9 +263,9 @@ class WriteWatch:
                        region_count=len(regions))
         for n, region in enumerate(regions):
             watch.regions[n] = _Region(region.lo, region.hi, int(region.rule))
-        for base in (SRAM_BASE, SRAM_UNCACHED_BASE):
-            hart.add_native_hook(UC_HOOK_MEM_WRITE, _CHECK_HOOK, watch, base, base + SRAM_SIZE - 1,
-                                 "the store checker (--check-writes)")
+        hart.attach_write_watch(watch, _CHECK_HOOK, [(base, base + SRAM_SIZE - 1)
+                                                     for base in (SRAM_BASE, SRAM_UNCACHED_BASE)],
+                                "the store checker (--check-writes)")
         self._watches[hart.hart_id] = (watch, regions)
 
     def stray_store(self, hart: Hart) -> Stray | None:

@@ -16,6 +16,7 @@ from PIL import Image
 
 from conftest import GOLDEN_FRAMES, ROOT, run_emulator
 from emulator import dmac as d
+from emulator.hart import ENGINE_FAST, ENGINE_PRECISE
 from emulator.errors import EXIT_STRAY_WRITE, StrayWrite
 from emulator.hart import HartState
 from emulator.memory import SRAM_BASE, SRAM_SIZE
@@ -134,10 +135,18 @@ STRAYS = {
 
 @pytest.mark.parametrize("name", STRAYS)
 def test_a_stray_store_stops_the_run_naming_pc_address_and_region(name):
+    """On the fast engine (the default), which checks its own stores; the precise engine, whose
+    Unicorn hook checks them, stops at the same store with the same message and counts."""
     hart, body, address, size, region = STRAYS[name]
-    board = make_board(watched(*((body, "") if hart == 0 else ("", body))), check_writes=True)
-    with pytest.raises(StrayWrite) as stop:
-        run_until(board, finished)
+    elf = watched(*((body, "") if hart == 0 else ("", body)))
+    stops = {}
+    for engine in (ENGINE_PRECISE, ENGINE_FAST):
+        board = make_board(elf, check_writes=True, engine=engine)
+        with pytest.raises(StrayWrite) as stop:
+            run_until(board, finished)
+        stops[engine] = (str(stop.value), [h.executed for h in board.harts], [h.cycles for h in board.harts])
+    assert stops[ENGINE_FAST] == stops[ENGINE_PRECISE]
+    assert board.harts[hart].fast_statistics()["instructions"] > 0     # the store was the fast engine's
     store = sym(board, "store")
     message = str(stop.value)
     access = re.match(rf"hart {hart} at pc 0x{store:08x} <store> \(s[bhwd] [^:]*\): store of {size} bytes at "
