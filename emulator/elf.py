@@ -3,6 +3,7 @@ segment's bytes at its physical address in SRAM; both harts then start at
 0x8000_0000 whatever the ELF's entry field says."""
 from __future__ import annotations
 
+import functools
 import struct
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -94,8 +95,16 @@ def _symbol_tables(elf: ELFFile) -> tuple[dict[int, str], dict[str, int]]:
         return symbols, values
     if symtab["sh_entsize"] != _ELF64_SYM.size:
         raise ValueError(f".symtab entries of {symtab['sh_entsize']} bytes, not {_ELF64_SYM.size}")
-    strtab = elf.get_section(symtab["sh_link"]).data()
-    data = symtab.data()
+    symbols, values = _symbols_of(symtab.data(), elf.get_section(symtab["sh_link"]).data())
+    return dict(symbols), dict(values)
+
+
+@functools.lru_cache(maxsize=8)
+def _symbols_of(data: bytes, strtab: bytes) -> tuple[dict[int, str], dict[str, int]]:
+    """_symbol_tables' work on a .symtab and its string table, once a process for the same bytes
+    (every board of a firmware reads them); the callers get copies."""
+    symbols: dict[int, str] = {}
+    values: dict[str, int] = {}
     for st_name, st_info, _, _, st_value, _ in _ELF64_SYM.iter_unpack(data[:len(data) - len(data) % _ELF64_SYM.size]):
         if not st_name:
             continue

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import ctypes
 import enum
+import functools
 import math
 import weakref
 from dataclasses import dataclass
@@ -794,9 +795,15 @@ def find_csr_sites(code: bytes, base: int) -> list[tuple[int, int]]:
     """Every 2-byte-aligned address in `code` holding a CSR instruction on an intercepted CSR.
     Sites that are really the middle of another instruction never execute, so extra
     candidates are harmless."""
+    return list(_csr_sites(code, base))
+
+
+@functools.lru_cache(maxsize=8)
+def _csr_sites(code: bytes, base: int) -> tuple[tuple[int, int], ...]:
+    """find_csr_sites, once a process for the same code (every board of a firmware scans it)."""
     sites = []
     for offset in range(0, len(code) - 3, 2):
         word = int.from_bytes(code[offset:offset + 4], "little")
         if word & 0x7F == 0x73 and (word >> 12) & 3 and (word >> 20) in INTERCEPTED_CSRS:
             sites.append((base + offset, word))
-    return sites
+    return tuple(sites)

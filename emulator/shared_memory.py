@@ -34,6 +34,7 @@ before; in practice a poller is waiting long before the hand-over.
 from __future__ import annotations
 
 import ctypes
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -252,12 +253,18 @@ def find_poll_loops(code: bytes, base: int) -> list[PollLoop]:
     """Every loop in `code` (loaded at `base`) that can only be polling memory (module comment).
     Every 2-byte-aligned position is tried: one that is really the middle of an instruction never
     executes, so a loop found there costs nothing."""
+    return list(_poll_loops(code, base))
+
+
+@functools.lru_cache(maxsize=8)
+def _poll_loops(code: bytes, base: int) -> tuple[PollLoop, ...]:
+    """find_poll_loops, once a process for the same code (every board of a firmware scans it)."""
     loops = {}
     for offset in _backward_branches(code):
         loop = _poll_loop_at(code, base, offset)
         if loop is not None and loop.head not in loops:
             loops[loop.head] = loop
-    return list(loops.values())
+    return tuple(loops.values())
 
 
 # --- at run time ---------------------------------------------------------------------------------

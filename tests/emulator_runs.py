@@ -82,8 +82,12 @@ def serve() -> None:
     import emulator.board  # noqa: F401
     import emulator.console_watch, emulator.golden, emulator.trace, emulator.uart_input, emulator.vcd  # noqa: F401,E401
     import PIL.Image, PIL.PngImagePlugin  # noqa: F401,E401
-    from emulator.memory import POWER_ON_SEED, power_on_pattern
-    power_on_pattern(POWER_ON_SEED)
+    from emulator.board import Board
+    firmware = ROOT / "build" / "firmware.elf"
+    if firmware.is_file():
+        # what a board learns of the firmware most runs use (its symbols, CSR sites, poll loops,
+        # cycle table) and the power-on SRAM pattern are kept in the process, for every fork
+        Board(str(firmware)).close()
     answers = sys.stdout
     for line in sys.stdin:
         request = json.loads(line)
