@@ -111,8 +111,8 @@ _counter_lib.fast_resume.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_
 _counter_lib.fast_abandon.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
 _counter_lib.fast_set_windows.restype = ctypes.c_int
 _counter_lib.fast_set_windows.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_uint32]
-_STOP_DEVICE = 3      # _fast_engine.c's answer: a device access, counted, for the board to carry out
 _counter_lib.fast_set_write_watch.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
+_STOP_DEVICE = 3      # _fast_engine.c's answer: a device access, counted, for the board to carry out
 _counter_lib.fast_run_alone.restype = ctypes.c_uint64
 _counter_lib.fast_run_alone.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_uint64,
                                         ctypes.c_void_p]
@@ -322,7 +322,8 @@ class Hart:
         the same table (_write_check.h), so the hart stays on it. After a stray store `watch.stray`
         is set and the hart stops before its next instruction, on either engine."""
         for first, last in views:
-            _add_native_hook(self.uc, unicorn.UC_HOOK_MEM_WRITE, check, watch, first, last, f"{what} on hart {self.hart_id}")
+            _add_native_hook(self.uc, unicorn.UC_HOOK_MEM_WRITE, check, watch, first, last,
+                             f"{what} on hart {self.hart_id}")
         self._write_watch = watch
         self._give_write_watch()
 
