@@ -186,14 +186,15 @@ class FirmwareCaller:
         hart.pending_exception = None
         hart.pc = address
         end, ran = hart.run(budget)
-        where = symbolize(self.board.image.symbols, hart.pc) or hex(hart.pc)
         if end is RunEnd.EXCEPTION:
             trap = hart.pending_exception
             raise AssertionError(f"{routine} trapped: {EXCEPTION_NAMES.get(trap.cause, trap.cause)} at "
                                  f"{symbolize(self.board.image.symbols, trap.epc) or hex(trap.epc)} "
                                  f"(tval 0x{trap.tval:x})")
-        assert end is RunEnd.WFI, f"{routine} did not return within {budget} instructions ({end.value}, at {where})"
-        assert hart.pc == self.return_address + 4, f"{routine} ended at {where}, not at its return address"
+        if end is not RunEnd.WFI or hart.pc != self.return_address + 4:
+            where = symbolize(self.board.image.symbols, hart.pc) or hex(hart.pc)
+            assert end is RunEnd.WFI, f"{routine} did not return within {budget} instructions ({end.value}, at {where})"
+            raise AssertionError(f"{routine} ended at {where}, not at its return address")
         for name, (register, value) in saved.items():
             now = uc.reg_read(register)
             assert now == value, f"{routine} changed callee-saved {name}: 0x{value:x} -> 0x{now:x}"
