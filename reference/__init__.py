@@ -14,13 +14,13 @@ Command line: ``python -m reference render FOLDER --frames N --out DIR`` and
 ideal image (see `reference.cli`).
 """
 from .ideal import DEFAULT_DENSITY, ideal_channels, render_ideal_frame, render_ideal_image
-from .load import load_card_folder, load_card_image, load_files
+from .load import load_card_folder, load_card_image, load_card_scene, load_files
 from .obj import Mesh, ModelError, parse_obj
 from .ppm import TextureError, parse_ppm, rgb565_from_samples
 from .render import render_frame, render_image, rgb565_to_rgb888
 from .scene import Scene, SceneError, parse_scene
 
 __all__ = ["DEFAULT_DENSITY", "Mesh", "ModelError", "Scene", "SceneError", "TextureError",
-           "ideal_channels", "load_card_folder", "load_card_image", "load_files", "parse_obj",
+           "ideal_channels", "load_card_folder", "load_card_image", "load_card_scene", "load_files", "parse_obj",
            "parse_ppm", "parse_scene", "render_frame", "render_ideal_frame", "render_ideal_image",
            "render_image", "rgb565_from_samples", "rgb565_to_rgb888"]

@@ -59,13 +59,24 @@ def load_card_folder(folder) -> tuple[Scene, Mesh, np.ndarray | None]:
     return load_files(scene_ini, obj, ppm)
 
 
-def load_card_image(image) -> tuple[Scene, Mesh, np.ndarray | None]:
+def _card_scene_ini(image: Path) -> bytes | None:
     from sdcard_image import UsageError, read_file
-    image = Path(image)
     try:
-        scene_ini = read_file(image, "/scene.ini")
+        return read_file(image, "/scene.ini")
     except UsageError:
-        scene_ini = None
+        return None
+
+
+def load_card_scene(image) -> Scene:
+    """The scene of a card image alone (the defaults without scene.ini), without its model and
+    texture, which can take seconds to parse."""
+    return parse_scene(_card_scene_ini(Path(image)))
+
+
+def load_card_image(image) -> tuple[Scene, Mesh, np.ndarray | None]:
+    from sdcard_image import read_file
+    image = Path(image)
+    scene_ini = _card_scene_ini(image)
     scene = parse_scene(scene_ini)
     obj = read_file(image, "/" + scene.model.lstrip("/"))
     ppm = read_file(image, "/" + scene.texture.lstrip("/")) if uses_texture(scene) else None

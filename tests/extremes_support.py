@@ -55,7 +55,7 @@ class Run:
     @property
     def background(self) -> np.ndarray:
         """The scene's background colour as the LCD shows it (RGB888)."""
-        scene, _, _ = reference.load_card_image(self.card)
+        scene = reference.load_card_scene(self.card)
         return reference.rgb565_to_rgb888(np.array([scene.background]))[0]
 
     def compare(self, frame: int, firmware_lighting: bool = False) -> "Comparison":
