@@ -77,22 +77,28 @@ def _run_child(request: dict) -> None:
 
 
 def serve() -> None:
-    """Reads requests from standard input until it ends, answering on standard output."""
+    """Reads requests from standard input until it ends, answering on standard output (anything
+    else the server itself prints goes to standard error)."""
+    answers = os.fdopen(os.dup(1), "w")
+    os.dup2(2, 1)
     import emulator.cli  # noqa: F401  (what every run imports, once, before the forks)
     import emulator.board  # noqa: F401
     import emulator.console_watch, emulator.golden, emulator.trace, emulator.uart_input, emulator.vcd  # noqa: F401,E401
     import PIL.Image, PIL.PngImagePlugin  # noqa: F401,E401
     from emulator.board import Board
     firmware = ROOT / "build" / "firmware.elf"
-    if firmware.is_file():
+    try:
         # what a board learns of the firmware most runs use (its symbols, CSR sites, poll loops,
-        # cycle table) and the power-on SRAM pattern are kept in the process, for every fork
+        # cycle table) and the power-on SRAM pattern are kept in the process, for every fork; a
+        # firmware missing or being rebuilt just now leaves that to each run
         Board(str(firmware)).close()
-    answers = sys.stdout
+    except Exception:  # noqa: BLE001
+        pass
     for line in sys.stdin:
         request = json.loads(line)
         pid = os.fork()
         if pid == 0:
+            answers.close()
             _run_child(request)
         answers.write(json.dumps({"pid": pid}) + "\n")
         answers.flush()
