@@ -82,7 +82,6 @@ def serve() -> None:
     answers = os.fdopen(os.dup(1), "w")
     os.dup2(2, 1)
     import emulator.cli  # noqa: F401  (what every run imports, once, before the forks)
-    import emulator.board  # noqa: F401
     import emulator.console_watch, emulator.golden, emulator.trace, emulator.uart_input, emulator.vcd  # noqa: F401,E401
     import PIL.Image, PIL.PngImagePlugin  # noqa: F401,E401
     from emulator.board import Board

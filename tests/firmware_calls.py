@@ -191,10 +191,11 @@ class FirmwareCaller:
             raise AssertionError(f"{routine} trapped: {EXCEPTION_NAMES.get(trap.cause, trap.cause)} at "
                                  f"{symbolize(self.board.image.symbols, trap.epc) or hex(trap.epc)} "
                                  f"(tval 0x{trap.tval:x})")
-        if end is not RunEnd.WFI or hart.pc != self.return_address + 4:
-            where = symbolize(self.board.image.symbols, hart.pc) or hex(hart.pc)
-            assert end is RunEnd.WFI, f"{routine} did not return within {budget} instructions ({end.value}, at {where})"
-            raise AssertionError(f"{routine} ended at {where}, not at its return address")
+        def where() -> str:    # (named only in a failure's message: symbolize is slow for every call)
+            return symbolize(self.board.image.symbols, hart.pc) or hex(hart.pc)
+
+        assert end is RunEnd.WFI, f"{routine} did not return within {budget} instructions ({end.value}, at {where()})"
+        assert hart.pc == self.return_address + 4, f"{routine} ended at {where()}, not at its return address"
         for name, (register, value) in saved.items():
             now = uc.reg_read(register)
             assert now == value, f"{routine} changed callee-saved {name}: 0x{value:x} -> 0x{now:x}"
