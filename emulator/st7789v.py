@@ -338,13 +338,10 @@ class ST7789V:
         if self._regs.sleeping or not self._regs.display_on:
             return np.zeros((self.WIDTH, self.HEIGHT, 3), dtype=np.uint8)
         upright = self._gram.reshape(self.HEIGHT, self.WIDTH)[::-1, :].T
-        image = np.empty((self.WIDTH, self.HEIGHT, 3), dtype=np.uint8)
-        for channel, shift in enumerate((12, 6, 0)):
-            six = ((upright >> shift) & 0x3F).astype(np.uint8)
-            image[:, :, channel] = (six << 2) | (six >> 4)
-        if self._regs.inverted:
-            np.subtract(255, image, out=image)
-        return image
+        # one look-up a pixel (the board takes a picture at every frame): the RGB bytes of 4-byte
+        # pixels, a view whose fourth byte is left out
+        pixels = np.take(_rgb888_of_gram_colours(self._regs.inverted), upright)
+        return pixels.view(np.uint8).reshape(self.WIDTH, self.HEIGHT, 4)[:, :, :3]
 
     # --- commands ------------------------------------------------------------------------
 
@@ -653,6 +650,21 @@ def _colours_of_16_bit_pixels(bgr: bool) -> np.ndarray:
     if bgr:
         red, blue = blue, red
     table = (red << 12) | (green << 6) | blue
+    table.flags.writeable = False
+    return table
+
+
+@functools.lru_cache(maxsize=2)
+def _rgb888_of_gram_colours(inverted: bool) -> np.ndarray:
+    """What the panel shows for every packed 18-bit GRAM colour: bytes R, G, B and 0 of a
+    little-endian uint32 (2^18 entries, read-only). Each 6-bit channel becomes 8 bits with its
+    top two bits repeated below (0 and full scale exact); INVON shows 255 minus that."""
+    values = np.arange(1 << 18, dtype=np.uint32)
+    table = np.zeros(1 << 18, dtype="<u4")
+    for byte, shift in enumerate((12, 6, 0)):
+        six = (values >> shift) & 0x3F
+        eight = (six << 2) | (six >> 4)
+        table |= (255 - eight if inverted else eight) << (8 * byte)
     table.flags.writeable = False
     return table
 

@@ -21,6 +21,7 @@ on every open); `CardFat` reads a FAT32 table in one go, to the same list.
 """
 from __future__ import annotations
 
+import array
 import datetime
 import errno
 import functools
@@ -29,6 +30,7 @@ import os
 import shutil
 import struct
 import subprocess
+import sys
 import tempfile
 import warnings
 from copy import copy
@@ -318,6 +320,16 @@ class CardFat(PyFat):
         if len(fats[0]) != fat_bytes:
             raise PyFATException("Invalid length of FAT")
         self.fat = (np.frombuffer(fats[0], dtype="<u4") & FAT32_ENTRY_MASK).tolist()
+
+    def __bytes__(self) -> bytes:
+        # pyfatfs packs a FAT32 table with a struct format of one letter per entry, at every
+        # file it creates or closes (flush_fat); an array of 32-bit entries gives the same bytes
+        if self.fat_type != self.FAT_TYPE_FAT32:
+            return super().__bytes__()
+        table = array.array("I", self.fat)
+        if sys.byteorder == "big":
+            table.byteswap()
+        return table.tobytes()
 
 
 class CardFS(PyFatFS):

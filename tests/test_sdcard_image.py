@@ -333,14 +333,17 @@ def test_pyfatfs_geometry_matches_plan_and_fsck(tmp_path, size_mib):
     assert result.returncode == 0, result.stdout + result.stderr
 
 
-def test_the_fat_is_read_as_pyfatfs_reads_it(special, tmp_path):
+def test_the_fat_is_read_and_packed_as_pyfatfs_does_it(special, tmp_path):
     """CardFat reads a FAT32 table in one go: the same entries as pyfatfs' own reading (the
-    reserved top bits cleared), and the same warning when the two FATs differ."""
+    reserved top bits cleared), and the same warning when the two FATs differ; and packs it for
+    writing into the bytes pyfatfs' own packing gives."""
+    from pyfatfs.PyFat import PyFat
     from pyfatfs.PyFatFS import PyFatFS
     card = shutil.copy(special.image, tmp_path / "card.img")
     twin = shutil.copy(special.image, tmp_path / "twin.img")
     ours = fat32.CardFS(str(card), PART_OFFSET)
     entries = list(ours.fs.fat)
+    assert bytes(ours.fs) == PyFat.__bytes__(ours.fs)
     ours.fs.close()
     theirs = PyFatFS(str(twin), offset=PART_OFFSET)
     assert entries == theirs.fs.fat
