@@ -96,10 +96,17 @@ typedef struct {
     int64_t imm;
     uint32_t entry;    /* the cycle table's entry for its address */
     uint16_t op;
+    uint16_t cost;     /* its cycles known statically: 1 + the entry's extra */
     uint8_t rd, rs1, rs2, rs3, rm;
     uint8_t len;       /* 2 or 4 */
-    uint8_t loop_head; /* the head of a poll loop (the counter's table) */
+    uint8_t timing;    /* what COUNT does beyond adding `cost` (T_ flags) */
 } insn_t;
+
+/* insn_t.timing: a control transfer (resolved when the next instruction shows where it went), a
+ * multiply or divide (its latency depends on its operands), the head of a poll loop */
+#define T_TRANSFER 1
+#define T_MULDIV 2
+#define T_LOOP_HEAD 4
 
 /* A straight run of decoded instructions from `pc` up to a jump (a conditional branch taken leaves
  * it in the middle), an instruction for
@@ -528,9 +535,17 @@ static void decode(const insn_counter_t *c, insn_t *in, uint64_t pc, uint32_t fe
         in->len = 4;
         w = fetched;
     }
-    in->entry = table_entry(c, pc);
+    uint32_t e = table_entry(c, pc);
+    in->entry = e;
+    in->cost = (uint16_t)(1 + E_EXTRA(e));
+    int kind = (int)E_KIND(e);
+    if (kind == KIND_MUL || kind == KIND_DIV)
+        in->timing |= T_MULDIV;
+    else if (kind != KIND_PLAIN)
+        in->timing |= T_TRANSFER;
     poll_loop_t *loop = loop_slot(c, pc);
-    in->loop_head = loop != NULL && loop->head == pc;
+    if (loop != NULL && loop->head == pc)
+        in->timing |= T_LOOP_HEAD;
     in->op = OP_HANDOFF;
     if (w == 0)
         return;
@@ -908,6 +923,16 @@ static void store_state(fast_state_t *f, void *uc, int fp_written, uint64_t old_
     f->write_batch(uc, ids, values, n);
 }
 
+/* interpret's bound on `cycles` below which neither limit can be reached (cycles grow at least as fast as
+ * the instructions executed) */
+static inline uint64_t limit_check(uint64_t executed, uint64_t cycles, uint64_t limit, uint64_t cycle_limit)
+{
+    if (executed >= limit || cycles >= cycle_limit)
+        return cycles;
+    /* (no sum that could wrap: the limits may be near 2^64, lifted) */
+    return limit - executed < cycle_limit - cycles ? cycles + (limit - executed) : cycle_limit;
+}
+
 /*
  * Runs the hart from f->pc (its registers in `f`) until an instruction needs the precise engine
  * (STOP_HANDOFF: f->pc names it, not counted), a device access is left to the caller (STOP_DEVICE:
@@ -923,9 +948,14 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
     uint64_t *fr = f->f;
     uint64_t pc = f->pc;
     const int fpu_on = (f->mstatus & MSTATUS_FS) != 0;
-    uint64_t executed = c->executed, cycles = c->cycles, stall = c->stall_cycles;
+    uint64_t executed = c->executed, cycles = c->cycles;
+    const uint64_t start_cycles = cycles, start_mispredicts = c->mispredicts;
     const uint64_t cycle_limit = c->cycle_limit;
     uint64_t limit = c->limit;   /* (a poll loop's head or a poll answered here lowers it during the call) */
+    /* One comparison an instruction instead of two: while cycles < check, neither limit is reached (every
+     * instruction adds one to `executed` and at least one to `cycles`); at check, both are looked at and
+     * check moves on. Whatever lowers `limit` sets check = cycles. */
+    uint64_t check = limit_check(executed, cycles, limit, cycle_limit);
     uint64_t block_epoch = 0;    /* f->epoch when the current block was entered */
     const uint64_t start = executed;
     int pending_kind = c->pending_kind;
@@ -936,10 +966,13 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
 #define HAND_OVER() do { pc = in->pc; why = STOP_HANDOFF; goto out; } while (0)
 /* on to the next instruction of the block; each starts only below the counter's limits */
 #define DISPATCH() do { \
-        if (executed >= limit || cycles >= cycle_limit) { \
-            pc = in->pc; \
-            why = STOP_LIMIT; \
-            goto out; \
+        if (cycles >= check) { \
+            if (executed >= limit || cycles >= cycle_limit) { \
+                pc = in->pc; \
+                why = STOP_LIMIT; \
+                goto out; \
+            } \
+            check = limit_check(executed, cycles, limit, cycle_limit); \
         } \
         goto *dispatch[in->op]; \
     } while (0)
@@ -952,35 +985,31 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
 /* Counts and times the instruction exactly as count_instruction does, its operands still unwritten. */
 #define COUNT() do { \
         executed++; \
-        uint64_t cost = 1; \
         if (pending_kind) { \
-            cost += resolve_transfer(c, pending_pc, pending_entry, pending_kind, in->pc); \
+            cycles += resolve_transfer(c, pending_pc, pending_entry, pending_kind, in->pc); \
             pending_kind = 0; \
         } \
-        uint32_t e = in->entry; \
-        if (e != 0) { \
-            int kind = (int)E_KIND(e); \
-            uint64_t extra = E_EXTRA(e); \
-            if (kind == KIND_MUL || kind == KIND_DIV) { \
-                uint64_t latency = muldiv_latency(e, x[E_RS1(e)], x[E_RS2(e)], kind == KIND_DIV); \
+        cycles += in->cost; \
+        if (in->timing) { \
+            uint32_t e = in->entry; \
+            if (in->timing & T_MULDIV) { \
+                uint64_t latency = muldiv_latency(e, x[E_RS1(e)], x[E_RS2(e)], E_KIND(e) == KIND_DIV); \
                 uint64_t distance = E_DIST(e); \
-                extra += latency > distance ? latency - distance : 0; \
-            } else if (kind != KIND_PLAIN) { \
-                pending_kind = kind; \
+                cycles += latency > distance ? latency - distance : 0; \
+            } else if (in->timing & T_TRANSFER) { \
+                pending_kind = (int)E_KIND(e); \
                 pending_pc = in->pc; \
                 pending_entry = e; \
             } \
-            stall += extra; \
-            cost += extra; \
-        } \
-        cycles += cost; \
-        if (in->loop_head) { \
-            poll_loop_t *loop = loop_slot(c, in->pc); \
-            if (!loop->ignore && executed - loop->last == loop->body && c->poll_report == 0) { \
-                c->poll_report = in->pc; \
-                c->limit = limit = executed; \
+            if (in->timing & T_LOOP_HEAD) { \
+                poll_loop_t *loop = loop_slot(c, in->pc); \
+                if (!loop->ignore && executed - loop->last == loop->body && c->poll_report == 0) { \
+                    c->poll_report = in->pc; \
+                    c->limit = limit = executed; \
+                    check = cycles; \
+                } \
+                loop->last = executed; \
             } \
-            loop->last = executed; \
         } \
     } while (0)
 /* a store into decoded code: its blocks are compared with their code again at their next entry */
@@ -994,6 +1023,7 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
             if (write_check_strays(watch_, (uint64_t)((h) - sram), width, &region_, &next_)) { \
                 write_check_record(watch_, a, width, in->pc, region_, next_); \
                 c->limit = limit = executed; \
+                check = cycles; \
             } \
         } \
     } while (0)
@@ -1009,8 +1039,10 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
                     if (++f->rep.repeats >= f->rep.needed) { \
                         f->rep.polling = 1;   /* note_poll: the hart polls; its turn ends here */ \
                         f->rep.repeats = 0; \
-                        if (executed < limit) \
+                        if (executed < limit) { \
                             c->limit = limit = executed; \
+                            check = cycles; \
+                        } \
                     } \
                     x[dest_reg] = extend(f->rep.value, nbytes, sign_from); \
                     NEXT(); \
@@ -1333,7 +1365,8 @@ out:
     c->pending_kind = pending_kind;
     c->pending_pc = pending_pc;
     c->pending_entry = pending_entry;
-    c->stall_cycles = stall;
+    c->stall_cycles += (cycles - start_cycles) - (executed - start) -
+                       MISPREDICT_PENALTY * (c->mispredicts - start_mispredicts);
     if (executed != start)
         c->last_pc = 0;   /* the precise engine's last instruction is no longer the hart's last */
     return why;

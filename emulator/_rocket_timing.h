@@ -50,14 +50,15 @@ static inline void btb_index_remove(predictor_t *p, uint64_t pc)
     p->index[gap] = 0;
 }
 
-/* Cycles the control transfer at `pc` (its table entry `e`) costs beyond its own, now that the
- * next instruction's address `next` shows where it went; the predictor learns as Rocket's does. */
-static inline uint64_t resolve_transfer(insn_counter_t *c, uint64_t pc, uint32_t e, int kind, uint64_t next)
+/* What a control transfer costs beyond its own cycle and what the predictor learns from it, in
+ * general: every kind, hit or miss (resolve_transfer takes the common conditional-branch cases
+ * itself). `hit`: the transfer's BTB entry or -1. */
+static __attribute__((noinline)) uint64_t resolve_any_transfer(insn_counter_t *c, uint64_t pc, uint32_t e, int kind,
+                                                               uint64_t next, int hit)
 {
     predictor_t *p = &c->predictor;
     uint64_t fallthrough = pc + (E_SIZE4(e) ? 4 : 2);
     int taken = next != fallthrough || kind != KIND_BRANCH;
-    int hit = btb_find(p, pc);
     int predicted_taken = 0;
     uint64_t predicted_target = 0;
     uint32_t bht_index = (uint32_t)((pc >> 1) ^ p->history) & (BHT_ENTRIES - 1);
@@ -102,6 +103,36 @@ static inline uint64_t resolve_transfer(insn_counter_t *c, uint64_t pc, uint32_t
         return 0;
     c->mispredicts++;
     return MISPREDICT_PENALTY;
+}
+
+/* Cycles the control transfer at `pc` (its table entry `e`) costs beyond its own, now that the
+ * next instruction's address `next` shows where it went; the predictor learns as Rocket's does.
+ * Inline for the cases a conditional branch takes most (the fast engine resolves one every few
+ * instructions): not taken with no BTB entry (predicted not taken, nothing learns), and a BTB
+ * hit whose branch was predicted right (the BHT and the history learn); resolve_any_transfer
+ * for everything else, with the same outcome. */
+static inline uint64_t resolve_transfer(insn_counter_t *c, uint64_t pc, uint32_t e, int kind, uint64_t next)
+{
+    predictor_t *p = &c->predictor;
+    int hit = btb_find(p, pc);
+    if (kind == KIND_BRANCH) {
+        int taken = next != pc + (E_SIZE4(e) ? 4 : 2);
+        if (hit < 0) {
+            if (!taken)
+                return 0;
+        } else if (!p->is_jump[hit] && !(p->is_return[hit] && p->ras_count > 0)) {
+            uint32_t bht_index = (uint32_t)((pc >> 1) ^ p->history) & (BHT_ENTRIES - 1);
+            uint8_t v = p->bht[bht_index];
+            int predicted_taken = v & 1;
+            if (taken == predicted_taken && (!taken || p->target[hit] == next)) {
+                uint8_t v1 = (v >> 1) & 1, v0 = v & 1;
+                p->bht[bht_index] = (uint8_t)((taken << 1) | ((v1 & v0) | ((v1 | v0) & taken)));
+                p->history = ((uint32_t)taken << (BHT_BITS - 1)) | (p->history >> 1);
+                return 0;
+            }
+        }
+    }
+    return resolve_any_transfer(c, pc, e, kind, next, hit);
 }
 
 static inline int msb(uint64_t x)   /* hardware Log2: index of the highest set bit, 0 for 0 */
