@@ -1465,6 +1465,23 @@ int fast_resume(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t value)
     return interpret_on(f, c, uc);
 }
 
+/* fast_run (resume 0, `arg` the pc) or fast_resume (resume 1, `arg` the loaded value) for the
+ * Python-callable step of _insn_counter.c; at STOP_DEVICE, `out` holds the access: window, address,
+ * width, is_store, the stored value, its pc. */
+int fast_step(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t arg, int resume, uint64_t out[6])
+{
+    int why = resume ? fast_resume(f, c, uc, arg) : fast_run(f, c, uc, arg);
+    if (why == STOP_DEVICE) {
+        out[0] = f->dev.window;
+        out[1] = f->dev.address;
+        out[2] = f->dev.width;
+        out[3] = f->dev.is_store;
+        out[4] = f->dev.value;
+        out[5] = f->pc;
+    }
+    return why;
+}
+
 /* After STOP_DEVICE: ends the run with the access not carried out (it trapped, or the board failed):
  * the registers back to the precise engine, the pc at the access. */
 __attribute__((visibility("default")))

@@ -10,9 +10,9 @@
  * Rocket core would take (below: timing.py computes the table it reads), and
  * stops before the CSR instructions the board answers itself (hart.py).
  *
- * It is built as a (method-less) Python extension only so that pip builds
- * it with the package; Python never calls into it, ctypes hands the address
- * of count_instruction to uc_hook_add.
+ * It is built as a Python extension so that pip builds it with the package;
+ * ctypes hands the address of count_instruction to uc_hook_add. Its one
+ * Python function, fast_step, runs the fast engine (below).
  */
 #include <Python.h>
 #include <stdint.h>
@@ -94,9 +94,68 @@ void count_instruction(void *uc, uint64_t address, uint32_t size, insn_counter_t
     }
 }
 
+/* _fast_engine.c: one stretch of the fast engine, up to its stop (a device access described in out[]) */
+struct fast_state;
+int fast_step(struct fast_state *f, insn_counter_t *c, void *uc, uint64_t arg, int resume, uint64_t out[6]);
+#define FAST_STOP_DEVICE 3
+
+/*
+ * fast_step(state, counter, uc, arg, resume) for hart.py: the fast engine's run (resume false, arg
+ * the pc) or its resumption after a device access (resume true, arg the loaded value), called the
+ * way CPython calls its own functions. A ctypes call and the six reads of the access's fields cost
+ * about a microsecond and a half, as much as the rest of a device access the firmware polls.
+ * Returns the stop (an int), or at a device access (window, address, width, is_store, value, pc)
+ * with the stop first. The GIL is released meanwhile, as ctypes releases it.
+ */
+static PyObject *py_fast_step(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    (void)self;
+    if (nargs != 5) {
+        PyErr_SetString(PyExc_TypeError, "fast_step(state, counter, uc, arg, resume) takes 5 arguments");
+        return NULL;
+    }
+    void *f = PyLong_AsVoidPtr(args[0]);
+    void *c = PyLong_AsVoidPtr(args[1]);
+    void *uc = PyLong_AsVoidPtr(args[2]);
+    uint64_t arg = PyLong_AsUnsignedLongLongMask(args[3]);   /* modulo 2^64, as ctypes' c_uint64 takes it */
+    int resume = PyObject_IsTrue(args[4]);
+    if (PyErr_Occurred())
+        return NULL;
+    if (f == NULL || c == NULL || uc == NULL) {
+        PyErr_SetString(PyExc_ValueError, "fast_step: a null state, counter or engine");
+        return NULL;
+    }
+    uint64_t out[6];
+    int why;
+    Py_BEGIN_ALLOW_THREADS
+    why = fast_step((struct fast_state *)f, (insn_counter_t *)c, uc, arg, resume, out);
+    Py_END_ALLOW_THREADS
+    if (why != FAST_STOP_DEVICE)
+        return PyLong_FromLong(why);
+    PyObject *result = PyTuple_New(7);
+    if (result == NULL)
+        return NULL;
+    PyTuple_SET_ITEM(result, 0, PyLong_FromLong(why));
+    for (int i = 0; i < 6; i++) {
+        PyObject *item = PyLong_FromUnsignedLongLong(out[i]);
+        if (item == NULL) {
+            Py_DECREF(result);
+            return NULL;
+        }
+        PyTuple_SET_ITEM(result, i + 1, item);
+    }
+    return result;
+}
+
+static PyMethodDef methods[] = {
+    {"fast_step", (PyCFunction)(void (*)(void))py_fast_step, METH_FASTCALL,
+     "fast_step(state, counter, uc, arg, resume): a stretch of the fast engine (see _insn_counter.c)"},
+    {NULL, NULL, 0, NULL},
+};
+
 static struct PyModuleDef module = {
     PyModuleDef_HEAD_INIT, "_insn_counter",
-    "Native per-instruction counting hook (used through ctypes).", -1, NULL,
+    "Native per-instruction counting hook (used through ctypes) and the fast engine's step.", -1, methods,
 };
 
 PyMODINIT_FUNC PyInit__insn_counter(void)

@@ -112,7 +112,7 @@ _counter_lib.fast_abandon.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
 _counter_lib.fast_set_windows.restype = ctypes.c_int
 _counter_lib.fast_set_windows.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_uint32]
 _counter_lib.fast_set_write_watch.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
-_STOP_DEVICE = 3      # _fast_engine.c's answer: a device access, counted, for the board to carry out
+_fast_step = _insn_counter.fast_step   # runs the fast engine, CPython's way of calling (see _insn_counter.c)
 _counter_lib.fast_run_alone.restype = ctypes.c_uint64
 _counter_lib.fast_run_alone.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_uint64,
                                         ctypes.c_void_p]
@@ -296,6 +296,8 @@ class Hart:
             raise MemoryError("cannot allocate the fast engine")
         self._fast_state = state
         self._fast_head = _FastHead.from_address(state)
+        self._counter_at = ctypes.addressof(self._counter)     # (_fast_step takes addresses)
+        self._uc_at = self.uc._uch.value
         # freed with the hart (Board.close frees it at once)
         self._free_fast_state = weakref.finalize(self, _counter_lib.fast_state_free, state)
         self._give_windows()
@@ -381,34 +383,34 @@ class Hart:
         """Runs the hart on the fast engine from `pc` until it reaches the counter's limits or an
         instruction it hands over, carrying out the device accesses it stops at on the way; the
         precise engine holds the hart's registers again after it. Returns the pc to go on from."""
-        state, counter, uc = self._fast_state, ctypes.byref(self._counter), self.uc._uch
+        state, counter, uc = self._fast_state, self._counter_at, self._uc_at
         rep = self._fast_head.rep
-        why = _counter_lib.fast_run(state, counter, uc, pc)
+        stop = _fast_step(state, counter, uc, pc, False)    # the stop, or a device access (_fast_step)
         while True:
+            at_device = stop.__class__ is tuple
             if rep.armed:
                 rep.armed = 0     # armed for one stretch of the interpreter: the board may change anything now
                 if rep.answered:
-                    self._holding = why == _STOP_DEVICE
+                    self._holding = at_device
                     self._repeats_answered(self, rep.pc, rep.address, rep.value, rep.repeats, bool(rep.polling))
                     self._holding = False
-            if why != _STOP_DEVICE:
+            if not at_device:
                 break
-            dev = self._fast_head.dev
+            _, window, address, width, is_store, stored, access_pc = stop
             self.device_accesses += 1
             self._holding = True
             try:
-                value = self._device_access(self, dev.window, dev.address, dev.width, bool(dev.is_store), dev.value,
-                                            self._fast_head.pc)
+                value = self._device_access(self, window, address, width, bool(is_store), stored, access_pc)
             except BaseException:
                 self._holding = False
-                _counter_lib.fast_abandon(state, uc)
+                _counter_lib.fast_abandon(state, self.uc._uch)
                 raise
             self._holding = False
             if self.pending_exception is not None:
                 # (defensive: the bus raises no exception for the aligned accesses it gets here today)
-                _counter_lib.fast_abandon(state, uc)    # the access trapped: it does not complete
+                _counter_lib.fast_abandon(state, self.uc._uch)    # the access trapped: it does not complete
                 break
-            why = _counter_lib.fast_resume(state, counter, uc, value)
+            stop = _fast_step(state, counter, uc, value, True)
         return self._fast_head.pc
 
     def fast_usable(self) -> bool:
