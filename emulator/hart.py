@@ -553,7 +553,7 @@ class Hart:
                 precise_limit = min(turn_limit, counter.executed + self._precise_stretch)
             counter.limit = precise_limit
             self._run_precise(pc)
-            pc = self.uc.reg_read(rv.UC_RISCV_REG_PC)
+            pc = self.reg(rv.UC_RISCV_REG_PC)
             if precise_limit < turn_limit and counter.limit == precise_limit and counter.executed >= precise_limit \
                     and not (self.stop_requested or self.pending_exception is not None or counter.poll_report
                              or counter.cycles >= counter.cycle_limit or self._slept_at(pc)):
@@ -563,7 +563,7 @@ class Hart:
                 counter.limit = turn_limit
             break
         ran = self._counter.executed - start
-        self.pc = self.uc.reg_read(rv.UC_RISCV_REG_PC)
+        self.pc = self.reg(rv.UC_RISCV_REG_PC)
         if self.pending_exception is not None:
             return RunEnd.EXCEPTION, ran
         if self._counter.poll_report:
