@@ -1,20 +1,22 @@
-"""`python -m emulator` runs for the tests, each in a process of its own, without paying for the
-interpreter's start and the board model's imports each time (about 0.2 s a run, some 270 runs a
-suite).
+"""`python -m emulator` runs for the tests (and `python -m reference`, `python -m sdcard_image`
+runs), each in a process of its own, without paying for the interpreter's start and the
+project's imports each time (about 0.2 s a run of the board model, some 270 runs a suite; 0.25 s
+a run of the other two).
 
 A server process (`python tests/emulator_runs.py`, one per test process, started at the first
-run) imports the board model once and forks a child for each run the tests ask for. The child
-sets the asking test's working folder and environment, writes its standard output and error to
-files the test names, runs the package's `__main__` as `python -m emulator` would, and exits with
-its status; the server reports the status back. What differs from a run started from the shell
-is only what was imported before the command line was read.
+run) imports the board model, the reference renderer and the card tool once and forks a child
+for each run the tests ask for. The child sets the asking test's working folder and environment,
+writes its standard output and error to files the test names, runs the package's `__main__` as
+`python -m <package>` would, and exits with its status; the server reports the status back. What
+differs from a run started from the shell is only what was imported before the command line was
+read.
 
 The tests that check the command as a user types it (test_readme_commands.py, the `--help` and
 bad-option tests) still start `python -m emulator` themselves.
 
-Protocol, one JSON object a line: the test sends {"args", "cwd", "env", "stdout", "stderr"}; the
-server answers {"pid"} once the child exists and {"status"} once it has ended (the exit status, or
-minus the signal that ended it, as subprocess reports it).
+Protocol, one JSON object a line: the test sends {"module", "args", "cwd", "env", "stdout",
+"stderr"}; the server answers {"pid"} once the child exists and {"status"} once it has ended (the
+exit status, or minus the signal that ended it, as subprocess reports it).
 """
 from __future__ import annotations
 
@@ -33,13 +35,13 @@ import traceback
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-COMMAND = [sys.executable, "-m", "emulator"]
+MODULES = ("emulator", "reference", "sdcard_image")    # the packages whose `python -m` runs are served
 
 
 # --- the server ----------------------------------------------------------------------------
 
 def _run_child(request: dict) -> None:
-    """In the forked child: becomes the `python -m emulator` run `request` describes; never returns."""
+    """In the forked child: becomes the `python -m <module>` run `request` describes; never returns."""
     status = 1
     try:
         os.chdir(request["cwd"])
@@ -55,9 +57,10 @@ def _run_child(request: dict) -> None:
         sys.stdin = open(0, "r", closefd=False)
         sys.stdout = open(1, "w", closefd=False)
         sys.stderr = open(2, "w", buffering=1, errors="backslashreplace", closefd=False)
-        sys.argv = [str(ROOT / "emulator" / "__main__.py"), *request["args"]]
+        module = request["module"]
+        sys.argv = [str(ROOT / module / "__main__.py"), *request["args"]]
         try:
-            runpy.run_module("emulator", run_name="__main__", alter_sys=True)
+            runpy.run_module(module, run_name="__main__", alter_sys=True)
             status = 0
         except SystemExit as end:
             if end.code is None:
@@ -84,6 +87,7 @@ def serve() -> None:
     import emulator.cli  # noqa: F401  (what every run imports, once, before the forks)
     import emulator.console_watch, emulator.golden, emulator.trace, emulator.uart_input, emulator.vcd  # noqa: F401,E401
     import PIL.Image, PIL.PngImagePlugin  # noqa: F401,E401
+    import reference.cli, sdcard_image.cli  # noqa: F401,E401
     from emulator.board import Board
     firmware = ROOT / "build" / "firmware.elf"
     try:
@@ -140,10 +144,11 @@ class _Server:
         line, self._received = self._received.split(b"\n", 1)
         return json.loads(line)
 
-    def run(self, args: list[str], timeout: float) -> subprocess.CompletedProcess:
-        with tempfile.TemporaryDirectory(prefix="emulator-run-") as folder:
+    def run(self, module: str, args: list[str], timeout: float, cwd: Path, text: bool) -> subprocess.CompletedProcess:
+        command = [sys.executable, "-m", module, *args]
+        with tempfile.TemporaryDirectory(prefix=f"{module}-run-") as folder:
             out, err = Path(folder) / "stdout", Path(folder) / "stderr"
-            request = {"args": list(args), "cwd": str(ROOT), "env": dict(os.environ),
+            request = {"module": module, "args": list(args), "cwd": str(cwd), "env": dict(os.environ),
                        "stdout": str(out), "stderr": str(err)}
             self.process.stdin.write(json.dumps(request).encode() + b"\n")
             pid = self._answer(None)["pid"]
@@ -151,8 +156,10 @@ class _Server:
             if answer is None:
                 os.kill(pid, signal.SIGKILL)
                 self._answer(None)
-                raise subprocess.TimeoutExpired([*COMMAND, *args], timeout, out.read_bytes(), err.read_bytes())
-            return subprocess.CompletedProcess([*COMMAND, *args], answer["status"],
+                raise subprocess.TimeoutExpired(command, timeout, out.read_bytes(), err.read_bytes())
+            if not text:
+                return subprocess.CompletedProcess(command, answer["status"], out.read_bytes(), err.read_bytes())
+            return subprocess.CompletedProcess(command, answer["status"],
                                                out.read_text(errors="replace"), err.read_text(errors="replace"))
 
 
@@ -160,19 +167,28 @@ _idle_servers: list[_Server] = []
 _servers_lock = threading.Lock()
 
 
-def run_emulator(*args: str, timeout: float = 600) -> subprocess.CompletedProcess:
-    """Runs `python -m emulator args` in a process of its own (see the module's docstring), from
-    the project's root; its output as text, as subprocess.run(..., capture_output=True, text=True)
-    gives it. Runs asked for at once (from threads) each get a server of their own."""
+def run_module(module: str, *args: str | Path, timeout: float = 600, cwd: Path = ROOT,
+               text: bool = True) -> subprocess.CompletedProcess:
+    """Runs `python -m module args` (module one of MODULES) in a process of its own (see the
+    module's docstring), from `cwd` (the project's root unless given), with standard input empty;
+    its output as subprocess.run(..., capture_output=True, text=text) gives it. Runs asked for at
+    once (from threads) each get a server of their own."""
+    if module not in MODULES:
+        raise ValueError(f"{module}: not one of the packages the run server has imported ({', '.join(MODULES)})")
     with _servers_lock:
         server = _idle_servers.pop() if _idle_servers else None
     if server is None or server.process.poll() is not None:
         server = _Server()
     try:
-        return server.run(list(args), timeout)
+        return server.run(module, [str(arg) for arg in args], timeout, Path(cwd), text)
     finally:
         with _servers_lock:
             _idle_servers.append(server)
+
+
+def run_emulator(*args: str, timeout: float = 600) -> subprocess.CompletedProcess:
+    """`python -m emulator args` from the project's root (run_module)."""
+    return run_module("emulator", *args, timeout=timeout)
 
 
 if __name__ == "__main__":

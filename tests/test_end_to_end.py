@@ -14,6 +14,7 @@ import pytest
 from PIL import Image
 
 from conftest import GOLDEN, GOLDEN_FRAMES, ROOT, run_emulator
+from emulator_runs import run_module
 
 from golden_scenes import SCENES
 
@@ -139,9 +140,8 @@ def test_flat_and_wireframe_cards_need_no_texture(name, mode, firmware, assets, 
     assert result.returncode == 0, result.stderr + console
     assert f"texture: not loaded (mode {mode})" in console.splitlines()
     assert "load models/" in console and ".ppm" not in console
-    reference = subprocess.run([sys.executable, "-m", "reference", "render-card", str(card), "--frames", "1",
-                                "--out", str(tmp_path / "reference"), "--quiet"], cwd=ROOT, capture_output=True,
-                               text=True)
+    reference = run_module("reference", "render-card", card, "--frames", "1", "--out", tmp_path / "reference",
+                           "--quiet")
     assert reference.returncode == 0, reference.stderr
     assert (tmp_path / "reference" / "frame_0000.png").exists()
 

@@ -3,7 +3,6 @@ errors, and a loose agreement with the firmware's golden frames (a convention ch
 from __future__ import annotations
 
 import math
-import subprocess
 import sys
 import warnings
 from dataclasses import replace
@@ -18,6 +17,7 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 from golden_scenes import DEFAULT_CARD, GOLDEN, SCENES  # noqa: E402
+from emulator_runs import run_module  # noqa: E402
 from reference import (Mesh, ModelError, Scene, SceneError, TextureError, load_card_image,  # noqa: E402
                        load_files, parse_obj, parse_ppm, parse_scene, render_frame, render_ideal_frame,
                        render_image)
@@ -587,20 +587,16 @@ def test_cli_renders_a_folder_and_a_card(tmp_path):
     (folder / "Models" / "tri.obj").write_text("v -1 -1 0\nv 1 -1 0\nv 0 1 0\nf 1 2 3\n")
     (folder / "texture.ppm").write_bytes(b"P3 1 1 1 1 1 1")
     out = tmp_path / "out"
-    result = subprocess.run([sys.executable, "-m", "reference", "render", str(folder), "--frames", "2",
-                             "--out", str(out), "--quiet"], cwd=ROOT, capture_output=True, text=True)
+    result = run_module("reference", "render", folder, "--frames", "2", "--out", out, "--quiet")
     assert result.returncode == 0, result.stderr
     frames = sorted(p.name for p in out.iterdir())
     assert frames == ["frame_0000.png", "frame_0001.png"]
     image = np.asarray(Image.open(out / "frame_0000.png"))
     assert image.shape == (240, 320, 3) and (image != image[0, 0]).any()
     (folder / "scene.ini").write_text("mode = flat\nnear = -1\n")
-    result = subprocess.run([sys.executable, "-m", "reference", "render", str(folder), "--out", str(out)],
-                            cwd=ROOT, capture_output=True, text=True)
+    result = run_module("reference", "render", folder, "--out", out)
     assert result.returncode == 3 and "bad scene.ini line 2: bad value (must be greater than 0)" in result.stderr
     if DEFAULT_CARD.exists():
-        result = subprocess.run([sys.executable, "-m", "reference", "render-card", str(DEFAULT_CARD),
-                                 "--out", str(tmp_path / "card-out"), "--quiet"], cwd=ROOT,
-                                capture_output=True, text=True)
+        result = run_module("reference", "render-card", DEFAULT_CARD, "--out", tmp_path / "card-out", "--quiet")
         assert result.returncode == 0, result.stderr
         assert (tmp_path / "card-out" / "frame_0000.png").exists()

@@ -4,7 +4,6 @@ bench scene. Small regions and single frames keep it to a few seconds."""
 from __future__ import annotations
 
 import math
-import subprocess
 import sys
 from dataclasses import replace
 from pathlib import Path
@@ -17,6 +16,7 @@ ROOT = Path(__file__).resolve().parent.parent
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
+from emulator_runs import run_module  # noqa: E402
 from reference import Mesh, Scene, load_card_image, render_frame, render_image  # noqa: E402
 from reference.ideal import (BoxTexture, channels, ideal_channels, line_coverage,  # noqa: E402
                              render_ideal_frame, render_ideal_image)
@@ -386,13 +386,11 @@ def test_cli_renders_the_ideal_and_refuses_a_bad_density(tmp_path):
     (folder / "scene.ini").write_text("mode = flat\ncull = off\n")
     (folder / "model.obj").write_text("v -1 -1 0\nv 1 -1 0\nv 0 1 0\nf 1 2 3\n")
     for extra, out in (([], "centres"), (["--ideal", "--density", "4"], "ideal")):
-        result = subprocess.run([sys.executable, "-m", "reference", "render", str(folder), "--out",
-                                 str(tmp_path / out), "--quiet", *extra], cwd=ROOT, capture_output=True, text=True)
+        result = run_module("reference", "render", folder, "--out", tmp_path / out, "--quiet", *extra)
         assert result.returncode == 0, result.stderr
     centres, ideal = (np.asarray(Image.open(tmp_path / out / "frame_0000.png")) for out in ("centres", "ideal"))
     assert 0 < np.any(centres != ideal, axis=2).mean() < 0.05            # the triangle's edges
     for extra, message in ((["--ideal", "--density", "65"], "--density must be from 1 to 64"),
                            (["--density", "4"], "--density applies only with --ideal")):
-        result = subprocess.run([sys.executable, "-m", "reference", "render", str(folder), "--out",
-                                 str(tmp_path / "bad"), *extra], cwd=ROOT, capture_output=True, text=True)
+        result = run_module("reference", "render", folder, "--out", tmp_path / "bad", *extra)
         assert result.returncode == 2 and message in result.stderr and "Traceback" not in result.stderr

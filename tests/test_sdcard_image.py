@@ -14,7 +14,6 @@ import random
 import shutil
 import struct
 import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -24,6 +23,7 @@ from PIL import Image
 from sdcard_image import (BadInputError, CorruptImageError, ImageTooSmallError, OutputExistsError,
                           UsageError, build_image, list_image, read_file)
 from sdcard_image import cli, fat32, image as image_mod, layouts
+from emulator_runs import run_module
 from sdcard_image.convert import CardPlan, PlacedFile
 from reference.obj import parse_obj
 from sdcard_image.objcheck import check_obj
@@ -89,9 +89,9 @@ def mcopy(img: Path, card_path: str, out: Path) -> bytes:
 
 
 def run_process(*args: str | Path) -> subprocess.CompletedProcess:
-    """`python -m sdcard_image ARGS` in a child process, exactly as a user runs it."""
-    return subprocess.run([sys.executable, "-m", "sdcard_image", *map(str, args)], cwd=ROOT,
-                          capture_output=True, text=True, timeout=120)
+    """`python -m sdcard_image ARGS` in a child process of its own (forked by the tests' run server,
+    emulator_runs.py)."""
+    return run_module("sdcard_image", *args, timeout=120)
 
 
 def run_cli(*args: str | Path) -> subprocess.CompletedProcess:
@@ -435,8 +435,7 @@ def test_extract_single_file_all_and_stdout(sample_img, inputs, tmp_path):
                    "A FILE WITH A RATHER LONG NAME, MORE THAN 13 CHARS.TXT", tmp_path).returncode == 0
     assert (tmp_path / "A FILE WITH A RATHER LONG NAME, MORE THAN 13 CHARS.TXT").read_bytes() \
         == b"deep\n"
-    piped = subprocess.run([sys.executable, "-m", "sdcard_image", "extract", str(sample_img),
-                            "/one.bin", "-"], cwd=ROOT, capture_output=True)
+    piped = run_module("sdcard_image", "extract", sample_img, "/one.bin", "-", text=False)
     assert piped.returncode == 0 and piped.stdout == b"\x01"
     dest = tmp_path / "all"
     result = run_cli("extract", sample_img, "--all", dest)
@@ -974,6 +973,5 @@ def test_a_card_laid_out_as_mkfs_fat_does(tmp_path, size_mib, bytes_per_cluster)
 
 
 def test_an_unknown_layout_is_a_usage_error(tmp_path):
-    result = subprocess.run([sys.executable, "-m", "sdcard_image", "build", str(tmp_path / "c.img"), "--layout", "exfat",
-                             "--scene", "model=x.obj"], cwd=ROOT, capture_output=True, text=True)
+    result = run_module("sdcard_image", "build", tmp_path / "c.img", "--layout", "exfat", "--scene", "model=x.obj")
     assert result.returncode == 2 and "invalid choice: 'exfat'" in result.stderr

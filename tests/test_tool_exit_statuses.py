@@ -7,11 +7,11 @@ from __future__ import annotations
 import errno
 import hashlib
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
+from emulator_runs import run_module as run_tool_module
 from sdcard_image import cli as sd_cli
 from sdcard_image import fat32
 
@@ -20,8 +20,8 @@ TRIANGLE = b"v -1 -1 -2\nv 1 -1 -2\nv 0 1 -2\nf 1 2 3\n"
 
 
 def run_module(module: str, *args: str | Path) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", module, *map(str, args)], cwd=ROOT,
-                          capture_output=True, text=True, timeout=120)
+    """`python -m module ARGS` in a process of its own (forked by the tests' run server)."""
+    return run_tool_module(module, *args, timeout=120)
 
 
 def digest(path: Path) -> str:
