@@ -50,6 +50,15 @@ static inline void btb_index_remove(predictor_t *p, uint64_t pc)
     p->index[gap] = 0;
 }
 
+/* A branch that hit in the BTB went `taken` (1) or not: its 2-bit BHT entry and the global history learn it. */
+static inline void bht_learn(predictor_t *p, uint32_t bht_index, int taken)
+{
+    uint8_t v = p->bht[bht_index];
+    uint8_t v1 = (v >> 1) & 1, v0 = v & 1;
+    p->bht[bht_index] = (uint8_t)((taken << 1) | ((v1 & v0) | ((v1 | v0) & taken)));
+    p->history = ((uint32_t)taken << (BHT_BITS - 1)) | (p->history >> 1);
+}
+
 /* What a control transfer costs beyond its own cycle and what the predictor learns from it, in
  * general: every kind, hit or miss (resolve_transfer takes the common conditional-branch cases
  * itself). `hit`: the transfer's BTB entry or -1. */
@@ -69,12 +78,8 @@ static __attribute__((noinline)) uint64_t resolve_any_transfer(insn_counter_t *c
             predicted_target = p->ras[p->ras_pos];
     }
     int mispredicted = taken != predicted_taken || (taken && predicted_target != next);
-    if (hit >= 0 && kind == KIND_BRANCH) {
-        uint8_t v = p->bht[bht_index];
-        uint8_t v1 = (v >> 1) & 1, v0 = v & 1;
-        p->bht[bht_index] = (uint8_t)((taken << 1) | ((v1 & v0) | ((v1 | v0) & taken)));
-        p->history = ((uint32_t)taken << (BHT_BITS - 1)) | (p->history >> 1);
-    }
+    if (hit >= 0 && kind == KIND_BRANCH)
+        bht_learn(p, bht_index, taken);
     if (taken && mispredicted) {
         int slot = hit;
         if (slot < 0) {
@@ -122,12 +127,9 @@ static inline uint64_t resolve_transfer(insn_counter_t *c, uint64_t pc, uint32_t
                 return 0;
         } else if (!p->is_jump[hit] && !(p->is_return[hit] && p->ras_count > 0)) {
             uint32_t bht_index = (uint32_t)((pc >> 1) ^ p->history) & (BHT_ENTRIES - 1);
-            uint8_t v = p->bht[bht_index];
-            int predicted_taken = v & 1;
+            int predicted_taken = p->bht[bht_index] & 1;
             if (taken == predicted_taken && (!taken || p->target[hit] == next)) {
-                uint8_t v1 = (v >> 1) & 1, v0 = v & 1;
-                p->bht[bht_index] = (uint8_t)((taken << 1) | ((v1 & v0) | ((v1 | v0) & taken)));
-                p->history = ((uint32_t)taken << (BHT_BITS - 1)) | (p->history >> 1);
+                bht_learn(p, bht_index, taken);
                 return 0;
             }
         }
