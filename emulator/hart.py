@@ -413,6 +413,16 @@ class Hart:
             stop = _fast_step(state, counter, uc, value, True)
         return self._fast_head.pc
 
+    def run_fast_stretch(self, pc: int) -> int:
+        """Runs the fast engine alone from `pc` until it hands the hart over or the counter's limits are
+        reached, and returns the pc it stopped at (the bench timing the interpreter by itself; the
+        board runs it through run)."""
+        return self._run_fast(pc)
+
+    def forget_decodings(self) -> None:
+        """Drops the fast engine's decoded blocks (the bench: each timed run decodes afresh)."""
+        self._forget_decodings()
+
     def fast_usable(self) -> bool:
         """Whether the hart runs on the fast engine (it has one and no hook needs the precise one)."""
         return self._fast_usable()

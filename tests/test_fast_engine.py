@@ -647,3 +647,16 @@ def test_the_turns_alone_leave_the_guests_flags_alone():
     precise, fast = boards
     assert turns_alone, "no turns alone"
     assert state(fast) == state(precise) and state(fast)["fflags"] == 0
+
+
+def test_the_benchs_drawing_figures_time_one_drawing_on_each_engine(firmware, card):
+    """tools/bench.py times hart 0's drawing of a steady frame on each engine: the fast engine stops
+    before the frame's closing wfi, the precise engine runs it, and each way draws the same
+    instructions."""
+    from pathlib import Path
+    from tools import bench
+    ways = bench.drawing_figures(Path(firmware), Path(card), rounds=1)
+    fast = ways["fast engine, Rocket cycle table"]["instructions"]
+    assert fast > 100_000
+    assert ways["precise engine, Rocket cycle table"]["instructions"] == fast + 1
+    assert ways["precise engine, one cycle each"]["instructions"] == fast + 1

@@ -7,7 +7,8 @@ Measured in one run on one host, so the ratios are meaningful even on a noisy ma
      over both harts, frames per host second, and virtual frames per second; instructions and
      CPU cycles per frame, reset to the first frame in virtual ms, under the Rocket cycle timing
      (the default) and under --timing ipc1, and the host cost of the cycle model (runs of both
-     alternate, the fastest of each counts);
+     alternate, the fastest of each counts); hart 0's drawing of a frame alone (no scheduler, no
+     devices) on the fast engine, on the precise one and on Unicorn with no hook;
   4. the same with --check-writes (the native store checker), as a ratio to 3 (runs of both
      alternate, and the fastest of each counts, so that a busy moment of the host does not
      decide the ratio).
@@ -43,6 +44,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -53,7 +55,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from emulator.board import Board  # noqa: E402
-from emulator.hart import ENGINE_FAST, ENGINE_PRECISE, CsrContext, Hart, HartState  # noqa: E402
+from emulator.hart import ENGINE_FAST, ENGINE_PRECISE, INSN_WFI, CsrContext, Hart, HartState  # noqa: E402
 from emulator.memory import SRAM_BASE  # noqa: E402
 from emulator.timing import TIMING_IPC1, TIMING_ROCKET  # noqa: E402
 from tools import quality  # noqa: E402
@@ -144,15 +146,11 @@ def real_time_figures(frames: list) -> dict:
             "virtual_ms_per_frame": virtual / count * 1e3}
 
 
-def drawing_figures(firmware: Path, card: Path, rounds: int = 3) -> dict:
-    """What hart 0's drawing costs the host per instruction on the precise engine, Unicorn and the
-    counting hook alone (no scheduler, no devices): from a steady frame's start (hart 0 asleep, both
-    framebuffers then marked free) to its next wfi, with the Rocket cycle table, with one cycle
-    each, and with no hook at all. The translations are dropped before each run, so that each way
-    runs code translated for it; the fastest of `rounds` counts. (The fast engine hands device
-    accesses to the precise one, which needs the scheduler: firmware_figures measures it in the
-    board, against the precise engine.)"""
-    board = Board(str(firmware), sd_image=str(card), engine=ENGINE_PRECISE)
+def _steady_drawing(firmware: Path, card: Path, engine: str) -> tuple[Board, Hart, Callable[[], int]]:
+    """A board of the default card stopped at a steady frame's start (hart 0 asleep), and a function
+    that puts hart 0 back there with both framebuffers marked free (so that it draws on) and returns
+    the pc to run it from."""
+    board = Board(str(firmware), sd_image=str(card), engine=engine)
     board.run(3)
     scheduler = board.scheduler
     while scheduler.harts[0].state is not HartState.ASLEEP:
@@ -163,18 +161,53 @@ def drawing_figures(firmware: Path, card: Path, rounds: int = 3) -> dict:
     context, pc = hart.uc.context_save(), hart.pc
     fb_state = board.image.symbol_values["fb_state"] - SRAM_BASE
 
-    def draw() -> tuple[float, int]:
+    def restore() -> int:
         memory[:] = snapshot
         memory[fb_state:fb_state + 8] = 0          # both buffers free: hart 0 draws on
         hart.uc.context_restore(context)
-        hart.uc.ctl_flush_tb()
         hart.lift_limits()
+        return pc
+    return board, hart, restore
+
+
+def drawing_figures(firmware: Path, card: Path, rounds: int = 3) -> dict:
+    """What hart 0's drawing costs the host per instruction with no scheduler and no devices, from a
+    steady frame's start to its next wfi: on the fast engine (the few instructions it hands over
+    run on the precise one), and on the precise engine, Unicorn with the counting hook, with the
+    Rocket cycle table and with one cycle each, and Unicorn with no hook at all. Decoded blocks and
+    translations are dropped before each run, so that each way runs code decoded or translated for
+    it; the fastest of `rounds` counts."""
+    ways = {}
+    board, hart, restore = _steady_drawing(firmware, card, ENGINE_FAST)
+
+    def draw_fast() -> tuple[float, int]:
+        pc = restore()
+        hart.forget_decodings()
+        executed = hart.executed
+        start = time.perf_counter()
+        while True:
+            pc = hart.run_fast_stretch(pc)
+            if hart.read_u32(pc) == INSN_WFI:
+                break
+            hart.uc.emu_start(pc, 0, count=1)      # an instruction the fast engine hands over
+            pc = hart.reg(unicorn.riscv_const.UC_RISCV_REG_PC)
+        return time.perf_counter() - start, hart.executed - executed
+
+    seconds, instructions = min(draw_fast() for _ in range(rounds))
+    ways["fast engine, Rocket cycle table"] = {"seconds": seconds, "instructions": instructions,
+                                               "ns_per_instruction": seconds / instructions * 1e9,
+                                               "mips": instructions / seconds / 1e6}
+    board.close()
+    board, hart, restore = _steady_drawing(firmware, card, ENGINE_PRECISE)
+
+    def draw() -> tuple[float, int]:
+        pc = restore()
+        hart.uc.ctl_flush_tb()
         executed = hart.executed
         start = time.perf_counter()
         hart.uc.emu_start(pc, 0)
         return time.perf_counter() - start, hart.executed - executed
 
-    ways = {}
     for way in ("precise engine, Rocket cycle table", "precise engine, one cycle each", "no hook"):
         if way == "precise engine, one cycle each":
             hart.install_cycle_table(None)
@@ -856,7 +889,7 @@ def speed_figures(args: argparse.Namespace) -> None:
           f"virtual frame, real-time factor {board['real_time_factor']:.3f} (virtual seconds per host second; "
           f"1.0 runs as fast as a Dock)")
     per_frame = board["instructions_per_frame"][0]
-    print(f"  Unicorn on hart 0's drawing alone (no scheduler, no devices), host time per instruction and for "
+    print(f"  hart 0's drawing alone on each engine (no scheduler, no devices), host time per instruction and for "
           f"a frame's {per_frame:,}:")
     for way, figures in drawing.items():
         print(f"    {way:36} {figures['ns_per_instruction']:6.2f} ns  {figures['ns_per_instruction'] * per_frame / 1e6:7.2f} ms"
