@@ -1442,10 +1442,9 @@ static int interpret_on(fast_state_t *f, insn_counter_t *c, void *uc)
  * (STOP_LIMIT; a poll loop's head lowers the limit as count_instruction does), or a device access
  * (STOP_DEVICE). The registers are read from `uc` first; they are written back, the pc too (f->pc),
  * when the run ends: at a device access it has not ended, and the caller carries the access out and
- * calls fast_resume (or fast_abandon).
+ * calls fast_resume (or fast_abandon). Python reaches both through fast_step (_insn_counter.c).
  */
-__attribute__((visibility("default")))
-int fast_run(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t from)
+static int fast_run(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t from)
 {
     begin_run(f, uc, from);
     f->devices_here = f->windows != 0;
@@ -1455,8 +1454,7 @@ int fast_run(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t from)
 
 /* After STOP_DEVICE: completes the access (a load's `value`, as the instruction extends it, into its
  * register) and goes on as fast_run does. */
-__attribute__((visibility("default")))
-int fast_resume(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t value)
+static int fast_resume(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t value)
 {
     device_access_t *d = &f->dev;
     if (!d->is_store)

@@ -17,7 +17,9 @@ of a volume that fsck.fat, mtools and a strict firmware reader accept, this modu
   case-insensitive duplicate check.
 
 pyfatfs also reads the FAT one entry at a time through struct (0.15 s for the default card,
-on every open); `CardFat` reads a FAT32 table in one go, to the same list.
+on every open) and packs it with a struct format of one letter per entry (at every file created
+or closed); `CardFat` reads a FAT32 table in one go, to the same list, and packs it in one go, to
+the same bytes.
 """
 from __future__ import annotations
 
@@ -324,9 +326,10 @@ class CardFat(PyFat):
     def __bytes__(self) -> bytes:
         # pyfatfs packs a FAT32 table with a struct format of one letter per entry, at every
         # file it creates or closes (flush_fat); an array of 32-bit entries gives the same bytes
-        if self.fat_type != self.FAT_TYPE_FAT32:
+        table = array.array("I")
+        if self.fat_type != self.FAT_TYPE_FAT32 or table.itemsize != 4:
             return super().__bytes__()
-        table = array.array("I", self.fat)
+        table.extend(self.fat)
         if sys.byteorder == "big":
             table.byteswap()
         return table.tobytes()

@@ -1,6 +1,6 @@
 """`python -m emulator` runs for the tests (and `python -m reference`, `python -m sdcard_image`
 runs), each in a process of its own, without paying for the interpreter's start and the
-project's imports each time (about 0.2 s a run of the board model, some 270 runs a suite; 0.25 s
+project's imports each time (about 0.2 s a run of the board model, some 270 runs a suite; 0.3 s
 a run of the other two).
 
 A server process (`python tests/emulator_runs.py`, one per test process, started at the first
