@@ -38,14 +38,10 @@
 #include <xmmintrin.h>
 
 #include "_counter.h"
+#include "_fast_engine.h"
 #include "_rocket_timing.h"
 #include "_write_check.h"
 
-
-/* fast_run's answers */
-#define STOP_HANDOFF 1   /* the instruction at pc needs the precise engine */
-#define STOP_LIMIT 2     /* the counter's instruction or cycle limit is reached */
-#define STOP_DEVICE 3    /* the load or store at pc, counted, accesses a device: see `dev` */
 
 /* Unicorn's register ids (unicorn/riscv.h) */
 #define UC_X1 2
@@ -949,6 +945,8 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
     uint64_t pc = f->pc;
     const int fpu_on = (f->mstatus & MSTATUS_FS) != 0;
     uint64_t executed = c->executed, cycles = c->cycles;
+    /* the run's stall cycles are what its cycles hold beyond one an instruction and the mispredictions'
+     * penalties: worked out once, at the end */
     const uint64_t start_cycles = cycles, start_mispredicts = c->mispredicts;
     const uint64_t cycle_limit = c->cycle_limit;
     uint64_t limit = c->limit;   /* (a poll loop's head or a poll answered here lowers it during the call) */
@@ -1463,9 +1461,7 @@ static int fast_resume(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t va
     return interpret_on(f, c, uc);
 }
 
-/* fast_run (resume 0, `arg` the pc) or fast_resume (resume 1, `arg` the loaded value) for the
- * Python-callable step of _insn_counter.c; at STOP_DEVICE, `out` holds the access: window, address,
- * width, is_store, the stored value, its pc. */
+/* (_fast_engine.h) */
 int fast_step(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t arg, int resume, uint64_t out[6])
 {
     int why = resume ? fast_resume(f, c, uc, arg) : fast_run(f, c, uc, arg);

@@ -18,6 +18,7 @@
 #include <stdint.h>
 
 #include "_counter.h"
+#include "_fast_engine.h"
 #include "_rocket_timing.h"
 
 PyMODINIT_FUNC PyInit__insn_counter(void);
@@ -94,11 +95,6 @@ void count_instruction(void *uc, uint64_t address, uint32_t size, insn_counter_t
     }
 }
 
-/* _fast_engine.c: one stretch of the fast engine, up to its stop (a device access described in out[]) */
-struct fast_state;
-int fast_step(struct fast_state *f, insn_counter_t *c, void *uc, uint64_t arg, int resume, uint64_t out[6]);
-#define FAST_STOP_DEVICE 3
-
 /*
  * fast_step(state, counter, uc, arg, resume) for hart.py: the fast engine's run (resume false, arg
  * the pc) or its resumption after a device access (resume true, arg the loaded value), called the
@@ -130,7 +126,7 @@ static PyObject *py_fast_step(PyObject *self, PyObject *const *args, Py_ssize_t 
     Py_BEGIN_ALLOW_THREADS
     why = fast_step((struct fast_state *)f, (insn_counter_t *)c, uc, arg, resume, out);
     Py_END_ALLOW_THREADS
-    if (why != FAST_STOP_DEVICE)
+    if (why != STOP_DEVICE)
         return PyLong_FromLong(why);
     PyObject *result = PyTuple_New(7);
     if (result == NULL)

@@ -357,8 +357,9 @@ class Hart:
         _counter_lib.fast_statistics(self._fast_state, out)
         return {"instructions": out[0], "handoffs": out[1], "blocks_decoded": out[2]}
 
-    def _forget_decodings(self) -> None:
-        """The counter's tables changed: the fast engine decodes its instructions again."""
+    def forget_decodings(self) -> None:
+        """Drops the fast engine's decoded blocks: it decodes its instructions again (the counter's tables
+        changed; the bench decoding afresh for each timed run)."""
         if self._fast_state is not None:
             _counter_lib.fast_forget_decodings(self._fast_state)
 
@@ -415,10 +416,6 @@ class Hart:
         board runs it through run)."""
         return self._run_fast(pc)
 
-    def forget_decodings(self) -> None:
-        """Drops the fast engine's decoded blocks (the bench: each timed run decodes afresh)."""
-        self._forget_decodings()
-
     def fast_usable(self) -> bool:
         """Whether the hart runs on the fast engine (it has one and no hook needs the precise one)."""
         return self._fast_usable()
@@ -443,13 +440,13 @@ class Hart:
             self.poll_loops[loop.head] = (loop, slots[(loop.head >> 1) & mask])
         self._counter.loop_mask = mask
         self._counter.loops = ctypes.addressof(slots)
-        self._forget_decodings()
+        self.forget_decodings()
 
     def install_cycle_table(self, table: timing.CycleTable | None) -> None:
         """Has the native counter charge the cycles `table` gives (timing.py) instead of one
         cycle per instruction; None: one cycle each (--timing ipc1)."""
         self._cycle_table = table
-        self._forget_decodings()
+        self.forget_decodings()
         if table is None:
             self._counter.table = None
             return
@@ -695,7 +692,7 @@ class Hart:
         self._csr_table = table
         self._counter.csr_sites = ctypes.addressof(table)
         self._counter.csr_mask = mask
-        self._forget_decodings()
+        self.forget_decodings()
 
     def add_stop_hook(self, callback: Callable, user_data: object, begin: int, end: int) -> int:
         """A Python code hook (a debugger's breakpoint or step) that runs before the native
