@@ -397,7 +397,8 @@ class SpiController(Peripheral):
     def stable_until(self, offset: int, now: float) -> float:
         """The status registers (sr, txflr, rxflr, risr, isr: reading them changes nothing) stay
         as they are until the next frame starts or ends on the wire, which is also when advance()
-        next has something to do. Without a DMA transmit channel only (it refills the FIFO as time
+        next has something to do; sr until the next frame edge that changes one of its bits
+        (_next_sr_change). Without a DMA transmit channel only (it refills the FIFO as time
         goes). Bounds are kept a hundred-thousandth of a frame early: the frame counts carry a
         millionth of a frame's slack (FRAME_EPSILON)."""
         if offset not in STATUS_REGISTERS or self.tx_dma is not None:
@@ -410,7 +411,24 @@ class SpiController(Peripheral):
         frames = int((now - train.start) / train.period + FRAME_EPSILON)
         if frames >= train.count:
             return now                  # the train is over but not yet ended
-        return train.start + (frames + 1 - STABLE_MARGIN) * train.period
+        edge = self._next_sr_change(train, frames) if offset == SR else frames + 1
+        return train.start + (edge - STABLE_MARGIN) * train.period
+
+    def _next_sr_change(self, train: _Train, frames: int) -> int:
+        """The first frame edge after edge `frames` at which sr can read otherwise (edge i: frame i
+        starts, frame i - 1 has arrived; the FIFOs as they are at edge `frames`): the wire going idle,
+        the last frame leaving the transmit FIFO (TFE), a slot freeing in a full one (TFNF), a
+        frame reaching an empty receive FIFO (RFNE), the receive FIFO filling (RFF). A CPU that
+        sent a burst and waits for the wire to be idle is answered once a burst, not once a frame."""
+        if self._held:
+            return frames + 1
+        edges = [train.count]
+        if self.tmod != TMOD_RX:
+            edges += [train.count - 1, train.count - FIFO_DEPTH]
+        if self.tmod in (TMOD_TX_RX, TMOD_RX) and not (self.rx_dma is not None and self.values[DMACR] & DMACR_RDMAE):
+            level = len(self._rx)
+            edges += [frames + FIFO_DEPTH - level] + ([frames + 1] if level == 0 else [])
+        return min(edge for edge in edges if edge > frames)
 
     # --- DMA handshakes -------------------------------------------------------------------
 

@@ -213,6 +213,33 @@ def test_transmit_and_receive_fills_the_rx_fifo_with_the_reply(bus):
     assert spi.read(s.RISR, 4, t) & s.INT_RXU
 
 
+@pytest.mark.parametrize("tmod, frames", [(s.TMOD_TX_RX, 1), (s.TMOD_TX_RX, 15), (s.TMOD_TX_RX, 33),
+                                          (s.TMOD_TX, 33)])
+def test_sr_is_stable_until_the_next_edge_that_changes_it(bus, tmod, frames):
+    """A CPU that writes a burst and polls sr is told, at every moment, a time up to which sr reads
+    the same; the bound is the frame edge at which it next reads otherwise (it skips the edges
+    that change nothing), so a poll is answered once for each change, not once a frame."""
+    board, spi, dev = bus
+    setup(spi, ctrlr0(8, tmod))
+    for i in range(frames):
+        spi.write(s.DR_FIRST, 4, i, 0.0)
+    samples = [k * FRAME8 / 4 + EPS for k in range(4 * frames + 6)]
+    reads = [(t, sr(spi, t), spi.stable_until(s.SR, t)) for t in samples]
+    changes = 0
+    for i, (t, value, until) in enumerate(reads):
+        assert until >= t
+        later = [v for t2, v, _ in reads[i + 1:] if t2 < until]
+        assert all(v == value for v in later), f"sr changed before {until / FRAME8:.3f} frames (at {t / FRAME8:.3f})"
+        after = [v for t2, v, _ in reads[i + 1:] if until < t2 < until + FRAME8 / 2]
+        if until != t and after:
+            assert after[0] != value, f"sr at {until / FRAME8:.3f} frames reads as before: not an edge that changes it"
+        changes += i > 0 and value != reads[i - 1][1]
+    # one frame: RFNE as BUSY clears; a burst: RFNE (TFNF too when it filled the FIFO), TFE (with RFF
+    # when 32 frames have come in), BUSY
+    assert changes == {(s.TMOD_TX_RX, 1): 1, (s.TMOD_TX_RX, 15): 3, (s.TMOD_TX_RX, 33): 3,
+                       (s.TMOD_TX, 33): 3}[(tmod, frames)]
+
+
 def test_rx_fifo_threshold_interrupt(bus):
     board, spi, dev = bus
     setup(spi, ctrlr0(8, s.TMOD_TX_RX))
