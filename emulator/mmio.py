@@ -60,6 +60,9 @@ class Peripheral:
     SIZE = 0x1000
     BUS = BUS_APB
     REGISTERS: dict[int, Register] = {}
+    # set by read_register when the read took something from the device (a FIFO's oldest entry,
+    # a claimed interrupt), cleared by the bus: such reads are not a poll, however alike their values
+    took_on_read = False
 
     def __init__(self, board: "Board | None" = None) -> None:
         self.board = board

@@ -89,6 +89,7 @@ class Plic(Peripheral):
             if source:
                 self.pending.discard(source)
                 self.in_service.add(source)
+                self.took_on_read = True
             self.board.interrupts_may_have_changed(now)
             return source
         return self.values[offset]

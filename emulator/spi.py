@@ -517,6 +517,7 @@ class SpiController(Peripheral):
             if not self._rx:
                 self._raw_int |= INT_RXU
                 return 0
+            self.took_on_read = True
             return self._rx.pop(0)
         if offset == TXFLR:
             return self.tx_level(now)

@@ -135,6 +135,7 @@ class Uarths(Peripheral):
             if not self._rx_fifo:
                 return EMPTY
             byte = self._rx_fifo.popleft()
+            self.took_on_read = True
             self.advance(now)          # room in the FIFO: the host's next byte may start
             return byte
         if offset == IP:

@@ -357,6 +357,57 @@ def test_spi_wait_is_the_wire_time_with_the_default_quantum():
     send_and_wait(quantum=20_000)
 
 
+BURST_THEN_DRAIN = """
+    li      s0, 0x50440000
+    lw      t0, 0x28(s0)
+    ori     t0, t0, 1 << 5
+    sw      t0, 0x28(s0)
+    lw      t0, 0x2c(s0)
+    ori     t0, t0, 1 << 7
+    sw      t0, 0x2c(s0)
+    li      s1, 0x53000000
+    li      t0, (7 << 16)              # 8-bit frames, transmit and receive
+    sw      t0, 0x00(s1)
+    li      t0, 26
+    sw      t0, 0x14(s1)
+    li      t0, 1
+    sw      t0, 0x08(s1)
+    sw      t0, 0x10(s1)
+    li      t3, 16
+    li      t0, 0xFF
+1:  sw      t0, 0x60(s1)
+    addi    t3, t3, -1
+    bnez    t3, 1b
+    li      t2, 4
+2:  lw      t1, 0x28(s1)               # wait for the wire to be idle: (sr & 5) == 4
+    andi    t1, t1, 5
+    bne     t1, t2, 2b
+    csrr    s10, mcycle
+    la      s2, buffer
+    li      t3, 16
+3:  lw      t1, 0x60(s1)               # sixteen 0xFF from one pc: a FIFO emptied, not a poll
+    sb      t1, 0(s2)
+    addi    s2, s2, 1
+    addi    t3, t3, -1
+    bnez    t3, 3b
+    csrr    s11, mcycle
+"""
+
+
+@pytest.mark.parametrize("quantum", [200, 20_000])
+def test_emptying_the_receive_fifo_is_not_polling(quantum):
+    """Reads that take entries from the receive FIFO are not a poll, however alike the entries:
+    the hart reading sixteen 0xFF bytes in a loop runs on, it does not wait for the next
+    device event as a hart polling a status register does."""
+    board = make_board(program(BURST_THEN_DRAIN, data="buffer: .space 16\n"), quantum=quantum)
+    dev = RecordingDevice()          # answers 0xFF to every byte
+    board.spi1.device_for_ss = lambda ss: dev if ss == 0 else None
+    run_to_done(board)
+    assert board.memory.read(symbol(board, "buffer"), 16) == b"\xff" * 16
+    assert reg(board, "s11") - reg(board, "s10") < 200        # cycles: sixteen loads and stores
+    assert not any("underflow" in w or "overflow" in w for w in board.warnings)
+
+
 RECEIVE_100 = """
     li      s0, 0x50440000
     lw      t0, 0x28(s0)
