@@ -3,8 +3,12 @@
 # Wiring (pins.S): SCLK pad 27, MOSI pad 28 (SPI1_D0), MISO pad 26
 # (SPI1_D1), chip select pad 29 = GPIOHS7 driven here by software. SPI1 runs
 # standard format, work mode 0, 8-bit frames: transmit-and-receive for
-# commands, responses and tokens (one byte at a time: sd_xchg), receive-only
-# with DMAC channel 1 for data blocks.
+# commands, responses and tokens, receive-only with DMAC channel 1 for data
+# blocks. Commands and the bytes after them go in bursts through the
+# 32-entry FIFOs (sd_burst): a command's frame and the Ncr bytes its R1
+# comes in are one burst, and what arrives after R1 (an R3/R7 payload, the
+# busy bytes after CMD12, the gap before a data token, the token and the
+# first data bytes) waits in sd_ahead for whoever reads next.
 #
 # Every command carries its CRC7 (crc.S), so CMD59 can turn the card's CRC
 # checking on; every data block's CRC16 is checked and a bad block is read
@@ -22,7 +26,8 @@
 #
 # Reads (sd_read_blocks): CMD17 for one block, CMD18 + CMD12 for several,
 # so a run of contiguous clusters costs one command. After the command, the
-# first block's data token is polled for a byte at a time. Then each block
+# first block's data token is looked for in bursts of SD_TOKEN_BURST_BYTES;
+# the data bytes after it are kept. Then each block
 # comes by DMA (SPI1 receive-only, DMAC channel 1) into a staging buffer:
 # its data, its CRC16 and, while more blocks follow, SD_LOOKAHEAD_BYTES of
 # the stream after it. The next block's gap and token are usually there: the
@@ -88,11 +93,9 @@ sd_init:
     # Supply ramp, then >= 74 clocks with CS high (pins_init left it high).
     li      a0, SD_POWER_UP_US
     call    sd_delay_us
-    li      s0, SD_INIT_CLOCK_BYTES
-1:  li      a0, SD_IDLE_BYTE
-    call    sd_xchg
-    addi    s0, s0, -1
-    bnez    s0, 1b
+    li      a0, SD_INIT_CLOCK_BYTES
+    call    sd_fill_ahead
+    call    sd_drop_ahead
 
     # CMD0: software reset into SPI mode; the card answers "idle".
     li      s0, SD_CMD0_TRIES
@@ -293,19 +296,16 @@ sd_read_csd:
 3:  call    sd_wait_token
     li      t0, SD_TOKEN_START_BLOCK
     bne     a0, t0, 6f                  # error token
-    mv      s2, s0                      # s2 = next byte out
-4:  li      a0, SD_IDLE_BYTE
-    call    sd_xchg
-    sb      a0, 0(s2)
-    addi    s2, s2, 1
-    addi    t0, s0, SD_CSD_BYTES
-    bltu    s2, t0, 4b
-    li      a0, SD_IDLE_BYTE
-    call    sd_xchg
-    slli    s3, a0, SD_BYTE_BITS
-    li      a0, SD_IDLE_BYTE
-    call    sd_xchg
-    or      s3, s3, a0                  # s3 = CRC16 the card sent
+    mv      a0, s0
+    li      a1, SD_CSD_BYTES
+    call    sd_receive_bytes
+    mv      a0, sp
+    li      a1, SD_CRC16_BYTES
+    call    sd_receive_bytes
+    lbu     s3, 0(sp)
+    slli    s3, s3, SD_BYTE_BITS
+    lbu     t0, 1(sp)
+    or      s3, s3, t0                  # s3 = CRC16 the card sent
     call    sd_deselect
     mv      a0, s0
     li      a1, SD_CSD_BYTES
@@ -460,11 +460,14 @@ sd_read_blocks:
     mv      a1, s9
     call    sd_fail_r1
 
-15: # Block s0's token, a byte at a time (SPI1 transmit-and-receive).
+15: # Block s0's token (SPI1 transmit-and-receive); the data bytes that
+    # came after it in its burst go to the start of s8's buffer.
     call    sd_wait_token
     li      t0, SD_TOKEN_START_BLOCK
     bne     a0, t0, 40f                 # error token
-    li      s9, 0
+    mv      a0, s8
+    call    sd_take_ahead
+    mv      s9, a0
 
 20: # Block s0 by DMA (the rest of its data, its CRC16, the lookahead while
     # more blocks follow) while the previous block is checked.
@@ -670,9 +673,10 @@ sd_copy_block:
     ret
 
 # sd_wait_token (file-local)
-#   What: clocks 0xFF until the card sends something other than 0xFF (the
-#         data token, or an error token), at most SD_READ_TIMEOUT_US (then
-#         error 2).
+#   What: takes received bytes (sd_ahead first, then bursts of
+#         SD_TOKEN_BURST_BYTES) until one is not 0xFF (the data token, or an
+#         error token), at most SD_READ_TIMEOUT_US (then error 2). The bytes
+#         after the token in its burst stay in sd_ahead.
 #   Arguments: none.
 #   Results: a0 = the token byte.
 #   Clobbers: only ABI temporaries.
@@ -683,10 +687,15 @@ sd_wait_token:
     li      a0, SD_READ_TIMEOUT_US
     call    timer_deadline
     mv      s0, a0
-1:  li      a0, SD_IDLE_BYTE
-    call    sd_xchg
+1:  call    sd_ahead_left
+    bnez    a0, 3f
+    li      a0, SD_TOKEN_BURST_BYTES
+    call    sd_fill_ahead
+3:  call    sd_take_byte
     li      t0, SD_IDLE_BYTE
     bne     a0, t0, 2f
+    call    sd_ahead_left
+    bnez    a0, 3b
     mv      a0, s0
     call    timer_expired
     beqz    a0, 1b
@@ -774,7 +783,7 @@ sd_receive_start:
 
 # sd_transfer_mode (file-local)
 #   What: SPI1 back in transmit-and-receive mode, DMA requests off, for
-#         byte-by-byte exchanges (sd_xchg) after a DMA receive.
+#         exchanges (sd_burst, sd_xchg) after a DMA receive.
 #   Arguments: none. Results: none.
 #   Clobbers: only ABI temporaries.
 sd_transfer_mode:
@@ -787,7 +796,8 @@ sd_transfer_mode:
 
 # sd_stop_transmission (file-local)
 #   What: ends a CMD18 stream: CMD12, skip the stuff byte, R1, then wait
-#         while the card holds MISO low (busy), at most SD_BUSY_TIMEOUT_US.
+#         while the card holds MISO low (busy; looked at in bursts of
+#         SD_BUSY_BURST_BYTES), at most SD_BUSY_TIMEOUT_US.
 #         The card stays selected.
 #   Arguments: none. Results: none.
 #   Clobbers: only ABI temporaries.
@@ -806,10 +816,15 @@ sd_stop_transmission:
 1:  li      a0, SD_BUSY_TIMEOUT_US
     call    timer_deadline
     mv      s0, a0
-2:  li      a0, SD_IDLE_BYTE
-    call    sd_xchg
+2:  call    sd_ahead_left
+    bnez    a0, 4f
+    li      a0, SD_BUSY_BURST_BYTES
+    call    sd_fill_ahead
+4:  call    sd_take_byte
     li      t0, SD_IDLE_BYTE
     beq     a0, t0, 3f
+    call    sd_ahead_left
+    bnez    a0, 4b
     mv      a0, s0
     call    timer_expired
     beqz    a0, 2b
@@ -934,108 +949,118 @@ sd_fail_r1:
     j       error_end
 
 # sd_command (file-local)
-#   What: sends one command frame (the card is selected) and waits up to
-#         SD_NCR_BYTES bytes for its R1. For CMD12 the stuff byte that
-#         follows the frame is skipped first.
+#   What: sends one command (the card is selected: sd_select) in one burst
+#         with what comes before and after it: the 0xFF byte that lets the
+#         card drive MISO (not for CMD12, sent in the middle of a CMD18
+#         stream), the frame, for CMD12 the stuff byte, and
+#         SD_NCR_BURST_BYTES of 0xFF for the response. R1 is the first byte
+#         after the frame (and stuff byte) with its top bit clear, looked for
+#         in SD_NCR_BYTES bytes at most (those after the burst a byte at a
+#         time). The bytes after R1 stay in sd_ahead.
 #   Arguments: a0 = command index, a1 = 32-bit argument.
 #   Results: a0 = R1, or SD_R1_NONE when no response started.
 #   Clobbers: only ABI temporaries.
 sd_command:
-    addi    sp, sp, -48
-    sd      ra, 40(sp)
-    sd      s0, 32(sp)
-    sd      s1, 24(sp)
-    sd      s2, 16(sp)
+    addi    sp, sp, -32
+    sd      ra, 24(sp)
+    sd      s0, 16(sp)
+    sd      s1, 8(sp)
+    sd      s2, 0(sp)
     mv      s2, a0
-    # frame at 0(sp): start | index, argument MSB first, CRC7 | end bit
+    la      s1, sd_ahead
+    li      t0, SD_IDLE_BYTE
+    sb      t0, 0(s1)
+    # the frame: start | index, argument MSB first, CRC7 | end bit
     ori     t0, a0, SD_CMD_START
-    sb      t0, 0(sp)
+    sb      t0, SD_CMD_AT(s1)
     srli    t0, a1, 3 * SD_BYTE_BITS
-    sb      t0, 1(sp)
+    sb      t0, SD_CMD_AT + 1(s1)
     srli    t0, a1, 2 * SD_BYTE_BITS
-    sb      t0, 2(sp)
+    sb      t0, SD_CMD_AT + 2(s1)
     srli    t0, a1, SD_BYTE_BITS
-    sb      t0, 3(sp)
-    sb      a1, 4(sp)
-    mv      a0, sp
+    sb      t0, SD_CMD_AT + 3(s1)
+    sb      a1, SD_CMD_AT + 4(s1)
+    addi    a0, s1, SD_CMD_AT
     li      a1, SD_CMD_CRC_BYTES
     call    crc7_sd
-    sb      a0, SD_CMD_CRC_BYTES(sp)
-    mv      s0, sp
-    addi    s1, sp, SD_CMD_FRAME_BYTES
-1:  lbu     a0, 0(s0)
-    call    sd_xchg
-    addi    s0, s0, 1
-    bltu    s0, s1, 1b
-
+    sb      a0, SD_CMD_AT + SD_CMD_CRC_BYTES(s1)
+    li      s0, SD_CMD_AT + SD_CMD_FRAME_BYTES    # s0 = where the response starts
+    mv      a0, s1                      # a0 = where the burst starts
     li      t0, SD_CMD12_STOP
-    bne     s2, t0, 2f
-    li      a0, SD_IDLE_BYTE            # stuff byte
-    call    sd_xchg
-2:  li      s0, SD_NCR_BYTES
-3:  li      a0, SD_IDLE_BYTE
-    call    sd_xchg
+    bne     s2, t0, 1f
+    addi    s0, s0, 1                   # after the stuff byte
+    addi    a0, s1, SD_CMD_AT           # no byte before the frame
+1:  add     t0, s1, s0                  # the response bytes: 0xFF out
+    addi    t1, t0, SD_NCR_BURST_BYTES
+    li      t2, SD_IDLE_BYTE
+2:  sb      t2, 0(t0)
+    addi    t0, t0, 1
+    bltu    t0, t1, 2b
+    sub     a1, t1, a0
+    call    sd_burst
+    la      t0, sd_ahead_next
+    sw      s0, 0(t0)
+    addi    t1, s0, SD_NCR_BURST_BYTES
+    sw      t1, SD_AHEAD_END_AT(t0)
+
+    li      s0, SD_NCR_BYTES
+3:  call    sd_take_byte
     andi    t0, a0, SD_R1_START_MASK
     beqz    t0, 4f
     addi    s0, s0, -1
     bnez    s0, 3b
     li      a0, SD_R1_NONE
-4:  ld      s2, 16(sp)
-    ld      s1, 24(sp)
-    ld      s0, 32(sp)
-    ld      ra, 40(sp)
-    addi    sp, sp, 48
-    ret
-
-# sd_read_u32 (file-local)
-#   What: clocks in 4 bytes, most significant first (R3 / R7 payload).
-#   Arguments: none.
-#   Results: a0 = the 32-bit value.
-#   Clobbers: only ABI temporaries.
-sd_read_u32:
-    addi    sp, sp, -32
-    sd      ra, 24(sp)
-    sd      s0, 16(sp)
-    sd      s1, 8(sp)
-    li      s0, 0
-    li      s1, SD_R3_PAYLOAD_BYTES
-1:  li      a0, SD_IDLE_BYTE
-    call    sd_xchg
-    slli    s0, s0, SD_BYTE_BITS
-    or      s0, s0, a0
-    addi    s1, s1, -1
-    bnez    s1, 1b
-    mv      a0, s0
+4:  ld      s2, 0(sp)
     ld      s1, 8(sp)
     ld      s0, 16(sp)
     ld      ra, 24(sp)
     addi    sp, sp, 32
     ret
 
-# sd_select (file-local)
-#   What: chip select low, then one 0xFF byte so the card drives MISO.
-#   Arguments: none. Results: none.
+# sd_read_u32 (file-local)
+#   What: the next 4 received bytes (sd_receive_bytes), most significant
+#         first (R3 / R7 payload).
+#   Arguments: none.
+#   Results: a0 = the 32-bit value.
 #   Clobbers: only ABI temporaries.
-sd_select:
+sd_read_u32:
     addi    sp, sp, -16
     sd      ra, 8(sp)
-    li      a0, GPIOHS_SD_CS_BIT
-    call    gpiohs_clear
-    li      a0, SD_IDLE_BYTE
-    call    sd_xchg
+    mv      a0, sp
+    li      a1, SD_R3_PAYLOAD_BYTES
+    call    sd_receive_bytes
+    li      a0, 0
+    mv      t0, sp
+    addi    t1, sp, SD_R3_PAYLOAD_BYTES
+1:  lbu     t2, 0(t0)
+    slli    a0, a0, SD_BYTE_BITS
+    or      a0, a0, t2
+    addi    t0, t0, 1
+    bltu    t0, t1, 1b
     ld      ra, 8(sp)
     addi    sp, sp, 16
     ret
 
+# sd_select (file-local)
+#   What: chip select low. The 0xFF byte that lets the card drive MISO
+#         before a command goes out with the command (sd_command).
+#   Arguments: none. Results: none.
+#   Clobbers: only ABI temporaries.
+sd_select:
+    li      a0, GPIOHS_SD_CS_BIT
+    j       gpiohs_clear
+
 # sd_deselect (file-local)
 #   What: chip select high, then one 0xFF byte (8 clocks) so the card
-#         releases MISO. No byte is on the wire when CS changes: sd_xchg
-#         returns only after its byte has come back.
+#         releases MISO; received bytes not taken are dropped. No byte is
+#         on the wire when CS changes: sd_burst and sd_xchg return only
+#         after their bytes have come back.
 #   Arguments: none. Results: none.
 #   Clobbers: only ABI temporaries.
 sd_deselect:
     addi    sp, sp, -16
     sd      ra, 8(sp)
+    call    sd_drop_ahead
     li      a0, GPIOHS_SD_CS_BIT
     call    gpiohs_set
     li      a0, SD_IDLE_BYTE
@@ -1059,6 +1084,148 @@ sd_xchg:
     beqz    t1, 1b
     lw      a0, SPI_DR(t0)
     andi    a0, a0, SD_BYTE_MASK
+    ret
+
+# sd_burst (file-local)
+#   What: exchanges a1 bytes in place: sends the bytes at a0 on MOSI and
+#         puts the bytes clocked in on MISO in their place. All go into the
+#         transmit FIFO at once; once the wire is idle (transmit FIFO empty,
+#         not busy: the wait the Kendryte SDK's SPI driver uses) every
+#         received byte is in the receive FIFO. SPI1 in transmit-and-receive
+#         mode with both FIFOs empty; they are empty again after.
+#   Arguments: a0 = bytes, a1 = count (1 .. SPI_FIFO_DEPTH).
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+sd_burst:
+    li      t0, SPI1_BASE
+    mv      t2, a0
+    add     t3, a0, a1                  # t3 = end
+1:  lbu     t1, 0(t2)
+    sw      t1, SPI_DR(t0)
+    addi    t2, t2, 1
+    bltu    t2, t3, 1b
+    li      t2, SPI_SR_TFE
+2:  lw      t1, SPI_SR(t0)
+    andi    t1, t1, SPI_SR_IDLE_MASK
+    bne     t1, t2, 2b
+    mv      t2, a0
+3:  lw      t1, SPI_DR(t0)
+    sb      t1, 0(t2)
+    addi    t2, t2, 1
+    bltu    t2, t3, 3b
+    ret
+
+# sd_fill_ahead (file-local)
+#   What: clocks in a0 bytes (MOSI 0xFF) in one burst; they become sd_ahead,
+#         which must hold nothing not yet taken.
+#   Arguments: a0 = count (1 .. SD_AHEAD_BYTES).
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+sd_fill_ahead:
+    la      t0, sd_ahead_next
+    sw      zero, 0(t0)
+    sw      a0, SD_AHEAD_END_AT(t0)
+    la      t0, sd_ahead
+    add     t1, t0, a0
+    li      t2, SD_IDLE_BYTE
+1:  sb      t2, 0(t0)
+    addi    t0, t0, 1
+    bltu    t0, t1, 1b
+    mv      a1, a0
+    la      a0, sd_ahead
+    j       sd_burst
+
+# sd_ahead_left (file-local)
+#   What: how many received bytes wait in sd_ahead.
+#   Arguments: none. Results: a0 = count.
+#   Clobbers: only ABI temporaries.
+sd_ahead_left:
+    la      t0, sd_ahead_next
+    lw      a0, SD_AHEAD_END_AT(t0)
+    lw      t1, 0(t0)
+    sub     a0, a0, t1
+    ret
+
+# sd_drop_ahead (file-local)
+#   What: forgets the received bytes waiting in sd_ahead.
+#   Arguments: none. Results: none.
+#   Clobbers: only ABI temporaries.
+sd_drop_ahead:
+    la      t0, sd_ahead_next
+    sw      zero, 0(t0)
+    sw      zero, SD_AHEAD_END_AT(t0)
+    ret
+
+# sd_take_byte (file-local)
+#   What: the next received byte: the oldest waiting in sd_ahead, or else
+#         one exchanged now (MOSI 0xFF).
+#   Arguments: none. Results: a0 = the byte.
+#   Clobbers: only ABI temporaries.
+sd_take_byte:
+    la      t0, sd_ahead_next
+    lw      t1, 0(t0)
+    lw      t2, SD_AHEAD_END_AT(t0)
+    bgeu    t1, t2, 1f
+    la      t2, sd_ahead
+    add     t2, t2, t1
+    lbu     a0, 0(t2)
+    addi    t1, t1, 1
+    sw      t1, 0(t0)
+    ret
+1:  li      a0, SD_IDLE_BYTE
+    j       sd_xchg
+
+# sd_take_ahead (file-local)
+#   What: moves the received bytes waiting in sd_ahead to a0.
+#   Arguments: a0 = destination. Results: a0 = how many.
+#   Clobbers: only ABI temporaries.
+sd_take_ahead:
+    la      t0, sd_ahead_next
+    lw      t1, 0(t0)
+    lw      t2, SD_AHEAD_END_AT(t0)
+    sw      t2, 0(t0)
+    sub     t3, t2, t1                  # t3 = count
+    la      t4, sd_ahead
+    add     t1, t4, t1
+    add     t2, t4, t2
+1:  bgeu    t1, t2, 2f
+    lbu     t5, 0(t1)
+    sb      t5, 0(a0)
+    addi    t1, t1, 1
+    addi    a0, a0, 1
+    j       1b
+2:  mv      a0, t3
+    ret
+
+# sd_receive_bytes (file-local)
+#   What: the next a1 received bytes to a0: those waiting in sd_ahead, then
+#         bursts of at most SD_AHEAD_BYTES.
+#   Arguments: a0 = destination, a1 = count.
+#   Results: none.
+#   Clobbers: only ABI temporaries.
+sd_receive_bytes:
+    addi    sp, sp, -32
+    sd      ra, 24(sp)
+    sd      s0, 16(sp)
+    sd      s1, 8(sp)
+    add     s1, a0, a1                  # s1 = end
+    mv      s0, a0                      # s0 = next byte out
+1:  bgeu    s0, s1, 3f
+    call    sd_ahead_left
+    bnez    a0, 2f
+    sub     a0, s1, s0
+    li      t0, SD_AHEAD_BYTES
+    bleu    a0, t0, 4f
+    mv      a0, t0
+4:  call    sd_fill_ahead
+2:  call    sd_take_byte
+    sb      a0, 0(s0)
+    addi    s0, s0, 1
+    j       1b
+3:  ld      s1, 8(sp)
+    ld      s0, 16(sp)
+    ld      ra, 24(sp)
+    addi    sp, sp, 32
     ret
 
 # sd_spi_setup (file-local)
@@ -1150,6 +1317,18 @@ sd_ccs:
 # ctrlr1 + 1), 0 when SPI1 is in transmit-and-receive mode.
 sd_rx_frames:
     .space  4
+# sd_ahead_next, sd_ahead_end: the received bytes not yet taken are
+# sd_ahead[sd_ahead_next .. sd_ahead_end).
+sd_ahead_next:
+    .space  4
+sd_ahead_end:
+    .space  4
+    .if sd_ahead_end - sd_ahead_next != SD_AHEAD_END_AT
+    .error "SD_AHEAD_END_AT does not match the layout of sd_ahead_next"
+    .endif
+# sd_ahead: the last burst (sd_burst), command and bytes received.
+sd_ahead:
+    .space  SD_AHEAD_BYTES
     .balign 8
     .globl sd_capacity
 # sd_capacity: the card's capacity in 512-byte blocks (its CSD), set by

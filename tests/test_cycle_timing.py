@@ -240,16 +240,16 @@ def test_an_unknown_timing_model_is_refused():
         make_board(timing="fast")
 
 
-# The default card's first frames under the model before cycle timing (commit 53f433e, this
-# firmware and card, taken again on the firmware whose hart 1 sleeps through the LCD's waits until
-# hart 0 prints):
+# The default card's first frames under the model before cycle timing (commit 53f433e, with commit
+# 517240d's fix that a read emptying a receive FIFO is not a poll; this firmware and card, taken
+# again on the firmware whose hart 1 sleeps through the LCD's waits until hart 0 prints, and again
+# on the one that talks to the SD card in bursts through SPI1's FIFOs):
 # virtual time each frame reached the LCD, and hart 0's and hart 1's instructions since the previous
-# frame. --timing ipc1 must reproduce them exactly. (A change to
-# the firmware or to the card changes them on purpose: take them again by running commit 53f433e's
-# emulator, `python -m emulator run build/firmware.elf --sd build/card.img --frames 4`, on the new
-# firmware and card.)
-BEFORE_CYCLES = [(0.13367450430107514, [12045745, 14615]), (0.14485702043010684, [1022976, 3115]),
-                 (0.15248126112489593, [1022182, 718]), (0.16010550181968503, [1039464, 718])]
+# frame. --timing ipc1 must reproduce them exactly. (A change to the firmware or to the card changes
+# them on purpose: take them again by running commit 53f433e's emulator with that fix, `python -m
+# emulator run build/firmware.elf --sd build/card.img --frames 4`, on the new firmware and card.)
+BEFORE_CYCLES = [(0.13369905351530048, [12042783, 14606]), (0.14496836865177634, [1022976, 3172]),
+                 (0.15259260934656543, [1022182, 718]), (0.16021685004135452, [1039464, 718])]
 
 
 def test_ipc1_reproduces_the_model_before_cycle_timing(firmware, card, firmware_run, tmp_path):
