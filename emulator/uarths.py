@@ -142,6 +142,19 @@ class Uarths(Peripheral):
             return self.read_ip()
         return self.values[offset]
 
+    def stable_until(self, offset: int, now: float) -> float:
+        """txdata (reading it changes nothing) reads full until the byte on the wire has gone and the
+        next leaves the FIFO for the wire; not full, until a write fills it. A writer waiting for
+        room is answered once a byte, not once a read."""
+        if offset != TXDATA:
+            return now
+        if len(self._fifo) < TX_FIFO_DEPTH:
+            return float("inf")
+        if self._shifting_until is None:
+            # the transmitter is off (txen = 0): only a write to txctrl lets the FIFO drain
+            return float("inf") if not self.values[TXCTRL] & 1 else now
+        return self._shifting_until
+
     def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
         self.advance(now)
         if offset == TXDATA:

@@ -136,6 +136,27 @@ def test_with_txen_the_shift_register_holds_a_ninth_byte(console_board):
     assert bytes(out) == b"abcdefghi"
 
 
+def test_txdata_is_stable_until_a_byte_leaves_the_full_fifo(console_board):
+    """A writer polling txdata is answered once a byte: full reads stay full until the byte on the
+    wire has gone (and not a moment longer), a FIFO with room keeps it until a write, and one
+    that cannot drain (txen clear) stays full."""
+    board, _ = console_board
+    uart = board.uarths
+    assert not full(board, 0.0) and uart.stable_until(u.TXDATA, 0.0) == float("inf")
+    for i in range(8):
+        uart.write(u.TXDATA, 4, 0x61 + i, 0.0)
+    assert full(board, 1e-6) and uart.stable_until(u.TXDATA, 1e-6) == float("inf")    # txen clear
+    uart.write(u.TXCTRL, 4, 1, 2e-6)
+    uart.write(u.TXDATA, 4, 0x69, 2e-6)           # the first byte went to the wire: room for a ninth
+    t = 2e-6 + BYTE / 2
+    assert full(board, t)
+    until = uart.stable_until(u.TXDATA, t)
+    assert until == pytest.approx(2e-6 + BYTE)
+    assert full(board, until - EPS) and not full(board, until + EPS)
+    assert uart.stable_until(u.TXDATA, until + EPS) == float("inf")
+    assert uart.stable_until(u.RXDATA, until + EPS) == until + EPS     # reading it takes a byte
+
+
 def test_rxdata_reads_empty_and_unknown_offsets_are_unmodelled(console_board):
     board, _ = console_board
     assert board.uarths.read(u.RXDATA, 4, 0.0) & u.EMPTY
