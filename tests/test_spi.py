@@ -303,7 +303,8 @@ def test_transmit_only_ignores_the_reply(bus):
     assert spi.read(s.RXFLR, 4, 1.0) == 0
 
 
-SEND_AND_WAIT = """
+# SPI1's clock gates open (APB2, SPI1); s1 = SPI1's base
+SPI1_CLOCKS_ON = """
     li      s0, 0x50440000
     lw      t0, 0x28(s0)
     ori     t0, t0, 1 << 5             # APB2
@@ -312,6 +313,9 @@ SEND_AND_WAIT = """
     ori     t0, t0, 1 << 7             # SPI1
     sw      t0, 0x2c(s0)
     li      s1, 0x53000000
+"""
+
+SEND_AND_WAIT = SPI1_CLOCKS_ON + """
     li      t0, (7 << 16) | (1 << 8)   # 8-bit frames, transmit only
     sw      t0, 0x00(s1)
     li      t0, 26
@@ -358,15 +362,7 @@ def test_spi_wait_is_the_wire_time_with_the_default_quantum():
 
 
 # SPI1's clock gates open, 8-bit frames in transmit-and-receive mode at 500 kHz, enabled, slave 0
-SPI1_TX_RX = """
-    li      s0, 0x50440000
-    lw      t0, 0x28(s0)
-    ori     t0, t0, 1 << 5
-    sw      t0, 0x28(s0)
-    lw      t0, 0x2c(s0)
-    ori     t0, t0, 1 << 7
-    sw      t0, 0x2c(s0)
-    li      s1, 0x53000000
+SPI1_TX_RX = SPI1_CLOCKS_ON + """
     li      t0, (7 << 16)              # 8-bit frames, transmit and receive
     sw      t0, 0x00(s1)
     li      t0, 26
@@ -412,15 +408,7 @@ def test_emptying_the_receive_fifo_is_not_polling(quantum):
     assert not any("underflow" in w or "overflow" in w for w in board.warnings)
 
 
-RECEIVE_100 = """
-    li      s0, 0x50440000
-    lw      t0, 0x28(s0)
-    ori     t0, t0, 1 << 5
-    sw      t0, 0x28(s0)
-    lw      t0, 0x2c(s0)
-    ori     t0, t0, 1 << 7
-    sw      t0, 0x2c(s0)
-    li      s1, 0x53000000
+RECEIVE_100 = SPI1_CLOCKS_ON + """
     li      t0, (7 << 16) | (2 << 8)   # 8-bit frames, receive only
     sw      t0, 0x00(s1)
     li      t0, 99
