@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import ctypes
 import functools
+import mmap
+import os
 from typing import Callable
 
 import numpy as np
@@ -26,19 +28,43 @@ POWER_ON_SEED = 0x0210
 @functools.lru_cache(maxsize=2)
 def power_on_pattern(seed: int) -> np.ndarray:
     """The SRAM's contents at power-on for `seed` (read-only). Made once a process: drawing
-    8 MiB of random bytes costs about 10 ms, copying them 1 ms, and the tests make hundreds of
-    boards."""
+    8 MiB of random bytes costs about 10 ms, and the tests make hundreds of boards."""
     pattern = np.random.default_rng(seed).integers(0, 256, SRAM_SIZE, dtype=np.uint8)
     pattern.flags.writeable = False
     return pattern
 
 
+@functools.lru_cache(maxsize=2)
+def _power_on_file(seed: int) -> int | None:
+    """A memory-only file holding power_on_pattern(seed), or None where the system has none
+    (os.memfd_create is Linux's). Made once a process and kept open (a forked process inherits it)."""
+    if not hasattr(os, "memfd_create"):
+        return None
+    descriptor = os.memfd_create(f"k210-sram-power-on-{seed:#x}", os.MFD_CLOEXEC)
+    os.write(descriptor, power_on_pattern(seed).tobytes())
+    return descriptor
+
+
+def _sram_buffer(fill_seed: int | None) -> tuple[ctypes.Array, mmap.mmap | None]:
+    """The host buffer of a new SRAM, and the mapping behind it when there is one. With a seed,
+    a private (copy-on-write) mapping of the power-on file: a board starts without copying
+    8 MiB (about 5 ms, paid again by each of a test suite's hundreds of boards), and only the
+    pages the firmware writes are copied, when it writes them."""
+    descriptor = _power_on_file(fill_seed) if fill_seed is not None else None
+    if descriptor is None:
+        buffer = (ctypes.c_uint8 * SRAM_SIZE)()
+        if fill_seed is not None:
+            np.frombuffer(buffer, dtype=np.uint8)[:] = power_on_pattern(fill_seed)
+        return buffer, None
+    mapping = mmap.mmap(descriptor, SRAM_SIZE, flags=mmap.MAP_PRIVATE, prot=mmap.PROT_READ | mmap.PROT_WRITE)
+    return (ctypes.c_uint8 * SRAM_SIZE).from_buffer(mapping), mapping
+
+
 class Sram:
     def __init__(self, fill_seed: int | None = POWER_ON_SEED) -> None:
-        self.buffer = (ctypes.c_uint8 * SRAM_SIZE)()
+        # (the mapping lives as long as the buffer made from it: ctypes keeps it referenced)
+        self.buffer, _ = _sram_buffer(fill_seed)
         self.bytes = np.frombuffer(self.buffer, dtype=np.uint8)
-        if fill_seed is not None:
-            self.bytes[:] = power_on_pattern(fill_seed)
         # --check-writes: called as write_check(address, length, writer) before a DMA write lands
         self.write_check: Callable[[int, int, str], None] | None = None
 
