@@ -659,12 +659,14 @@ def _rgb888_of_gram_colours(inverted: bool) -> np.ndarray:
     """What the panel shows for every packed 18-bit GRAM colour: bytes R, G, B and 0 of a
     little-endian uint32 (2^18 entries, read-only). Each 6-bit channel becomes 8 bits with its
     top two bits repeated below (0 and full scale exact); INVON shows 255 minus that."""
-    values = np.arange(1 << 18, dtype=np.uint32)
-    table = np.zeros(1 << 18, dtype="<u4")
-    for byte, shift in enumerate((12, 6, 0)):
-        six = (values >> shift) & 0x3F
-        eight = (six << 2) | (six >> 4)
-        table |= (255 - eight if inverted else eight) << (8 * byte)
+    six = np.arange(64, dtype=np.uint32)
+    eight = (six << 2) | (six >> 4)
+    if inverted:
+        eight = 255 - eight
+    # the red field is the colour's top six bits, blue its bottom six: one entry per
+    # (red, green, blue), in that order, is one entry per colour value
+    table = (eight[:, None, None] | (eight[None, :, None] << 8) | (eight[None, None, :] << 16)).astype("<u4")
+    table = table.reshape(-1)
     table.flags.writeable = False
     return table
 
