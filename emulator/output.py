@@ -15,6 +15,9 @@ from .errors import BadInput
 
 ANIMATION_NAME = "animation.png"
 FRAME_PATTERN = "frame_{:04d}.png"
+# zlib's fastest level for the frames and the animation: half the time of Pillow's default (6)
+# for files about a third larger. Writing them is a good part of a short run's host time.
+PNG_COMPRESS_LEVEL = 1
 # Browsers show an APNG frame shorter than about 11 ms for 100 ms (Chromium; Firefox does
 # the like), which would play a fast run ten times too slowly: frames shown for less than
 # this are given this long in animation.png, and run.json says which.
@@ -63,6 +66,7 @@ class RunOutput:
         self.console_path = self.folder / "console.log"
         self._console = self.console_path.open("wb")
         self.frame_paths: list[Path] = []
+        self._frame_images: list[Image.Image] = []    # the animation's frames, not read back from the files
         self.frame_times: list[float] = []
         self.grabs: list[dict] = []
         self.animation: dict | None = None
@@ -72,8 +76,10 @@ class RunOutput:
 
     def frame(self, record: FrameRecord, image: np.ndarray) -> None:
         path = self.folder / FRAME_PATTERN.format(record.index)
-        Image.fromarray(image, "RGB").save(path)
+        picture = Image.fromarray(image, "RGB")
+        picture.save(path, compress_level=PNG_COMPRESS_LEVEL)
         self.frame_paths.append(path)
+        self._frame_images.append(picture)
         self.frame_times.append(record.virtual_time_s)
 
     def grab(self, request, board) -> None:
@@ -91,11 +97,11 @@ class RunOutput:
     def finish(self, summary: dict) -> None:
         self._console.close()
         if self.frame_paths:
-            images = [Image.open(p) for p in self.frame_paths]
+            images = self._frame_images
             durations, lengthened = animation_durations(self.frame_times)
             # Pillow writes each duration as an exact fraction delay_num/delay_den of a second
             images[0].save(self.folder / ANIMATION_NAME, save_all=True, append_images=images[1:],
-                           duration=durations, loop=0)
+                           duration=durations, loop=0, compress_level=PNG_COMPRESS_LEVEL)
             self.animation = {"file": ANIMATION_NAME, "frame_durations_ms": durations,
                               "lengthened_to_ms": MIN_ANIMATION_FRAME_MS, "lengthened_frames": lengthened}
         summary["animation"] = self.animation
