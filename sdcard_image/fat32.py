@@ -292,12 +292,14 @@ FAT32_ENTRY_MASK = 0x0FFF_FFFF    # the top 4 bits of a FAT32 entry are reserved
 class CardFat(PyFat):
     """pyfatfs' volume, reading a FAT32 table with one numpy conversion instead of pyfatfs'
     struct call per entry: the same entries (the reserved top 4 bits cleared), the same
-    warning when the FATs differ, the same errors."""
+    warning when the FATs differ, the same errors. The FATs are written to the image once,
+    when the volume is closed, not at every file created, written or closed."""
 
     def __init__(self, offset: int) -> None:
         super().__init__(offset=offset, lazy_load=True)
         self._card_offset = offset
         self._card_fp = None
+        self._fat_unwritten = False
 
     def set_fp(self, fp) -> None:
         self._card_fp = fp      # pyfatfs keeps its own reference private to PyFat
@@ -322,6 +324,24 @@ class CardFat(PyFat):
         if len(fats[0]) != fat_bytes:
             raise PyFATException("Invalid length of FAT")
         self.fat = (np.frombuffer(fats[0], dtype="<u4") & FAT32_ENTRY_MASK).tolist()
+
+    def flush_fat(self) -> None:
+        # pyfatfs writes every FAT whole (1 MiB on a 64 MiB card) at each file it creates,
+        # writes or closes, and a small card of three files costs 10 such writes. It keeps the
+        # table in memory and never reads it back from the image while the volume is open, so
+        # the FATs are written once, by close (_mark_clean); a writer that raises still closes
+        # (CardWriter's with-block), or when a reader of the raw image asks (write_fat).
+        self._fat_unwritten = True
+
+    def write_fat(self) -> None:
+        """Writes the FATs to the image now, if a change since the last write is not there yet."""
+        if self._fat_unwritten:
+            super().flush_fat()
+            self._fat_unwritten = False
+
+    def _mark_clean(self) -> None:
+        super()._mark_clean()       # (pyfatfs' close: the clean-shutdown bit, then the boot sector)
+        self.write_fat()
 
     def __bytes__(self) -> bytes:
         # pyfatfs packs a FAT32 table with a struct format of one letter per entry, at every
@@ -577,6 +597,12 @@ class CardWriter:
         self.fs.fs.flush_fat()
         # pyfatfs would still list the entries under their long names: forget them.
         self.reopen()
+
+    def flush(self) -> None:
+        """Brings the image up to date while the card stays open, for a reader of the raw image
+        (rawfat): file data and folders are written as they change, the FATs only at close
+        (CardFat) or here."""
+        self.fs.fs.write_fat()
 
     def free_bytes(self) -> int:
         free = self.fs.fs.fat[2:].count(0)

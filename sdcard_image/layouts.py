@@ -131,6 +131,7 @@ def fill_directory(writer: CardWriter, card_dir: str, min_clusters: int = 3,
         writer.write(path, content)
         files[path] = content
         i += 1
+        writer.flush()
         if len(cluster_chain(writer.image, card_dir)) >= min_clusters:
             return files
         if i > 100000:

@@ -912,6 +912,40 @@ def test_writer_refuses_case_twin_in_one_folder(tmp_path):
             writer.write("/cube.obj", b"b")
 
 
+def test_the_fats_are_written_at_close_or_flush_and_a_raising_writer_leaves_a_sound_card(tmp_path, monkeypatch):
+    """pyfatfs would write both FATs whole at every file it creates, writes or closes (1 MiB each
+    time on this card): CardFat writes them once, at close, or when a reader of the raw image
+    asks (CardWriter.flush). Whatever was written before a raise is on the card, FAT and all."""
+    writes = []
+    real_flush = fat32.PyFat.flush_fat
+    monkeypatch.setattr(fat32.PyFat, "flush_fat", lambda fat: (writes.append(1), real_flush(fat))[1])
+    card = tmp_path / "c.img"
+    files = {f"/file{i}.bin": bytes([i]) * (700 * i + 1) for i in range(1, 6)}
+    with fat32.CardWriter.create(card, 64) as writer:
+        writes.clear()                                  # (the blank card's own format)
+        for path, data in list(files.items())[:3]:
+            writer.write(path, data)
+        assert writes == []
+        writer.flush()
+        assert len(writes) == 1
+        assert read_file(card, "/file3.bin") == files["/file3.bin"]    # the raw image is up to date
+        writer.flush()
+        assert len(writes) == 1                         # nothing changed since
+        for path, data in list(files.items())[3:]:
+            writer.write(path, data)
+    assert len(writes) == 2
+    assert {path: read_file(card, path) for path in files} == files
+    assert fsck(card, tmp_path).returncode == 0
+
+    broken = tmp_path / "broken.img"
+    with pytest.raises(RuntimeError, match="in the middle"):
+        with fat32.CardWriter.create(broken, 64) as writer:
+            writer.write("/kept.bin", b"k" * 3000)
+            raise RuntimeError("in the middle")
+    assert read_file(broken, "/kept.bin") == b"k" * 3000
+    assert fsck(broken, tmp_path).returncode == 0
+
+
 def test_exif_orientation_and_16_bit_grey(tmp_path):
     photo = Image.new("RGB", (6, 3), (10, 20, 30))
     exif = photo.getexif()
