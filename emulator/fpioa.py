@@ -43,6 +43,7 @@ class Fpioa(Peripheral):
     def __init__(self, board=None) -> None:
         super().__init__(board)
         self._pads_by_function: dict[int, tuple[int, ...]] = {}   # looked up on every GPIO read: kept
+        self.routing_version = 0    # changes whenever a pad's function may have (for tables others keep)
         self._unroute_all()
 
     def _unroute_all(self) -> None:
@@ -51,6 +52,7 @@ class Fpioa(Peripheral):
         for pad in range(PAD_COUNT):
             self.values[4 * pad] = FUNCTION_MASK
         self._pads_by_function.clear()
+        self.routing_version += 1
 
     def reset(self, now: float) -> None:
         super().reset(now)
@@ -71,5 +73,6 @@ class Fpioa(Peripheral):
     def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
         self.values[offset] = value
         self._pads_by_function.clear()
+        self.routing_version += 1
         if self.board is not None and offset < 4 * PAD_COUNT:
             self.board.wiring_changed(now)

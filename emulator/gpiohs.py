@@ -46,6 +46,11 @@ class Gpiohs(Peripheral):
             return None
         return ((self.values[OUTPUT_VAL] ^ self.values[OUTPUT_XOR]) >> line) & 1
 
+    def _driven(self) -> tuple[int, int]:
+        """What driven_level gives for every line, in two words: the lines driven, and their levels."""
+        enabled = self.values[OUTPUT_EN]
+        return enabled, (self.values[OUTPUT_VAL] ^ self.values[OUTPUT_XOR]) & enabled
+
     def input_value(self) -> int:
         driven = self.values[OUTPUT_EN]
         out = self.values[OUTPUT_VAL] ^ self.values[OUTPUT_XOR]
@@ -81,11 +86,11 @@ class Gpiohs(Peripheral):
             return
         if offset in (HIGH_IP, LOW_IP):
             return  # level pending bits follow the input; writes have no effect
-        before = [self.driven_level(n) for n in range(LINES)]
+        before = self._driven()
         if self.board is not None:
             # bytes already on the SPI wire must see the pin levels of their own time
             self.board.advance_devices(now)
         self.values[offset] = value
         self._sample_inputs()
-        if self.board is not None and before != [self.driven_level(n) for n in range(LINES)]:
+        if self.board is not None and before != self._driven():
             self.board.wiring_changed(now)

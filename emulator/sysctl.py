@@ -66,6 +66,9 @@ class PllState:
     running_since: float | None = None
 
 
+# the registers `usable` follows (gate_open, in_reset): a write to any other leaves it as it is
+_GATE_REGISTERS = frozenset((CLK_EN_CENT, CLK_EN_PERI, PERI_RESET))
+
 class Sysctl(Peripheral):
     NAME = "SYSCTL"
     BASE = 0x5044_0000
@@ -178,7 +181,8 @@ class Sysctl(Peripheral):
 
     def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
         self._write_register(offset, reg, value, now)
-        self._update_usable()
+        if offset in _GATE_REGISTERS:
+            self._update_usable()
 
     def _write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
         board = self.board

@@ -147,6 +147,8 @@ class DockWiring:
         self.sd_slot = sd_slot
         self._lcd_reset_level = 1
         self._pad_levels: list[int | None] = [None] * PAD_COUNT
+        self._driven_pads: set[int] = set()        # the pads whose _pad_levels entry is not None
+        self._line_pads: tuple[int, tuple[int, ...]] = (-1, ())   # (FPIOA routing version, pads carrying a line)
         self.pad_changes: list[tuple[float, int, int | None]] = []   # (virtual time, pad, level or None)
         self.pad_change_count = 0
 
@@ -183,10 +185,21 @@ class DockWiring:
         return None
 
     def _log_pad_changes(self, now: float) -> None:
-        for pad in range(PAD_COUNT):
+        # Only a pad that carries a GPIOHS or GPIO line can be driven now, and only one driven at the
+        # last look can have stopped being driven: the others stay undriven (None) either way.
+        fpioa = self.board.fpioa
+        version, line_pads = self._line_pads
+        if version != fpioa.routing_version:
+            line_pads = tuple(pad for pad in range(PAD_COUNT) if is_gpio_line(fpioa.function_of_pad(pad)))
+            self._line_pads = (fpioa.routing_version, line_pads)
+        for pad in sorted(self._driven_pads.union(line_pads)):
             level = self.pad_level(pad)
             if level != self._pad_levels[pad]:
                 self._pad_levels[pad] = level
+                if level is None:
+                    self._driven_pads.discard(pad)
+                else:
+                    self._driven_pads.add(pad)
                 self.board.signal(now, f"pad{pad:02d}", level)
                 self.pad_change_count += 1
                 if len(self.pad_changes) < MAX_PAD_CHANGES:
