@@ -645,11 +645,18 @@ def _map_positions(geometry: _WindowGeometry, positions: np.ndarray) -> np.ndarr
 def _colours_of_16_bit_pixels(bgr: bool) -> np.ndarray:
     """The packed 18-bit GRAM colour of every 16-bit pixel value by _decode_pixels' rule, red and
     blue swapped when MADCTL's BGR bit is set (65,536 entries, read-only)."""
-    values = np.arange(1 << 16, dtype=np.uint32)
-    red, green, blue = _decode_pixels(np.stack((values >> 8, values & 0xFF), axis=1), COLMOD_16BIT)
+    def channel(values: np.ndarray, which: int) -> np.ndarray:
+        # the 6-bit level of one channel for pixel values that set only that channel's field
+        return _decode_pixels(np.stack((values >> 8, values & 0xFF), axis=1), COLMOD_16BIT)[which]
+    red = channel(np.arange(32, dtype=np.uint32) << 11, 0)
+    green = channel(np.arange(64, dtype=np.uint32) << 5, 1)
+    blue = channel(np.arange(32, dtype=np.uint32), 2)
+    # a pixel value is its red field, then green, then blue (RRRRRGGG GGGBBBBB): one entry per
+    # (red, green, blue) field, in that order, is one entry per value
+    red, green, blue = red[:, None, None], green[None, :, None], blue[None, None, :]
     if bgr:
-        red, blue = blue, red
-    table = (red << 12) | (green << 6) | blue
+        red, blue = blue, red     # the fields' levels trade places in GRAM
+    table = ((red << 12) | (green << 6) | blue).reshape(-1)
     table.flags.writeable = False
     return table
 
