@@ -45,25 +45,24 @@ def _power_on_file(seed: int) -> int | None:
     return descriptor
 
 
-def _sram_buffer(fill_seed: int | None) -> tuple[ctypes.Array, mmap.mmap | None]:
-    """The host buffer of a new SRAM, and the mapping behind it when there is one. With a seed,
-    a private (copy-on-write) mapping of the power-on file: a board starts without copying
-    8 MiB (about 5 ms, paid again by each of a test suite's hundreds of boards), and only the
-    pages the firmware writes are copied, when it writes them."""
+def _sram_buffer(fill_seed: int | None) -> ctypes.Array:
+    """The host buffer of a new SRAM. With a seed, a private (copy-on-write) mapping of the
+    power-on file: a board starts without copying 8 MiB (about 5 ms, paid again by each of a test
+    suite's hundreds of boards), and only the pages the firmware writes are copied, when it writes
+    them. (The mapping lives as long as the buffer made from it: ctypes keeps it referenced.)"""
     descriptor = _power_on_file(fill_seed) if fill_seed is not None else None
     if descriptor is None:
         buffer = (ctypes.c_uint8 * SRAM_SIZE)()
         if fill_seed is not None:
             np.frombuffer(buffer, dtype=np.uint8)[:] = power_on_pattern(fill_seed)
-        return buffer, None
+        return buffer
     mapping = mmap.mmap(descriptor, SRAM_SIZE, flags=mmap.MAP_PRIVATE, prot=mmap.PROT_READ | mmap.PROT_WRITE)
-    return (ctypes.c_uint8 * SRAM_SIZE).from_buffer(mapping), mapping
+    return (ctypes.c_uint8 * SRAM_SIZE).from_buffer(mapping)
 
 
 class Sram:
     def __init__(self, fill_seed: int | None = POWER_ON_SEED) -> None:
-        # (the mapping lives as long as the buffer made from it: ctypes keeps it referenced)
-        self.buffer, _ = _sram_buffer(fill_seed)
+        self.buffer = _sram_buffer(fill_seed)
         self.bytes = np.frombuffer(self.buffer, dtype=np.uint8)
         # --check-writes: called as write_check(address, length, writer) before a DMA write lands
         self.write_check: Callable[[int, int, str], None] | None = None

@@ -69,6 +69,7 @@ class PllState:
 # the registers `usable` follows (gate_open, in_reset): a write to any other leaves it as it is
 _GATE_REGISTERS = frozenset((CLK_EN_CENT, CLK_EN_PERI, PERI_RESET))
 
+
 class Sysctl(Peripheral):
     NAME = "SYSCTL"
     BASE = 0x5044_0000
