@@ -14,7 +14,7 @@ RISE_IE, RISE_IP, FALL_IE, FALL_IP = 0x18, 0x1C, 0x20, 0x24
 HIGH_IE, HIGH_IP, LOW_IE, LOW_IP = 0x28, 0x2C, 0x30, 0x34
 IOF_EN, IOF_SEL, OUTPUT_XOR = 0x38, 0x3C, 0x40
 LINES = 32
-MASK = 0xFFFF_FFFF
+MASK = (1 << LINES) - 1     # one bit per line in every register
 
 
 class Gpiohs(Peripheral):
