@@ -25,23 +25,29 @@ GENERAL_SRAM_SIZE = 6 * 1024 * 1024
 POWER_ON_SEED = 0x0210
 
 
+def _draw_power_on_pattern(seed: int) -> np.ndarray:
+    # 8 MiB of random bytes: about 10 ms
+    return np.random.default_rng(seed).integers(0, 256, SRAM_SIZE, dtype=np.uint8)
+
+
 @functools.lru_cache(maxsize=2)
 def power_on_pattern(seed: int) -> np.ndarray:
-    """The SRAM's contents at power-on for `seed` (read-only). Made once a process: drawing
-    8 MiB of random bytes costs about 10 ms, and the tests make hundreds of boards."""
-    pattern = np.random.default_rng(seed).integers(0, 256, SRAM_SIZE, dtype=np.uint8)
+    """The SRAM's contents at power-on for `seed` (read-only), drawn once a process."""
+    pattern = _draw_power_on_pattern(seed)
     pattern.flags.writeable = False
     return pattern
 
 
 @functools.lru_cache(maxsize=2)
 def _power_on_file(seed: int) -> int | None:
-    """A memory-only file holding power_on_pattern(seed), or None where the system has none
-    (os.memfd_create is Linux's). Made once a process and kept open (a forked process inherits it)."""
+    """A memory-only file holding the power-on pattern of `seed`, or None where the system has
+    none (os.memfd_create is Linux's). Made once a process and kept open (a forked process
+    inherits it); the file is then the pattern's only copy in the process."""
     if not hasattr(os, "memfd_create"):
         return None
     descriptor = os.memfd_create(f"k210-sram-power-on-{seed:#x}", os.MFD_CLOEXEC)
-    os.write(descriptor, power_on_pattern(seed).tobytes())
+    with open(descriptor, "wb", closefd=False) as file:     # (a buffered write writes it all)
+        file.write(_draw_power_on_pattern(seed).tobytes())
     return descriptor
 
 

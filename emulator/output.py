@@ -96,8 +96,8 @@ class RunOutput:
 
     def finish(self, summary: dict) -> None:
         self._console.close()
-        if self.frame_paths:
-            images = self._frame_images
+        images = self._frame_images
+        if images:
             durations, lengthened = animation_durations(self.frame_times)
             # Pillow writes each duration as an exact fraction delay_num/delay_den of a second
             images[0].save(self.folder / ANIMATION_NAME, save_all=True, append_images=images[1:],

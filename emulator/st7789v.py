@@ -651,14 +651,10 @@ def _colours_of_16_bit_pixels(bgr: bool) -> np.ndarray:
     red = channel(np.arange(32, dtype=np.uint32) << 11, 0)
     green = channel(np.arange(64, dtype=np.uint32) << 5, 1)
     blue = channel(np.arange(32, dtype=np.uint32), 2)
-    # a pixel value is its red field, then green, then blue (RRRRRGGG GGGBBBBB): one entry per
-    # (red, green, blue) field, in that order, is one entry per value
-    red, green, blue = red[:, None, None], green[None, :, None], blue[None, None, :]
-    if bgr:
-        red, blue = blue, red     # the fields' levels trade places in GRAM
-    table = ((red << 12) | (green << 6) | blue).reshape(-1)
-    table.flags.writeable = False
-    return table
+    # a pixel value is its red field, then green, then blue (RRRRRGGG GGGBBBBB); with BGR the
+    # red and blue fields' levels trade places in GRAM
+    red_shift, blue_shift = (0, 12) if bgr else (12, 0)
+    return _table_of_fields((red, red_shift), (green, 6), (blue, blue_shift))
 
 
 @functools.lru_cache(maxsize=2)
@@ -670,9 +666,20 @@ def _rgb888_of_gram_colours(inverted: bool) -> np.ndarray:
     eight = (six << 2) | (six >> 4)
     if inverted:
         eight = 255 - eight
-    # the red field is the colour's top six bits, blue its bottom six: one entry per
-    # (red, green, blue), in that order, is one entry per colour value
-    table = (eight[:, None, None] | (eight[None, :, None] << 8) | (eight[None, None, :] << 16)).astype("<u4")
+    # a GRAM colour is its red field, then green, then blue; R is the picture's first byte
+    return _table_of_fields((eight, 0), (eight, 8), (eight, 16))
+
+
+def _table_of_fields(*fields: tuple[np.ndarray, int]) -> np.ndarray:
+    """A read-only look-up table for values made of bit fields, the first field the most
+    significant: fields are (the entry for each value of the field, the shift at which that
+    entry goes into the table's uint32 entry), and the table's entry for a value is the sum
+    of its fields' entries so shifted."""
+    table = np.zeros((), dtype=np.uint32)
+    for axis, (entries, shift) in enumerate(fields):
+        shape = [1] * len(fields)
+        shape[axis] = entries.size
+        table = table | (entries.astype(np.uint32).reshape(shape) << shift)
     table = table.reshape(-1)
     table.flags.writeable = False
     return table
