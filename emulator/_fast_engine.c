@@ -1501,6 +1501,13 @@ typedef struct {
     uint64_t handed_over;   /* out: 1 when the last turn stopped before its end (the pc needs the precise
                                engine, or a poll loop came round): the scheduler finishes it */
     double end_time;    /* out, handed_over 0: when the last turn ended */
+    /* Device events that bound the turns as `outer` does but need no board between them (the console's
+     * bytes leaving the UART while nothing else hears them: Uarths.quiet_ticks): `ticks` of them, the
+     * first at `tick`, each `tick_period` after the one before (the UART's own float sums). In, the
+     * first not yet reached; out, as far as the turns went (a turn begins after every tick it passed). */
+    double tick;
+    double tick_period;
+    uint64_t ticks;
 } alone_plan_t;
 
 /*
@@ -1518,9 +1525,16 @@ uint64_t fast_run_alone(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t f
     plan->turns = 0;
     plan->handed_over = 0;
     for (;;) {
+        /* the board's next event after t0, as the scheduler would find it: ticks up to t0 have passed */
+        while (plan->ticks != 0 && plan->tick <= t0) {
+            plan->tick = plan->tick + plan->tick_period;
+            plan->ticks--;
+        }
         double horizon = t0 + plan->quantum / plan->hz;
         if (plan->outer < horizon)
             horizon = plan->outer;
+        if (plan->ticks != 0 && plan->tick < horizon)
+            horizon = plan->tick;
         double wanted = ceil((horizon - t0) * plan->hz - 1e-9);
         uint64_t budget = wanted > 1.0 ? (uint64_t)wanted : 1;
         plan->t0 = t0;

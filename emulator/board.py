@@ -454,6 +454,15 @@ class Board:
         bytes_per_frame = max(1, self.spi0.frame_bits // 8)
         return self.spi0.earliest_delivery(-(-self.lcd.cells_missing() // bytes_per_frame), now)
 
+    def next_loud_device_event(self, now: float) -> float | None:
+        """next_device_event, where the console's quiet bytes (Uarths.quiet_ticks) do not count."""
+        earliest = None
+        for device in self.timed_devices:
+            t = device.next_loud_event_time(now) if device is self.uarths else device.next_event_time(now)
+            if t is not None and t > now and (earliest is None or t < earliest):
+                earliest = t
+        return earliest
+
     def next_device_event(self, now: float) -> float | None:
         # (a plain loop: the scheduler asks this several times a turn)
         earliest = None

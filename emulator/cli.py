@@ -530,6 +530,7 @@ def main(argv: list[str] | None = None) -> int:
         if trace_file is not None:
             trace = InstructionTrace(board, trace_file, args.trace_from or 0.0, args.trace_to)
         watch.attach(board.stop_run)
+        board.uarths.every_byte_heard = watch.active    # it may end the run the moment a byte is out
         # One board a process, and what exists now lives until the run ends: frozen, it is no
         # longer scanned by every full collection, which the scheduler's allocations set off
         # every few virtual ms (each took milliseconds of host time).

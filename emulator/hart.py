@@ -151,7 +151,8 @@ class AlonePlan(ctypes.Structure):
                 ("outer", ctypes.c_double), ("stop_at", ctypes.c_double), ("max_turns", ctypes.c_uint64),
                 ("horizon", ctypes.c_double), ("budget", ctypes.c_uint64), ("start_cycles", ctypes.c_uint64),
                 ("start_executed", ctypes.c_uint64), ("turns", ctypes.c_uint64), ("handed_over", ctypes.c_uint64),
-                ("end_time", ctypes.c_double)]
+                ("end_time", ctypes.c_double), ("tick", ctypes.c_double), ("tick_period", ctypes.c_double),
+                ("ticks", ctypes.c_uint64)]
 ENGINE_FAST, ENGINE_PRECISE = "fast", "precise"
 ENGINES = (ENGINE_FAST, ENGINE_PRECISE)
 # Instructions the precise engine runs after the fast one handed it the hart. A hand-over is mostly

@@ -468,15 +468,7 @@ class Scheduler:
         self._take_interrupt(hart)
         t0 = hart.time
         hz = self._hz
-        # what bounds every turn from now until one of them happens: a device event, a grab, run_until's end
-        outer = math.inf
-        event = board.next_device_event(t0)
-        if event is not None:
-            outer = min(outer, event)
-        if self._grabs and self._grabs[0][0] > t0:
-            outer = min(outer, self._grabs[0][0])
-        if self.until is not None and self.until > t0:
-            outer = min(outer, self.until)
+        outer = self._outer_bound(t0, board.next_device_event(t0))
         horizon = min(t0 + self.quantum / hz, outer)
         instruction_limit = None
         alone = False
@@ -505,7 +497,7 @@ class Scheduler:
             raise self.pending_stop
         hart.time = t0 + ran / hz
         if alone and hart.precise_runs == precise_runs and hart.device_accesses == device_accesses:
-            horizon = self._go_on_alone(hart, hz, outer, horizon)
+            horizon = self._go_on_alone(hart, hz, t0, outer, horizon)
         if hart.state is HartState.ASLEEP:
             # a wfi with an enabled interrupt already pending falls through (the privileged spec:
             # WFI resumes when an enabled interrupt is pending, whenever it became so); without
@@ -528,7 +520,19 @@ class Scheduler:
             self._set_time(min(running))
         self._check_deadlines()
 
-    def _go_on_alone(self, hart: Hart, hz: float, outer: float, horizon: float) -> float:
+    def _outer_bound(self, t0: float, event: float | None) -> float:
+        """What bounds every turn from t0 until one of them happens: the device event `event`
+        (the board's next after t0), a grab, run_until's end."""
+        outer = math.inf
+        if event is not None:
+            outer = min(outer, event)
+        if self._grabs and self._grabs[0][0] > t0:
+            outer = min(outer, self._grabs[0][0])
+        if self.until is not None and self.until > t0:
+            outer = min(outer, self.until)
+        return outer
+
+    def _go_on_alone(self, hart: Hart, hz: float, t0: float, outer: float, horizon: float) -> float:
         """The hart ran a turn alone on the fast engine, the others asleep in wfi, and nothing in it
         needed the board (no device access, CSR, trap or wfi: the precise engine did not run, and the
         fast one left no device access to the bus). Until
@@ -538,17 +542,24 @@ class Scheduler:
         else runs. So the hart runs them here, one after another, each exactly the turn _turn would
         give it (same budget, from the same float time), without moving the devices on between them,
         which is what costs the host time; the last one ends where _turn goes on as usual. Returns
-        the horizon of the last turn run (`horizon`, that of the turn _turn ran, when it ran none)."""
+        the horizon of the last turn run (`horizon`, that of the turn _turn ran, when it ran none;
+        `t0`: when that turn began, `outer` what bounded it)."""
         if self._trap_deadline is not None or self._draining or self._priority is not None or \
                 hart.state is not HartState.RUNNING or hart.polling or not hart.fast_usable() or \
                 any(other.state is not HartState.ASLEEP for other in self.harts if other is not hart):
             return horizon
+        plan = self._alone_plan
+        # the console's quiet bytes bound the turns as any device event does, but their ends need no
+        # board: the turns run on past them (each still ends at one it reaches, as _turn would end it),
+        # and the UART hears them all, each at its own time, when the board next moves the devices on
+        plan.tick, plan.tick_period, plan.ticks = self.board.uarths.quiet_ticks()
+        if plan.ticks:
+            outer = self._outer_bound(t0, self.board.next_loud_device_event(t0))
         stop_at = min(outer, self.board.earliest_frame_capture(hart.time))
         if self.until is None:
             stop_at = min(stop_at, self._last_frame_time + self.hang_budget_s)
         if hart.time >= stop_at:
             return horizon
-        plan = self._alone_plan
         plan.t0, plan.hz, plan.quantum, plan.outer, plan.stop_at = hart.time, hz, self.quantum, outer, stop_at
         plan.max_turns = MAX_TURNS_ALONE
         started = host_time.perf_counter()

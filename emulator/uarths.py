@@ -30,6 +30,7 @@ RX_FIFO_DEPTH = 8
 FULL = 1 << 31
 EMPTY = 1 << 31
 IP_TXWM, IP_RXWM = 1, 2
+NEWLINE = 0x0A
 RXCTRL_RXEN = 1
 INTERACTIVE_POLL_S = 0.05     # virtual time between looks at a terminal while nothing was typed
 
@@ -59,6 +60,9 @@ class Uarths(Peripheral):
         self._receiving_until: float | None = None   # end time of the byte coming in
         self._receiving_byte = 0
         self.bytes_received = 0
+        # whoever hears the console acts on each byte the moment it is out (a console watch that
+        # ends the run): then no byte's end is quiet (quiet_ticks)
+        self.every_byte_heard = False
 
     def _byte_time(self) -> float:
         hz = self.board.cpu_hz() if self.board is not None else 26e6
@@ -106,13 +110,49 @@ class Uarths(Peripheral):
             self._shifting_until = start + self._byte_time()
 
     def next_event_time(self, now: float) -> float | None:
-        events = [t for t in (self._shifting_until, self._receiving_until) if t is not None]
+        events = [t for t in (self._shifting_until, self._receiver_event(now)) if t is not None]
+        return min(events) if events else None
+
+    def _receiver_event(self, now: float) -> float | None:
+        if self._receiving_until is not None:
+            return self._receiving_until
         source = self.input
-        if source is not None and self._receiving_until is None and self._receiver_ready():
+        if source is not None and self._receiver_ready():
             if source.has_byte(now):
-                events.append(now)                      # the next byte starts coming in now
-            elif source.may_grow:
-                events.append(now + INTERACTIVE_POLL_S)   # look at the terminal again then
+                return now                              # the next byte starts coming in now
+            if source.may_grow:
+                return now + INTERACTIVE_POLL_S         # look at the terminal again then
+        return None
+
+    def quiet_ticks(self) -> tuple[float, float, int]:
+        """The ends of the bytes now on the wire and in the transmit FIFO that change nothing but
+        the FIFO's level and the console's record of them (each is heard with its own time,
+        last_byte_time, whenever the UART is advanced past it): not a line's end (the board
+        reads each whole line, and an error report, at its end), no transmit-watermark
+        interrupt enabled, nobody acting on each byte (every_byte_heard). (first end, byte time,
+        how many): the ends in a row, as advance works them out, up to the first byte that is
+        not quiet; the board's turns may run past them without stopping (Scheduler._go_on_alone)."""
+        if self._shifting_until is None or self.every_byte_heard or self.values[IE] & IP_TXWM:
+            return 0.0, 0.0, 0
+        count = 0
+        for byte in (self._pending_byte, *self._fifo):
+            if byte == NEWLINE:
+                break
+            count += 1
+        return self._shifting_until, self._byte_time(), count
+
+    def next_loud_event_time(self, now: float) -> float | None:
+        """next_event_time, with the quiet byte ends (quiet_ticks) left out."""
+        first, period, count = self.quiet_ticks()
+        if count == 0:
+            return self.next_event_time(now)
+        tx = first
+        for _ in range(count):
+            tx = tx + period
+        if count == 1 + len(self._fifo):
+            tx = None        # every byte waiting is quiet: the transmitter has nothing else to say
+        rx = self._receiver_event(now)
+        events = [t for t in (tx, rx) if t is not None]
         return min(events) if events else None
 
     def tx_level(self) -> int:

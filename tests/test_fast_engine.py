@@ -649,6 +649,49 @@ def test_the_turns_alone_leave_the_guests_flags_alone():
     assert state(fast) == state(precise) and state(fast)["fflags"] == 0
 
 
+# Five bytes to the console, then a loop long enough for many turns alone while they go out at
+# 115,200 baud (about 87 us each, some 20,000 cycles), then a line's end
+PRINT_THEN_LOOP = """
+    li      t0, 0x38000000          # UARTHS txdata (the mask ROM left the transmitter on)
+    la      t2, text
+1:  lbu     t1, 0(t2)
+    beqz    t1, 2f
+    sw      t1, 0(t0)
+    addi    t2, t2, 1
+    j       1b
+2:  li      s1, 150000
+3:  addi    s2, s2, 3
+    addi    s1, s1, -1
+    bnez    s1, 3b
+    li      t1, 10
+    sw      t1, 0(t0)
+"""
+
+
+def test_the_turns_alone_run_past_the_consoles_quiet_bytes_changing_nothing_else():
+    """A byte leaving the UART is a device event that ends a turn; when nothing but the console's
+    record of it depends on its moment (Uarths.quiet_ticks), the turns alone run on past it, each
+    still ending where it did, and the UART hears it later with its own time: the hart's
+    registers and counts, the console's bytes and their times are those of a run that stops at
+    every byte (every_byte_heard), in fewer calls of the turns alone."""
+    runs = []
+    for every_byte_heard in (True, False):
+        heard: list[tuple[int, float]] = []
+        board = make_board(program(FPU_ON + PRINT_THEN_LOOP, data='text: .asciz "quiet"'), cold=False,
+                           console=lambda byte: heard.append((byte, board.uarths.last_byte_time)))
+        board.uarths.every_byte_heard = every_byte_heard
+        calls = []
+        run_alone = board.harts[0].run_alone
+        board.harts[0].run_alone = lambda plan: (calls.append(plan.ticks), run_alone(plan))
+        board.run_until(0.004)
+        runs.append((state(board), board.harts[0].time, heard, calls))
+    (loud_state, loud_time, loud_heard, loud_calls), (quiet_state, quiet_time, quiet_heard, quiet_calls) = runs
+    assert bytes(byte for byte, _ in quiet_heard) == b"quiet\n" and quiet_state["pc"] == loud_state["pc"]
+    assert (quiet_state, quiet_time, quiet_heard) == (loud_state, loud_time, loud_heard)
+    assert not any(loud_calls) and any(quiet_calls)
+    assert len(quiet_calls) < len(loud_calls)
+
+
 def test_the_benchs_drawing_figures_time_one_drawing_on_each_engine(firmware, card):
     """tools/bench.py times hart 0's drawing of a steady frame on each engine: the fast engine stops
     before the frame's closing wfi, the precise engine runs it, and each way draws the same

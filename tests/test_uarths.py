@@ -180,6 +180,46 @@ def test_txwm_interrupt_pending_below_the_watermark(console_board):
     assert uart.irq_line()
 
 
+def test_quiet_ticks_are_the_byte_ends_up_to_a_line_end(console_board):
+    """The ends of bytes that change nothing but the console's record (Uarths.quiet_ticks): those
+    in a row from the byte on the wire up to a newline (the board reads each line at its end), each
+    a byte time after the one before, as advance works them out; the next loud event is the
+    newline's end."""
+    board, out = console_board
+    uart = board.uarths
+    assert uart.quiet_ticks() == (0.0, 0.0, 0)                       # nothing on the wire
+    uart.write(u.TXCTRL, 4, 1, 0.0)
+    for ch in b"ab\ncd":
+        uart.write(u.TXDATA, 4, ch, 0.0)
+    first, period, count = uart.quiet_ticks()
+    assert (first, count) == (uart.next_event_time(0.0), 2) and first == pytest.approx(BYTE)
+    assert period == pytest.approx(BYTE)
+    newline_end = first + period + period
+    assert uart.next_loud_event_time(0.0) == newline_end
+    uart.advance(newline_end)                                        # the line is out: "cd" is quiet
+    assert bytes(out) == b"ab\n"
+    first, period, count = uart.quiet_ticks()
+    assert count == 2 and first == uart.next_event_time(newline_end)
+    assert uart.next_loud_event_time(newline_end) is None             # nothing but quiet bytes left
+
+
+@pytest.mark.parametrize("why", ["watermark interrupt", "every byte heard"])
+def test_no_byte_is_quiet_when_its_end_may_matter(console_board, why):
+    """With the transmit-watermark interrupt enabled a byte's end may raise it; a console watch
+    (every_byte_heard) may end the run at any byte: then every end is an event."""
+    board, _ = console_board
+    uart = board.uarths
+    if why == "watermark interrupt":
+        uart.write(u.IE, 4, u.IP_TXWM, 0.0)
+    else:
+        uart.every_byte_heard = True
+    uart.write(u.TXCTRL, 4, 1, 0.0)
+    for ch in b"abc":
+        uart.write(u.TXDATA, 4, ch, 0.0)
+    assert uart.quiet_ticks()[2] == 0
+    assert uart.next_loud_event_time(0.0) == uart.next_event_time(0.0) == pytest.approx(BYTE)
+
+
 def test_a_program_prints_through_uarths():
     elf = program("""
         li      s0, 0x38000000
