@@ -288,6 +288,9 @@ class Board:
         self.scheduler.set_mtime(value, now)
 
     def clock_changed(self, now: float) -> None:
+        # what the devices did up to now took the old clock (a UART byte under way, say): they
+        # catch up before the scheduler takes the new one
+        self.advance_devices(now)
         self.scheduler.clock_changed(now)
 
     # --- wiring -----------------------------------------------------------------------
