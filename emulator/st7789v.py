@@ -224,6 +224,9 @@ class ST7789V:
         self._window_key: _WindowGeometry | None = None
         self._window_cells: np.ndarray | None = None
         self._window_all_on_panel = True
+        # for a window of the whole panel: where each cell's colour comes from in the window's
+        # pointer order (the inverse of _window_cells), made at the first whole frame
+        self._window_sources: np.ndarray | None = None
 
     # --- read-only state for tests and tools ------------------------------------------
 
@@ -502,7 +505,8 @@ class ST7789V:
         if fmt == COLMOD_16BIT:
             # a 16-bit pixel is two bytes, big-endian on the wire: one look-up gives its GRAM colour
             pairs = np.ascontiguousarray(units[:count * 2]).view(">u2")
-            self._store_pixels(_colours_of_16_bit_pixels(bool(self._regs.madctl & MADCTL_BGR))[pairs])
+            # (np.take: less than half the host time of indexing with the array here)
+            self._store_pixels(np.take(_colours_of_16_bit_pixels(bool(self._regs.madctl & MADCTL_BGR)), pairs))
             return
         fields = units[:count * per_pixel].reshape(count, per_pixel).astype(np.uint32)
         red, green, blue = _decode_pixels(fields, fmt)
@@ -530,8 +534,13 @@ class ST7789V:
             cells, colours = cells[on_panel], colours[on_panel]
         elif self._covered_count == 0 and cells.size == PIXELS:
             # a whole-panel window written whole from nothing covered: every cell once, the last
-            # one completes the frame (the common case: a firmware sending frame after frame)
-            self._gram[cells] = colours
+            # one completes the frame (the common case: a firmware sending frame after frame). The
+            # cells are then the window's, all of them: GRAM is its colours gathered in cell order
+            # (a gather costs the host about half what storing through the cells does)
+            if self._window_sources is None:
+                self._window_sources = np.empty(PIXELS, dtype=np.intp)
+                self._window_sources[cells] = np.arange(PIXELS)
+            np.take(colours, self._window_sources, out=self._gram)
             self._capture_frame()
             return
         while cells.size:
@@ -588,7 +597,7 @@ class ST7789V:
         size = geometry.width * geometry.height
         if geometry != self._window_key:
             self._window_key = geometry
-            self._window_cells = None
+            self._window_cells = self._window_sources = None
             if size <= WINDOW_CACHE_LIMIT:
                 self._window_cells = _map_positions(geometry, np.arange(size, dtype=np.int64))
                 self._window_all_on_panel = bool(self._window_cells.min() >= 0)

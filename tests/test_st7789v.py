@@ -446,6 +446,22 @@ def test_full_picture_with_madctl_60_is_rotated_180() -> None:
     assert np.array_equal(host.lcd.shown_image(), expected)
 
 
+def test_whole_frames_follow_each_change_of_orientation() -> None:
+    """Whole frames one after another, the orientation changed between them and back: each shows
+    as written in its own orientation (the model keeps what a whole-panel window's cells are per
+    window, and forgets it when the window changes)."""
+    rng = np.random.default_rng(3)
+    host = ready_host(madctl=0xA0)
+    for madctl, flip in ((0xA0, False), (0x60, True), (0xA0, False)):
+        picture = rng.integers(0, 1 << 16, (240, 320), dtype=np.uint16)
+        host.cmd(MADCTL, madctl)
+        host.window(0, 319, 0, 239)
+        host.cmd(RAMWR)
+        host.data(picture.astype(">u2").view(np.uint8).ravel())
+        expected = expected_565(picture.astype(np.uint32))
+        assert np.array_equal(host.lcd.shown_image(), expected[::-1, ::-1] if flip else expected)
+
+
 # --- COLMOD ----------------------------------------------------------------------------
 
 
