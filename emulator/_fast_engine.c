@@ -1503,8 +1503,7 @@ typedef struct {
     double end_time;    /* out, handed_over 0: when the last turn ended */
     /* Device events that bound the turns as `outer` does but need no board between them (the console's
      * bytes leaving the UART while nothing else hears them: Uarths.quiet_ticks): `ticks` of them, the
-     * first at `tick`, each `tick_period` after the one before (the UART's own float sums). In, the
-     * first not yet reached; out, as far as the turns went (a turn begins after every tick it passed). */
+     * first at `tick`, each `tick_period` after the one before (the UART's own float sums). */
     double tick;
     double tick_period;
     uint64_t ticks;
@@ -1522,19 +1521,21 @@ uint64_t fast_run_alone(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t f
     begin_run(f, uc, from);
     f->devices_here = 0;   /* a device access ends the turns here: the scheduler finishes that turn */
     double t0 = plan->t0;
+    double tick = plan->tick;
+    uint64_t ticks = plan->ticks;
     plan->turns = 0;
     plan->handed_over = 0;
     for (;;) {
         /* the board's next event after t0, as the scheduler would find it: ticks up to t0 have passed */
-        while (plan->ticks != 0 && plan->tick <= t0) {
-            plan->tick = plan->tick + plan->tick_period;
-            plan->ticks--;
+        while (ticks != 0 && tick <= t0) {
+            tick = tick + plan->tick_period;
+            ticks--;
         }
         double horizon = t0 + plan->quantum / plan->hz;
         if (plan->outer < horizon)
             horizon = plan->outer;
-        if (plan->ticks != 0 && plan->tick < horizon)
-            horizon = plan->tick;
+        if (ticks != 0 && tick < horizon)
+            horizon = tick;
         double wanted = ceil((horizon - t0) * plan->hz - 1e-9);
         uint64_t budget = wanted > 1.0 ? (uint64_t)wanted : 1;
         plan->t0 = t0;

@@ -288,9 +288,6 @@ class Board:
         self.scheduler.set_mtime(value, now)
 
     def clock_changed(self, now: float) -> None:
-        # what the devices did up to now took the old clock (a UART byte under way, say): they
-        # catch up before the scheduler takes the new one
-        self.advance_devices(now)
         self.scheduler.clock_changed(now)
 
     # --- wiring -----------------------------------------------------------------------
@@ -457,20 +454,16 @@ class Board:
         bytes_per_frame = max(1, self.spi0.frame_bits // 8)
         return self.spi0.earliest_delivery(-(-self.lcd.cells_missing() // bytes_per_frame), now)
 
-    def next_loud_device_event(self, now: float) -> float | None:
-        """next_device_event, where the console's quiet bytes (Uarths.quiet_ticks) do not count."""
-        earliest = None
-        for device in self.timed_devices:
-            t = device.next_loud_event_time(now) if device is self.uarths else device.next_event_time(now)
-            if t is not None and t > now and (earliest is None or t < earliest):
-                earliest = t
-        return earliest
-
-    def next_device_event(self, now: float) -> float | None:
+    def next_device_event(self, now: float, past_quiet_console: bool = False) -> float | None:
+        """The first moment after `now` a device changes state by itself; with past_quiet_console,
+        the console's quiet bytes (Uarths.quiet_ticks) do not count."""
         # (a plain loop: the scheduler asks this several times a turn)
         earliest = None
         for device in self.timed_devices:
-            t = device.next_event_time(now)
+            if past_quiet_console and device is self.uarths:
+                t = device.next_loud_event_time(now)
+            else:
+                t = device.next_event_time(now)
             if t is not None and t > now and (earliest is None or t < earliest):
                 earliest = t
         return earliest

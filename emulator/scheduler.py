@@ -554,7 +554,7 @@ class Scheduler:
         # and the UART hears them all, each at its own time, when the board next moves the devices on
         plan.tick, plan.tick_period, plan.ticks = self.board.uarths.quiet_ticks()
         if plan.ticks:
-            outer = self._outer_bound(t0, self.board.next_loud_device_event(t0))
+            outer = self._outer_bound(t0, self.board.next_device_event(t0, past_quiet_console=True))
         stop_at = min(outer, self.board.earliest_frame_capture(hart.time))
         if self.until is None:
             stop_at = min(stop_at, self._last_frame_time + self.hang_budget_s)
@@ -569,7 +569,13 @@ class Scheduler:
         if not plan.handed_over:
             hart.time = plan.end_time
             return plan.horizon
-        # the last turn stopped for the board: it goes on as _run_hart would have run it from its start
+        # the last turn stopped for the board: the board catches up with its start, as between any
+        # two turns (the UART hears the bytes that ended before it; the board's time is the turn's
+        # start for whatever reads it: a trap's grace period, a warning's time), and it goes on as
+        # _run_hart would have run it from its start
+        hart.time = plan.t0
+        self._set_time(plan.t0)
+        self._check_deadlines()
         ran = self._run_hart(hart, plan.t0, plan.budget, hz, since=(plan.start_executed, plan.start_cycles))
         if self.pending_stop is not None:
             raise self.pending_stop

@@ -125,17 +125,19 @@ class Uarths(Peripheral):
         return None
 
     def quiet_ticks(self) -> tuple[float, float, int]:
-        """The ends of the bytes now on the wire and in the transmit FIFO that change nothing but
-        the FIFO's level and the console's record of them (each is heard with its own time,
-        last_byte_time, whenever the UART is advanced past it): not a line's end (the board
-        reads each whole line, and an error report, at its end), no transmit-watermark
-        interrupt enabled, nobody acting on each byte (every_byte_heard). (first end, byte time,
-        how many): the ends in a row, as advance works them out, up to the first byte that is
-        not quiet; the board's turns may run past them without stopping (Scheduler._go_on_alone)."""
-        if self._shifting_until is None or self.every_byte_heard or self.values[IE] & IP_TXWM:
+        """The ends of the bytes about to leave that change nothing but the FIFO's level and the
+        console's record of them (each is heard with its own time, last_byte_time, whenever the
+        UART is advanced past it): not a line's end (the board reads each whole line, and an error
+        report, at its end), no transmit-watermark interrupt enabled, nobody acting on each byte
+        (every_byte_heard), no terminal typed into meanwhile (whose next look depends on when it is
+        asked). (first end, byte time, how many): the ends in a row, as advance works them out, up
+        to the first byte that is not quiet; the board's turns may run past them without stopping
+        (Scheduler._go_on_alone)."""
+        if self._shifting_until is None or self.every_byte_heard or self.values[IE] & IP_TXWM or \
+                (self.input is not None and self.input.may_grow):
             return 0.0, 0.0, 0
         count = 0
-        for byte in (self._pending_byte, *self._fifo):
+        for byte in self._leaving():
             if byte == NEWLINE:
                 break
             count += 1
@@ -149,11 +151,20 @@ class Uarths(Peripheral):
         tx = first
         for _ in range(count):
             tx = tx + period
-        if count == 1 + len(self._fifo):
-            tx = None        # every byte waiting is quiet: the transmitter has nothing else to say
+        if count == len(self._leaving()):
+            tx = None        # every byte about to leave is quiet: the transmitter has nothing else to say
         rx = self._receiver_event(now)
         events = [t for t in (tx, rx) if t is not None]
         return min(events) if events else None
+
+    def _leaving(self) -> tuple[int, ...]:
+        """The bytes that leave back to back from now on: the one on the wire, and the FIFO's while
+        the transmitter is on (txen = 0 lets the byte on the wire end and no other start)."""
+        if self._shifting_until is None:
+            return ()
+        if not self.values[TXCTRL] & 1:
+            return (self._pending_byte,)
+        return (self._pending_byte, *self._fifo)
 
     def tx_level(self) -> int:
         return len(self._fifo)

@@ -180,28 +180,6 @@ def test_txwm_interrupt_pending_below_the_watermark(console_board):
     assert uart.irq_line()
 
 
-def test_a_byte_under_way_when_the_clock_changes_keeps_the_old_byte_time(console_board):
-    """A clock change (SYSCTL) reaches the devices first: the byte on the wire then ends at the
-    old baud, however late the UART is next looked at; the next byte goes at the new one."""
-    from emulator import sysctl as sc
-    board, out = console_board
-    uart, sysctl = board.uarths, board.sysctl
-    heard: list[float] = []
-    board.uarths.on_byte = lambda byte: heard.append(uart.last_byte_time)
-    sysctl.write(sc.PLL0, 4, 30 << 4 | 1 << 20 | 1 << 21 | 1 << 25, 1e-6)      # clkf 30, in reset
-    sysctl.write(sc.PLL0, 4, 30 << 4 | 1 << 21 | 1 << 25, 2e-6)                # released: locks later
-    locked = 2e-6 + sc.PLL_LOCK_TIME_S
-    start = locked - 1.5 * BYTE
-    uart.write(u.TXCTRL, 4, 1, start)
-    for ch in b"abc":
-        uart.write(u.TXDATA, 4, ch, start)
-    sysctl.write(sc.CLK_SEL0, 4, 1, locked)                 # 403 MHz while "b" is on the wire
-    uart.advance(locked + BYTE)
-    fast_byte = 10 * (DIV + 1) / sysctl.cpu_hz()
-    assert heard[:2] == [pytest.approx(start + BYTE), pytest.approx(start + 2 * BYTE)]
-    assert heard[2] == pytest.approx(start + 2 * BYTE + fast_byte)
-
-
 def test_quiet_ticks_are_the_byte_ends_up_to_a_line_end(console_board):
     """The ends of bytes that change nothing but the console's record (Uarths.quiet_ticks): those
     in a row from the byte on the wire up to a newline (the board reads each line at its end), each
@@ -223,6 +201,19 @@ def test_quiet_ticks_are_the_byte_ends_up_to_a_line_end(console_board):
     first, period, count = uart.quiet_ticks()
     assert count == 2 and first == uart.next_event_time(newline_end)
     assert uart.next_loud_event_time(newline_end) is None             # nothing but quiet bytes left
+
+
+def test_with_the_transmitter_off_only_the_byte_on_the_wire_ends(console_board):
+    """txen = 0: the byte on the wire ends, the FIFO's wait; so only that end is ahead."""
+    board, _ = console_board
+    uart = board.uarths
+    uart.write(u.TXCTRL, 4, 1, 0.0)
+    for ch in b"abc":
+        uart.write(u.TXDATA, 4, ch, 0.0)
+    uart.write(u.TXCTRL, 4, 0, BYTE / 2)
+    first, _, count = uart.quiet_ticks()
+    assert (first, count) == (pytest.approx(BYTE), 1)
+    assert uart.next_loud_event_time(BYTE / 2) is None
 
 
 @pytest.mark.parametrize("why", ["watermark interrupt", "every byte heard"])
