@@ -133,29 +133,28 @@ class Uarths(Peripheral):
         asked). (first end, byte time, how many): the ends in a row, as advance works them out, up
         to the first byte that is not quiet; the board's turns may run past them without stopping
         (Scheduler._go_on_alone)."""
-        if self._shifting_until is None or self.every_byte_heard or self.values[IE] & IP_TXWM or \
-                (self.input is not None and self.input.may_grow):
-            return 0.0, 0.0, 0
-        count = 0
-        for byte in self._leaving():
-            if byte == NEWLINE:
-                break
-            count += 1
-        return self._shifting_until, self._byte_time(), count
+        first, period, count, _ = self._quiet_chain()
+        return first, period, count
 
     def next_loud_event_time(self, now: float) -> float | None:
         """next_event_time, with the quiet byte ends (quiet_ticks) left out."""
-        first, period, count = self.quiet_ticks()
-        if count == 0:
-            return self.next_event_time(now)
-        tx = first
-        for _ in range(count):
-            tx = tx + period
-        if count == len(self._leaving()):
-            tx = None        # every byte about to leave is quiet: the transmitter has nothing else to say
-        rx = self._receiver_event(now)
-        events = [t for t in (tx, rx) if t is not None]
+        events = [t for t in (self._quiet_chain()[3], self._receiver_event(now)) if t is not None]
         return min(events) if events else None
+
+    def _quiet_chain(self) -> tuple[float, float, int, float | None]:
+        """quiet_ticks, and the end of the first byte about to leave that is not quiet (None: none
+        is), in one walk along the bytes."""
+        if self._shifting_until is None:
+            return 0.0, 0.0, 0, None
+        if self.every_byte_heard or self.values[IE] & IP_TXWM or (self.input is not None and self.input.may_grow):
+            return 0.0, 0.0, 0, self._shifting_until
+        period = self._byte_time()
+        end, count = self._shifting_until, 0
+        for byte in self._leaving():
+            if byte == NEWLINE:
+                return self._shifting_until, period, count, end
+            end, count = end + period, count + 1
+        return self._shifting_until, period, count, None
 
     def _leaving(self) -> tuple[int, ...]:
         """The bytes that leave back to back from now on: the one on the wire, and the FIFO's while
