@@ -30,6 +30,8 @@ from .hart import ENGINE_FAST, ENGINES, Hart
 from .memory import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE, Sram
 from .mmio import Peripheral
 from .plic import SOURCE_DMA0, SOURCE_GPIO, SOURCE_GPIOHS0, SOURCE_SPI0, SOURCE_SPI1, SOURCE_UARTHS, Plic
+from .plic import m_context as plic_m_context
+from .plic import s_context as plic_s_context
 from .scheduler import (DEFAULT_HANG_BUDGET_S, DEFAULT_QUANTUM, HARTS, FrameRecord, RunResult,  # noqa: F401
                         Scheduler)  # FrameRecord and RunResult: the board's results, imported from here
 from .sdcard import SdCard, SdImage
@@ -433,8 +435,10 @@ class Board:
             value |= 1 << hartmod.IRQ_MSI
         if mask >> hartmod.IRQ_MTI & 1 and self.clint.timer_pending(h, now):
             value |= 1 << hartmod.IRQ_MTI
-        if mask >> hartmod.IRQ_MEI & 1 and self.plic.external_pending(h):
+        if mask >> hartmod.IRQ_MEI & 1 and self.plic.external_pending(plic_m_context(h)):
             value |= 1 << hartmod.IRQ_MEI
+        if mask >> hartmod.IRQ_SEI & 1 and self.plic.external_pending(plic_s_context(h)):
+            value |= 1 << hartmod.IRQ_SEI
         return value
 
     def interrupts_may_have_changed(self, now: float | None = None) -> None:

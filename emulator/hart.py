@@ -56,7 +56,10 @@ CAUSE_INTERRUPT = 1 << 63
 CAUSE_ILLEGAL_INSTRUCTION = 2
 CAUSE_BREAKPOINT = 3
 CAUSE_ECALL_M = 11
-IRQ_MSI, IRQ_MTI, IRQ_MEI = 3, 7, 11
+IRQ_MSI, IRQ_MTI, IRQ_SEI, IRQ_MEI = 3, 7, 9, 11
+# the order in which pending interrupts are taken (privileged spec 1.10, 3.1.14: MEI, MSI, MTI,
+# then the S-mode ones; SSI and STI are software-written bits of mip, which the model ignores)
+IRQ_PRIORITY = (IRQ_MEI, IRQ_MSI, IRQ_MTI, IRQ_SEI)
 
 EXCEPTION_NAMES = {
     0: "instruction address misaligned", 1: "instruction access fault",

@@ -1,7 +1,13 @@
-"""PLIC (0x0C00_0000): the platform-level interrupt controller, one M-mode context per hart.
+"""PLIC (0x0C00_0000): the platform-level interrupt controller, an M-mode and an S-mode context per hart.
 
-Sources 1..65 (SPI0 1, SPI1 2, DMA channels 27..32, UARTHS 33, GPIOHS 34..65).
-Context n belongs to hart n (the Kendryte SDK's `plic->targets.target[core_id]`).
+Sources 1..65 (SPI0 1, SPI1 2, GPIO 23, DMA channels 27..32, UARTHS 33, GPIOHS 34..65).
+Contexts, as on the K210: 0 = hart 0's M-mode (its MEIP), 1 = hart 0's S-mode (its SEIP),
+2 = hart 1's M-mode, 3 = hart 1's S-mode. Sources: the Kendryte SDK's plic.h gives each core
+0x100 bytes of enables (`target_enables.target[core_id]`) and 0x2000 of threshold and
+claim/complete (`targets.target[core_id]`), i.e. two SiFive contexts (0x80 and 0x1000 each),
+the first of which is the core's M-mode one; Linux's K210 device tree wires the PLIC the same
+way since "riscv: dts: k210: fix broken IRQs on hart1" (2022): interrupts-extended =
+<cpu0 M-ext>, <cpu0 S-ext>, <cpu1 M-ext>, <cpu1 S-ext>.
 Interrupts are level-triggered through a gateway: a source becomes pending when its
 line is high and it is not being served; claim returns the highest-priority pending
 enabled source above the threshold (ties: lowest id) and clears its pending bit;
@@ -19,7 +25,9 @@ from typing import Callable, Iterable
 from .mmio import BUS_TILELINK, Peripheral, Register, byte_fields
 
 SOURCES = 66          # 0 is "no interrupt"
-CONTEXTS = 2
+CONTEXTS_PER_HART = 2  # M-mode, then S-mode
+HARTS = 2
+CONTEXTS = HARTS * CONTEXTS_PER_HART
 PRIORITY = 0x0000
 PENDING = 0x1000
 ENABLE = 0x2000
@@ -31,6 +39,16 @@ PRIORITY_MASK = 7
 WORDS = (SOURCES + 31) // 32
 
 SOURCE_SPI0, SOURCE_SPI1, SOURCE_GPIO, SOURCE_DMA0, SOURCE_UARTHS, SOURCE_GPIOHS0 = 1, 2, 23, 27, 33, 34
+
+
+def m_context(hart: int) -> int:
+    """The context whose interrupt is hart `hart`'s MEIP."""
+    return CONTEXTS_PER_HART * hart
+
+
+def s_context(hart: int) -> int:
+    """The context whose interrupt is hart `hart`'s SEIP."""
+    return CONTEXTS_PER_HART * hart + 1
 
 
 class Plic(Peripheral):
@@ -73,7 +91,7 @@ class Plic(Peripheral):
         return best
 
     def external_pending(self, context: int) -> bool:
-        """MEIP for the hart owning `context`."""
+        """The context's interrupt: MEIP or SEIP of the hart it belongs to (m_context, s_context)."""
         self.sample()
         return self._best(context) != 0
 

@@ -225,9 +225,12 @@ class Scheduler:
         for hart in self.harts:
             if hart.state is HartState.RUNNING:
                 continue
-            if hart.state is HartState.WAITING and not hart.reg(rv.UC_RISCV_REG_MSTATUS) & hartmod.MSTATUS_MIE:
-                continue
-            enabled = hart.reg(rv.UC_RISCV_REG_MIE)
+            if hart.state is HartState.WAITING:
+                if not hart.reg(rv.UC_RISCV_REG_MSTATUS) & hartmod.MSTATUS_MIE:
+                    continue
+                enabled = self._taken_in_m_mode(hart)
+            else:
+                enabled = hart.reg(rv.UC_RISCV_REG_MIE)   # wfi wakes on any enabled interrupt
             if enabled and self.board.mip(hart.hart_id, now, enabled):
                 if hart.state is HartState.WAITING:
                     self._end_wait(hart, now, by_store=False)
@@ -302,13 +305,19 @@ class Scheduler:
         return any(other is hart and watch.hits for waiter in self.harts if waiter.wait is not None
                    for other, watch, _ in waiter.wait.watches)
 
+    @staticmethod
+    def _taken_in_m_mode(hart: Hart) -> int:
+        """The interrupts the hart, in M-mode with mstatus.MIE set, would take: those enabled in
+        mie and not delegated to S-mode in mideleg (privileged spec 1.10, 3.1.14)."""
+        return hart.reg(rv.UC_RISCV_REG_MIE) & ~hart.reg(rv.UC_RISCV_REG_MIDELEG)
+
     def _take_interrupt(self, hart: Hart) -> None:
         """Before a turn: a pending enabled interrupt with mstatus.MIE set enters mtvec."""
         if not hart.reg(rv.UC_RISCV_REG_MSTATUS) & hartmod.MSTATUS_MIE:
             return
-        enabled = hart.reg(rv.UC_RISCV_REG_MIE)
+        enabled = self._taken_in_m_mode(hart)
         pending = self.board.mip(hart.hart_id, hart.time, enabled) & enabled
-        for irq in (hartmod.IRQ_MEI, hartmod.IRQ_MSI, hartmod.IRQ_MTI):
+        for irq in hartmod.IRQ_PRIORITY:
             if pending >> irq & 1:
                 hart.enter_trap(hartmod.CAUSE_INTERRUPT | irq, hart.pc, 0)
                 return

@@ -174,7 +174,7 @@ dma_irq_init:
     .globl dma_irq_enable
 # dma_irq_enable
 #   What: lets DMAC channel a0's interrupt (PLIC source 27 + a0) reach the
-#         calling hart's M-mode context (context = hart id on the K210),
+#         calling hart's M-mode context (context 2 x hart id on the K210),
 #         threshold 0. mie.MEIE is only set while waiting, and mstatus.MIE
 #         never, so this wakes WFI and never takes a trap.
 #   Arguments: a0 = DMAC channel (0 .. 5).
@@ -192,7 +192,7 @@ dma_irq_enable:
     slli    t1, t1, 2                   # t1 = offset of the source's enable word
     li      t2, PLIC_ENABLE
     add     t1, t1, t2
-    slli    t2, t0, PLIC_ENABLE_SHIFT
+    slli    t2, t0, PLIC_HART_ENABLE_SHIFT
     add     t1, t1, t2
     lw      t2, 0(t1)
     andi    t4, t3, 31
@@ -201,7 +201,7 @@ dma_irq_enable:
     or      t2, t2, t5
     sw      t2, 0(t1)
     li      t1, PLIC_THRESHOLD
-    slli    t2, t0, PLIC_CONTEXT_SHIFT
+    slli    t2, t0, PLIC_HART_CONTEXT_SHIFT
     add     t1, t1, t2
     sw      zero, 0(t1)
     ret
@@ -249,9 +249,9 @@ dma_sleep_channel:
 3:  # Claim, quiet the source, complete: completing while the DMAC still
     # asserts the (level) interrupt would make the PLIC raise it again.
     csrr    t4, mhartid
-    slli    t4, t4, PLIC_CONTEXT_SHIFT
+    slli    t4, t4, PLIC_HART_CONTEXT_SHIFT
     li      t5, PLIC_THRESHOLD + PLIC_CLAIM_OFF
-    add     t5, t5, t4                  # t5 = &claim[context]
+    add     t5, t5, t4                  # t5 = &claim[the hart's M-mode context]
     lw      t6, 0(t5)
     slli    t1, a0, DMAC_CH_STRIDE_SHIFT
     add     t1, t1, t0                  # t1 = channel a0's registers - DMAC_CH0

@@ -1,5 +1,5 @@
 """CLINT (msip, mtimecmp, mtime at CPU clock / 50) and PLIC (priorities, threshold,
-enables, claim/complete gateways, one context per hart): facts sheet section 1."""
+enables, claim/complete gateways, an M-mode and an S-mode context per hart): facts sheet section 1."""
 from __future__ import annotations
 
 import pytest
@@ -7,7 +7,7 @@ import pytest
 from emulator import clint as c
 from emulator import plic as p
 from emulator.errors import UnmodelledAccess
-from emulator.hart import IRQ_MEI, IRQ_MSI, IRQ_MTI
+from emulator.hart import IRQ_MEI, IRQ_MSI, IRQ_MTI, IRQ_SEI
 from k210_fixtures import board, idle_elf  # noqa: F401
 
 CPU_HZ = 26e6
@@ -225,22 +225,41 @@ def test_disabled_sources_are_not_claimed(plic):
     assert claim(plic, 0) == 3
 
 
-def test_contexts_belong_to_harts(plic, board):
+def test_contexts_belong_to_harts_m_mode_first(plic, board):
+    """Context 2h is hart h's MEIP, 2h + 1 its SEIP (SDK plic.h: 0x100 of enables and 0x2000 of
+    threshold/claim per core; Linux's K210 device tree since "fix broken IRQs on hart1")."""
+    assert (p.m_context(0), p.s_context(0), p.m_context(1), p.s_context(1)) == (0, 1, 2, 3)
     plic.lines.high |= {1, 2}
     priority(plic, 1, 1)
     priority(plic, 2, 1)
-    enable(plic, 1, 2)                            # hart 1 takes source 2
-    assert not board.mip(0, 0.0) >> IRQ_MEI & 1
+    enable(plic, 2, 2)                            # hart 1's M-mode context takes source 2
+    assert not board.mip(0, 0.0) & (1 << IRQ_MEI | 1 << IRQ_SEI)
     assert board.mip(1, 0.0) >> IRQ_MEI & 1
+    assert not board.mip(1, 0.0) >> IRQ_SEI & 1
     enable(plic, 0, 1)
     assert board.mip(0, 0.0) >> IRQ_MEI & 1
-    assert claim(plic, 1) == 2
+    assert claim(plic, 2) == 2
     assert claim(plic, 0) == 1
-    threshold(plic, 1, 7)
+    threshold(plic, 2, 7)
     assert plic.read(p.THRESHOLD, 4, 0.0) == 0    # per-context threshold
-    complete(plic, 1, 2)
-    assert not plic.external_pending(1)           # hart 1's threshold masks it now
-    assert plic.read(p.ENABLE + p.ENABLE_STRIDE, 4, 0.0) == 1 << 2
+    complete(plic, 2, 2)
+    assert not plic.external_pending(2)           # hart 1's threshold masks it now
+    # the SDK's addresses for core 1: enables at 0x2000 + 0x100, threshold at 0x200000 + 0x2000
+    assert plic.read(0x2000 + 0x100, 4, 0.0) == 1 << 2
+    assert plic.read(0x20_0000 + 0x2000, 4, 0.0) == 7
+
+
+@pytest.mark.parametrize("hart", [0, 1])
+def test_s_mode_context_raises_seip_not_meip(plic, board, hart):
+    plic.lines.high.add(33)
+    priority(plic, 33, 1)
+    enable(plic, p.s_context(hart), 33)
+    assert board.mip(hart, 0.0) >> IRQ_SEI & 1
+    assert not board.mip(hart, 0.0) >> IRQ_MEI & 1
+    assert not board.mip(1 - hart, 0.0) & (1 << IRQ_MEI | 1 << IRQ_SEI)
+    assert claim(plic, p.m_context(hart)) == 0    # not enabled in the M-mode context
+    assert claim(plic, p.s_context(hart)) == 33
+    assert not board.mip(hart, 0.0) >> IRQ_SEI & 1
 
 
 def test_board_sources_reach_the_plic(board):
@@ -265,6 +284,6 @@ def test_plic_unknown_offset(board):
     board.plic.write(0x0, 4, 5, 0.0)              # source 0's priority is there and stays 0
     assert board.plic.read(0x0, 4, 0.0) == 0
     with pytest.raises(UnmodelledAccess):
-        board.plic.read(p.THRESHOLD + 2 * p.CONTEXT_STRIDE, 4, 0.0)   # no third context
+        board.plic.read(p.THRESHOLD + 4 * p.CONTEXT_STRIDE, 4, 0.0)   # no fifth context
     with pytest.raises(UnmodelledAccess, match="read-only"):
         board.plic.write(p.PENDING, 4, 1, 0.0)

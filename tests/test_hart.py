@@ -7,7 +7,7 @@ import pytest
 
 from emulator.errors import FirmwareTrap, UnmodelledAccess
 from emulator.elf import load_elf
-from emulator.hart import CAUSE_INTERRUPT, IRQ_MEI, IRQ_MSI, IRQ_MTI, CsrContext, Hart, HartState, RunEnd
+from emulator.hart import CAUSE_INTERRUPT, IRQ_MEI, IRQ_MSI, IRQ_MTI, IRQ_SEI, CsrContext, Hart, HartState, RunEnd
 from emulator.memory import Sram
 from k210_fixtures import at_done, build_elf, make_board, program, reg, run_to_done, run_until, symbol
 
@@ -507,6 +507,126 @@ def test_external_interrupt_through_the_plic():
     run_to_done(board)
     assert reg(board, "s8") == CAUSE_INTERRUPT | IRQ_MEI
     assert reg(board, "s3") == 34
+
+
+def test_plic_contexts_as_on_the_k210():
+    """Context 2 (0x0C00_2100, 0x0C20_2000) is hart 1's M-mode context: source 34 enabled there
+    reaches hart 1 as MEI. Context 1 (0x0C00_2080, 0x0C20_1000) is hart 0's S-mode context: source
+    35 enabled there raises hart 0's SEIP, not its MEIP, and is taken in M-mode as cause 9 (SDK
+    plic.h; Linux's K210 device tree). Before 2026-11-28 the model gave context 1 to hart 1."""
+    board = make_board(build_elf("""
+        .globl _start
+    _start:
+        la      t0, handler
+        csrw    mtvec, t0
+        csrr    a0, mhartid
+        bnez    a0, hart1
+        li      s0, 0x50440000
+        lw      t0, 0x28(s0)
+        ori     t0, t0, 1 << 3
+        sw      t0, 0x28(s0)                 # GPIOHS's clock
+        li      s1, 0x0C000000
+        li      t0, 1
+        sw      t0, 34 * 4(s1)               # priority[34] = 1
+        sw      t0, 35 * 4(s1)               # priority[35] = 1
+        li      t1, 0x0C002000 + 2 * 0x80 + 4
+        li      t0, 1 << (34 - 32)
+        sw      t0, 0(t1)                    # context 2 enables source 34
+        li      t1, 0x0C002000 + 1 * 0x80 + 4
+        li      t0, 1 << (35 - 32)
+        sw      t0, 0(t1)                    # context 1 enables source 35
+        li      t0, (1 << 11) | (1 << 9)
+        csrw    mie, t0                      # MEIE and SEIE
+        csrsi   mstatus, 8
+        la      t1, ready
+    1:  ld      t0, 0(t1)                    # hart 1 has its interrupts on
+        beqz    t0, 1b
+        li      s2, 0x38001000
+        li      t0, 3
+        sw      t0, 0x04(s2)                 # input_en, lines 0 and 1
+        sw      t0, 0x08(s2)                 # output_en
+        sw      t0, 0x18(s2)                 # rise_ie
+        sw      t0, 0x0C(s2)                 # output_val: both rise
+    2:  j       2b
+    hart1:
+        li      t0, 1 << 11
+        csrw    mie, t0                      # MEIE
+        csrsi   mstatus, 8
+        la      t1, ready
+        li      t0, 1
+        sd      t0, 0(t1)
+    3:  j       3b
+        .balign 4
+    handler:
+        csrr    a0, mhartid
+        bnez    a0, handler1
+        csrr    s8, mcause
+        csrr    s5, mip
+        li      t1, 0x0C200000 + 1 * 0x1000 + 4
+        lw      s3, 0(t1)                    # claim, context 1
+        li      t1, 0x0C200000 + 0 * 0x1000 + 4
+        lw      s4, 0(t1)                    # claim, context 0: nothing
+        la      t1, seen1
+    4:  ld      t0, 0(t1)                    # wait for hart 1's claim
+        beqz    t0, 4b
+    done:
+        j       done
+    handler1:
+        csrr    s8, mcause
+        li      t1, 0x0C200000 + 2 * 0x1000 + 4
+        lw      s3, 0(t1)                    # claim, context 2
+        la      t1, seen1
+        li      t0, 1
+        sd      t0, 0(t1)
+    5:  wfi
+        j       5b
+        .data
+        .balign 8
+    ready: .dword 0
+    seen1: .dword 0
+    """), quantum=100)
+    run_to_done(board)
+    assert reg(board, "s8", 1) == CAUSE_INTERRUPT | IRQ_MEI
+    assert reg(board, "s3", 1) == 34
+    assert reg(board, "s8", 0) == CAUSE_INTERRUPT | IRQ_SEI
+    assert reg(board, "s5", 0) >> IRQ_SEI & 1 and not reg(board, "s5", 0) >> IRQ_MEI & 1
+    assert reg(board, "s3", 0) == 35
+    assert reg(board, "s4", 0) == 0
+
+
+def test_a_delegated_seip_is_not_taken_in_m_mode():
+    """mideleg.SEI hands hart 0's S-mode external interrupt to S-mode: in M-mode it is not taken,
+    though mip shows it (privileged spec 1.10, 3.1.14)."""
+    board = make_board(trap_program("""
+        li      s0, 0x50440000
+        lw      t0, 0x28(s0)
+        ori     t0, t0, 1 << 3
+        sw      t0, 0x28(s0)
+        li      s1, 0x0C000000
+        li      t0, 1
+        sw      t0, 34 * 4(s1)
+        li      t1, 0x0C002000 + 1 * 0x80 + 4
+        li      t0, 1 << 2
+        sw      t0, 0(t1)                    # context 1 (hart 0's S-mode) enables source 34
+        li      t0, 1 << 9
+        csrw    mideleg, t0
+        csrw    mie, t0                      # SEIE
+        csrsi   mstatus, 8
+        li      s2, 0x38001000
+        li      t0, 1
+        sw      t0, 0x04(s2)
+        sw      t0, 0x08(s2)
+        sw      t0, 0x18(s2)
+        sw      t0, 0x0C(s2)                 # rising edge
+        li      t0, 2000
+    1:  addi    t0, t0, -1
+        bnez    t0, 1b
+        csrr    s5, mip
+        li      s8, 7
+    """), quantum=100)
+    run_to_done(board)
+    assert reg(board, "s8") == 7
+    assert reg(board, "s5") >> IRQ_SEI & 1
 
 
 def test_masked_interrupts_are_not_taken():
