@@ -23,7 +23,7 @@ all: firmware
 toolchain:
 	@tools/ensure-toolchain.sh
 
-$(VENV)/.installed: pyproject.toml setup.py emulator/_insn_counter.c emulator/_fast_engine.c emulator/_counter.h emulator/_write_watch.c emulator/_write_check.h emulator/_poll_watch.c | toolchain
+$(VENV)/.installed: pyproject.toml setup.py $(wildcard emulator/cpu/*.c emulator/cpu/*.h) | toolchain
 	@tools/ensure-venv.sh $(VENV)
 	@touch $@
 

@@ -43,9 +43,9 @@ def _session_root(tmp_path_factory) -> Path:
 
 @pytest.fixture(scope="session", autouse=True)
 def model_cache(tmp_path_factory) -> Path:
-    """The board model's cache of cycle tables (emulator/timing.py) for this session: shared by
+    """The board model's cache of cycle tables (emulator/cpu/timing.py) for this session: shared by
     the workers and the commands the tests run, kept out of the user's own cache folder."""
-    from emulator.timing import CACHE_ENVIRONMENT
+    from emulator.cpu.timing import CACHE_ENVIRONMENT
     folder = _session_root(tmp_path_factory) / "model-cache"
     os.environ[CACHE_ENVIRONMENT] = str(folder)
     return folder

@@ -85,8 +85,8 @@ def serve() -> None:
     else the server itself prints goes to standard error)."""
     answers = os.fdopen(os.dup(1), "w")
     os.dup2(2, 1)
-    import emulator.cli  # noqa: F401  (what every run imports, once, before the forks)
-    import emulator.console_watch, emulator.golden, emulator.trace, emulator.uart_input, emulator.vcd  # noqa: F401,E401
+    import emulator.frontends.cli  # noqa: F401  (what every run imports, once, before the forks)
+    import emulator.frontends.console_watch, emulator.frontends.golden, emulator.frontends.trace, emulator.frontends.uart_input, emulator.frontends.vcd  # noqa: F401,E401
     import PIL.Image, PIL.PngImagePlugin  # noqa: F401,E401
     import reference.cli, sdcard_image.cli  # noqa: F401,E401
     from emulator.board import Board

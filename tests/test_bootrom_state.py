@@ -1,5 +1,5 @@
 """The state the mask ROM hands a program (the board model's default) against --cold, the reset
-value of every register (emulator/bootrom.py; README, "The state the firmware is handed")."""
+value of every register (emulator/board/bootrom.py; README, "The state the firmware is handed")."""
 from __future__ import annotations
 
 import json
@@ -7,8 +7,8 @@ import json
 import pytest
 from conftest import run_emulator
 
-from emulator import bootrom
-from emulator import sysctl as sc
+from emulator.board import bootrom
+from emulator.devices import sysctl as sc
 from emulator.errors import HardwareMisuse
 from k210_fixtures import make_board, program, reg, run_to_done, run_until
 

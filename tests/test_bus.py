@@ -10,12 +10,12 @@ import json
 import pytest
 
 from conftest import GOLDEN, GOLDEN_FRAMES, run_emulator
-from emulator import plic as p
-from emulator import sysctl as sc
+from emulator.devices import plic as p
+from emulator.devices import sysctl as sc
 from unicorn import riscv_const as rv
 
 from emulator.errors import UnmodelledAccess
-from emulator.hart import IRQ_MSI
+from emulator.cpu.hart import IRQ_MSI
 from k210_fixtures import make_board, program, reg, run_to_done, run_until, symbol
 
 PLIC = 0x0C00_0000

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import pytest
 
-from emulator import clint as c
-from emulator import plic as p
+from emulator.devices import clint as c
+from emulator.devices import plic as p
 from emulator.errors import UnmodelledAccess
-from emulator.hart import IRQ_MEI, IRQ_MSI, IRQ_MTI, IRQ_SEI
+from emulator.cpu.hart import IRQ_MEI, IRQ_MSI, IRQ_MTI, IRQ_SEI
 from k210_fixtures import board, idle_elf  # noqa: F401
 
 CPU_HZ = 26e6
@@ -264,7 +264,7 @@ def test_s_mode_context_raises_seip_not_meip(plic, board, hart):
 
 def test_board_sources_reach_the_plic(board):
     """GPIOHS line 0 rising edge with rise_ie -> PLIC source 34 -> MEIP of hart 0."""
-    from emulator import gpiohs as g
+    from emulator.devices import gpiohs as g
     gp = board.gpiohs
     priority(board.plic, 34, 1)
     enable(board.plic, 0, 34)

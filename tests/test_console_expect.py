@@ -13,7 +13,7 @@ import sys
 import pytest
 
 from conftest import ROOT, run_emulator
-from emulator.console_watch import ConsolePattern, ConsoleWatch
+from emulator.frontends.console_watch import ConsolePattern, ConsoleWatch
 from emulator.errors import ConsoleExpectationsMet, ConsoleFailText
 
 ECHO_INPUT = b"Ada\r\nhello world\nquit\n"

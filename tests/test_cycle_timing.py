@@ -1,4 +1,4 @@
-"""The cycle table (emulator/timing.py) on small firmware routines: what firmware reads from
+"""The cycle table (emulator/cpu/timing.py) on small firmware routines: what firmware reads from
 mcycle and minstret around a loop is what the table and Rocket's sources say it costs.
 
 Each case calls a loop of the instructions measured five times, with LOOPS iterations four times,
@@ -15,7 +15,7 @@ import os
 import pytest
 
 from conftest import run_emulator
-from emulator.timing import LATENCY, MISPREDICT_PENALTY, TIMING_IPC1, TIMING_ROCKET, decode
+from emulator.cpu.timing import LATENCY, MISPREDICT_PENALTY, TIMING_IPC1, TIMING_ROCKET, decode
 from k210_fixtures import make_board, program, reg, run_to_done
 
 LOOPS = 200
@@ -197,9 +197,9 @@ def test_a_built_cycle_table_is_kept_on_disk_and_read_back(firmware, tmp_path, m
     """A new process reads the table the last one built (timing._TABLES is per process): the same
     entries, from a file named by the code and the model; a file of the wrong length or a folder
     that cannot be made only mean the table is built again."""
-    from emulator import timing
-    from emulator.elf import load_elf
-    from emulator.memory import Sram
+    from emulator.cpu import timing
+    from emulator.board.elf import load_elf
+    from emulator.board.memory import Sram
     code = load_elf(firmware, Sram()).code_ranges
     cache = tmp_path / "cache"
     monkeypatch.setenv(timing.CACHE_ENVIRONMENT, str(cache))

@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from emulator import dmac as d
-from emulator import spi as s
+from emulator.devices import dmac as d
+from emulator.devices import spi as s
 from emulator.errors import HardwareMisuse, UnmodelledAccess
-from emulator.plic import SOURCE_DMA0
+from emulator.devices.plic import SOURCE_DMA0
 from k210_fixtures import RecordingDevice, board, idle_elf, make_board, program, reg, run_to_done  # noqa: F401
 
 CPU_HZ = 26e6

@@ -75,7 +75,7 @@ def test_animation_keeps_exact_frame_durations(tmp_path):
     """Each frame is shown from its own virtual time to the next frame's, to the fraction of a
     millisecond (APNG delays are fractions of a second; no rounding to whole ms)."""
     from emulator.board import FrameRecord
-    from emulator.output import RunOutput
+    from emulator.frontends.output import RunOutput
     output = RunOutput(tmp_path)
     for index, at in enumerate([0.5, 0.5505, 0.6001]):
         image = np.full((240, 320, 3), index * 60, dtype=np.uint8)   # distinct: Pillow merges equal neighbours

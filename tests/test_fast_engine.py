@@ -16,10 +16,10 @@ import json
 import pytest
 
 from conftest import GOLDEN_FRAMES, run_emulator
-from emulator.cli import build_parser
+from emulator.frontends.cli import build_parser
 from emulator.errors import FirmwareTrap
-from emulator.hart import ENGINE_FAST, ENGINE_PRECISE, Hart
-from emulator.timing import TIMING_IPC1, TIMING_ROCKET
+from emulator.cpu.hart import ENGINE_FAST, ENGINE_PRECISE, Hart
+from emulator.cpu.timing import TIMING_IPC1, TIMING_ROCKET
 from k210_fixtures import RecordingDevice, at_done, make_board, program, reg, run_to_done, run_until, symbol
 from unicorn import riscv_const as rv
 

@@ -6,10 +6,10 @@ import re
 
 import pytest
 
-from emulator import gpiohs as g
+from emulator.devices import gpiohs as g
 from emulator.errors import UnmodelledAccess
-from emulator.fpioa import FUNC_GPIOHS0, FUNC_SPI0_SS0, FUNC_UARTHS_TX, PAD_COUNT
-from emulator.plic import SOURCE_GPIOHS0
+from emulator.devices.fpioa import FUNC_GPIOHS0, FUNC_SPI0_SS0, FUNC_UARTHS_TX, PAD_COUNT
+from emulator.devices.plic import SOURCE_GPIOHS0
 from k210_fixtures import board, idle_elf, make_board, program, run_to_done  # noqa: F401
 
 OE_EN, IE_EN = 1 << 12, 1 << 20

@@ -30,7 +30,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from unicorn import riscv_const as rv
 
-from emulator.hart import RunEnd
+from emulator.cpu.hart import RunEnd
 from firmware_calls import FirmwareCaller
 from reference.numbers import parse_number
 from reference.obj import ModelError, parse_obj

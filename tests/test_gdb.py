@@ -1,4 +1,4 @@
-"""The GDB remote stub (`run --gdb PORT [--gdb-wait]`, emulator/gdbstub.py): a real
+"""The GDB remote stub (`run --gdb PORT [--gdb-wait]`, emulator/frontends/gdbstub.py): a real
 gdb-multiarch session in batch mode against the default card, and the protocol's edges through
 a small client of our own (Ctrl-C, a firmware trap shown as a signal, bad packets, a GDB that
 goes away)."""
@@ -16,7 +16,7 @@ import pytest
 from conftest import ROOT, run_emulator
 from unicorn import riscv_const as rv
 
-from emulator.gdbstub import checksum
+from emulator.frontends.gdbstub import checksum
 
 GDB = shutil.which("gdb-multiarch")
 needs_gdb = pytest.mark.skipif(GDB is None, reason="gdb-multiarch is not installed (tools/ensure-toolchain.sh)")
@@ -204,7 +204,7 @@ def test_a_busy_port_and_bad_options(firmware, tmp_path):
 
 
 def test_a_breakpoint_stops_before_its_instruction_and_counts_stay_exact():
-    from emulator.gdbstub import Debugger
+    from emulator.frontends.gdbstub import Debugger
     from k210_fixtures import make_board, program, symbol
     board = make_board(program("""
     first:
@@ -234,7 +234,7 @@ def test_a_breakpoint_stops_before_its_instruction_and_counts_stay_exact():
 
 
 def test_read_and_access_watchpoints_stop_after_the_access():
-    from emulator.gdbstub import Debugger
+    from emulator.frontends.gdbstub import Debugger
     from k210_fixtures import make_board, program, symbol
     board = make_board(program("""
         la      t0, cell

@@ -11,7 +11,7 @@ import pytest
 from PIL import Image
 
 from conftest import GOLDEN, GOLDEN_FRAMES, ROOT, run_emulator, shared_value
-from emulator.grab import parse_grab, rgb565_image
+from emulator.frontends.grab import parse_grab, rgb565_image
 
 
 def _run(firmware, card, out, *extra):

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import pytest
 
-from emulator import gpio as g
+from emulator.devices import gpio as g
 from emulator.errors import HardwareMisuse
-from emulator.plic import SOURCE_GPIO
+from emulator.devices.plic import SOURCE_GPIO
 from k210_fixtures import board, idle_elf, make_board, program, reg, run_to_done  # noqa: F401
 
 FUNC_GPIO0 = 56

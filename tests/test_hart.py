@@ -6,9 +6,9 @@ from __future__ import annotations
 import pytest
 
 from emulator.errors import FirmwareTrap, UnmodelledAccess
-from emulator.elf import load_elf
-from emulator.hart import CAUSE_INTERRUPT, IRQ_MEI, IRQ_MSI, IRQ_MTI, IRQ_SEI, CsrContext, Hart, HartState, RunEnd
-from emulator.memory import Sram
+from emulator.board.elf import load_elf
+from emulator.cpu.hart import CAUSE_INTERRUPT, IRQ_MEI, IRQ_MSI, IRQ_MTI, IRQ_SEI, CsrContext, Hart, HartState, RunEnd
+from emulator.board.memory import Sram
 from k210_fixtures import at_done, build_elf, make_board, program, reg, run_to_done, run_until, symbol
 
 CPU_HZ = 26e6

@@ -1,13 +1,13 @@
-"""The harts side by side (emulator/shared_memory.py): what one hart stores, the other sees as soon
+"""The harts side by side (emulator/cpu/shared_memory.py): what one hart stores, the other sees as soon
 as it would on the chip, even a flag set for a few instructions only."""
 from __future__ import annotations
 
 import pytest
 
 from emulator.errors import HangDetected
-from emulator.hart import HartState
-from emulator.shared_memory import find_poll_loops
-from emulator.timing import MISPREDICT_PENALTY
+from emulator.cpu.hart import HartState
+from emulator.cpu.shared_memory import find_poll_loops
+from emulator.cpu.timing import MISPREDICT_PENALTY
 from k210_fixtures import build_elf, make_board, reg, run_until, symbol
 
 ROUNDS = 300
@@ -192,8 +192,8 @@ def test_an_interrupt_reaches_a_hart_waiting_on_sram():
 ])
 def test_which_loops_can_only_be_polling(source, polls):
     elf = build_elf(".option norelax\n.globl _start\n_start:\n" + source + "\n")
-    from emulator.elf import load_elf
-    from emulator.memory import Sram
+    from emulator.board.elf import load_elf
+    from emulator.board.memory import Sram
     image = load_elf(elf, Sram(fill_seed=None))
     loops = [loop for address, code in image.code_ranges for loop in find_poll_loops(code, address)]
     assert bool(loops) is polls

@@ -1,10 +1,10 @@
-"""SRAM (emulator/memory.py): every board's SRAM starts with the same power-on pattern, and what
+"""SRAM (emulator/board/memory.py): every board's SRAM starts with the same power-on pattern, and what
 one board writes is its own (each SRAM is a private copy-on-write mapping of that pattern)."""
 from __future__ import annotations
 
 import numpy as np
 
-from emulator.memory import POWER_ON_SEED, SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE, Sram, power_on_pattern
+from emulator.board.memory import POWER_ON_SEED, SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE, Sram, power_on_pattern
 
 
 def test_each_sram_starts_with_the_power_on_pattern_and_keeps_its_own_writes():

@@ -1,11 +1,11 @@
-"""--profile (emulator/profile.py): instructions and cycles per function, exclusive and
+"""--profile (emulator/frontends/profile.py): instructions and cycles per function, exclusive and
 inclusive, with calls, and the folded call stacks."""
 from __future__ import annotations
 
 import json
 
 from conftest import run_emulator
-from emulator.profile import Profiler, decode_call, function_starts
+from emulator.frontends.profile import Profiler, decode_call, function_starts
 from k210_fixtures import make_board, program, run_to_done, symbol
 
 CALLS = """

@@ -7,7 +7,7 @@ import pytest
 from k210_fixtures import idle_elf, make_board  # noqa: F401
 
 from emulator.errors import BadInput
-from emulator.sdcard import (BLOCK, INIT_TIME_S, NAC_BYTES, NCR_BYTES, RULE_POWER_UP_CLOCKS, VARYING_NAC_MAX, SdCard,
+from emulator.devices.sdcard import (BLOCK, INIT_TIME_S, NAC_BYTES, NCR_BYTES, RULE_POWER_UP_CLOCKS, VARYING_NAC_MAX, SdCard,
                              SdImage, command_frame, crc7, crc16, crc16_bitwise)
 
 BLOCKS = 64

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from emulator import spi as s
+from emulator.devices import spi as s
 from emulator.errors import UnmodelledAccess
 from k210_fixtures import (RecordingDevice, at_done, board, idle_elf, make_board, program, reg,  # noqa: F401
                            run_to_done, run_until, symbol)

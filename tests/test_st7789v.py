@@ -6,7 +6,7 @@ import pytest
 
 from k210_fixtures import idle_elf, make_board  # noqa: F401
 
-from emulator.st7789v import (
+from emulator.devices.st7789v import (
     CASET, COLMOD, DISPOFF, DISPON, INVOFF, INVON, MADCTL, NOP, NORON, PTLON,
     RAMWR, RASET, RULE_AFTER_RESET, RULE_AFTER_SLEEP, RULE_RESET_PULSE, RULE_SLEEP_TOGGLE, SLPIN, SLPOUT,
     SWRESET, ST7789V,

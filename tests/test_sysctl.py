@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from emulator import sysctl as sc
+from emulator.devices import sysctl as sc
 from emulator.errors import HardwareMisuse, UnmodelledAccess
 from k210_fixtures import board, idle_elf, make_board, program, run_to_done  # noqa: F401
 

@@ -1,4 +1,4 @@
-"""--trace-insn: an instruction trace of a window of virtual time (emulator/trace.py)."""
+"""--trace-insn: an instruction trace of a window of virtual time (emulator/frontends/trace.py)."""
 from __future__ import annotations
 
 import json
@@ -6,7 +6,7 @@ import json
 import pytest
 
 from conftest import run_emulator
-from emulator.trace import HEADER, InstructionTrace
+from emulator.frontends.trace import HEADER, InstructionTrace
 from k210_fixtures import make_board, program, run_to_done, symbol
 
 PROGRAM = """

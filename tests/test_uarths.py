@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from emulator import uarths as u
+from emulator.devices import uarths as u
 from emulator.errors import UnmodelledAccess
 from k210_fixtures import idle_elf, make_board, program, run_until  # noqa: F401
 
@@ -265,7 +265,7 @@ def test_a_program_prints_through_uarths():
 # --- the receiver (--uart-input) ---------------------------------------------------------------
 
 def receiving_board(idle_elf, data: bytes):
-    from emulator.uart_input import UartInput
+    from emulator.frontends.uart_input import UartInput
     board = make_board(idle_elf)
     board.uarths.write(u.DIV, 4, DIV, 0.0)
     board.uarths.input = UartInput(data)

@@ -1,4 +1,4 @@
-"""--vcd (emulator/vcd.py): the pins over virtual time as a Value Change Dump, read back here
+"""--vcd (emulator/frontends/vcd.py): the pins over virtual time as a Value Change Dump, read back here
 with a small parser of our own and checked against what the programs do."""
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""--check-writes (emulator/write_watch.py): stores outside the firmware's buffers stop the run
+"""--check-writes (emulator/board/write_watch.py): stores outside the firmware's buffers stop the run
 with StrayWrite (exit status 10) naming the pc, the address and the region; stores inside them,
 and the real firmware, run as without the check.
 
@@ -15,12 +15,12 @@ import pytest
 from PIL import Image
 
 from conftest import GOLDEN_FRAMES, ROOT, run_emulator
-from emulator import dmac as d
-from emulator.hart import ENGINE_FAST, ENGINE_PRECISE
+from emulator.devices import dmac as d
+from emulator.cpu.hart import ENGINE_FAST, ENGINE_PRECISE
 from emulator.errors import EXIT_STRAY_WRITE, StrayWrite
-from emulator.hart import HartState
-from emulator.memory import SRAM_BASE, SRAM_SIZE
-from emulator.write_watch import CODE, DATA, HEAP, UNOWNED, Rule, plan_layout, stack_name
+from emulator.cpu.hart import HartState
+from emulator.board.memory import SRAM_BASE, SRAM_SIZE
+from emulator.board.write_watch import CODE, DATA, HEAP, UNOWNED, Rule, plan_layout, stack_name
 from k210_fixtures import at_done, build_elf, make_board, program, reg, run_until
 
 K210_LD = ROOT / "firmware" / "k210.ld"

@@ -55,9 +55,9 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from emulator.board import Board  # noqa: E402
-from emulator.hart import ENGINE_FAST, ENGINE_PRECISE, INSN_WFI, CsrContext, Hart, HartState  # noqa: E402
-from emulator.memory import SRAM_BASE  # noqa: E402
-from emulator.timing import TIMING_IPC1, TIMING_ROCKET  # noqa: E402
+from emulator.cpu.hart import ENGINE_FAST, ENGINE_PRECISE, INSN_WFI, CsrContext, Hart, HartState  # noqa: E402
+from emulator.board.memory import SRAM_BASE  # noqa: E402
+from emulator.cpu.timing import TIMING_IPC1, TIMING_ROCKET  # noqa: E402
 from tools import quality  # noqa: E402
 
 LOOP_SOURCE = """
@@ -229,7 +229,7 @@ PROFILE_TOP = 12
 def profile_figures(firmware: Path, card: Path, frames: int = PROFILE_FRAMES) -> dict:
     """The default scene under --profile: hart 0's functions per steady frame (frames 1.. of
     `frames`), by cycles, and the host time per frame with and without the profiler."""
-    from emulator.profile import Profiler
+    from emulator.frontends.profile import Profiler
     timings = {}
     for profiled in (False, True):
         board = Board(str(firmware), sd_image=str(card))

@@ -6,7 +6,7 @@ Pure functions over records (dicts) with no emulator in sight, so they are teste
 (tests/test_bench_quality.py). A record has at least `scene`, `scale`, `mode`, `setting`,
 `instructions_hart0`, `psnr_db`, `max_error` and `pixels_differ` (a share, 0 to 1): the distance
 from the reference renderer's pixel-centre image. Its cost is `cycles_hart0`, hart 0's CPU cycles
-per frame under the board model's Rocket timing (emulator/timing.py), or `instructions_hart0` in a
+per frame under the board model's Rocket timing (emulator/cpu/timing.py), or `instructions_hart0` in a
 record without cycles. A record may also carry `psnr_ideal_db`,
 `max_error_ideal` and `pixels_differ_ideal`, the same against the ideal image (reference/ideal.py);
 where records carry them the tables gain their columns, the front against the ideal, and the plot
@@ -522,7 +522,7 @@ def write_quality(records: list[dict], folder: Path) -> str:
     (folder / "quality.md").write_text(
         "# Precision settings: cycles per frame against error\n\n"
         "Per scene and mode, each precision setting's instructions and CPU cycles per frame on hart 0 (steady "
-        "state; cycles as the K210's Rocket core takes them, emulator/timing.py) and "
+        "state; cycles as the K210's Rocket core takes them, emulator/cpu/timing.py) and "
         "how far its frames are from the float64 reference renderer: PSNR over all frames, the largest "
         "per-channel error and the share of pixels that differ. `on front`: no other setting of the same "
         "scene and mode needs no more cycles and reaches at least the PSNR, being better in one. "

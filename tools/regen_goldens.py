@@ -23,7 +23,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests"))
-from emulator.golden import compare_frame  # noqa: E402
+from emulator.frontends.golden import compare_frame  # noqa: E402
 from golden_scenes import GOLDEN, SCENES, scene_card  # noqa: E402
 
 FOLDER_GOLDEN = "golden"        # a scene folder's goldens: DIR/golden/frame_NNNN.png

@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
-from .errors import UnmodelledAccess
+from ..errors import UnmodelledAccess
 from .mmio import Peripheral, Register, field
 
 if TYPE_CHECKING:

@@ -13,7 +13,7 @@ import re
 from dataclasses import dataclass
 from typing import Callable
 
-from .errors import BoardStop, ConsoleExpectationsMet, ConsoleFailText
+from ..errors import BoardStop, ConsoleExpectationsMet, ConsoleFailText
 
 
 @dataclass(frozen=True)

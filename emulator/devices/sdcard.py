@@ -51,7 +51,7 @@ from typing import Callable
 
 import numpy as np
 
-from .errors import BadInput
+from ..errors import BadInput
 
 BLOCK = 512
 NCR_BYTES = 1            # bytes of 0xFF between a command and its response (spec: 1..8)

@@ -10,10 +10,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .memory import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE
+from ..board.memory import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE
 
 if TYPE_CHECKING:
-    from .board import Board
+    from ..board import Board
 
 GRAB_SYNTAX = re.compile(r"^(?P<what>[^@]+)@(?P<at>[0-9.eE+-]+)(?P<options>(:[A-Za-z0-9x]+)*)$")
 DEFAULT_WIDTH, DEFAULT_HEIGHT = 320, 240

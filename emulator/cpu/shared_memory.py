@@ -40,7 +40,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import _poll_watch
-from .memory import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE
+from .decode import decode_memory_access
+from ..memory_map import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE
 
 MAX_LOOP_BYTES = 64            # longer loops are not taken for poll loops
 RACE_WINDOW_CYCLES = 512       # lockstep after a hand-over (and at reset), in CPU cycles
@@ -205,7 +206,6 @@ def _poll_loop_at(code: bytes, base: int, branch_offset: int) -> PollLoop | None
             return None                                          # a value carried between iterations
         if insn.writes:
             defined.add(insn.writes)
-    from .bus import decode_memory_access     # here: bus.py imports hart.py, which imports this module
     loads = []
     for pc, insn in insns:
         if insn.load:

@@ -31,7 +31,7 @@ from unicorn import riscv_const as rv
 from unicorn.unicorn_py3 import unicorn as _ucpy
 
 from . import _insn_counter, shared_memory, timing
-from .memory import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE
+from ..memory_map import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE
 
 # CSR numbers the board answers itself
 CSR_MHARTID = 0xF14

@@ -9,12 +9,12 @@ import time
 from pathlib import Path
 from typing import TextIO
 
-from .errors import (EXIT_BAD_INPUT, EXIT_GOLDEN_MISMATCH, EXIT_INTERNAL, EXIT_OK, EXIT_USAGE, BadInput,
+from ..errors import (EXIT_BAD_INPUT, EXIT_GOLDEN_MISMATCH, EXIT_INTERNAL, EXIT_OK, EXIT_USAGE, BadInput,
                      BoardStop)
-from .sdcard import FAULTS
-from .timing import TIMING_MODELS, TIMING_ROCKET
-from .hart import ENGINE_FAST, ENGINES
-from .wiring import LCD_8080, LCD_INTERFACES
+from ..devices.sdcard import FAULTS
+from ..cpu.timing import TIMING_MODELS, TIMING_ROCKET
+from ..cpu.hart import ENGINE_FAST, ENGINES
+from ..board.wiring import LCD_8080, LCD_INTERFACES
 
 PROG = "python -m emulator"
 MAX_QUANTUM = 1_000_000_000    # instructions per turn; the native counter's limit is 64-bit, runs need far less
@@ -299,7 +299,7 @@ def golden_count(args: argparse.Namespace) -> int:
 def grab_problem(grabs: list, firmware: str) -> str | None:
     """Before the run: every --grab of a symbol or address names a buffer in SRAM. A firmware
     that cannot be read is left for the run to report (status 6)."""
-    from .elf import read_symbol_values
+    from ..board.elf import read_symbol_values
     from .grab import check_grab_buffer
     symbols: dict[str, int] = {}
     if any(g.what != "gram" and not g.what.lower().startswith("0x") for g in grabs):
@@ -324,7 +324,7 @@ def run_expecting(board, watch, until_s: float | None, budget_s: float, progress
     """--expect: runs until the console has printed every expected text (the watch ends the run
     with ConsoleExpectationsMet), or fails at --until's time, or without --until after
     budget_s of virtual time without the next expected text."""
-    from .errors import ConsoleExpectationUnmet
+    from ..errors import ConsoleExpectationUnmet
     if until_s is not None:
         board.run_until(until_s, progress=progress)
         raise ConsoleExpectationUnmet(watch.unmet_message(f"by --until's {until_s:g} s of virtual time"))
@@ -351,7 +351,7 @@ def run_under_gdb(board, args: argparse.Namespace, terminal):
     attaches (or until the run's own end); after GDB detaches the run goes on to its end."""
     import select as select_module
     from .gdbstub import GdbServer
-    from .scheduler import RunResult
+    from ..board.scheduler import RunResult
     server = GdbServer(board, args.gdb, terminal.message)
     scheduler = board.scheduler
     terminal.message(f"[gdb] listening on 127.0.0.1:{server.port}; attach with: gdb-multiarch {args.firmware} "
@@ -462,7 +462,7 @@ def main(argv: list[str] | None = None) -> int:
         return usage_error(problem)
     if args.until is None and args.frames is None and not args.expected:
         args.frames = DEFAULT_FRAMES
-    from .board import Board
+    from ..board import Board
     from .console_watch import ConsoleWatch
     from .trace import InstructionTrace, open_trace
     from .vcd import attach as attach_signal_log, open_vcd

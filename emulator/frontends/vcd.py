@@ -19,7 +19,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import IO
 
-from .errors import BadInput
+from ..errors import BadInput
 
 TIMESCALE_S = 1e-9
 

@@ -16,11 +16,11 @@ from typing import IO, TYPE_CHECKING
 import unicorn
 from unicorn import riscv_const as rv
 
-from .errors import BadInput
+from ..errors import BadInput
 
 if TYPE_CHECKING:
-    from .board import Board
-    from .hart import Hart
+    from ..board import Board
+    from ..cpu.hart import Hart
 
 GPR_NAMES = ["zero", "ra", "sp", "gp", "tp", "t0", "t1", "t2", "s0", "s1", "a0", "a1", "a2", "a3", "a4", "a5",
              "a6", "a7", "s2", "s3", "s4", "s5", "s6", "s7", "s8", "s9", "s10", "s11", "t3", "t4", "t5", "t6"]

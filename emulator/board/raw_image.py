@@ -11,7 +11,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from .elf import RESET_PC, LoadedImage, Segment, load_elf
-from .errors import BadInput
+from ..errors import BadInput
 from .memory import SRAM_BASE, SRAM_SIZE, Sram
 
 ELF_MAGIC = b"\x7fELF"

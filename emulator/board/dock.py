@@ -15,32 +15,33 @@ from typing import Callable
 import numpy as np
 
 from . import bootrom
-from . import hart as hartmod
-from .bus import Bus, is_sram
-from .clint import Clint
-from .disasm import disassemble_one
-from .dmac import Dmac
+from ..cpu import hart as hartmod
+from .bus import Bus
+from ..devices.clint import Clint
+from ..cpu.disasm import disassemble_one
+from ..devices.dmac import Dmac
 from .elf import RESET_PC, LoadedImage
 from .raw_image import load_firmware
-from .errors import BoardStop
-from .fpioa import Fpioa
-from .gpio import Gpio
-from .gpiohs import Gpiohs
-from .hart import ENGINE_FAST, ENGINES, Hart
-from .memory import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE, Sram
-from .mmio import Peripheral
-from .plic import SOURCE_DMA0, SOURCE_GPIO, SOURCE_GPIOHS0, SOURCE_SPI0, SOURCE_SPI1, SOURCE_UARTHS, Plic
-from .plic import m_context as plic_m_context
-from .plic import s_context as plic_s_context
+from ..errors import BoardStop
+from ..devices.fpioa import Fpioa
+from ..devices.gpio import Gpio
+from ..devices.gpiohs import Gpiohs
+from ..cpu.hart import ENGINE_FAST, ENGINES, Hart
+from .memory import Sram
+from ..memory_map import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE, is_sram
+from ..devices.mmio import Peripheral
+from ..devices.plic import SOURCE_DMA0, SOURCE_GPIO, SOURCE_GPIOHS0, SOURCE_SPI0, SOURCE_SPI1, SOURCE_UARTHS, Plic
+from ..devices.plic import m_context as plic_m_context
+from ..devices.plic import s_context as plic_s_context
 from .scheduler import (DEFAULT_HANG_BUDGET_S, DEFAULT_QUANTUM, HARTS, FrameRecord, RunResult,  # noqa: F401
                         Scheduler)  # FrameRecord and RunResult: the board's results, imported from here
-from .sdcard import SdCard, SdImage
-from .shared_memory import find_poll_loops
-from .spi import SpiController
-from .st7789v import ST7789V
-from .timing import MISPREDICT_PENALTY, TIMING_IPC1, TIMING_MODELS, TIMING_ROCKET, build_table
-from .sysctl import Sysctl
-from .uarths import Uarths
+from ..devices.sdcard import SdCard, SdImage
+from ..cpu.shared_memory import find_poll_loops
+from ..devices.spi import SpiController
+from ..devices.st7789v import ST7789V
+from ..cpu.timing import MISPREDICT_PENALTY, TIMING_IPC1, TIMING_MODELS, TIMING_ROCKET, build_table
+from ..devices.sysctl import Sysctl
+from ..devices.uarths import Uarths
 from .wiring import LCD_8080, DockWiring, LcdPort, SdSlot
 from .write_watch import WriteWatch
 

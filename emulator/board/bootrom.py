@@ -43,14 +43,14 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from .fpioa import FUNC_UARTHS_RX, FUNC_UARTHS_TX
-from .sysctl import (CENT_APB0, CENT_APB1, CENT_APB2, CENT_CPU, CENT_SRAM0, CENT_SRAM1, CLK_EN_CENT, CLK_EN_PERI,
+from ..devices.fpioa import FUNC_UARTHS_RX, FUNC_UARTHS_TX
+from ..devices.sysctl import (CENT_APB0, CENT_APB1, CENT_APB2, CENT_CPU, CENT_SRAM0, CENT_SRAM1, CLK_EN_CENT, CLK_EN_PERI,
                      CLK_SEL0, OSC_HZ, PERI_BITS, PLL0, PLL_CLKF, PLL_CLKOD, PLL_CLKR, PLL_LOCK_TIME_S,
                      PLL_OUT_EN_BIT, PLL_PWRD_BIT)
-from .uarths import DIV, RXCTRL, TXCTRL
+from ..devices.uarths import DIV, RXCTRL, TXCTRL
 
 if TYPE_CHECKING:
-    from .board import Board
+    from .dock import Board
 
 PLL0_CLKF = 29                     # 26 MHz x (29 + 1) = 780 MHz
 PLL_BWADJ_SHIFT = 14

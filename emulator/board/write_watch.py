@@ -53,11 +53,12 @@ from dataclasses import dataclass
 from unicorn import riscv_const as rv
 from unicorn.unicorn_py3 import unicorn as _ucpy
 
-from . import _write_watch
+from ..cpu import _write_watch
 from .elf import LoadedImage
-from .errors import BadInput
-from .hart import Hart
-from .memory import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE, Sram
+from ..errors import BadInput
+from ..cpu.hart import Hart
+from ..memory_map import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE
+from .memory import Sram
 
 WATCH_MAX_REGIONS = 24   # _write_check.h's table size
 

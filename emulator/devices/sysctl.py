@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .errors import HardwareMisuse, UnmodelledAccess
+from ..errors import HardwareMisuse, UnmodelledAccess
 from .mmio import Peripheral, Register, field
 
 OSC_HZ = 26_000_000

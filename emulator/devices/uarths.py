@@ -22,7 +22,7 @@ from collections import deque
 from typing import Callable
 
 from .mmio import BUS_TILELINK, Peripheral, Register
-from .uart_input import UartInput
+from ..frontends.uart_input import UartInput
 
 TXDATA, RXDATA, TXCTRL, RXCTRL, IE, IP, DIV = 0x00, 0x04, 0x08, 0x0C, 0x10, 0x14, 0x18
 TX_FIFO_DEPTH = 8

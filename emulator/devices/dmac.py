@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import HardwareMisuse, UnmodelledAccess
+from ..errors import HardwareMisuse, UnmodelledAccess
 from .mmio import BUS_AHB, Peripheral, Register, field
 
 CHANNELS = 6

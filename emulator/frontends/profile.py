@@ -30,11 +30,11 @@ import unicorn
 from elftools.elf.constants import SH_FLAGS
 from elftools.elf.elffile import ELFFile
 
-from .errors import BadInput
+from ..errors import BadInput
 
 if TYPE_CHECKING:
-    from .board import Board, FrameRecord
-    from .hart import Hart
+    from ..board import Board, FrameRecord
+    from ..cpu.hart import Hart
 
 LINK_REGISTERS = (1, 5)           # ra, t0: the RISC-V calling convention's link registers
 UNKNOWN = "?"

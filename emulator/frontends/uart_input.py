@@ -15,7 +15,7 @@ import time
 from collections import deque
 from pathlib import Path
 
-from .errors import BadInput
+from ..errors import BadInput
 
 STDIN = "-"
 POLL_S = 0.05              # longest single host wait while the board waits for a key

@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
-from .board import FrameRecord
-from .errors import BadInput
+from ..board import FrameRecord
+from ..errors import BadInput
 
 ANIMATION_NAME = "animation.png"
 FRAME_PATTERN = "frame_{:04d}.png"

@@ -13,15 +13,15 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .errors import HardwareMisuse
-from .fpioa import (FUNC_GPIO0, FUNC_GPIOHS0, FUNC_SPI0_D0, FUNC_SPI0_SCLK, FUNC_SPI0_SS0, FUNC_SPI1_D0,
+from ..errors import HardwareMisuse
+from ..devices.fpioa import (FUNC_GPIO0, FUNC_GPIOHS0, FUNC_SPI0_D0, FUNC_SPI0_SCLK, FUNC_SPI0_SS0, FUNC_SPI1_D0,
                     FUNC_SPI1_D1, FUNC_SPI1_SCLK, FUNC_SPI1_SS0, PAD_COUNT)
-from .gpio import LINES as GPIO_LINES
-from .sdcard import SdCard
-from .st7789v import ST7789V
+from ..devices.gpio import LINES as GPIO_LINES
+from ..devices.sdcard import SdCard
+from ..devices.st7789v import ST7789V
 
 if TYPE_CHECKING:
-    from .board import Board
+    from .dock import Board
 
 # Maix Dock pads
 PAD_LCD_CS, PAD_LCD_RST, PAD_LCD_DC, PAD_LCD_SCLK = 36, 37, 38, 39

@@ -12,11 +12,11 @@ from elftools.common.exceptions import ELFError
 from elftools.elf.constants import P_FLAGS
 from elftools.elf.elffile import ELFFile
 
-from .errors import BadInput
+from ..errors import BadInput
+from ..memory_map import RESET_PC  # noqa: F401 (where an image must start)
 from .memory import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE, Sram
 
 EM_RISCV = "EM_RISCV"
-RESET_PC = SRAM_BASE
 
 
 @dataclass(frozen=True)

@@ -27,12 +27,12 @@ from typing import TYPE_CHECKING, Callable
 import unicorn
 from unicorn import riscv_const as rv
 
-from .errors import BadInput, BoardStop, ConsoleExpectationsMet, FirmwareReportedError, FirmwareTrap, HangDetected
-from .hart import CAUSE_INTERRUPT, CSR_MCYCLE, CSR_MHARTID, CSR_MINSTRET, HartState
+from ..errors import BadInput, BoardStop, ConsoleExpectationsMet, FirmwareReportedError, FirmwareTrap, HangDetected
+from ..cpu.hart import CAUSE_INTERRUPT, CSR_MCYCLE, CSR_MHARTID, CSR_MINSTRET, HartState
 
 if TYPE_CHECKING:
-    from .board import Board
-    from .hart import Hart
+    from ..board import Board
+    from ..cpu.hart import Hart
 
 HOST = "127.0.0.1"
 SIGINT, SIGILL, SIGTRAP, SIGABRT, SIGBUS, SIGSEGV, SIGKILL = 2, 4, 5, 6, 7, 11, 9
@@ -227,7 +227,7 @@ class Debugger:
         def enter_trap(cause: int, epc: int, tval: int) -> None:
             enter(cause, epc, tval)
             if not cause & CAUSE_INTERRUPT and self.event is None:
-                from .hart import EXCEPTION_NAMES
+                from ..cpu.hart import EXCEPTION_NAMES
                 name = EXCEPTION_NAMES.get(cause, f"exception {cause}")
                 self.event = StopEvent(CAUSE_SIGNALS.get(cause, SIGTRAP), hart.hart_id,
                                        message=f"hart {hart.hart_id}: {name} at pc 0x{epc:x}, mtval 0x{tval:x}; "

@@ -19,10 +19,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from .errors import RegisterRuleViolation
+from ..errors import RegisterRuleViolation
 
 if TYPE_CHECKING:
-    from .board import Board
+    from ..board import Board
 
 
 @dataclass(frozen=True)

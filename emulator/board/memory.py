@@ -16,12 +16,8 @@ from typing import Callable
 
 import numpy as np
 
-from .errors import HardwareMisuse
-
-SRAM_BASE = 0x8000_0000
-SRAM_UNCACHED_BASE = 0x4000_0000
-SRAM_SIZE = 8 * 1024 * 1024          # 6 MiB SRAM0/SRAM1 + 2 MiB AI SRAM
-GENERAL_SRAM_SIZE = 6 * 1024 * 1024
+from ..errors import HardwareMisuse
+from ..memory_map import GENERAL_SRAM_SIZE, SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE  # noqa: F401 (the board's names)
 POWER_ON_SEED = 0x0210
 
 

@@ -42,17 +42,18 @@ from typing import TYPE_CHECKING, Callable
 import unicorn
 from unicorn import riscv_const as rv
 
-from . import hart as hartmod
+from ..cpu import hart as hartmod
 from .elf import symbolize
-from .errors import BoardStop, FirmwareTrap, HardwareMisuse, RegisterRuleViolation, StrayWrite, UnmodelledAccess
-from .hart import Hart
+from ..errors import BoardStop, FirmwareTrap, HardwareMisuse, RegisterRuleViolation, StrayWrite, UnmodelledAccess
+from ..cpu.decode import decode_memory_access
+from ..cpu.hart import Hart
 from .scheduler import POLL_REPEATS
-from .memory import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE
-from .mmio import BUS_AHB, BUS_APB, BUS_TILELINK, Peripheral, Register
+from ..memory_map import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE, is_sram
+from ..devices.mmio import BUS_AHB, BUS_APB, BUS_TILELINK, Peripheral, Register
 from .write_watch import describe as describe_stray
 
 if TYPE_CHECKING:
-    from .board import Board
+    from .dock import Board
 
 # Blocks of the K210 the model knows by name but does not implement (for clear messages)
 KNOWN_UNMODELLED = [
@@ -84,47 +85,6 @@ LANE_REPEAT = {1: 0x0101_0101, 2: 0x0001_0001}
 
 def _mask(width_bytes: int) -> int:
     return (1 << (8 * width_bytes)) - 1
-
-
-def _bits(word: int, high: int, low: int) -> int:
-    return (word >> low) & ((1 << (high - low + 1)) - 1)
-
-
-def _signed(value: int, bits: int) -> int:
-    return value - (1 << bits) if value >> (bits - 1) & 1 else value
-
-
-def decode_memory_access(word: int) -> tuple[int, int, int] | None:
-    """(bytes moved, base register, offset) of an RV64GC load/store/AMO, or None."""
-    if word & 3 != 3:                         # compressed
-        op, funct3 = word & 3, _bits(word, 15, 13)
-        if op == 0 and funct3 in (1, 2, 3, 5, 6, 7):          # c.fld c.lw c.ld c.fsd c.sw c.sd
-            rs1 = 8 + _bits(word, 9, 7)
-            if funct3 in (2, 6):
-                imm = _bits(word, 12, 10) << 3 | _bits(word, 6, 6) << 2 | _bits(word, 5, 5) << 6
-                return 4, rs1, imm
-            return 8, rs1, _bits(word, 12, 10) << 3 | _bits(word, 6, 5) << 6
-        if op == 2 and funct3 in (1, 2, 3):                    # c.fldsp c.lwsp c.ldsp
-            if funct3 == 2:
-                return 4, 2, _bits(word, 12, 12) << 5 | _bits(word, 6, 4) << 2 | _bits(word, 3, 2) << 6
-            return 8, 2, _bits(word, 12, 12) << 5 | _bits(word, 6, 5) << 3 | _bits(word, 4, 2) << 6
-        if op == 2 and funct3 in (5, 6, 7):                    # c.fsdsp c.swsp c.sdsp
-            if funct3 == 6:
-                return 4, 2, _bits(word, 12, 9) << 2 | _bits(word, 8, 7) << 6
-            return 8, 2, _bits(word, 12, 10) << 3 | _bits(word, 9, 7) << 6
-        return None
-    opcode, funct3, rs1 = word & 0x7F, _bits(word, 14, 12), _bits(word, 19, 15)
-    if opcode in (0x03, 0x07):                                 # loads
-        return 1 << (funct3 & 3), rs1, _signed(word >> 20, 12)
-    if opcode in (0x23, 0x27):                                 # stores
-        return 1 << (funct3 & 3), rs1, _signed(_bits(word, 31, 25) << 5 | _bits(word, 11, 7), 12)
-    if opcode == 0x2F:                                         # AMOs and LR/SC
-        return (8 if funct3 == 3 else 4), rs1, 0
-    return None
-
-
-def is_sram(address: int) -> bool:
-    return SRAM_BASE <= address < SRAM_BASE + SRAM_SIZE or SRAM_UNCACHED_BASE <= address < SRAM_UNCACHED_BASE + SRAM_SIZE
 
 
 class Bus:

@@ -27,15 +27,15 @@ import numpy as np
 import unicorn
 from unicorn import riscv_const as rv
 
-from . import hart as hartmod
-from . import shared_memory
+from ..cpu import hart as hartmod
+from ..cpu import shared_memory
 from .elf import symbolize
-from .errors import BoardStop, FirmwareReportedError, FirmwareTrap, HangDetected
-from .hart import CsrContext, Hart, HartState, RunEnd
+from ..errors import BoardStop, FirmwareReportedError, FirmwareTrap, HangDetected
+from ..cpu.hart import CsrContext, Hart, HartState, RunEnd
 from .memory import SRAM_BASE, SRAM_UNCACHED_BASE
 
 if TYPE_CHECKING:
-    from .board import Board
+    from .dock import Board
 
 HARTS = 2
 DEFAULT_QUANTUM = 20_000          # CPU cycles per hart per turn

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 from PIL import Image, UnidentifiedImageError
 
-from .errors import BadInput
+from ..errors import BadInput
 
 DIFF_COLOUR = (255, 0, 255)
 
