@@ -41,7 +41,7 @@ USE_WHAT_WAS_HANDED_OVER = """
 
 def test_the_program_finds_the_cpu_at_390_mhz_from_pll0():
     board = make_board(cold=False)
-    assert board.cpu_hz() == 390 * MHZ
+    assert board.scheduler.cpu_hz() == 390 * MHZ
     assert board.sysctl.pll_hz(sc.PLL0) == 780 * MHZ
     assert board.sysctl.read(sc.PLL_LOCK, 4, 0.0) & 3 == 3     # locked before the jump
     assert board.sysctl.read(sc.PLL_LOCK, 4, 0.0) >> 8 & 1 == 0  # PLL1 off, as the ROM leaves it
@@ -67,7 +67,7 @@ def test_firmware_uses_what_the_rom_left_without_setting_it_up():
 
 def test_cold_starts_from_the_reset_values():
     board = make_board(program(USE_WHAT_WAS_HANDED_OVER), cold=True)
-    assert board.cpu_hz() == 26 * MHZ
+    assert board.scheduler.cpu_hz() == 26 * MHZ
     with pytest.raises(HardwareMisuse, match="FPIOA accessed while its clock is gated"):
         run_to_done(board)
     assert reg(board, "s3") & 1 == 0                               # ACLK from the oscillator

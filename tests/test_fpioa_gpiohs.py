@@ -24,9 +24,9 @@ def route(board, pad, function, now=0.0, extra=OE_EN):
 def test_pads_start_unrouted(board):
     board.gpiohs.write(g.OUTPUT_EN, 4, 0xFFFF_FFFF, 0.0)
     for pad in range(PAD_COUNT):
-        assert board.gpiohs_level_on_pad(pad) is None, pad
+        assert board.wiring.gpiohs_level_on_pad(pad) is None, pad
     assert board.fpioa.pads_with_function(FUNC_SPI0_SS0 + 3) == []
-    assert board._spi0_device(3) is None                 # no LCD chip select until routed
+    assert board.wiring.spi0_device(3) is None                 # no LCD chip select until routed
 
 
 def test_function_of_pad_is_the_low_byte(board):
@@ -127,15 +127,15 @@ def test_gpiohs_level_on_pad_follows_fpioa_routing(board):
     gp = board.gpiohs
     gp.write(g.OUTPUT_EN, 4, 0b11, 0.0)
     gp.write(g.OUTPUT_VAL, 4, 0b10, 0.0)
-    assert board.gpiohs_level_on_pad(38) is None          # pad not routed to GPIOHS
+    assert board.wiring.gpiohs_level_on_pad(38) is None          # pad not routed to GPIOHS
     route(board, 38, FUNC_GPIOHS0 + 1)
-    assert board.gpiohs_level_on_pad(38) == 1
+    assert board.wiring.gpiohs_level_on_pad(38) == 1
     route(board, 38, FUNC_GPIOHS0 + 0)
-    assert board.gpiohs_level_on_pad(38) == 0
+    assert board.wiring.gpiohs_level_on_pad(38) == 0
     route(board, 38, FUNC_SPI0_SS0)                        # another function: no GPIOHS level
-    assert board.gpiohs_level_on_pad(38) is None
+    assert board.wiring.gpiohs_level_on_pad(38) is None
     route(board, 38, FUNC_GPIOHS0 + 31)
-    assert board.gpiohs_level_on_pad(38) is None           # line 31 is not an output
+    assert board.wiring.gpiohs_level_on_pad(38) is None           # line 31 is not an output
 
 
 def test_lcd_reset_pin_follows_the_gpiohs_line_on_pad_37(board):
@@ -178,7 +178,7 @@ def test_lcd_dc_through_a_program():
     board = make_board(elf)
     run_to_done(board)
     assert board.fpioa.function_of_pad(38) == FUNC_GPIOHS0 + 1
-    assert board.gpiohs_level_on_pad(38) == 1
+    assert board.wiring.gpiohs_level_on_pad(38) == 1
 
 
 @pytest.mark.parametrize("interface, lanes, routed_d0, expected", [

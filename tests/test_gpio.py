@@ -23,12 +23,12 @@ def test_outputs_drive_their_pads_through_fpioa(board):
     assert gp.driven_level(0) is None                      # an input until its direction says so
     gp.write(g.DIRECTION, 4, 0b0011, 0.0)
     assert [gp.driven_level(n) for n in range(3)] == [1, 0, None]
-    assert board.pad_level(12) is None                     # not routed yet
+    assert board.wiring.pad_level(12) is None                     # not routed yet
     route(board, 12, FUNC_GPIO0 + 0)
     route(board, 13, FUNC_GPIO0 + 1)
-    assert (board.pad_level(12), board.pad_level(13)) == (1, 0)
+    assert (board.wiring.pad_level(12), board.wiring.pad_level(13)) == (1, 0)
     gp.write(g.DATA_OUTPUT, 4, 0b0010, 1e-3)
-    assert (board.pad_level(12), board.pad_level(13)) == (0, 1)
+    assert (board.wiring.pad_level(12), board.wiring.pad_level(13)) == (0, 1)
     assert board.pad_changes[-2:] == [(1e-3, 12, 0), (1e-3, 13, 1)]
 
 
@@ -98,9 +98,9 @@ def test_lcd_reset_and_dc_on_gpio_lines(board):
     assert calls == [(0, 2e-6)]
     gp.write(g.DATA_OUTPUT, 4, 0b01, 1e-3)
     assert calls == [(0, 2e-6), (1, 1e-3)]
-    assert board.pad_level(38) == 0
+    assert board.wiring.pad_level(38) == 0
     gp.write(g.DATA_OUTPUT, 4, 0b11, 2e-3)
-    assert board.pad_level(38) == 1
+    assert board.wiring.pad_level(38) == 1
 
 
 def test_dc_that_nothing_drives_is_misuse(board):
@@ -135,7 +135,7 @@ def test_gpio_through_a_program():
     """))
     run_to_done(board)
     assert reg(board, "s3") == 1 << 3 and reg(board, "s4") == 0
-    assert board.pad_level(12) == 0
+    assert board.wiring.pad_level(12) == 0
 
 
 def test_gpio_needs_its_clock():

@@ -457,7 +457,7 @@ def measure(firmware: Path, folder: Path, name: str, model: str, texture: str, s
         "scene": name, "mode": mode, "scale": scale, "setting": setting, "setting_keys": dict(keys),
         "instructions_hart0": round(hart0), "instructions_hart1": round(hart1),
         "cycles_hart0": round(cycles0), "cycles_hart1": round(cycles1),
-        "draw_time_ms": cycles0 / board.cpu_hz() * 1e3,
+        "draw_time_ms": cycles0 / board.scheduler.cpu_hz() * 1e3,
         "frame_time_ms": frame_time * 1e3, "fps": 1 / frame_time,
         **compared,
         "host_time_s": time.perf_counter() - started,
@@ -486,7 +486,7 @@ def harts_run(firmware: Path, folder: Path, model: str, texture: str, scale: flo
     return {"harts": harts,
             "cycles": [round(sum(f.cycles[h] for f in steady) / len(steady)) for h in (0, 1)],
             "instructions": [round(sum(f.instructions[h] for f in steady) / len(steady)) for h in (0, 1)],
-            "frame_period_ms": period * 1e3, "frame_period_cycles": round(period * board.cpu_hz())}, images
+            "frame_period_ms": period * 1e3, "frame_period_cycles": round(period * board.scheduler.cpu_hz())}, images
 
 
 def harts_figures(firmware: Path, folder: Path) -> list[dict]:

@@ -41,16 +41,12 @@ firmware is handed", lists the same with sources):
 """
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
 
-from ..devices.fpioa import FUNC_UARTHS_RX, FUNC_UARTHS_TX
+from ..devices.fpioa import FUNC_UARTHS_RX, FUNC_UARTHS_TX, Fpioa
 from ..devices.sysctl import (CENT_APB0, CENT_APB1, CENT_APB2, CENT_CPU, CENT_SRAM0, CENT_SRAM1, CLK_EN_CENT, CLK_EN_PERI,
                      CLK_SEL0, OSC_HZ, PERI_BITS, PLL0, PLL_CLKF, PLL_CLKOD, PLL_CLKR, PLL_LOCK_TIME_S,
-                     PLL_OUT_EN_BIT, PLL_PWRD_BIT)
-from ..devices.uarths import DIV, RXCTRL, TXCTRL
-
-if TYPE_CHECKING:
-    from .dock import Board
+                     PLL_OUT_EN_BIT, PLL_PWRD_BIT, Sysctl)
+from ..devices.uarths import DIV, RXCTRL, TXCTRL, Uarths
 
 PLL0_CLKF = 29                     # 26 MHz x (29 + 1) = 780 MHz
 PLL_BWADJ_SHIFT = 14
@@ -73,20 +69,18 @@ UARTHS_DIV_HANDED_OVER = CPU_HZ_HANDED_OVER // ISP_BAUD - 1
 UARTHS_TXEN = UARTHS_RXEN = 1
 
 
-def hand_over(board: "Board") -> None:
-    """Puts the board's registers in the state the mask ROM leaves when it jumps to the program
+def hand_over(sysctl: Sysctl, fpioa: Fpioa, uarths: Uarths) -> None:
+    """Puts the blocks' registers in the state the mask ROM leaves when it jumps to the program
     (module comment). Written straight into the register tables, before the board's clock and
     scheduler exist, as the state the program finds, not as accesses it makes."""
-    sysctl = board.sysctl
     sysctl.values[PLL0] = PLL0_HANDED_OVER
     sysctl.plls[PLL0].running_since = -PLL_LOCK_TIME_S     # locked long before the program starts
     sysctl.values[CLK_SEL0] = ACLK_SEL_PLL0
     sysctl.values[CLK_EN_CENT] = CLK_EN_CENT_HANDED_OVER
     sysctl.values[CLK_EN_PERI] = CLK_EN_PERI_HANDED_OVER
     sysctl.refresh_usable()
-    board.fpioa.values[4 * PAD_UARTHS_RX] = PAD_WORD_UARTHS_RX
-    board.fpioa.values[4 * PAD_UARTHS_TX] = PAD_WORD_UARTHS_TX
-    uarths = board.uarths
+    fpioa.values[4 * PAD_UARTHS_RX] = PAD_WORD_UARTHS_RX
+    fpioa.values[4 * PAD_UARTHS_TX] = PAD_WORD_UARTHS_TX
     uarths.values[DIV] = UARTHS_DIV_HANDED_OVER
     uarths.values[TXCTRL] |= UARTHS_TXEN
     uarths.values[RXCTRL] |= UARTHS_RXEN

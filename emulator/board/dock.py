@@ -30,6 +30,7 @@ from ..cpu.hart import ENGINE_FAST, ENGINES, Hart
 from .memory import Sram
 from ..memory_map import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE, is_sram
 from ..devices.mmio import Peripheral
+from ..devices.ports import Ports
 from ..devices.plic import SOURCE_DMA0, SOURCE_GPIO, SOURCE_GPIOHS0, SOURCE_SPI0, SOURCE_SPI1, SOURCE_UARTHS, Plic
 from ..devices.plic import m_context as plic_m_context
 from ..devices.plic import s_context as plic_s_context
@@ -42,13 +43,37 @@ from ..devices.st7789v import ST7789V
 from ..cpu.timing import MISPREDICT_PENALTY, TIMING_IPC1, TIMING_MODELS, TIMING_ROCKET, build_table
 from ..devices.sysctl import Sysctl
 from ..devices.uarths import Uarths
-from .wiring import LCD_8080, DockWiring, LcdPort, SdSlot
+from .wiring import LCD_8080, ChipPins, DockWiring, LcdPort, SdSlot
 from .write_watch import WriteWatch
 
 FIRMWARE_ERROR_PREFIX = b"error "
 # Distinct warnings kept in a run's list: a firmware that keeps doing something new and wrong
 # must not flood the console and run.json; those beyond are only counted.
 MAX_DISTINCT_WARNINGS = 100
+
+
+class SchedulerClock:
+    """The devices' Clock and MtimeCounter ports (devices/ports.py): the scheduler's clock. The
+    devices are made first (the scheduler starts from the CPU clock they set), so the board hands
+    the scheduler to this port once it exists."""
+
+    def __init__(self) -> None:
+        self.scheduler: Scheduler | None = None
+
+    def cpu_hz(self) -> float:
+        return self.scheduler.cpu_hz()
+
+    def now(self) -> float:
+        return self.scheduler.time
+
+    def mtime(self, now: float) -> int:
+        return self.scheduler.mtime(now)
+
+    def set_mtime(self, value: int, now: float) -> None:
+        self.scheduler.set_mtime(value, now)
+
+    def time_of_mtime(self, value: int) -> float | None:
+        return self.scheduler.time_of_mtime(value)
 
 
 @dataclass
@@ -104,38 +129,47 @@ class Board:
         self._warning_records: dict[str, WarningRecord] = {}
         self._warnings_unlisted = 0
         self.memory = Sram()
-        self.sysctl = Sysctl(self)
-        self.fpioa = Fpioa(self)
-        self.gpiohs = Gpiohs(self)
-        self.gpio = Gpio(self)
+        self.clock = SchedulerClock()
+        ports = Ports(clock=self.clock, warn=self.warn, irq_changed=self.interrupts_may_have_changed,
+                      catch_up=self.advance_devices, signal=self.signal,
+                      wiring_changed=lambda now: self.wiring.changed(now))
+        self.sysctl = Sysctl(ports, clock_changed=lambda now: self.scheduler.clock_changed(now),
+                             reset_block=self.reset_peripheral)
+        self.fpioa = Fpioa(ports)
+        self.gpiohs = Gpiohs(ports)
+        self.gpio = Gpio(ports, self.fpioa)
         self._console = console or (lambda byte: None)
         self._console_line = bytearray()
         self._line_began = 0.0                             # when the line under way began
         self.completed_line_began = float("-inf")          # when the last complete line began
         self.console_lines: list[tuple[float, str]] = []   # (virtual time the line ended, text)
-        self.uarths = Uarths(self, on_byte=self._console_byte)
-        self.clint = Clint(self)
-        self.plic = Plic(self, high_sources=self._high_sources)
-        self.dmac = Dmac(self)
-        self.spi0 = SpiController(0, self)
-        self.spi1 = SpiController(1, self)
+        self.uarths = Uarths(ports, on_byte=self._console_byte)
+        self.clint = Clint(ports, counter=self.clock)
+        self.plic = Plic(ports, high_sources=self._high_sources)
+        self.spi0 = SpiController(0, ports, source_hz=lambda: self.sysctl.spi_source_hz(0))
+        self.spi1 = SpiController(1, ports, source_hz=lambda: self.sysctl.spi_source_hz(1))
+        self.dmac = Dmac(ports, self.memory, requests=self.sysctl.dma_request,
+                         peripherals={"spi0": self.spi0, "spi1": self.spi1})
         self.peripherals: list[Peripheral] = [self.sysctl, self.fpioa, self.gpiohs, self.gpio, self.uarths,
                                               self.clint, self.plic, self.dmac, self.spi0, self.spi1]
         self.signals = None                    # a vcd.SignalLog with --vcd
         self.timed_devices = [self.uarths, self.spi0, self.spi1, self.dmac, self.sysctl, self.clint]
         self.cold = cold
         if not cold:
-            bootrom.hand_over(self)    # before the scheduler reads the CPU clock
+            bootrom.hand_over(self.sysctl, self.fpioa, self.uarths)    # before the scheduler reads the CPU clock
         self.scheduler = Scheduler(self, quantum, hang_budget_s)
+        self.clock.scheduler = self.scheduler
         self.timing_warnings: dict[str, int] = {}     # broken datasheet waits, per rule (run.json)
         self.lcd = ST7789V(on_frame=self.scheduler.frame_captured,
                            on_warning=lambda now, text: self.warn(f"ST7789V: {text}", now), strict=strict,
                            on_rule=lambda kind, now, text: self.timing_rule_broken(kind, f"ST7789V: {text}", now))
         self.sd_image = SdImage(sd_image, writable=sd_writable, warn=self.warn) if sd_image else None
-        sd_slot = SdSlot(self, SdCard(self.sd_image, warn=self.warn, faults=sd_faults, strict=strict,
-                                      on_rule=lambda kind, now, text: self.timing_rule_broken(kind, text, now))
+        sd_card = SdCard(self.sd_image, warn=self.warn, faults=sd_faults, strict=strict,
+                         on_rule=lambda kind, now, text: self.timing_rule_broken(kind, text, now)
                          ) if self.sd_image else None
-        self.wiring = DockWiring(self, LcdPort(self, self.lcd, lcd_interface), sd_slot)
+        chip = ChipPins(self.sysctl, self.fpioa, self.gpiohs, self.gpio, self.spi0, self.spi1)
+        self.wiring = DockWiring(chip, ports, self.lcd, lcd_interface, sd_card,
+                                 on_lcd_delivery=self.scheduler.lcd_data_delivered)
         self.spi0.device_for_ss = self.wiring.spi0_device
         self.spi1.device_for_ss = self.wiring.spi1_device
         self.bus = Bus(self, strict)
@@ -217,10 +251,6 @@ class Board:
         return self.scheduler.trap_report
 
     @property
-    def delivery_time(self) -> float:
-        return self.scheduler.delivery_time
-
-    @property
     def host_time_in_harts(self) -> float:
         return self.scheduler.host_time_in_harts
 
@@ -270,54 +300,12 @@ class Board:
         """Calls action(board) once the board's virtual time reaches at_s (a framebuffer grab)."""
         self.scheduler.grab_at(at_s, action)
 
-    # --- the clock, as devices see it ------------------------------------------------------------
-
-    def cpu_hz(self) -> float:
-        return self.scheduler.cpu_hz()
-
-    def hart_now(self, hart: Hart) -> float:
-        return self.scheduler.hart_now(hart)
-
-    def cycles(self, now: float) -> int:
-        return self.scheduler.cycles(now)
-
-    def mtime(self, now: float) -> int:
-        return self.scheduler.mtime(now)
-
-    def time_of_mtime(self, value: int) -> float | None:
-        return self.scheduler.time_of_mtime(value)
-
-    def set_mtime(self, value: int, now: float) -> None:
-        self.scheduler.set_mtime(value, now)
-
-    def clock_changed(self, now: float) -> None:
-        self.scheduler.clock_changed(now)
-
     # --- wiring -----------------------------------------------------------------------
-
-    def _spi0_device(self, ss: int):
-        return self.wiring.spi0_device(ss)
-
-    def _spi1_device(self, ss: int):
-        return self.wiring.spi1_device(ss)
-
-    def gpiohs_level_on_pad(self, pad: int) -> int | None:
-        return self.wiring.gpiohs_level_on_pad(pad)
-
-    def pad_level(self, pad: int) -> int | None:
-        """The level a GPIOHS or GPIO line drives on a pad (None: no such line drives it)."""
-        return self.wiring.pad_level(pad)
 
     @property
     def pad_changes(self) -> list[tuple[float, int, int | None]]:
         """Every change of a pad's GPIOHS/GPIO level: (virtual time, pad, level or None)."""
         return self.wiring.pad_changes
-
-    def wiring_changed(self, now: float) -> None:
-        self.wiring.changed(now)
-
-    def spi_by_name(self, name: str) -> SpiController:
-        return {"spi0": self.spi0, "spi1": self.spi1}[name]
 
     def reset_peripheral(self, name: str, now: float) -> None:
         """SYSCTL peri_reset released a block: it returns to its reset state."""

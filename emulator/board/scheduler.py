@@ -165,6 +165,10 @@ class Scheduler:
         self._epoch_mtime = self.mtime(now)
         self._epoch_time = now
 
+    def lcd_data_delivered(self, now: float) -> None:
+        """Data reached the LCD at `now` (a frame's time is when its last data arrived)."""
+        self.delivery_time = now
+
     def clock_changed(self, now: float) -> None:
         """SYSCTL changed the CPU clock: later instructions take the new cycle time."""
         self._rebase(now)

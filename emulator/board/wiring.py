@@ -9,19 +9,23 @@ time (`pad_changes`), for tests and run.json.
 """
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
 from ..errors import HardwareMisuse
 from ..devices.fpioa import (FUNC_GPIO0, FUNC_GPIOHS0, FUNC_SPI0_D0, FUNC_SPI0_SCLK, FUNC_SPI0_SS0, FUNC_SPI1_D0,
                     FUNC_SPI1_D1, FUNC_SPI1_SCLK, FUNC_SPI1_SS0, PAD_COUNT)
+from ..devices.fpioa import Fpioa
 from ..devices.gpio import LINES as GPIO_LINES
+from ..devices.gpio import Gpio
+from ..devices.gpiohs import Gpiohs
+from ..devices.ports import Ports
 from ..devices.sdcard import SdCard
+from ..devices.spi import SpiController
 from ..devices.st7789v import ST7789V
-
-if TYPE_CHECKING:
-    from .dock import Board
+from ..devices.sysctl import Sysctl
 
 # Maix Dock pads
 PAD_LCD_CS, PAD_LCD_RST, PAD_LCD_DC, PAD_LCD_SCLK = 36, 37, 38, 39
@@ -34,6 +38,17 @@ SD_DEFAULT_SPEED_MAX_HZ = 25_000_000
 # Pad changes kept for run.json and tests; a firmware that toggles pins for ever must not
 # fill the host's memory: beyond this many only the count goes on
 MAX_PAD_CHANGES = 100_000
+
+
+@dataclass(frozen=True)
+class ChipPins:
+    """The K210 blocks whose pins the Dock's wiring follows."""
+    sysctl: Sysctl
+    fpioa: Fpioa
+    gpiohs: Gpiohs
+    gpio: Gpio
+    spi0: SpiController
+    spi1: SpiController
 
 
 def is_gpio_line(function: int) -> bool:
@@ -51,25 +66,30 @@ class LcdPort:
     first. Either way each frame reaches the panel as its bytes, the most significant first,
     with D/C as it is when the frame's last bit is out."""
 
-    def __init__(self, board: "Board", lcd: ST7789V, interface: str = LCD_8080) -> None:
+    def __init__(self, chip: ChipPins, lcd: ST7789V, interface: str, pad_level: Callable[[int], int | None],
+                 on_delivery: Callable[[float], None]) -> None:
+        """pad_level: the level a line drives on a pad (DockWiring.pad_level). on_delivery: data
+        reached the LCD at this time."""
         if interface not in LCD_INTERFACES:
             raise ValueError(f"LCD interface {interface!r}: one of {', '.join(LCD_INTERFACES)}")
-        self.board = board
+        self.chip = chip
         self.lcd = lcd
         self.interface = interface
+        self.pad_level = pad_level
+        self.on_delivery = on_delivery
 
     def spi_select(self, selected: bool, now: float) -> None:
         self.lcd.set_chip_select(selected, now)
 
     def _check_data_lines(self, lanes: int) -> None:
-        board = self.board
+        chip = self.chip
         if self.interface == LCD_8080:
             if lanes != 8:
                 raise HardwareMisuse(
                     f"SPI0 sends to the LCD in the {lanes}-line format; the Dock's LCD has an 8-bit parallel "
                     f"bus that latches SPI0's eight data lines on every clock (octal frame format, ctrlr0[22:21] "
                     f"= 3; a 4-line serial ST7789V module instead is --lcd-interface spi)")
-            if not board.sysctl.spi_dvp_data_enabled():
+            if not chip.sysctl.spi_dvp_data_enabled():
                 raise HardwareMisuse("SPI0 sends to the LCD with SYSCTL misc.spi_dvp_data_enable (bit 10) clear: "
                                      "the upper data lines do not reach the LCD")
             return
@@ -77,20 +97,19 @@ class LcdPort:
             raise HardwareMisuse(f"SPI0 sends to the LCD in the {lanes}-line format; a 4-line serial ST7789V "
                                  f"(--lcd-interface spi) takes one data line (standard frame format, "
                                  f"ctrlr0[22:21] = 0)")
-        if not board.fpioa.pads_with_function(FUNC_SPI0_D0):
+        if not chip.fpioa.pads_with_function(FUNC_SPI0_D0):
             raise HardwareMisuse("SPI0 sends to the 4-line serial LCD but no pad carries SPI0_D0 (FPIOA "
                                  "function 4), its data line")
 
     def spi_transfer(self, data: np.ndarray, lanes: int, now: float) -> np.ndarray:
-        board = self.board
-        if board.fpioa.function_of_pad(PAD_LCD_SCLK) != FUNC_SPI0_SCLK:
+        if self.chip.fpioa.function_of_pad(PAD_LCD_SCLK) != FUNC_SPI0_SCLK:
             raise HardwareMisuse("SPI0 sends to the LCD but pad 39 (LCD WRX/clock) is not routed to SPI0_SCLK")
         self._check_data_lines(lanes)
-        dc = board.wiring.pad_level(PAD_LCD_DC)
+        dc = self.pad_level(PAD_LCD_DC)
         if dc is None:
             raise HardwareMisuse("SPI0 sends to the LCD but its D/C line (pad 38) is not a driven GPIOHS or "
                                  "GPIO output")
-        board.scheduler.delivery_time = now
+        self.on_delivery(now)
         self.lcd.write(data, dc, now)
         return np.zeros(len(data), dtype=np.uint8)
 
@@ -99,14 +118,17 @@ class SdSlot:
     """The Dock's micro SD slot on SPI1: MISO, clock and MOSI through FPIOA (pads 26-28),
     chip select on pad 29 as SPI1's own slave select or as a GPIOHS or GPIO line."""
 
-    def __init__(self, board: "Board", card: SdCard) -> None:
-        self.board = board
+    def __init__(self, chip: ChipPins, card: SdCard, pad_level: Callable[[int], int | None],
+                 warn: Callable[[str], None]) -> None:
+        self.chip = chip
         self.card = card
+        self.pad_level = pad_level
+        self.warn = warn
         self._warned_clock = False
 
     def cs_is_gpio(self) -> bool:
         """Whether pad 29 carries a GPIOHS or GPIO line (software chip select)."""
-        return is_gpio_line(self.board.fpioa.function_of_pad(PAD_SD_CS))
+        return is_gpio_line(self.chip.fpioa.function_of_pad(PAD_SD_CS))
 
     def spi_select(self, selected: bool, now: float) -> None:
         if not self.cs_is_gpio():
@@ -114,11 +136,11 @@ class SdSlot:
 
     def gpio_changed(self, now: float) -> None:
         if self.cs_is_gpio():
-            level = self.board.wiring.pad_level(PAD_SD_CS)
+            level = self.pad_level(PAD_SD_CS)
             self.card.set_selected(level == 0, now)
 
     def spi_transfer(self, data: np.ndarray, lanes: int, now: float) -> np.ndarray:
-        fpioa = self.board.fpioa
+        fpioa = self.chip.fpioa
         if fpioa.function_of_pad(PAD_SD_SCLK) != FUNC_SPI1_SCLK or fpioa.function_of_pad(PAD_SD_MOSI) != FUNC_SPI1_D0:
             return np.full(len(data), 0xFF, dtype=np.uint8)   # the card sees no clock or no data
         if lanes != 1:
@@ -130,21 +152,26 @@ class SdSlot:
         return reply
 
     def _check_clock(self) -> None:
-        hz = self.board.spi1.sclk_hz()
+        hz = self.chip.spi1.sclk_hz()
         limit = SD_DEFAULT_SPEED_MAX_HZ if self.card.initialised else SD_IDENTIFICATION_MAX_HZ
         if hz > limit * 1.0001 and not self._warned_clock:
             self._warned_clock = True
             phase = "in default speed mode" if self.card.initialised else "before initialisation completes"
-            self.board.warn(f"SD card clocked at {hz / 1e6:.3f} MHz {phase} (the card allows {limit / 1e6:g} MHz)")
+            self.warn(f"SD card clocked at {hz / 1e6:.3f} MHz {phase} (the card allows {limit / 1e6:g} MHz)")
 
 
 class DockWiring:
     """Routes SPI chip selects and GPIOHS and GPIO lines to the LCD and the SD slot through FPIOA."""
 
-    def __init__(self, board: "Board", lcd_port: LcdPort, sd_slot: SdSlot | None) -> None:
-        self.board = board
-        self.lcd_port = lcd_port
-        self.sd_slot = sd_slot
+    def __init__(self, chip: ChipPins, ports: Ports, lcd: ST7789V, lcd_interface: str, sd_card: SdCard | None,
+                 on_lcd_delivery: Callable[[float], None]) -> None:
+        """ports: the catch-up of the devices before pins change, warnings and the --vcd pins;
+        on_lcd_delivery: data reached the LCD at this time."""
+        self.chip = chip
+        self.ports = ports
+        self.lcd = lcd
+        self.lcd_port = LcdPort(chip, lcd, lcd_interface, self.pad_level, on_lcd_delivery)
+        self.sd_slot = SdSlot(chip, sd_card, self.pad_level, ports.warn) if sd_card is not None else None
         self._lcd_reset_level = 1
         self._pad_levels: list[int | None] = [None] * PAD_COUNT
         self._driven_pads: set[int] = set()        # the pads whose _pad_levels entry is not None
@@ -154,7 +181,7 @@ class DockWiring:
 
     def spi0_device(self, ss: int) -> LcdPort | None:
         """The LCD answers on SPI0 when pad 36 carries SPI0's slave select ss."""
-        if self.board.fpioa.function_of_pad(PAD_LCD_CS) == FUNC_SPI0_SS0 + ss:
+        if self.chip.fpioa.function_of_pad(PAD_LCD_CS) == FUNC_SPI0_SS0 + ss:
             return self.lcd_port
         return None
 
@@ -163,31 +190,31 @@ class DockWiring:
         or GPIO line (then the card itself decides, from that line, whether it is selected)."""
         if self.sd_slot is None:
             return None
-        function = self.board.fpioa.function_of_pad(PAD_SD_CS)
+        function = self.chip.fpioa.function_of_pad(PAD_SD_CS)
         if function == FUNC_SPI1_SS0 + ss or self.sd_slot.cs_is_gpio():
             return self.sd_slot
         return None
 
     def gpiohs_level_on_pad(self, pad: int) -> int | None:
         """The level a GPIOHS output drives on a pad, or None when no GPIOHS line drives it."""
-        function = self.board.fpioa.function_of_pad(pad)
+        function = self.chip.fpioa.function_of_pad(pad)
         if FUNC_GPIOHS0 <= function < FUNC_GPIOHS0 + 32:
-            return self.board.gpiohs.driven_level(function - FUNC_GPIOHS0)
+            return self.chip.gpiohs.driven_level(function - FUNC_GPIOHS0)
         return None
 
     def pad_level(self, pad: int) -> int | None:
         """The level a GPIOHS or slow-GPIO line drives on a pad, or None when none drives it."""
-        function = self.board.fpioa.function_of_pad(pad)
+        function = self.chip.fpioa.function_of_pad(pad)
         if FUNC_GPIOHS0 <= function < FUNC_GPIOHS0 + 32:
-            return self.board.gpiohs.driven_level(function - FUNC_GPIOHS0)
+            return self.chip.gpiohs.driven_level(function - FUNC_GPIOHS0)
         if FUNC_GPIO0 <= function < FUNC_GPIO0 + GPIO_LINES:
-            return self.board.gpio.driven_level(function - FUNC_GPIO0)
+            return self.chip.gpio.driven_level(function - FUNC_GPIO0)
         return None
 
     def _log_pad_changes(self, now: float) -> None:
         # Only a pad that carries a GPIOHS or GPIO line can be driven now, and only one driven at the
         # last look can have stopped being driven: the others stay undriven (None) either way.
-        fpioa = self.board.fpioa
+        fpioa = self.chip.fpioa
         version, line_pads = self._line_pads
         if version != fpioa.routing_version:
             line_pads = tuple(pad for pad in range(PAD_COUNT) if is_gpio_line(fpioa.function_of_pad(pad)))
@@ -200,7 +227,7 @@ class DockWiring:
                     self._driven_pads.discard(pad)
                 else:
                     self._driven_pads.add(pad)
-                self.board.signal(now, f"pad{pad:02d}", level)
+                self.ports.signal(now, f"pad{pad:02d}", level)
                 self.pad_change_count += 1
                 if len(self.pad_changes) < MAX_PAD_CHANGES:
                     self.pad_changes.append((now, pad, level))
@@ -209,16 +236,16 @@ class DockWiring:
         """FPIOA or a GPIOHS or GPIO output changed: the pad log, the LCD's reset pin, the SPI
         chip selects, the SD card's software chip select and the GPIO block's edge detection
         follow."""
-        board = self.board
-        board.advance_devices(now)
+        chip = self.chip
+        self.ports.catch_up(now)
         self._log_pad_changes(now)
         level = self.pad_level(PAD_LCD_RST)
         level = 1 if level is None else level
         if level != self._lcd_reset_level:
             self._lcd_reset_level = level
-            board.lcd.set_reset_pin(level, now)
-        board.spi0.wiring_changed(now)
-        board.spi1.wiring_changed(now)
+            self.lcd.set_reset_pin(level, now)
+        chip.spi0.wiring_changed(now)
+        chip.spi1.wiring_changed(now)
         if self.sd_slot is not None:
             self.sd_slot.gpio_changed(now)
-        board.gpio.wiring_changed(now)
+        chip.gpio.wiring_changed(now)

@@ -1,7 +1,7 @@
 """CLINT (0x0200_0000): per-hart software interrupt (msip) and timer (mtimecmp), and mtime.
 
-mtime ticks at CPU clock / 50 on the K210. The board owns the virtual clock and
-answers mtime; this model keeps msip and mtimecmp and says when each hart's
+mtime ticks at CPU clock / 50 on the K210. The board's clock keeps the count across
+clock changes and answers mtime (the MtimeCounter port); this model keeps msip and mtimecmp and says when each hart's
 timer interrupt becomes pending. mtimecmp is not reset by the Rocket CLINT; the
 model starts it at all ones (no timer interrupt pending), which is what random
 power-up contents almost always amount to.
@@ -9,6 +9,7 @@ power-up contents almost always amount to.
 from __future__ import annotations
 
 from .mmio import BUS_TILELINK, Peripheral, Register
+from .ports import MtimeCounter, Ports
 
 HARTS = 2
 HALVES = ((0, 32), (32, 32))     # mtimecmp and mtime: two 32-bit fields each
@@ -34,37 +35,41 @@ class Clint(Peripheral):
         MTIME: Register("mtime", width=8, narrow_ok=True, fields=HALVES),
     }
 
+    def __init__(self, ports: Ports, counter: MtimeCounter) -> None:
+        super().__init__(ports)
+        self.counter = counter
+
     def msip(self, hart: int) -> bool:
         return bool(self.values[MSIP + 4 * hart] & 1)
 
     def timer_pending(self, hart: int, now: float) -> bool:
-        return self.board.mtime(now) >= self.values[MTIMECMP + 8 * hart]
+        return self.counter.mtime(now) >= self.values[MTIMECMP + 8 * hart]
 
     def write(self, offset: int, size: int, value: int, now: float) -> None:
         if size == 4 and offset in (MTIME, MTIME + 4):
             # a 32-bit store replaces one half of the running counter; the other half is
             # what mtime holds now, not what was last written
-            self.values[MTIME] = self.board.mtime(now)
+            self.values[MTIME] = self.counter.mtime(now)
         super().write(offset, size, value, now)
 
     def read_register(self, offset: int, reg: Register, now: float) -> int:
         if offset == MTIME:
-            return self.board.mtime(now)
+            return self.counter.mtime(now)
         return self.values[offset]
 
     def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
         if offset == MTIME:
-            self.board.set_mtime(value, now)
+            self.counter.set_mtime(value, now)
         elif offset < MTIMECMP:
             self.values[offset] = value & 1
         else:
             self.values[offset] = value
-        self.board.interrupts_may_have_changed(now)
+        self.ports.irq_changed(now)
 
     def next_event_time(self, now: float) -> float | None:
         times = []
         for hart in range(HARTS):
-            when = self.board.time_of_mtime(self.values[MTIMECMP + 8 * hart])
+            when = self.counter.time_of_mtime(self.values[MTIMECMP + 8 * hart])
             if when is not None and when > now:
                 times.append(when)
         return min(times) if times else None

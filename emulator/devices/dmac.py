@@ -15,11 +15,13 @@ narrower one the bytes it addresses: the bus models those with a warning (bus.py
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable, Protocol
 
 import numpy as np
 
 from ..errors import HardwareMisuse, UnmodelledAccess
 from .mmio import BUS_AHB, Peripheral, Register, field
+from .ports import DmaMemory, Ports
 
 CHANNELS = 6
 ID, COMPVER, CFG, CHEN, INTSTATUS, COM_INTCLEAR = 0x00, 0x08, 0x10, 0x18, 0x30, 0x38
@@ -93,7 +95,7 @@ class DmaChannel:
     def read_for_peripheral(self, n: int) -> np.ndarray:
         """The next n items from memory, for a peripheral's transmit FIFO."""
         t = self.transfer
-        values = self.dmac.board.memory.read_items(t.src, t.src_width, n, t.src_fixed)
+        values = self.dmac.memory.read_items(t.src, t.src_width, n, t.src_fixed)
         if not t.src_fixed:
             t.src += n * t.src_width
         t.done_items += n
@@ -105,7 +107,7 @@ class DmaChannel:
         if t is None:
             return
         take = values[: self.remaining()]
-        self.dmac.board.memory.write_items(t.dst, t.dst_width, take, t.dst_fixed, f"DMAC channel {self.index}")
+        self.dmac.memory.write_items(t.dst, t.dst_width, take, t.dst_fixed, f"DMAC channel {self.index}")
         if not t.dst_fixed:
             t.dst += len(take) * t.dst_width
         t.done_items += len(take)
@@ -120,6 +122,18 @@ class DmaChannel:
     def peripheral_done(self, at: float) -> None:
         if self.transfer is not None:
             self.transfer.done_at = at
+
+
+class HandshakePeripheral(Protocol):
+    """A block a channel hands items to or takes them from, paced by its handshake (SPI0, SPI1)."""
+
+    NAME: str
+
+    def is_data_register(self, address: int) -> bool: ...
+
+    def attach_tx_dma(self, channel: DmaChannel, now: float) -> None: ...
+
+    def attach_rx_dma(self, channel: DmaChannel, now: float) -> None: ...
 
 
 class Dmac(Peripheral):
@@ -141,8 +155,15 @@ class Dmac(Peripheral):
         **_channel_registers(),
     }
 
-    def __init__(self, board=None) -> None:
-        super().__init__(board)
+    def __init__(self, ports: Ports, memory: DmaMemory, requests: Callable[[int], tuple[str, str] | None],
+                 peripherals: dict[str, "HandshakePeripheral"]) -> None:
+        """memory: what the channels read and write. requests: the peripheral request SYSCTL's dma_sel
+        routes to a handshake interface, as (peripheral name, "tx" or "rx"), None: none. peripherals:
+        the blocks a channel can handshake with, by those names."""
+        super().__init__(ports)
+        self.memory = memory
+        self.requests = requests
+        self.peripherals = peripherals
         self.channels = [DmaChannel(self, n) for n in range(CHANNELS)]
 
     def reset(self, now: float) -> None:
@@ -178,7 +199,7 @@ class Dmac(Peripheral):
         self.values[self._ch(n, STATUS)] = t.items
         enabled = self.values[self._ch(n, INTSTATUS_EN)]
         self.values[self._ch(n, CH_INTSTATUS)] |= (INT_BLOCK_TFR_DONE | INT_DMA_TFR_DONE) & enabled
-        self.board.interrupts_may_have_changed(t.done_at)
+        self.ports.irq_changed(t.done_at)
 
     def irq_line(self, n: int) -> bool:
         return bool(self.irq_lines() >> n & 1)
@@ -206,7 +227,7 @@ class Dmac(Peripheral):
     # --- registers ------------------------------------------------------------------------
 
     def read_register(self, offset: int, reg: Register, now: float) -> int:
-        self.board.advance_devices(now)
+        self.ports.catch_up(now)
         if offset == INTSTATUS:
             return sum(1 << n for n in range(CHANNELS) if self.values[self._ch(n, CH_INTSTATUS)])
         if offset == RESET:
@@ -220,7 +241,7 @@ class Dmac(Peripheral):
             # chen, does), so they need not catch up first (the firmware writes these for every block)
             self.values[offset] = value
             return
-        self.board.advance_devices(now)
+        self.ports.catch_up(now)
         if offset == RESET:
             if value & 1:
                 self.reset(now)
@@ -233,11 +254,11 @@ class Dmac(Peripheral):
         if offset >= CH_BASE and (offset - CH_BASE) % CH_STRIDE == INTCLEAR:
             status = offset - INTCLEAR + CH_INTSTATUS
             self.values[status] &= ~value
-            self.board.interrupts_may_have_changed(now)
+            self.ports.irq_changed(now)
             return
         self.values[offset] = value
         if offset == CFG:
-            self.board.interrupts_may_have_changed(now)
+            self.ports.irq_changed(now)
 
     def _write_chen(self, value: int, now: float) -> None:
         old = self.values[CHEN]
@@ -247,7 +268,7 @@ class Dmac(Peripheral):
             bit = 1 << n
             if write_enable & bit and new & bit and not old & bit:
                 if not self.values[CFG] & CFG_ENABLE:
-                    self.board.warn(f"DMAC: channel {n} enabled while the DMAC is disabled (cfg bit 0): ignored")
+                    self.ports.warn(f"DMAC: channel {n} enabled while the DMAC is disabled (cfg bit 0): ignored", now)
                     new &= ~bit
                     continue
                 self.values[CHEN] = (self.values[CHEN] & ~bit) | bit
@@ -270,14 +291,14 @@ class Dmac(Peripheral):
                             bool(ctl >> 4 & 1), bool(ctl >> 6 & 1))
         channel = self.channels[n]
         channel.transfer = transfer
-        memory = self.board.memory
+        memory = self.memory
         if kind == TT_MEM2MEM:
             if src_width != dst_width:
                 raise UnmodelledAccess(f"DMAC channel {n}: memory-to-memory with different widths is not modelled")
             values = memory.read_items(transfer.src, src_width, items, transfer.src_fixed)
             memory.write_items(transfer.dst, dst_width, values, transfer.dst_fixed, f"DMAC channel {n}")
             transfer.done_items = items
-            transfer.done_at = now + items * src_width / MEM2MEM_BYTES_PER_CYCLE / self.board.cpu_hz()
+            transfer.done_at = now + items * src_width / MEM2MEM_BYTES_PER_CYCLE / self.ports.clock.cpu_hz()
             return
         if kind not in (TT_MEM2PER, TT_PER2MEM):
             raise UnmodelledAccess(f"DMAC channel {n}: transfer type {kind} is not modelled")
@@ -286,7 +307,7 @@ class Dmac(Peripheral):
         if hs_software:
             raise UnmodelledAccess(f"DMAC channel {n}: software handshake on the peripheral side is not modelled")
         handshake = field(cfg, 44, 4) if to_peripheral else field(cfg, 39, 4)
-        request = self.board.sysctl.dma_request(handshake)
+        request = self.requests(handshake)
         if request is None:
             raise HardwareMisuse(f"DMAC channel {n}: handshake interface {handshake} has no peripheral request "
                                  f"selected in SYSCTL dma_sel")
@@ -294,7 +315,7 @@ class Dmac(Peripheral):
         if direction != ("tx" if to_peripheral else "rx"):
             raise HardwareMisuse(f"DMAC channel {n}: {'memory-to-peripheral' if to_peripheral else 'peripheral-to-memory'} "
                                  f"transfer handshakes with {device_name.upper()} {direction.upper()}")
-        spi = self.board.spi_by_name(device_name)
+        spi = self.peripherals[device_name]
         address = transfer.dst if to_peripheral else transfer.src
         if not spi.is_data_register(address):
             raise HardwareMisuse(f"DMAC channel {n}: {'dar' if to_peripheral else 'sar'} = 0x{address:x} is not "

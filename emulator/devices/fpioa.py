@@ -7,6 +7,7 @@ firmware routed, as on the Maix Dock.
 from __future__ import annotations
 
 from .mmio import Peripheral, Register
+from .ports import Ports
 
 PAD_COUNT = 48
 FUNCTION_MASK = 0xFF
@@ -40,8 +41,8 @@ class Fpioa(Peripheral):
         **{TIE_VAL + 4 * i: Register(f"tie_val{i}") for i in range(8)},
     }
 
-    def __init__(self, board=None) -> None:
-        super().__init__(board)
+    def __init__(self, ports: Ports) -> None:
+        super().__init__(ports)
         self._pads_by_function: dict[int, tuple[int, ...]] = {}   # looked up on every GPIO read: kept
         self.routing_version = 0    # changes whenever a pad's function may have (for tables others keep)
         self._unroute_all()
@@ -57,8 +58,7 @@ class Fpioa(Peripheral):
     def reset(self, now: float) -> None:
         super().reset(now)
         self._unroute_all()
-        if self.board is not None:
-            self.board.wiring_changed(now)
+        self.ports.wiring_changed(now)
 
     def function_of_pad(self, pad: int) -> int:
         return self.values[4 * pad] & FUNCTION_MASK
@@ -74,5 +74,5 @@ class Fpioa(Peripheral):
         self.values[offset] = value
         self._pads_by_function.clear()
         self.routing_version += 1
-        if self.board is not None and offset < 4 * PAD_COUNT:
-            self.board.wiring_changed(now)
+        if offset < 4 * PAD_COUNT:
+            self.ports.wiring_changed(now)

@@ -21,7 +21,9 @@ real pad's change is seen, not what: they are stored and otherwise ignored.
 """
 from __future__ import annotations
 
+from .fpioa import FUNC_GPIO0, Fpioa
 from .mmio import Peripheral, Register
+from .ports import Ports
 
 DATA_OUTPUT, DIRECTION, SOURCE = 0x00, 0x04, 0x08
 INT_ENABLE, INT_MASK, INT_LEVEL, INT_POLARITY = 0x30, 0x34, 0x38, 0x3C
@@ -29,7 +31,6 @@ INT_STATUS, INT_RAW_STATUS, DEBOUNCE, INT_CLEAR = 0x40, 0x44, 0x48, 0x4C
 DATA_INPUT, SYNC_LEVEL, ID_CODE, INT_BOTHEDGE = 0x50, 0x60, 0x64, 0x68
 LINES = 8
 LINE_MASK = (1 << LINES) - 1
-FUNC_GPIO0 = 56            # FPIOA function of line 0 (fpioa.h)
 FPIOA_PU, FPIOA_PD = 1 << 16, 1 << 17
 
 
@@ -52,8 +53,10 @@ class Gpio(Peripheral):
         ID_CODE: Register("id_code", writable=False), INT_BOTHEDGE: Register("interrupt_bothedge"),
     }
 
-    def __init__(self, board=None) -> None:
-        super().__init__(board)
+    def __init__(self, ports: Ports, fpioa: Fpioa) -> None:
+        """fpioa: the pads' routing and pulls, which the lines read as inputs."""
+        super().__init__(ports)
+        self.fpioa = fpioa
         self._last_input = 0
         self._edges = 0            # latched edge interrupts, until cleared through eoi
 
@@ -61,8 +64,7 @@ class Gpio(Peripheral):
         super().reset(now)
         self._last_input = 0
         self._edges = 0
-        if self.board is not None:
-            self.board.wiring_changed(now)
+        self.ports.wiring_changed(now)
 
     # --- pins ------------------------------------------------------------------------------
 
@@ -73,9 +75,7 @@ class Gpio(Peripheral):
         return self.values[DATA_OUTPUT] >> line & 1
 
     def _pad_of(self, line: int) -> int | None:
-        if self.board is None:
-            return None
-        pads = self.board.fpioa.pads_with_function(FUNC_GPIO0 + line)
+        pads = self.fpioa.pads_with_function(FUNC_GPIO0 + line)
         return pads[0] if pads else None
 
     def input_value(self) -> int:
@@ -85,7 +85,7 @@ class Gpio(Peripheral):
             level = self.driven_level(line)
             if level is None:
                 pad = self._pad_of(line)
-                config = self.board.fpioa.values[4 * pad] if pad is not None else 0
+                config = self.fpioa.values[4 * pad] if pad is not None else 0
                 level = 1 if config & FPIOA_PU and not config & FPIOA_PD else 0
             value |= level << line
         return value
@@ -115,8 +115,7 @@ class Gpio(Peripheral):
         polarity, both = self.values[INT_POLARITY], self.values[INT_BOTHEDGE]
         seen = (rose & (polarity | both)) | (fell & (~polarity | both))
         self._edges |= seen & self.values[INT_ENABLE] & self.values[INT_LEVEL] & LINE_MASK
-        if self.board is not None:
-            self.board.interrupts_may_have_changed(now)
+        self.ports.irq_changed(now)
 
     # --- registers ----------------------------------------------------------------------------
 
@@ -132,17 +131,13 @@ class Gpio(Peripheral):
     def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
         if offset == INT_CLEAR:
             self._edges &= ~value
-            if self.board is not None:
-                self.board.interrupts_may_have_changed(now)
+            self.ports.irq_changed(now)
             return
         before = [self.driven_level(line) for line in range(LINES)]
-        if self.board is not None:
-            # bytes already on the SPI wire must see the pin levels of their own time
-            self.board.advance_devices(now)
+        # bytes already on the SPI wire must see the pin levels of their own time
+        self.ports.catch_up(now)
         self.values[offset] = value & LINE_MASK
-        if self.board is None:
-            return
         if before != [self.driven_level(line) for line in range(LINES)]:
-            self.board.wiring_changed(now)
+            self.ports.wiring_changed(now)
         elif offset in (INT_ENABLE, INT_MASK, INT_LEVEL, INT_POLARITY, INT_BOTHEDGE):
-            self.board.interrupts_may_have_changed(now)
+            self.ports.irq_changed(now)

@@ -8,6 +8,7 @@ interrupt pending bits follow the input value; writing 1 clears an edge bit.
 from __future__ import annotations
 
 from .mmio import BUS_TILELINK, Peripheral, Register
+from .ports import Ports
 
 INPUT_VAL, INPUT_EN, OUTPUT_EN, OUTPUT_VAL, PUE, PDE = 0x00, 0x04, 0x08, 0x0C, 0x10, 0x14
 RISE_IE, RISE_IP, FALL_IE, FALL_IP = 0x18, 0x1C, 0x20, 0x24
@@ -36,8 +37,8 @@ class Gpiohs(Peripheral):
         IOF_EN: Register("iof_en"), IOF_SEL: Register("iof_sel"), OUTPUT_XOR: Register("output_xor"),
     }
 
-    def __init__(self, board=None) -> None:
-        super().__init__(board)
+    def __init__(self, ports: Ports) -> None:
+        super().__init__(ports)
         self._last_input = 0
 
     def driven_level(self, line: int) -> int | None:
@@ -87,10 +88,9 @@ class Gpiohs(Peripheral):
         if offset in (HIGH_IP, LOW_IP):
             return  # level pending bits follow the input; writes have no effect
         before = self._driven()
-        if self.board is not None:
-            # bytes already on the SPI wire must see the pin levels of their own time
-            self.board.advance_devices(now)
+        # bytes already on the SPI wire must see the pin levels of their own time
+        self.ports.catch_up(now)
         self.values[offset] = value
         self._sample_inputs()
-        if self.board is not None and before != self._driven():
-            self.board.wiring_changed(now)
+        if before != self._driven():
+            self.ports.wiring_changed(now)

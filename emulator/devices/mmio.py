@@ -17,12 +17,8 @@ a store covers all of its bytes.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
-
 from ..errors import RegisterRuleViolation
-
-if TYPE_CHECKING:
-    from ..board import Board
+from .ports import Ports
 
 
 @dataclass(frozen=True)
@@ -64,8 +60,8 @@ class Peripheral:
     # a claimed interrupt), cleared by the bus: such reads are not a poll, however alike their values
     took_on_read = False
 
-    def __init__(self, board: "Board | None" = None) -> None:
-        self.board = board
+    def __init__(self, ports: Ports) -> None:
+        self.ports = ports
         self.values: dict[int, int] = {off: reg.reset for off, reg in self.REGISTERS.items()}
         # lookup's answers by (offset, size, is_write): the table is fixed, and the firmware polls
         self._found: dict[tuple[int, int, bool], tuple[int, Register]] = {}

@@ -23,6 +23,7 @@ from __future__ import annotations
 from typing import Callable, Iterable
 
 from .mmio import BUS_TILELINK, Peripheral, Register, byte_fields
+from .ports import Ports
 
 SOURCES = 66          # 0 is "no interrupt"
 CONTEXTS_PER_HART = 2  # M-mode, then S-mode
@@ -65,9 +66,10 @@ class Plic(Peripheral):
         **{CLAIM + CONTEXT_STRIDE * c: Register(f"claim{c}") for c in range(CONTEXTS)},
     }
 
-    def __init__(self, board=None, high_sources: Callable[[], Iterable[int]] | None = None) -> None:
-        super().__init__(board)
-        self.high_sources = high_sources or (lambda: ())
+    def __init__(self, ports: Ports, high_sources: Callable[[], Iterable[int]]) -> None:
+        """high_sources: the sources whose interrupt line is high now (the board's wiring of the lines)."""
+        super().__init__(ports)
+        self.high_sources = high_sources
         self.pending: set[int] = set()
         self.in_service: set[int] = set()
 
@@ -96,7 +98,7 @@ class Plic(Peripheral):
         return self._best(context) != 0
 
     def read_register(self, offset: int, reg: Register, now: float) -> int:
-        self.board.advance_devices(now)
+        self.ports.catch_up(now)
         self.sample()
         if PENDING <= offset < PENDING + 4 * WORDS:
             word = (offset - PENDING) // 4
@@ -108,7 +110,7 @@ class Plic(Peripheral):
                 self.pending.discard(source)
                 self.in_service.add(source)
                 self.took_on_read = True
-            self.board.interrupts_may_have_changed(now)
+            self.ports.irq_changed(now)
             return source
         return self.values[offset]
 
@@ -122,4 +124,4 @@ class Plic(Peripheral):
             self.values[offset] = value & PRIORITY_MASK
         else:
             self.values[offset] = value
-        self.board.interrupts_may_have_changed(now)
+        self.ports.irq_changed(now)

@@ -24,12 +24,13 @@ Configuration registers can only be written while the controller is disabled
 from __future__ import annotations
 
 from dataclasses import dataclass, field as dc_field
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Callable, Protocol
 
 import numpy as np
 
 from ..errors import UnmodelledAccess
 from .mmio import Peripheral, Register, field
+from .ports import Ports
 
 if TYPE_CHECKING:
     from .dmac import DmaChannel
@@ -133,12 +134,14 @@ class SpiController(Peripheral):
         XIP_MODE_BITS: Register("xip_mode_bits"), ENDIAN: Register("endian"),
     }
 
-    def __init__(self, index: int, board=None) -> None:
+    def __init__(self, index: int, ports: Ports, source_hz: Callable[[], float]) -> None:
+        """source_hz: the clock SYSCTL gives the controller (its baud rate is that / baudr)."""
         self.index = index
+        self.source_hz = source_hz
         self.NAME = f"SPI{index}"
         self.GATE = f"spi{index}"
         self.BASE = 0x5200_0000 + 0x0100_0000 * index
-        super().__init__(board)
+        super().__init__(ports)
         self.device_for_ss = lambda ss: None   # set by the board's wiring
         self._train: _Train | None = None
         self._held: list[int] = []               # frames written while no slave is selected
@@ -160,9 +163,9 @@ class SpiController(Peripheral):
                 channel.peripheral_gone()
         self._end_train(now)
         super().reset(now)
-        if self._ss_low and self.board is not None:
+        if self._ss_low:
             self._ss_low = False
-            self.board.signal(now, f"spi{self.index}_ss_n", 1)
+            self.ports.signal(now, f"spi{self.index}_ss_n", 1)
         self._held.clear()
         self._rx.clear()
         self._raw_int = 0
@@ -189,9 +192,9 @@ class SpiController(Peripheral):
 
     def sclk_hz(self) -> float:
         divider = self.values[BAUDR] & 0xFFFE   # SCKDV is even; bit 0 reads as written but is ignored
-        if divider == 0 or self.board is None:
+        if divider == 0:
             return 0.0
-        return self.board.sysctl.spi_source_hz(self.index) / divider
+        return self.source_hz() / divider
 
     def frame_period(self) -> float:
         hz = self.sclk_hz()
@@ -237,15 +240,15 @@ class SpiController(Peripheral):
         return None
 
     def _end_train(self, at: float) -> None:
-        if self._train is not None and self.board is not None:
-            self.board.signal(min(at, self._train.end()), f"spi{self.index}_sclk", 0)
+        if self._train is not None:
+            self.ports.signal(min(at, self._train.end()), f"spi{self.index}_sclk", 0)
         self._train = None
 
     def _update_selection(self, now: float) -> None:
         low = bool(self.enabled and self.values[SER])
-        if low != self._ss_low and self.board is not None:
+        if low != self._ss_low:
             self._ss_low = low
-            self.board.signal(now, f"spi{self.index}_ss_n", 0 if low else 1)
+            self.ports.signal(now, f"spi{self.index}_ss_n", 0 if low else 1)
         device = self._slave() if self.enabled and self.values[SER] else None
         if device is not self._selected:
             if self._selected is not None:
@@ -307,7 +310,7 @@ class SpiController(Peripheral):
         if len(values) > room:
             self._raw_int |= INT_RXO
             # no frame count in the text: repeated overflows are counted as one warning
-            self.board.warn(f"{self.NAME}: receive FIFO overflow: received frames lost "
+            self.ports.warn(f"{self.NAME}: receive FIFO overflow: received frames lost "
                             f"(the {FIFO_DEPTH}-frame FIFO was full)", now)
 
     def _push(self, values: np.ndarray, now: float) -> None:
@@ -324,8 +327,7 @@ class SpiController(Peripheral):
                 self.advance(now)
             self._check_wire_format()
             train = self._train = _Train(start=now, period=period, bits=self.frame_bits)
-            if self.board is not None:
-                self.board.signal(now, f"spi{self.index}_sclk", 1)
+            self.ports.signal(now, f"spi{self.index}_sclk", 1)
         train.frames.append(values.astype(np.uint32))
         train.count += len(values)
 
@@ -436,9 +438,9 @@ class SpiController(Peripheral):
         self.advance(now)
         self.tx_dma = channel
         item_bits = 8 * channel.transfer.dst_width
-        if item_bits < self.frame_bits and self.board is not None:
+        if item_bits < self.frame_bits:
             # each item is one FIFO entry; the DW SSI takes a frame's bits from the entry's low bits
-            self.board.warn(f"DMAC channel {channel.index} writes {item_bits}-bit items into {self.NAME}'s "
+            self.ports.warn(f"DMAC channel {channel.index} writes {item_bits}-bit items into {self.NAME}'s "
                             f"{self.frame_bits}-bit frames: AXI leaves the byte lanes a narrow write does not "
                             f"use undefined; the model sends their bits as 0", now)
         self._dma_started = now
@@ -501,7 +503,7 @@ class SpiController(Peripheral):
     def irq_line(self) -> bool:
         if not self.values[IMR]:
             return False        # every source masked (the PLIC samples this on every wake check)
-        return bool(self._interrupts(self.board.time) & self.values[IMR])
+        return bool(self._interrupts(self.ports.clock.now()) & self.values[IMR])
 
     def _interrupts(self, now: float) -> int:
         raw = self._raw_int
@@ -554,7 +556,7 @@ class SpiController(Peripheral):
             self._write_data(value, now)
             return
         if offset in CONFIG_REGISTERS and self.enabled:
-            self.board.warn(f"{self.NAME}.{reg.name} written while the controller is enabled: ignored, "
+            self.ports.warn(f"{self.NAME}.{reg.name} written while the controller is enabled: ignored, "
                             f"as the DW SSI ignores it")
             return
         if offset == SSIENR:
@@ -584,7 +586,7 @@ class SpiController(Peripheral):
         if self.tx_level(now) >= FIFO_DEPTH:
             self._raw_int |= INT_TXO
             # no value in the text: repeated losses are counted as one warning
-            self.board.warn(f"{self.NAME}: a frame written to a full transmit FIFO was lost", now)
+            self.ports.warn(f"{self.NAME}: a frame written to a full transmit FIFO was lost", now)
             return
         if self.tmod == TMOD_RX:
             # receive-only: one write starts clocking ctrlr1 + 1 frames in (sending 0xFF filler,

@@ -11,9 +11,11 @@ reset-source status at 0x60, and the SDK is what runs on real boards.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 from ..errors import HardwareMisuse, UnmodelledAccess
 from .mmio import Peripheral, Register, field
+from .ports import Ports
 
 OSC_HZ = 26_000_000
 # The PLL datasheet figure is not public; the SDK polls the lock bits. 50 us is
@@ -105,8 +107,13 @@ class Sysctl(Peripheral):
         0x6C: Register("power_sel"),
     }
 
-    def __init__(self, board=None) -> None:
-        super().__init__(board)
+    def __init__(self, ports: Ports, clock_changed: Callable[[float], None],
+                 reset_block: Callable[[str, float], None]) -> None:
+        """clock_changed: the CPU clock changed at this time (the board's clock follows it).
+        reset_block: peri_reset released the block of this name (PERI_BITS) at this time."""
+        super().__init__(ports)
+        self.clock_changed = clock_changed
+        self.reset_block = reset_block
         self.usable: set[str] = set()   # gates open and not in reset, kept current on writes
         # PLL0 comes out of reset powered and running (at 26 MHz: all dividers 0), so it
         # reads as locked; PLL1/PLL2 are off until firmware powers them.
@@ -186,7 +193,6 @@ class Sysctl(Peripheral):
             self._update_usable()
 
     def _write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
-        board = self.board
         if offset in self.plls:
             if offset == PLL0 and self.values[CLK_SEL0] & 1 and value != self.values[PLL0]:
                 raise HardwareMisuse(
@@ -216,18 +222,17 @@ class Sysctl(Peripheral):
                     raise HardwareMisuse("SYSCTL.clk_sel0: ACLK switched to PLL0 while PLL0's output is disabled (out_en = 0)")
             old_hz = self.cpu_hz()
             self.values[CLK_SEL0] = value
-            if board is not None and self.cpu_hz() != old_hz:
-                board.clock_changed(now)
+            if self.cpu_hz() != old_hz:
+                self.clock_changed(now)
             return
         if offset == SOFT_RESET and value & 1:
             raise UnmodelledAccess("SYSCTL.soft_reset: a whole-chip soft reset is not modelled")
         if offset == PERI_RESET:
             released = self.values[PERI_RESET] & ~value
             self.values[PERI_RESET] = value
-            if board is not None:
-                for name, bit in PERI_BITS.items():
-                    if released >> bit & 1:
-                        board.reset_peripheral(name, now)
+            for name, bit in PERI_BITS.items():
+                if released >> bit & 1:
+                    self.reset_block(name, now)
             return
         self.values[offset] = value
 

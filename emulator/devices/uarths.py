@@ -22,7 +22,7 @@ from collections import deque
 from typing import Callable
 
 from .mmio import BUS_TILELINK, Peripheral, Register
-from ..frontends.uart_input import UartInput
+from .ports import Ports, SerialInput
 
 TXDATA, RXDATA, TXCTRL, RXCTRL, IE, IP, DIV = 0x00, 0x04, 0x08, 0x0C, 0x10, 0x14, 0x18
 TX_FIFO_DEPTH = 8
@@ -49,13 +49,14 @@ class Uarths(Peripheral):
         DIV: Register("div", reset=0x0D8D, fields=((0, 16),)),  # 115200 baud from the 26 MHz oscillator... about
     }
 
-    def __init__(self, board=None, on_byte: Callable[[int], None] | None = None) -> None:
-        super().__init__(board)
-        self.on_byte = on_byte or (lambda b: None)
+    def __init__(self, ports: Ports, on_byte: Callable[[int], None]) -> None:
+        """on_byte: hears each byte as its stop bit goes out (the Dock's USB-serial bridge)."""
+        super().__init__(ports)
+        self.on_byte = on_byte
         self._fifo: deque[int] = deque()
         self._shifting_until: float | None = None   # end time of the byte on the wire
         self.last_byte_time = 0.0                    # when the last byte's stop bit went out
-        self.input: UartInput | None = None          # what the host sends (--uart-input)
+        self.input: SerialInput | None = None          # what the host sends (--uart-input)
         self._rx_fifo: deque[int] = deque()
         self._receiving_until: float | None = None   # end time of the byte coming in
         self._receiving_byte = 0
@@ -65,7 +66,7 @@ class Uarths(Peripheral):
         self.every_byte_heard = False
 
     def _byte_time(self) -> float:
-        hz = self.board.cpu_hz() if self.board is not None else 26e6
+        hz = self.ports.clock.cpu_hz()
         bits = 10 + (1 if self.values[TXCTRL] >> 1 & 1 else 0)
         return bits * (self.values[DIV] + 1) / hz
 
@@ -210,10 +211,10 @@ class Uarths(Peripheral):
         if offset == TXDATA:
             if len(self._fifo) < TX_FIFO_DEPTH:
                 self._fifo.append(value & 0xFF)
-            elif self.board is not None:
+            else:
                 # the text names no byte, so that a firmware that never waits gets one
                 # counted warning rather than one per lost character
-                self.board.warn(f"{self.NAME}: a byte written to txdata while the {TX_FIFO_DEPTH}-byte transmit "
+                self.ports.warn(f"{self.NAME}: a byte written to txdata while the {TX_FIFO_DEPTH}-byte transmit "
                                 f"FIFO was full was lost: a writer must wait while txdata reads bit 31 (full)", now)
         else:
             self.values[offset] = value
