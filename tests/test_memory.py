@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from emulator.board.memory import POWER_ON_SEED, SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE, Sram, power_on_pattern
+from emulator.board.memory import POWER_ON_SEED, Sram, power_on_pattern
+from emulator.memory_map import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE
 
 
 def test_each_sram_starts_with_the_power_on_pattern_and_keeps_its_own_writes():

@@ -19,7 +19,7 @@ from emulator.devices import dmac as d
 from emulator.cpu.hart import ENGINE_FAST, ENGINE_PRECISE
 from emulator.errors import EXIT_STRAY_WRITE, StrayWrite
 from emulator.cpu.hart import HartState
-from emulator.board.memory import SRAM_BASE, SRAM_SIZE
+from emulator.memory_map import SRAM_BASE, SRAM_SIZE
 from emulator.board.write_watch import CODE, DATA, HEAP, UNOWNED, Rule, plan_layout, stack_name
 from k210_fixtures import at_done, build_elf, make_board, program, reg, run_until
 

@@ -56,7 +56,7 @@ sys.path.insert(0, str(ROOT))
 
 from emulator.board import Board  # noqa: E402
 from emulator.cpu.hart import ENGINE_FAST, ENGINE_PRECISE, INSN_WFI, CsrContext, Hart, HartState  # noqa: E402
-from emulator.board.memory import SRAM_BASE  # noqa: E402
+from emulator.memory_map import SRAM_BASE  # noqa: E402
 from emulator.cpu.timing import TIMING_IPC1, TIMING_ROCKET  # noqa: E402
 from tools import quality  # noqa: E402
 

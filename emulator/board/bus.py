@@ -37,7 +37,7 @@ address, or, with --strict, stop the run (exit status 5):
 """
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Callable
+from typing import TYPE_CHECKING, Callable, Protocol
 
 import unicorn
 from unicorn import riscv_const as rv
@@ -53,7 +53,11 @@ from ..devices.mmio import BUS_AHB, BUS_APB, BUS_TILELINK, Peripheral, Register
 from .write_watch import describe as describe_stray
 
 if TYPE_CHECKING:
-    from .dock import Board
+    from ..devices.sysctl import Sysctl
+    from .elf import LoadedImage
+    from .memory import Sram
+    from .scheduler import Scheduler
+    from .write_watch import WriteWatch
 
 # Blocks of the K210 the model knows by name but does not implement (for clear messages)
 KNOWN_UNMODELLED = [
@@ -87,10 +91,30 @@ def _mask(width_bytes: int) -> int:
     return (1 << (8 * width_bytes)) - 1
 
 
+class Board(Protocol):
+    """What the bus asks of the board it serves (dock.py's Board): the parts an access reaches or
+    depends on, and its warnings."""
+
+    scheduler: "Scheduler"
+    peripherals: list[Peripheral]
+    timed_devices: list[Peripheral]
+    memory: "Sram"
+    sysctl: "Sysctl"
+    image: "LoadedImage"
+    write_watch: "WriteWatch | None"
+    permissive: bool
+
+    def warn(self, text: str, now: float | None = None) -> None: ...
+
+    def disassemble_at(self, pc: int) -> str: ...
+
+    def next_device_event(self, now: float, past_quiet_console: bool = False) -> float | None: ...
+
+
 class Bus:
     """Decodes every hart access outside SRAM and applies the K210's rules to it."""
 
-    def __init__(self, board: "Board", strict: bool = False) -> None:
+    def __init__(self, board: Board, strict: bool = False) -> None:
         self.board = board
         self.strict = strict     # stop at the first access the register tables do not take as it is
         self.scheduler = board.scheduler

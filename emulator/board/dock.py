@@ -20,7 +20,7 @@ from .bus import Bus
 from ..devices.clint import Clint
 from ..cpu.disasm import disassemble_one
 from ..devices.dmac import Dmac
-from .elf import RESET_PC, LoadedImage
+from .elf import LoadedImage
 from .raw_image import load_firmware
 from ..errors import BoardStop
 from ..devices.fpioa import Fpioa
@@ -28,7 +28,7 @@ from ..devices.gpio import Gpio
 from ..devices.gpiohs import Gpiohs
 from ..cpu.hart import ENGINE_FAST, ENGINES, Hart
 from .memory import Sram
-from ..memory_map import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE, is_sram
+from ..memory_map import RESET_PC, SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE, is_sram
 from ..devices.mmio import Peripheral
 from ..devices.ports import Ports
 from ..devices.plic import SOURCE_DMA0, SOURCE_GPIO, SOURCE_GPIOHS0, SOURCE_SPI0, SOURCE_SPI1, SOURCE_UARTHS, Plic

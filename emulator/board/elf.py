@@ -13,8 +13,8 @@ from elftools.elf.constants import P_FLAGS
 from elftools.elf.elffile import ELFFile
 
 from ..errors import BadInput
-from ..memory_map import RESET_PC  # noqa: F401 (where an image must start)
-from .memory import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE, Sram
+from ..memory_map import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE
+from .memory import Sram
 
 EM_RISCV = "EM_RISCV"
 

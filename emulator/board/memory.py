@@ -17,7 +17,7 @@ from typing import Callable
 import numpy as np
 
 from ..errors import HardwareMisuse
-from ..memory_map import GENERAL_SRAM_SIZE, SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE  # noqa: F401 (the board's names)
+from ..memory_map import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE
 POWER_ON_SEED = 0x0210
 
 

@@ -10,9 +10,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .elf import RESET_PC, LoadedImage, Segment, load_elf
+from .elf import LoadedImage, Segment, load_elf
 from ..errors import BadInput
-from .memory import SRAM_BASE, SRAM_SIZE, Sram
+from ..memory_map import RESET_PC, SRAM_BASE, SRAM_SIZE
+from .memory import Sram
 
 ELF_MAGIC = b"\x7fELF"
 RAW_SUFFIX = ".bin"

@@ -21,7 +21,7 @@ from __future__ import annotations
 import math
 import time as host_time
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Callable
+from typing import TYPE_CHECKING, Callable, Protocol
 
 import numpy as np
 import unicorn
@@ -32,10 +32,15 @@ from ..cpu import shared_memory
 from .elf import symbolize
 from ..errors import BoardStop, FirmwareReportedError, FirmwareTrap, HangDetected
 from ..cpu.hart import CsrContext, Hart, HartState, RunEnd
-from .memory import SRAM_BASE, SRAM_UNCACHED_BASE
+from ..memory_map import SRAM_BASE, SRAM_UNCACHED_BASE
 
 if TYPE_CHECKING:
-    from .dock import Board
+    from ..devices.mmio import Peripheral
+    from ..devices.st7789v import ST7789V
+    from ..devices.sysctl import Sysctl
+    from ..devices.uarths import Uarths
+    from .elf import LoadedImage
+    from .memory import Sram
 
 HARTS = 2
 DEFAULT_QUANTUM = 20_000          # CPU cycles per hart per turn
@@ -78,10 +83,50 @@ class RunResult:
     cycles: list[int] = field(default_factory=list)   # per hart: cycles spent executing (not asleep)
 
 
+class TurnObserver(Protocol):
+    """What the bus does around a hart's turn (bus.py)."""
+
+    def turn_begins(self, hart: Hart) -> None: ...
+
+    def turn_ended(self, hart: Hart) -> BoardStop | None: ...
+
+    def is_sram(self, address: int) -> bool: ...
+
+
+class Board(Protocol):
+    """What the scheduler asks of the board it runs (dock.py's Board): its parts, the interrupt
+    and device-event questions that span the devices, and its reports."""
+
+    bus: TurnObserver
+    memory: "Sram"
+    image: "LoadedImage"
+    lcd: "ST7789V"
+    sysctl: "Sysctl"
+    uarths: "Uarths"
+    peripherals: "list[Peripheral]"
+    on_frame: Callable[[FrameRecord, np.ndarray], None]
+    completed_line_began: float
+    warnings: list[str]
+
+    def mip(self, h: int, now: float, mask: int = ~0) -> int: ...
+
+    def next_device_event(self, now: float, past_quiet_console: bool = False) -> float | None: ...
+
+    def advance_devices(self, now: float) -> None: ...
+
+    def earliest_frame_capture(self, now: float) -> float: ...
+
+    def loop_cycles_bound(self, instructions: int) -> int: ...
+
+    def disassemble_at(self, pc: int) -> str: ...
+
+    def recent_warnings(self, count: int) -> list[str]: ...
+
+
 class Scheduler:
     """Owns virtual time and the harts; runs them in turns between device events."""
 
-    def __init__(self, board: "Board", quantum: int, hang_budget_s: float) -> None:
+    def __init__(self, board: Board, quantum: int, hang_budget_s: float) -> None:
         self.board = board
         self.quantum = quantum
         self.hang_budget_s = hang_budget_s
