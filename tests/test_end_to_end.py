@@ -3,6 +3,7 @@ and hold the first frames against the golden PNGs."""
 from __future__ import annotations
 
 import json
+import re
 import os
 import pty
 import subprocess
@@ -210,6 +211,46 @@ _start:
     result = run_emulator("run", str(elf), "--out", str(tmp_path), "--quiet")
     assert result.returncode == 3, result.stderr
     assert "illegal instruction" in result.stderr and "mtvec" in result.stderr
+
+
+SERVED_ECALLS = """
+    .globl _start
+_start:
+    csrr    t0, mhartid
+    bnez    t0, 3f
+    la      t0, handler
+    csrw    mtvec, t0
+    li      s1, 3
+1:  ecall
+    addi    s1, s1, -1
+    bnez    s1, 1b
+2:  j       2b
+3:  wfi
+    j       3b
+    .balign 4
+handler:
+    csrr    t0, mepc
+    addi    t0, t0, 4
+    csrw    mepc, t0
+    mret
+"""
+
+
+def test_exceptions_the_handler_serves_are_part_of_the_run(assemble, tmp_path):
+    """ecalls served by the firmware's trap handler: the run goes on (run.json counts them);
+    --stop-on-trap ends it at the first (status 3)."""
+    elf = assemble(SERVED_ECALLS)
+    result = run_emulator("run", str(elf), "--out", str(tmp_path / "a"), "--quiet", "--until", "0.01")
+    assert result.returncode == 0, result.stderr
+    summary = json.loads((tmp_path / "a" / "run.json").read_text())
+    assert summary["exceptions"] == {"environment call from M-mode": 3} and not summary["stop_on_trap"]
+    result = run_emulator("run", str(elf), "--out", str(tmp_path / "b"), "--quiet", "--until", "0.01",
+                          "--stop-on-trap")
+    assert result.returncode == 3, result.stderr
+    assert re.search(r"environment call from M-mode at pc 0x80000016 <_start\+0x16> \(ecall\), mtval 0x0; then, "
+                     r"after the trap handler returned, hart 0: environment call", result.stderr), result.stderr
+    summary = json.loads((tmp_path / "b" / "run.json").read_text())
+    assert summary["exceptions"] == {"environment call from M-mode": 1} and summary["stop_on_trap"]
 
 
 def test_hang_is_reported(assemble, tmp_path):

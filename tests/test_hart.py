@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from emulator.errors import FirmwareTrap, UnmodelledAccess
+from emulator.errors import FirmwareTrap, HangDetected, UnmodelledAccess
 from emulator.board.elf import load_elf
 from emulator.cpu.hart import CAUSE_INTERRUPT, IRQ_MEI, IRQ_MSI, IRQ_MTI, IRQ_SEI, CsrContext, Hart, HartState, RunEnd
 from emulator.board.memory import Sram
@@ -209,8 +209,8 @@ def test_illegal_instruction_enters_mtvec(layout, fault_label):
     assert reg(board, "s10") == word                     # mtval: the instruction bits
     status = reg(board, "s11")
     assert status & MSTATUS_MPP == MSTATUS_MPP and not status & MSTATUS_MIE
-    assert "illegal instruction" in board._trap_report
-    assert f"0x{fault:08x}" in board._trap_report
+    assert "illegal instruction" in board.last_exception
+    assert f"0x{fault:08x}" in board.last_exception
 
 
 def test_illegal_instruction_does_not_retire():
@@ -273,6 +273,132 @@ def test_mret_returns_to_mepc_plus_4():
     run_to_done(board)
     assert reg(board, "s1") == 42
     assert reg(board, "priv") == 3                          # still machine mode (MPP = M)
+
+
+# --- exceptions are the program's: the run goes on ------------------------------------------------
+
+SYSCALL_HANDLER = """
+    .balign 4
+handler:
+    csrr    t0, mcause
+    li      t1, 11
+    bne     t0, t1, fatal
+    addi    s2, s2, 1                    # one more system call served
+    add     a0, a0, a1                   # the "system call": a0 = a0 + a1
+    csrr    t0, mepc
+    addi    t0, t0, 4
+    csrw    mepc, t0
+    mret
+fatal:
+    csrw    mie, zero
+1:  wfi
+    j       1b
+"""
+
+
+def test_ecall_system_calls_are_served_by_the_handler_and_the_run_goes_on():
+    """newlib's system calls on the Kendryte SDK are ecalls its trap handler serves: many in a row,
+    each returning to the program (before 2026-11-28 the second exception ended the run)."""
+    board = make_board(program("""
+        la      t0, handler
+        csrw    mtvec, t0
+        li      s2, 0
+        li      s3, 0
+        li      s4, 5
+    1:  mv      a0, s3
+        li      a1, 7
+        ecall
+        mv      s3, a0
+        addi    s4, s4, -1
+        bnez    s4, 1b
+        j       done
+    """ + SYSCALL_HANDLER))
+    run_to_done(board)
+    assert reg(board, "s2") == 5 and reg(board, "s3") == 35
+    assert board.scheduler.exceptions_taken == {"environment call from M-mode": 5}
+    assert board.harts[0].open_trap is None                  # every handler returned
+
+
+def test_a_handler_that_parks_the_harts_ends_the_run_as_a_trap():
+    """An exception the handler does not return from, after which no hart can go on: the trap
+    ended the program (status 3), named with its pc."""
+    board = make_board(program("""
+        la      t0, handler
+        csrw    mtvec, t0
+    the_fault:
+        .word   0xffffffff
+    """ + SYSCALL_HANDLER))
+    with pytest.raises(FirmwareTrap, match=r"illegal instruction at pc 0x[0-9a-f]+ <the_fault>.*did not return"):
+        run_until(board, lambda b: False, max_time_s=1.0)
+
+
+def test_a_handler_that_returns_to_the_fault_is_a_trap_storm():
+    """A handler that returns to the same faulting instruction without changing anything: the hart
+    can make no progress (reported like a hang, naming the trap)."""
+    board = make_board(program("""
+        la      t0, handler
+        csrw    mtvec, t0
+    the_fault:
+        .word   0xffffffff
+        j       done
+        .balign 4
+    handler:
+        mret
+    """))
+    with pytest.raises(HangDetected, match=r"trap storm: hart 0: illegal instruction at pc 0x[0-9a-f]+ <the_fault>"):
+        run_until(board, lambda b: False, max_time_s=1.0)
+    assert board.scheduler.exceptions_taken["illegal instruction"] == 1000
+
+
+def test_stop_on_trap_ends_the_run_at_the_first_exception():
+    board = make_board(program("""
+        la      t0, handler
+        csrw    mtvec, t0
+        li      a0, 1
+        li      a1, 2
+        ecall
+        j       done
+    """ + SYSCALL_HANDLER))
+    board.scheduler.stop_on_trap = True
+    with pytest.raises(FirmwareTrap, match="environment call from M-mode.*the firmware's trap handler has run"):
+        run_until(board, lambda b: False, max_time_s=1.0)
+    assert reg(board, "s2") == 1                              # the handler ran: its grace period
+
+
+def test_mret_to_user_mode_and_ecall_from_user_mode():
+    """mret goes to the mode in MPP (the K210 has U-mode) and sets MPP to U; an ecall there is
+    cause 8, and the trap puts the hart back in M-mode with MPP = U."""
+    board = make_board(program("""
+        la      t0, handler
+        csrw    mtvec, t0
+        li      t0, 3 << 11
+        csrc    mstatus, t0                  # MPP = U
+        la      t0, user
+        csrw    mepc, t0
+        mret
+    user:
+        csrr    s5, mstatus                  # M-mode CSR from U-mode: illegal
+        li      s6, 1
+        ecall
+        .balign 4
+    handler:
+        csrr    t0, mcause
+        li      t1, 2
+        bne     t0, t1, 1f
+        li      s7, 1                        # the illegal CSR read, seen
+        csrr    t0, mepc
+        addi    t0, t0, 4
+        csrw    mepc, t0
+        mret
+    1:  mv      s8, t0
+        csrr    s9, mstatus
+        j       done
+    """))
+    run_to_done(board)
+    assert reg(board, "s7") == 1 and reg(board, "s6") == 1
+    assert reg(board, "s8") == 8                               # environment call from U-mode
+    assert reg(board, "s9") & MSTATUS_MPP == 0                  # MPP = U: the mode the trap came from
+    assert reg(board, "priv") == 3
 
 
 def test_exception_without_a_trap_handler_stops_the_run():

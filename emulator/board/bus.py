@@ -514,7 +514,7 @@ class Bus:
             # it: a store that schedules something before this turn's planned end ends the turn.
             # (Without mstatus.MIE nothing can preempt the hart; status reads are exact in any
             # case, and sleeping harts wake at the event's own time.)
-            if timed and hart.reg(rv.UC_RISCV_REG_MSTATUS) & hartmod.MSTATUS_MIE:
+            if timed and hart.m_interrupts_enabled():
                 event = self.board.next_device_event(now)
                 if event is not None and event < scheduler.turn_horizon:
                     hart.request_stop()

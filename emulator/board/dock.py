@@ -247,8 +247,9 @@ class Board:
         self.scheduler.frames_wanted = value
 
     @property
-    def _trap_report(self) -> str | None:
-        return self.scheduler.trap_report
+    def last_exception(self) -> str | None:
+        """The last synchronous exception a hart took, described (None: none yet)."""
+        return self.scheduler.last_exception
 
     @property
     def host_time_in_harts(self) -> float:

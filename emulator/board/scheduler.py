@@ -46,6 +46,9 @@ HARTS = 2
 DEFAULT_QUANTUM = 20_000          # CPU cycles per hart per turn
 DEFAULT_HANG_BUDGET_S = 5.0       # virtual seconds without a new frame before a run counts as hung
 TRAP_GRACE_S = 0.5                # virtual time the firmware's trap handler gets to report
+# A hart that takes the same exception at the same pc with the same registers this many times in a
+# row, storing to no device in between, can make no progress: a trap storm, which ends the run
+TRAP_STORM_REPEATS = 1000
 POLL_REPEATS = 8                  # identical reads at one pc before a hart counts as polling
 # After the last requested frame the run goes on this long at most, so that the console line
 # the firmware begins after that frame (this firmware's "frame N") is not cut off.
@@ -156,9 +159,13 @@ class Scheduler:
         self._poll = [NO_POLL] * HARTS
         self._grabs: list[tuple[float, Callable[["Board"], None]]] = []
         self.host_time_in_harts = 0.0                     # host seconds spent executing guest code
-        self.trap_report: str | None = None
+        self.stop_on_trap = False                         # --stop-on-trap: any exception ends the run
+        self.trap_report: str | None = None               # --stop-on-trap: the exception that ends it
         self._error_report: tuple[int, str] | None = None
-        self._trap_deadline: float | None = None
+        self._trap_deadline: float | None = None          # a grace period before the run may end
+        self.exceptions_taken: dict[str, int] = {}        # per kind, for run.json
+        self.last_exception: str | None = None
+        self._storm: dict[int, tuple[tuple, int, int]] = {}   # per hart: (what, device stores, repeats)
         self.harts = [Hart(h, CsrContext(mcycle=self._mcycle_reader(h), mip=self._mip_reader(h)))
                       for h in range(HARTS)]
         # both harts start together: what one stores at once the other may be polling already
@@ -265,7 +272,7 @@ class Scheduler:
         then, and a running hart with interrupts enabled ends its turn to take it."""
         self._wake_sleepers(self.time if now is None else now)
         hart = self.current
-        if hart is not None and hart.reg(rv.UC_RISCV_REG_MSTATUS) & hartmod.MSTATUS_MIE:
+        if hart is not None and hart.m_interrupts_enabled():
             hart.request_stop()
 
     def _wake_sleepers(self, now: float) -> None:
@@ -275,7 +282,7 @@ class Scheduler:
             if hart.state is HartState.RUNNING:
                 continue
             if hart.state is HartState.WAITING:
-                if not hart.reg(rv.UC_RISCV_REG_MSTATUS) & hartmod.MSTATUS_MIE:
+                if not hart.m_interrupts_enabled():
                     continue
                 enabled = self._taken_in_m_mode(hart)
             else:
@@ -362,7 +369,7 @@ class Scheduler:
 
     def _take_interrupt(self, hart: Hart) -> None:
         """Before a turn: a pending enabled interrupt with mstatus.MIE set enters mtvec."""
-        if not hart.reg(rv.UC_RISCV_REG_MSTATUS) & hartmod.MSTATUS_MIE:
+        if not hart.m_interrupts_enabled():
             return
         enabled = self._taken_in_m_mode(hart)
         pending = self.board.mip(hart.hart_id, hart.time, enabled) & enabled
@@ -711,20 +718,44 @@ class Scheduler:
     # --- traps, error reports and deadlines ----------------------------------------------------
 
     def _deliver_exception(self, hart: Hart) -> None:
+        """A synchronous exception enters the firmware's trap handler, as on the chip, and the run
+        goes on. The run ends only where the hart can make no progress: mtvec pointing at no
+        memory, or a trap storm; with --stop-on-trap, after the handler's grace period."""
         exc = hart.pending_exception
         hart.pending_exception = None
+        name = hartmod.EXCEPTION_NAMES.get(exc.cause, f"exception {exc.cause}")
         where = symbolize(self.board.image.symbols, exc.epc)
-        report = (f"hart {hart.hart_id}: {hartmod.EXCEPTION_NAMES.get(exc.cause, f'exception {exc.cause}')} "
-                  f"at pc 0x{exc.epc:08x}{f' <{where}>' if where else ''} ({self.board.disassemble_at(exc.epc)}), "
-                  f"mtval 0x{exc.tval:x}")
+        report = (f"hart {hart.hart_id}: {name} at pc 0x{exc.epc:08x}{f' <{where}>' if where else ''} "
+                  f"({self.board.disassemble_at(exc.epc)}), mtval 0x{exc.tval:x}")
         mtvec = hart.csr(rv.UC_RISCV_REG_MTVEC)
         if self.trap_report is not None:
-            raise FirmwareTrap(f"{self.trap_report}; then, in the trap handler, {report}")
+            where = "in the trap handler" if hart.open_trap is not None else "after the trap handler returned"
+            raise FirmwareTrap(f"{self.trap_report}; then, {where}, {report}")
         if mtvec & ~3 == 0 or not self.board.bus.is_sram(mtvec & ~3):
             raise FirmwareTrap(f"{report}; mtvec = 0x{mtvec:x} points at no trap handler")
-        self.trap_report = report
+        self.exceptions_taken[name] = self.exceptions_taken.get(name, 0) + 1
+        self.last_exception = report
+        if self.stop_on_trap:
+            self.trap_report = report
+        else:
+            self._watch_for_storm(hart, exc, report)
+        hart.open_trap = report
         self._trap_deadline = self.time + TRAP_GRACE_S
         hart.enter_trap(exc.cause, exc.epc, exc.tval)
+
+    def _watch_for_storm(self, hart: Hart, exc: hartmod.PendingException, report: str) -> None:
+        """Ends the run when the hart takes the same exception at the same pc with the same registers
+        TRAP_STORM_REPEATS times in a row, storing to no device in between (its handler returns to
+        the faulting instruction and nothing changes): reported like a hang, naming the trap."""
+        what = (exc.cause, exc.epc, exc.tval, tuple(hart.reg(rv.UC_RISCV_REG_X1 + n) for n in range(31)))
+        stores = sum(counts[hart.hart_id] for counts in self.board.bus.device_writes.values())
+        last = self._storm.get(hart.hart_id)
+        repeats = last[2] + 1 if last is not None and last[0] == what and last[1] == stores else 1
+        self._storm[hart.hart_id] = (what, stores, repeats)
+        if repeats >= TRAP_STORM_REPEATS:
+            raise HangDetected(f"trap storm: {report}, {repeats} times in a row with the same registers and no "
+                               f"device store in between: the trap handler returns to the faulting instruction "
+                               f"and nothing changes")
 
     def firmware_reported_error(self, code: int, line: str) -> None:
         """The firmware printed its fatal error report: the run ends after the grace period."""
@@ -736,17 +767,32 @@ class Scheduler:
         if self._trap_deadline is not None:
             everyone_waits = all(h.state is not HartState.RUNNING for h in self.harts) and \
                 self.board.next_device_event(self.time) is None
-            if self.time >= self._trap_deadline or everyone_waits:
-                if self.trap_report is not None:
-                    raise FirmwareTrap(self.trap_report + " (the firmware's trap handler has run; see the console)")
-                code, line = self._error_report
-                raise FirmwareReportedError(f"the firmware reported: {line}", code)
+            if self.trap_report is not None or self._error_report is not None:
+                if self.time >= self._trap_deadline or everyone_waits:
+                    if self.trap_report is not None:
+                        raise FirmwareTrap(self.trap_report + " (the firmware's trap handler has run; see the console)")
+                    code, line = self._error_report
+                    raise FirmwareReportedError(f"the firmware reported: {line}", code)
+            elif everyone_waits:
+                self._report_hang("every hart sleeps in wfi and no device will ever raise an interrupt")
+            elif self.time >= self._trap_deadline or not any(h.open_trap for h in self.harts):
+                # the handler returned, or runs on as the program's own code: the run goes on
+                self._trap_deadline = None
         if self.time - self._last_frame_time > self.hang_budget_s and not self._draining and self.until is None:
             self._report_hang(f"no frame reached the LCD for {self.hang_budget_s:g} s of virtual time")
 
     def _report_hang(self, why: str) -> None:
+        """Ends the run: no hart can make progress. When a hart is in a trap handler it never
+        returned from, the exception is what ended the program (a handler that reports and parks
+        the harts, as most firmware's does for an exception it cannot handle): a trap."""
         board = self.board
+        open_traps = [h.open_trap for h in self.harts if h.open_trap is not None]
+        if open_traps:
+            raise FirmwareTrap(f"{'; '.join(open_traps)}; the trap handler did not return, and then {why} "
+                               f"(see the console)")
         lines = [why]
+        if self.last_exception is not None:
+            lines.append(f"the last exception taken (its handler returned): {self.last_exception}")
         for hart in self.harts:
             where = symbolize(board.image.symbols, hart.pc)
             state = hart.state.value

@@ -55,7 +55,7 @@ MSTATUS_MPP = 3 << 11
 CAUSE_INTERRUPT = 1 << 63
 CAUSE_ILLEGAL_INSTRUCTION = 2
 CAUSE_BREAKPOINT = 3
-CAUSE_ECALL_M = 11
+CAUSE_ECALL_U, CAUSE_ECALL_M = 8, 11
 IRQ_MSI, IRQ_MTI, IRQ_SEI, IRQ_MEI = 3, 7, 9, 11
 # the order in which pending interrupts are taken (privileged spec 1.10, 3.1.14: MEI, MSI, MTI,
 # then the S-mode ones; SSI and STI are software-written bits of mip, which the model ignores)
@@ -70,7 +70,13 @@ EXCEPTION_NAMES = {
 }
 
 INSN_WFI = 0x10500073
+INSN_MRET = 0x30200073
+PRIV_U, PRIV_M = 0, 3
 
+
+# Unicorn's register ids that are not CSRs (Unicorn answers them in any mode)
+_NOT_CSRS = frozenset([rv.UC_RISCV_REG_PC, *range(rv.UC_RISCV_REG_X0, rv.UC_RISCV_REG_X31 + 1),
+                       *range(rv.UC_RISCV_REG_F0, rv.UC_RISCV_REG_F31 + 1)])
 
 BTB_ENTRIES, BHT_ENTRIES, RAS_ENTRIES = 40, 128, 2     # _insn_counter.c's predictor sizes
 BTB_INDEX_BUCKETS = 128
@@ -219,6 +225,13 @@ class Hart:
         self.polling = False     # set during a turn when the board saw it poll an unchanging register
         self.pc = 0
         self.pending_exception: PendingException | None = None
+        # the exception this hart's trap handler is handling, until it returns with mret (the board
+        # tells a trap that ends the program from one the program handles: scheduler.py)
+        self.open_trap: str | None = None
+        # the mode the hart runs in: it changes only at a trap (enter_trap) and at mret, both carried
+        # out here. Unicorn answers a CSR read or write only in a mode allowed to make it, so the
+        # model makes its own accesses to M-mode CSRs in M-mode (_as_machine)
+        self.privilege = PRIV_M
         self.stop_requested = False
         self.retired_adjust = 0   # instructions counted by the hook that did not retire (trapped)
         self.minstret_offset = 0  # set by firmware writes to minstret
@@ -475,12 +488,24 @@ class Hart:
         native hook ends the run after the current instruction by setting limit = executed."""
         return ctypes.addressof(self._counter)
 
+    def _as_machine(self, access: Callable[[], int]) -> int:
+        """Runs a Unicorn CSR access as M-mode does it, whatever mode the hart is in."""
+        if self.privilege == PRIV_M:
+            return access()
+        self.uc.reg_write(rv.UC_RISCV_REG_PRIV, PRIV_M)
+        try:
+            return access()
+        finally:
+            self.uc.reg_write(rv.UC_RISCV_REG_PRIV, self.privilege)
+
     def reg(self, register: int) -> int:
         """A register's value, read straight through Unicorn's C API (the MMIO paths call
         this on every device access, where the Python wrapper's overhead shows), or from the fast
         engine while it holds the registers (a device access it left to the board)."""
         if self._holding:
             return self._held_reg(register)
+        if self.privilege != PRIV_M and register not in _NOT_CSRS:
+            return self._as_machine(lambda: self.uc.reg_read(register))
         _ucpy.uclib.uc_reg_read(self.uc._uch, register, self._reg_ref)
         return self._reg_value.value
 
@@ -648,8 +673,8 @@ class Hart:
         # this hook, whatever the instruction's length (a 2-byte c.unimp too), so the
         # faulting instruction is always at pc - 4.
         epc = uc.reg_read(rv.UC_RISCV_REG_PC) - 4
-        # QEMU reports ecall as U-mode's number; the hart is in M-mode
-        cause = CAUSE_ECALL_M if intno == 8 else intno
+        # QEMU reports every ecall as U-mode's number; the cause says the mode it came from
+        cause = CAUSE_ECALL_U + self.privilege if intno == CAUSE_ECALL_U else intno
         tval = 0
         if cause == CAUSE_ILLEGAL_INSTRUCTION:
             low = self.read_u16(epc)
@@ -664,12 +689,17 @@ class Hart:
         self.pending_exception = PendingException(CAUSE_BREAKPOINT, self.pc, self.pc)
 
     def enter_trap(self, cause: int, epc: int, tval: int) -> None:
-        """Takes a trap into machine mode exactly as the privileged spec describes."""
+        """Takes a trap into machine mode exactly as the privileged spec describes: MPIE = MIE,
+        MIE = 0, MPP = the mode the hart was in, and the hart in M-mode."""
         self.forget_pending_transfer()
         uc = self.uc
+        privilege = self.privilege
+        if privilege != PRIV_M:
+            uc.reg_write(rv.UC_RISCV_REG_PRIV, PRIV_M)
+            self.privilege = PRIV_M
         mstatus = uc.reg_read(rv.UC_RISCV_REG_MSTATUS)
         mie_bit = 1 if mstatus & MSTATUS_MIE else 0
-        mstatus = (mstatus & ~(MSTATUS_MIE | MSTATUS_MPIE)) | (mie_bit << 7) | MSTATUS_MPP
+        mstatus = (mstatus & ~(MSTATUS_MIE | MSTATUS_MPIE | MSTATUS_MPP)) | (mie_bit << 7) | (privilege << 11)
         uc.reg_write(rv.UC_RISCV_REG_MSTATUS, mstatus)
         uc.reg_write(rv.UC_RISCV_REG_MEPC, epc)
         uc.reg_write(rv.UC_RISCV_REG_MCAUSE, cause)
@@ -681,8 +711,13 @@ class Hart:
         self.pc = base
         self.state = HartState.RUNNING
 
+    def m_interrupts_enabled(self) -> bool:
+        """Whether an enabled M-mode interrupt would be taken now: always below M-mode, in M-mode
+        when mstatus.MIE is set (privileged spec 1.10, 3.1.6.1)."""
+        return self.privilege != PRIV_M or bool(self.reg(rv.UC_RISCV_REG_MSTATUS) & MSTATUS_MIE)
+
     def csr(self, reg: int) -> int:
-        return self.uc.reg_read(reg)
+        return self._as_machine(lambda: self.uc.reg_read(reg))
 
     # --- CSR interception --------------------------------------------------------------
 
@@ -712,19 +747,24 @@ class Hart:
         return handle
 
     def _carry_out_csr(self, address: int, word: int) -> int:
-        """Executes the CSR instruction `word` at `address` (already counted); returns the pc
-        the hart goes on from: the next instruction, or the site itself when it traps."""
+        """Executes the CSR instruction or mret `word` at `address` (already counted); returns the
+        pc the hart goes on from: the next instruction, or the site itself when it traps."""
+        if word == INSN_MRET:
+            if self.privilege != PRIV_M:
+                return self._illegal(address, word)
+            return self._carry_out_mret()
         csr = word >> 20
+        if self.privilege < (csr >> 8) & 3:
+            # a CSR of a more privileged mode (bits 9:8 of its number): an illegal instruction. The
+            # user counters (cycle, instret) are let through, as the 1.9.1 counter-enable bits reset
+            return self._illegal(address, word)
         rd = (word >> 7) & 31
         rs1 = (word >> 15) & 31
         funct3 = (word >> 12) & 7
         operand = rs1 if funct3 & 4 else (self.reg(rv.UC_RISCV_REG_X0 + rs1) if rs1 else 0)
         writes = (funct3 & 3) == 1 or rs1 != 0
         if writes and csr in READ_ONLY_CSRS:
-            # a write to a read-only CSR is an illegal instruction, as on the real hart
-            self.pending_exception = PendingException(CAUSE_ILLEGAL_INSTRUCTION, address, word)
-            self.retired_adjust += 1
-            return address
+            return self._illegal(address, word)     # a write to a read-only CSR, as on the real hart
         old = self._csr_value(csr)
         if writes:
             op = funct3 & 3
@@ -733,6 +773,30 @@ class Hart:
         if rd:
             self.uc.reg_write(rv.UC_RISCV_REG_X0 + rd, old)
         return address + 4
+
+    def _illegal(self, address: int, word: int) -> int:
+        """The instruction `word` at `address` (counted, not retired) raises an illegal-instruction
+        exception; returns the pc the hart stays at."""
+        self.pending_exception = PendingException(CAUSE_ILLEGAL_INSTRUCTION, address, word)
+        self.retired_adjust += 1
+        return address
+
+    def _carry_out_mret(self) -> int:
+        """mret (privileged spec 1.10, 3.2.2; 1.9.1 the same): MIE = MPIE, MPIE = 1, the hart goes
+        to mode MPP, MPP = U (the K210 has U-mode: misa bit 20), and on at mepc. Carried out here so
+        that the board knows the trap handler has returned (open_trap)."""
+        uc = self.uc
+        mstatus = uc.reg_read(rv.UC_RISCV_REG_MSTATUS)
+        privilege = (mstatus & MSTATUS_MPP) >> 11
+        mpie = 1 if mstatus & MSTATUS_MPIE else 0
+        mstatus = (mstatus & ~(MSTATUS_MIE | MSTATUS_MPP)) | (mpie << 3) | MSTATUS_MPIE | (PRIV_U << 11)
+        self._csr_write(CSR_MSTATUS, mstatus)      # may unmask a pending interrupt: taken right after
+        pc = uc.reg_read(rv.UC_RISCV_REG_MEPC) & ~1
+        if privilege != PRIV_M:
+            uc.reg_write(rv.UC_RISCV_REG_PRIV, privilege)
+            self.privilege = privilege
+        self.open_trap = None
+        return pc
 
     def _csr_value(self, csr: int) -> int:
         if csr in INTERRUPT_ENABLE_CSRS:
@@ -814,6 +878,6 @@ def _csr_sites(code: bytes, base: int) -> tuple[tuple[int, int], ...]:
     sites = []
     for offset in range(0, len(code) - 3, 2):
         word = int.from_bytes(code[offset:offset + 4], "little")
-        if word & 0x7F == 0x73 and (word >> 12) & 3 and (word >> 20) in INTERCEPTED_CSRS:
+        if (word & 0x7F == 0x73 and (word >> 12) & 3 and (word >> 20) in INTERCEPTED_CSRS) or word == INSN_MRET:
             sites.append((base + offset, word))
     return tuple(sites)

@@ -34,8 +34,13 @@ EXIT_STATUS_HELP = f"""exit status:
      not compile, --expect with --frames, --trace-from/--trace-to without --trace-insn or in the wrong
      order, --gdb-wait without --gdb, --gdb with --expect or --fail-on, a --gdb port above 65535;
      or, after a run that ended well, a --grab whose time the run ended before
-  3  the firmware trapped (exception), or jumped into a block the model lacks
-  4  hang: no frame within the virtual-time budget, or every hart waits forever (neither with --until)
+  3  the firmware trapped: an exception whose handler never returned, after which no hart could
+     go on (the handler parked the harts) or no frame came within the budget; an exception with
+     mtvec pointing at no memory; a jump into a block the model lacks; with --stop-on-trap, any
+     exception (after its handler's 0.5 s of virtual time to report it)
+  4  hang: no frame within the virtual-time budget, or every hart waits forever (neither with
+     --until), or a trap storm (the same exception at the same pc with the same registers again
+     and again, no device store in between)
   5  the firmware touched an address or register the model does not implement; with --strict also
      an access the K210's bus answers in a way of its own (see --strict)
   6  bad input: a file or folder the command line names cannot be used: the firmware image (missing,
@@ -226,6 +231,10 @@ def build_parser() -> argparse.ArgumentParser:
                           "gated, pads unrouted) instead of the state the K210's mask ROM hands a program "
                           "(CPU at 390 MHz from PLL0, the clocks the ROM and Dock firmware use on, UARTHS at "
                           "115200 baud on pads 4 and 5)")
+    run.add_argument("--stop-on-trap", action="store_true",
+                     help="end the run (status 3) at the first synchronous exception, after its handler's 0.5 s "
+                          "of virtual time to report it, instead of letting the firmware's trap handler deal "
+                          "with it as the chip does (ecall system calls, misaligned accesses it emulates)")
     run.add_argument("--strict", action="store_true",
                      help="stop (status 5) at the first access the K210's bus answers in a way of its own instead "
                           "of answering it as the chip does with a warning: an 8/16-bit or 64-bit access to "
@@ -522,6 +531,7 @@ def main(argv: list[str] | None = None) -> int:
                       check_writes=args.check_writes, strict=args.strict, lcd_interface=args.lcd_interface,
                       cold=args.cold, timing=args.timing, engine=args.engine)
         board.uarths.input = uart_input
+        board.scheduler.stop_on_trap = args.stop_on_trap
         if vcd_file is not None:
             signal_log = attach_signal_log(board)
         if args.profile:
@@ -598,6 +608,8 @@ def main(argv: list[str] | None = None) -> int:
     summary["grabs"] = output.grabs
     summary["writes_checked"] = args.check_writes
     summary["strict"] = args.strict
+    summary["stop_on_trap"] = args.stop_on_trap
+    summary["exceptions"] = dict(board.scheduler.exceptions_taken) if board is not None else {}
     summary["lcd_interface"] = args.lcd_interface
     summary["bus_warnings"] = dict(board.bus.questionable) if board is not None else {}
     summary["until_s"] = args.until
