@@ -71,7 +71,6 @@ KNOWN_UNMODELLED = [
     (0x8800_0000, 0x2_0000, "boot ROM"),
 ]
 CAUSE_FETCH_ACCESS = 1
-CAUSE_LOAD_MISALIGNED, CAUSE_STORE_MISALIGNED = 4, 6
 CAUSE_LOAD_ACCESS, CAUSE_STORE_ACCESS = 5, 7
 # Rocket's physical addresses (rocket-chip coreplex/Configs.scala, PAddrBits = 32; in machine
 # mode its TLB passes the address's low bits through unchanged, rocket/TLB.scala)
@@ -139,6 +138,7 @@ class Bus:
         """Maps SRAM (both views) and every device window into a hart's engine."""
         uc = hart.uc
         self._map_windows(hart, 0)
+        hart.trap_misaligned(self.board.memory.address)
         uc.hook_add(unicorn.UC_HOOK_MEM_UNMAPPED | unicorn.UC_HOOK_MEM_FETCH_PROT | unicorn.UC_HOOK_MEM_READ_PROT
                     | unicorn.UC_HOOK_MEM_WRITE_PROT, self._unmapped(hart))
         hart.attach_devices([(p.BASE, p.BASE + p.SIZE) for p in self.peripherals], self._direct_access(),
@@ -383,7 +383,7 @@ class Bus:
         address = (base + imm) & (2**64 - 1)
         if address % width == 0:
             return False
-        cause = CAUSE_STORE_MISALIGNED if is_store else CAUSE_LOAD_MISALIGNED
+        cause = hartmod.CAUSE_STORE_MISALIGNED if is_store else hartmod.CAUSE_LOAD_MISALIGNED
         hart.pending_exception = hartmod.PendingException(cause, pc, address)
         hart.retired_adjust += 1
         hart.request_stop()

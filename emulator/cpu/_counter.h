@@ -75,6 +75,14 @@ typedef struct {
     uint64_t csr_mask;
     uint64_t csr_report;  /* the site the run stopped at, counted but not executed (0: none) */
     uint64_t last_pc;     /* the precise engine's last counted instruction */
+    /* --- misaligned loads and stores, which Rocket traps on and Unicorn carries out --- */
+    const uint8_t *sram;  /* SRAM's host buffer (where the code is read from); NULL: no check */
+    uint64_t sram_base;   /* SRAM's two views and their size */
+    uint64_t sram_alias;
+    uint64_t sram_size;
+    uint64_t misaligned_pc;      /* the access the run stopped before, counted, not executed (0: none) */
+    uint64_t misaligned_address;
+    uint64_t misaligned_store;   /* 1: a store or AMO (mcause 6), 0: a load or LR (mcause 4) */
 } insn_counter_t;
 
 /* A table entry (timing.py writes them; keep the two in step). */
@@ -112,6 +120,71 @@ static inline uint32_t table_entry(const insn_counter_t *c, uint64_t address)
     if (c->table == NULL || address < c->table_base || address >= c->table_end)
         return 0;
     return c->table[(address - c->table_base) >> 1];
+}
+
+/*
+ * The memory access of an RV64GC load, store, LR/SC or AMO (`size` its length: 2 compressed, 4):
+ * returns its width in bytes (0: not such an instruction) and sets its base register, offset and
+ * whether it writes. The Python copy is cpu/decode.py's decode_memory_access; a test checks the two
+ * agree on every instruction word it draws.
+ */
+static inline uint32_t bits_of(uint32_t word, int high, int low)
+{
+    return (word >> low) & ((1u << (high - low + 1)) - 1);
+}
+
+static inline int memory_access_of(uint32_t word, uint32_t size, uint32_t *rs1, int64_t *offset, int *is_store)
+{
+    if (size == 2) {
+        uint32_t op = word & 3, funct3 = bits_of(word, 15, 13);
+        *is_store = funct3 >= 5;
+        if (op == 0 && funct3 != 0 && funct3 != 4) {          /* c.fld c.lw c.ld c.fsd c.sw c.sd */
+            *rs1 = 8 + bits_of(word, 9, 7);
+            if (funct3 == 2 || funct3 == 6) {
+                *offset = bits_of(word, 12, 10) << 3 | bits_of(word, 6, 6) << 2 | bits_of(word, 5, 5) << 6;
+                return 4;
+            }
+            *offset = bits_of(word, 12, 10) << 3 | bits_of(word, 6, 5) << 6;
+            return 8;
+        }
+        if (op == 2 && funct3 >= 1 && funct3 <= 3) {          /* c.fldsp c.lwsp c.ldsp */
+            *rs1 = 2;
+            if (funct3 == 2) {
+                *offset = bits_of(word, 12, 12) << 5 | bits_of(word, 6, 4) << 2 | bits_of(word, 3, 2) << 6;
+                return 4;
+            }
+            *offset = bits_of(word, 12, 12) << 5 | bits_of(word, 6, 5) << 3 | bits_of(word, 4, 2) << 6;
+            return 8;
+        }
+        if (op == 2 && funct3 >= 5) {                          /* c.fsdsp c.swsp c.sdsp */
+            *rs1 = 2;
+            if (funct3 == 6) {
+                *offset = bits_of(word, 12, 9) << 2 | bits_of(word, 8, 7) << 6;
+                return 4;
+            }
+            *offset = bits_of(word, 12, 10) << 3 | bits_of(word, 9, 7) << 6;
+            return 8;
+        }
+        return 0;
+    }
+    uint32_t opcode = word & 0x7F, funct3 = bits_of(word, 14, 12);
+    *rs1 = bits_of(word, 19, 15);
+    if (opcode == 0x03 || opcode == 0x07) {                    /* loads */
+        *is_store = 0;
+        *offset = (int64_t)(int32_t)word >> 20;
+        return 1u << (funct3 & 3);
+    }
+    if (opcode == 0x23 || opcode == 0x27) {                    /* stores */
+        *is_store = 1;
+        *offset = (int64_t)(((int32_t)word >> 25) << 5 | (int32_t)bits_of(word, 11, 7));
+        return 1u << (funct3 & 3);
+    }
+    if (opcode == 0x2F && (funct3 == 2 || funct3 == 3)) {      /* LR/SC and AMOs */
+        *is_store = bits_of(word, 31, 27) != 0x02;             /* all but LR write */
+        *offset = 0;
+        return funct3 == 3 ? 8 : 4;
+    }
+    return 0;
 }
 
 #endif

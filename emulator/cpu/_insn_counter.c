@@ -32,6 +32,57 @@ static uint64_t reg(insn_counter_t *c, void *uc, uint32_t r)
 }
 
 /*
+ * Rocket traps on a misaligned load, store, LR/SC or AMO, whatever the address (rocket-chip
+ * DCache.scala: xcpt.ma.ld / xcpt.ma.st from the store generator's misaligned check); Unicorn
+ * carries them out. Before each instruction in SRAM its access's address is computed from the
+ * base register; a misaligned one is reported and the run stops before it (hart.py raises the
+ * exception: mcause 4 or 6, mtval the address).
+ */
+static int misaligned(insn_counter_t *c, void *uc, uint64_t address, uint32_t size)
+{
+    uint64_t offset_in_sram;
+    if (address - c->sram_base < c->sram_size)
+        offset_in_sram = address - c->sram_base;
+    else if (address - c->sram_alias < c->sram_size)
+        offset_in_sram = address - c->sram_alias;
+    else
+        return 0;
+    if (offset_in_sram + size > c->sram_size)
+        return 0;
+    const uint8_t *code = c->sram + offset_in_sram;
+    uint32_t word = (uint32_t)code[0] | (uint32_t)code[1] << 8;
+    if (size == 4)
+        word |= (uint32_t)code[2] << 16 | (uint32_t)code[3] << 24;
+    uint32_t rs1;
+    int64_t offset;
+    int is_store;
+    uint32_t width = (uint32_t)memory_access_of(word, size, &rs1, &offset, &is_store);
+    if (width <= 1)
+        return 0;
+    uint64_t target = reg(c, uc, rs1) + (uint64_t)offset;
+    if ((target & (width - 1)) == 0)
+        return 0;
+    c->misaligned_pc = address;
+    c->misaligned_address = target;
+    c->misaligned_store = (uint64_t)is_store;
+    return 1;
+}
+
+/* memory_access_of for the tests (tests/test_hart.py checks it against cpu/decode.py): out[0] the
+ * width (0: no access), out[1] the base register, out[2] the offset, out[3] whether it writes. */
+__attribute__((visibility("default")))
+void decode_access_for_tests(uint32_t word, uint32_t size, int64_t out[4])
+{
+    uint32_t rs1 = 0;
+    int64_t offset = 0;
+    int is_store = 0;
+    out[0] = memory_access_of(word, size, &rs1, &offset, &is_store);
+    out[1] = rs1;
+    out[2] = offset;
+    out[3] = is_store;
+}
+
+/*
  * Poll loops are noticed here rather than by a hook of their own on each loop head: Unicorn
  * walks its whole list of code hooks on every instruction, so each extra hook costs every
  * instruction, where this costs a table look-up. When a loop head comes round again exactly
@@ -92,7 +143,10 @@ void count_instruction(void *uc, uint64_t address, uint32_t size, insn_counter_t
     if (is_csr_site(counter, address)) {
         counter->csr_report = address;
         counter->stop(uc);
+        return;
     }
+    if (counter->sram != NULL && misaligned(counter, uc, address, size))
+        counter->stop(uc);
 }
 
 /*

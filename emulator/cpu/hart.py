@@ -54,6 +54,7 @@ MSTATUS_MPP = 3 << 11
 
 CAUSE_INTERRUPT = 1 << 63
 CAUSE_ILLEGAL_INSTRUCTION = 2
+CAUSE_LOAD_MISALIGNED, CAUSE_STORE_MISALIGNED = 4, 6
 CAUSE_BREAKPOINT = 3
 CAUSE_ECALL_U, CAUSE_ECALL_M = 8, 11
 IRQ_MSI, IRQ_MTI, IRQ_SEI, IRQ_MEI = 3, 7, 9, 11
@@ -102,7 +103,10 @@ class _Counter(ctypes.Structure):
                 ("reg_x0", ctypes.c_int32), ("pending_kind", ctypes.c_int32), ("pending_pc", ctypes.c_uint64),
                 ("pending_entry", ctypes.c_uint32), ("pad", ctypes.c_uint32), ("mispredicts", ctypes.c_uint64),
                 ("stall_cycles", ctypes.c_uint64), ("predictor", _Predictor), ("csr_sites", ctypes.c_void_p),
-                ("csr_mask", ctypes.c_uint64), ("csr_report", ctypes.c_uint64), ("last_pc", ctypes.c_uint64)]
+                ("csr_mask", ctypes.c_uint64), ("csr_report", ctypes.c_uint64), ("last_pc", ctypes.c_uint64),
+                ("sram", ctypes.c_void_p), ("sram_base", ctypes.c_uint64), ("sram_alias", ctypes.c_uint64),
+                ("sram_size", ctypes.c_uint64), ("misaligned_pc", ctypes.c_uint64),
+                ("misaligned_address", ctypes.c_uint64), ("misaligned_store", ctypes.c_uint64)]
 
 
 _counter_lib = ctypes.CDLL(_insn_counter.__file__)
@@ -116,6 +120,7 @@ _counter_lib.fast_statistics.argtypes = [ctypes.c_void_p, ctypes.POINTER(ctypes.
 _counter_lib.fast_abandon.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
 _counter_lib.fast_set_windows.restype = ctypes.c_int
 _counter_lib.fast_set_windows.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_uint32]
+_counter_lib.decode_access_for_tests.argtypes = [ctypes.c_uint32, ctypes.c_uint32, ctypes.POINTER(ctypes.c_int64)]
 _counter_lib.fast_set_write_watch.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
 _fast_step = _insn_counter.fast_step   # runs the fast engine, CPython's way of calling (see _insn_counter.c)
 _counter_lib.fast_run_alone.restype = ctypes.c_uint64
@@ -295,6 +300,15 @@ class Hart:
         self.uc.hook_del(handle)
 
     # --- the fast engine ---------------------------------------------------------------
+
+    def trap_misaligned(self, sram_address: int) -> None:
+        """Has the precise engine's counter raise the misaligned-address exceptions Rocket raises and
+        Unicorn does not (_insn_counter.c): it reads the code from SRAM's host buffer at
+        `sram_address`. (The fast engine hands every access that is not naturally aligned to the
+        precise engine.)"""
+        counter = self._counter
+        counter.sram_base, counter.sram_alias, counter.sram_size = SRAM_BASE, SRAM_UNCACHED_BASE, SRAM_SIZE
+        counter.sram = sram_address
 
     def enable_fast_engine(self, sram_address: int) -> None:
         """Gives the hart a second engine, an interpreter of the code in SRAM (_fast_engine.c; SRAM is
@@ -615,6 +629,13 @@ class Hart:
         self.precise_runs += 1
         while True:
             self.uc.emu_start(pc, 0)
+            if counter.misaligned_pc:
+                # the counter stopped before a misaligned access: counted, not retired, it traps
+                cause = CAUSE_STORE_MISALIGNED if counter.misaligned_store else CAUSE_LOAD_MISALIGNED
+                self.pending_exception = PendingException(cause, counter.misaligned_pc, counter.misaligned_address)
+                self.retired_adjust += 1
+                counter.misaligned_pc = 0
+                return
             site = counter.csr_report
             if not site:
                 return
