@@ -112,6 +112,14 @@ def board(idle_elf) -> Board:
     return make_board(idle_elf)
 
 
+def route_uarths_to_the_console(board: Board) -> Board:
+    """Routes pad 5 to UARTHS_TX as the mask ROM leaves it (bootrom.py): a cold board's console is
+    whatever FPIOA routes to the USB-serial bridge's pad, nothing until then."""
+    from emulator.board import bootrom
+    board.fpioa.values[4 * bootrom.PAD_UARTHS_TX] = bootrom.PAD_WORD_UARTHS_TX
+    return board
+
+
 def symbol(board: Board, name: str) -> int:
     for address, sym in board.image.symbols.items():
         if sym == name:

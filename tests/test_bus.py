@@ -16,7 +16,7 @@ from unicorn import riscv_const as rv
 
 from emulator.errors import UnmodelledAccess
 from emulator.cpu.hart import IRQ_MSI
-from k210_fixtures import make_board, program, reg, run_to_done, run_until, symbol
+from k210_fixtures import make_board, program, reg, route_uarths_to_the_console, run_to_done, run_until, symbol
 
 PLIC = 0x0C00_0000
 SYSCTL = 0x5044_0000
@@ -130,6 +130,7 @@ def test_byte_store_to_uarths_txdata_sends_the_byte():
         li      t1, 10
         sb      t1, 0(t0)
     """), console=sent.append)
+    route_uarths_to_the_console(board)
     run_until(board, lambda b: len(sent) == 2, max_time_s=0.01)
     assert bytes(sent) == b"K\n"
     first = [w for w in board.warnings if f"pc 0x{symbol(board, 'first'):08x} <first>" in w]
@@ -154,6 +155,7 @@ def test_a_putc_loop_of_byte_stores_is_one_warning_counted():
         addi    t2, t2, 1
         j       next
     """, data="text: .byte 97, 98, 99, 10, 0"), console=sent.append)
+    route_uarths_to_the_console(board)
     run_until(board, lambda b: len(sent) == 4, max_time_s=0.01)
     assert bytes(sent) == b"abc\n"
     putc = [w for w in board.warnings if f"pc 0x{symbol(board, 'putc'):08x} <putc>" in w]

@@ -191,14 +191,14 @@ def test_unmodelled_access_names_hart_pc_instruction_address(assemble, tmp_path)
     elf = assemble("""
     .globl _start
 _start:
-    li t0, 0x50210000      # UART1, not modelled
+    li t0, 0x50280000      # I2C0, not modelled
     lw t1, 8(t0)
 1:  j 1b
 """)
     result = run_emulator("run", str(elf), "--out", str(tmp_path), "--quiet", "--budget", "0.01")
     assert result.returncode == 5, result.stderr
     message = result.stderr
-    for part in ("hart 0", "pc 0x80000004", "lw", "load of 4 bytes", "0x50210008", "UART1"):
+    for part in ("hart 0", "pc 0x80000004", "lw", "load of 4 bytes", "0x50280008", "I2C"):
         assert part in message, message
 
 

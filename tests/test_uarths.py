@@ -6,7 +6,7 @@ import pytest
 
 from emulator.devices import uarths as u
 from emulator.errors import UnmodelledAccess
-from k210_fixtures import idle_elf, make_board, program, run_until  # noqa: F401
+from k210_fixtures import idle_elf, make_board, program, route_uarths_to_the_console, run_until  # noqa: F401
 
 CPU_HZ = 26e6
 DIV = 25                       # 26 MHz / 26 = 1 Mbaud: one bit per microsecond
@@ -18,7 +18,7 @@ EPS = 1e-12                    # float slack at exact boundaries
 @pytest.fixture
 def console_board(idle_elf):
     out: list[tuple[int, float]] = []
-    board = make_board(idle_elf, console=lambda b: out.append(b))
+    board = route_uarths_to_the_console(make_board(idle_elf, console=lambda b: out.append(b)))
     board.uarths.write(u.DIV, 4, DIV, 0.0)
     return board, out
 
@@ -253,7 +253,7 @@ def test_a_program_prints_through_uarths():
     message: .asciz "Hello, K210 board model! 0123456789"
     """)
     out = bytearray()
-    board = make_board(elf, console=out.append, quantum=2000)
+    board = route_uarths_to_the_console(make_board(elf, console=out.append, quantum=2000))
     text = b"Hello, K210 board model! 0123456789"
     run_until(board, lambda b: len(out) == len(text), max_time_s=1e-3)
     assert bytes(out) == text

@@ -61,8 +61,7 @@ if TYPE_CHECKING:
 
 # Blocks of the K210 the model knows by name but does not implement (for clear messages)
 KNOWN_UNMODELLED = [
-    (0x5020_1000, 0xF000, "GPIO (past its registers)"), (0x5021_0000, 0x1_0000, "UART1"),
-    (0x5022_0000, 0x1_0000, "UART2"), (0x5023_0000, 0x1_0000, "UART3"), (0x5024_0000, 0x1_0000, "SPI slave"),
+    (0x5020_1000, 0xF000, "GPIO (past its registers)"), (0x5024_0000, 0x1_0000, "SPI slave"),
     (0x5025_0000, 0x3_0000, "I2S"), (0x5028_0000, 0x3_0000, "I2C"), (0x502C_0000, 0x1_0000, "SHA256"),
     (0x502D_0000, 0x3_0000, "timers"), (0x5040_0000, 0x2_0000, "WDT"), (0x5042_0000, 0x1_0000, "OTP"),
     (0x5043_0000, 0x1_0000, "DVP"), (0x5045_0000, 0x1_0000, "AES"), (0x5046_0000, 0x1_0000, "RTC"),

@@ -23,7 +23,7 @@ from ..devices.dmac import Dmac
 from .elf import LoadedImage
 from .raw_image import load_firmware
 from ..errors import BoardStop
-from ..devices.fpioa import Fpioa
+from ..devices.fpioa import FUNC_UART1_RX, FUNC_UART1_TX, FUNC_UARTHS_RX, FUNC_UARTHS_TX, Fpioa
 from ..devices.gpio import Gpio
 from ..devices.gpiohs import Gpiohs
 from ..cpu.hart import ENGINE_FAST, ENGINES, Hart
@@ -31,7 +31,9 @@ from .memory import Sram
 from ..memory_map import RESET_PC, SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE, is_sram
 from ..devices.mmio import Peripheral
 from ..devices.ports import Ports
-from ..devices.plic import SOURCE_DMA0, SOURCE_GPIO, SOURCE_GPIOHS0, SOURCE_SPI0, SOURCE_SPI1, SOURCE_UARTHS, Plic
+from ..devices.plic import (SOURCE_DMA0, SOURCE_GPIO, SOURCE_GPIOHS0, SOURCE_SPI0, SOURCE_SPI1, SOURCE_UART1,
+                            SOURCE_UARTHS, Plic)
+from ..devices.ports import SerialInput
 from ..devices.plic import m_context as plic_m_context
 from ..devices.plic import s_context as plic_s_context
 from .scheduler import (DEFAULT_HANG_BUDGET_S, DEFAULT_QUANTUM, HARTS, FrameRecord, RunResult,  # noqa: F401
@@ -42,11 +44,14 @@ from ..devices.spi import SpiController
 from ..devices.st7789v import ST7789V
 from ..cpu.timing import MISPREDICT_PENALTY, TIMING_IPC1, TIMING_MODELS, TIMING_ROCKET, build_table
 from ..devices.sysctl import Sysctl
+from ..devices.uart import DwUart
 from ..devices.uarths import Uarths
-from .wiring import LCD_8080, ChipPins, DockWiring, LcdPort, SdSlot
+from .wiring import LCD_8080, ChipPins, DockWiring, LcdPort, RoutedInput, SdSlot
 from .write_watch import WriteWatch
 
 FIRMWARE_ERROR_PREFIX = b"error "
+# What a run keeps of each UART's output for run.json; beyond it only the count goes on
+MAX_UART_OUTPUT = 1 << 20
 # Distinct warnings kept in a run's list: a firmware that keeps doing something new and wrong
 # must not flood the console and run.json; those beyond are only counted.
 MAX_DISTINCT_WARNINGS = 100
@@ -143,17 +148,22 @@ class Board:
         self._line_began = 0.0                             # when the line under way began
         self.completed_line_began = float("-inf")          # when the last complete line began
         self.console_lines: list[tuple[float, str]] = []   # (virtual time the line ended, text)
-        self.uarths = Uarths(ports, on_byte=self._console_byte)
+        self.uart_output: dict[str, bytearray] = {}       # what each UART sent, wherever it went
+        self.uarths = Uarths(ports, on_byte=lambda byte: self._serial_out(self.uarths, FUNC_UARTHS_TX, byte))
+        self.uarts = [DwUart(n, ports, source_hz=self.sysctl.apb0_hz,
+                             on_byte=lambda byte, n=n: self._serial_out(self.uarts[n - 1], FUNC_UART1_TX + 2 * (n - 1),
+                                                                        byte))
+                      for n in (1, 2, 3)]
         self.clint = Clint(ports, counter=self.clock)
         self.plic = Plic(ports, high_sources=self._high_sources)
         self.spi0 = SpiController(0, ports, source_hz=lambda: self.sysctl.spi_source_hz(0))
         self.spi1 = SpiController(1, ports, source_hz=lambda: self.sysctl.spi_source_hz(1))
         self.dmac = Dmac(ports, self.memory, requests=self.sysctl.dma_request,
                          peripherals={"spi0": self.spi0, "spi1": self.spi1})
-        self.peripherals: list[Peripheral] = [self.sysctl, self.fpioa, self.gpiohs, self.gpio, self.uarths,
+        self.peripherals: list[Peripheral] = [self.sysctl, self.fpioa, self.gpiohs, self.gpio, self.uarths, *self.uarts,
                                               self.clint, self.plic, self.dmac, self.spi0, self.spi1]
         self.signals = None                    # a vcd.SignalLog with --vcd
-        self.timed_devices = [self.uarths, self.spi0, self.spi1, self.dmac, self.sysctl, self.clint]
+        self.timed_devices = [self.uarths, self.spi0, self.spi1, self.dmac, self.sysctl, self.clint, *self.uarts]
         self.cold = cold
         if not cold:
             bootrom.hand_over(self.sysctl, self.fpioa, self.uarths)    # before the scheduler reads the CPU clock
@@ -311,7 +321,7 @@ class Board:
     def reset_peripheral(self, name: str, now: float) -> None:
         """SYSCTL peri_reset released a block: it returns to its reset state."""
         target = {"spi0": self.spi0, "spi1": self.spi1, "dma": self.dmac, "fpioa": self.fpioa,
-                  "gpio": self.gpio}.get(name)
+                  "gpio": self.gpio, **{uart.GATE: uart for uart in self.uarts}}.get(name)
         if target is not None:
             self.advance_devices(now)
             target.reset(now)
@@ -326,18 +336,36 @@ class Board:
 
     # --- console -------------------------------------------------------------------------
 
-    def _console_byte(self, byte: int) -> None:
-        """Console output; a line `error <code> ...` is the firmware's fatal error report."""
+    def connect_serial_input(self, source: SerialInput) -> None:
+        """What the host types into the Dock's USB-serial bridge (--uart-input): it reaches whichever
+        UART FPIOA routes to pad 4 (wiring.RoutedInput)."""
+        self.uarths.input = RoutedInput(source, self.fpioa, FUNC_UARTHS_RX)
+        for n, uart in enumerate(self.uarts):
+            uart.input = RoutedInput(source, self.fpioa, FUNC_UART1_RX + 2 * n)
+
+    def _serial_out(self, uart: Uarths | DwUart, tx_function: int, byte: int) -> None:
+        """A byte left a UART's transmitter: kept for run.json, and the console's when FPIOA routes
+        that UART's TX to pad 5, the USB-serial bridge's (the console is what the Dock's USB port
+        shows, whichever UART drives it)."""
+        record = self.uart_output.setdefault(uart.NAME, bytearray())
+        if len(record) < MAX_UART_OUTPUT:
+            record.append(byte)
+        if self.wiring.console_transmitter() == tx_function:
+            self._console_byte(byte, uart.last_byte_time)
+
+    def _console_byte(self, byte: int, at: float) -> None:
+        """Console output (`at`: when the byte's stop bit was out); a line `error <code> ...` is the
+        firmware's fatal error report."""
         self._console(byte)
         if not self._console_line:
-            self._line_began = self.uarths.last_byte_time
+            self._line_began = at
         if byte != 10:
             self._console_line.append(byte)
             return
         line = bytes(self._console_line).rstrip(b"\r")
         self._console_line.clear()
         self.completed_line_began = self._line_began
-        self.console_lines.append((self.uarths.last_byte_time, line.decode("ascii", "replace")))
+        self.console_lines.append((at, line.decode("ascii", "replace")))
         if line.startswith(FIRMWARE_ERROR_PREFIX):
             words = line.decode("ascii", "replace")
             code = words.split()[1] if len(words.split()) > 1 else ""
@@ -412,6 +440,9 @@ class Board:
             high.append(SOURCE_GPIO)
         if self.uarths.irq_line():
             high.append(SOURCE_UARTHS)
+        for n, uart in enumerate(self.uarts):
+            if uart.irq_line():
+                high.append(SOURCE_UART1 + n)
         lines = self.gpiohs.irq_lines()
         if lines:
             high.extend(SOURCE_GPIOHS0 + n for n in range(32) if lines >> n & 1)

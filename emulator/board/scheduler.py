@@ -447,8 +447,8 @@ class Scheduler:
         self._host_start = host_time.perf_counter()
         last_progress = 0.0
         idle_since: float | None = None
-        while self.time < until_s or self._trap_deadline is not None:
-            if self._trap_deadline is None and not any(h.state is HartState.RUNNING for h in self.harts) and \
+        while self.time < until_s or self._report_pending():
+            if not self._report_pending() and not any(h.state is HartState.RUNNING for h in self.harts) and \
                     self.board.next_device_event(self.time) is None:
                 idle_since = self.time
                 self._set_time(until_s)
@@ -762,6 +762,12 @@ class Scheduler:
         if self._error_report is None:
             self._error_report = (code, line)
             self._trap_deadline = self.time + TRAP_GRACE_S
+
+    def _report_pending(self) -> bool:
+        """An error report or a --stop-on-trap exception waits for its grace period to end the run
+        (--until's time does not cut it short; a trap handler that has not returned does not hold
+        up --until, whose time is the user's)."""
+        return self._trap_deadline is not None and (self.trap_report is not None or self._error_report is not None)
 
     def _check_deadlines(self) -> None:
         if self._trap_deadline is not None:

@@ -21,13 +21,14 @@ from ..devices.fpioa import Fpioa
 from ..devices.gpio import LINES as GPIO_LINES
 from ..devices.gpio import Gpio
 from ..devices.gpiohs import Gpiohs
-from ..devices.ports import Ports
+from ..devices.ports import Ports, SerialInput
 from ..devices.sdcard import SdCard
 from ..devices.spi import SpiController
 from ..devices.st7789v import ST7789V
 from ..devices.sysctl import Sysctl
 
 # Maix Dock pads
+PAD_CONSOLE_RX, PAD_CONSOLE_TX = 4, 5       # the USB-serial bridge's TX reaches pad 4, pad 5 reaches its RX
 PAD_LCD_CS, PAD_LCD_RST, PAD_LCD_DC, PAD_LCD_SCLK = 36, 37, 38, 39
 PAD_SD_MISO, PAD_SD_SCLK, PAD_SD_MOSI, PAD_SD_CS = 26, 27, 28, 29
 # The LCD's bus: the Dock's panel (8-bit MCU interface) or a 4-line serial ST7789V module
@@ -160,6 +161,30 @@ class SdSlot:
             self.warn(f"SD card clocked at {hz / 1e6:.3f} MHz {phase} (the card allows {limit / 1e6:g} MHz)")
 
 
+class RoutedInput:
+    """What the host sends the Dock's USB-serial bridge (--uart-input) reaches a UART's receiver
+    only while FPIOA routes that UART's RX function to pad 4, as on the board (the SDK's start-up
+    routes UART3 there, the mask ROM UARTHS)."""
+
+    def __init__(self, source: SerialInput, fpioa: Fpioa, rx_function: int) -> None:
+        self.source = source
+        self.fpioa = fpioa
+        self.rx_function = rx_function
+
+    def _routed(self) -> bool:
+        return self.fpioa.function_of_pad(PAD_CONSOLE_RX) == self.rx_function
+
+    @property
+    def may_grow(self) -> bool:
+        return self._routed() and self.source.may_grow
+
+    def has_byte(self, virtual_now: float) -> bool:
+        return self._routed() and self.source.has_byte(virtual_now)
+
+    def pop(self) -> int:
+        return self.source.pop()
+
+
 class DockWiring:
     """Routes SPI chip selects and GPIOHS and GPIO lines to the LCD and the SD slot through FPIOA."""
 
@@ -194,6 +219,10 @@ class DockWiring:
         if function == FUNC_SPI1_SS0 + ss or self.sd_slot.cs_is_gpio():
             return self.sd_slot
         return None
+
+    def console_transmitter(self) -> int:
+        """The FPIOA function on pad 5, whose bytes the USB-serial bridge hears (the console)."""
+        return self.chip.fpioa.function_of_pad(PAD_CONSOLE_TX)
 
     def gpiohs_level_on_pad(self, pad: int) -> int | None:
         """The level a GPIOHS output drives on a pad, or None when no GPIOHS line drives it."""

@@ -55,7 +55,8 @@ PERI_BITS = {
 }
 # which APB bus each gated peripheral hangs off (the SDK's sysctl_clock_bus_en)
 PERI_BUS = {"gpio": CENT_APB0, "fpioa": CENT_APB0, "spi0": CENT_APB2, "spi1": CENT_APB2,
-            "spi2": CENT_APB0, "spi3": CENT_APB2, "dma": None}
+            "spi2": CENT_APB0, "spi3": CENT_APB2, "dma": None,
+            "uart1": CENT_APB0, "uart2": CENT_APB0, "uart3": CENT_APB0}
 
 # DMA request codes selected by dma_sel (SDK sysctl_dma_select_t, first entries)
 DMA_REQUESTS = {0: ("spi0", "rx"), 1: ("spi0", "tx"), 2: ("spi1", "rx"), 3: ("spi1", "tx")}
@@ -138,6 +139,11 @@ class Sysctl(Peripheral):
         if not sel & 1:
             return float(OSC_HZ)
         return self.pll_hz(PLL0) / (2 << field(sel, 1, 2))
+
+    def apb0_hz(self) -> float:
+        """APB0's clock: ACLK / (clk_sel0.apb0_clk_sel + 1) (the SDK's sysctl_clock_get_freq,
+        SYSCTL_CLOCK_APB0; apb0_clk_sel is clk_sel0[5:3]). UART1-3 count their bit times in it."""
+        return self.cpu_hz() / (field(self.values[CLK_SEL0], 3, 3) + 1)
 
     def spi_source_hz(self, index: int) -> float:
         """SPIn source clock = PLL0 / ((threshold + 1) * 2) (SDK formula)."""

@@ -530,7 +530,8 @@ def main(argv: list[str] | None = None) -> int:
                       sd_image=args.sd, sd_writable=args.sd_writable, sd_faults=frozenset(args.sd_fault),
                       check_writes=args.check_writes, strict=args.strict, lcd_interface=args.lcd_interface,
                       cold=args.cold, timing=args.timing, engine=args.engine)
-        board.uarths.input = uart_input
+        if uart_input is not None:
+            board.connect_serial_input(uart_input)
         board.scheduler.stop_on_trap = args.stop_on_trap
         if vcd_file is not None:
             signal_log = attach_signal_log(board)
@@ -610,6 +611,9 @@ def main(argv: list[str] | None = None) -> int:
     summary["strict"] = args.strict
     summary["stop_on_trap"] = args.stop_on_trap
     summary["exceptions"] = dict(board.scheduler.exceptions_taken) if board is not None else {}
+    # every UART's output, wherever FPIOA routed it (the console is pad 5's only)
+    summary["uart_output"] = ({name: bytes(sent).decode("utf-8", "replace") for name, sent in board.uart_output.items()}
+                              if board is not None else {})
     summary["lcd_interface"] = args.lcd_interface
     summary["bus_warnings"] = dict(board.bus.questionable) if board is not None else {}
     summary["until_s"] = args.until
