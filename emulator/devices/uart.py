@@ -146,8 +146,6 @@ class DwUart(Peripheral):
                 self.last_byte_time = end
                 self._sent(self._pending_byte, end)
                 start = end
-                if not self._tx:
-                    self._thre_pending = True     # the transmitter ran dry: the 16550's THRE interrupt
             else:
                 start = now
             byte_time = self._byte_time()
@@ -155,6 +153,8 @@ class DwUart(Peripheral):
                 return
             self._pending_byte = self._tx.popleft()
             self._shifting_until = start + byte_time
+            if not self._tx:
+                self._thre_pending = True         # THR (the FIFO) empty: the 16550's THRE interrupt
 
     def _sent(self, byte: int, at: float) -> None:
         if self.values[MCR] & MCR_LOOPBACK:

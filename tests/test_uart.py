@@ -1,0 +1,259 @@
+"""UART1-3, DesignWare APB UARTs (devices/uart.py): the divisor latch and DLF as the Kendryte SDK's
+uart_configure programs them, byte times, 16-byte FIFOs, the programmable THRE mode the SDK's
+putchar relies on, IIR, LSR, USR, the receiver, loopback, SRR; the PLIC sources 11-13; and the
+Dock's console, which is whatever FPIOA routes to pad 5."""
+from __future__ import annotations
+
+import pytest
+
+from emulator.devices import uart as u
+from emulator.devices.fpioa import FUNC_UART1_RX, FUNC_UART1_TX
+from emulator.devices.plic import SOURCE_UART1
+from emulator.frontends.uart_input import UartInput
+from k210_fixtures import idle_elf, make_board, program, reg, run_to_done, run_until  # noqa: F401
+
+APB0_HZ = 26e6                   # a cold board: ACLK from the oscillator, apb0_clk_sel 0
+PAD_RX, PAD_TX = 4, 5
+EPS = 1e-12
+
+
+def configure(uart, baud: int, lcr: int = 3, now: float = 0.0) -> float:
+    """What the SDK's uart_configure writes (8 data bits by default, 1 stop bit, no parity),
+    with FIFOs on, programmable THRE mode, transmit threshold 8 (FCR 0x31 | 0x8). Returns a bit's time."""
+    divisor = int(APB0_HZ // baud)
+    dlh, rest = divisor >> 12, divisor - ((divisor >> 12) << 12)
+    dll, dlf = rest // 16, rest - (rest // 16) * 16
+    uart.write(u.LCR, 4, u.LCR_DLAB, now)
+    uart.write(u.IER, 4, dlh, now)
+    uart.write(u.RBR, 4, dll, now)
+    uart.write(u.DLF, 4, dlf, now)
+    uart.write(u.LCR, 4, 0, now)
+    uart.write(u.LCR, 4, lcr, now)
+    uart.write(u.IER, 4, u.IER_PTIME, now)
+    uart.write(u.IIR, 4, 0 << 6 | 3 << 4 | 1 << 3 | 1, now)
+    return 16 * ((dlh << 8 | dll) + dlf / 16) / APB0_HZ
+
+
+@pytest.fixture
+def board(idle_elf):
+    return make_board(idle_elf)
+
+
+def route(board, rx_function: int | None, tx_function: int | None) -> None:
+    if rx_function is not None:
+        board.fpioa.write(4 * PAD_RX, 4, rx_function, 0.0)
+    if tx_function is not None:
+        board.fpioa.write(4 * PAD_TX, 4, tx_function | 0xF << 8 | 1 << 12, 0.0)
+
+
+def test_the_sdk_divisor_sets_the_bit_time(board):
+    uart = board.uarts[2]
+    bit = configure(uart, 115_200)
+    assert uart.bit_time() == pytest.approx(bit)
+    # 26 MHz / 115200 = 225.69: DLH:DLL 14, DLF 1 -> 16 x 14.0625 clocks a bit, 115,555 baud
+    assert 1 / uart.bit_time() == pytest.approx(26e6 / 225, rel=1e-9)
+    uart.write(u.LCR, 4, u.LCR_DLAB | 3, 0.0)
+    assert uart.read(u.RBR, 4, 0.0) == 14 and uart.read(u.IER, 4, 0.0) == 0      # DLL, DLH with DLAB
+    uart.write(u.LCR, 4, 3, 0.0)
+    assert uart.read(u.IER, 4, 0.0) == u.IER_PTIME                                   # IER without
+
+
+@pytest.mark.parametrize("lcr, bits", [(3, 10), (3 | u.LCR_PEN, 11), (3 | u.LCR_STOP, 11), (0, 7),
+                                       (u.LCR_STOP, 7.5)])
+def test_a_byte_takes_start_data_parity_and_stop_bits(board, lcr, bits):
+    route(board, None, FUNC_UART1_TX)
+    uart = board.uarts[0]
+    bit = configure(uart, 1_000_000, lcr)
+    uart.write(u.RBR, 4, 0x41, 1e-3)
+    uart.advance(1e-3 + bits * bit * 0.999)
+    assert board.uart_output == {}
+    uart.advance(1e-3 + bits * bit + EPS)
+    assert bytes(board.uart_output["UART1"]) == b"A"
+    assert uart.last_byte_time == pytest.approx(1e-3 + bits * bit)
+
+
+def test_programmable_thre_mode_lsr_bit_5_means_fifo_full(board):
+    """The SDK's putchar waits `while (LSR & (1 << 5))`: with IER bit 7 and the FIFOs on, bit 5 is
+    set while the 16-byte transmit FIFO is full, not while it is empty (DW_apb_uart, PTIME)."""
+    uart = board.uarts[2]
+    configure(uart, 115_200)
+    assert not uart.read(u.LSR, 4, 0.0) & u.LSR_THRE            # empty: the writer may go on
+    assert uart.read(u.LSR, 4, 0.0) & u.LSR_TEMT
+    for n in range(17):                                          # one on the wire, 16 in the FIFO
+        uart.write(u.RBR, 4, 0x30 + n, 0.0)
+    assert uart.read(u.LSR, 4, 0.0) & u.LSR_THRE
+    assert uart.read(u.TFL, 4, 0.0) == 16
+    assert uart.read(u.USR, 4, 0.0) == u.USR_BUSY              # full, not empty, transmitting
+    uart.write(u.RBR, 4, 0x7A, 0.0)                             # lost, with a warning
+    assert any("transmit FIFO was full was lost" in w for w in board.warnings)
+    uart.write(u.IER, 4, 0, 0.0)                                # 16550 mode: bit 5 is THR empty
+    assert not uart.read(u.LSR, 4, 0.0) & u.LSR_THRE
+
+
+def test_thre_interrupt_16550_mode_cleared_by_reading_iir(board):
+    uart = board.uarts[0]
+    bit = configure(uart, 1_000_000)
+    uart.write(u.IER, 4, 0, 0.0)
+    assert uart.read(u.IIR, 4, 0.0) == 0xC1                      # FIFOs on, nothing pending
+    uart.write(u.IER, 4, u.IER_ETBEI, 0.0)                       # enabling it with THR empty: at once
+    assert uart.irq_line()
+    assert uart.read(u.IIR, 4, 0.0) == 0xC2
+    assert uart.read(u.IIR, 4, 0.0) == 0xC1                      # the read cleared it
+    uart.write(u.RBR, 4, 0x55, 0.0)                              # into the shifter: the FIFO empties
+    assert uart.read(u.IIR, 4, 0.0) == 0xC2
+    uart.write(u.RBR, 4, 0x56, 0.0)                              # waits in the FIFO: no THRE
+    assert uart.read(u.IIR, 4, 0.0) == 0xC1
+    uart.advance(10 * bit + EPS)                                 # 0x56 moved to the shifter
+    assert uart.read(u.IIR, 4, 10 * bit + EPS) == 0xC2
+
+
+def test_thre_interrupt_in_programmable_mode_follows_the_threshold(board):
+    uart = board.uarts[0]
+    configure(uart, 1_000_000)                                   # threshold: half full (8)
+    uart.write(u.IER, 4, u.IER_PTIME | u.IER_ETBEI, 0.0)
+    for n in range(9):
+        uart.write(u.RBR, 4, n, 0.0)                             # 1 on the wire, 8 waiting
+    assert uart.read(u.IIR, 4, 0.0) == 0xC2
+    uart.write(u.RBR, 4, 9, 0.0)                                 # 9 waiting: above it
+    assert uart.read(u.IIR, 4, 0.0) == 0xC1
+    assert uart.read(u.STET, 4, 0.0) == 3 and uart.read(u.SFE, 4, 0.0) == 1
+
+
+def test_receiver_takes_the_host_bytes_at_the_baud_rate_and_raises_its_interrupts(board):
+    route(board, FUNC_UART1_RX + 4, None)                        # UART3 from pad 4
+    uart = board.uarts[2]
+    bit = configure(uart, 1_000_000)
+    board.connect_serial_input(UartInput(b"hi!"))
+    uart.write(u.IER, 4, u.IER_ERBFI, 0.0)                       # receive trigger: 1 byte
+    uart.advance(0.0)
+    assert not uart.read(u.LSR, 4, 0.0) & u.LSR_DR
+    t = 10 * bit + EPS
+    uart.advance(t)
+    assert uart.read(u.LSR, 4, t) & u.LSR_DR and uart.read(u.RFL, 4, t) == 1
+    assert uart.read(u.IIR, 4, t) == 0xC4                        # received data available
+    assert SOURCE_UART1 + 2 in board._high_sources()
+    assert uart.read(u.RBR, 4, t) == ord("h")
+    t = 30 * bit + EPS
+    uart.advance(t)
+    assert uart.read(u.RFL, 4, t) == 2
+    assert bytes([uart.read(u.RBR, 4, t), uart.read(u.RBR, 4, t)]) == b"i!"
+    assert uart.read(u.IIR, 4, t) == 0xC1
+    assert not board.uarts[0].input.has_byte(t)                  # UART1 is not routed from pad 4
+
+
+def test_a_byte_left_in_the_fifo_below_the_trigger_times_out(board):
+    route(board, FUNC_UART1_RX, None)
+    uart = board.uarts[0]
+    bit = configure(uart, 1_000_000)
+    uart.write(u.IIR, 4, 2 << 6 | 1, 0.0)                        # trigger: half full
+    board.connect_serial_input(UartInput(b"x"))
+    uart.write(u.IER, 4, u.IER_ERBFI, 0.0)
+    uart.advance(10 * bit + EPS)
+    assert uart.read(u.IIR, 4, 10 * bit + EPS) == 0xC1           # one byte: under the trigger
+    timeout = uart.next_event_time(10 * bit + EPS)
+    assert timeout == pytest.approx(10 * bit + 4 * 10 * bit)     # four character times
+    assert uart.read(u.IIR, 4, timeout) == 0xCC
+
+
+def test_loopback_receives_what_it_sends(board):
+    uart = board.uarts[1]
+    bit = configure(uart, 1_000_000)
+    uart.write(u.MCR, 4, u.MCR_LOOPBACK, 0.0)
+    uart.write(u.RBR, 4, 0x99, 0.0)
+    uart.advance(10 * bit + EPS)
+    assert uart.read(u.RBR, 4, 10 * bit + EPS) == 0x99
+    assert board.uart_output == {}                                # nothing on the pin
+
+
+def test_srr_and_fcr_reset_the_fifos(board):
+    uart = board.uarts[0]
+    configure(uart, 1_000_000)
+    for n in range(5):
+        uart.write(u.RBR, 4, n, 0.0)
+    assert uart.read(u.TFL, 4, 0.0) == 4
+    uart.write(u.IIR, 4, 1 | u.FCR_XFIFOR, 0.0)
+    assert uart.read(u.TFL, 4, 0.0) == 0
+    uart.write(u.SRR, 4, u.SRR_UR, 0.0)
+    assert uart.read(u.LCR, 4, 0.0) == 0 and uart.read(u.IER, 4, 0.0) == 0
+    assert uart.read(u.CTR, 4, 0.0) == u.PERIPHERAL_ID
+
+
+def test_the_console_is_what_pad_5_carries(board):
+    """The Dock's USB-serial bridge listens on pad 5: a UART's bytes reach the console only
+    while FPIOA routes that UART's TX there; every UART's bytes are kept either way."""
+    heard = bytearray()
+    board._console = heard.append
+    uart1, uart3 = board.uarts[0], board.uarts[2]
+    bit = configure(uart1, 1_000_000)
+    configure(uart3, 1_000_000)
+    uart1.write(u.RBR, 4, ord("a"), 0.0)
+    uart3.write(u.RBR, 4, ord("b"), 0.0)
+    board.advance_devices(10 * bit + EPS)
+    assert heard == b""
+    route(board, None, FUNC_UART1_TX + 4)                       # UART3_TX on pad 5
+    uart1.write(u.RBR, 4, ord("c"), 1e-3)
+    uart3.write(u.RBR, 4, ord("d"), 1e-3)
+    board.advance_devices(1e-3 + 10 * bit + EPS)
+    assert heard == b"d"
+    assert {name: bytes(sent) for name, sent in board.uart_output.items()} == {"UART1": b"ac", "UART3": b"bd"}
+
+
+def test_an_sdk_style_program_prints_on_uart3_through_pads_4_and_5():
+    """The SDK's start-up: UART3's clock on (APB0 and clk_en_peri bit 18), its reset pulsed,
+    pads 4/5 to UART3, uart_configure for 115200, then putchar waiting on LSR bit 5."""
+    board = make_board(program("""
+        li      s0, 0x50440000
+        lw      t0, 0x28(s0)
+        ori     t0, t0, 1 << 3
+        sw      t0, 0x28(s0)                 # clk_en_cent: APB0
+        lw      t0, 0x2C(s0)
+        li      t1, (1 << 18) | (1 << 20)
+        or      t0, t0, t1
+        sw      t0, 0x2C(s0)                 # clk_en_peri: UART3, FPIOA
+        lw      t0, 0x34(s0)
+        li      t1, 1 << 18
+        or      t0, t0, t1
+        sw      t0, 0x34(s0)                 # peri_reset: UART3 in reset ...
+        not     t1, t1
+        and     t0, t0, t1
+        sw      t0, 0x34(s0)                 # ... and out
+        li      s1, 0x502B0000
+        li      t0, 68 | (1 << 20)
+        sw      t0, 16(s1)                   # pad 4: UART3_RX
+        li      t0, 69 | (0xF << 8) | (1 << 12)
+        sw      t0, 20(s1)                   # pad 5: UART3_TX
+        li      s2, 0x50230000
+        li      t0, 0x80
+        sw      t0, 0x0C(s2)                 # LCR.DLAB
+        sw      zero, 0x04(s2)               # DLH
+        li      t0, 14
+        sw      t0, 0x00(s2)                 # DLL: 26 MHz / 115200 = 16 x 14 + 1
+        li      t0, 1
+        sw      t0, 0xC0(s2)                 # DLF
+        sw      zero, 0x0C(s2)
+        li      t0, 3
+        sw      t0, 0x0C(s2)                 # 8N1
+        li      t0, 0x80
+        sw      t0, 0x04(s2)                 # IER: programmable THRE
+        li      t0, 0x39
+        sw      t0, 0x08(s2)                 # FCR
+        la      s3, text
+    1:  lbu     t1, 0(s3)
+        beqz    t1, 3f
+    2:  lw      t2, 0x14(s2)                 # LSR: wait while bit 5 (FIFO full)
+        andi    t2, t2, 1 << 5
+        bnez    t2, 2b
+        sw      t1, 0(s2)                    # THR
+        addi    s3, s3, 1
+        j       1b
+    3:  lw      t2, 0x14(s2)                 # wait until the transmitter is empty (TEMT)
+        andi    t2, t2, 1 << 6
+        beqz    t2, 3b
+    """, data='text: .asciz "hello from UART3 through pad 5, longer than one FIFO\\n"'))
+    heard = bytearray()
+    board._console = heard.append
+    run_to_done(board, max_time_s=0.02)
+    assert heard == b"hello from UART3 through pad 5, longer than one FIFO\n"
+    assert [line for _, line in board.console_lines] == ["hello from UART3 through pad 5, longer than one FIFO"]
+    # the bytes of 10 bits at 26e6 / 225 baud, back to back
+    assert board.uarts[2].last_byte_time >= len(heard) * 10 * 225 / 26e6
