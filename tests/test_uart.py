@@ -257,3 +257,36 @@ def test_an_sdk_style_program_prints_on_uart3_through_pads_4_and_5():
     assert [line for _, line in board.console_lines] == ["hello from UART3 through pad 5, longer than one FIFO"]
     # the bytes of 10 bits at 26e6 / 225 baud, back to back
     assert board.uarts[2].last_byte_time >= len(heard) * 10 * 225 / 26e6
+
+
+def test_dma_keeps_the_transmit_fifo_full_and_takes_what_is_received(board):
+    """The SDK's uart_send_data_dma / uart_receive_data_dma: SYSCTL dma_sel routes UARTn's TX or
+    RX request to a channel, one 32-bit item a byte; the block is done when its last item is in
+    the FIFO (sending) or in memory (receiving)."""
+    from emulator.devices import dmac as d
+    from test_dmac import SRC, DST, ch, chcfg, ctl, run_devices, setup_channel, w
+    uart = board.uarts[0]
+    bit = configure(uart, 1_000_000)
+    text = b"DMA to UART1, more than sixteen bytes\n"
+    board.memory.load(SRC, b"".join(bytes([c, 0, 0, 0]) for c in text))
+    board.sysctl.write(0x64, 4, 15, 0.0)                       # dma_sel: channel 0 <- UART1_TX
+    w(board, d.CFG, d.CFG_ENABLE, 0.0)
+    setup_channel(board, 0, sar=SRC, dar=uart.BASE, items=len(text), ctl_value=ctl(dinc_fixed=True),
+                  cfg_value=chcfg(d.TT_MEM2PER, hs_dst_sw=False, dst_per=0))
+    w(board, d.CHEN, 0x0101, 0.0)
+    t_done = run_devices(board, 0.0, lambda t: not board.dmac.values[d.CHEN] & 1)
+    # done once the last byte is in the FIFO: 16 bytes before the end of the wire
+    assert t_done == pytest.approx((len(text) - 17) * 10 * bit, abs=1e-9)
+    t_end = run_devices(board, t_done, lambda t: len(board.uart_output.get("UART1", b"")) == len(text))
+    assert bytes(board.uart_output["UART1"]) == text
+    assert t_end == pytest.approx(len(text) * 10 * bit, abs=1e-9)
+    # receiving: loopback brings the bytes back, a second channel takes them
+    uart.write(u.MCR, 4, u.MCR_LOOPBACK, t_end)
+    board.sysctl.write(0x64, 4, 14 << 6, t_end)                # channel 1 <- UART1_RX
+    setup_channel(board, 1, sar=uart.BASE, dar=DST, items=3, ctl_value=ctl(sinc_fixed=True),
+                  cfg_value=chcfg(d.TT_PER2MEM, hs_src_sw=False, src_per=1), now=t_end)
+    w(board, d.CHEN, 0x0202, t_end)
+    for c in b"abc":
+        uart.write(u.RBR, 4, c, t_end)
+    run_devices(board, t_end, lambda t: not board.dmac.values[d.CHEN] & 2)
+    assert board.memory.read(DST, 12) == b"a\0\0\0b\0\0\0c\0\0\0"

@@ -159,11 +159,12 @@ class Board:
         self.spi0 = SpiController(0, ports, source_hz=lambda: self.sysctl.spi_source_hz(0))
         self.spi1 = SpiController(1, ports, source_hz=lambda: self.sysctl.spi_source_hz(1))
         self.dmac = Dmac(ports, self.memory, requests=self.sysctl.dma_request,
-                         peripherals={"spi0": self.spi0, "spi1": self.spi1})
+                         peripherals={"spi0": self.spi0, "spi1": self.spi1, **{uart.GATE: uart for uart in self.uarts}})
         self.peripherals: list[Peripheral] = [self.sysctl, self.fpioa, self.gpiohs, self.gpio, self.uarths, *self.uarts,
                                               self.clint, self.plic, self.dmac, self.spi0, self.spi1]
         self.signals = None                    # a vcd.SignalLog with --vcd
-        self.timed_devices = [self.uarths, self.spi0, self.spi1, self.dmac, self.sysctl, self.clint, *self.uarts]
+        # the blocks a DMA channel serves advance before the DMAC, which completes what they finished
+        self.timed_devices = [self.uarths, self.spi0, self.spi1, *self.uarts, self.dmac, self.sysctl, self.clint]
         self.cold = cold
         if not cold:
             bootrom.hand_over(self.sysctl, self.fpioa, self.uarths)    # before the scheduler reads the CPU clock

@@ -125,7 +125,8 @@ class DmaChannel:
 
 
 class HandshakePeripheral(Protocol):
-    """A block a channel hands items to or takes them from, paced by its handshake (SPI0, SPI1)."""
+    """A block a channel hands items to or takes them from, paced by its handshake (SPI0, SPI1,
+    UART1-3)."""
 
     NAME: str
 
@@ -134,6 +135,8 @@ class HandshakePeripheral(Protocol):
     def attach_tx_dma(self, channel: DmaChannel, now: float) -> None: ...
 
     def attach_rx_dma(self, channel: DmaChannel, now: float) -> None: ...
+
+    def detach_dma(self, channel: DmaChannel) -> None: ...
 
 
 class Dmac(Peripheral):

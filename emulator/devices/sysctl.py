@@ -58,8 +58,10 @@ PERI_BUS = {"gpio": CENT_APB0, "fpioa": CENT_APB0, "spi0": CENT_APB2, "spi1": CE
             "spi2": CENT_APB0, "spi3": CENT_APB2, "dma": None,
             "uart1": CENT_APB0, "uart2": CENT_APB0, "uart3": CENT_APB0}
 
-# DMA request codes selected by dma_sel (SDK sysctl_dma_select_t, first entries)
-DMA_REQUESTS = {0: ("spi0", "rx"), 1: ("spi0", "tx"), 2: ("spi1", "rx"), 3: ("spi1", "tx")}
+# DMA request codes selected by dma_sel (SDK sysctl_dma_select_t): the ones of modelled blocks
+DMA_REQUESTS = {0: ("spi0", "rx"), 1: ("spi0", "tx"), 2: ("spi1", "rx"), 3: ("spi1", "tx"),
+                14: ("uart1", "rx"), 15: ("uart1", "tx"), 16: ("uart2", "rx"), 17: ("uart2", "tx"),
+                18: ("uart3", "rx"), 19: ("uart3", "tx")}
 
 
 @dataclass

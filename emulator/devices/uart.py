@@ -17,16 +17,23 @@ The FIFOs hold 16 bytes: the SDK's trigger names (uart.h: receive 1, 4, 8, 14 fo
 of a 16-byte FIFO. Each byte takes start + data + parity + stop bits; what leaves the
 transmitter goes to the pin FPIOA routes UARTn_TX to (the Dock's wiring hears it), or back
 to the receiver in loopback (MCR bit 4). The receiver takes what the host sends (--uart-input)
-as UARTHS does. The parameter registers say what the databook says they say when the encoded
+as UARTHS does. DMA handshakes (SYSCTL dma_sel's UARTn requests) keep the transmit FIFO full
+from memory, one 32-bit item a byte, and hand each received byte to the channel. The parameter
+registers say what the databook says they say when the encoded
 parameters are not configured (CPR 0), UCV 0; CTR is the DesignWare peripheral id 0x44570110.
 """
 from __future__ import annotations
 
 from collections import deque
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
+
+import numpy as np
 
 from .mmio import Peripheral, Register
 from .ports import Ports, SerialInput
+
+if TYPE_CHECKING:
+    from .dmac import DmaChannel
 
 RBR, IER, IIR, LCR, MCR, LSR, MSR, SCR = 0x00, 0x04, 0x08, 0x0C, 0x10, 0x14, 0x18, 0x1C
 LPDLL, LPDLH = 0x20, 0x24
@@ -102,10 +109,56 @@ class DwUart(Peripheral):
         self.last_byte_time = 0.0
         self.bytes_sent = 0
         self.bytes_received = 0
+        self.tx_dma: DmaChannel | None = None      # a DMAC channel feeding THR (its handshake)
+        self.rx_dma: DmaChannel | None = None      # a DMAC channel taking what is received
 
     def reset(self, now: float) -> None:
+        for channel in (self.tx_dma, self.rx_dma):
+            if channel is not None:
+                channel.peripheral_gone()
         super().reset(now)
         self._clear()
+
+    # --- DMA handshakes (sysctl dma_sel: UARTn RX/TX requests) --------------------------------------
+
+    def is_data_register(self, address: int) -> bool:
+        return address == self.BASE + RBR
+
+    def attach_tx_dma(self, channel: DmaChannel, now: float) -> None:
+        """The channel answers the transmitter's requests: the FIFO is kept full from memory, each
+        32-bit item one byte (its low 8 bits, as the SDK's uart_send_data_dma writes them)."""
+        self.advance(now)
+        self.tx_dma = channel
+        self._dma_refill(now)
+        self.advance(now)
+
+    def attach_rx_dma(self, channel: DmaChannel, now: float) -> None:
+        """The channel takes each received byte as an item, the FIFO's first."""
+        self.advance(now)
+        self.rx_dma = channel
+        if self._rx:
+            received = np.array(self._rx, dtype=np.uint32)
+            self._rx.clear()
+            channel.accept_from_peripheral(received, now)
+
+    def detach_dma(self, channel: DmaChannel) -> None:
+        if self.tx_dma is channel:
+            self.tx_dma = None
+        if self.rx_dma is channel:
+            self.rx_dma = None
+
+    def _dma_refill(self, at: float) -> None:
+        channel = self.tx_dma
+        if channel is None or not channel.remaining():
+            return
+        room = self._depth() - len(self._tx)
+        if room <= 0:
+            return
+        items = channel.read_for_peripheral(min(room, channel.remaining()))
+        self._tx.extend(int(item) & 0xFF for item in items)
+        self._thre_pending = False
+        if not channel.remaining():
+            channel.peripheral_done(at)
 
     # --- the line ----------------------------------------------------------------------------------
 
@@ -153,6 +206,7 @@ class DwUart(Peripheral):
                 return
             self._pending_byte = self._tx.popleft()
             self._shifting_until = start + byte_time
+            self._dma_refill(start)
             if not self._tx:
                 self._thre_pending = True         # THR (the FIFO) empty: the 16550's THRE interrupt
 
@@ -164,7 +218,13 @@ class DwUart(Peripheral):
         self.on_byte(byte)
 
     def _take(self, byte: int, at: float) -> None:
-        """A byte has come in whole: into the receive FIFO, or lost (overrun) when it is full."""
+        """A byte has come in whole: to the DMA channel taking them, into the receive FIFO, or lost
+        (overrun) when it is full."""
+        self._rx_activity = at
+        if self.rx_dma is not None and self.rx_dma.remaining():
+            self.bytes_received += 1
+            self.rx_dma.accept_from_peripheral(np.array([byte], dtype=np.uint32), at)
+            return
         if len(self._rx) < self._depth():
             self._rx.append(byte)
             self.bytes_received += 1
