@@ -18,8 +18,9 @@ static uint64_t tick_length;
 
 /* The timer interrupt: a tick; the next one is one period after this one was due, so the
  * LEDs keep the timer's pace whatever the interrupt's latency. */
-uintptr_t trap_handler(uintptr_t mcause, uintptr_t mepc, uintptr_t mtval)
+uintptr_t trap_handler(uintptr_t mcause, uintptr_t mepc, uintptr_t mtval, struct trap_frame *frame)
 {
+    (void)frame;
     if (mcause != (MCAUSE_INTERRUPT | IRQ_M_TIMER)) {
         printf("trap: mcause 0x%lx mepc 0x%lx mtval 0x%lx\n", (unsigned long)mcause, (unsigned long)mepc,
                (unsigned long)mtval);

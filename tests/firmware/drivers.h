@@ -11,11 +11,13 @@
 #include <stdint.h>
 
 /* sysctl.c: clocks, as handed over; nothing here touches the PLLs */
-enum clock { CLOCK_FPIOA, CLOCK_GPIO, CLOCK_SPI0, CLOCK_DMA };
+enum clock { CLOCK_FPIOA, CLOCK_GPIO, CLOCK_SPI0, CLOCK_DMA, CLOCK_UART1, CLOCK_UART2, CLOCK_UART3 };
 void clock_enable(enum clock clock);
 uint32_t pll0_hz(void);
 uint32_t cpu_hz(void);
 uint32_t spi0_source_hz(void);
+uint32_t apb0_hz(void);
+void uart_reset(int uart);
 void dma_select(int channel, uint32_t request);
 void spi0_dvp_data_enable(void);
 void io_banks_1v8(uint32_t banks);
@@ -36,6 +38,18 @@ void gpiohs_write(int line, int level);
 void uarths_init(uint32_t baud);
 void uarths_putc(char c);
 int uarths_getc(void);
+
+/* uart.c: UART1-3 (DesignWare), polled */
+void uart_init(int uart, uint32_t baud);
+void uart_putc(int uart, char c);
+void uart_flush(int uart);
+
+/* trap.c: what start.S hands trap_handler (the caller-saved registers as trap_entry saved them) */
+struct trap_frame {
+    uint64_t ra, t0, t1, t2, t3, t4, t5, t6, a[8];
+};
+uint64_t *trap_frame_register(struct trap_frame *frame, int number);
+uintptr_t trap_handler(uintptr_t mcause, uintptr_t mepc, uintptr_t mtval, struct trap_frame *frame);
 
 /* clint.c: time */
 uint64_t mtime_now(void);

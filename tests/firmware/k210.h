@@ -26,6 +26,7 @@ static inline void mmio_write64(uintptr_t address, uint64_t value) { *(volatile 
 #define FPIOA_BASE      0x502B0000u
 #define SYSCTL_BASE     0x50440000u
 #define SPI0_BASE       0x52000000u
+#define UART1_BASE      0x50210000u        /* UARTn at UART1_BASE + 0x10000 (n - 1) */
 
 #define OSC_HZ          26000000u          /* the board's crystal, IN0 */
 
@@ -53,6 +54,9 @@ static inline void mmio_write64(uintptr_t address, uint64_t value) { *(volatile 
 #define PERI_GPIO               (1u << 5)
 #define PERI_SPI0               (1u << 6)
 #define PERI_FPIOA              (1u << 20)
+#define PERI_UART1              (1u << 16) /* UART2, UART3: the next two bits */
+#define SYSCTL_PERI_RESET       0x34
+#define CLK_SEL0_APB0_SHIFT     3          /* [5:3]: APB0 = ACLK / (apb0_clk_sel + 1) */
 
 #define MISC_SPI_DVP_DATA       (1u << 10) /* SPI0's eight data lines reach the LCD connector */
 #define POWER_BANK6_1V8         (1u << 6)  /* IO bank 6 (pads 36..41, the LCD's) at 1.8 V */
@@ -78,6 +82,8 @@ static inline void mmio_write64(uintptr_t address, uint64_t value) { *(volatile 
 #define FUNC_UARTHS_TX          19
 #define FUNC_GPIOHS0            24
 #define FUNC_GPIO0              56
+#define FUNC_UART1_RX           64         /* UARTn_RX = 64 + 2 (n - 1), UARTn_TX the next */
+#define FUNC_UART1_TX           65
 
 /* Maix Dock pads */
 #define PAD_UARTHS_RX           4
@@ -110,6 +116,26 @@ static inline void mmio_write64(uintptr_t address, uint64_t value) { *(volatile 
 #define UARTHS_RXDATA_EMPTY     (1u << 31)
 #define UARTHS_TXEN             (1u << 0)
 #define UARTHS_RXEN             (1u << 0)
+
+/* --- UART1-3 (uart.h: DesignWare APB UART, 32-bit registers 4 apart) ------------------------ */
+#define UART_RBR_THR_DLL        0x00
+#define UART_IER_DLH            0x04
+#define UART_FCR                0x08
+#define UART_LCR                0x0C
+#define UART_LSR                0x14
+#define UART_DLF                0xC0
+#define UART_LCR_DLAB           (1u << 7)
+#define UART_LCR_8N1            3u
+#define UART_IER_PTIME          (1u << 7)  /* programmable THRE: LSR bit 5 = transmit FIFO full */
+#define UART_FCR_FIFOS          (1u | 1u << 3 | 3u << 4)   /* on, DMA mode 1, transmit threshold 1/2 */
+#define UART_LSR_DR             (1u << 0)
+#define UART_LSR_TX_FULL        (1u << 5)  /* with UART_IER_PTIME */
+#define UART_LSR_TEMT           (1u << 6)
+
+/* --- exceptions (encoding.h) ----------------------------------------------------------- */
+#define CAUSE_LOAD_MISALIGNED   4
+#define CAUSE_ECALL_M           11
+#define SYS_WRITE               64         /* newlib's system call numbers (a7) */
 
 /* --- CLINT (clint.h) ------------------------------------------------------------------- */
 #define CLINT_MTIMECMP0         0x4000

@@ -4,7 +4,9 @@
 # picolibc's errno, the FPU) and calls main(); a main() that returns ends in a wfi loop
 # with interrupts off. Hart 1, should it arrive here too, parks in wfi with every
 # interrupt masked: these programs use one hart. Traps save the caller-saved registers
-# and call trap_handler(mcause, mepc, mtval) in C, which returns the pc to resume at.
+# and call trap_handler(mcause, mepc, mtval, frame) in C, which returns the pc to resume at;
+# frame holds the saved registers (ra, t0-t6, a0-a7: struct trap_frame), which the handler
+# may change (a system call's result, an emulated load's destination).
 
     .equ    STACK_SIZE, 16384           # per hart, as k210.ld lays out
     .equ    FRAME, 20 * 8               # ra, t0-t6, a0-a7, and mepc's slot (one spare)
@@ -43,7 +45,7 @@ park:
     j       3b
 
 # trap_entry: saves the registers a C function may clobber, calls trap_handler(mcause, mepc,
-# mtval), resumes at the pc it returns.
+# mtval, frame), resumes at the pc it returns with the registers from the frame.
     .balign 4
 trap_entry:
     addi    sp, sp, -FRAME
@@ -66,6 +68,7 @@ trap_entry:
     csrr    a0, mcause
     csrr    a1, mepc
     csrr    a2, mtval
+    mv      a3, sp
     call    trap_handler
     csrw    mepc, a0
     ld      ra, 0(sp)

@@ -28,7 +28,27 @@ void clock_enable(enum clock clock)
     case CLOCK_DMA:
         sysctl_set_bits(SYSCTL_CLK_EN_PERI, PERI_DMA);
         break;
+    case CLOCK_UART1:
+    case CLOCK_UART2:
+    case CLOCK_UART3:
+        sysctl_set_bits(SYSCTL_CLK_EN_CENT, CENT_APB0);
+        sysctl_set_bits(SYSCTL_CLK_EN_PERI, PERI_UART1 << (clock - CLOCK_UART1));
+        break;
     }
+}
+
+/* Pulses UARTn's reset (peri_reset), as the SDK's sysctl_reset does. */
+void uart_reset(int uart)
+{
+    uint32_t bit = PERI_UART1 << (uart - 1);
+    sysctl_set_bits(SYSCTL_PERI_RESET, bit);
+    sysctl_write(SYSCTL_PERI_RESET, sysctl_read(SYSCTL_PERI_RESET) & ~bit);
+}
+
+/* APB0's clock (UART1-3 count in it): ACLK / (apb0_clk_sel + 1). */
+uint32_t apb0_hz(void)
+{
+    return cpu_hz() / (((sysctl_read(SYSCTL_CLK_SEL0) >> CLK_SEL0_APB0_SHIFT) & 7) + 1);
 }
 
 /* PLL0's output: 26 MHz * (clkf + 1) / ((clkr + 1) * (clkod + 1)), or 26 MHz bypassed. */
