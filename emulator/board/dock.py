@@ -31,8 +31,8 @@ from .memory import Sram
 from ..memory_map import RESET_PC, SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE, is_sram
 from ..devices.mmio import Peripheral
 from ..devices.ports import Ports
-from ..devices.plic import (SOURCE_DMA0, SOURCE_GPIO, SOURCE_GPIOHS0, SOURCE_SPI0, SOURCE_SPI1, SOURCE_UART1,
-                            SOURCE_UARTHS, Plic)
+from ..devices.plic import (SOURCE_DMA0, SOURCE_GPIO, SOURCE_GPIOHS0, SOURCE_SPI0, SOURCE_SPI1, SOURCE_TIMER0A,
+                            SOURCE_UART1, SOURCE_UARTHS, Plic)
 from ..devices.ports import SerialInput
 from ..devices.plic import m_context as plic_m_context
 from ..devices.plic import s_context as plic_s_context
@@ -44,6 +44,7 @@ from ..devices.spi import SpiController
 from ..devices.st7789v import ST7789V
 from ..cpu.timing import MISPREDICT_PENALTY, TIMING_IPC1, TIMING_MODELS, TIMING_ROCKET, build_table
 from ..devices.sysctl import Sysctl
+from ..devices.timer import DwTimer
 from ..devices.uart import DwUart
 from ..devices.uarths import Uarths
 from .wiring import LCD_8080, ChipPins, DockWiring, LcdPort, RoutedInput, SdSlot
@@ -154,17 +155,19 @@ class Board:
                              on_byte=lambda byte, n=n: self._serial_out(self.uarts[n - 1], FUNC_UART1_TX + 2 * (n - 1),
                                                                         byte))
                       for n in (1, 2, 3)]
+        self.timers = [DwTimer(n, ports, clock_hz=lambda n=n: self.sysctl.timer_hz(n)) for n in range(3)]
         self.clint = Clint(ports, counter=self.clock)
         self.plic = Plic(ports, high_sources=self._high_sources)
         self.spi0 = SpiController(0, ports, source_hz=lambda: self.sysctl.spi_source_hz(0))
         self.spi1 = SpiController(1, ports, source_hz=lambda: self.sysctl.spi_source_hz(1))
         self.dmac = Dmac(ports, self.memory, requests=self.sysctl.dma_request,
                          peripherals={"spi0": self.spi0, "spi1": self.spi1, **{uart.GATE: uart for uart in self.uarts}})
-        self.peripherals: list[Peripheral] = [self.sysctl, self.fpioa, self.gpiohs, self.gpio, self.uarths, *self.uarts,
+        self.peripherals: list[Peripheral] = [self.sysctl, self.fpioa, self.gpiohs, self.gpio, self.uarths, *self.uarts, *self.timers,
                                               self.clint, self.plic, self.dmac, self.spi0, self.spi1]
         self.signals = None                    # a vcd.SignalLog with --vcd
         # the blocks a DMA channel serves advance before the DMAC, which completes what they finished
-        self.timed_devices = [self.uarths, self.spi0, self.spi1, *self.uarts, self.dmac, self.sysctl, self.clint]
+        self.timed_devices = [self.uarths, self.spi0, self.spi1, *self.uarts, self.dmac, self.sysctl, self.clint,
+                              *self.timers]
         self.cold = cold
         if not cold:
             bootrom.hand_over(self.sysctl, self.fpioa, self.uarths)    # before the scheduler reads the CPU clock
@@ -178,9 +181,11 @@ class Board:
         sd_card = SdCard(self.sd_image, warn=self.warn, faults=sd_faults, strict=strict,
                          on_rule=lambda kind, now, text: self.timing_rule_broken(kind, text, now)
                          ) if self.sd_image else None
-        chip = ChipPins(self.sysctl, self.fpioa, self.gpiohs, self.gpio, self.spi0, self.spi1)
+        chip = ChipPins(self.sysctl, self.fpioa, self.gpiohs, self.gpio, self.spi0, self.spi1, tuple(self.timers))
         self.wiring = DockWiring(chip, ports, self.lcd, lcd_interface, sd_card,
                                  on_lcd_delivery=self.scheduler.lcd_data_delivered)
+        for n, timer in enumerate(self.timers):
+            timer.on_toggle = lambda channel, at, level, n=n: self.wiring.timer_toggled(n, channel, at, level)
         self.spi0.device_for_ss = self.wiring.spi0_device
         self.spi1.device_for_ss = self.wiring.spi1_device
         self.bus = Bus(self, strict)
@@ -322,7 +327,7 @@ class Board:
     def reset_peripheral(self, name: str, now: float) -> None:
         """SYSCTL peri_reset released a block: it returns to its reset state."""
         target = {"spi0": self.spi0, "spi1": self.spi1, "dma": self.dmac, "fpioa": self.fpioa,
-                  "gpio": self.gpio, **{uart.GATE: uart for uart in self.uarts}}.get(name)
+                  "gpio": self.gpio, **{block.GATE: block for block in (*self.uarts, *self.timers)}}.get(name)
         if target is not None:
             self.advance_devices(now)
             target.reset(now)
@@ -444,6 +449,10 @@ class Board:
         for n, uart in enumerate(self.uarts):
             if uart.irq_line():
                 high.append(SOURCE_UART1 + n)
+        for n, timer in enumerate(self.timers):
+            lines = timer.irq_lines()
+            if lines:
+                high.extend(SOURCE_TIMER0A + 2 * n + line for line in range(2) if lines >> line & 1)
         lines = self.gpiohs.irq_lines()
         if lines:
             high.extend(SOURCE_GPIOHS0 + n for n in range(32) if lines >> n & 1)

@@ -739,8 +739,11 @@ class Scheduler:
             self.trap_report = report
         else:
             self._watch_for_storm(hart, exc, report)
-        hart.open_trap = report
-        self._trap_deadline = self.time + TRAP_GRACE_S
+        if exc.cause not in hartmod.ECALL_CAUSES or self.stop_on_trap:
+            # a fault its handler may not return from; an ecall is a request, and a handler that
+            # never returns from one ends the program as asked (the SDK's exit spins in sys_exit)
+            hart.open_trap = report
+            self._trap_deadline = self.time + TRAP_GRACE_S
         hart.enter_trap(exc.cause, exc.epc, exc.tval)
 
     def _watch_for_storm(self, hart: Hart, exc: hartmod.PendingException, report: str) -> None:

@@ -15,7 +15,7 @@ from typing import Callable
 import numpy as np
 
 from ..errors import HardwareMisuse
-from ..devices.fpioa import (FUNC_GPIO0, FUNC_GPIOHS0, FUNC_SPI0_D0, FUNC_SPI0_SCLK, FUNC_SPI0_SS0, FUNC_SPI1_D0,
+from ..devices.fpioa import (FUNC_TIMER0_TOGGLE1, FUNC_GPIO0, FUNC_GPIOHS0, FUNC_SPI0_D0, FUNC_SPI0_SCLK, FUNC_SPI0_SS0, FUNC_SPI1_D0,
                     FUNC_SPI1_D1, FUNC_SPI1_SCLK, FUNC_SPI1_SS0, PAD_COUNT)
 from ..devices.fpioa import Fpioa
 from ..devices.gpio import LINES as GPIO_LINES
@@ -26,6 +26,8 @@ from ..devices.sdcard import SdCard
 from ..devices.spi import SpiController
 from ..devices.st7789v import ST7789V
 from ..devices.sysctl import Sysctl
+from ..devices.timer import CHANNELS as TIMER_CHANNELS
+from ..devices.timer import DwTimer
 
 # Maix Dock pads
 PAD_CONSOLE_RX, PAD_CONSOLE_TX = 4, 5       # the USB-serial bridge's TX reaches pad 4, pad 5 reaches its RX
@@ -50,11 +52,21 @@ class ChipPins:
     gpio: Gpio
     spi0: SpiController
     spi1: SpiController
+    timers: tuple[DwTimer, ...]
+
+
+TIMER_TOGGLES = 3 * TIMER_CHANNELS
 
 
 def is_gpio_line(function: int) -> bool:
     """Whether an FPIOA function is a GPIOHS or slow-GPIO line (software-driven)."""
     return FUNC_GPIOHS0 <= function < FUNC_GPIOHS0 + 32 or FUNC_GPIO0 <= function < FUNC_GPIO0 + GPIO_LINES
+
+
+def is_driven_output(function: int) -> bool:
+    """Whether an FPIOA function drives a level the pad log follows: a GPIOHS or GPIO line, or a
+    timer's PWM toggle output."""
+    return is_gpio_line(function) or FUNC_TIMER0_TOGGLE1 <= function < FUNC_TIMER0_TOGGLE1 + TIMER_TOGGLES
 
 
 class LcdPort:
@@ -231,14 +243,24 @@ class DockWiring:
             return self.chip.gpiohs.driven_level(function - FUNC_GPIOHS0)
         return None
 
-    def pad_level(self, pad: int) -> int | None:
+    def pad_level(self, pad: int, now: float | None = None) -> int | None:
         """The level a GPIOHS or slow-GPIO line drives on a pad, or None when none drives it."""
         function = self.chip.fpioa.function_of_pad(pad)
         if FUNC_GPIOHS0 <= function < FUNC_GPIOHS0 + 32:
             return self.chip.gpiohs.driven_level(function - FUNC_GPIOHS0)
         if FUNC_GPIO0 <= function < FUNC_GPIO0 + GPIO_LINES:
             return self.chip.gpio.driven_level(function - FUNC_GPIO0)
+        if FUNC_TIMER0_TOGGLE1 <= function < FUNC_TIMER0_TOGGLE1 + TIMER_TOGGLES:
+            timer, channel = divmod(function - FUNC_TIMER0_TOGGLE1, TIMER_CHANNELS)
+            return self.chip.timers[timer].toggle_level(channel, self.ports.clock.now() if now is None else now)
         return None
+
+    def timer_toggled(self, timer: int, channel: int, at: float, level: int) -> None:
+        """A PWM output changed at `at` (the timer tells each change with its own time): the pads
+        FPIOA routes it to follow, in the pad log and --vcd."""
+        function = FUNC_TIMER0_TOGGLE1 + TIMER_CHANNELS * timer + channel
+        for pad in self.chip.fpioa.pads_with_function(function):
+            self._record_pad(pad, level, at)
 
     def _log_pad_changes(self, now: float) -> None:
         # Only a pad that carries a GPIOHS or GPIO line can be driven now, and only one driven at the
@@ -246,20 +268,22 @@ class DockWiring:
         fpioa = self.chip.fpioa
         version, line_pads = self._line_pads
         if version != fpioa.routing_version:
-            line_pads = tuple(pad for pad in range(PAD_COUNT) if is_gpio_line(fpioa.function_of_pad(pad)))
+            line_pads = tuple(pad for pad in range(PAD_COUNT) if is_driven_output(fpioa.function_of_pad(pad)))
             self._line_pads = (fpioa.routing_version, line_pads)
         for pad in sorted(self._driven_pads.union(line_pads)):
-            level = self.pad_level(pad)
-            if level != self._pad_levels[pad]:
-                self._pad_levels[pad] = level
-                if level is None:
-                    self._driven_pads.discard(pad)
-                else:
-                    self._driven_pads.add(pad)
-                self.ports.signal(now, f"pad{pad:02d}", level)
-                self.pad_change_count += 1
-                if len(self.pad_changes) < MAX_PAD_CHANGES:
-                    self.pad_changes.append((now, pad, level))
+            self._record_pad(pad, self.pad_level(pad, now), now)
+
+    def _record_pad(self, pad: int, level: int | None, now: float) -> None:
+        if level != self._pad_levels[pad]:
+            self._pad_levels[pad] = level
+            if level is None:
+                self._driven_pads.discard(pad)
+            else:
+                self._driven_pads.add(pad)
+            self.ports.signal(now, f"pad{pad:02d}", level)
+            self.pad_change_count += 1
+            if len(self.pad_changes) < MAX_PAD_CHANGES:
+                self.pad_changes.append((now, pad, level))
 
     def changed(self, now: float) -> None:
         """FPIOA or a GPIOHS or GPIO output changed: the pad log, the LCD's reset pin, the SPI

@@ -57,6 +57,7 @@ CAUSE_ILLEGAL_INSTRUCTION = 2
 CAUSE_LOAD_MISALIGNED, CAUSE_STORE_MISALIGNED = 4, 6
 CAUSE_BREAKPOINT = 3
 CAUSE_ECALL_U, CAUSE_ECALL_M = 8, 11
+ECALL_CAUSES = (CAUSE_ECALL_U, CAUSE_ECALL_U + 1, CAUSE_ECALL_M)
 IRQ_MSI, IRQ_MTI, IRQ_SEI, IRQ_MEI = 3, 7, 9, 11
 # the order in which pending interrupts are taken (privileged spec 1.10, 3.1.14: MEI, MSI, MTI,
 # then the S-mode ones; SSI and STI are software-written bits of mip, which the model ignores)

@@ -56,7 +56,10 @@ PERI_BITS = {
 # which APB bus each gated peripheral hangs off (the SDK's sysctl_clock_bus_en)
 PERI_BUS = {"gpio": CENT_APB0, "fpioa": CENT_APB0, "spi0": CENT_APB2, "spi1": CENT_APB2,
             "spi2": CENT_APB0, "spi3": CENT_APB2, "dma": None,
-            "uart1": CENT_APB0, "uart2": CENT_APB0, "uart3": CENT_APB0}
+            "uart1": CENT_APB0, "uart2": CENT_APB0, "uart3": CENT_APB0,
+            "timer0": CENT_APB0, "timer1": CENT_APB0, "timer2": CENT_APB0}
+CLK_TH2 = 0x40
+TIMER0_CLK_SEL_BIT = 13      # clk_sel0: timer n's source, 0 IN0, 1 PLL0
 
 # DMA request codes selected by dma_sel (SDK sysctl_dma_select_t): the ones of modelled blocks
 DMA_REQUESTS = {0: ("spi0", "rx"), 1: ("spi0", "tx"), 2: ("spi1", "rx"), 3: ("spi1", "tx"),
@@ -146,6 +149,12 @@ class Sysctl(Peripheral):
         """APB0's clock: ACLK / (clk_sel0.apb0_clk_sel + 1) (the SDK's sysctl_clock_get_freq,
         SYSCTL_CLOCK_APB0; apb0_clk_sel is clk_sel0[5:3]). UART1-3 count their bit times in it."""
         return self.cpu_hz() / (field(self.values[CLK_SEL0], 3, 3) + 1)
+
+    def timer_hz(self, index: int) -> float:
+        """TIMERn's clock: IN0 or PLL0 (clk_sel0 bit 13 + n) / ((clk_th2 byte n + 1) x 2) (the SDK's
+        sysctl_clock_get_freq, SYSCTL_CLOCK_TIMERn)."""
+        source = self.pll_hz(PLL0) if self.values[CLK_SEL0] >> (TIMER0_CLK_SEL_BIT + index) & 1 else float(OSC_HZ)
+        return source / ((field(self.values[CLK_TH2], 8 * index, 8) + 1) * 2)
 
     def spi_source_hz(self, index: int) -> float:
         """SPIn source clock = PLL0 / ((threshold + 1) * 2) (SDK formula)."""
