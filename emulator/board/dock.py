@@ -47,6 +47,7 @@ from ..devices.sysctl import Sysctl
 from ..devices.timer import DwTimer
 from ..devices.uart import DwUart
 from ..devices.uarths import Uarths
+from .pins import ExternalPins, PinChange
 from .wiring import LCD_8080, ChipPins, DockWiring, LcdPort, RoutedInput, SdSlot
 from .write_watch import WriteWatch
 
@@ -108,7 +109,7 @@ class Board:
                  sd_image: str | None = None, sd_writable: bool = False,
                  sd_faults: frozenset[str] = frozenset(), check_writes: bool = False, strict: bool = False,
                  lcd_interface: str = LCD_8080, cold: bool = False, timing: str = TIMING_ROCKET,
-                 engine: str = ENGINE_FAST) -> None:
+                 engine: str = ENGINE_FAST, pins: list[PinChange] = ()) -> None:
         """check_writes: stop with StrayWrite at the first store (a hart's or a DMA channel's) into
         SRAM outside the firmware's buffers (write_watch.py; a checker, not hardware behaviour).
         strict: stop at the first access a register table does not take as it is, or that no device
@@ -120,6 +121,7 @@ class Board:
         leaves when it jumps to the program (bootrom.py).
         timing: what an instruction costs, "rocket" (the K210's Rocket core, timing.py) or "ipc1"
         (one cycle each).
+        pins: levels driven on pads from outside at given times (pins.py, --pin).
         engine: "fast" runs each hart on our interpreter of the code in SRAM where it can, handing
         the rest to Unicorn, "precise" on Unicorn alone, counting each instruction (hart.py,
         _fast_engine.c); what runs and every count are the same."""
@@ -142,8 +144,9 @@ class Board:
         self.sysctl = Sysctl(ports, clock_changed=lambda now: self.scheduler.clock_changed(now),
                              reset_block=self.reset_peripheral)
         self.fpioa = Fpioa(ports)
-        self.gpiohs = Gpiohs(ports)
-        self.gpio = Gpio(ports, self.fpioa)
+        self.pins = ExternalPins(pins, on_change=lambda at: self.wiring.changed(at))
+        self.gpiohs = Gpiohs(ports, pad_inputs=lambda first, count: self.wiring.pad_inputs(first, count))
+        self.gpio = Gpio(ports, pad_inputs=lambda first, count: self.wiring.pad_inputs(first, count))
         self._console = console or (lambda byte: None)
         self._console_line = bytearray()
         self._line_began = 0.0                             # when the line under way began
@@ -167,7 +170,7 @@ class Board:
         self.signals = None                    # a vcd.SignalLog with --vcd
         # the blocks a DMA channel serves advance before the DMAC, which completes what they finished
         self.timed_devices = [self.uarths, self.spi0, self.spi1, *self.uarts, self.dmac, self.sysctl, self.clint,
-                              *self.timers]
+                              *self.timers, self.pins]
         self.cold = cold
         if not cold:
             bootrom.hand_over(self.sysctl, self.fpioa, self.uarths)    # before the scheduler reads the CPU clock
@@ -183,7 +186,8 @@ class Board:
                          ) if self.sd_image else None
         chip = ChipPins(self.sysctl, self.fpioa, self.gpiohs, self.gpio, self.spi0, self.spi1, tuple(self.timers))
         self.wiring = DockWiring(chip, ports, self.lcd, lcd_interface, sd_card,
-                                 on_lcd_delivery=self.scheduler.lcd_data_delivered)
+                                 on_lcd_delivery=self.scheduler.lcd_data_delivered,
+                                 outside=lambda: (self.pins.version, self.pins.levels))
         for n, timer in enumerate(self.timers):
             timer.on_toggle = lambda channel, at, level, n=n: self.wiring.timer_toggled(n, channel, at, level)
         self.spi0.device_for_ss = self.wiring.spi0_device

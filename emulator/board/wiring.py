@@ -38,6 +38,7 @@ LCD_8080, LCD_SPI = "8080", "spi"
 LCD_INTERFACES = (LCD_8080, LCD_SPI)
 SD_IDENTIFICATION_MAX_HZ = 400_000
 SD_DEFAULT_SPEED_MAX_HZ = 25_000_000
+FPIOA_PU, FPIOA_PD = 1 << 16, 1 << 17      # a pad's pull-up and pull-down (fpioa.h io_config)
 # Pad changes kept for run.json and tests; a firmware that toggles pins for ever must not
 # fill the host's memory: beyond this many only the count goes on
 MAX_PAD_CHANGES = 100_000
@@ -201,10 +202,13 @@ class DockWiring:
     """Routes SPI chip selects and GPIOHS and GPIO lines to the LCD and the SD slot through FPIOA."""
 
     def __init__(self, chip: ChipPins, ports: Ports, lcd: ST7789V, lcd_interface: str, sd_card: SdCard | None,
-                 on_lcd_delivery: Callable[[float], None]) -> None:
+                 on_lcd_delivery: Callable[[float], None], outside: Callable[[], tuple[int, dict[int, int]]]) -> None:
         """ports: the catch-up of the devices before pins change, warnings and the --vcd pins;
-        on_lcd_delivery: data reached the LCD at this time."""
+        on_lcd_delivery: data reached the LCD at this time; outside: the pads driven from outside
+        (--pin), as (a version that changes with them, pad -> level)."""
         self.chip = chip
+        self.outside = outside
+        self._pad_inputs: dict[tuple[int, int], tuple[tuple[int, int], tuple[int, int, int, int]]] = {}
         self.ports = ports
         self.lcd = lcd
         self.lcd_port = LcdPort(chip, lcd, lcd_interface, self.pad_level, on_lcd_delivery)
@@ -231,6 +235,33 @@ class DockWiring:
         if function == FUNC_SPI1_SS0 + ss or self.sd_slot.cs_is_gpio():
             return self.sd_slot
         return None
+
+    def pad_inputs(self, first: int, count: int) -> tuple[int, int, int, int]:
+        """For FPIOA functions first .. first + count - 1 (bit i: function first + i), what their
+        pads give them: (driven from outside, those levels, pulled up, pulled down), from the pad
+        FPIOA routes each to (devices/ports.py PadInputs). Kept until the routing or the outside
+        changes: GPIOHS asks on every read."""
+        fpioa = self.chip.fpioa
+        version, levels = self.outside()
+        key = (fpioa.routing_version, version)
+        cached = self._pad_inputs.get((first, count))
+        if cached is not None and cached[0] == key:
+            return cached[1]
+        outside = levels_out = up = down = 0
+        for i in range(count):
+            pads = fpioa.pads_with_function(first + i)
+            if not pads:
+                continue
+            pad = pads[0]
+            if pad in levels:
+                outside |= 1 << i
+                levels_out |= levels[pad] << i
+            config = fpioa.values[4 * pad]
+            up |= (1 if config & FPIOA_PU else 0) << i
+            down |= (1 if config & FPIOA_PD else 0) << i
+        answer = (outside, levels_out, up, down)
+        self._pad_inputs[(first, count)] = (key, answer)
+        return answer
 
     def console_transmitter(self) -> int:
         """The FPIOA function on pad 5, whose bytes the USB-serial bridge hears (the console)."""
@@ -302,3 +333,4 @@ class DockWiring:
         if self.sd_slot is not None:
             self.sd_slot.gpio_changed(now)
         chip.gpio.wiring_changed(now)
+        chip.gpiohs.wiring_changed(now)

@@ -21,9 +21,9 @@ real pad's change is seen, not what: they are stored and otherwise ignored.
 """
 from __future__ import annotations
 
-from .fpioa import FUNC_GPIO0, Fpioa
+from .fpioa import FUNC_GPIO0
 from .mmio import Peripheral, Register
-from .ports import Ports
+from .ports import PadInputs, Ports
 
 DATA_OUTPUT, DIRECTION, SOURCE = 0x00, 0x04, 0x08
 INT_ENABLE, INT_MASK, INT_LEVEL, INT_POLARITY = 0x30, 0x34, 0x38, 0x3C
@@ -31,7 +31,6 @@ INT_STATUS, INT_RAW_STATUS, DEBOUNCE, INT_CLEAR = 0x40, 0x44, 0x48, 0x4C
 DATA_INPUT, SYNC_LEVEL, ID_CODE, INT_BOTHEDGE = 0x50, 0x60, 0x64, 0x68
 LINES = 8
 LINE_MASK = (1 << LINES) - 1
-FPIOA_PU, FPIOA_PD = 1 << 16, 1 << 17
 
 
 class Gpio(Peripheral):
@@ -53,10 +52,10 @@ class Gpio(Peripheral):
         ID_CODE: Register("id_code", writable=False), INT_BOTHEDGE: Register("interrupt_bothedge"),
     }
 
-    def __init__(self, ports: Ports, fpioa: Fpioa) -> None:
-        """fpioa: the pads' routing and pulls, which the lines read as inputs."""
+    def __init__(self, ports: Ports, pad_inputs: PadInputs) -> None:
+        """pad_inputs: what the lines' pads give them as inputs (the Dock's wiring)."""
         super().__init__(ports)
-        self.fpioa = fpioa
+        self.pad_inputs = pad_inputs
         self._last_input = 0
         self._edges = 0            # latched edge interrupts, until cleared through eoi
 
@@ -74,21 +73,14 @@ class Gpio(Peripheral):
             return None
         return self.values[DATA_OUTPUT] >> line & 1
 
-    def _pad_of(self, line: int) -> int | None:
-        pads = self.fpioa.pads_with_function(FUNC_GPIO0 + line)
-        return pads[0] if pads else None
-
     def input_value(self) -> int:
-        """The external port: each line's pad as the line sees it."""
-        value = 0
-        for line in range(LINES):
-            level = self.driven_level(line)
-            if level is None:
-                pad = self._pad_of(line)
-                config = self.fpioa.values[4 * pad] if pad is not None else 0
-                level = 1 if config & FPIOA_PU and not config & FPIOA_PD else 0
-            value |= level << line
-        return value
+        """The external port: each line's pad as the line sees it: its own output, else what drives
+        the pad from outside, else the pad's FPIOA pull, else 0."""
+        driven = self.values[DIRECTION] & LINE_MASK
+        outside, levels, pad_up, pad_down = self.pad_inputs(FUNC_GPIO0, LINES)
+        pulled = pad_up & ~pad_down
+        return ((self.values[DATA_OUTPUT] & driven) | (levels & outside & ~driven)
+                | (pulled & ~outside & ~driven)) & LINE_MASK
 
     # --- interrupts ---------------------------------------------------------------------
 

@@ -1,14 +1,16 @@
 """GPIOHS (0x3800_1000): 32 high-speed GPIO lines (SiFive GPIO layout).
 
 Output level of line n = bit n of (output_val XOR output_xor) when output_en
-bit n is set. Inputs read back the pad: a line driven by the chip reads what
-it drives; an undriven line reads its pull (pue/pde), else 0. Edge and level
-interrupt pending bits follow the input value; writing 1 clears an edge bit.
+bit n is set. Inputs read back the pad FPIOA routes GPIOHSn to: a line driven by the chip reads
+what it drives; else what drives the pad from outside (--pin); else its pull, GPIOHS's own
+(pue/pde) or the pad's (FPIOA's pu/pd bits, which the SDK's gpiohs_set_drive_mode sets), else
+0. Edge and level interrupt pending bits follow the input value; writing 1 clears an edge bit.
 """
 from __future__ import annotations
 
 from .mmio import BUS_TILELINK, Peripheral, Register
-from .ports import Ports
+from .fpioa import FUNC_GPIOHS0
+from .ports import PadInputs, Ports
 
 INPUT_VAL, INPUT_EN, OUTPUT_EN, OUTPUT_VAL, PUE, PDE = 0x00, 0x04, 0x08, 0x0C, 0x10, 0x14
 RISE_IE, RISE_IP, FALL_IE, FALL_IP = 0x18, 0x1C, 0x20, 0x24
@@ -37,8 +39,9 @@ class Gpiohs(Peripheral):
         IOF_EN: Register("iof_en"), IOF_SEL: Register("iof_sel"), OUTPUT_XOR: Register("output_xor"),
     }
 
-    def __init__(self, ports: Ports) -> None:
+    def __init__(self, ports: Ports, pad_inputs: PadInputs) -> None:
         super().__init__(ports)
+        self.pad_inputs = pad_inputs
         self._last_input = 0
 
     def driven_level(self, line: int) -> int | None:
@@ -55,8 +58,15 @@ class Gpiohs(Peripheral):
     def input_value(self) -> int:
         driven = self.values[OUTPUT_EN]
         out = self.values[OUTPUT_VAL] ^ self.values[OUTPUT_XOR]
-        pulled = self.values[PUE] & ~self.values[PDE]
-        return ((out & driven) | (pulled & ~driven)) & self.values[INPUT_EN] & MASK
+        outside, levels, pad_up, pad_down = self.pad_inputs(FUNC_GPIOHS0, LINES)
+        pulled = (self.values[PUE] | pad_up) & ~(self.values[PDE] | pad_down)
+        value = (out & driven) | (levels & outside & ~driven) | (pulled & ~outside & ~driven)
+        return value & self.values[INPUT_EN] & MASK
+
+    def wiring_changed(self, now: float) -> None:
+        """A pad's level from outside or FPIOA's routing may have changed: edges are latched."""
+        self._sample_inputs()
+        self.ports.irq_changed(now)
 
     def irq_lines(self) -> int:
         """Bit n set: GPIOHS line n's interrupt (PLIC source 34 + n) is high."""

@@ -43,6 +43,14 @@ class Ports:
     wiring_changed: Callable[[float], None]
 
 
+class PadInputs(Protocol):
+    """What reaches a block's input lines from their pads: for the FPIOA functions first ..
+    first + count - 1, bit i for function first + i, (driven from outside, the outside's levels,
+    pulled up, pulled down) by the pad FPIOA routes the function to (the Dock's wiring)."""
+
+    def __call__(self, first: int, count: int) -> tuple[int, int, int, int]: ...
+
+
 class MtimeCounter(Protocol):
     """The CLINT's mtime, which counts at CPU clock / 50 across clock changes: the board's clock
     keeps it, as an integral of the CPU clock over virtual time."""

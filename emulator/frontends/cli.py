@@ -28,7 +28,7 @@ EXIT_STATUS_HELP = f"""exit status:
   1  internal error of the board model
   2  bad command line: an unknown option or a value out of range (--frames, --quantum 1..{MAX_QUANTUM},
      --budget and --until above 0 and finite, --tolerance 0..{MAX_TOLERANCE}, --sd-fault, --timing, a --grab's syntax
-     or time), an option without the one it needs (--tolerance without --golden, --sd-writable or
+     or time, a --pin that is not PAD=LEVEL@SECONDS with a pad 0..47), an option without the one it needs (--tolerance without --golden, --sd-writable or
      --sd-fault without --sd), --until with --frames, a --grab of a symbol the firmware does not define
      or of a buffer outside SRAM, an empty --expect/--fail-on text or a regular expression that does
      not compile, --expect with --frames, --trace-from/--trace-to without --trace-insn or in the wrong
@@ -45,7 +45,8 @@ EXIT_STATUS_HELP = f"""exit status:
      an access the K210's bus answers in a way of its own (see --strict)
   6  bad input: a file or folder the command line names cannot be used: the firmware image (missing,
      unreadable, not a RISC-V ELF, a raw .bin that is empty or larger than SRAM), the card image
-     (missing, truncated), the --uart-input file (missing, unreadable), the --trace-insn file (cannot
+     (missing, truncated), the --uart-input or --pin-file file (missing, unreadable; a --pin-file line
+     that is not SECONDS PAD LEVEL), the --trace-insn file (cannot
      be written), the --vcd file (cannot be written), the --gdb port (in use), the --golden folder (missing or a file) or one of its
      frames (not a readable PNG), the --out folder (a file of that name exists, or it cannot be
      created or written in)
@@ -114,6 +115,14 @@ def time_seconds(text: str) -> float:
     return value
 
 
+def pin_change(text: str):
+    from ..board.pins import parse_pin
+    try:
+        return parse_pin(text)
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
+
+
 def tolerance_value(text: str) -> int:
     value = _whole_number(text)
     if not 0 <= value <= MAX_TOLERANCE:
@@ -162,6 +171,13 @@ def build_parser() -> argparse.ArgumentParser:
                           "USB serial bridge would (each when the receiver is on and has room); '-' reads "
                           "standard input: piped, all of it; from a terminal, each key as it is typed, with "
                           "virtual time held to the host's clock")
+    run.add_argument("--pin", dest="pins", action="append", default=[], metavar="PAD=LEVEL@SECONDS", type=pin_change,
+                     help="drive a pad from outside from SECONDS of virtual time on: LEVEL 0 or 1, or z to let "
+                          "go of it (a key: the Dock's BOOT key is pad 16, pressed = 0); repeatable. GPIOHS and "
+                          "GPIO lines routed to the pad read it, with their edge and level interrupts; a line "
+                          "the chip drives reads its own output")
+    run.add_argument("--pin-file", metavar="FILE", type=Path, default=None,
+                     help="more such changes from FILE, a line each: SECONDS PAD LEVEL ('#' starts a comment)")
     run.add_argument("--trace-insn", metavar="FILE", type=Path, default=None,
                      help="write an instruction trace to FILE: per instruction the hart, virtual time, pc, "
                           "disassembly and the registers it wrote (about 60 bytes per instruction; the model runs "
@@ -489,6 +505,10 @@ def main(argv: list[str] | None = None) -> int:
         if problem:
             return usage_error(problem)
         uart_input = UartInput.open(args.uart_input) if args.uart_input is not None else None
+        pins = list(args.pins)
+        if args.pin_file is not None:
+            from ..board.pins import load_schedule
+            pins.extend(load_schedule(args.pin_file))
         prepare_output_folder(args.out)
         trace_file = open_trace(args.trace_insn) if args.trace_insn is not None else None
         vcd_file = open_vcd(args.vcd) if args.vcd is not None else None
@@ -529,7 +549,7 @@ def main(argv: list[str] | None = None) -> int:
                       on_frame=on_frame, on_warning=terminal.warning, permissive=args.permissive,
                       sd_image=args.sd, sd_writable=args.sd_writable, sd_faults=frozenset(args.sd_fault),
                       check_writes=args.check_writes, strict=args.strict, lcd_interface=args.lcd_interface,
-                      cold=args.cold, timing=args.timing, engine=args.engine)
+                      cold=args.cold, timing=args.timing, engine=args.engine, pins=pins)
         if uart_input is not None:
             board.connect_serial_input(uart_input)
         board.scheduler.stop_on_trap = args.stop_on_trap
@@ -610,6 +630,7 @@ def main(argv: list[str] | None = None) -> int:
     summary["writes_checked"] = args.check_writes
     summary["strict"] = args.strict
     summary["stop_on_trap"] = args.stop_on_trap
+    summary["pins"] = [change.describe() for change in board.pins.played] if board is not None else []
     summary["exceptions"] = dict(board.scheduler.exceptions_taken) if board is not None else {}
     # every UART's output, wherever FPIOA routed it (the console is pad 5's only)
     summary["uart_output"] = ({name: bytes(sent).decode("utf-8", "replace") for name, sent in board.uart_output.items()}
