@@ -244,9 +244,10 @@ def test_read_only_and_wrong_width(board):
         board.sysctl.read(sc.CLK_SEL0, 8, 0.0)
 
 
-def test_soft_reset_is_refused(board):
-    with pytest.raises(UnmodelledAccess, match="soft reset"):
-        board.sysctl.write(sc.SOFT_RESET, 4, 1, 0.0)
+def test_soft_reset_asks_for_a_chip_reset(board):
+    """soft_reset bit 0 resets the whole chip (tests/test_wdt.py runs programs through one)."""
+    board.sysctl.write(sc.SOFT_RESET, 4, 1, 1e-3)
+    assert board.scheduler.reset_requested == ("soft", 1e-3)
 
 
 def test_unknown_sysctl_offset_through_a_program():

@@ -32,7 +32,7 @@ from ..memory_map import RESET_PC, SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE, is_
 from ..devices.mmio import Peripheral
 from ..devices.ports import Ports
 from ..devices.plic import (SOURCE_DMA0, SOURCE_GPIO, SOURCE_GPIOHS0, SOURCE_SPI0, SOURCE_SPI1, SOURCE_TIMER0A,
-                            SOURCE_UART1, SOURCE_UARTHS, Plic)
+                            SOURCE_UART1, SOURCE_UARTHS, SOURCE_WDT0, Plic)
 from ..devices.ports import SerialInput
 from ..devices.plic import m_context as plic_m_context
 from ..devices.plic import s_context as plic_s_context
@@ -46,6 +46,7 @@ from ..cpu.timing import MISPREDICT_PENALTY, TIMING_IPC1, TIMING_MODELS, TIMING_
 from ..devices.sysctl import Sysctl
 from ..devices.timer import DwTimer
 from ..devices.uart import DwUart
+from ..devices.wdt import DwWatchdog
 from ..devices.uarths import Uarths
 from .pins import ExternalPins, PinChange
 from .wiring import LCD_8080, ChipPins, DockWiring, LcdPort, RoutedInput, SdSlot
@@ -141,8 +142,9 @@ class Board:
         ports = Ports(clock=self.clock, warn=self.warn, irq_changed=self.interrupts_may_have_changed,
                       catch_up=self.advance_devices, signal=self.signal,
                       wiring_changed=lambda now: self.wiring.changed(now))
+        reset_chip = lambda cause, at: self.scheduler.request_reset(cause, at)   # noqa: E731
         self.sysctl = Sysctl(ports, clock_changed=lambda now: self.scheduler.clock_changed(now),
-                             reset_block=self.reset_peripheral)
+                             reset_block=self.reset_peripheral, reset_chip=reset_chip)
         self.fpioa = Fpioa(ports)
         self.pins = ExternalPins(pins, on_change=lambda at: self.wiring.changed(at))
         self.gpiohs = Gpiohs(ports, pad_inputs=lambda first, count: self.wiring.pad_inputs(first, count))
@@ -159,18 +161,20 @@ class Board:
                                                                         byte))
                       for n in (1, 2, 3)]
         self.timers = [DwTimer(n, ports, clock_hz=lambda n=n: self.sysctl.timer_hz(n)) for n in range(3)]
+        self.watchdogs = [DwWatchdog(n, ports, clock_hz=lambda n=n: self.sysctl.wdt_hz(n), reset_chip=reset_chip)
+                          for n in range(2)]
         self.clint = Clint(ports, counter=self.clock)
         self.plic = Plic(ports, high_sources=self._high_sources)
         self.spi0 = SpiController(0, ports, source_hz=lambda: self.sysctl.spi_source_hz(0))
         self.spi1 = SpiController(1, ports, source_hz=lambda: self.sysctl.spi_source_hz(1))
         self.dmac = Dmac(ports, self.memory, requests=self.sysctl.dma_request,
                          peripherals={"spi0": self.spi0, "spi1": self.spi1, **{uart.GATE: uart for uart in self.uarts}})
-        self.peripherals: list[Peripheral] = [self.sysctl, self.fpioa, self.gpiohs, self.gpio, self.uarths, *self.uarts, *self.timers,
+        self.peripherals: list[Peripheral] = [self.sysctl, self.fpioa, self.gpiohs, self.gpio, self.uarths, *self.uarts, *self.timers, *self.watchdogs,
                                               self.clint, self.plic, self.dmac, self.spi0, self.spi1]
         self.signals = None                    # a vcd.SignalLog with --vcd
         # the blocks a DMA channel serves advance before the DMAC, which completes what they finished
         self.timed_devices = [self.uarths, self.spi0, self.spi1, *self.uarts, self.dmac, self.sysctl, self.clint,
-                              *self.timers, self.pins]
+                              *self.timers, *self.watchdogs, self.pins]
         self.cold = cold
         if not cold:
             bootrom.hand_over(self.sysctl, self.fpioa, self.uarths)    # before the scheduler reads the CPU clock
@@ -195,6 +199,9 @@ class Board:
         self.bus = Bus(self, strict)
         self.write_watch: WriteWatch | None = None
         self.image: LoadedImage = load_firmware(firmware, self.memory)
+        # the program as loaded: what the mask ROM copies into SRAM again after a chip reset
+        self._program = [(segment.address, bytes(self.memory.read(segment.address, segment.size)))
+                         for segment in self.image.segments]
         if self.image.entry != RESET_PC:
             self.warn(f"ELF entry is 0x{self.image.entry:x}, but the K210 starts both harts at 0x{RESET_PC:x}")
         sites, loops = [], []
@@ -331,10 +338,25 @@ class Board:
     def reset_peripheral(self, name: str, now: float) -> None:
         """SYSCTL peri_reset released a block: it returns to its reset state."""
         target = {"spi0": self.spi0, "spi1": self.spi1, "dma": self.dmac, "fpioa": self.fpioa,
-                  "gpio": self.gpio, **{block.GATE: block for block in (*self.uarts, *self.timers)}}.get(name)
+                  "gpio": self.gpio, **{block.GATE: block for block in (*self.uarts, *self.timers, *self.watchdogs)}}.get(name)
         if target is not None:
             self.advance_devices(now)
             target.reset(now)
+
+    def reset_chip(self, cause: str, at: float) -> None:
+        """The whole chip resets (a watchdog, SYSCTL's soft_reset; the scheduler resets the harts):
+        every block as at power-on, then as the mask ROM leaves it (unless the board started cold),
+        the program in SRAM again as the ROM copies it from flash (the rest of SRAM keeps what it
+        held), SYSCTL's reset_status saying why. The Dock's LCD and card are not the chip's: they
+        keep their state."""
+        for peripheral in self.peripherals:
+            peripheral.reset(at)
+        if not self.cold:
+            bootrom.hand_over(self.sysctl, self.fpioa, self.uarths)
+        self.sysctl.record_reset(cause)
+        for address, data in self._program:
+            self.memory.load(address, data)
+        self.wiring.changed(at)
 
     def disassemble_at(self, pc: int) -> str:
         """The instruction at pc as text ('?' style output when pc is not in SRAM)."""
@@ -453,6 +475,9 @@ class Board:
         for n, uart in enumerate(self.uarts):
             if uart.irq_line():
                 high.append(SOURCE_UART1 + n)
+        for n, watchdog in enumerate(self.watchdogs):
+            if watchdog.irq_line():
+                high.append(SOURCE_WDT0 + n)
         for n, timer in enumerate(self.timers):
             lines = timer.irq_lines()
             if lines:

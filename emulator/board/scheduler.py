@@ -32,7 +32,7 @@ from ..cpu import shared_memory
 from .elf import symbolize
 from ..errors import BoardStop, FirmwareReportedError, FirmwareTrap, HangDetected
 from ..cpu.hart import CsrContext, Hart, HartState, RunEnd
-from ..memory_map import SRAM_BASE, SRAM_UNCACHED_BASE
+from ..memory_map import RESET_PC, SRAM_BASE, SRAM_UNCACHED_BASE
 
 if TYPE_CHECKING:
     from ..devices.mmio import Peripheral
@@ -125,6 +125,10 @@ class Board(Protocol):
 
     def recent_warnings(self, count: int) -> list[str]: ...
 
+    def reset_chip(self, cause: str, at: float) -> None: ...
+
+    def interrupts_may_have_changed(self, now: float | None = None) -> None: ...
+
 
 class Scheduler:
     """Owns virtual time and the harts; runs them in turns between device events."""
@@ -164,6 +168,8 @@ class Scheduler:
         self._error_report: tuple[int, str] | None = None
         self._trap_deadline: float | None = None          # a grace period before the run may end
         self.exceptions_taken: dict[str, int] = {}        # per kind, for run.json
+        self.reset_requested: tuple[str, float] | None = None   # a chip reset, carried out after the turn
+        self.resets: list[tuple[float, str]] = []         # (virtual time, cause) of every chip reset
         self.last_exception: str | None = None
         self._storm: dict[int, tuple[tuple, int, int]] = {}   # per hart: (what, device stores, repeats)
         self.harts = [Hart(h, CsrContext(mcycle=self._mcycle_reader(h), mip=self._mip_reader(h)))
@@ -502,8 +508,41 @@ class Scheduler:
         while every hart sleeps) ends the run here. Single turns for whoever steps the board and
         looks at it in between (the tests, the GDB server's wait for a connection)."""
         self._turn(go_on_alone)
+        if self.reset_requested is not None:
+            self._reset_chip()
         if self.pending_stop is not None:
             raise self.pending_stop
+
+    def request_reset(self, cause: str, at: float) -> None:
+        """A watchdog or SYSCTL's soft_reset resets the chip at `at`: carried out after the turn,
+        when no hart is in the middle of an instruction (a hart running asks to stop)."""
+        if self.reset_requested is None:
+            self.reset_requested = (cause, at)
+        if self.current is not None:
+            self.current.request_stop()
+
+    def _reset_chip(self) -> None:
+        """Every hart back at the reset pc, as the mask ROM jumps there after a reset, with
+        everything it was waiting for forgotten; the board resets the devices (Board.reset_chip)."""
+        cause, at = self.reset_requested
+        self.reset_requested = None
+        for hart in self.harts:
+            if hart.wait is not None:
+                self._end_wait(hart, at, by_store=False)
+        self.board.reset_chip(cause, at)
+        self.clock_changed(at)
+        for hart in self.harts:
+            hart.time = max(hart.time, at)
+            hart.reset(RESET_PC)
+        self.trap_report = None
+        self._trap_deadline = None
+        self._storm.clear()
+        self._poll = [NO_POLL] * HARTS
+        self._poll_seen.clear()
+        self._priority = None
+        self._race_until = max(self._race_until, at + shared_memory.RACE_WINDOW_CYCLES / self._hz)
+        self.resets.append((at, cause))
+        self.board.interrupts_may_have_changed(at)
 
     def _turn(self, go_on_alone: bool = False) -> None:
         """One turn: the running hart that is furthest behind in virtual time runs until

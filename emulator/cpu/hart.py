@@ -486,6 +486,31 @@ class Hart:
         self._counter.table_base = table.base
         self._counter.table_end = table.end
 
+    def reset(self, pc: int) -> None:
+        """A chip reset: the hart in M-mode at `pc` with its registers and the trap CSRs at 0,
+        interrupts off, mcycle and minstret counting from 0 (Rocket's counters reset)."""
+        uc = self.uc
+        if self.privilege != PRIV_M:
+            uc.reg_write(rv.UC_RISCV_REG_PRIV, PRIV_M)
+            self.privilege = PRIV_M
+        for register in range(rv.UC_RISCV_REG_X1, rv.UC_RISCV_REG_X31 + 1):
+            uc.reg_write(register, 0)
+        for register in range(rv.UC_RISCV_REG_F0, rv.UC_RISCV_REG_F31 + 1):
+            uc.reg_write(register, 0)
+        for register in (rv.UC_RISCV_REG_MSTATUS, rv.UC_RISCV_REG_MIE, rv.UC_RISCV_REG_MTVEC, rv.UC_RISCV_REG_MEPC,
+                         rv.UC_RISCV_REG_MCAUSE, rv.UC_RISCV_REG_MTVAL, rv.UC_RISCV_REG_MSCRATCH,
+                         rv.UC_RISCV_REG_MIDELEG, rv.UC_RISCV_REG_MEDELEG):
+            uc.reg_write(register, 0)
+        self.mcycle_offset = -self.csr_context.mcycle()
+        self.minstret_offset = -self.instret
+        self.pending_exception = None
+        self.open_trap = None
+        self.polling = False
+        self.forget_pending_transfer()
+        self.forget_decodings()
+        self.pc = pc
+        self.state = HartState.RUNNING
+
     def forget_pending_transfer(self) -> None:
         """A trap or interrupt enters mtvec: the control transfer the counter last saw does not
         lead to the next instruction it will see, so it is not resolved (no misprediction)."""

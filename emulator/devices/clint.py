@@ -39,6 +39,11 @@ class Clint(Peripheral):
         super().__init__(ports)
         self.counter = counter
 
+    def reset(self, now: float) -> None:
+        """A chip reset: msip and mtimecmp as at power-on, mtime from 0."""
+        super().reset(now)
+        self.counter.set_mtime(0, now)
+
     def msip(self, hart: int) -> bool:
         return bool(self.values[MSIP + 4 * hart] & 1)
 

@@ -44,6 +44,10 @@ class Gpiohs(Peripheral):
         self.pad_inputs = pad_inputs
         self._last_input = 0
 
+    def reset(self, now: float) -> None:
+        super().reset(now)
+        self._last_input = 0
+
     def driven_level(self, line: int) -> int | None:
         """Level the chip drives on a line, or None when the line is not an output."""
         if not self.values[OUTPUT_EN] >> line & 1:

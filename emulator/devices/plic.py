@@ -42,6 +42,7 @@ WORDS = (SOURCES + 31) // 32
 SOURCE_SPI0, SOURCE_SPI1, SOURCE_GPIO, SOURCE_DMA0, SOURCE_UARTHS, SOURCE_GPIOHS0 = 1, 2, 23, 27, 33, 34
 SOURCE_UART1 = 11    # UARTn is source 10 + n (plic.h IRQN_UART1_INTERRUPT)
 SOURCE_TIMER0A = 14  # TIMERn's channels 0-1: 14 + 2 n, channels 2-3: 15 + 2 n
+SOURCE_WDT0 = 21     # WDTn is source 21 + n
 
 
 def m_context(hart: int) -> int:
@@ -74,6 +75,11 @@ class Plic(Peripheral):
         self.high_sources = high_sources
         self.pending: set[int] = set()
         self.in_service: set[int] = set()
+
+    def reset(self, now: float) -> None:
+        super().reset(now)
+        self.pending.clear()
+        self.in_service.clear()
 
     def sample(self) -> None:
         """Gateways: latch a pending bit for each high source line not being served."""

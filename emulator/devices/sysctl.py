@@ -57,8 +57,14 @@ PERI_BITS = {
 PERI_BUS = {"gpio": CENT_APB0, "fpioa": CENT_APB0, "spi0": CENT_APB2, "spi1": CENT_APB2,
             "spi2": CENT_APB0, "spi3": CENT_APB2, "dma": None,
             "uart1": CENT_APB0, "uart2": CENT_APB0, "uart3": CENT_APB0,
-            "timer0": CENT_APB0, "timer1": CENT_APB0, "timer2": CENT_APB0}
+            "timer0": CENT_APB0, "timer1": CENT_APB0, "timer2": CENT_APB0,
+            "wdt0": CENT_APB1, "wdt1": CENT_APB1}
 CLK_TH2 = 0x40
+CLK_TH6 = 0x50
+RESET_STATUS = 0x60
+RESET_STS_CLR = 1
+# reset_status's cause bits (sysctl.h sysctl_reset_status_t)
+RESET_CAUSE_BITS = {"pin": 1 << 1, "WDT0": 1 << 2, "WDT1": 1 << 3, "soft": 1 << 4}
 TIMER0_CLK_SEL_BIT = 13      # clk_sel0: timer n's source, 0 IN0, 1 PLL0
 
 # DMA request codes selected by dma_sel (SDK sysctl_dma_select_t): the ones of modelled blocks
@@ -114,17 +120,34 @@ class Sysctl(Peripheral):
     }
 
     def __init__(self, ports: Ports, clock_changed: Callable[[float], None],
-                 reset_block: Callable[[str, float], None]) -> None:
+                 reset_block: Callable[[str, float], None], reset_chip: Callable[[str, float], None]) -> None:
         """clock_changed: the CPU clock changed at this time (the board's clock follows it).
-        reset_block: peri_reset released the block of this name (PERI_BITS) at this time."""
+        reset_block: peri_reset released the block of this name (PERI_BITS) at this time.
+        reset_chip: soft_reset resets the whole chip (cause "soft") at this time."""
         super().__init__(ports)
         self.clock_changed = clock_changed
         self.reset_block = reset_block
+        self.reset_chip = reset_chip
         self.usable: set[str] = set()   # gates open and not in reset, kept current on writes
         # PLL0 comes out of reset powered and running (at 26 MHz: all dividers 0), so it
         # reads as locked; PLL1/PLL2 are off until firmware powers them.
         self.plls = {PLL0: PllState(-PLL_LOCK_TIME_S), PLL1: PllState(), PLL2: PllState()}
         self.slip_sticky = {PLL0: False, PLL1: False, PLL2: False}
+
+    def reset(self, now: float) -> None:
+        """A chip reset: every register as at power-on (PLL0 running at reset, the others off); the
+        reset status keeps its cause bits (reset_status), which the board sets after this."""
+        status = self.values[RESET_STATUS]
+        super().reset(now)
+        self.values[RESET_STATUS] = status
+        self.plls = {PLL0: PllState(now - PLL_LOCK_TIME_S), PLL1: PllState(), PLL2: PllState()}
+        self.slip_sticky = {PLL0: False, PLL1: False, PLL2: False}
+        self._update_usable()
+
+    def record_reset(self, cause: str) -> None:
+        """The chip was reset by `cause` (a RESET_CAUSE_BITS key): its bit is set in reset_status
+        until firmware clears the bits (reset_sts_clr)."""
+        self.values[RESET_STATUS] |= RESET_CAUSE_BITS[cause]
 
     # --- clocks the rest of the board asks for -------------------------------------------
 
@@ -149,6 +172,10 @@ class Sysctl(Peripheral):
         """APB0's clock: ACLK / (clk_sel0.apb0_clk_sel + 1) (the SDK's sysctl_clock_get_freq,
         SYSCTL_CLOCK_APB0; apb0_clk_sel is clk_sel0[5:3]). UART1-3 count their bit times in it."""
         return self.cpu_hz() / (field(self.values[CLK_SEL0], 3, 3) + 1)
+
+    def wdt_hz(self, index: int) -> float:
+        """WDTn's clock: IN0 / ((clk_th6 byte n + 1) x 2) (sysctl_clock_get_freq, SYSCTL_CLOCK_WDTn)."""
+        return OSC_HZ / ((field(self.values[CLK_TH6], 8 * index, 8) + 1) * 2)
 
     def timer_hz(self, index: int) -> float:
         """TIMERn's clock: IN0 or PLL0 (clk_sel0 bit 13 + n) / ((clk_th2 byte n + 1) x 2) (the SDK's
@@ -242,8 +269,15 @@ class Sysctl(Peripheral):
             if self.cpu_hz() != old_hz:
                 self.clock_changed(now)
             return
-        if offset == SOFT_RESET and value & 1:
-            raise UnmodelledAccess("SYSCTL.soft_reset: a whole-chip soft reset is not modelled")
+        if offset == SOFT_RESET:
+            self.values[offset] = value & 1
+            if value & 1:
+                self.reset_chip("soft", now)           # the whole chip, SYSCTL included
+            return
+        if offset == RESET_STATUS:
+            causes = 0 if value & RESET_STS_CLR else self.values[RESET_STATUS] & ~RESET_STS_CLR
+            self.values[RESET_STATUS] = causes | (value & RESET_STS_CLR)
+            return
         if offset == PERI_RESET:
             released = self.values[PERI_RESET] & ~value
             self.values[PERI_RESET] = value

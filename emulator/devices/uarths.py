@@ -65,6 +65,14 @@ class Uarths(Peripheral):
         # ends the run): then no byte's end is quiet (quiet_ticks)
         self.every_byte_heard = False
 
+    def reset(self, now: float) -> None:
+        """A chip reset: registers and FIFOs as at power-on; a byte on the wire is cut off."""
+        super().reset(now)
+        self._fifo.clear()
+        self._rx_fifo.clear()
+        self._shifting_until = None
+        self._receiving_until = None
+
     def _byte_time(self) -> float:
         hz = self.ports.clock.cpu_hz()
         bits = 10 + (1 if self.values[TXCTRL] >> 1 & 1 else 0)

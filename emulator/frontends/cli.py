@@ -630,6 +630,8 @@ def main(argv: list[str] | None = None) -> int:
     summary["writes_checked"] = args.check_writes
     summary["strict"] = args.strict
     summary["stop_on_trap"] = args.stop_on_trap
+    summary["resets"] = ([{"virtual_time_s": at, "cause": cause} for at, cause in board.scheduler.resets]
+                         if board is not None else [])
     summary["pins"] = [change.describe() for change in board.pins.played] if board is not None else []
     summary["exceptions"] = dict(board.scheduler.exceptions_taken) if board is not None else {}
     # every UART's output, wherever FPIOA routed it (the console is pad 5's only)
