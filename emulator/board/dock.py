@@ -40,6 +40,7 @@ from .scheduler import (DEFAULT_HANG_BUDGET_S, DEFAULT_QUANTUM, HARTS, FrameReco
                         Scheduler)  # FrameRecord and RunResult: the board's results, imported from here
 from ..devices.sdcard import SdCard, SdImage
 from ..cpu.shared_memory import find_poll_loops
+from ..cpu.time_loops import find_time_loops
 from ..devices.spi import SpiController
 from ..devices.st7789v import ST7789V
 from ..cpu.timing import MISPREDICT_PENALTY, TIMING_IPC1, TIMING_MODELS, TIMING_ROCKET, build_table
@@ -204,16 +205,18 @@ class Board:
                          for segment in self.image.segments]
         if self.image.entry != RESET_PC:
             self.warn(f"ELF entry is 0x{self.image.entry:x}, but the K210 starts both harts at 0x{RESET_PC:x}")
-        sites, loops = [], []
+        sites, loops, time_loops = [], [], []
         for address, code in self.image.code_ranges:
             sites.extend(hartmod.find_csr_sites(code, address))
             loops.extend(find_poll_loops(code, address))
+            time_loops.extend(find_time_loops(code, address))
         self.cycle_table = build_table(self.image.code_ranges) if timing == TIMING_ROCKET else None
         for hart in self.harts:
             self.bus.attach(hart)
             hart.install_cycle_table(self.cycle_table)
             hart.intercept_csr_sites(sites)
             hart.install_poll_loops(loops)
+            hart.install_time_loops(time_loops)
             if engine == ENGINE_FAST:
                 hart.enable_fast_engine(self.memory.address)
             hart.pc = RESET_PC

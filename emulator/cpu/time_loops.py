@@ -1,0 +1,272 @@
+"""Loops that wait for time by reading it: the Kendryte SDK's usleep and msleep, `while
+(read_cycle() - start < n);`. Each iteration reads mcycle (or cycle), does register arithmetic on
+it and branches back until the value is far enough on; nothing else happens in it. Run
+instruction by instruction, a one-second wait at 400 MHz is tens of millions of CSR reads, each
+answered by the board; here the hart skips the iterations that cannot end the loop, with exact
+counts.
+
+At load time every such loop is found (`find_time_loops`): a straight run of register arithmetic,
+exactly one read of mcycle/cycle and branches out of the loop, closed by a backward branch, in
+which no register carries a value from one iteration to the next (so every iteration is the
+same but for the time it reads), and whose instructions this module can evaluate. At run time
+(Hart._skip_waiting) the hart, stopped at the loop's time read, has seen the last two iterations
+take the same instructions, cycles, branch mispredictions and stalls, with the branch predictor
+in the same state and the time advancing by the same cycles: from here every iteration is the
+same. `exits` evaluates the rest of an iteration (from the time read to the closing branch) for a
+time value; the first iteration whose value ends the loop is found by bisection (the loops wait
+for a value to grow past a bound), and the ones before it are skipped: their instructions,
+cycles, mispredictions and stalls are counted, time moves on by their cycles, and the hart reads
+the time of the iteration that ends the loop, which it then runs.
+"""
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+
+from .shared_memory import MAX_LOOP_BYTES, _backward_branches
+
+MASK = (1 << 64) - 1
+CSR_MCYCLE, CSR_CYCLE = 0xB00, 0xC00
+
+
+def _bits(word: int, high: int, low: int) -> int:
+    return (word >> low) & ((1 << (high - low + 1)) - 1)
+
+
+def _signed(value: int, bits: int) -> int:
+    return value - (1 << bits) if value >> (bits - 1) & 1 else value
+
+
+def _sx32(value: int) -> int:
+    value &= 0xFFFF_FFFF
+    return (value - (1 << 32) if value >> 31 else value) & MASK
+
+
+@dataclass(frozen=True)
+class Op:
+    """One instruction the evaluator carries out: `kind` alu (rd = op(rs1, rs2 or imm)), branch
+    (to `target` when op(rs1, rs2) holds), jump (to `target`), time (rd = the time read)."""
+    pc: int
+    size: int
+    kind: str
+    op: str = ""
+    rd: int = 0
+    rs1: int = 0
+    rs2: int | None = None          # None: the immediate is the second operand
+    imm: int = 0
+    target: int | None = None
+
+    @property
+    def reads(self) -> tuple[int, ...]:
+        return tuple(r for r in (self.rs1, self.rs2) if r)
+
+
+_OP = {(0, 0): "add", (0, 0x20): "sub", (1, 0): "sll", (2, 0): "slt", (3, 0): "sltu", (4, 0): "xor",
+       (5, 0): "srl", (5, 0x20): "sra", (6, 0): "or", (7, 0): "and"}
+_OP_IMM = {0: "add", 2: "slt", 3: "sltu", 4: "xor", 6: "or", 7: "and"}
+_BRANCH = {0: "eq", 1: "ne", 4: "lt", 5: "ge", 6: "ltu", 7: "geu"}
+
+
+def _decode_32(word: int, pc: int) -> Op | None:
+    opcode, rd, funct3 = word & 0x7F, _bits(word, 11, 7), _bits(word, 14, 12)
+    rs1, rs2, funct7 = _bits(word, 19, 15), _bits(word, 24, 20), _bits(word, 31, 25)
+    i_imm = _signed(word >> 20, 12)
+    if opcode in (0x13, 0x1B):                                   # OP-IMM, OP-IMM-32
+        w = "w" if opcode == 0x1B else ""
+        if funct3 in (1, 5):
+            shamt = _bits(word, 25, 20) if not w else _bits(word, 24, 20)
+            op = "sll" if funct3 == 1 else ("sra" if word >> 30 & 1 else "srl")
+            return Op(pc, 4, "alu", op + w, rd, rs1, None, shamt)
+        if w and funct3 != 0:
+            return None
+        return Op(pc, 4, "alu", _OP_IMM[funct3] + w, rd, rs1, None, i_imm) if funct3 in _OP_IMM else None
+    if opcode in (0x33, 0x3B):                                   # OP, OP-32 (no M extension)
+        name = _OP.get((funct3, funct7))
+        w = "w" if opcode == 0x3B else ""
+        if name is None or (w and name not in ("add", "sub", "sll", "srl", "sra")):
+            return None
+        return Op(pc, 4, "alu", name + w, rd, rs1, rs2)
+    if opcode == 0x37:                                           # LUI
+        return Op(pc, 4, "alu", "add", rd, 0, None, _signed(word & 0xFFFF_F000, 32))
+    if opcode == 0x17:                                           # AUIPC
+        return Op(pc, 4, "alu", "add", rd, 0, None, (pc + _signed(word & 0xFFFF_F000, 32)) & MASK)
+    if opcode == 0x63 and funct3 in _BRANCH:
+        imm = (_bits(word, 31, 31) << 12 | _bits(word, 7, 7) << 11 | _bits(word, 30, 25) << 5
+               | _bits(word, 11, 8) << 1)
+        return Op(pc, 4, "branch", _BRANCH[funct3], 0, rs1, rs2, target=pc + _signed(imm, 13))
+    if opcode == 0x6F and rd == 0:                               # j
+        imm = (_bits(word, 31, 31) << 20 | _bits(word, 19, 12) << 12 | _bits(word, 20, 20) << 11
+               | _bits(word, 30, 21) << 1)
+        return Op(pc, 4, "jump", target=pc + _signed(imm, 21))
+    if opcode == 0x73 and funct3 == 2 and rs1 == 0 and word >> 20 in (CSR_MCYCLE, CSR_CYCLE) and rd:
+        return Op(pc, 4, "time", rd=rd)                          # csrr rd, mcycle / cycle
+    return None
+
+
+def _decode_16(half: int, pc: int) -> Op | None:
+    op, funct3 = half & 3, _bits(half, 15, 13)
+    rd = _bits(half, 11, 7)
+    rdp, rs2p = 8 + _bits(half, 9, 7), 8 + _bits(half, 4, 2)
+    imm6 = _signed(_bits(half, 12, 12) << 5 | _bits(half, 6, 2), 6)
+    if op == 1:
+        if funct3 == 0:
+            return Op(pc, 2, "alu", "add", rd, rd, None, imm6)             # c.addi (c.nop)
+        if funct3 == 1 and rd:
+            return Op(pc, 2, "alu", "addw", rd, rd, None, imm6)            # c.addiw
+        if funct3 == 2:
+            return Op(pc, 2, "alu", "add", rd, 0, None, imm6)              # c.li
+        if funct3 == 3 and rd not in (0, 2) and imm6:
+            return Op(pc, 2, "alu", "add", rd, 0, None, (imm6 << 12) & MASK)   # c.lui
+        if funct3 == 4:
+            kind = _bits(half, 11, 10)
+            if kind in (0, 1):
+                shamt = _bits(half, 12, 12) << 5 | _bits(half, 6, 2)
+                return Op(pc, 2, "alu", "srl" if kind == 0 else "sra", rdp, rdp, None, shamt)
+            if kind == 2:
+                return Op(pc, 2, "alu", "and", rdp, rdp, None, imm6)
+            name = {(0, 0): "sub", (0, 1): "xor", (0, 2): "or", (0, 3): "and", (1, 0): "subw",
+                    (1, 1): "addw"}.get((_bits(half, 12, 12), _bits(half, 6, 5)))
+            return Op(pc, 2, "alu", name, rdp, rdp, rs2p) if name else None
+        if funct3 == 5:
+            imm = (_bits(half, 12, 12) << 11 | _bits(half, 8, 8) << 10 | _bits(half, 10, 9) << 8
+                   | _bits(half, 6, 6) << 7 | _bits(half, 7, 7) << 6 | _bits(half, 2, 2) << 5
+                   | _bits(half, 11, 11) << 4 | _bits(half, 5, 3) << 1)
+            return Op(pc, 2, "jump", target=pc + _signed(imm, 12))       # c.j
+        imm = (_bits(half, 12, 12) << 8 | _bits(half, 6, 5) << 6 | _bits(half, 2, 2) << 5
+               | _bits(half, 11, 10) << 3 | _bits(half, 4, 3) << 1)
+        return Op(pc, 2, "branch", "eq" if funct3 == 6 else "ne", 0, rdp, 0, target=pc + _signed(imm, 9))
+    if op == 2:
+        if funct3 == 0 and rd:
+            return Op(pc, 2, "alu", "sll", rd, rd, None, _bits(half, 12, 12) << 5 | _bits(half, 6, 2))
+        rs2 = _bits(half, 6, 2)
+        if funct3 == 4 and rd and rs2:
+            if not _bits(half, 12, 12):
+                return Op(pc, 2, "alu", "add", rd, 0, rs2)                     # c.mv
+            return Op(pc, 2, "alu", "add", rd, rd, rs2)                        # c.add
+    return None
+
+
+def decode(code: bytes, offset: int, pc: int) -> Op | None:
+    """The instruction at code[offset], if it is one the evaluator carries out."""
+    if offset + 2 > len(code):
+        return None
+    low = int.from_bytes(code[offset:offset + 2], "little")
+    if low & 3 != 3:
+        return _decode_16(low, pc)
+    if offset + 4 > len(code):
+        return None
+    return _decode_32(int.from_bytes(code[offset:offset + 4], "little"), pc)
+
+
+def _alu(op: str, a: int, b: int) -> int:
+    word = op.endswith("w")
+    name = op[:-1] if word else op
+    shift = b & (31 if word else 63)
+    if name == "add":
+        value = a + b
+    elif name == "sub":
+        value = a - b
+    elif name == "sll":
+        value = a << shift
+    elif name == "srl":
+        value = (a & (0xFFFF_FFFF if word else MASK)) >> shift
+    elif name == "sra":
+        signed = _signed(a & (0xFFFF_FFFF if word else MASK), 32 if word else 64)
+        value = signed >> shift
+    elif name == "slt":
+        value = int(_signed(a & MASK, 64) < _signed(b & MASK, 64))
+    elif name == "sltu":
+        value = int((a & MASK) < (b & MASK))
+    elif name == "xor":
+        value = a ^ b
+    elif name == "or":
+        value = a | b
+    else:
+        value = a & b
+    return _sx32(value) if word else value & MASK
+
+
+def _taken(op: str, a: int, b: int) -> bool:
+    sa, sb = _signed(a, 64), _signed(b, 64)
+    return {"eq": a == b, "ne": a != b, "lt": sa < sb, "ge": sa >= sb, "ltu": a < b, "geu": a >= b}[op]
+
+
+@dataclass(frozen=True)
+class TimeLoop:
+    """A loop waiting for time (module comment): [head, branch] holds `body` instructions; `rest`
+    is what follows the time read up to the closing branch, the part of an iteration that decides
+    whether the loop ends."""
+    head: int
+    branch: int
+    body: int
+    site: int                                   # the time read's address
+    rest: tuple[Op, ...]
+
+    def exits(self, time: int, register) -> bool:
+        """Whether the iteration whose time read returns `time` leaves the loop; `register(n)`
+        gives the others' values (what the loop does not write is the same in every iteration)."""
+        values: dict[int, int] = {}
+
+        def get(r: int) -> int:
+            return 0 if r == 0 else values[r] if r in values else register(r)
+
+        time_read = next(op for op in self.rest if op.kind == "time")
+        values[time_read.rd] = time & MASK
+        for op in self.rest[1:]:
+            if op.kind == "alu":
+                b = get(op.rs2) if op.rs2 is not None else op.imm & MASK
+                if op.rd:
+                    values[op.rd] = _alu(op.op, get(op.rs1), b)
+            elif op.kind == "branch":
+                if _taken(op.op, get(op.rs1), get(op.rs2)):
+                    return op.target != self.head
+            elif op.kind == "jump":
+                return op.target != self.head
+        return True                             # fell through the closing branch
+
+
+def find_time_loops(code: bytes, base: int) -> list[TimeLoop]:
+    """Every loop in `code` (loaded at `base`) that can only be waiting for time (module comment)."""
+    return list(_time_loops(code, base))
+
+
+@functools.lru_cache(maxsize=8)
+def _time_loops(code: bytes, base: int) -> tuple[TimeLoop, ...]:
+    loops = {}
+    for offset in _backward_branches(code):
+        loop = _time_loop_at(code, base, offset)
+        if loop is not None and loop.head not in loops:
+            loops[loop.head] = loop
+    return tuple(loops.values())
+
+
+def _time_loop_at(code: bytes, base: int, branch_offset: int) -> TimeLoop | None:
+    branch_pc = base + branch_offset
+    closing = decode(code, branch_offset, branch_pc)
+    if closing is None or closing.kind not in ("branch", "jump") or closing.target is None or \
+            not branch_pc - MAX_LOOP_BYTES <= closing.target < branch_pc:
+        return None
+    head = closing.target
+    ops: list[Op] = []
+    pc = head
+    while pc < branch_pc:
+        op = decode(code, pc - base, pc)
+        if op is None or (op.kind == "jump") or (op.kind == "branch" and head <= op.target <= branch_pc):
+            return None                          # not evaluable, or a branch within the loop
+        ops.append(op)
+        pc += op.size
+    if pc != branch_pc:
+        return None
+    ops.append(closing)
+    times = [index for index, op in enumerate(ops) if op.kind == "time"]
+    if len(times) != 1:
+        return None
+    written = {op.rd for op in ops if op.kind in ("alu", "time") and op.rd}
+    defined: set[int] = set()
+    for op in ops:
+        if any(r in written and r not in defined for r in op.reads):
+            return None                          # a value carried between iterations
+        if op.kind in ("alu", "time") and op.rd:
+            defined.add(op.rd)
+    start = times[0]
+    return TimeLoop(head, branch_pc, len(ops), ops[start].pc, tuple(ops[start:]))

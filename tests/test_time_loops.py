@@ -1,0 +1,95 @@
+"""Loops that wait for time by reading mcycle (cpu/time_loops.py): the iterations that cannot end
+the loop are counted without being run, and everything the hart and the board show is what
+running them would have shown: registers, instructions, cycles, mispredictions, stalls, time."""
+from __future__ import annotations
+
+import time
+
+import pytest
+
+from emulator.cpu import hart as hartmod
+from emulator.cpu.hart import ENGINE_FAST, ENGINE_PRECISE
+from emulator.cpu.time_loops import decode, find_time_loops
+from k210_fixtures import make_board, program, reg, run_to_done
+
+# the SDK's usleep: while (read_cycle() - start < n) continue; (here 2 ms at 26 MHz, 52,000 cycles)
+USLEEP = """
+    csrr    s0, mcycle
+    li      s1, 52000
+1:  csrr    t0, mcycle
+    sub     t0, t0, s0
+    bltu    t0, s1, 1b
+    csrr    s2, mcycle
+    csrr    s3, minstret
+"""
+
+
+def state(board) -> dict:
+    hart = board.harts[0]
+    return {"registers": [reg(board, name) for name in ("s0", "s1", "s2", "s3", "t0")], "executed": hart.executed,
+            "cycles": hart.cycles, "mispredicts": hart.mispredicts, "stalls": hart.stall_cycles, "pc": hart.pc}
+
+
+def run(source: str, engine: str, skip: bool) -> tuple[dict, float, int]:
+    board = make_board(program(source), engine=engine)
+    if not skip:
+        for hart in board.harts:
+            hart.time_loops.clear()
+    started = time.process_time()
+    run_to_done(board, max_time_s=0.1)
+    return state(board), time.process_time() - started, board.harts[0].iterations_skipped
+
+
+@pytest.mark.parametrize("engine", [ENGINE_FAST, ENGINE_PRECISE])
+def test_skipping_a_usleep_loop_changes_nothing_the_program_sees(engine):
+    skipped, skipped_time, iterations = run(USLEEP, engine, True)
+    ran, ran_time, none = run(USLEEP, engine, False)
+    assert skipped == ran
+    assert iterations > 1000 and none == 0
+    assert 52000 <= reg_value(skipped, 2) - reg_value(skipped, 0) < 52100
+
+
+def reg_value(state: dict, index: int) -> int:
+    return state["registers"][index]
+
+
+def test_the_finder_takes_the_sdk_usleep_and_nothing_that_carries_a_value(tmp_path):
+    from k210_fixtures import build_elf
+    from elftools.elf.elffile import ELFFile
+    elf = build_elf(""".globl _start
+_start:
+    csrr    s0, mcycle
+wait:
+    csrr    t0, mcycle
+    sub     t0, t0, s0
+    bltu    t0, s1, wait
+count:
+    csrr    t0, mcycle
+    addi    s4, s4, 1                    # carries a value: not only waiting
+    bltu    t0, s1, count
+load:
+    csrr    t0, mcycle
+    ld      t1, 0(s0)                    # a load: not this module's
+    bltu    t0, t1, load
+""")
+    with open(elf, "rb") as handle:
+        text = ELFFile(handle).get_section_by_name(".text")
+        code, base = text.data(), text["sh_addr"]
+    loops = find_time_loops(code, base)
+    assert len(loops) == 1 and loops[0].body == 3
+    assert decode(code, 0, base).kind == "time"
+
+
+@pytest.mark.parametrize("engine", [ENGINE_FAST, ENGINE_PRECISE])
+def test_running_alone_the_wait_is_skipped_to_the_next_event_with_the_same_results(engine):
+    """board.run_until (as the command line runs): a hart alone skips its wait up to the next thing
+    that can happen, here run_until's end; the same state as running every iteration."""
+    states = []
+    for skip in (True, False):
+        board = make_board(program(USLEEP), engine=engine)
+        if not skip:
+            for hart in board.harts:
+                hart.time_loops.clear()
+        board.run_until(0.004)
+        states.append((state(board), board.time, board.harts[0].time))
+    assert states[0] == states[1]
