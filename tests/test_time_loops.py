@@ -45,7 +45,7 @@ def test_skipping_a_usleep_loop_changes_nothing_the_program_sees(engine):
     skipped, skipped_time, iterations = run(USLEEP, engine, True)
     ran, ran_time, none = run(USLEEP, engine, False)
     assert skipped == ran
-    assert iterations > 1000 and none == 0
+    assert iterations > none + 1000          # (both skip the spin at `done` alike)
     assert 52000 <= reg_value(skipped, 2) - reg_value(skipped, 0) < 52100
 
 

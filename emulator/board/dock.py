@@ -40,7 +40,7 @@ from .scheduler import (DEFAULT_HANG_BUDGET_S, DEFAULT_QUANTUM, HARTS, FrameReco
                         Scheduler)  # FrameRecord and RunResult: the board's results, imported from here
 from ..devices.sdcard import SdCard, SdImage
 from ..cpu.shared_memory import find_poll_loops
-from ..cpu.time_loops import find_time_loops
+from ..cpu.time_loops import find_idle_loops, find_time_loops
 from ..devices.spi import SpiController
 from ..devices.st7789v import ST7789V
 from ..cpu.timing import MISPREDICT_PENALTY, TIMING_IPC1, TIMING_MODELS, TIMING_ROCKET, build_table
@@ -209,6 +209,7 @@ class Board:
         for address, code in self.image.code_ranges:
             sites.extend(hartmod.find_csr_sites(code, address))
             loops.extend(find_poll_loops(code, address))
+            loops.extend(find_idle_loops(code, address))
             time_loops.extend(find_time_loops(code, address))
         self.cycle_table = build_table(self.image.code_ranges) if timing == TIMING_ROCKET else None
         for hart in self.harts:

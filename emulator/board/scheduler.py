@@ -307,6 +307,9 @@ class Scheduler:
         wrote meanwhile; or, in lockstep, what it reads was the same one iteration ago), the
         hart waits, with a store watch on the other harts over what it reads. False: it goes on."""
         loop, slot = hart.take_poll_report()
+        if not loop.loads:
+            hart.skip_idle(loop)    # it only spins: nothing to wait for, its iterations are counted
+            return False
         spans = shared_memory.polled_spans(loop, lambda r: hart.reg(rv.UC_RISCV_REG_X0 + r))
         if spans is None:
             slot.ignore = 1     # it polls a device: the bus's poll detection is for those
@@ -596,12 +599,7 @@ class Scheduler:
         budget = max(1, math.ceil((horizon - t0) * hz - 1e-9))
         self.turn_horizon = t0 + budget / hz
         precise_runs, device_accesses = hart.precise_runs, hart.device_accesses
-        # running alone, a hart waiting for time may count the iterations of its wait up to the next
-        # thing that can happen (nothing else runs meanwhile): cpu/time_loops.py
-        hart.alone_cycles = (None if not (alone and outer < math.inf) else
-                             hart.cycles + max(budget, math.floor((outer - t0) * hz)))
         ran = self._run_hart(hart, t0, budget, hz, instruction_limit)
-        hart.alone_cycles = None
         if self.pending_stop is not None:
             raise self.pending_stop
         hart.time = t0 + ran / hz

@@ -253,7 +253,6 @@ class Hart:
         self._time_seen: dict[int, tuple] = {}        # per time read: the counter at its last two reads
         self.iterations_skipped = 0                   # time-loop iterations counted without running them
         self._turn_limit = NO_LIMIT
-        self.alone_cycles: int | None = None     # set by the board: how far a time loop may be skipped alone
         self._csr_table: ctypes.Array | None = None   # the counter's table of CSR sites, kept alive here
         self.csr_listeners: list[Callable[["Hart", int], None]] = []   # called before a CSR site is carried out
         self.poll_loops: dict[int, tuple[shared_memory.PollLoop, shared_memory.LoopSlot]] = {}
@@ -506,11 +505,10 @@ class Hart:
         if step != tuple(b - a for a, b in zip(older[:4], last[:4])) or step[0] != loop.body or                 last[4:8] != now[4:8] or older[4:8] != last[4:8] or now[8] - last[8] != step[1] or step[1] <= 0:
             return                              # not yet the same iteration over and over
         cycles_per, time = step[1], now[8]
-        if self.alone_cycles is not None:
-            limit = (max(self.alone_cycles, counter.cycle_limit) - counter.cycles) // cycles_per
-        else:
-            limit = min((counter.cycle_limit - counter.cycles) // cycles_per,
-                        (max(counter.limit, self._turn_limit) - counter.executed) // loop.body)
+        # within this run's limits: a turn's end is where running would have stopped too (beyond it,
+        # where the next turns would end depends on the scheduler's float arithmetic of time)
+        limit = min((counter.cycle_limit - counter.cycles) // cycles_per,
+                    (max(counter.limit, self._turn_limit) - counter.executed) // loop.body)
         register = lambda r: self.reg(rv.UC_RISCV_REG_X0 + r)   # noqa: E731
         if limit <= 0 or loop.exits(time, register):
             return
@@ -531,6 +529,29 @@ class Hart:
             return
         self.iterations_skipped += skip
         self._time_seen[loop.site] = (last, self._counter_state() + (time + skip * cycles_per,))
+
+    def skip_idle(self, loop: shared_memory.PollLoop) -> None:
+        """The hart came round a loop that only spins (time_loops.find_idle_loops) again: once two
+        iterations in a row were alike in instructions, cycles, mispredictions, stalls and predictor
+        state, the iterations up to the end of this run are counted without being run."""
+        counter = self._counter
+        now = self._counter_state()
+        seen = self._time_seen.get(loop.head)
+        self._time_seen[loop.head] = (seen[1] if seen else None, now)
+        if seen is None or seen[0] is None:
+            return
+        older, last = seen
+        step = tuple(b - a for a, b in zip(last[:4], now[:4]))
+        if step != tuple(b - a for a, b in zip(older[:4], last[:4])) or step[0] != loop.body or \
+                last[4:] != now[4:] or older[4:] != last[4:] or step[1] <= 0:
+            return
+        skip = min((counter.cycle_limit - counter.cycles) // step[1],
+                   (max(counter.limit, self._turn_limit) - counter.executed) // loop.body)
+        if skip <= 0:
+            return
+        self._count_skipped(skip, step)
+        self.iterations_skipped += skip
+        self._time_seen[loop.head] = (last, self._counter_state())
 
     def _count_skipped(self, iterations: int, step: tuple[int, int, int, int]) -> None:
         counter = self._counter

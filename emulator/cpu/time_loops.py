@@ -16,14 +16,18 @@ same. `exits` evaluates the rest of an iteration (from the time read to the clos
 time value; the first iteration whose value ends the loop is found by bisection (the loops wait
 for a value to grow past a bound), and the ones before it are skipped: their instructions,
 cycles, mispredictions and stalls are counted, time moves on by their cycles, and the hart reads
-the time of the iteration that ends the loop, which it then runs.
+the time of the iteration that ends the loop, which it then runs. The skip stays within the
+hart's turn, whose end is where running would have stopped as well: a one-second wait costs a
+turn's overhead per 20,000 cycles instead of a CSR read per iteration (skipping on past the turn
+while the hart runs alone would need the scheduler's turn arithmetic, which floats make
+path-dependent: issue 33's integer time).
 """
 from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
 
-from .shared_memory import MAX_LOOP_BYTES, _backward_branches
+from .shared_memory import MAX_LOOP_BYTES, PollLoop, _backward_branches
 
 MASK = (1 << 64) - 1
 CSR_MCYCLE, CSR_CYCLE = 0xB00, 0xC00
@@ -223,6 +227,58 @@ class TimeLoop:
             elif op.kind == "jump":
                 return op.target != self.head
         return True                             # fell through the closing branch
+
+
+JAL_TO_ITSELF, C_J_TO_ITSELF = 0x0000_006F, 0xA001     # jal x0, 0 and c.j 0: `j .`
+
+
+def find_idle_loops(code: bytes, base: int) -> list[PollLoop]:
+    """Every loop that does nothing but spin: `j .` (a jump to itself; the SDK's sys_exit ends in
+    one, and many programs' last words are one) or a straight run of register arithmetic closed by a
+    backward jump, carrying no value between iterations and reading no memory and no time. The
+    native counter reports them as it reports poll loops (a PollLoop without loads); the hart counts
+    their iterations without running them (Hart.skip_idle)."""
+    return list(_idle_loops(code, base))
+
+
+@functools.lru_cache(maxsize=8)
+def _idle_loops(code: bytes, base: int) -> tuple[PollLoop, ...]:
+    loops = {}
+    halves = [int.from_bytes(code[i:i + 2], "little") for i in range(0, len(code) - 1, 2)]
+    to_itself = [2 * i for i, half in enumerate(halves)
+                 if half == C_J_TO_ITSELF or (half == JAL_TO_ITSELF & 0xFFFF and i + 1 < len(halves) and
+                                              half | halves[i + 1] << 16 == JAL_TO_ITSELF)]
+    for offset in [*_backward_branches(code), *to_itself]:
+        loop = _idle_loop_at(code, base, offset)
+        if loop is not None and loop.head not in loops:
+            loops[loop.head] = loop
+    return tuple(loops.values())
+
+
+def _idle_loop_at(code: bytes, base: int, branch_offset: int) -> PollLoop | None:
+    branch_pc = base + branch_offset
+    closing = decode(code, branch_offset, branch_pc)
+    if closing is None or closing.kind != "jump" or not branch_pc - MAX_LOOP_BYTES <= closing.target <= branch_pc:
+        return None
+    head = closing.target
+    ops: list[Op] = []
+    pc = head
+    while pc < branch_pc:
+        op = decode(code, pc - base, pc)
+        if op is None or op.kind != "alu":
+            return None
+        ops.append(op)
+        pc += op.size
+    if pc != branch_pc:
+        return None
+    written = {op.rd for op in ops if op.rd}
+    defined: set[int] = set()
+    for op in ops:
+        if any(r in written and r not in defined for r in op.reads):
+            return None
+        if op.rd:
+            defined.add(op.rd)
+    return PollLoop(head, branch_pc, len(ops) + 1, ())
 
 
 def find_time_loops(code: bytes, base: int) -> list[TimeLoop]:
