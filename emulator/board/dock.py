@@ -32,7 +32,7 @@ from ..memory_map import RESET_PC, SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE, is_
 from ..devices.mmio import Peripheral
 from ..devices.ports import Ports
 from ..devices.plic import (SOURCE_DMA0, SOURCE_GPIO, SOURCE_GPIOHS0, SOURCE_SPI0, SOURCE_SPI1, SOURCE_TIMER0A,
-                            SOURCE_UART1, SOURCE_UARTHS, SOURCE_WDT0, Plic)
+                            SOURCE_RTC, SOURCE_UART1, SOURCE_UARTHS, SOURCE_WDT0, Plic)
 from ..devices.ports import SerialInput
 from ..devices.plic import m_context as plic_m_context
 from ..devices.plic import s_context as plic_s_context
@@ -47,6 +47,7 @@ from ..cpu.timing import MISPREDICT_PENALTY, TIMING_IPC1, TIMING_MODELS, TIMING_
 from ..devices.sysctl import Sysctl
 from ..devices.timer import DwTimer
 from ..devices.uart import DwUart
+from ..devices.rtc import Rtc
 from ..devices.wdt import DwWatchdog
 from ..devices.uarths import Uarths
 from .pins import ExternalPins, PinChange
@@ -164,18 +165,19 @@ class Board:
         self.timers = [DwTimer(n, ports, clock_hz=lambda n=n: self.sysctl.timer_hz(n)) for n in range(3)]
         self.watchdogs = [DwWatchdog(n, ports, clock_hz=lambda n=n: self.sysctl.wdt_hz(n), reset_chip=reset_chip)
                           for n in range(2)]
+        self.rtc = Rtc(ports)
         self.clint = Clint(ports, counter=self.clock)
         self.plic = Plic(ports, high_sources=self._high_sources)
         self.spi0 = SpiController(0, ports, source_hz=lambda: self.sysctl.spi_source_hz(0))
         self.spi1 = SpiController(1, ports, source_hz=lambda: self.sysctl.spi_source_hz(1))
         self.dmac = Dmac(ports, self.memory, requests=self.sysctl.dma_request,
                          peripherals={"spi0": self.spi0, "spi1": self.spi1, **{uart.GATE: uart for uart in self.uarts}})
-        self.peripherals: list[Peripheral] = [self.sysctl, self.fpioa, self.gpiohs, self.gpio, self.uarths, *self.uarts, *self.timers, *self.watchdogs,
+        self.peripherals: list[Peripheral] = [self.sysctl, self.fpioa, self.gpiohs, self.gpio, self.uarths, *self.uarts, *self.timers, *self.watchdogs, self.rtc,
                                               self.clint, self.plic, self.dmac, self.spi0, self.spi1]
         self.signals = None                    # a vcd.SignalLog with --vcd
         # the blocks a DMA channel serves advance before the DMAC, which completes what they finished
         self.timed_devices = [self.uarths, self.spi0, self.spi1, *self.uarts, self.dmac, self.sysctl, self.clint,
-                              *self.timers, *self.watchdogs, self.pins]
+                              *self.timers, *self.watchdogs, self.rtc, self.pins]
         self.cold = cold
         if not cold:
             bootrom.hand_over(self.sysctl, self.fpioa, self.uarths)    # before the scheduler reads the CPU clock
@@ -342,7 +344,7 @@ class Board:
     def reset_peripheral(self, name: str, now: float) -> None:
         """SYSCTL peri_reset released a block: it returns to its reset state."""
         target = {"spi0": self.spi0, "spi1": self.spi1, "dma": self.dmac, "fpioa": self.fpioa,
-                  "gpio": self.gpio, **{block.GATE: block for block in (*self.uarts, *self.timers, *self.watchdogs)}}.get(name)
+                  "gpio": self.gpio, **{block.GATE: block for block in (*self.uarts, *self.timers, *self.watchdogs, self.rtc)}}.get(name)
         if target is not None:
             self.advance_devices(now)
             target.reset(now)
@@ -479,6 +481,8 @@ class Board:
         for n, uart in enumerate(self.uarts):
             if uart.irq_line():
                 high.append(SOURCE_UART1 + n)
+        if self.rtc.irq_line():
+            high.append(SOURCE_RTC)
         for n, watchdog in enumerate(self.watchdogs):
             if watchdog.irq_line():
                 high.append(SOURCE_WDT0 + n)

@@ -43,6 +43,7 @@ SOURCE_SPI0, SOURCE_SPI1, SOURCE_GPIO, SOURCE_DMA0, SOURCE_UARTHS, SOURCE_GPIOHS
 SOURCE_UART1 = 11    # UARTn is source 10 + n (plic.h IRQN_UART1_INTERRUPT)
 SOURCE_TIMER0A = 14  # TIMERn's channels 0-1: 14 + 2 n, channels 2-3: 15 + 2 n
 SOURCE_WDT0 = 21     # WDTn is source 21 + n
+SOURCE_RTC = 20
 
 
 def m_context(hart: int) -> int:

@@ -171,12 +171,13 @@ class DwTimer(Peripheral):
         return (1 if status & 3 else 0) | (2 if status & 12 else 0)
 
     def next_event_time(self, now: float) -> float | None:
-        """The next count's end of a channel whose end matters outside a read: an unmasked
-        interrupt, or a PWM toggle output."""
+        """The next count's end of a channel whose end matters outside a read: an unmasked interrupt.
+        (A PWM output's edges are told with their own times whenever the timer is advanced, every
+        turn of the harts: they need no turn of their own.)"""
         times = []
         for channel, count in enumerate(self._counts):
             control = self._control(channel)
-            if count is not None and (not control & CR_INTERRUPT_MASK or control & CR_PWM):
+            if count is not None and not control & CR_INTERRUPT_MASK:
                 end = count.next_end(now)
                 if end < math.inf:
                     times.append(end)
