@@ -12,9 +12,11 @@ before the storer goes on; after such a hand-over, and at reset, the harts run i
 lockstep for a moment (shared_memory.py).
 
 mcycle and mtime are integrals of the CPU clock over virtual time; a clock change
-(SYSCTL) starts a new epoch. A run ends when the requested frames have been shown,
-or with a BoardStop: a trap or fatal error report (after a grace period in which the
-firmware's own handler may report it), a hang, or a stop recorded by the bus.
+(SYSCTL) starts a new epoch. Exceptions enter the firmware's trap handler and the run goes on.
+A run ends when the requested frames have been shown, or with a BoardStop: the firmware's fatal
+error report (after a grace period), a trap that ended the program (its handler never returned
+and then no hart could go on), a trap storm, a hang, or a stop recorded by the bus. A chip reset
+(a watchdog, SYSCTL's soft_reset) is carried out between turns (Board.reset_chip).
 """
 from __future__ import annotations
 
