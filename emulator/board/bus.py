@@ -62,9 +62,8 @@ if TYPE_CHECKING:
 # Blocks of the K210 the model knows by name but does not implement (for clear messages)
 KNOWN_UNMODELLED = [
     (0x5020_1000, 0xF000, "GPIO (past its registers)"), (0x5024_0000, 0x1_0000, "SPI slave"),
-    (0x5025_0000, 0x3_0000, "I2S"), (0x5028_0000, 0x3_0000, "I2C"), (0x502C_0000, 0x1_0000, "SHA256"),
-    (0x5042_0000, 0x1_0000, "OTP"),
-    (0x5043_0000, 0x1_0000, "DVP"), (0x5045_0000, 0x1_0000, "AES"), 
+    (0x5025_0000, 0x3_0000, "I2S"), (0x5028_0000, 0x3_0000, "I2C"), (0x5042_0000, 0x1_0000, "OTP"),
+    (0x5043_0000, 0x1_0000, "DVP"), (0x5045_0000, 0x1_0000, "AES"),
     (0x5400_0000, 0x100_0000, "SPI3 (on-board flash)"), (0x5000_0000 + 0x1000, 0xF000, "DMAC (past its registers)"),
     (0x5100_0000, 0x100_0000, "SPI2"), (0x4080_0000, 0x100_0000, "KPU"), (0x4200_0000, 0x100_0000, "FFT"),
     (0x8800_0000, 0x2_0000, "boot ROM"),

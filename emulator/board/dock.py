@@ -48,6 +48,7 @@ from ..devices.sysctl import Sysctl
 from ..devices.timer import DwTimer
 from ..devices.uart import DwUart
 from ..devices.rtc import Rtc
+from ..devices.sha256 import Sha256
 from ..devices.wdt import DwWatchdog
 from ..devices.uarths import Uarths
 from .pins import ExternalPins, PinChange
@@ -166,13 +167,14 @@ class Board:
         self.watchdogs = [DwWatchdog(n, ports, clock_hz=lambda n=n: self.sysctl.wdt_hz(n), reset_chip=reset_chip)
                           for n in range(2)]
         self.rtc = Rtc(ports)
+        self.sha256 = Sha256(ports)
         self.clint = Clint(ports, counter=self.clock)
         self.plic = Plic(ports, high_sources=self._high_sources)
         self.spi0 = SpiController(0, ports, source_hz=lambda: self.sysctl.spi_source_hz(0))
         self.spi1 = SpiController(1, ports, source_hz=lambda: self.sysctl.spi_source_hz(1))
         self.dmac = Dmac(ports, self.memory, requests=self.sysctl.dma_request,
                          peripherals={"spi0": self.spi0, "spi1": self.spi1, **{uart.GATE: uart for uart in self.uarts}})
-        self.peripherals: list[Peripheral] = [self.sysctl, self.fpioa, self.gpiohs, self.gpio, self.uarths, *self.uarts, *self.timers, *self.watchdogs, self.rtc,
+        self.peripherals: list[Peripheral] = [self.sysctl, self.fpioa, self.gpiohs, self.gpio, self.uarths, *self.uarts, *self.timers, *self.watchdogs, self.rtc, self.sha256,
                                               self.clint, self.plic, self.dmac, self.spi0, self.spi1]
         self.signals = None                    # a vcd.SignalLog with --vcd
         # the blocks a DMA channel serves advance before the DMAC, which completes what they finished
@@ -344,7 +346,8 @@ class Board:
     def reset_peripheral(self, name: str, now: float) -> None:
         """SYSCTL peri_reset released a block: it returns to its reset state."""
         target = {"spi0": self.spi0, "spi1": self.spi1, "dma": self.dmac, "fpioa": self.fpioa,
-                  "gpio": self.gpio, **{block.GATE: block for block in (*self.uarts, *self.timers, *self.watchdogs, self.rtc)}}.get(name)
+                  "gpio": self.gpio, **{block.GATE: block for block in (*self.uarts, *self.timers, *self.watchdogs, self.rtc,
+                                                    self.sha256)}}.get(name)
         if target is not None:
             self.advance_devices(now)
             target.reset(now)

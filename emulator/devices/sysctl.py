@@ -58,7 +58,7 @@ PERI_BUS = {"gpio": CENT_APB0, "fpioa": CENT_APB0, "spi0": CENT_APB2, "spi1": CE
             "spi2": CENT_APB0, "spi3": CENT_APB2, "dma": None,
             "uart1": CENT_APB0, "uart2": CENT_APB0, "uart3": CENT_APB0,
             "timer0": CENT_APB0, "timer1": CENT_APB0, "timer2": CENT_APB0,
-            "wdt0": CENT_APB1, "wdt1": CENT_APB1, "rtc": CENT_APB1}
+            "wdt0": CENT_APB1, "wdt1": CENT_APB1, "rtc": CENT_APB1, "sha": CENT_APB0}
 CLK_TH2 = 0x40
 CLK_TH6 = 0x50
 RESET_STATUS = 0x60
