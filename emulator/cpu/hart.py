@@ -31,7 +31,7 @@ from unicorn import riscv_const as rv
 from unicorn.unicorn_py3 import unicorn as _ucpy
 
 from . import _insn_counter, shared_memory, timing
-from .time_loops import TimeLoop
+from .time_loops import LoopSkipper, TimeLoop
 from ..memory_map import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE
 
 # CSR numbers the board answers itself
@@ -246,12 +246,11 @@ class Hart:
         self._counter = _Counter(0, 0, _UC_EMU_STOP, None, 0, 0, 0, NO_LIMIT, None, 0, 0, _UC_REG_READ,
                                  rv.UC_RISCV_REG_X0)
         self._cycle_table: timing.CycleTable | None = None   # kept alive while the counter reads it
+        self.skipper = LoopSkipper(self._counter)
         self._counter_hook = self.add_native_hook(unicorn.UC_HOOK_CODE, _COUNT_HOOK, self._counter, 1, 0,
                                                   "the instruction counter")
         self._csr_words: dict[int, int] = {}          # address -> instruction word of each CSR site
         self.time_loops: dict[int, TimeLoop] = {}     # by the address of their time read (time_loops.py)
-        self._time_seen: dict[int, tuple] = {}        # per time read: the counter at its last two reads
-        self.iterations_skipped = 0                   # time-loop iterations counted without running them
         self._turn_limit = NO_LIMIT
         self._csr_table: ctypes.Array | None = None   # the counter's table of CSR sites, kept alive here
         self.csr_listeners: list[Callable[["Hart", int], None]] = []   # called before a CSR site is carried out
@@ -481,84 +480,17 @@ class Hart:
 
     def install_time_loops(self, loops: list[TimeLoop]) -> None:
         """The loops that wait for time (time_loops.py): at their time read, the hart skips the
-        iterations that cannot end the loop (_skip_waiting)."""
+        iterations that cannot end the loop (time_loops.LoopSkipper)."""
         self.time_loops.update((loop.site, loop) for loop in loops)
 
-    def _counter_state(self) -> tuple:
-        counter = self._counter
-        return (counter.executed, counter.cycles, counter.mispredicts, counter.stall_cycles,
-                bytes(counter.predictor), counter.pending_kind, counter.pending_pc, counter.pending_entry)
-
-    def _skip_waiting(self, loop: TimeLoop, csr: int) -> None:
-        """At a time loop's read (counted, not carried out): when the last two iterations were alike
-        in everything but the time they read (time_loops.py), the iterations before the first that
-        ends the loop are counted as run, within this run's instruction and cycle limits, and the
-        read returns the time of the iteration it now is."""
-        counter = self._counter
-        now = self._counter_state() + (self._csr_value(csr),)
-        seen = self._time_seen.get(loop.site)
-        self._time_seen[loop.site] = (seen[1] if seen else None, now)
-        if seen is None or seen[0] is None:
-            return
-        older, last = seen
-        step = tuple(b - a for a, b in zip(last[:4], now[:4]))
-        if step != tuple(b - a for a, b in zip(older[:4], last[:4])) or step[0] != loop.body or                 last[4:8] != now[4:8] or older[4:8] != last[4:8] or now[8] - last[8] != step[1] or step[1] <= 0:
-            return                              # not yet the same iteration over and over
-        cycles_per, time = step[1], now[8]
-        # within this run's limits: a turn's end is where running would have stopped too (beyond it,
-        # where the next turns would end depends on the scheduler's float arithmetic of time)
-        limit = min((counter.cycle_limit - counter.cycles) // cycles_per,
-                    (max(counter.limit, self._turn_limit) - counter.executed) // loop.body)
-        register = lambda r: self.reg(rv.UC_RISCV_REG_X0 + r)   # noqa: E731
-        if limit <= 0 or loop.exits(time, register):
-            return
-        if not loop.exits(time + limit * cycles_per, register):
-            skip = limit
-        else:
-            low, high = 0, limit                # exits(low) false, exits(high) true
-            while high - low > 1:
-                middle = (low + high) // 2
-                if loop.exits(time + middle * cycles_per, register):
-                    high = middle
-                else:
-                    low = middle
-            skip = high
-        self._count_skipped(skip, step)
-        if self._csr_value(csr) != time + skip * cycles_per:
-            self._count_skipped(-skip, step)    # the clock does not map cycles one to one here
-            return
-        self.iterations_skipped += skip
-        self._time_seen[loop.site] = (last, self._counter_state() + (time + skip * cycles_per,))
-
     def skip_idle(self, loop: shared_memory.PollLoop) -> None:
-        """The hart came round a loop that only spins (time_loops.find_idle_loops) again: once two
-        iterations in a row were alike in instructions, cycles, mispredictions, stalls and predictor
-        state, the iterations up to the end of this run are counted without being run."""
-        counter = self._counter
-        now = self._counter_state()
-        seen = self._time_seen.get(loop.head)
-        self._time_seen[loop.head] = (seen[1] if seen else None, now)
-        if seen is None or seen[0] is None:
-            return
-        older, last = seen
-        step = tuple(b - a for a, b in zip(last[:4], now[:4]))
-        if step != tuple(b - a for a, b in zip(older[:4], last[:4])) or step[0] != loop.body or \
-                last[4:] != now[4:] or older[4:] != last[4:] or step[1] <= 0:
-            return
-        skip = min((counter.cycle_limit - counter.cycles) // step[1],
-                   (max(counter.limit, self._turn_limit) - counter.executed) // loop.body)
-        if skip <= 0:
-            return
-        self._count_skipped(skip, step)
-        self.iterations_skipped += skip
-        self._time_seen[loop.head] = (last, self._counter_state())
+        """The hart came round a loop that only spins again (time_loops.find_idle_loops)."""
+        self.skipper.at_idle(loop, self._turn_limit)
 
-    def _count_skipped(self, iterations: int, step: tuple[int, int, int, int]) -> None:
-        counter = self._counter
-        counter.executed += iterations * step[0]
-        counter.cycles += iterations * step[1]
-        counter.mispredicts += iterations * step[2]
-        counter.stall_cycles += iterations * step[3]
+    @property
+    def iterations_skipped(self) -> int:
+        """Loop iterations counted without being run (time_loops.py)."""
+        return self.skipper.iterations
 
     def install_cycle_table(self, table: timing.CycleTable | None) -> None:
         """Has the native counter charge the cycles `table` gives (timing.py) instead of one
@@ -592,6 +524,7 @@ class Hart:
         self.pending_exception = None
         self.open_trap = None
         self.polling = False
+        self.skipper.forget()
         self.forget_pending_transfer()
         self.forget_decodings()
         self.pc = pc
@@ -890,7 +823,8 @@ class Hart:
         csr = word >> 20
         loop = self.time_loops.get(address)
         if loop is not None:
-            self._skip_waiting(loop, csr)
+            self.skipper.at_time_read(loop, lambda: self._csr_value(csr),
+                                      lambda r: self.reg(rv.UC_RISCV_REG_X0 + r), self._turn_limit)
         if self.privilege < (csr >> 8) & 3:
             # a CSR of a more privileged mode (bits 9:8 of its number): an illegal instruction. The
             # user counters (cycle, instret) are let through, as the 1.9.1 counter-enable bits reset

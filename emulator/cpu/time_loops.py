@@ -9,7 +9,7 @@ At load time every such loop is found (`find_time_loops`): a straight run of reg
 exactly one read of mcycle/cycle and branches out of the loop, closed by a backward branch, in
 which no register carries a value from one iteration to the next (so every iteration is the
 same but for the time it reads), and whose instructions this module can evaluate. At run time
-(Hart._skip_waiting) the hart, stopped at the loop's time read, has seen the last two iterations
+(LoopSkipper.at_time_read) the hart, stopped at the loop's time read, has seen the last two iterations
 take the same instructions, cycles, branch mispredictions and stalls, with the branch predictor
 in the same state and the time advancing by the same cycles: from here every iteration is the
 same. `exits` evaluates the rest of an iteration (from the time read to the closing branch) for a
@@ -326,3 +326,98 @@ def _time_loop_at(code: bytes, base: int, branch_offset: int) -> TimeLoop | None
             defined.add(op.rd)
     start = times[0]
     return TimeLoop(head, branch_pc, len(ops), ops[start].pc, tuple(ops[start:]))
+
+
+class LoopSkipper:
+    """One hart's skipping of the loops above: what its native counter (hart.py's _Counter) was at
+    the last two visits of each loop, and the iterations counted without being run."""
+
+    def __init__(self, counter) -> None:
+        self.counter = counter
+        self.seen: dict[int, tuple] = {}
+        self.iterations = 0
+
+    def forget(self) -> None:
+        """A chip reset: every loop is seen afresh."""
+        self.seen.clear()
+
+    def _state(self) -> tuple:
+        counter = self.counter
+        return (counter.executed, counter.cycles, counter.mispredicts, counter.stall_cycles,
+                bytes(counter.predictor), counter.pending_kind, counter.pending_pc, counter.pending_entry)
+
+    def _steady(self, key: int, now: tuple, body: int) -> tuple[tuple, tuple[int, ...]] | None:
+        """Records this visit; (the last visit, the counts one iteration adds) when the last two
+        iterations were alike in instructions (`body`), cycles, mispredictions, stalls and
+        predictor state, else None."""
+        seen = self.seen.get(key)
+        self.seen[key] = (seen[1] if seen else None, now)
+        if seen is None or seen[0] is None:
+            return None
+        older, last = seen
+        step = tuple(b - a for a, b in zip(last[:4], now[:4]))
+        if step != tuple(b - a for a, b in zip(older[:4], last[:4])) or step[0] != body or step[1] <= 0 or \
+                last[4:8] != now[4:8] or older[4:8] != last[4:8]:
+            return None
+        return last, step
+
+    def _room(self, body: int, cycles_per: int, turn_limit: int) -> int:
+        """Iterations that fit in the rest of the hart's turn: where running would stop too (beyond
+        it, where the next turns would end depends on the scheduler's float arithmetic of time)."""
+        counter = self.counter
+        return min((counter.cycle_limit - counter.cycles) // cycles_per,
+                   (max(counter.limit, turn_limit) - counter.executed) // body)
+
+    def _count(self, iterations: int, step: tuple[int, ...]) -> None:
+        counter = self.counter
+        counter.executed += iterations * step[0]
+        counter.cycles += iterations * step[1]
+        counter.mispredicts += iterations * step[2]
+        counter.stall_cycles += iterations * step[3]
+
+    def at_time_read(self, loop: TimeLoop, time_now, register, turn_limit: int) -> None:
+        """At a time loop's read (counted, not carried out; `time_now()` the value it would read,
+        `register(n)` the hart's registers): the iterations before the first that ends the loop are
+        counted, and the read then returns the time of the iteration it now is."""
+        time = time_now()
+        steady = self._steady(loop.site, self._state() + (time,), loop.body)
+        if steady is None:
+            return
+        last, step = steady
+        cycles_per = step[1]
+        if time - last[8] != cycles_per:
+            return                               # the clock changed, or mcycle was written
+        limit = self._room(loop.body, cycles_per, turn_limit)
+        if limit <= 0 or loop.exits(time, register):
+            return
+        if not loop.exits(time + limit * cycles_per, register):
+            skip = limit
+        else:
+            low, high = 0, limit                 # exits(low) false, exits(high) true
+            while high - low > 1:
+                middle = (low + high) // 2
+                if loop.exits(time + middle * cycles_per, register):
+                    high = middle
+                else:
+                    low = middle
+            skip = high
+        self._count(skip, step)
+        if time_now() != time + skip * cycles_per:
+            self._count(-skip, step)             # the clock does not map cycles one to one here
+            return
+        self.iterations += skip
+        self.seen[loop.site] = (last, self._state() + (time + skip * cycles_per,))
+
+    def at_idle(self, loop: PollLoop, turn_limit: int) -> None:
+        """At a spinning loop's head, come round again: its iterations up to the end of the turn are
+        counted without being run."""
+        steady = self._steady(loop.head, self._state(), loop.body)
+        if steady is None:
+            return
+        last, step = steady
+        skip = self._room(loop.body, step[1], turn_limit)
+        if skip <= 0:
+            return
+        self._count(skip, step)
+        self.iterations += skip
+        self.seen[loop.head] = (last, self._state())
