@@ -13,7 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable
 
-from ..errors import HardwareMisuse, UnmodelledAccess
+from ..errors import HardwareMisuse
 from .mmio import Peripheral, Register, field
 from .ports import Ports
 
