@@ -48,7 +48,7 @@ from ..errors import BoardStop, FirmwareTrap, HardwareMisuse, RegisterRuleViolat
 from ..cpu.decode import decode_memory_access
 from ..cpu.hart import Hart
 from .scheduler import POLL_REPEATS
-from ..memory_map import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE, is_sram
+from ..memory_map import K210_UNMODELLED, SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE, is_sram
 from ..devices.mmio import BUS_AHB, BUS_APB, BUS_TILELINK, Peripheral, Register
 from .write_watch import describe as describe_stray
 
@@ -59,15 +59,6 @@ if TYPE_CHECKING:
     from .scheduler import Scheduler
     from .write_watch import WriteWatch
 
-# Blocks of the K210 the model knows by name but does not implement (for clear messages)
-KNOWN_UNMODELLED = [
-    (0x5020_1000, 0xF000, "GPIO (past its registers)"), (0x5024_0000, 0x1_0000, "SPI slave"),
-    (0x5025_0000, 0x3_0000, "I2S"), (0x5028_0000, 0x3_0000, "I2C"), (0x5042_0000, 0x1_0000, "OTP"),
-    (0x5043_0000, 0x1_0000, "DVP"), (0x5045_0000, 0x1_0000, "AES"),
-    (0x5400_0000, 0x100_0000, "SPI3 (on-board flash)"), (0x5000_0000 + 0x1000, 0xF000, "DMAC (past its registers)"),
-    (0x5100_0000, 0x100_0000, "SPI2"), (0x4080_0000, 0x100_0000, "KPU"), (0x4200_0000, 0x100_0000, "FFT"),
-    (0x8800_0000, 0x2_0000, "boot ROM"),
-]
 CAUSE_FETCH_ACCESS = 1
 CAUSE_LOAD_ACCESS, CAUSE_STORE_ACCESS = 5, 7
 # Rocket's physical addresses (rocket-chip coreplex/Configs.scala, PAddrBits = 32; in machine
@@ -220,7 +211,7 @@ class Bus:
             write = access in (unicorn.UC_MEM_WRITE_UNMAPPED, unicorn.UC_MEM_WRITE_PROT)
             if address >> PHYSICAL_ADDRESS_BITS:
                 return self._upper_bits_set(hart, address, size, fetch, write)
-            name = next((n for base, length, n in KNOWN_UNMODELLED if base <= address < base + length), None)
+            name = next((n for base, length, n in K210_UNMODELLED if base <= address < base + length), None)
             if not fetch and not self.strict and DEBUG_BASE <= address < DEBUG_BASE + DEBUG_SIZE:
                 # mapped on first use: a mapping at address 0 slows every hart down by several per cent
                 uc.mmio_map(DEBUG_BASE, DEBUG_SIZE, self._debug_reader(hart), None, self._debug_writer(hart), None)

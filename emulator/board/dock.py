@@ -28,11 +28,10 @@ from ..devices.gpio import Gpio
 from ..devices.gpiohs import Gpiohs
 from ..cpu.hart import ENGINE_FAST, ENGINES, Hart
 from .memory import Sram
-from ..memory_map import RESET_PC, SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE, is_sram
+from ..memory_map import K210_BLOCKS, RESET_PC, SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE, is_sram
 from ..devices.mmio import Peripheral
 from ..devices.ports import Ports
-from ..devices.plic import (SOURCE_DMA0, SOURCE_GPIO, SOURCE_GPIOHS0, SOURCE_SPI0, SOURCE_SPI1, SOURCE_TIMER0A,
-                            SOURCE_RTC, SOURCE_UART1, SOURCE_UARTHS, SOURCE_WDT0, Plic)
+from ..devices.plic import Plic
 from ..devices.ports import SerialInput
 from ..devices.plic import m_context as plic_m_context
 from ..devices.plic import s_context as plic_s_context
@@ -176,6 +175,7 @@ class Board:
                          peripherals={"spi0": self.spi0, "spi1": self.spi1, **{uart.GATE: uart for uart in self.uarts}})
         self.peripherals: list[Peripheral] = [self.sysctl, self.fpioa, self.gpiohs, self.gpio, self.uarths, *self.uarts, *self.timers, *self.watchdogs, self.rtc, self.sha256,
                                               self.clint, self.plic, self.dmac, self.spi0, self.spi1]
+        self._interrupting = [(p, K210_BLOCKS[p.NAME].irqs) for p in self.peripherals if K210_BLOCKS[p.NAME].irqs]
         self.signals = None                    # a vcd.SignalLog with --vcd
         # the blocks a DMA channel serves advance before the DMAC, which completes what they finished
         self.timed_devices = [self.uarths, self.spi0, self.spi1, *self.uarts, self.dmac, self.sysctl, self.clint,
@@ -468,34 +468,13 @@ class Board:
     # --- interrupts --------------------------------------------------------------------
 
     def _high_sources(self) -> list[int]:
-        """PLIC sources whose interrupt line is high right now."""
+        """PLIC sources whose interrupt line is high right now (each block's lines, wired to the
+        sources memory_map.K210_BLOCKS gives)."""
         high = []
-        if self.spi0.irq_line():
-            high.append(SOURCE_SPI0)
-        if self.spi1.irq_line():
-            high.append(SOURCE_SPI1)
-        dma = self.dmac.irq_lines()
-        if dma:
-            high.extend(SOURCE_DMA0 + n for n in range(6) if dma >> n & 1)
-        if self.gpio.irq_line():
-            high.append(SOURCE_GPIO)
-        if self.uarths.irq_line():
-            high.append(SOURCE_UARTHS)
-        for n, uart in enumerate(self.uarts):
-            if uart.irq_line():
-                high.append(SOURCE_UART1 + n)
-        if self.rtc.irq_line():
-            high.append(SOURCE_RTC)
-        for n, watchdog in enumerate(self.watchdogs):
-            if watchdog.irq_line():
-                high.append(SOURCE_WDT0 + n)
-        for n, timer in enumerate(self.timers):
-            lines = timer.irq_lines()
+        for device, sources in self._interrupting:
+            lines = device.irq_lines()
             if lines:
-                high.extend(SOURCE_TIMER0A + 2 * n + line for line in range(2) if lines >> line & 1)
-        lines = self.gpiohs.irq_lines()
-        if lines:
-            high.extend(SOURCE_GPIOHS0 + n for n in range(32) if lines >> n & 1)
+                high.extend(source for line, source in enumerate(sources) if lines >> line & 1)
         return high
 
     def mip(self, h: int, now: float, mask: int = ~0) -> int:

@@ -8,6 +8,7 @@ power-up contents almost always amount to.
 """
 from __future__ import annotations
 
+from ..memory_map import K210_BLOCKS
 from .mmio import BUS_TILELINK, Peripheral, Register
 from .ports import MtimeCounter, Ports
 
@@ -25,8 +26,8 @@ class Clint(Peripheral):
     halves of mtimecmp and mtime), so a store narrower than 32 bits changes nothing."""
 
     NAME = "CLINT"
-    BASE = 0x0200_0000
-    SIZE = 0x10000
+    BASE = K210_BLOCKS["CLINT"].base
+    SIZE = K210_BLOCKS["CLINT"].size
     BUS = BUS_TILELINK
     REGISTERS = {
         **{MSIP + 4 * h: Register(f"msip{h}") for h in range(HARTS)},

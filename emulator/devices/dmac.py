@@ -20,6 +20,7 @@ from typing import Callable, Protocol
 import numpy as np
 
 from ..errors import HardwareMisuse, UnmodelledAccess
+from ..memory_map import K210_BLOCKS
 from .mmio import BUS_AHB, Peripheral, Register, field
 from .ports import DmaMemory, Ports
 
@@ -141,9 +142,9 @@ class HandshakePeripheral(Protocol):
 
 class Dmac(Peripheral):
     NAME = "DMAC"
-    BASE = 0x5000_0000
-    SIZE = 0x1000
-    GATE = "dma"
+    BASE = K210_BLOCKS["DMAC"].base
+    SIZE = K210_BLOCKS["DMAC"].size
+    GATE = K210_BLOCKS["DMAC"].gate
     BUS = BUS_AHB
     REGISTERS = {
         ID: Register("id", width=8, writable=False), COMPVER: Register("compver", width=8, writable=False,

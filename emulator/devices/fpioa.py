@@ -6,6 +6,7 @@ firmware routed, as on the Maix Dock.
 """
 from __future__ import annotations
 
+from ..memory_map import K210_BLOCKS
 from .mmio import Peripheral, Register
 from .ports import Ports
 
@@ -35,9 +36,9 @@ TIE_VAL = 0xE0
 
 class Fpioa(Peripheral):
     NAME = "FPIOA"
-    BASE = 0x502B_0000
-    SIZE = 0x1000
-    GATE = "fpioa"
+    BASE = K210_BLOCKS["FPIOA"].base
+    SIZE = K210_BLOCKS["FPIOA"].size
+    GATE = K210_BLOCKS["FPIOA"].gate
     REGISTERS = {
         **{4 * pad: Register(f"io{pad}") for pad in range(PAD_COUNT)},
         **{TIE_EN + 4 * i: Register(f"tie_en{i}") for i in range(8)},

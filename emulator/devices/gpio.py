@@ -22,6 +22,7 @@ real pad's change is seen, not what: they are stored and otherwise ignored.
 from __future__ import annotations
 
 from .fpioa import FUNC_GPIO0
+from ..memory_map import K210_BLOCKS
 from .mmio import Peripheral, Register
 from .ports import PadInputs, Ports
 
@@ -38,9 +39,9 @@ class Gpio(Peripheral):
     tells it when pad levels may have changed (wiring_changed)."""
 
     NAME = "GPIO"
-    BASE = 0x5020_0000
-    SIZE = 0x1000
-    GATE = "gpio"
+    BASE = K210_BLOCKS["GPIO"].base
+    SIZE = K210_BLOCKS["GPIO"].size
+    GATE = K210_BLOCKS["GPIO"].gate
     REGISTERS = {
         DATA_OUTPUT: Register("data_output"), DIRECTION: Register("direction"), SOURCE: Register("source"),
         INT_ENABLE: Register("interrupt_enable"), INT_MASK: Register("interrupt_mask"),

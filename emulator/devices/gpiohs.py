@@ -8,6 +8,7 @@ what it drives; else what drives the pad from outside (--pin); else its pull, GP
 """
 from __future__ import annotations
 
+from ..memory_map import K210_BLOCKS
 from .mmio import BUS_TILELINK, Peripheral, Register
 from .fpioa import FUNC_GPIOHS0
 from .ports import PadInputs, Ports
@@ -25,8 +26,8 @@ class Gpiohs(Peripheral):
     only a store that covers all four bytes changes it."""
 
     NAME = "GPIOHS"
-    BASE = 0x3800_1000
-    SIZE = 0x1000
+    BASE = K210_BLOCKS["GPIOHS"].base
+    SIZE = K210_BLOCKS["GPIOHS"].size
     BUS = BUS_TILELINK
     REGISTERS = {
         INPUT_VAL: Register("input_val", writable=False),

@@ -142,6 +142,15 @@ class Peripheral:
     def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
         self.values[offset] = value
 
+    def irq_line(self) -> bool:
+        """Whether the block's (only) interrupt line is high now."""
+        return False
+
+    def irq_lines(self) -> int:
+        """The block's interrupt lines now, line n in bit n (memory_map.K210_BLOCKS gives each line's
+        PLIC source); a block with more than one line overrides this."""
+        return 1 if self.irq_line() else 0
+
     def next_event_time(self, now: float) -> float | None:
         """The next virtual time at which this device changes state by itself (None: never)."""
         return None

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 from typing import Callable, Iterable
 
+from ..memory_map import K210_BLOCKS
 from .mmio import BUS_TILELINK, Peripheral, Register, byte_fields
 from .ports import Ports
 
@@ -39,11 +40,11 @@ CONTEXT_STRIDE = 0x1000
 PRIORITY_MASK = 7
 WORDS = (SOURCES + 31) // 32
 
-SOURCE_SPI0, SOURCE_SPI1, SOURCE_GPIO, SOURCE_DMA0, SOURCE_UARTHS, SOURCE_GPIOHS0 = 1, 2, 23, 27, 33, 34
-SOURCE_UART1 = 11    # UARTn is source 10 + n (plic.h IRQN_UART1_INTERRUPT)
-SOURCE_TIMER0A = 14  # TIMERn's channels 0-1: 14 + 2 n, channels 2-3: 15 + 2 n
-SOURCE_WDT0 = 21     # WDTn is source 21 + n
-SOURCE_RTC = 20
+# the first source of some blocks (memory_map.K210_BLOCKS has them all)
+SOURCE_SPI0, SOURCE_SPI1, SOURCE_GPIO, SOURCE_DMA0, SOURCE_UARTHS, SOURCE_GPIOHS0 = (
+    K210_BLOCKS[name].irqs[0] for name in ("SPI0", "SPI1", "GPIO", "DMAC", "UARTHS", "GPIOHS"))
+SOURCE_UART1, SOURCE_TIMER0A, SOURCE_WDT0, SOURCE_RTC = (
+    K210_BLOCKS[name].irqs[0] for name in ("UART1", "TIMER0", "WDT0", "RTC"))
 
 
 def m_context(hart: int) -> int:
@@ -58,8 +59,8 @@ def s_context(hart: int) -> int:
 
 class Plic(Peripheral):
     NAME = "PLIC"
-    BASE = 0x0C00_0000
-    SIZE = 0x0400_0000
+    BASE = K210_BLOCKS["PLIC"].base
+    SIZE = K210_BLOCKS["PLIC"].size
     BUS = BUS_TILELINK
     REGISTERS = {
         **{PRIORITY + 4 * s: Register(f"priority{s}") for s in range(SOURCES)},

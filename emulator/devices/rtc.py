@@ -26,6 +26,7 @@ import math
 from dataclasses import dataclass
 from datetime import datetime, timedelta
 
+from ..memory_map import K210_BLOCKS
 from .mmio import Peripheral, Register
 from .ports import Ports
 
@@ -81,9 +82,9 @@ def _time_fields(word: int) -> dict[str, int]:
 
 class Rtc(Peripheral):
     NAME = "RTC"
-    BASE = 0x5046_0000
-    SIZE = 0x1_0000
-    GATE = "rtc"
+    BASE = K210_BLOCKS["RTC"].base
+    SIZE = K210_BLOCKS["RTC"].size
+    GATE = K210_BLOCKS["RTC"].gate
     REGISTERS = {
         DATE: Register("date"), TIME: Register("time"), ALARM_DATE: Register("alarm_date"),
         ALARM_TIME: Register("alarm_time"), INITIAL_COUNT: Register("initial_count"),

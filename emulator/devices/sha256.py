@@ -16,6 +16,7 @@ the DMA handshake (a DMAC channel routed to it stops the run).
 """
 from __future__ import annotations
 
+from ..memory_map import K210_BLOCKS
 from .mmio import Peripheral, Register
 from .ports import Ports
 
@@ -56,9 +57,9 @@ def compress(state: tuple[int, ...], block: list[int]) -> tuple[int, ...]:
 
 class Sha256(Peripheral):
     NAME = "SHA256"
-    BASE = 0x502C_0000
-    SIZE = 0x1_0000
-    GATE = "sha"
+    BASE = K210_BLOCKS["SHA256"].base
+    SIZE = K210_BLOCKS["SHA256"].size
+    GATE = K210_BLOCKS["SHA256"].gate
     REGISTERS = {
         **{RESULT + 4 * n: Register(f"sha_result{n}", writable=False) for n in range(8)},
         DATA_IN: Register("sha_data_in1", readable=False), 0x24: Register("reserved0"),

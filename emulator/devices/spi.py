@@ -29,6 +29,7 @@ from typing import TYPE_CHECKING, Callable, Protocol
 import numpy as np
 
 from ..errors import UnmodelledAccess
+from ..memory_map import K210_BLOCKS
 from .mmio import Peripheral, Register, field
 from .ports import Ports
 
@@ -115,7 +116,6 @@ class _Train:
 class SpiController(Peripheral):
     """One DW SSI controller (index 0 = SPI0, 1 = SPI1)."""
 
-    SIZE = 0x1000
     REGISTERS = {
         CTRLR0: Register("ctrlr0", reset=0x0007_0000), CTRLR1: Register("ctrlr1"),
         SSIENR: Register("ssienr"), MWCR: Register("mwcr"), SER: Register("ser"),
@@ -139,8 +139,8 @@ class SpiController(Peripheral):
         self.index = index
         self.source_hz = source_hz
         self.NAME = f"SPI{index}"
-        self.GATE = f"spi{index}"
-        self.BASE = 0x5200_0000 + 0x0100_0000 * index
+        block = K210_BLOCKS[self.NAME]
+        self.GATE, self.BASE, self.SIZE = block.gate, block.base, block.size
         super().__init__(ports)
         self.device_for_ss = lambda ss: None   # set by the board's wiring
         self._train: _Train | None = None

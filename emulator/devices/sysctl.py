@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 from ..errors import HardwareMisuse
+from ..memory_map import K210_BLOCKS
 from .mmio import Peripheral, Register, field
 from .ports import Ports
 
@@ -86,8 +87,8 @@ _GATE_REGISTERS = frozenset((CLK_EN_CENT, CLK_EN_PERI, PERI_RESET))
 
 class Sysctl(Peripheral):
     NAME = "SYSCTL"
-    BASE = 0x5044_0000
-    SIZE = 0x1000
+    BASE = K210_BLOCKS["SYSCTL"].base
+    SIZE = K210_BLOCKS["SYSCTL"].size
     REGISTERS = {
         0x00: Register("git_id", writable=False, reset=0x0000_0000),
         0x04: Register("clk_freq", writable=False, reset=OSC_HZ),

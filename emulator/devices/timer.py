@@ -25,6 +25,7 @@ import math
 from dataclasses import dataclass
 from typing import Callable
 
+from ..memory_map import K210_BLOCKS
 from .mmio import Peripheral, Register
 from .ports import Ports
 
@@ -97,9 +98,8 @@ class DwTimer(Peripheral):
         """index: 0, 1 or 2. clock_hz: the timer clock SYSCTL gives this block."""
         self.index = index
         self.NAME = f"TIMER{index}"
-        self.GATE = f"timer{index}"
-        self.BASE = 0x502D_0000 + 0x1_0000 * index
-        self.SIZE = 0x1_0000
+        block = K210_BLOCKS[self.NAME]
+        self.GATE, self.BASE, self.SIZE = block.gate, block.base, block.size
         self.clock_hz = clock_hz
         super().__init__(ports)
         self._counts: list[_Count | None] = [None] * CHANNELS

@@ -29,6 +29,7 @@ from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 
+from ..memory_map import K210_BLOCKS
 from .mmio import Peripheral, Register
 from .ports import Ports, SerialInput
 
@@ -85,9 +86,8 @@ class DwUart(Peripheral):
         on_byte: hears each byte as its stop bit leaves the TX pin."""
         self.index = index
         self.NAME = f"UART{index}"
-        self.GATE = f"uart{index}"
-        self.BASE = 0x5020_0000 + 0x1_0000 * index
-        self.SIZE = 0x1_0000
+        block = K210_BLOCKS[self.NAME]
+        self.GATE, self.BASE, self.SIZE = block.gate, block.base, block.size
         self.source_hz = source_hz
         self.on_byte = on_byte
         self.input: SerialInput | None = None     # what the host sends this UART's RX pin

@@ -21,6 +21,7 @@ from __future__ import annotations
 from collections import deque
 from typing import Callable
 
+from ..memory_map import K210_BLOCKS
 from .mmio import BUS_TILELINK, Peripheral, Register
 from .ports import Ports, SerialInput
 
@@ -37,8 +38,8 @@ INTERACTIVE_POLL_S = 0.05     # virtual time between looks at a terminal while n
 
 class Uarths(Peripheral):
     NAME = "UARTHS"
-    BASE = 0x3800_0000
-    SIZE = 0x1000
+    BASE = K210_BLOCKS["UARTHS"].base
+    SIZE = K210_BLOCKS["UARTHS"].size
     BUS = BUS_TILELINK
     # fields as sifive-blocks' UART declares them: an 8-bit txdata byte (a store that covers it
     # queues it), txen and nstop, the 3-bit watermarks at bit 16, a 16-bit divisor

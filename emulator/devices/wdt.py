@@ -22,6 +22,7 @@ from __future__ import annotations
 import math
 from typing import Callable
 
+from ..memory_map import K210_BLOCKS
 from .mmio import Peripheral, Register
 from .ports import Ports
 
@@ -52,9 +53,8 @@ class DwWatchdog(Peripheral):
         resets, because of this watchdog (its name), at this time."""
         self.index = index
         self.NAME = f"WDT{index}"
-        self.GATE = f"wdt{index}"
-        self.BASE = 0x5040_0000 + 0x1_0000 * index
-        self.SIZE = 0x1_0000
+        block = K210_BLOCKS[self.NAME]
+        self.GATE, self.BASE, self.SIZE = block.gate, block.base, block.size
         self.clock_hz = clock_hz
         self.reset_chip = reset_chip
         super().__init__(ports)
