@@ -224,3 +224,43 @@ def test_stop_on_trap_fails_the_syscalls_program_at_its_first_ecall(c_firmware, 
         result.stderr
     summary = json.loads((tmp_path / "run.json").read_text())
     assert summary["exceptions"] == {"environment call from M-mode": 1} and summary["stop_on_trap"]
+
+
+# --- the time blocks and the watchdog, in the SDK's manner -----------------------------------------
+
+def test_timers_tick_pwm_alarm_and_a_key_through_the_plic(c_firmware, tmp_path):
+    """timers.c: TIMER0 every 10 ms (five ticks), TIMER1's PWM on pad 24 (1 kHz, a quarter high,
+    read back from the VCD), an RTC alarm two seconds after it was set, the BOOT key (pad 16,
+    pulled up) pressed at 2.5 s by --pin: each through the PLIC to hart 0's handler."""
+    from test_vcd import read_vcd
+    out = tmp_path / "out"
+    run = run_emulator("run", str(c_firmware / "timers.elf"), "--until", "3", "--quiet", "--out", str(out),
+                       "--pin", "16=0@2.5", "--vcd", str(tmp_path / "t.vcd"))
+    assert run.returncode == 0, run.stderr
+    summary = json.loads((out / "run.json").read_text())
+    lines = console_of(summary)
+    assert lines[0] == "timers started: 13000000 Hz timer clock"
+    ticks = [int(re.fullmatch(r"tick (\d) at (\d+) us", line).group(2)) for line in lines[1:6]]
+    assert [b - a for a, b in zip(ticks, ticks[1:])] == [10000] * 4
+    assert lines[6:] == ["alarm at 12:34:58", "key pressed", "done: 5 ticks, 1 alarm, 1 key"]
+    alarm = next(c["virtual_time_s"] for c in summary["console"] if c["line"] == "alarm at 12:34:58")
+    assert 2.0 < alarm < 2.01                               # set at 12:34:56 just after start
+    key = next(c["virtual_time_s"] for c in summary["console"] if c["line"] == "key pressed")
+    assert 2.5 < key < 2.51
+    _, changes = read_vcd((tmp_path / "t.vcd").read_text())
+    edges = [t for t, v in changes["pad24"]]                # low from the start, then high, ...
+    assert [v for t, v in changes["pad24"][:3]] == ["0", "1", "0"]
+    lows = {round((b - a) / 1e3) for a, b in zip(edges[0::2], edges[1::2])}
+    highs = {round((b - a) / 1e3) for a, b in zip(edges[1::2], edges[2::2])}
+    assert lows == {750} and highs == {250}                 # microseconds
+
+
+def test_an_unfed_watchdog_interrupts_then_resets_and_the_program_finds_out(c_firmware, tmp_path):
+    out = tmp_path / "out"
+    run = run_emulator("run", str(c_firmware / "watchdog.elf"), "--until", "0.1", "--quiet", "--out", str(out))
+    assert run.returncode == 0, run.stderr
+    summary = json.loads((out / "run.json").read_text())
+    assert console_of(summary) == ["watchdog started: 5 ms a timeout", "watchdog interrupt: not fed, not cleared",
+                                   "restarted by the watchdog"]
+    (reset,) = summary["resets"]
+    assert reset["cause"] == "WDT0" and 0.0100 < reset["virtual_time_s"] < 0.0102   # two timeouts of 2^16 / 13 MHz

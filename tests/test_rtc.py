@@ -1,7 +1,7 @@
 """The RTC (devices/rtc.py) as the Kendryte SDK's rtc.c drives it: rtc_init (unprotected, counting
 IN0's 26 MHz, count from 1, running), setting the time in setting mode, the calendar moving on a
 second per initial_count cycles (minutes, days, months, leap years, the week day), tick and alarm
-interrupts as pulses the PLIC latches (source 20)."""
+interrupts as pulses the PLIC's gateway latches (source 20)."""
 from __future__ import annotations
 
 import pytest
@@ -70,25 +70,34 @@ def test_tick_every_second_and_an_alarm_are_pulses_the_plic_latches(rtc):
     clock.write(r.REGISTER_CTRL, 4, OPEN | RUNNING, 0.0)
     assert clock.next_event_time(0.0) == pytest.approx(1.0)
     clock.advance(1.0)                                                    # 23:59:59: no alarm
-    assert clock._pulses == []
+    assert SOURCE_RTC not in board.plic.pending
     start = clock.next_event_time(1.0)
     assert start == pytest.approx(2.0)
-    clock.advance(start)
-    board.time = start
-    assert clock.irq_line() and SOURCE_RTC in board._high_sources()
+    clock.advance(start)                                                  # midnight: the alarm's pulse
+    assert SOURCE_RTC in board.plic.pending and not clock.irq_line()     # latched; no level to hold
     board.plic.write(4 * SOURCE_RTC, 4, 1, start)
     board.plic.write(0x2000, 4, 1 << SOURCE_RTC, start)
-    board.plic.sample()
-    board.time = start + 1e-6                                             # the pulse is over, latched
-    assert not clock.irq_line()
     assert board.plic.read(0x20_0004, 4, start + 1e-6) == SOURCE_RTC
+    board.plic.write(0x20_0004, 4, SOURCE_RTC, start + 1e-6)             # complete
+    assert SOURCE_RTC not in board.plic.pending
     clock.write(r.REGISTER_CTRL, 4, OPEN | SETTING, 3.0)
     clock.write(r.INTERRUPT_CTRL, 4, r.TICK_ENABLE, 3.0)                  # every second
     clock.write(r.REGISTER_CTRL, 4, OPEN | RUNNING, 3.0)
     for second in (4.0, 5.0):
         tick = clock.next_event_time(second - 0.5)
         assert tick == pytest.approx(second)
+        board.plic.pending.discard(SOURCE_RTC)
         clock.advance(tick)
-        board.time = tick
-        assert clock.irq_line()
-        assert clock.next_event_time(tick) == pytest.approx(tick + 1 / r.CLOCK_HZ)   # the pulse's end
+        assert SOURCE_RTC in board.plic.pending
+
+
+def test_from_its_reset_date_the_calendar_still_counts(rtc):
+    """A program that sets only the time (as timers.c does) finds the calendar counting from the
+    reset date, year 00."""
+    board, clock = rtc
+    clock.write(r.REGISTER_CTRL, 4, OPEN | SETTING, 0.0)
+    clock.write(r.INITIAL_COUNT, 4, r.CLOCK_HZ, 0.0)
+    clock.write(r.CURRENT_COUNT, 4, 1, 0.0)
+    clock.write(r.TIME, 4, 59 << 10 | 59 << 16 | 23 << 24, 0.0)
+    clock.write(r.REGISTER_CTRL, 4, OPEN | RUNNING, 0.0)
+    assert when(clock, 1.0 + 1e-7) == (0, 0, 1, 2, 1, 0, 0, 0)          # 00-01-02, the next day

@@ -165,7 +165,7 @@ class Board:
         self.timers = [DwTimer(n, ports, clock_hz=lambda n=n: self.sysctl.timer_hz(n)) for n in range(3)]
         self.watchdogs = [DwWatchdog(n, ports, clock_hz=lambda n=n: self.sysctl.wdt_hz(n), reset_chip=reset_chip)
                           for n in range(2)]
-        self.rtc = Rtc(ports)
+        self.rtc = Rtc(ports, pulse=lambda at: self.plic.latch(K210_BLOCKS["RTC"].irqs[0], at))
         self.sha256 = Sha256(ports)
         self.clint = Clint(ports, counter=self.clock)
         self.plic = Plic(ports, high_sources=self._high_sources)

@@ -83,6 +83,13 @@ class Plic(Peripheral):
         self.pending.clear()
         self.in_service.clear()
 
+    def latch(self, source: int, now: float) -> None:
+        """A pulse on a source's line (a block whose interrupt is a pulse, the RTC's): the gateway
+        latches it as pending, unless the source is being served."""
+        if source not in self.in_service:
+            self.pending.add(source)
+        self.ports.irq_changed(now)
+
     def sample(self) -> None:
         """Gateways: latch a pending bit for each high source line not being served."""
         for source in self.high_sources():

@@ -16,8 +16,8 @@ each time it gets there the calendar moves on a second (rtc_init sets current_co
 While setting, what is written takes effect where the write masks allow (rtc_protect_set(0)
 opens them all); paused, the calendar stands. The tick interrupt comes at the start of every
 second, minute, hour or day (tick mode), the alarm interrupt at the start of the second whose
-fields the compare mask selects match the alarm's; each is a pulse of one RTC clock (the SDK's
-handler clears nothing in the RTC), latched by the PLIC (source 20).
+fields the compare mask selects match the alarm's; each is a pulse (the SDK's handler clears
+nothing in the RTC), which the PLIC's gateway latches as pending (source 20): the `pulse` port.
 """
 from __future__ import annotations
 
@@ -25,6 +25,7 @@ import calendar
 import math
 from dataclasses import dataclass
 from datetime import datetime, timedelta
+from typing import Callable
 
 from ..memory_map import K210_BLOCKS
 from .mmio import Peripheral, Register
@@ -33,6 +34,7 @@ from .ports import Ports
 DATE, TIME, ALARM_DATE, ALARM_TIME, INITIAL_COUNT, CURRENT_COUNT = 0x00, 0x04, 0x08, 0x0C, 0x10, 0x14
 INTERRUPT_CTRL, REGISTER_CTRL, EXTENDED = 0x18, 0x1C, 0x28
 CLOCK_HZ = 26_000_000                # IN0
+GREGORIAN_CYCLE = 400
 READ_ENABLE, WRITE_ENABLE = 1, 2
 INITIAL_COUNT_MASK, INTERRUPT_REGISTER_MASK = 1 << 29, 1 << 30
 TICK_ENABLE, ALARM_ENABLE = 1, 2
@@ -53,13 +55,16 @@ class Calendar:
     second: int = 0
 
     def plus(self, seconds: int) -> "Calendar":
+        # (400 years on: the Gregorian calendar repeats every 400 years, and Python's starts at year 1)
+        year = 100 * self.century + self.year + GREGORIAN_CYCLE
         try:
-            moment = datetime(100 * self.century + self.year, self.month, self.day, self.hour, self.minute,
-                              self.second) + timedelta(seconds=seconds)
+            start = datetime(year, self.month, self.day, self.hour, self.minute, self.second)
         except ValueError:
-            return self            # a date the calendar cannot hold (day 31 of April, year 0): it stands
-        days = (moment.date() - datetime(100 * self.century + self.year, self.month, self.day).date()).days
-        return Calendar(moment.year // 100, moment.year % 100, moment.month, moment.day, (self.week + days) % 7,
+            return self            # a date the calendar cannot hold (31 April, month 0): it stands
+        moment = start + timedelta(seconds=seconds)
+        days = (moment.date() - start.date()).days
+        year = moment.year - GREGORIAN_CYCLE
+        return Calendar(year // 100, year % 100, moment.month, moment.day, (self.week + days) % 7,
                         moment.hour, moment.minute, moment.second)
 
     def date_word(self) -> int:
@@ -93,15 +98,16 @@ class Rtc(Peripheral):
         EXTENDED: Register("extended"),
     }
 
-    def __init__(self, ports: Ports) -> None:
+    def __init__(self, ports: Ports, pulse: Callable[[float], None]) -> None:
+        """pulse: the interrupt line pulses at this time (the PLIC's gateway latches it)."""
         super().__init__(ports)
+        self.pulse = pulse
         self._clear()
 
     def _clear(self) -> None:
         self.calendar = Calendar()
         self._since: float | None = None       # running: when current_count had `_count`
         self._count = 0
-        self._pulses: list[float] = []         # recent interrupt pulses' times
 
     def reset(self, now: float) -> None:
         super().reset(now)
@@ -168,13 +174,10 @@ class Rtc(Peripheral):
     def next_event_time(self, now: float) -> float | None:
         if self._since is None or not self.values[INTERRUPT_CTRL] & (TICK_ENABLE | ALARM_ENABLE):
             return None
-        start = self._second_starts(now)
-        pulse_end = next((t + 1 / CLOCK_HZ for t in self._pulses if t + 1 / CLOCK_HZ > now), None)
-        return min(t for t in (start, pulse_end) if t is not None)
+        return self._second_starts(now)
 
     def advance(self, now: float) -> None:
         """Interrupt pulses at the seconds that begin up to `now`, each raised at its own time."""
-        self._pulses = [t for t in self._pulses if t + 1 / CLOCK_HZ > now]
         if self._since is None or not self.values[INTERRUPT_CTRL] & (TICK_ENABLE | ALARM_ENABLE):
             return
         while True:
@@ -184,12 +187,7 @@ class Rtc(Peripheral):
             self.calendar = self.calendar.plus(1)
             self._since, self._count = start, 1
             if self._interrupting(self.calendar):
-                self._pulses.append(start)
-                self.ports.irq_changed(start)
-
-    def irq_line(self) -> bool:
-        now = self.ports.clock.now()
-        return any(t <= now < t + 1 / CLOCK_HZ for t in self._pulses)
+                self.pulse(start)
 
     # --- registers -------------------------------------------------------------------------------------
 

@@ -11,12 +11,15 @@
 #include <stdint.h>
 
 /* sysctl.c: clocks, as handed over; nothing here touches the PLLs */
-enum clock { CLOCK_FPIOA, CLOCK_GPIO, CLOCK_SPI0, CLOCK_DMA, CLOCK_UART1, CLOCK_UART2, CLOCK_UART3 };
+enum clock { CLOCK_FPIOA, CLOCK_GPIO, CLOCK_SPI0, CLOCK_DMA, CLOCK_UART1, CLOCK_UART2, CLOCK_UART3, CLOCK_TIMER0,
+             CLOCK_TIMER1, CLOCK_TIMER2, CLOCK_WDT0, CLOCK_RTC };
 void clock_enable(enum clock clock);
 uint32_t pll0_hz(void);
 uint32_t cpu_hz(void);
 uint32_t spi0_source_hz(void);
 uint32_t apb0_hz(void);
+uint32_t timer_hz(int timer);
+uint32_t wdt_hz(void);
 void uart_reset(int uart);
 void dma_select(int channel, uint32_t request);
 void spi0_dvp_data_enable(void);
@@ -43,6 +46,16 @@ int uarths_getc(void);
 void uart_init(int uart, uint32_t baud);
 void uart_putc(int uart, char c);
 void uart_flush(int uart);
+
+/* plic.c: interrupts to hart 0 (M-mode, context 0) */
+void plic_enable(int source, uint32_t priority);
+int plic_claim(void);
+void plic_complete(int source);
+
+/* timer.c: TIMER0-2 channels */
+void timer_start(int timer, int channel, uint32_t counts, int interrupt);
+void timer_pwm(int timer, int channel, uint32_t low_counts, uint32_t high_counts);
+void timer_clear(int timer, int channel);
 
 /* trap.c: what start.S hands trap_handler (the caller-saved registers as trap_entry saved them) */
 struct trap_frame {

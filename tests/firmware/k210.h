@@ -27,6 +27,10 @@ static inline void mmio_write64(uintptr_t address, uint64_t value) { *(volatile 
 #define SYSCTL_BASE     0x50440000u
 #define SPI0_BASE       0x52000000u
 #define UART1_BASE      0x50210000u        /* UARTn at UART1_BASE + 0x10000 (n - 1) */
+#define PLIC_BASE       0x0C000000u
+#define TIMER0_BASE     0x502D0000u        /* TIMERn at TIMER0_BASE + 0x10000 n */
+#define WDT0_BASE       0x50400000u
+#define RTC_BASE        0x50460000u
 
 #define OSC_HZ          26000000u          /* the board's crystal, IN0 */
 
@@ -55,6 +59,13 @@ static inline void mmio_write64(uintptr_t address, uint64_t value) { *(volatile 
 #define PERI_SPI0               (1u << 6)
 #define PERI_FPIOA              (1u << 20)
 #define PERI_UART1              (1u << 16) /* UART2, UART3: the next two bits */
+#define PERI_TIMER0             (1u << 21) /* TIMER1, TIMER2: the next two bits */
+#define PERI_WDT0               (1u << 24)
+#define PERI_RTC                (1u << 29)
+#define CENT_APB1               (1u << 4)  /* WDT, RTC, ... */
+#define SYSCTL_CLK_TH2          0x40       /* timer n's threshold: byte n */
+#define SYSCTL_CLK_TH6          0x50       /* WDT n's threshold: byte n */
+#define SYSCTL_RESET_STS_WDT0   (1u << 2)
 #define SYSCTL_PERI_RESET       0x34
 #define CLK_SEL0_APB0_SHIFT     3          /* [5:3]: APB0 = ACLK / (apb0_clk_sel + 1) */
 
@@ -84,6 +95,7 @@ static inline void mmio_write64(uintptr_t address, uint64_t value) { *(volatile 
 #define FUNC_GPIO0              56
 #define FUNC_UART1_RX           64         /* UARTn_RX = 64 + 2 (n - 1), UARTn_TX the next */
 #define FUNC_UART1_TX           65
+#define FUNC_TIMER0_TOGGLE1     190        /* TIMERn_TOGGLEc = 190 + 4 n + c - 1 */
 
 /* Maix Dock pads */
 #define PAD_UARTHS_RX           4
@@ -131,6 +143,55 @@ static inline void mmio_write64(uintptr_t address, uint64_t value) { *(volatile 
 #define UART_LSR_DR             (1u << 0)
 #define UART_LSR_TX_FULL        (1u << 5)  /* with UART_IER_PTIME */
 #define UART_LSR_TEMT           (1u << 6)
+
+/* --- PLIC (plic.h): hart 0's M-mode context is context 0 (hart h's: 2 h) ------------------- */
+#define PLIC_PRIORITY           0x000000   /* + 4 x source */
+#define PLIC_ENABLE0            0x002000   /* + 4 x (source / 32) */
+#define PLIC_THRESHOLD0         0x200000
+#define PLIC_CLAIM0             0x200004
+#define IRQ_TIMER0A             14         /* TIMERn's channels 0-1: 14 + 2 n */
+#define IRQ_RTC                 20
+#define IRQ_WDT0                21
+#define IRQ_GPIOHS0             34
+
+/* --- TIMER0-2 (timer.h: DesignWare APB timers) ------------------------------------------ */
+#define TIMER_CHANNEL_STRIDE    0x14
+#define TIMER_LOAD_COUNT        0x00
+#define TIMER_CONTROL           0x08
+#define TIMER_EOI               0x0C
+#define TIMER_LOAD_COUNT2       0xB0       /* + 4 x channel */
+#define TIMER_CR_ENABLE         1u
+#define TIMER_CR_USER_MODE      2u
+#define TIMER_CR_INTERRUPT_MASK 4u
+#define TIMER_CR_PWM            8u
+
+/* --- WDT0-1 (wdt.h: DesignWare APB watchdog) -------------------------------------------- */
+#define WDT_CR                  0x00
+#define WDT_TORR                0x04
+#define WDT_CRR                 0x0C
+#define WDT_EOI                 0x14
+#define WDT_CR_ENABLE           1u
+#define WDT_CR_INTERRUPT_FIRST  2u
+#define WDT_RESTART             0x76u
+
+/* --- RTC (rtc.h) -------------------------------------------------------------------------- */
+#define RTC_DATE                0x00
+#define RTC_TIME                0x04
+#define RTC_ALARM_TIME          0x0C
+#define RTC_INITIAL_COUNT       0x10
+#define RTC_CURRENT_COUNT       0x14
+#define RTC_INTERRUPT_CTRL      0x18
+#define RTC_REGISTER_CTRL       0x1C
+#define RTC_UNPROTECTED         (0xFFu << 13 | 0xFFu << 21 | 1u << 29 | 1u << 30)
+#define RTC_RUNNING             1u
+#define RTC_SETTING             2u
+#define RTC_ALARM_ENABLE        2u
+#define RTC_MASK_SECOND_MINUTE_HOUR (0x0Eu << 24)
+
+/* --- GPIOHS interrupts (gpiohs.h) --------------------------------------------------------- */
+#define GPIOHS_INPUT_VAL        0x00
+#define GPIOHS_FALL_IE          0x20
+#define GPIOHS_FALL_IP          0x24
 
 /* --- exceptions (encoding.h) ----------------------------------------------------------- */
 #define CAUSE_LOAD_MISALIGNED   4
@@ -214,8 +275,10 @@ static inline void mmio_write64(uintptr_t address, uint64_t value) { *(volatile 
 /* --- machine CSRs ---------------------------------------------------------------------- */
 #define MSTATUS_MIE             (1ul << 3)
 #define MIE_MTIE                (1ul << 7)
+#define MIE_MEIE                (1ul << 11)
 #define MCAUSE_INTERRUPT        (1ul << 63)
 #define IRQ_M_TIMER             7
+#define IRQ_M_EXTERNAL          11
 
 #define read_csr(name) ({ unsigned long value_; __asm__ volatile("csrr %0, " #name : "=r"(value_)); value_; })
 #define set_csr(name, bits) __asm__ volatile("csrs " #name ", %0" : : "r"(bits))

@@ -34,6 +34,20 @@ void clock_enable(enum clock clock)
         sysctl_set_bits(SYSCTL_CLK_EN_CENT, CENT_APB0);
         sysctl_set_bits(SYSCTL_CLK_EN_PERI, PERI_UART1 << (clock - CLOCK_UART1));
         break;
+    case CLOCK_TIMER0:
+    case CLOCK_TIMER1:
+    case CLOCK_TIMER2:
+        sysctl_set_bits(SYSCTL_CLK_EN_CENT, CENT_APB0);
+        sysctl_set_bits(SYSCTL_CLK_EN_PERI, PERI_TIMER0 << (clock - CLOCK_TIMER0));
+        break;
+    case CLOCK_WDT0:
+        sysctl_set_bits(SYSCTL_CLK_EN_CENT, CENT_APB1);
+        sysctl_set_bits(SYSCTL_CLK_EN_PERI, PERI_WDT0);
+        break;
+    case CLOCK_RTC:
+        sysctl_set_bits(SYSCTL_CLK_EN_CENT, CENT_APB1);
+        sysctl_set_bits(SYSCTL_CLK_EN_PERI, PERI_RTC);
+        break;
     }
 }
 
@@ -44,6 +58,16 @@ void uart_reset(int uart)
     sysctl_set_bits(SYSCTL_PERI_RESET, bit);
     sysctl_write(SYSCTL_PERI_RESET, sysctl_read(SYSCTL_PERI_RESET) & ~bit);
 }
+
+/* TIMERn's clock with its threshold left at 0 and its source at IN0: 26 MHz / 2 (the SDK's
+ * sysctl_clock_get_freq: source / ((threshold + 1) x 2)). */
+uint32_t timer_hz(int timer)
+{
+    return OSC_HZ / (((sysctl_read(SYSCTL_CLK_TH2) >> (8 * timer)) & 0xFF) + 1) / 2;
+}
+
+/* WDT0's clock: IN0 / ((threshold + 1) x 2). */
+uint32_t wdt_hz(void) { return OSC_HZ / ((sysctl_read(SYSCTL_CLK_TH6) & 0xFF) + 1) / 2; }
 
 /* APB0's clock (UART1-3 count in it): ACLK / (apb0_clk_sel + 1). */
 uint32_t apb0_hz(void)
