@@ -163,10 +163,16 @@ class DwTimer(Peripheral):
 
     def _status(self, now: float) -> int:
         return sum(1 << n for n in range(CHANNELS)
-                   if self._state(n, now)[2] and not self._control(n) & CR_INTERRUPT_MASK)
+                   if not self._control(n) & CR_INTERRUPT_MASK and self._state(n, now)[2])
+
+    def _quiet(self) -> bool:
+        """No channel counting and no interrupt left uncleared (the PLIC asks on every sample)."""
+        return not any(self._counts) and all(e <= c for e, c in zip(self._ended_before, self._cleared))
 
     def irq_lines(self) -> int:
         """Bit 0: the line of channels 0 and 1 (PLIC 14 + 2 n), bit 1: that of channels 2 and 3."""
+        if self._quiet():
+            return 0
         status = self._status(self.ports.clock.now())
         return (1 if status & 3 else 0) | (2 if status & 12 else 0)
 
@@ -174,6 +180,8 @@ class DwTimer(Peripheral):
         """The next count's end of a channel whose end matters outside a read: an unmasked interrupt.
         (A PWM output's edges are told with their own times whenever the timer is advanced, every
         turn of the harts: they need no turn of their own.)"""
+        if not any(self._counts):
+            return None
         times = []
         for channel, count in enumerate(self._counts):
             control = self._control(channel)
@@ -185,6 +193,8 @@ class DwTimer(Peripheral):
 
     def advance(self, now: float) -> None:
         """Tells on_toggle each change of a PWM output up to `now`, with its own time."""
+        if not any(self._counts):
+            return
         for channel, count in enumerate(self._counts):
             if count is None or not self._control(channel) & CR_PWM:
                 continue

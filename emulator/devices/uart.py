@@ -185,7 +185,15 @@ class DwUart(Peripheral):
         stop_bits = 1.0 if not lcr & LCR_STOP else (1.5 if data_bits == 5 else 2.0)
         return bit * (1 + data_bits + (1 if lcr & LCR_PEN else 0) + stop_bits)
 
+    def _idle(self) -> bool:
+        """Nothing on the wire, nothing to send or to be sent: time changes nothing here (the board
+        advances every device often; most UARTs are idle)."""
+        return self._shifting_until is None and not self._tx and self._receiving_until is None and \
+            self.input is None and not self._rx
+
     def advance(self, now: float) -> None:
+        if self._idle():
+            return
         self._advance_tx(now)
         self._advance_rx(now)
 
@@ -252,6 +260,8 @@ class DwUart(Peripheral):
             self._receiving_until = start + byte_time
 
     def next_event_time(self, now: float) -> float | None:
+        if self._idle():
+            return None
         events = [t for t in (self._shifting_until, self._receiving_until, self._timeout_time()) if t is not None
                   and t > now]
         source = self.input
@@ -265,10 +275,10 @@ class DwUart(Peripheral):
 
     def _timeout_time(self) -> float | None:
         """When the character timeout interrupt comes, for bytes waiting in the receive FIFO."""
-        byte_time = self._byte_time()
-        if not self._rx or not self._fifo_enabled() or byte_time is None:
+        if not self._rx or not self._fifo_enabled():
             return None
-        return self._rx_activity + TIMEOUT_CHARACTERS * byte_time
+        byte_time = self._byte_time()
+        return None if byte_time is None else self._rx_activity + TIMEOUT_CHARACTERS * byte_time
 
     # --- interrupts -------------------------------------------------------------------------------
 
