@@ -512,3 +512,16 @@ def test_dma_items_of_different_widths_to_a_peripheral_are_unmodelled(spi_bus):
     spi_setup(spi, 8, s.TMOD_TX, dmacr=s.DMACR_TDMAE)
     with pytest.raises(UnmodelledAccess, match="32-bit source items into 8-bit destination items"):
         w(board, d.CHEN, 0x0101, 0.0)
+
+
+def test_a_channels_interrupt_signal_is_enabled_at_reset(board):
+    """The SDK's dmac.c enables intstatus_en only and relies on the channel's interrupt: intsignal_en
+    lets every interrupt through from reset (issue 36: a model with it at 0 lost those interrupts)."""
+    assert r(board, ch(0, d.INTSIGNAL_EN), 0.0) == d.INTSIGNAL_RESET
+    board.memory.load(SRC, bytes(range(16)))
+    w(board, d.CFG, d.CFG_ENABLE | d.CFG_INT_EN, 0.0)
+    memcpy_channel(board, 0, 4)
+    w(board, ch(0, d.INTSTATUS_EN), d.INT_DMA_TFR_DONE, 0.0)
+    w(board, d.CHEN, 0x0101, 0.0)
+    run_devices(board, 0.0, lambda t: not board.dmac.values[d.CHEN] & 1)
+    assert board.dmac.irq_line(0)

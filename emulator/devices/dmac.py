@@ -39,6 +39,9 @@ WIDTH_BYTES = {0: 1, 1: 2, 2: 4, 3: 8}
 # memory-to-memory copies move one 64-bit AXI beat per bus clock (ACLK = CPU clock)
 MEM2MEM_BYTES_PER_CYCLE = 8
 # a channel's set-up registers: they take effect when the channel starts
+# A channel's intsignal_en lets every interrupt through at reset: the Kendryte SDK's dmac.c never
+# writes it, and its dmac_irq_register relies on the channel's interrupt (intstatus_en chooses)
+INTSIGNAL_RESET = 0xFFFF_FFFF
 _SETUP_REGISTERS = frozenset({SAR, DAR, BLOCK_TS, CTL, CH_CFG, LLP})
 # each channel's (intstatus, intsignal_en) offsets: its interrupt line is high when they share a bit
 _IRQ_REGISTERS = [(CH_BASE + CH_STRIDE * n + CH_INTSTATUS, CH_BASE + CH_STRIDE * n + INTSIGNAL_EN)
@@ -57,6 +60,7 @@ def _channel_registers() -> dict[int, Register]:
                 f"ch{n}_{name}", width=8,
                 writable=off not in (STATUS, CH_INTSTATUS),
                 readable=off != INTCLEAR,
+                reset=INTSIGNAL_RESET if off == INTSIGNAL_EN else 0,
             )
     return table
 
