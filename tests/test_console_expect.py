@@ -81,7 +81,8 @@ def test_a_program_that_reads_its_input_passes_with_expect(c_firmware, tmp_path)
     assert summary["exit"] == "ok" and "printed every expected text" in summary["message"]
     assert [m["pattern"] for m in summary["expect_matched"]] == summary["expect"]
     assert summary["uart_input"] == {"source": str(tmp_path / "input.txt"), "interactive": False,
-                                     "bytes": len(ECHO_INPUT), "received": len(ECHO_INPUT)}
+                                     "bytes": len(ECHO_INPUT), "received": len(ECHO_INPUT),
+                                     "received_by": {"UARTHS": len(ECHO_INPUT)}}
     assert [e["line"] for e in summary["console"]][:3] == ["name? Ada", "hello, Ada!", "> hello world"]
     # the run ends at the last expected text, not later
     times = [m["virtual_time_s"] for m in summary["expect_matched"]]

@@ -141,6 +141,26 @@ def test_receiver_takes_the_host_bytes_at_the_baud_rate_and_raises_its_interrupt
     assert not board.uarts[0].input.has_byte(t)                  # UART1 is not routed from pad 4
 
 
+def test_a_reset_in_the_middle_of_a_byte_has_the_host_send_it_again(board):
+    # the SDK's start-up configures UART3 and the program's uart_init resets it; a byte caught
+    # on the wire then is neither lost nor counted twice
+    route(board, FUNC_UART1_RX + 4, None)
+    uart = board.uarts[2]
+    bit = configure(uart, 1_000_000)
+    board.connect_serial_input(UartInput(b"ab"))
+    uart.advance(5 * bit)                                        # 'a' half in
+    uart.reset(5 * bit)
+    assert uart.bytes_received == 0
+    t = 5 * bit + EPS
+    configure(uart, 1_000_000, now=t)
+    uart.advance(t + 20 * bit)
+    assert uart.read(u.RFL, 4, t + 20 * bit) == 2
+    assert bytes([uart.read(u.RBR, 4, t), uart.read(u.RBR, 4, t)]) == b"ab"
+    assert uart.bytes_received == 2
+    uart.reset(t + 21 * bit)
+    assert uart.bytes_received == 2                              # the run's count outlives the reset
+
+
 def test_a_byte_left_in_the_fifo_below_the_trigger_times_out(board):
     route(board, FUNC_UART1_RX, None)
     uart = board.uarts[0]

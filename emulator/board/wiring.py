@@ -197,6 +197,9 @@ class RoutedInput:
     def pop(self) -> int:
         return self.source.pop()
 
+    def put_back(self, byte: int) -> None:
+        self.source.put_back(byte)
+
 
 class DockWiring:
     """Routes SPI chip selects and GPIOHS and GPIO lines to the LCD and the SD slot through FPIOA."""

@@ -79,3 +79,6 @@ class SerialInput(Protocol):
     def has_byte(self, virtual_now: float) -> bool: ...
 
     def pop(self) -> int: ...
+
+    def put_back(self, byte: int) -> None:
+        """A byte a receiver took but never finished (it was reset mid-byte) goes first again."""

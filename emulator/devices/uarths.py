@@ -67,7 +67,11 @@ class Uarths(Peripheral):
         self.every_byte_heard = False
 
     def reset(self, now: float) -> None:
-        """A chip reset: registers and FIFOs as at power-on; a byte on the wire is cut off."""
+        """A chip reset: registers and FIFOs as at power-on; a byte on the wire is cut off (one
+        coming in is sent again by the host's bridge, as DwUart.reset says)."""
+        self.advance(now)
+        if self._receiving_until is not None and self.input is not None:
+            self.input.put_back(self._receiving_byte)
         super().reset(now)
         self._fifo.clear()
         self._rx_fifo.clear()

@@ -167,8 +167,9 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--fail-on-re", dest="failures", action="append", metavar="REGEX", type=regex_pattern,
                      help="as --fail-on, a regular expression matched against each whole console line")
     run.add_argument("--uart-input", metavar="FILE", default=None,
-                     help="send FILE's bytes to UARTHS's receiver at the baud the firmware set, as the Dock's "
-                          "USB serial bridge would (each when the receiver is on and has room); '-' reads "
+                     help="send FILE's bytes to pad 4 (the Dock's USB serial bridge), to the receiver of the UART "
+                          "FPIOA routes from it (UARTHS at reset, UART3 after the SDK's start-up), at the baud "
+                          "the firmware set (each when the receiver is on and has room); '-' reads "
                           "standard input: piped, all of it; from a terminal, each key as it is typed, with "
                           "virtual time held to the host's clock")
     run.add_argument("--pin", dest="pins", action="append", default=[], metavar="PAD=LEVEL@SECONDS", type=pin_change,
@@ -662,7 +663,10 @@ def main(argv: list[str] | None = None) -> int:
         "file": str(args.trace_insn), "from_s": args.trace_from or 0.0, "to_s": args.trace_to, "lines": trace.lines}
     summary["uart_input"] = None if uart_input is None else {
         "source": args.uart_input, "interactive": uart_input.interactive, "bytes": uart_input.total,
-        "received": board.uarths.bytes_received if board is not None else 0}
+        # what each UART's receiver took of it (the one FPIOA routed from pad 4 at the time)
+        "received": sum(uart.bytes_received for uart in (board.uarths, *board.uarts)) if board is not None else 0,
+        "received_by": ({uart.NAME: uart.bytes_received for uart in (board.uarths, *board.uarts) if uart.bytes_received}
+                        if board is not None else {})}
     output.finish(summary)
     if status == EXIT_OK:
         terminal.message(f"[board] {message}; {board.time * 1e3:.2f} ms virtual; output in {args.out}")

@@ -69,6 +69,9 @@ class UartInput:
     def pop(self) -> int:
         return self._bytes.popleft()
 
+    def put_back(self, byte: int) -> None:
+        self._bytes.appendleft(byte)
+
     def _pace(self, virtual_now: float) -> None:
         """Takes what the user has typed; waits (for a key at most) while virtual time is
         ahead of the host's clock."""
