@@ -26,6 +26,7 @@ import tty
 import pytest
 
 from conftest import ROOT
+from emulator.board.flash_image import FlashImage
 
 sys.path.insert(0, str(ROOT))
 from tools.flash import BOARD, kflash_arguments  # noqa: E402
@@ -133,6 +134,9 @@ def test_kflash_writes_our_firmware_bin_unchanged(firmware, tmp_path):
     body = image.read_bytes()
     head = bytes((0x02,)) + struct.pack("<I", len(body))                  # not encrypted, dual I/O
     assert written == head + body + hashlib.sha256(head + body).digest()
+    # and `--flash build/firmware.bin` gives the board model's flash those very bytes, then boots them
+    flash = FlashImage.open(image)
+    assert bytes(flash.data[:len(written)]) == written and flash.boot_program() == body
 
 
 def test_a_changed_byte_shows(firmware, tmp_path):

@@ -21,7 +21,8 @@ from ..devices.clint import Clint
 from ..cpu.disasm import disassemble_one
 from ..devices.dmac import Dmac
 from .elf import LoadedImage
-from .raw_image import load_firmware
+from .flash_image import FlashImage
+from .raw_image import load_firmware, load_program
 from ..errors import BoardStop
 from ..devices.fpioa import FUNC_UART1_RX, FUNC_UART1_TX, FUNC_UARTHS_RX, FUNC_UARTHS_TX, Fpioa
 from ..devices.gpio import Gpio
@@ -104,7 +105,7 @@ class WarningRecord:
 class Board:
     """A Maix Dock running one firmware image."""
 
-    def __init__(self, firmware: str, *, quantum: int = DEFAULT_QUANTUM,
+    def __init__(self, firmware: str | None, *, flash: FlashImage | None = None, quantum: int = DEFAULT_QUANTUM,
                  hang_budget_s: float = DEFAULT_HANG_BUDGET_S,
                  console: Callable[[int], None] | None = None,
                  on_frame: Callable[[FrameRecord, np.ndarray], None] | None = None,
@@ -113,7 +114,10 @@ class Board:
                  sd_faults: frozenset[str] = frozenset(), check_writes: bool = False, strict: bool = False,
                  lcd_interface: str = LCD_8080, cold: bool = False, timing: str = TIMING_ROCKET,
                  engine: str = ENGINE_FAST, pins: list[PinChange] = ()) -> None:
-        """check_writes: stop with StrayWrite at the first store (a hart's or a DMA channel's) into
+        """firmware: an ELF or a raw .bin, copied into SRAM; or None: boot the program in `flash` as the
+        mask ROM does (flash_image.py).
+        flash: the on-board SPI flash's content (--flash).
+        check_writes: stop with StrayWrite at the first store (a hart's or a DMA channel's) into
         SRAM outside the firmware's buffers (write_watch.py; a checker, not hardware behaviour).
         strict: stop at the first access a register table does not take as it is, or that no device
         answers, instead of answering it as the K210's bus does with a warning (bus.py); and have the
@@ -203,7 +207,14 @@ class Board:
         self.spi1.device_for_ss = self.wiring.spi1_device
         self.bus = Bus(self, strict)
         self.write_watch: WriteWatch | None = None
-        self.image: LoadedImage = load_firmware(firmware, self.memory)
+        self.flash = flash
+        if firmware is None:
+            if flash is None:
+                raise ValueError("a Board needs a firmware file or a flash to boot from")
+            self.image: LoadedImage = load_program(flash.boot_program(), self.memory)
+            firmware = f"the program in {flash.path}"
+        else:
+            self.image = load_firmware(firmware, self.memory)
         # the program as loaded: what the mask ROM copies into SRAM again after a chip reset
         self._program = [(segment.address, bytes(self.memory.read(segment.address, segment.size)))
                          for segment in self.image.segments]

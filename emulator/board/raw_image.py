@@ -46,6 +46,11 @@ def load_raw(path: Path, memory: Sram) -> LoadedImage:
     if len(data) > SRAM_SIZE:
         raise BadInput(f"{path}: the raw image is {len(data)} bytes, more than the {SRAM_SIZE} bytes of SRAM "
                        f"at 0x{SRAM_BASE:x} the ROM copies it to")
+    return load_program(data, memory)
+
+
+def load_program(data: bytes, memory: Sram) -> LoadedImage:
+    """Copies a program (at most SRAM's size) to 0x8000_0000, as the ROM does."""
     memory.load(RESET_PC, data)
     segment = Segment(RESET_PC, len(data), writable=True, executable=True)
     return LoadedImage(RESET_PC, [(RESET_PC, data)], {}, len(data), [segment], {})

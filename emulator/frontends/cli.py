@@ -137,8 +137,14 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
     run = sub.add_parser("run", help="run a firmware ELF and capture the LCD's frames",
                          epilog=EXIT_STATUS_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
-    run.add_argument("firmware", help="firmware ELF (linked for SRAM at 0x80000000), or a raw image ending in "
-                     ".bin (firmware.bin, as kflash writes it and the ROM copies it to 0x80000000)")
+    run.add_argument("firmware", nargs="?", default=None,
+                     help="firmware ELF (linked for SRAM at 0x80000000), or a raw image ending in .bin "
+                          "(firmware.bin, as kflash writes it and the ROM copies it to 0x80000000); left out "
+                          "with --flash: boot the program at the flash's address 0 as the mask ROM does")
+    run.add_argument("--flash", metavar="IMAGE", default=None,
+                     help="the content of the Dock's 16 MiB SPI flash: a .kfpkg (each file at its address, "
+                          "as kflash writes it), a program .bin (written at 0 with the ROM's boot header, as "
+                          "`make flash` writes it) or any other file as a dump of the flash from address 0")
     run.add_argument("--sd", metavar="IMAGE", help="SD card image in the Dock's slot (opened read-only: the "
                      "firmware's writes are kept in memory for the run)")
     run.add_argument("--sd-writable", action="store_true", help="with --sd: let the firmware's writes reach the "
@@ -297,6 +303,10 @@ def option_problem(args: argparse.Namespace) -> str | None:
         return "--until and --frames exclude each other (a run ends at a virtual time or after frames)"
     if args.tolerance is not None and args.golden is None:
         return "--tolerance needs --golden (it says how far a pixel may differ from its golden frame)"
+    if args.firmware is None and args.flash is None:
+        return "give a firmware file, or --flash IMAGE to boot the program in the flash as the mask ROM does"
+    if args.firmware is None and args.profile:
+        return "--profile needs the firmware's ELF for its symbols (give it as well as --flash)"
     if args.sd is None and args.sd_writable:
         return "--sd-writable needs --sd (the card image the firmware's writes would reach)"
     if args.sd is None and args.sd_fault:
@@ -322,13 +332,15 @@ def golden_count(args: argparse.Namespace) -> int:
     return max(1, len(list(args.golden.glob("frame_*.png")))) if args.golden.is_dir() else 1
 
 
-def grab_problem(grabs: list, firmware: str) -> str | None:
+def grab_problem(grabs: list, firmware: str | None) -> str | None:
     """Before the run: every --grab of a symbol or address names a buffer in SRAM. A firmware
     that cannot be read is left for the run to report (status 6)."""
     from ..board.elf import read_symbol_values
     from .grab import check_grab_buffer
     symbols: dict[str, int] = {}
     if any(g.what != "gram" and not g.what.lower().startswith("0x") for g in grabs):
+        if firmware is None:
+            return "--grab of a symbol needs the firmware's ELF (booted from --flash there are no symbols)"
         try:
             symbols = read_symbol_values(firmware)
         except BadInput:
@@ -380,7 +392,7 @@ def run_under_gdb(board, args: argparse.Namespace, terminal):
     from ..board.scheduler import RunResult
     server = GdbServer(board, args.gdb, terminal.message)
     scheduler = board.scheduler
-    terminal.message(f"[gdb] listening on 127.0.0.1:{server.port}; attach with: gdb-multiarch {args.firmware} "
+    terminal.message(f"[gdb] listening on 127.0.0.1:{server.port}; attach with: gdb-multiarch {args.firmware or ''} "
                      f"-ex 'target remote 127.0.0.1:{server.port}'")
     try:
         if not args.gdb_wait:
@@ -505,6 +517,10 @@ def main(argv: list[str] | None = None) -> int:
         problem = grab_problem(grabs, args.firmware)
         if problem:
             return usage_error(problem)
+        flash = None
+        if args.flash is not None:
+            from ..board.flash_image import FlashImage
+            flash = FlashImage.open(args.flash)
         uart_input = UartInput.open(args.uart_input) if args.uart_input is not None else None
         pins = list(args.pins)
         if args.pin_file is not None:
@@ -546,7 +562,7 @@ def main(argv: list[str] | None = None) -> int:
             profiler.frame(record)
 
     try:
-        board = Board(str(args.firmware), quantum=args.quantum, hang_budget_s=args.budget, console=console,
+        board = Board(None if args.firmware is None else str(args.firmware), flash=flash, quantum=args.quantum, hang_budget_s=args.budget, console=console,
                       on_frame=on_frame, on_warning=terminal.warning, permissive=args.permissive,
                       sd_image=args.sd, sd_writable=args.sd_writable, sd_faults=frozenset(args.sd_fault),
                       check_writes=args.check_writes, strict=args.strict, lcd_interface=args.lcd_interface,
@@ -602,7 +618,8 @@ def main(argv: list[str] | None = None) -> int:
     frames = board.frames if board is not None else []
     summary = summary_dict(kind, message, frames, board.time if board else 0.0,
                            [h.instret for h in board.harts] if board else [0, 0],
-                           time.perf_counter() - started, board.warnings if board else [], str(args.firmware),
+                           time.perf_counter() - started, board.warnings if board else [],
+                           str(args.firmware) if args.firmware is not None else f"{args.flash} (booted from flash)",
                            board.device_writes if board else {}, board.console_lines if board else [])
     if args.golden is not None and board is not None:
         tolerance = args.tolerance or 0
