@@ -14,7 +14,7 @@ import zipfile
 
 import pytest
 
-from conftest import run_emulator
+from conftest import ROOT, run_emulator
 from emulator.board.flash_image import ERASED, FLASH_SIZE, FlashImage, with_boot_header
 from emulator.errors import EXIT_BAD_INPUT, EXIT_USAGE, BadInput
 
@@ -141,3 +141,11 @@ def test_a_flash_the_rom_would_not_boot_is_bad_input(hello_bin, tmp_path):
 def test_a_run_needs_a_firmware_or_a_flash(tmp_path):
     run = run_emulator("run", "--until", "0.01", "--out", str(tmp_path / "out"))
     assert run.returncode == EXIT_USAGE and "--flash IMAGE" in run.stderr
+
+
+def test_the_renderer_booted_from_its_flash_image_draws_the_golden_frames(firmware, card, tmp_path):
+    # build/firmware.bin is what `make flash` hands kflash; booted from the flash it draws as its ELF does
+    run = run_emulator("run", "--flash", str(firmware.parent / "firmware.bin"), "--sd", str(card), "--frames", "2",
+                       "--golden", str(ROOT / "tests" / "golden" / "default"), "--quiet", "--out", str(tmp_path / "out"))
+    assert run.returncode == 0, run.stderr
+    assert "all 2 frames match" in run.stderr
