@@ -478,11 +478,44 @@ def test_frame_sizes_that_are_not_whole_bytes_are_unmodelled(bus, dfs):
         spi.write(s.DR_FIRST, 4, 1, 0.0)
 
 
-def test_eeprom_mode_is_unmodelled(bus):
+def test_eeprom_read_sends_the_command_then_clocks_ctrlr1_plus_one_frames_in(bus):
+    # as the SDK's spi_receive_data_standard reads a W25Q's ID: the command and address written
+    # before the slave is selected, then 2 bytes read (DW SSI databook, EEPROM read)
     board, spi, dev = bus
-    setup(spi, ctrlr0(8, s.TMOD_EEPROM))
-    with pytest.raises(UnmodelledAccess, match="EEPROM"):
-        spi.write(s.DR_FIRST, 4, 1, 0.0)
+    dev.replies = bytearray(b"\x11\x22\x33\x44\xEF\x17")
+    setup(spi, ctrlr0(8, s.TMOD_EEPROM), ctrlr1=1, ser=0)
+    for byte in (0x90, 0, 0, 0):
+        spi.write(s.DR_FIRST, 4, byte, 0.0)
+    assert txflr(spi, 0.0) == 4
+    spi.write(s.SER, 4, 1, 0.0)
+    assert txflr(spi, FRAME8 / 2) == 3 and sr(spi, FRAME8 / 2) & s.SR_BUSY
+    assert spi.read(s.RXFLR, 4, 5 * FRAME8 + EPS) == 1            # the command's replies are dropped
+    assert txflr(spi, 5 * FRAME8 + EPS) == 0
+    t = 6 * FRAME8 + EPS
+    assert sr(spi, t) == s.SR_TFNF | s.SR_TFE | s.SR_RFNE
+    assert [spi.read(s.DR_FIRST, 4, t) for _ in range(2)] == [0xEF, 0x17]
+    assert bytes(dev.received) == b"\x90\x00\x00\x00\xFF\xFF"
+
+
+def test_eeprom_read_with_the_command_written_after_the_select(bus):
+    # a frame written while the earlier ones are still going out joins the command
+    board, spi, dev = bus
+    dev.replies = bytearray(b"\x00\x00\x5A\xA5\x01")
+    setup(spi, ctrlr0(8, s.TMOD_EEPROM), ctrlr1=2)
+    spi.write(s.DR_FIRST, 4, 0x05, 0.0)
+    spi.write(s.DR_FIRST, 4, 0x35, FRAME8 / 2)
+    t = 5 * FRAME8 + EPS
+    assert spi.read(s.RXFLR, 4, t) == 3
+    assert [spi.read(s.DR_FIRST, 4, t) for _ in range(3)] == [0x5A, 0xA5, 0x01]
+    assert bytes(dev.received) == b"\x05\x35\xFF\xFF\xFF"
+    # a second read after the first has ended starts a command of its own
+    dev.replies = bytearray(b"\x00\x42")
+    spi.write(s.SSIENR, 4, 0, t)
+    spi.write(s.CTRLR1, 4, 0, t)
+    spi.write(s.SSIENR, 4, 1, t)
+    spi.write(s.SER, 4, 1, t)
+    spi.write(s.DR_FIRST, 4, 0x05, t)
+    assert spi.read(s.DR_FIRST, 4, t + 2 * FRAME8 + EPS) == 0x42
 
 
 def spi_ctrlr0(trans=0, addr_bits=0, inst_bits=0, wait=0) -> int:

@@ -6,7 +6,10 @@ bits takes dfs / lanes serial clock periods (lanes: 1 standard, 2 dual, 4 quad,
 8 octal). A frame reaches the selected device when its last bit is out, so the
 device sees pins such as the LCD's D/C as they are at that moment. In
 transmit-and-receive mode the device's answer goes into the 32-entry receive
-FIFO; in receive-only mode writing one dummy frame clocks ctrlr1 + 1 frames in.
+FIFO; in receive-only mode writing one dummy frame clocks ctrlr1 + 1 frames in. In EEPROM-read
+mode (tmod 3) the frames written (a command and an address) go out with their replies dropped, and
+once the transmit FIFO has run empty the controller clocks ctrlr1 + 1 frames in, sending 0xFF: the
+SDK's spi_receive_data_standard reads a flash's ID or status this way whenever it has a command.
 
 DMA: with dmacr.tdmae set and a DMAC channel handshaking to this controller's
 TX request, the channel keeps the FIFO full, so a DMA transfer is one unbroken
@@ -152,6 +155,10 @@ class SpiController(Peripheral):
         self.tx_dma: "DmaChannel | None" = None
         self.rx_dma: "DmaChannel | None" = None
         self._dma_started = 0.0
+        # EEPROM-read mode: frames at the train's end that clock the reply in (not transmit data),
+        # and written frames whose replies are still to be dropped
+        self._eeprom_fill = 0
+        self._eeprom_drop = 0
 
     def reset(self, now: float) -> None:
         """peri_reset: FIFOs, transfers and registers back to reset; devices deselected."""
@@ -169,6 +176,7 @@ class SpiController(Peripheral):
         self._held.clear()
         self._rx.clear()
         self._raw_int = 0
+        self._eeprom_fill = self._eeprom_drop = 0
         self.tx_dma = self.rx_dma = None
 
     # --- configuration decoded -----------------------------------------------------------
@@ -225,8 +233,6 @@ class SpiController(Peripheral):
                 )
             if self.tmod != TMOD_TX:
                 raise UnmodelledAccess(f"{self.NAME}: receiving in {FORMAT_NAMES[self.frame_format]} format is not modelled")
-        if self.tmod == TMOD_EEPROM:
-            raise UnmodelledAccess(f"{self.NAME}: EEPROM-read transfer mode (tmod 3) is not modelled")
 
     # --- chip select and device wiring -------------------------------------------------------
 
@@ -243,6 +249,7 @@ class SpiController(Peripheral):
         if self._train is not None:
             self.ports.signal(min(at, self._train.end()), f"spi{self.index}_sclk", 0)
         self._train = None
+        self._eeprom_fill = self._eeprom_drop = 0
 
     def _update_selection(self, now: float) -> None:
         low = bool(self.enabled and self.values[SER])
@@ -291,7 +298,13 @@ class SpiController(Peripheral):
             reply = device.spi_transfer(data, FORMAT_LANES[self.frame_format], now)
         else:
             reply = np.full(len(data), 0xFF, dtype=np.uint8)  # MISO pulled up: nothing answers
-        if self.tmod in (TMOD_TX_RX, TMOD_RX):
+        if self.tmod == TMOD_EEPROM and self._eeprom_drop:
+            dropped = min(self._eeprom_drop, len(frames))
+            self._eeprom_drop -= dropped
+            reply = reply[dropped * nbytes:]
+            if not len(reply):
+                return
+        if self.tmod in (TMOD_TX_RX, TMOD_RX, TMOD_EEPROM):
             if nbytes == 1:
                 self._receive(reply.astype(np.uint32), now)
                 return
@@ -342,7 +355,8 @@ class SpiController(Peripheral):
         train = self._train
         if train is None:
             return min(held, FIFO_DEPTH)
-        return min(FIFO_DEPTH, train.count - train.started(now) + held)
+        # (EEPROM-read mode: the frames clocking the reply in are not in the FIFO)
+        return min(FIFO_DEPTH, max(0, train.count - self._eeprom_fill - train.started(now)) + held)
 
     def busy(self, now: float) -> bool:
         train = self._train
@@ -364,7 +378,8 @@ class SpiController(Peripheral):
             times.append(train.start + (train.count - FIFO_DEPTH) * train.period)
         if self.tx_dma is not None and self.tx_dma.remaining():
             times.append(self._dma_push_time(train.count + self.tx_dma.remaining() - 1))
-        if self.tmod in (TMOD_TX_RX, TMOD_RX) and not (self.rx_dma is not None and self.values[DMACR] & DMACR_RDMAE):
+        if self.tmod in (TMOD_TX_RX, TMOD_RX, TMOD_EEPROM) and not (
+                self.rx_dma is not None and self.values[DMACR] & DMACR_RDMAE):
             # a CPU reading the receive FIFO sees it change when frames arrive: the first one
             # into an empty FIFO (RFNE), the one that lifts the level above rxftlr (RXF), the
             # one that fills it (RFF) and the one that overflows it (RXO)
@@ -403,7 +418,7 @@ class SpiController(Peripheral):
         (_next_sr_change). Without a DMA transmit channel only (it refills the FIFO as time
         goes). Bounds are kept a hundred-thousandth of a frame early: the frame counts carry a
         millionth of a frame's slack (FRAME_EPSILON)."""
-        if offset not in STATUS_REGISTERS or self.tx_dma is not None:
+        if offset not in STATUS_REGISTERS or self.tx_dma is not None or self.tmod == TMOD_EEPROM:
             return now
         train = self._train
         if train is None:
@@ -576,7 +591,10 @@ class SpiController(Peripheral):
             if value and self._held:
                 held = np.array(self._held, dtype=np.uint32)
                 self._held.clear()
-                self._push(held, now)
+                if self.tmod == TMOD_EEPROM:
+                    self._push_eeprom(held, now)
+                else:
+                    self._push(held, now)
         if offset == DMACR:
             self._dma_refill(now)
 
@@ -596,4 +614,27 @@ class SpiController(Peripheral):
             filler = (1 << self.frame_bits) - 1
             self._push(np.full(count, filler, dtype=np.uint32), now)
             return
-        self._push(np.array([value & ((1 << self.frame_bits) - 1)], dtype=np.uint32), now)
+        frame = np.array([value & ((1 << self.frame_bits) - 1)], dtype=np.uint32)
+        if self.tmod == TMOD_EEPROM:
+            self._push_eeprom(frame, now)
+            return
+        self._push(frame, now)
+
+    def _push_eeprom(self, frames: np.ndarray, now: float) -> None:
+        """EEPROM-read mode: the command frames go out, and behind them, once the transmit FIFO runs
+        empty, ctrlr1 + 1 frames clock the reply in. A frame written before the filler has started
+        joins the command (the FIFO had not run empty yet); the filler moves behind it."""
+        self._check_wire_format()
+        train = self._train
+        if train is not None and self._eeprom_fill and train.started(now) <= train.count - self._eeprom_fill:
+            train.frames.pop()                           # the filler, always its own chunk
+            train.count -= self._eeprom_fill
+            self._eeprom_fill = 0
+        self._push(frames, now)
+        if self._train is None:
+            return                                       # held until a slave is selected (write_register)
+        self._eeprom_drop += len(frames)
+        if not self._eeprom_fill:
+            count = (self.values[CTRLR1] & 0xFFFF) + 1
+            self._push(np.full(count, (1 << self.frame_bits) - 1, dtype=np.uint32), now)
+            self._eeprom_fill = count
