@@ -37,7 +37,8 @@ from unicorn import riscv_const as rv
 
 from emulator.board import Board
 from emulator.board.elf import symbolize
-from emulator.cpu.hart import EXCEPTION_NAMES, INSN_WFI, RunEnd
+from emulator.cpu.hart import RunEnd
+from emulator.cpu.riscv import EXCEPTION_NAMES, INSN_WFI
 
 MSTATUS_FS_INITIAL = 1 << 13          # mstatus.FS = 01 (boot.S MSTATUS_FS_INITIAL)
 NAN_BOX = 0xFFFF_FFFF_0000_0000       # upper half of an f register holding a single

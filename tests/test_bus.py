@@ -15,7 +15,7 @@ from emulator.devices import sysctl as sc
 from unicorn import riscv_const as rv
 
 from emulator.errors import UnmodelledAccess
-from emulator.cpu.hart import IRQ_MSI
+from emulator.cpu.riscv import IRQ_MSI
 from k210_fixtures import make_board, program, reg, route_uarths_to_the_console, run_to_done, run_until, symbol
 
 PLIC = 0x0C00_0000

@@ -7,7 +7,7 @@ import pytest
 from emulator.devices import clint as c
 from emulator.devices import plic as p
 from emulator.errors import UnmodelledAccess
-from emulator.cpu.hart import IRQ_MEI, IRQ_MSI, IRQ_MTI, IRQ_SEI
+from emulator.cpu.riscv import IRQ_MEI, IRQ_MSI, IRQ_MTI, IRQ_SEI
 from k210_fixtures import board, idle_elf  # noqa: F401
 
 CPU_HZ = 26e6

@@ -12,8 +12,8 @@ from hypothesis import strategies as st
 from emulator.board.elf import load_elf
 from emulator.board.memory import Sram
 from emulator.cpu.decode import decode_memory_access
-from emulator.cpu.hart import (CAUSE_INTERRUPT, ENGINE_FAST, ENGINE_PRECISE, IRQ_MEI, IRQ_MSI, IRQ_MTI, IRQ_SEI,
-                               CsrContext, Hart, HartState, RunEnd, _counter_lib)
+from emulator.cpu.hart import ENGINE_FAST, ENGINE_PRECISE, CsrContext, Hart, HartState, RunEnd, _counter_lib
+from emulator.cpu.riscv import CAUSE_INTERRUPT, IRQ_MEI, IRQ_MSI, IRQ_MTI, IRQ_SEI
 from emulator.errors import FirmwareTrap, HangDetected, UnmodelledAccess
 from k210_fixtures import at_done, build_elf, make_board, program, reg, run_to_done, run_until, symbol
 

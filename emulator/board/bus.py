@@ -43,6 +43,7 @@ import unicorn
 from unicorn import riscv_const as rv
 
 from ..cpu import hart as hartmod
+from ..cpu import riscv
 from .elf import symbolize
 from ..errors import BoardStop, FirmwareTrap, HardwareMisuse, RegisterRuleViolation, StrayWrite, UnmodelledAccess
 from ..cpu.decode import decode_memory_access
@@ -59,8 +60,6 @@ if TYPE_CHECKING:
     from .scheduler import Scheduler
     from .write_watch import WriteWatch
 
-CAUSE_FETCH_ACCESS = 1
-CAUSE_LOAD_ACCESS, CAUSE_STORE_ACCESS = 5, 7
 # Rocket's physical addresses (rocket-chip coreplex/Configs.scala, PAddrBits = 32; in machine
 # mode its TLB passes the address's low bits through unchanged, rocket/TLB.scala)
 PHYSICAL_ADDRESS_BITS = 32
@@ -240,10 +239,10 @@ class Bus:
             return
         self._questionable(hart, "access fault", address, 4, "instruction fetch",
                            f"no memory answers at this address: the K210 raises an instruction access "
-                           f"fault (mcause {CAUSE_FETCH_ACCESS}, mtval 0x{address:x}) into the firmware's "
+                           f"fault (mcause {riscv.CAUSE_FETCH_FAULT}, mtval 0x{address:x}) into the firmware's "
                            f"trap handler", pc=address)
         # the jump retired; the instruction at the target was never fetched, so nothing to take back
-        hart.pending_exception = hartmod.PendingException(CAUSE_FETCH_ACCESS, address, address)
+        hart.pending_exception = hartmod.PendingException(riscv.CAUSE_FETCH_FAULT, address, address)
 
     def _upper_bits_set(self, hart: Hart, address: int, size: int, fetch: bool, write: bool) -> bool:
         """An address above 4 GiB: the K210 reaches what its low 32 bits name. The same memory
@@ -290,7 +289,7 @@ class Bus:
         """Rocket's answer to an access its physical memory attributes do not allow: a precise
         load or store access fault with mtval = the address, into the firmware's trap handler."""
         pc = hart.reg(rv.UC_RISCV_REG_PC)
-        cause = CAUSE_STORE_ACCESS if is_store else CAUSE_LOAD_ACCESS
+        cause = riscv.CAUSE_STORE_FAULT if is_store else riscv.CAUSE_LOAD_FAULT
         width = self._access(hart, pc)[0]
         self._questionable(hart, "access fault", address, width, "store" if is_store else "load",
                            f"{why}: the K210 raises a {'store' if is_store else 'load'} access fault "
@@ -372,7 +371,7 @@ class Bus:
         address = (base + imm) & (2**64 - 1)
         if address % width == 0:
             return False
-        cause = hartmod.CAUSE_STORE_MISALIGNED if is_store else hartmod.CAUSE_LOAD_MISALIGNED
+        cause = riscv.CAUSE_STORE_MISALIGNED if is_store else riscv.CAUSE_LOAD_MISALIGNED
         hart.pending_exception = hartmod.PendingException(cause, pc, address)
         hart.retired_adjust += 1
         hart.request_stop()

@@ -16,6 +16,7 @@ import numpy as np
 
 from . import bootrom
 from ..cpu import hart as hartmod
+from ..cpu import riscv
 from .bus import Bus
 from ..devices.clint import Clint
 from ..cpu.disasm import disassemble_one
@@ -492,14 +493,14 @@ class Board:
         """The hart's pending interrupt bits; only those in `mask` are computed (sampling the
         PLIC is the expensive part, and a hart that has MEIE clear does not need it)."""
         value = 0
-        if mask >> hartmod.IRQ_MSI & 1 and self.clint.msip(h):
-            value |= 1 << hartmod.IRQ_MSI
-        if mask >> hartmod.IRQ_MTI & 1 and self.clint.timer_pending(h, now):
-            value |= 1 << hartmod.IRQ_MTI
-        if mask >> hartmod.IRQ_MEI & 1 and self.plic.external_pending(plic_m_context(h)):
-            value |= 1 << hartmod.IRQ_MEI
-        if mask >> hartmod.IRQ_SEI & 1 and self.plic.external_pending(plic_s_context(h)):
-            value |= 1 << hartmod.IRQ_SEI
+        if mask >> riscv.IRQ_MSI & 1 and self.clint.msip(h):
+            value |= 1 << riscv.IRQ_MSI
+        if mask >> riscv.IRQ_MTI & 1 and self.clint.timer_pending(h, now):
+            value |= 1 << riscv.IRQ_MTI
+        if mask >> riscv.IRQ_MEI & 1 and self.plic.external_pending(plic_m_context(h)):
+            value |= 1 << riscv.IRQ_MEI
+        if mask >> riscv.IRQ_SEI & 1 and self.plic.external_pending(plic_s_context(h)):
+            value |= 1 << riscv.IRQ_SEI
         return value
 
     def interrupts_may_have_changed(self, now: float | None = None) -> None:

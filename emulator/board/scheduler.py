@@ -30,6 +30,7 @@ import unicorn
 from unicorn import riscv_const as rv
 
 from ..cpu import hart as hartmod
+from ..cpu import riscv
 from ..cpu import shared_memory
 from .elf import symbolize
 from ..errors import BoardStop, FirmwareReportedError, FirmwareTrap, HangDetected
@@ -384,9 +385,9 @@ class Scheduler:
             return
         enabled = self._taken_in_m_mode(hart)
         pending = self.board.mip(hart.hart_id, hart.time, enabled) & enabled
-        for irq in hartmod.IRQ_PRIORITY:
+        for irq in riscv.IRQ_PRIORITY:
             if pending >> irq & 1:
-                hart.enter_trap(hartmod.CAUSE_INTERRUPT | irq, hart.pc, 0)
+                hart.enter_trap(riscv.CAUSE_INTERRUPT | irq, hart.pc, 0)
                 return
 
     # --- frames and grabs ---------------------------------------------------------------------
@@ -767,7 +768,7 @@ class Scheduler:
         memory, or a trap storm; with --stop-on-trap, after the handler's grace period."""
         exc = hart.pending_exception
         hart.pending_exception = None
-        name = hartmod.EXCEPTION_NAMES.get(exc.cause, f"exception {exc.cause}")
+        name = riscv.EXCEPTION_NAMES.get(exc.cause, f"exception {exc.cause}")
         where = symbolize(self.board.image.symbols, exc.epc)
         report = (f"hart {hart.hart_id}: {name} at pc 0x{exc.epc:08x}{f' <{where}>' if where else ''} "
                   f"({self.board.disassemble_at(exc.epc)}), mtval 0x{exc.tval:x}")
@@ -783,7 +784,7 @@ class Scheduler:
             self.trap_report = report
         else:
             self._watch_for_storm(hart, exc, report)
-        if exc.cause not in hartmod.ECALL_CAUSES or self.stop_on_trap:
+        if exc.cause not in riscv.ECALL_CAUSES or self.stop_on_trap:
             # a fault its handler may not return from; an ecall is a request, and a handler that
             # never returns from one ends the program as asked (the SDK's exit spins in sys_exit)
             hart.open_trap = report

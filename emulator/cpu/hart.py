@@ -31,53 +31,21 @@ from unicorn import riscv_const as rv
 from unicorn.unicorn_py3 import unicorn as _ucpy
 
 from . import _insn_counter, shared_memory, timing
+from .riscv import (CAUSE_BREAKPOINT, CAUSE_ECALL_U, CAUSE_ILLEGAL_INSTRUCTION, CAUSE_INTERRUPT,
+                    CAUSE_LOAD_MISALIGNED, CAUSE_STORE_MISALIGNED, CSR_CYCLE, CSR_INSTRET, CSR_MCYCLE,
+                    CSR_MHARTID, CSR_MIE, CSR_MINSTRET, CSR_MIP, CSR_MSTATUS, INSN_MRET, INSN_WFI,
+                    MSTATUS_MIE, MSTATUS_MPIE, MSTATUS_MPP, PRIV_M, PRIV_U)
 from .time_loops import LoopSkipper, TimeLoop
 from ..memory_map import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE
 
 # CSR numbers the board answers itself
-CSR_MHARTID = 0xF14
-CSR_MCYCLE = 0xB00
-CSR_MINSTRET = 0xB02
-CSR_CYCLE = 0xC00
-CSR_INSTRET = 0xC02
-CSR_MIP = 0x344
-CSR_MSTATUS = 0x300
-CSR_MIE = 0x304
 # mstatus and mie are real Unicorn CSRs; they are intercepted only so that a write that may
 # unmask a pending interrupt ends the hart's turn, and the interrupt is taken right there
 INTERRUPT_ENABLE_CSRS = {CSR_MSTATUS: rv.UC_RISCV_REG_MSTATUS, CSR_MIE: rv.UC_RISCV_REG_MIE}
 INTERCEPTED_CSRS = {CSR_MHARTID, CSR_MCYCLE, CSR_MINSTRET, CSR_CYCLE, CSR_INSTRET, CSR_MIP, *INTERRUPT_ENABLE_CSRS}
 READ_ONLY_CSRS = {CSR_MHARTID, CSR_CYCLE, CSR_INSTRET}
 
-MSTATUS_MIE = 1 << 3
-MSTATUS_MPIE = 1 << 7
-MSTATUS_MPP = 3 << 11
 
-CAUSE_INTERRUPT = 1 << 63
-CAUSE_ILLEGAL_INSTRUCTION = 2
-CAUSE_LOAD_MISALIGNED, CAUSE_STORE_MISALIGNED = 4, 6
-CAUSE_BREAKPOINT = 3
-CAUSE_ECALL_U, CAUSE_ECALL_M = 8, 11
-ECALL_CAUSES = (CAUSE_ECALL_U, CAUSE_ECALL_U + 1, CAUSE_ECALL_M)
-IRQ_MSI, IRQ_MTI, IRQ_SEI, IRQ_MEI = 3, 7, 9, 11
-# the order in which pending interrupts are taken (privileged spec 1.10, 3.1.14: MEI, MSI, MTI,
-# then the S-mode ones; SSI and STI are software-written bits of mip, which the model ignores)
-IRQ_PRIORITY = (IRQ_MEI, IRQ_MSI, IRQ_MTI, IRQ_SEI)
-
-EXCEPTION_NAMES = {
-    0: "instruction address misaligned", 1: "instruction access fault",
-    2: "illegal instruction", 3: "breakpoint", 4: "load address misaligned",
-    5: "load access fault", 6: "store address misaligned", 7: "store access fault",
-    8: "environment call from U-mode", 9: "environment call from S-mode",
-    11: "environment call from M-mode",
-}
-
-INSN_WFI = 0x10500073
-INSN_MRET = 0x30200073
-PRIV_U, PRIV_M = 0, 3
-
-
-# Unicorn's register ids that are not CSRs (Unicorn answers them in any mode)
 _NOT_CSRS = frozenset([rv.UC_RISCV_REG_PC, *range(rv.UC_RISCV_REG_X0, rv.UC_RISCV_REG_X31 + 1),
                        *range(rv.UC_RISCV_REG_F0, rv.UC_RISCV_REG_F31 + 1)])
 

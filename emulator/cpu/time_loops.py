@@ -27,10 +27,10 @@ from __future__ import annotations
 import functools
 from dataclasses import dataclass
 
+from .riscv import CSR_CYCLE, CSR_MCYCLE
 from .shared_memory import MAX_LOOP_BYTES, PollLoop, _backward_branches
 
 MASK = (1 << 64) - 1
-CSR_MCYCLE, CSR_CYCLE = 0xB00, 0xC00
 
 
 def _bits(word: int, high: int, low: int) -> int:

@@ -28,7 +28,9 @@ import unicorn
 from unicorn import riscv_const as rv
 
 from ..errors import BadInput, BoardStop, ConsoleExpectationsMet, FirmwareReportedError, FirmwareTrap, HangDetected
-from ..cpu.hart import CAUSE_INTERRUPT, CSR_MCYCLE, CSR_MHARTID, CSR_MINSTRET, HartState
+from ..cpu import riscv
+from ..cpu.hart import HartState
+from ..cpu.riscv import CAUSE_INTERRUPT, CSR_MCYCLE, CSR_MHARTID, CSR_MINSTRET
 
 if TYPE_CHECKING:
     from ..board import Board
@@ -43,19 +45,17 @@ INTERRUPT_BYTE = 0x03
 PACKET_SIZE = 0x4000
 # GDB's numbering for RISC-V (gdb/riscv-tdep.h): x0..x31, pc, f0..f31, then CSR n at 65 + n
 PC_REGNUM, FIRST_FPR_REGNUM, FIRST_CSR_REGNUM = 32, 33, 65
-GPR_NAMES = ["zero", "ra", "sp", "gp", "tp", "t0", "t1", "t2", "fp", "s1", "a0", "a1", "a2", "a3", "a4", "a5",
-             "a6", "a7", "s2", "s3", "s4", "s5", "s6", "s7", "s8", "s9", "s10", "s11", "t3", "t4", "t5", "t6"]
-FPR_NAMES = ["ft0", "ft1", "ft2", "ft3", "ft4", "ft5", "ft6", "ft7", "fs0", "fs1", "fa0", "fa1", "fa2", "fa3",
-             "fa4", "fa5", "fa6", "fa7", "fs2", "fs3", "fs4", "fs5", "fs6", "fs7", "fs8", "fs9", "fs10", "fs11",
-             "ft8", "ft9", "ft10", "ft11"]
+# GDB's own names (gdb/features/riscv/64bit-cpu.xml) are the psABI's, but x8 is "fp"
+GPR_NAMES = [*riscv.GPR_NAMES[:8], "fp", *riscv.GPR_NAMES[9:]]
+FPR_NAMES = list(riscv.FPR_NAMES)
 # the CSRs shown: (name, number, Unicorn register or None where the board answers)
-CSRS = [("fflags", 0x001, rv.UC_RISCV_REG_FFLAGS), ("frm", 0x002, rv.UC_RISCV_REG_FRM),
-        ("fcsr", 0x003, rv.UC_RISCV_REG_FCSR), ("mstatus", 0x300, rv.UC_RISCV_REG_MSTATUS),
-        ("misa", 0x301, rv.UC_RISCV_REG_MISA), ("mie", 0x304, rv.UC_RISCV_REG_MIE),
-        ("mtvec", 0x305, rv.UC_RISCV_REG_MTVEC), ("mscratch", 0x340, rv.UC_RISCV_REG_MSCRATCH),
-        ("mepc", 0x341, rv.UC_RISCV_REG_MEPC), ("mcause", 0x342, rv.UC_RISCV_REG_MCAUSE),
-        ("mtval", 0x343, rv.UC_RISCV_REG_MTVAL), ("mip", 0x344, None), ("mcycle", CSR_MCYCLE, None),
-        ("minstret", CSR_MINSTRET, None), ("mhartid", CSR_MHARTID, None)]
+CSRS = [("fflags", riscv.CSR_FFLAGS, rv.UC_RISCV_REG_FFLAGS), ("frm", riscv.CSR_FRM, rv.UC_RISCV_REG_FRM),
+        ("fcsr", riscv.CSR_FCSR, rv.UC_RISCV_REG_FCSR), ("mstatus", riscv.CSR_MSTATUS, rv.UC_RISCV_REG_MSTATUS),
+        ("misa", riscv.CSR_MISA, rv.UC_RISCV_REG_MISA), ("mie", riscv.CSR_MIE, rv.UC_RISCV_REG_MIE),
+        ("mtvec", riscv.CSR_MTVEC, rv.UC_RISCV_REG_MTVEC), ("mscratch", riscv.CSR_MSCRATCH, rv.UC_RISCV_REG_MSCRATCH),
+        ("mepc", riscv.CSR_MEPC, rv.UC_RISCV_REG_MEPC), ("mcause", riscv.CSR_MCAUSE, rv.UC_RISCV_REG_MCAUSE),
+        ("mtval", riscv.CSR_MTVAL, rv.UC_RISCV_REG_MTVAL), ("mip", riscv.CSR_MIP, None),
+        ("mcycle", CSR_MCYCLE, None), ("minstret", CSR_MINSTRET, None), ("mhartid", CSR_MHARTID, None)]
 CSR_BY_REGNUM = {FIRST_CSR_REGNUM + number: (name, number, reg) for name, number, reg in CSRS}
 WATCH_KINDS = {2: "watch", 3: "rwatch", 4: "awatch"}
 
@@ -227,8 +227,7 @@ class Debugger:
         def enter_trap(cause: int, epc: int, tval: int) -> None:
             enter(cause, epc, tval)
             if not cause & CAUSE_INTERRUPT and self.event is None:
-                from ..cpu.hart import EXCEPTION_NAMES
-                name = EXCEPTION_NAMES.get(cause, f"exception {cause}")
+                name = riscv.EXCEPTION_NAMES.get(cause, f"exception {cause}")
                 self.event = StopEvent(CAUSE_SIGNALS.get(cause, SIGTRAP), hart.hart_id,
                                        message=f"hart {hart.hart_id}: {name} at pc 0x{epc:x}, mtval 0x{tval:x}; "
                                                f"stopped at its trap handler (mepc, mcause, mtval say where)\n")

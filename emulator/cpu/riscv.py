@@ -1,0 +1,52 @@
+"""RISC-V names and numbers the model speaks in, in one place: register names (the psABI's), the
+CSRs the board carries out or shows, trap causes and their names, interrupt numbers, privilege
+levels and the few whole-instruction encodings the harts look for (the privileged and unprivileged
+specifications, version 20191213 / 1.11)."""
+from __future__ import annotations
+
+# Integer and floating-point registers by ABI name (RISC-V psABI, "Integer Register Convention")
+GPR_NAMES = ("zero", "ra", "sp", "gp", "tp", "t0", "t1", "t2", "s0", "s1", "a0", "a1", "a2", "a3", "a4", "a5",
+             "a6", "a7", "s2", "s3", "s4", "s5", "s6", "s7", "s8", "s9", "s10", "s11", "t3", "t4", "t5", "t6")
+FPR_NAMES = ("ft0", "ft1", "ft2", "ft3", "ft4", "ft5", "ft6", "ft7", "fs0", "fs1", "fa0", "fa1", "fa2", "fa3",
+             "fa4", "fa5", "fa6", "fa7", "fs2", "fs3", "fs4", "fs5", "fs6", "fs7", "fs8", "fs9", "fs10", "fs11",
+             "ft8", "ft9", "ft10", "ft11")
+
+# CSR numbers
+CSR_FFLAGS, CSR_FRM, CSR_FCSR = 0x001, 0x002, 0x003
+CSR_MSTATUS, CSR_MISA, CSR_MIE, CSR_MTVEC = 0x300, 0x301, 0x304, 0x305
+CSR_MSCRATCH, CSR_MEPC, CSR_MCAUSE, CSR_MTVAL, CSR_MIP = 0x340, 0x341, 0x342, 0x343, 0x344
+CSR_MCYCLE, CSR_MINSTRET = 0xB00, 0xB02
+CSR_CYCLE, CSR_INSTRET = 0xC00, 0xC02
+CSR_MHARTID = 0xF14
+
+MSTATUS_MIE = 1 << 3
+MSTATUS_MPIE = 1 << 7
+MSTATUS_MPP = 3 << 11
+
+# mcause
+CAUSE_INTERRUPT = 1 << 63
+CAUSE_FETCH_FAULT = 1
+CAUSE_ILLEGAL_INSTRUCTION = 2
+CAUSE_BREAKPOINT = 3
+CAUSE_LOAD_MISALIGNED, CAUSE_STORE_MISALIGNED = 4, 6
+CAUSE_LOAD_FAULT, CAUSE_STORE_FAULT = 5, 7
+CAUSE_ECALL_U, CAUSE_ECALL_S, CAUSE_ECALL_M = 8, 9, 11
+ECALL_CAUSES = (CAUSE_ECALL_U, CAUSE_ECALL_S, CAUSE_ECALL_M)
+EXCEPTION_NAMES = {
+    0: "instruction address misaligned", 1: "instruction access fault",
+    2: "illegal instruction", 3: "breakpoint", 4: "load address misaligned",
+    5: "load access fault", 6: "store address misaligned", 7: "store access fault",
+    8: "environment call from U-mode", 9: "environment call from S-mode",
+    11: "environment call from M-mode",
+}
+
+# interrupts (mip/mie bits, and mcause's code with CAUSE_INTERRUPT)
+IRQ_MSI, IRQ_MTI, IRQ_SEI, IRQ_MEI = 3, 7, 9, 11
+# the order in which pending interrupts are taken (privileged spec 1.10, 3.1.14: MEI, MSI, MTI,
+# then the S-mode ones; SSI and STI are software-written bits of mip, which the model ignores)
+IRQ_PRIORITY = (IRQ_MEI, IRQ_MSI, IRQ_MTI, IRQ_SEI)
+
+PRIV_U, PRIV_M = 0, 3
+
+INSN_WFI = 0x10500073
+INSN_MRET = 0x30200073
