@@ -12,7 +12,8 @@ from hypothesis import strategies as st
 from emulator.board.elf import load_elf
 from emulator.board.memory import Sram
 from emulator.cpu.decode import decode_memory_access
-from emulator.cpu.hart import ENGINE_FAST, ENGINE_PRECISE, CsrContext, Hart, HartState, RunEnd, _counter_lib
+from emulator.cpu.hart import ENGINE_FAST, ENGINE_PRECISE, CsrContext, Hart, HartState, RunEnd
+from emulator.cpu.native import counter_lib
 from emulator.cpu.riscv import CAUSE_INTERRUPT, IRQ_MEI, IRQ_MSI, IRQ_MTI, IRQ_SEI
 from emulator.errors import FirmwareTrap, HangDetected, UnmodelledAccess
 from k210_fixtures import at_done, build_elf, make_board, program, reg, run_to_done, run_until, symbol
@@ -504,7 +505,7 @@ def test_the_counters_access_decoder_agrees_with_decode_py(word, compressed):
     if compressed and word & 3 == 3:
         word &= ~1
     out = (ctypes.c_int64 * 4)()
-    _counter_lib.decode_access_for_tests(word, size, out)
+    counter_lib.decode_access_for_tests(word, size, out)
     expected = decode_memory_access(word)
     if word & 0x7F == 0x2F and (word >> 12) & 7 not in (2, 3):
         expected = None        # a reserved AMO width: decode.py guesses, the counter leaves it alone

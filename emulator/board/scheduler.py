@@ -32,6 +32,7 @@ from unicorn import riscv_const as rv
 from ..cpu import hart as hartmod
 from ..cpu import riscv
 from ..cpu import shared_memory
+from ..cpu.native import AlonePlan
 from .elf import symbolize
 from ..errors import BoardStop, FirmwareReportedError, FirmwareTrap, HangDetected
 from ..cpu.hart import CsrContext, Hart, HartState, RunEnd
@@ -182,7 +183,7 @@ class Scheduler:
         self._priority: tuple[Hart, int] | None = None    # a hart woken by a store, and its turn's length
         # per hart: the poll loop it last came round without waiting, and what that loop read then
         self._poll_seen: dict[int, tuple[int, list[bytes]]] = {}
-        self._alone_plan = hartmod.AlonePlan()
+        self._alone_plan = AlonePlan()
 
     def _mcycle_reader(self, h: int) -> Callable[[], int]:
         return lambda: self.cycles(self.hart_now(self.harts[h]))

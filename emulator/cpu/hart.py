@@ -30,7 +30,9 @@ import unicorn
 from unicorn import riscv_const as rv
 from unicorn.unicorn_py3 import unicorn as _ucpy
 
-from . import _insn_counter, shared_memory, timing
+from . import shared_memory, timing
+from .native import (COUNT_HOOK, NO_LIMIT, AlonePlan, Counter, FastHead, counter_lib,
+                     fast_step)
 from .riscv import (CAUSE_BREAKPOINT, CAUSE_ECALL_U, CAUSE_ILLEGAL_INSTRUCTION, CAUSE_INTERRUPT,
                     CAUSE_LOAD_MISALIGNED, CAUSE_STORE_MISALIGNED, CSR_CYCLE, CSR_INSTRET, CSR_MCYCLE,
                     CSR_MHARTID, CSR_MIE, CSR_MINSTRET, CSR_MIP, CSR_MSTATUS, INSN_MRET, INSN_WFI,
@@ -49,78 +51,6 @@ READ_ONLY_CSRS = {CSR_MHARTID, CSR_CYCLE, CSR_INSTRET}
 _NOT_CSRS = frozenset([rv.UC_RISCV_REG_PC, *range(rv.UC_RISCV_REG_X0, rv.UC_RISCV_REG_X31 + 1),
                        *range(rv.UC_RISCV_REG_F0, rv.UC_RISCV_REG_F31 + 1)])
 
-BTB_ENTRIES, BHT_ENTRIES, RAS_ENTRIES = 40, 128, 2     # _insn_counter.c's predictor sizes
-BTB_INDEX_BUCKETS = 128
-NO_LIMIT = 2**64 - 1
-
-
-class _Predictor(ctypes.Structure):
-    """_insn_counter.c's predictor_t (Rocket's BTB, BHT and RAS)."""
-    _fields_ = [("pc", ctypes.c_uint64 * BTB_ENTRIES), ("target", ctypes.c_uint64 * BTB_ENTRIES),
-                ("valid", ctypes.c_uint8 * BTB_ENTRIES), ("is_jump", ctypes.c_uint8 * BTB_ENTRIES),
-                ("is_return", ctypes.c_uint8 * BTB_ENTRIES), ("bht", ctypes.c_uint8 * BHT_ENTRIES),
-                ("ras", ctypes.c_uint64 * RAS_ENTRIES), ("next_replace", ctypes.c_uint32),
-                ("history", ctypes.c_uint32), ("ras_count", ctypes.c_uint32), ("ras_pos", ctypes.c_uint32),
-                ("index", ctypes.c_uint8 * BTB_INDEX_BUCKETS)]
-
-
-class _Counter(ctypes.Structure):
-    """_insn_counter.c's insn_counter_t."""
-    _fields_ = [("executed", ctypes.c_uint64), ("limit", ctypes.c_uint64), ("stop", ctypes.c_void_p),
-                ("loops", ctypes.c_void_p), ("loop_mask", ctypes.c_uint64), ("poll_report", ctypes.c_uint64),
-                ("cycles", ctypes.c_uint64), ("cycle_limit", ctypes.c_uint64), ("table", ctypes.c_void_p),
-                ("table_base", ctypes.c_uint64), ("table_end", ctypes.c_uint64), ("reg_read", ctypes.c_void_p),
-                ("reg_x0", ctypes.c_int32), ("pending_kind", ctypes.c_int32), ("pending_pc", ctypes.c_uint64),
-                ("pending_entry", ctypes.c_uint32), ("pad", ctypes.c_uint32), ("mispredicts", ctypes.c_uint64),
-                ("stall_cycles", ctypes.c_uint64), ("predictor", _Predictor), ("csr_sites", ctypes.c_void_p),
-                ("csr_mask", ctypes.c_uint64), ("csr_report", ctypes.c_uint64), ("last_pc", ctypes.c_uint64),
-                ("sram", ctypes.c_void_p), ("sram_base", ctypes.c_uint64), ("sram_alias", ctypes.c_uint64),
-                ("sram_size", ctypes.c_uint64), ("misaligned_pc", ctypes.c_uint64),
-                ("misaligned_address", ctypes.c_uint64), ("misaligned_store", ctypes.c_uint64)]
-
-
-_counter_lib = ctypes.CDLL(_insn_counter.__file__)
-_COUNT_HOOK = ctypes.cast(_counter_lib.count_instruction, ctypes.c_void_p)
-_counter_lib.fast_state_new.restype = ctypes.c_void_p
-_counter_lib.fast_state_new.argtypes = [ctypes.c_uint64, ctypes.c_void_p, ctypes.c_uint64, ctypes.c_uint64, ctypes.c_uint64,
-                                        ctypes.c_void_p, ctypes.c_void_p]
-_counter_lib.fast_state_free.argtypes = [ctypes.c_void_p]
-_counter_lib.fast_forget_decodings.argtypes = [ctypes.c_void_p]
-_counter_lib.fast_statistics.argtypes = [ctypes.c_void_p, ctypes.POINTER(ctypes.c_uint64)]
-_counter_lib.fast_abandon.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
-_counter_lib.fast_set_windows.restype = ctypes.c_int
-_counter_lib.fast_set_windows.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_uint32]
-_counter_lib.decode_access_for_tests.argtypes = [ctypes.c_uint32, ctypes.c_uint32, ctypes.POINTER(ctypes.c_int64)]
-_counter_lib.fast_set_write_watch.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
-_fast_step = _insn_counter.fast_step   # runs the fast engine, CPython's way of calling (see _insn_counter.c)
-_counter_lib.fast_run_alone.restype = ctypes.c_uint64
-_counter_lib.fast_run_alone.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_uint64,
-                                        ctypes.c_void_p]
-
-
-class _DeviceAccess(ctypes.Structure):
-    """_fast_engine.c's device_access_t: the access the interpreter stopped at (STOP_DEVICE)."""
-    _fields_ = [("address", ctypes.c_uint64), ("value", ctypes.c_uint64), ("next_pc", ctypes.c_uint64),
-                ("width", ctypes.c_uint32), ("is_store", ctypes.c_uint32), ("window", ctypes.c_uint32),
-                ("rd", ctypes.c_uint32), ("sign_bits", ctypes.c_uint32), ("pad", ctypes.c_uint32)]
-
-
-class _Repeat(ctypes.Structure):
-    """_fast_engine.c's repeat_t: a device load the interpreter answers again itself (arm_repeats)."""
-    _fields_ = [("pc", ctypes.c_uint64), ("address", ctypes.c_uint64), ("value", ctypes.c_uint64),
-                ("until", ctypes.c_uint64), ("width", ctypes.c_uint32), ("armed", ctypes.c_uint32),
-                ("repeats", ctypes.c_uint32), ("needed", ctypes.c_uint32), ("answered", ctypes.c_uint32),
-                ("polling", ctypes.c_uint32)]
-
-
-class _FastHead(ctypes.Structure):
-    """The start of _fast_engine.c's fast_state_t: the hart's registers while the interpreter holds
-    them, the device access it stopped at, the load it answers again itself."""
-    _fields_ = [("x", ctypes.c_uint64 * 33), ("f", ctypes.c_uint64 * 32), ("pc", ctypes.c_uint64),
-                ("mstatus", ctypes.c_uint64), ("fflags", ctypes.c_uint64), ("frm", ctypes.c_uint64),
-                ("dev", _DeviceAccess), ("rep", _Repeat)]
-
-
 # A device access the fast engine leaves to the board: (hart, window index, address, width in bytes,
 # is a store, the stored value, pc) -> the loaded value (0 for a store)
 DeviceAccess = Callable[["Hart", int, int, int, bool, int, int], int]
@@ -129,14 +59,6 @@ DeviceAccess = Callable[["Hart", int, int, int, bool, int, int], int]
 RepeatsAnswered = Callable[["Hart", int, int, int, int, bool], None]
 
 
-class AlonePlan(ctypes.Structure):
-    """_fast_engine.c's alone_plan_t: the turns of a hart running alone (Scheduler._go_on_alone)."""
-    _fields_ = [("t0", ctypes.c_double), ("hz", ctypes.c_double), ("quantum", ctypes.c_double),
-                ("outer", ctypes.c_double), ("stop_at", ctypes.c_double), ("max_turns", ctypes.c_uint64),
-                ("horizon", ctypes.c_double), ("budget", ctypes.c_uint64), ("start_cycles", ctypes.c_uint64),
-                ("start_executed", ctypes.c_uint64), ("turns", ctypes.c_uint64), ("handed_over", ctypes.c_uint64),
-                ("end_time", ctypes.c_double), ("tick", ctypes.c_double), ("tick_period", ctypes.c_double),
-                ("ticks", ctypes.c_uint64)]
 ENGINE_FAST, ENGINE_PRECISE = "fast", "precise"
 ENGINES = (ENGINE_FAST, ENGINE_PRECISE)
 # Instructions the precise engine runs after the fast one handed it the hart. A hand-over is mostly
@@ -211,11 +133,11 @@ class Hart:
         self.retired_adjust = 0   # instructions counted by the hook that did not retire (trapped)
         self.minstret_offset = 0  # set by firmware writes to minstret
         self.mcycle_offset = 0
-        self._counter = _Counter(0, 0, _UC_EMU_STOP, None, 0, 0, 0, NO_LIMIT, None, 0, 0, _UC_REG_READ,
+        self._counter = Counter(0, 0, _UC_EMU_STOP, None, 0, 0, 0, NO_LIMIT, None, 0, 0, _UC_REG_READ,
                                  rv.UC_RISCV_REG_X0)
         self._cycle_table: timing.CycleTable | None = None   # kept alive while the counter reads it
         self.skipper = LoopSkipper(self._counter)
-        self._counter_hook = self.add_native_hook(unicorn.UC_HOOK_CODE, _COUNT_HOOK, self._counter, 1, 0,
+        self._counter_hook = self.add_native_hook(unicorn.UC_HOOK_CODE, COUNT_HOOK, self._counter, 1, 0,
                                                   "the instruction counter")
         self._csr_words: dict[int, int] = {}          # address -> instruction word of each CSR site
         self.time_loops: dict[int, TimeLoop] = {}     # by the address of their time read (time_loops.py)
@@ -230,7 +152,7 @@ class Hart:
         self._reg_ref = ctypes.byref(self._reg_value)
         # the fast engine (enable_fast_engine), and the hooks that keep a hart on the precise one
         self._fast_state: int | None = None
-        self._fast_head: _FastHead | None = None
+        self._fast_head: FastHead | None = None
         self._hooks_needing_precision: set[int] = set()
         self.precise_runs = 0     # runs of the precise engine (the scheduler sees whether a turn had any)
         self._precise_stretch = PRECISE_STRETCH
@@ -248,7 +170,7 @@ class Hart:
         which the caller keeps alive as long as the hook. `what` names it in the error.
         Returns the hook's handle (for remove_hook)."""
         handle = _add_native_hook(self.uc, kind, callback, user_data, begin, end, f"{what} on hart {self.hart_id}")
-        if callback is not _COUNT_HOOK:
+        if callback is not COUNT_HOOK:
             # the fast engine does not carry other hooks (store watches, the write checker)
             self._hooks_needing_precision.add(handle)
         return handle
@@ -290,16 +212,16 @@ class Hart:
         It hands the hart over before what it does not carry out itself: device accesses, CSRs,
         wfi, traps, atomics, floating point on NaNs or in other rounding modes. Counts, cycles and
         every stop stay what the precise engine alone would give."""
-        state = _counter_lib.fast_state_new(self.hart_id, sram_address, SRAM_SIZE, SRAM_BASE, SRAM_UNCACHED_BASE,
+        state = counter_lib.fast_state_new(self.hart_id, sram_address, SRAM_SIZE, SRAM_BASE, SRAM_UNCACHED_BASE,
                                             _UC_REG_READ_BATCH, _UC_REG_WRITE_BATCH)
         if not state:
             raise MemoryError("cannot allocate the fast engine")
         self._fast_state = state
-        self._fast_head = _FastHead.from_address(state)
-        self._counter_at = ctypes.addressof(self._counter)     # (_fast_step takes addresses)
+        self._fast_head = FastHead.from_address(state)
+        self._counter_at = ctypes.addressof(self._counter)     # (fast_step takes addresses)
         self._uc_at = self.uc._uch.value
         # freed with the hart (Board.close frees it at once)
-        self._free_fast_state = weakref.finalize(self, _counter_lib.fast_state_free, state)
+        self._free_fast_state = weakref.finalize(self, counter_lib.fast_state_free, state)
         self._give_windows()
         self._give_write_watch()
 
@@ -331,7 +253,7 @@ class Hart:
 
     def _give_write_watch(self) -> None:
         if self._fast_state is not None and self._write_watch is not None:
-            _counter_lib.fast_set_write_watch(self._fast_state, ctypes.byref(self._write_watch))
+            counter_lib.fast_set_write_watch(self._fast_state, ctypes.byref(self._write_watch))
 
     def _stray_store_made(self) -> bool:
         return self._write_watch is not None and bool(self._write_watch.stray)
@@ -343,7 +265,7 @@ class Hart:
         count = len(self._device_windows)
         bases = (ctypes.c_uint64 * count)(*(base for base, _ in self._device_windows))
         ends = (ctypes.c_uint64 * count)(*(end for _, end in self._device_windows))
-        if not _counter_lib.fast_set_windows(self._fast_state, bases, ends, count):
+        if not counter_lib.fast_set_windows(self._fast_state, bases, ends, count):
             raise ValueError(f"the fast engine takes at most 64 device windows, not {count}")
 
     def close(self) -> None:
@@ -358,14 +280,14 @@ class Hart:
         if self._fast_state is None:
             return {}
         out = (ctypes.c_uint64 * 3)()
-        _counter_lib.fast_statistics(self._fast_state, out)
+        counter_lib.fast_statistics(self._fast_state, out)
         return {"instructions": out[0], "handoffs": out[1], "blocks_decoded": out[2]}
 
     def forget_decodings(self) -> None:
         """Drops the fast engine's decoded blocks: it decodes its instructions again (the counter's tables
         changed; the bench decoding afresh for each timed run)."""
         if self._fast_state is not None:
-            _counter_lib.fast_forget_decodings(self._fast_state)
+            counter_lib.fast_forget_decodings(self._fast_state)
 
     def arm_repeats(self, pc: int, address: int, width: int, value: int, until: float, clock: tuple[float, int, float],
                     repeats: int, needed: int) -> None:
@@ -386,7 +308,7 @@ class Hart:
         precise engine holds the hart's registers again after it. Returns the pc to go on from."""
         state, counter, uc = self._fast_state, self._counter_at, self._uc_at
         rep = self._fast_head.rep
-        stop = _fast_step(state, counter, uc, pc, False)    # the stop, or a device access (_fast_step)
+        stop = fast_step(state, counter, uc, pc, False)    # the stop, or a device access (fast_step)
         while True:
             at_device = stop.__class__ is tuple
             if rep.armed:
@@ -404,14 +326,14 @@ class Hart:
                 value = self._device_access(self, window, address, width, bool(is_store), stored, access_pc)
             except BaseException:
                 self._holding = False
-                _counter_lib.fast_abandon(state, self.uc._uch)
+                counter_lib.fast_abandon(state, self.uc._uch)
                 raise
             self._holding = False
             if self.pending_exception is not None:
                 # (defensive: the bus raises no exception for the aligned accesses it gets here today)
-                _counter_lib.fast_abandon(state, self.uc._uch)    # the access trapped: it does not complete
+                counter_lib.fast_abandon(state, self.uc._uch)    # the access trapped: it does not complete
                 break
-            stop = _fast_step(state, counter, uc, value, True)
+            stop = fast_step(state, counter, uc, value, True)
         return self._fast_head.pc
 
     def run_fast_stretch(self, pc: int) -> int:
@@ -427,7 +349,7 @@ class Hart:
     def run_alone(self, plan: AlonePlan) -> None:
         """Runs the turns `plan` describes on the fast engine, from `self.pc` (fast_run_alone)."""
         self.stop_requested = False
-        self.pc = _counter_lib.fast_run_alone(self._fast_state, ctypes.byref(self._counter), self.uc._uch, self.pc,
+        self.pc = counter_lib.fast_run_alone(self._fast_state, ctypes.byref(self._counter), self.uc._uch, self.pc,
                                               ctypes.byref(plan))
 
     def _fast_usable(self) -> bool:
@@ -775,7 +697,7 @@ class Hart:
         stops before is neither counted nor timed. The counter is added again after it."""
         self.remove_hook(self._counter_hook)
         handle = self.uc.hook_add(unicorn.UC_HOOK_CODE, callback, user_data, begin, end)
-        self._counter_hook = self.add_native_hook(unicorn.UC_HOOK_CODE, _COUNT_HOOK, self._counter, 1, 0,
+        self._counter_hook = self.add_native_hook(unicorn.UC_HOOK_CODE, COUNT_HOOK, self._counter, 1, 0,
                                                   "the instruction counter")
         self.uc.ctl_flush_tb()   # see add_hook
         self._hooks_needing_precision.add(handle)

@@ -329,7 +329,7 @@ def _time_loop_at(code: bytes, base: int, branch_offset: int) -> TimeLoop | None
 
 
 class LoopSkipper:
-    """One hart's skipping of the loops above: what its native counter (hart.py's _Counter) was at
+    """One hart's skipping of the loops above: what its native counter (native.py's Counter) was at
     the last two visits of each loop, and the iterations counted without being run."""
 
     def __init__(self, counter) -> None:

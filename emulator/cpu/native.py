@@ -1,0 +1,90 @@
+"""The C extension (_insn_counter.c with _fast_engine.c) as Python sees it: ctypes mirrors of the
+structures it shares with hart.py, and its functions' signatures. A field added on one side must be
+added on the other in the same place: nothing checks the two layouts against each other yet (issue
+33 asks for mirrors generated from the C headers)."""
+from __future__ import annotations
+
+import ctypes
+
+from . import _insn_counter
+
+BTB_ENTRIES, BHT_ENTRIES, RAS_ENTRIES = 40, 128, 2     # _insn_counter.c's predictor sizes
+BTB_INDEX_BUCKETS = 128
+NO_LIMIT = 2**64 - 1
+
+
+class Predictor(ctypes.Structure):
+    """_insn_counter.c's predictor_t (Rocket's BTB, BHT and RAS)."""
+    _fields_ = [("pc", ctypes.c_uint64 * BTB_ENTRIES), ("target", ctypes.c_uint64 * BTB_ENTRIES),
+                ("valid", ctypes.c_uint8 * BTB_ENTRIES), ("is_jump", ctypes.c_uint8 * BTB_ENTRIES),
+                ("is_return", ctypes.c_uint8 * BTB_ENTRIES), ("bht", ctypes.c_uint8 * BHT_ENTRIES),
+                ("ras", ctypes.c_uint64 * RAS_ENTRIES), ("next_replace", ctypes.c_uint32),
+                ("history", ctypes.c_uint32), ("ras_count", ctypes.c_uint32), ("ras_pos", ctypes.c_uint32),
+                ("index", ctypes.c_uint8 * BTB_INDEX_BUCKETS)]
+
+
+class Counter(ctypes.Structure):
+    """_insn_counter.c's insn_counter_t."""
+    _fields_ = [("executed", ctypes.c_uint64), ("limit", ctypes.c_uint64), ("stop", ctypes.c_void_p),
+                ("loops", ctypes.c_void_p), ("loop_mask", ctypes.c_uint64), ("poll_report", ctypes.c_uint64),
+                ("cycles", ctypes.c_uint64), ("cycle_limit", ctypes.c_uint64), ("table", ctypes.c_void_p),
+                ("table_base", ctypes.c_uint64), ("table_end", ctypes.c_uint64), ("reg_read", ctypes.c_void_p),
+                ("reg_x0", ctypes.c_int32), ("pending_kind", ctypes.c_int32), ("pending_pc", ctypes.c_uint64),
+                ("pending_entry", ctypes.c_uint32), ("pad", ctypes.c_uint32), ("mispredicts", ctypes.c_uint64),
+                ("stall_cycles", ctypes.c_uint64), ("predictor", Predictor), ("csr_sites", ctypes.c_void_p),
+                ("csr_mask", ctypes.c_uint64), ("csr_report", ctypes.c_uint64), ("last_pc", ctypes.c_uint64),
+                ("sram", ctypes.c_void_p), ("sram_base", ctypes.c_uint64), ("sram_alias", ctypes.c_uint64),
+                ("sram_size", ctypes.c_uint64), ("misaligned_pc", ctypes.c_uint64),
+                ("misaligned_address", ctypes.c_uint64), ("misaligned_store", ctypes.c_uint64)]
+
+
+counter_lib = ctypes.CDLL(_insn_counter.__file__)
+COUNT_HOOK = ctypes.cast(counter_lib.count_instruction, ctypes.c_void_p)
+counter_lib.fast_state_new.restype = ctypes.c_void_p
+counter_lib.fast_state_new.argtypes = [ctypes.c_uint64, ctypes.c_void_p, ctypes.c_uint64, ctypes.c_uint64, ctypes.c_uint64,
+                                        ctypes.c_void_p, ctypes.c_void_p]
+counter_lib.fast_state_free.argtypes = [ctypes.c_void_p]
+counter_lib.fast_forget_decodings.argtypes = [ctypes.c_void_p]
+counter_lib.fast_statistics.argtypes = [ctypes.c_void_p, ctypes.POINTER(ctypes.c_uint64)]
+counter_lib.fast_abandon.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
+counter_lib.fast_set_windows.restype = ctypes.c_int
+counter_lib.fast_set_windows.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_uint32]
+counter_lib.decode_access_for_tests.argtypes = [ctypes.c_uint32, ctypes.c_uint32, ctypes.POINTER(ctypes.c_int64)]
+counter_lib.fast_set_write_watch.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
+fast_step = _insn_counter.fast_step   # runs the fast engine, CPython's way of calling (see _insn_counter.c)
+counter_lib.fast_run_alone.restype = ctypes.c_uint64
+counter_lib.fast_run_alone.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_uint64,
+                                        ctypes.c_void_p]
+
+
+class DeviceStop(ctypes.Structure):
+    """_fast_engine.c's device_access_t: the access the interpreter stopped at (STOP_DEVICE)."""
+    _fields_ = [("address", ctypes.c_uint64), ("value", ctypes.c_uint64), ("next_pc", ctypes.c_uint64),
+                ("width", ctypes.c_uint32), ("is_store", ctypes.c_uint32), ("window", ctypes.c_uint32),
+                ("rd", ctypes.c_uint32), ("sign_bits", ctypes.c_uint32), ("pad", ctypes.c_uint32)]
+
+
+class RepeatRecord(ctypes.Structure):
+    """_fast_engine.c's repeat_t: a device load the interpreter answers again itself (arm_repeats)."""
+    _fields_ = [("pc", ctypes.c_uint64), ("address", ctypes.c_uint64), ("value", ctypes.c_uint64),
+                ("until", ctypes.c_uint64), ("width", ctypes.c_uint32), ("armed", ctypes.c_uint32),
+                ("repeats", ctypes.c_uint32), ("needed", ctypes.c_uint32), ("answered", ctypes.c_uint32),
+                ("polling", ctypes.c_uint32)]
+
+
+class FastHead(ctypes.Structure):
+    """The start of _fast_engine.c's fast_state_t: the hart's registers while the interpreter holds
+    them, the device access it stopped at, the load it answers again itself."""
+    _fields_ = [("x", ctypes.c_uint64 * 33), ("f", ctypes.c_uint64 * 32), ("pc", ctypes.c_uint64),
+                ("mstatus", ctypes.c_uint64), ("fflags", ctypes.c_uint64), ("frm", ctypes.c_uint64),
+                ("dev", DeviceStop), ("rep", RepeatRecord)]
+
+
+class AlonePlan(ctypes.Structure):
+    """_fast_engine.c's alone_plan_t: the turns of a hart running alone (Scheduler._go_on_alone)."""
+    _fields_ = [("t0", ctypes.c_double), ("hz", ctypes.c_double), ("quantum", ctypes.c_double),
+                ("outer", ctypes.c_double), ("stop_at", ctypes.c_double), ("max_turns", ctypes.c_uint64),
+                ("horizon", ctypes.c_double), ("budget", ctypes.c_uint64), ("start_cycles", ctypes.c_uint64),
+                ("start_executed", ctypes.c_uint64), ("turns", ctypes.c_uint64), ("handed_over", ctypes.c_uint64),
+                ("end_time", ctypes.c_double), ("tick", ctypes.c_double), ("tick_period", ctypes.c_double),
+                ("ticks", ctypes.c_uint64)]
