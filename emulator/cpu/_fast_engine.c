@@ -32,6 +32,7 @@
  * upper half holds. tests/test_fast_engine.py compares this engine with the precise one.
  */
 #include <math.h>
+#include <stddef.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -1508,6 +1509,20 @@ typedef struct {
     double tick_period;
     uint64_t ticks;
 } alone_plan_t;
+
+/* The sizes of the structures native.py mirrors for ctypes (tests/test_native_layout.py checks the
+ * mirrors against them and against the field names here): predictor_t, insn_counter_t,
+ * device_access_t, repeat_t, fast_state_t up to `windows` (the head Python reads), alone_plan_t. */
+__attribute__((visibility("default")))
+void struct_sizes_for_tests(uint64_t out[6])
+{
+    out[0] = sizeof(predictor_t);
+    out[1] = sizeof(insn_counter_t);
+    out[2] = sizeof(device_access_t);
+    out[3] = sizeof(repeat_t);
+    out[4] = offsetof(fast_state_t, windows);
+    out[5] = sizeof(alone_plan_t);
+}
 
 /*
  * Runs the turns the scheduler would give a hart running alone, one after another, while none needs
