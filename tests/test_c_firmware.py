@@ -212,7 +212,7 @@ def test_syscalls_ecall_and_misaligned_load_served_by_the_trap_handler(c_firmwar
         "write returned 35; misaligned lw read 0x54433221",
         "51 ecalls served, 1 misaligned loads carried out",
     ]
-    assert board.scheduler.exceptions_taken == {"environment call from M-mode": 101, "load address misaligned": 1}
+    assert board.scheduler.traps.taken == {"environment call from M-mode": 101, "load address misaligned": 1}
     assert set(board.uart_output) == {"UART3"}
 
 

@@ -576,9 +576,9 @@ def test_integer_instructions_at_the_extremes_are_the_precise_engines(seed):
     source, data = _integer_walk(seed, 1500)
     precise, fast = run_on_both(source, data)
     assert state(fast) == state(precise)
-    taken = precise.scheduler.exceptions_taken
+    taken = precise.scheduler.traps.taken
     assert taken.get("load address misaligned", 0) + taken.get("store address misaligned", 0) > 10
-    assert fast.scheduler.exceptions_taken == taken
+    assert fast.scheduler.traps.taken == taken
     assert fast.harts[0].fast_statistics()["instructions"] > 0.8 * (fast.harts[0].executed - fast.harts[0].iterations_skipped)
 
 

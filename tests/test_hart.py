@@ -322,7 +322,7 @@ def test_ecall_system_calls_are_served_by_the_handler_and_the_run_goes_on():
     """ + SYSCALL_HANDLER))
     run_to_done(board)
     assert reg(board, "s2") == 5 and reg(board, "s3") == 35
-    assert board.scheduler.exceptions_taken == {"environment call from M-mode": 5}
+    assert board.scheduler.traps.taken == {"environment call from M-mode": 5}
     assert board.harts[0].open_trap is None                  # every handler returned
 
 
@@ -354,7 +354,7 @@ def test_a_handler_that_returns_to_the_fault_is_a_trap_storm():
     """))
     with pytest.raises(HangDetected, match=r"trap storm: hart 0: illegal instruction at pc 0x[0-9a-f]+ <the_fault>"):
         run_until(board, lambda b: False, max_time_s=1.0)
-    assert board.scheduler.exceptions_taken["illegal instruction"] == 1000
+    assert board.scheduler.traps.taken["illegal instruction"] == 1000
 
 
 def test_stop_on_trap_ends_the_run_at_the_first_exception():
@@ -366,7 +366,7 @@ def test_stop_on_trap_ends_the_run_at_the_first_exception():
         ecall
         j       done
     """ + SYSCALL_HANDLER))
-    board.scheduler.stop_on_trap = True
+    board.scheduler.traps.stop_on_trap = True
     with pytest.raises(FirmwareTrap, match="environment call from M-mode.*the firmware's trap handler has run"):
         run_until(board, lambda b: False, max_time_s=1.0)
     assert reg(board, "s2") == 1                              # the handler ran: its grace period
@@ -470,7 +470,7 @@ def test_misaligned_accesses_trap_and_the_handler_recovers_them(engine):
     assert reg(board, "s2") == 0x14131211
     assert reg(board, "s5") == 0x1234
     assert board.memory.read(symbol(board, "bytes"), 7) == bytes([0x10, 0x11, 0x12, 0x34, 0x12, 0x15, 0x16])
-    assert board.scheduler.exceptions_taken == {"load address misaligned": 2, "store address misaligned": 1}
+    assert board.scheduler.traps.taken == {"load address misaligned": 2, "store address misaligned": 1}
 
 
 @pytest.mark.parametrize("access, address, cause", [

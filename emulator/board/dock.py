@@ -296,7 +296,7 @@ class Board:
     @property
     def last_exception(self) -> str | None:
         """The last synchronous exception a hart took, described (None: none yet)."""
-        return self.scheduler.last_exception
+        return self.scheduler.traps.last
 
     @property
     def host_time_in_harts(self) -> float:

@@ -29,11 +29,10 @@ import numpy as np
 import unicorn
 from unicorn import riscv_const as rv
 
-from ..cpu import hart as hartmod
-from ..cpu import riscv
 from ..cpu import shared_memory
 from ..cpu.native import AlonePlan
 from .elf import symbolize
+from .traps import Traps
 from ..errors import BoardStop, FirmwareReportedError, FirmwareTrap, HangDetected
 from ..cpu.hart import CsrContext, Hart, HartState, RunEnd
 from ..memory_map import RESET_PC, SRAM_BASE, SRAM_UNCACHED_BASE
@@ -50,9 +49,6 @@ HARTS = 2
 DEFAULT_QUANTUM = 20_000          # CPU cycles per hart per turn
 DEFAULT_HANG_BUDGET_S = 5.0       # virtual seconds without a new frame before a run counts as hung
 TRAP_GRACE_S = 0.5                # virtual time the firmware's trap handler gets to report
-# A hart that takes the same exception at the same pc with the same registers this many times in a
-# row, storing to no device in between, can make no progress: a trap storm, which ends the run
-TRAP_STORM_REPEATS = 1000
 POLL_REPEATS = 8                  # identical reads at one pc before a hart counts as polling
 # After the last requested frame the run goes on this long at most, so that the console line
 # the firmware begins after that frame (this firmware's "frame N") is not cut off.
@@ -91,7 +87,9 @@ class RunResult:
 
 
 class TurnObserver(Protocol):
-    """What the bus does around a hart's turn (bus.py)."""
+    """What the bus does around a hart's turn (bus.py), and what it counts (traps.py's storm watch)."""
+
+    device_writes: dict[str, list[int]]
 
     def turn_begins(self, hart: Hart) -> None: ...
 
@@ -167,15 +165,11 @@ class Scheduler:
         self._poll = [NO_POLL] * HARTS
         self._grabs: list[tuple[float, Callable[["Board"], None]]] = []
         self.host_time_in_harts = 0.0                     # host seconds spent executing guest code
-        self.stop_on_trap = False                         # --stop-on-trap: any exception ends the run
-        self.trap_report: str | None = None               # --stop-on-trap: the exception that ends it
+        self.traps = Traps(board)                         # exceptions and interrupts entering mtvec
         self._error_report: tuple[int, str] | None = None
         self._trap_deadline: float | None = None          # a grace period before the run may end
-        self.exceptions_taken: dict[str, int] = {}        # per kind, for run.json
         self.reset_requested: tuple[str, float] | None = None   # a chip reset, carried out after the turn
         self.resets: list[tuple[float, str]] = []         # (virtual time, cause) of every chip reset
-        self.last_exception: str | None = None
-        self._storm: dict[int, tuple[tuple, int, int]] = {}   # per hart: (what, device stores, repeats)
         self.harts = [Hart(h, CsrContext(mcycle=self._mcycle_reader(h), mip=self._mip_reader(h)))
                       for h in range(HARTS)]
         # both harts start together: what one stores at once the other may be polling already
@@ -294,7 +288,7 @@ class Scheduler:
             if hart.state is HartState.WAITING:
                 if not hart.m_interrupts_enabled():
                     continue
-                enabled = self._taken_in_m_mode(hart)
+                enabled = self.traps.taken_in_m_mode(hart)
             else:
                 enabled = hart.reg(rv.UC_RISCV_REG_MIE)   # wfi wakes on any enabled interrupt
             if enabled and self.board.mip(hart.hart_id, now, enabled):
@@ -373,23 +367,6 @@ class Scheduler:
     def _stopped_by_a_watch(self, hart: Hart) -> bool:
         return any(other is hart and watch.hits for waiter in self.harts if waiter.wait is not None
                    for other, watch, _ in waiter.wait.watches)
-
-    @staticmethod
-    def _taken_in_m_mode(hart: Hart) -> int:
-        """The interrupts the hart, in M-mode with mstatus.MIE set, would take: those enabled in
-        mie and not delegated to S-mode in mideleg (privileged spec 1.10, 3.1.14)."""
-        return hart.reg(rv.UC_RISCV_REG_MIE) & ~hart.reg(rv.UC_RISCV_REG_MIDELEG)
-
-    def _take_interrupt(self, hart: Hart) -> None:
-        """Before a turn: a pending enabled interrupt with mstatus.MIE set enters mtvec."""
-        if not hart.m_interrupts_enabled():
-            return
-        enabled = self._taken_in_m_mode(hart)
-        pending = self.board.mip(hart.hart_id, hart.time, enabled) & enabled
-        for irq in riscv.IRQ_PRIORITY:
-            if pending >> irq & 1:
-                hart.enter_trap(riscv.CAUSE_INTERRUPT | irq, hart.pc, 0)
-                return
 
     # --- frames and grabs ---------------------------------------------------------------------
 
@@ -541,9 +518,8 @@ class Scheduler:
         for hart in self.harts:
             hart.time = max(hart.time, at)
             hart.reset(RESET_PC)
-        self.trap_report = None
+        self.traps.chip_reset()
         self._trap_deadline = None
-        self._storm.clear()
         self._poll = [NO_POLL] * HARTS
         self._poll_seen.clear()
         self._priority = None
@@ -576,7 +552,7 @@ class Scheduler:
             if self._priority[0] in running:
                 hart, priority_turn = self._priority
             self._priority = None
-        self._take_interrupt(hart)
+        self.traps.take_interrupt(hart)
         t0 = hart.time
         hz = self._hz
         outer = self._outer_bound(t0, board.next_device_event(t0))
@@ -758,53 +734,14 @@ class Scheduler:
             if end is RunEnd.WFI:
                 hart.state = HartState.ASLEEP
             elif end is RunEnd.EXCEPTION:
-                self._deliver_exception(hart)
+                self.traps.deliver_exception(hart, self._open_grace)
         return ran
 
     # --- traps, error reports and deadlines ----------------------------------------------------
 
-    def _deliver_exception(self, hart: Hart) -> None:
-        """A synchronous exception enters the firmware's trap handler, as on the chip, and the run
-        goes on. The run ends only where the hart can make no progress: mtvec pointing at no
-        memory, or a trap storm; with --stop-on-trap, after the handler's grace period."""
-        exc = hart.pending_exception
-        hart.pending_exception = None
-        name = riscv.EXCEPTION_NAMES.get(exc.cause, f"exception {exc.cause}")
-        where = symbolize(self.board.image.symbols, exc.epc)
-        report = (f"hart {hart.hart_id}: {name} at pc 0x{exc.epc:08x}{f' <{where}>' if where else ''} "
-                  f"({self.board.disassemble_at(exc.epc)}), mtval 0x{exc.tval:x}")
-        mtvec = hart.csr(rv.UC_RISCV_REG_MTVEC)
-        if self.trap_report is not None:
-            where = "in the trap handler" if hart.open_trap is not None else "after the trap handler returned"
-            raise FirmwareTrap(f"{self.trap_report}; then, {where}, {report}")
-        if mtvec & ~3 == 0 or not self.board.bus.is_sram(mtvec & ~3):
-            raise FirmwareTrap(f"{report}; mtvec = 0x{mtvec:x} points at no trap handler")
-        self.exceptions_taken[name] = self.exceptions_taken.get(name, 0) + 1
-        self.last_exception = report
-        if self.stop_on_trap:
-            self.trap_report = report
-        else:
-            self._watch_for_storm(hart, exc, report)
-        if exc.cause not in riscv.ECALL_CAUSES or self.stop_on_trap:
-            # a fault its handler may not return from; an ecall is a request, and a handler that
-            # never returns from one ends the program as asked (the SDK's exit spins in sys_exit)
-            hart.open_trap = report
-            self._trap_deadline = self.time + TRAP_GRACE_S
-        hart.enter_trap(exc.cause, exc.epc, exc.tval)
-
-    def _watch_for_storm(self, hart: Hart, exc: hartmod.PendingException, report: str) -> None:
-        """Ends the run when the hart takes the same exception at the same pc with the same registers
-        TRAP_STORM_REPEATS times in a row, storing to no device in between (its handler returns to
-        the faulting instruction and nothing changes): reported like a hang, naming the trap."""
-        what = (exc.cause, exc.epc, exc.tval, tuple(hart.reg(rv.UC_RISCV_REG_X1 + n) for n in range(31)))
-        stores = sum(counts[hart.hart_id] for counts in self.board.bus.device_writes.values())
-        last = self._storm.get(hart.hart_id)
-        repeats = last[2] + 1 if last is not None and last[0] == what and last[1] == stores else 1
-        self._storm[hart.hart_id] = (what, stores, repeats)
-        if repeats >= TRAP_STORM_REPEATS:
-            raise HangDetected(f"trap storm: {report}, {repeats} times in a row with the same registers and no "
-                               f"device store in between: the trap handler returns to the faulting instruction "
-                               f"and nothing changes")
+    def _open_grace(self) -> None:
+        """A trap handler that may never return gets the grace period to report before the run ends."""
+        self._trap_deadline = self.time + TRAP_GRACE_S
 
     def firmware_reported_error(self, code: int, line: str) -> None:
         """The firmware printed its fatal error report: the run ends after the grace period."""
@@ -816,16 +753,16 @@ class Scheduler:
         """An error report or a --stop-on-trap exception waits for its grace period to end the run
         (--until's time does not cut it short; a trap handler that has not returned does not hold
         up --until, whose time is the user's)."""
-        return self._trap_deadline is not None and (self.trap_report is not None or self._error_report is not None)
+        return self._trap_deadline is not None and (self.traps.report is not None or self._error_report is not None)
 
     def _check_deadlines(self) -> None:
         if self._trap_deadline is not None:
             everyone_waits = all(h.state is not HartState.RUNNING for h in self.harts) and \
                 self.board.next_device_event(self.time) is None
-            if self.trap_report is not None or self._error_report is not None:
+            if self.traps.report is not None or self._error_report is not None:
                 if self.time >= self._trap_deadline or everyone_waits:
-                    if self.trap_report is not None:
-                        raise FirmwareTrap(self.trap_report + " (the firmware's trap handler has run; see the console)")
+                    if self.traps.report is not None:
+                        raise FirmwareTrap(self.traps.report + " (the firmware's trap handler has run; see the console)")
                     code, line = self._error_report
                     raise FirmwareReportedError(f"the firmware reported: {line}", code)
             elif everyone_waits:
@@ -846,8 +783,8 @@ class Scheduler:
             raise FirmwareTrap(f"{'; '.join(open_traps)}; the trap handler did not return, and then {why} "
                                f"(see the console)")
         lines = [why]
-        if self.last_exception is not None:
-            lines.append(f"the last exception taken (its handler returned): {self.last_exception}")
+        if self.traps.last is not None:
+            lines.append(f"the last exception taken (its handler returned): {self.traps.last}")
         for hart in self.harts:
             where = symbolize(board.image.symbols, hart.pc)
             state = hart.state.value

@@ -569,7 +569,7 @@ def main(argv: list[str] | None = None) -> int:
                       cold=args.cold, timing=args.timing, engine=args.engine, pins=pins)
         if uart_input is not None:
             board.connect_serial_input(uart_input)
-        board.scheduler.stop_on_trap = args.stop_on_trap
+        board.scheduler.traps.stop_on_trap = args.stop_on_trap
         if vcd_file is not None:
             signal_log = attach_signal_log(board)
         if args.profile:
@@ -651,7 +651,7 @@ def main(argv: list[str] | None = None) -> int:
     summary["resets"] = ([{"virtual_time_s": at, "cause": cause} for at, cause in board.scheduler.resets]
                          if board is not None else [])
     summary["pins"] = [change.describe() for change in board.pins.played] if board is not None else []
-    summary["exceptions"] = dict(board.scheduler.exceptions_taken) if board is not None else {}
+    summary["exceptions"] = dict(board.scheduler.traps.taken) if board is not None else {}
     # every UART's output, wherever FPIOA routed it (the console is pad 5's only)
     summary["uart_output"] = ({name: bytes(sent).decode("utf-8", "replace") for name, sent in board.uart_output.items()}
                               if board is not None else {})

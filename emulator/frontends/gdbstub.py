@@ -348,7 +348,7 @@ class Debugger:
         """A stop that would end a run: shown in GDB as a signal; continuing goes on from there."""
         scheduler = self.board.scheduler
         scheduler.pending_stop = None
-        scheduler.trap_report = None
+        scheduler.traps.report = None
         scheduler._trap_deadline = None
         scheduler._error_report = None
         if isinstance(stop, ConsoleExpectationsMet):
