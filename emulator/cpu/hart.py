@@ -31,8 +31,8 @@ from unicorn import riscv_const as rv
 from unicorn.unicorn_py3 import unicorn as _ucpy
 
 from . import shared_memory, timing
-from .native import (COUNT_HOOK, NO_LIMIT, AlonePlan, Counter, FastHead, counter_lib,
-                     fast_step)
+from .native import (COUNT_HOOK, NO_LIMIT, AlonePlan, Counter, FastHead, add_native_hook, address_table,
+                     counter_lib, fast_step)
 from .riscv import (CAUSE_BREAKPOINT, CAUSE_ECALL_U, CAUSE_ILLEGAL_INSTRUCTION, CAUSE_INTERRUPT,
                     CAUSE_LOAD_MISALIGNED, CAUSE_STORE_MISALIGNED, CSR_CYCLE, CSR_INSTRET, CSR_MCYCLE,
                     CSR_MHARTID, CSR_MIE, CSR_MINSTRET, CSR_MIP, CSR_MSTATUS, INSN_MRET, INSN_WFI,
@@ -169,7 +169,7 @@ class Hart:
         begin..end (inclusive; begin > end: everywhere), called with a pointer to `user_data`,
         which the caller keeps alive as long as the hook. `what` names it in the error.
         Returns the hook's handle (for remove_hook)."""
-        handle = _add_native_hook(self.uc, kind, callback, user_data, begin, end, f"{what} on hart {self.hart_id}")
+        handle = add_native_hook(self.uc, kind, callback, user_data, begin, end, f"{what} on hart {self.hart_id}")
         if callback is not COUNT_HOOK:
             # the fast engine does not carry other hooks (store watches, the write checker)
             self._hooks_needing_precision.add(handle)
@@ -246,7 +246,7 @@ class Hart:
         the same table (_write_check.h), so the hart stays on it. After a stray store `watch.stray`
         is set and the hart stops before its next instruction, on either engine."""
         for first, last in views:
-            _add_native_hook(self.uc, unicorn.UC_HOOK_MEM_WRITE, check, watch, first, last,
+            add_native_hook(self.uc, unicorn.UC_HOOK_MEM_WRITE, check, watch, first, last,
                              f"{what} on hart {self.hart_id}")
         self._write_watch = watch
         self._give_write_watch()
@@ -684,7 +684,7 @@ class Hart:
         self._csr_words.update(sites)
         if not self._csr_words:
             return
-        table, mask = _address_table(list(self._csr_words))
+        table, mask = address_table(list(self._csr_words))
         self._csr_table = table
         self._counter.csr_sites = ctypes.addressof(table)
         self._counter.csr_mask = mask
@@ -804,26 +804,6 @@ def _first_cycle_at(until: float, t0: float, start: int, hz: float) -> int:
     while c > start and t0 + (c - 1 - start) / hz >= until:
         c -= 1
     return min(c, NO_LIMIT)
-
-
-def _add_native_hook(uc: unicorn.Uc, kind: int, callback: int, user_data: ctypes.Structure, begin: int, end: int,
-                     what: str) -> int:
-    handle = ctypes.c_size_t()
-    status = _ucpy.uclib.uc_hook_add(uc._uch, ctypes.byref(handle), kind, callback,
-                                     ctypes.byref(user_data), ctypes.c_uint64(begin), ctypes.c_uint64(end))
-    if status != 0:
-        raise RuntimeError(f"cannot install {what}: unicorn status {status}")
-    return handle.value
-
-
-def _address_table(addresses: list[int]) -> tuple[ctypes.Array, int]:
-    """The native counter's table of CSR sites: u64 slots (shared_memory.collision_free_size; an
-    empty slot holds 0, which is no instruction's address). Returns (table, mask)."""
-    size = shared_memory.collision_free_size(addresses)
-    table = (ctypes.c_uint64 * size)()
-    for address in addresses:
-        table[(address >> 1) & (size - 1)] = address
-    return table, size - 1
 
 
 def find_csr_sites(code: bytes, base: int) -> list[tuple[int, int]]:

@@ -5,7 +5,10 @@ from __future__ import annotations
 
 import ctypes
 
-from . import _insn_counter
+import unicorn
+from unicorn.unicorn_py3 import unicorn as _ucpy
+
+from . import _insn_counter, shared_memory
 
 BTB_ENTRIES, BHT_ENTRIES, RAS_ENTRIES = 40, 128, 2     # _insn_counter.c's predictor sizes
 BTB_INDEX_BUCKETS = 128
@@ -88,3 +91,24 @@ class AlonePlan(ctypes.Structure):
                 ("start_executed", ctypes.c_uint64), ("turns", ctypes.c_uint64), ("handed_over", ctypes.c_uint64),
                 ("end_time", ctypes.c_double), ("tick", ctypes.c_double), ("tick_period", ctypes.c_double),
                 ("ticks", ctypes.c_uint64)]
+
+
+def add_native_hook(uc: unicorn.Uc, kind: int, callback: int, user_data: ctypes.Structure, begin: int, end: int,
+                    what: str) -> int:
+    """Installs a hook written in C (callback: its address) on Unicorn's own hook list."""
+    handle = ctypes.c_size_t()
+    status = _ucpy.uclib.uc_hook_add(uc._uch, ctypes.byref(handle), kind, callback,
+                                     ctypes.byref(user_data), ctypes.c_uint64(begin), ctypes.c_uint64(end))
+    if status != 0:
+        raise RuntimeError(f"cannot install {what}: unicorn status {status}")
+    return handle.value
+
+
+def address_table(addresses: list[int]) -> tuple[ctypes.Array, int]:
+    """The native counter's table of CSR sites: u64 slots (shared_memory.collision_free_size; an
+    empty slot holds 0, which is no instruction's address). Returns (table, mask)."""
+    size = shared_memory.collision_free_size(addresses)
+    table = (ctypes.c_uint64 * size)()
+    for address in addresses:
+        table[(address >> 1) & (size - 1)] = address
+    return table, size - 1
