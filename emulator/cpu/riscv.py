@@ -1,7 +1,7 @@
 """RISC-V names and numbers the model speaks in, in one place: register names (the psABI's), the
 CSRs the board carries out or shows, trap causes and their names, interrupt numbers, privilege
-levels and the few whole-instruction encodings the harts look for (the privileged and unprivileged
-specifications, version 20191213 / 1.11)."""
+levels, the few whole-instruction encodings the harts look for, and the field helpers every decoder
+here uses (the privileged and unprivileged specifications, version 20191213 / 1.11)."""
 from __future__ import annotations
 
 # Integer and floating-point registers by ABI name (RISC-V psABI, "Integer Register Convention")
@@ -50,3 +50,26 @@ PRIV_U, PRIV_M = 0, 3
 
 INSN_WFI = 0x10500073
 INSN_MRET = 0x30200073
+
+
+def bits(word: int, high: int, low: int) -> int:
+    """The field word[high:low], as the specifications write instruction fields."""
+    return (word >> low) & ((1 << (high - low + 1)) - 1)
+
+
+def signed(value: int, width: int) -> int:
+    """A `width`-bit field read as two's complement (an immediate's sign extension)."""
+    return value - (1 << width) if value >> (width - 1) & 1 else value
+
+
+def instruction_at(code: bytes, offset: int) -> tuple[int, int] | None:
+    """(word, length in bytes) of the instruction at code[offset]: 2 for a compressed one (its low
+    bits are not 11), else 4; None where the code ends first."""
+    if offset + 2 > len(code):
+        return None
+    low = int.from_bytes(code[offset:offset + 2], "little")
+    if low & 3 != 3:
+        return low, 2
+    if offset + 4 > len(code):
+        return None
+    return int.from_bytes(code[offset:offset + 4], "little"), 4

@@ -41,6 +41,7 @@ import numpy as np
 
 from . import _poll_watch
 from .decode import decode_memory_access
+from .riscv import bits, instruction_at, signed
 from ..memory_map import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE
 
 MAX_LOOP_BYTES = 64            # longer loops are not taken for poll loops
@@ -90,14 +91,6 @@ class Wait:
 
 # --- static analysis: which loops can only be polling ---------------------------------------------
 
-def _bits(word: int, high: int, low: int) -> int:
-    return (word >> low) & ((1 << (high - low + 1)) - 1)
-
-
-def _signed(value: int, bits: int) -> int:
-    return value - (1 << bits) if value >> (bits - 1) & 1 else value
-
-
 @dataclass(frozen=True)
 class _Insn:
     size: int
@@ -109,7 +102,7 @@ class _Insn:
 
 
 def _decode_32(word: int, pc: int) -> _Insn | None:
-    opcode, rd, rs1, rs2 = word & 0x7F, _bits(word, 11, 7), _bits(word, 19, 15), _bits(word, 24, 20)
+    opcode, rd, rs1, rs2 = word & 0x7F, bits(word, 11, 7), bits(word, 19, 15), bits(word, 24, 20)
     if opcode == 0x03:                                           # integer loads
         return _Insn(4, (rs1,), rd, load=True)
     if opcode in (0x13, 0x1B):                                   # OP-IMM, OP-IMM-32
@@ -121,20 +114,20 @@ def _decode_32(word: int, pc: int) -> _Insn | None:
     if opcode == 0x0F:                                           # FENCE
         return _Insn(4, (), 0)
     if opcode == 0x63:                                           # branches
-        imm = (_bits(word, 31, 31) << 12 | _bits(word, 7, 7) << 11 | _bits(word, 30, 25) << 5
-               | _bits(word, 11, 8) << 1)
-        return _Insn(4, (rs1, rs2), 0, target=pc + _signed(imm, 13), conditional=True)
+        imm = (bits(word, 31, 31) << 12 | bits(word, 7, 7) << 11 | bits(word, 30, 25) << 5
+               | bits(word, 11, 8) << 1)
+        return _Insn(4, (rs1, rs2), 0, target=pc + signed(imm, 13), conditional=True)
     if opcode == 0x6F and rd == 0:                               # j
-        imm = (_bits(word, 31, 31) << 20 | _bits(word, 19, 12) << 12 | _bits(word, 20, 20) << 11
-               | _bits(word, 30, 21) << 1)
-        return _Insn(4, (), 0, target=pc + _signed(imm, 21))
+        imm = (bits(word, 31, 31) << 20 | bits(word, 19, 12) << 12 | bits(word, 20, 20) << 11
+               | bits(word, 30, 21) << 1)
+        return _Insn(4, (), 0, target=pc + signed(imm, 21))
     return None                                                  # stores, AMOs, CSRs, calls, FP, wfi...
 
 
 def _decode_16(word: int, pc: int) -> _Insn | None:
-    op, funct3 = word & 3, _bits(word, 15, 13)
-    rd, rs2 = _bits(word, 11, 7), _bits(word, 6, 2)
-    rdp, rs2p = 8 + _bits(word, 4, 2), 8 + _bits(word, 9, 7)    # rd' (Q0), rs1'/rd' (Q1)
+    op, funct3 = word & 3, bits(word, 15, 13)
+    rd, rs2 = bits(word, 11, 7), bits(word, 6, 2)
+    rdp, rs2p = 8 + bits(word, 4, 2), 8 + bits(word, 9, 7)    # rd' (Q0), rs1'/rd' (Q1)
     if op == 0:
         if funct3 == 0 and word != 0:                            # c.addi4spn
             return _Insn(2, (2,), rdp)
@@ -147,36 +140,33 @@ def _decode_16(word: int, pc: int) -> _Insn | None:
         if funct3 in (2, 3):                                     # c.li, c.lui / c.addi16sp
             return _Insn(2, (rd,) if funct3 == 3 and rd == 2 else (), rd)
         if funct3 == 4:
-            if _bits(word, 11, 10) != 3:                         # c.srli, c.srai, c.andi
+            if bits(word, 11, 10) != 3:                         # c.srli, c.srai, c.andi
                 return _Insn(2, (rs2p,), rs2p)
-            return _Insn(2, (rs2p, 8 + _bits(word, 4, 2)), rs2p)  # c.sub c.xor c.or c.and c.subw c.addw
+            return _Insn(2, (rs2p, 8 + bits(word, 4, 2)), rs2p)  # c.sub c.xor c.or c.and c.subw c.addw
         if funct3 == 5:                                          # c.j
-            imm = (_bits(word, 12, 12) << 11 | _bits(word, 8, 8) << 10 | _bits(word, 10, 9) << 8
-                   | _bits(word, 6, 6) << 7 | _bits(word, 7, 7) << 6 | _bits(word, 2, 2) << 5
-                   | _bits(word, 11, 11) << 4 | _bits(word, 5, 3) << 1)
-            return _Insn(2, (), 0, target=pc + _signed(imm, 12))
-        imm = (_bits(word, 12, 12) << 8 | _bits(word, 6, 5) << 6 | _bits(word, 2, 2) << 5
-               | _bits(word, 11, 10) << 3 | _bits(word, 4, 3) << 1)
-        return _Insn(2, (rs2p,), 0, target=pc + _signed(imm, 9), conditional=True)   # c.beqz, c.bnez
+            imm = (bits(word, 12, 12) << 11 | bits(word, 8, 8) << 10 | bits(word, 10, 9) << 8
+                   | bits(word, 6, 6) << 7 | bits(word, 7, 7) << 6 | bits(word, 2, 2) << 5
+                   | bits(word, 11, 11) << 4 | bits(word, 5, 3) << 1)
+            return _Insn(2, (), 0, target=pc + signed(imm, 12))
+        imm = (bits(word, 12, 12) << 8 | bits(word, 6, 5) << 6 | bits(word, 2, 2) << 5
+               | bits(word, 11, 10) << 3 | bits(word, 4, 3) << 1)
+        return _Insn(2, (rs2p,), 0, target=pc + signed(imm, 9), conditional=True)   # c.beqz, c.bnez
     if op == 2:
         if funct3 == 0:                                          # c.slli
             return _Insn(2, (rd,), rd)
         if funct3 in (2, 3) and rd:                              # c.lwsp, c.ldsp
             return _Insn(2, (2,), rd, load=True)
         if funct3 == 4 and rs2:                                  # c.mv, c.add
-            return _Insn(2, (rs2,) if not _bits(word, 12, 12) else (rd, rs2), rd)
+            return _Insn(2, (rs2,) if not bits(word, 12, 12) else (rd, rs2), rd)
     return None
 
 
 def _decode(code: bytes, offset: int, pc: int) -> _Insn | None:
-    if offset + 2 > len(code):
+    found = instruction_at(code, offset)
+    if found is None:
         return None
-    low = int.from_bytes(code[offset:offset + 2], "little")
-    if low & 3 != 3:
-        return _decode_16(low, pc)
-    if offset + 4 > len(code):
-        return None
-    return _decode_32(int.from_bytes(code[offset:offset + 4], "little"), pc)
+    word, size = found
+    return _decode_16(word, pc) if size == 2 else _decode_32(word, pc)
 
 
 def _poll_loop_at(code: bytes, base: int, branch_offset: int) -> PollLoop | None:

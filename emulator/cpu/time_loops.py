@@ -27,18 +27,10 @@ from __future__ import annotations
 import functools
 from dataclasses import dataclass
 
-from .riscv import CSR_CYCLE, CSR_MCYCLE
+from .riscv import CSR_CYCLE, CSR_MCYCLE, bits, instruction_at, signed
 from .shared_memory import MAX_LOOP_BYTES, PollLoop, _backward_branches
 
 MASK = (1 << 64) - 1
-
-
-def _bits(word: int, high: int, low: int) -> int:
-    return (word >> low) & ((1 << (high - low + 1)) - 1)
-
-
-def _signed(value: int, bits: int) -> int:
-    return value - (1 << bits) if value >> (bits - 1) & 1 else value
 
 
 def _sx32(value: int) -> int:
@@ -72,13 +64,13 @@ _BRANCH = {0: "eq", 1: "ne", 4: "lt", 5: "ge", 6: "ltu", 7: "geu"}
 
 
 def _decode_32(word: int, pc: int) -> Op | None:
-    opcode, rd, funct3 = word & 0x7F, _bits(word, 11, 7), _bits(word, 14, 12)
-    rs1, rs2, funct7 = _bits(word, 19, 15), _bits(word, 24, 20), _bits(word, 31, 25)
-    i_imm = _signed(word >> 20, 12)
+    opcode, rd, funct3 = word & 0x7F, bits(word, 11, 7), bits(word, 14, 12)
+    rs1, rs2, funct7 = bits(word, 19, 15), bits(word, 24, 20), bits(word, 31, 25)
+    i_imm = signed(word >> 20, 12)
     if opcode in (0x13, 0x1B):                                   # OP-IMM, OP-IMM-32
         w = "w" if opcode == 0x1B else ""
         if funct3 in (1, 5):
-            shamt = _bits(word, 25, 20) if not w else _bits(word, 24, 20)
+            shamt = bits(word, 25, 20) if not w else bits(word, 24, 20)
             op = "sll" if funct3 == 1 else ("sra" if word >> 30 & 1 else "srl")
             return Op(pc, 4, "alu", op + w, rd, rs1, None, shamt)
         if w and funct3 != 0:
@@ -91,27 +83,27 @@ def _decode_32(word: int, pc: int) -> Op | None:
             return None
         return Op(pc, 4, "alu", name + w, rd, rs1, rs2)
     if opcode == 0x37:                                           # LUI
-        return Op(pc, 4, "alu", "add", rd, 0, None, _signed(word & 0xFFFF_F000, 32))
+        return Op(pc, 4, "alu", "add", rd, 0, None, signed(word & 0xFFFF_F000, 32))
     if opcode == 0x17:                                           # AUIPC
-        return Op(pc, 4, "alu", "add", rd, 0, None, (pc + _signed(word & 0xFFFF_F000, 32)) & MASK)
+        return Op(pc, 4, "alu", "add", rd, 0, None, (pc + signed(word & 0xFFFF_F000, 32)) & MASK)
     if opcode == 0x63 and funct3 in _BRANCH:
-        imm = (_bits(word, 31, 31) << 12 | _bits(word, 7, 7) << 11 | _bits(word, 30, 25) << 5
-               | _bits(word, 11, 8) << 1)
-        return Op(pc, 4, "branch", _BRANCH[funct3], 0, rs1, rs2, target=pc + _signed(imm, 13))
+        imm = (bits(word, 31, 31) << 12 | bits(word, 7, 7) << 11 | bits(word, 30, 25) << 5
+               | bits(word, 11, 8) << 1)
+        return Op(pc, 4, "branch", _BRANCH[funct3], 0, rs1, rs2, target=pc + signed(imm, 13))
     if opcode == 0x6F and rd == 0:                               # j
-        imm = (_bits(word, 31, 31) << 20 | _bits(word, 19, 12) << 12 | _bits(word, 20, 20) << 11
-               | _bits(word, 30, 21) << 1)
-        return Op(pc, 4, "jump", target=pc + _signed(imm, 21))
+        imm = (bits(word, 31, 31) << 20 | bits(word, 19, 12) << 12 | bits(word, 20, 20) << 11
+               | bits(word, 30, 21) << 1)
+        return Op(pc, 4, "jump", target=pc + signed(imm, 21))
     if opcode == 0x73 and funct3 == 2 and rs1 == 0 and word >> 20 in (CSR_MCYCLE, CSR_CYCLE) and rd:
         return Op(pc, 4, "time", rd=rd)                          # csrr rd, mcycle / cycle
     return None
 
 
 def _decode_16(half: int, pc: int) -> Op | None:
-    op, funct3 = half & 3, _bits(half, 15, 13)
-    rd = _bits(half, 11, 7)
-    rdp, rs2p = 8 + _bits(half, 9, 7), 8 + _bits(half, 4, 2)
-    imm6 = _signed(_bits(half, 12, 12) << 5 | _bits(half, 6, 2), 6)
+    op, funct3 = half & 3, bits(half, 15, 13)
+    rd = bits(half, 11, 7)
+    rdp, rs2p = 8 + bits(half, 9, 7), 8 + bits(half, 4, 2)
+    imm6 = signed(bits(half, 12, 12) << 5 | bits(half, 6, 2), 6)
     if op == 1:
         if funct3 == 0:
             return Op(pc, 2, "alu", "add", rd, rd, None, imm6)             # c.addi (c.nop)
@@ -122,29 +114,29 @@ def _decode_16(half: int, pc: int) -> Op | None:
         if funct3 == 3 and rd not in (0, 2) and imm6:
             return Op(pc, 2, "alu", "add", rd, 0, None, (imm6 << 12) & MASK)   # c.lui
         if funct3 == 4:
-            kind = _bits(half, 11, 10)
+            kind = bits(half, 11, 10)
             if kind in (0, 1):
-                shamt = _bits(half, 12, 12) << 5 | _bits(half, 6, 2)
+                shamt = bits(half, 12, 12) << 5 | bits(half, 6, 2)
                 return Op(pc, 2, "alu", "srl" if kind == 0 else "sra", rdp, rdp, None, shamt)
             if kind == 2:
                 return Op(pc, 2, "alu", "and", rdp, rdp, None, imm6)
             name = {(0, 0): "sub", (0, 1): "xor", (0, 2): "or", (0, 3): "and", (1, 0): "subw",
-                    (1, 1): "addw"}.get((_bits(half, 12, 12), _bits(half, 6, 5)))
+                    (1, 1): "addw"}.get((bits(half, 12, 12), bits(half, 6, 5)))
             return Op(pc, 2, "alu", name, rdp, rdp, rs2p) if name else None
         if funct3 == 5:
-            imm = (_bits(half, 12, 12) << 11 | _bits(half, 8, 8) << 10 | _bits(half, 10, 9) << 8
-                   | _bits(half, 6, 6) << 7 | _bits(half, 7, 7) << 6 | _bits(half, 2, 2) << 5
-                   | _bits(half, 11, 11) << 4 | _bits(half, 5, 3) << 1)
-            return Op(pc, 2, "jump", target=pc + _signed(imm, 12))       # c.j
-        imm = (_bits(half, 12, 12) << 8 | _bits(half, 6, 5) << 6 | _bits(half, 2, 2) << 5
-               | _bits(half, 11, 10) << 3 | _bits(half, 4, 3) << 1)
-        return Op(pc, 2, "branch", "eq" if funct3 == 6 else "ne", 0, rdp, 0, target=pc + _signed(imm, 9))
+            imm = (bits(half, 12, 12) << 11 | bits(half, 8, 8) << 10 | bits(half, 10, 9) << 8
+                   | bits(half, 6, 6) << 7 | bits(half, 7, 7) << 6 | bits(half, 2, 2) << 5
+                   | bits(half, 11, 11) << 4 | bits(half, 5, 3) << 1)
+            return Op(pc, 2, "jump", target=pc + signed(imm, 12))       # c.j
+        imm = (bits(half, 12, 12) << 8 | bits(half, 6, 5) << 6 | bits(half, 2, 2) << 5
+               | bits(half, 11, 10) << 3 | bits(half, 4, 3) << 1)
+        return Op(pc, 2, "branch", "eq" if funct3 == 6 else "ne", 0, rdp, 0, target=pc + signed(imm, 9))
     if op == 2:
         if funct3 == 0 and rd:
-            return Op(pc, 2, "alu", "sll", rd, rd, None, _bits(half, 12, 12) << 5 | _bits(half, 6, 2))
-        rs2 = _bits(half, 6, 2)
+            return Op(pc, 2, "alu", "sll", rd, rd, None, bits(half, 12, 12) << 5 | bits(half, 6, 2))
+        rs2 = bits(half, 6, 2)
         if funct3 == 4 and rd and rs2:
-            if not _bits(half, 12, 12):
+            if not bits(half, 12, 12):
                 return Op(pc, 2, "alu", "add", rd, 0, rs2)                     # c.mv
             return Op(pc, 2, "alu", "add", rd, rd, rs2)                        # c.add
     return None
@@ -152,14 +144,11 @@ def _decode_16(half: int, pc: int) -> Op | None:
 
 def decode(code: bytes, offset: int, pc: int) -> Op | None:
     """The instruction at code[offset], if it is one the evaluator carries out."""
-    if offset + 2 > len(code):
+    found = instruction_at(code, offset)
+    if found is None:
         return None
-    low = int.from_bytes(code[offset:offset + 2], "little")
-    if low & 3 != 3:
-        return _decode_16(low, pc)
-    if offset + 4 > len(code):
-        return None
-    return _decode_32(int.from_bytes(code[offset:offset + 4], "little"), pc)
+    word, size = found
+    return _decode_16(word, pc) if size == 2 else _decode_32(word, pc)
 
 
 def _alu(op: str, a: int, b: int) -> int:
@@ -175,10 +164,9 @@ def _alu(op: str, a: int, b: int) -> int:
     elif name == "srl":
         value = (a & (0xFFFF_FFFF if word else MASK)) >> shift
     elif name == "sra":
-        signed = _signed(a & (0xFFFF_FFFF if word else MASK), 32 if word else 64)
-        value = signed >> shift
+        value = signed(a & (0xFFFF_FFFF if word else MASK), 32 if word else 64) >> shift
     elif name == "slt":
-        value = int(_signed(a & MASK, 64) < _signed(b & MASK, 64))
+        value = int(signed(a & MASK, 64) < signed(b & MASK, 64))
     elif name == "sltu":
         value = int((a & MASK) < (b & MASK))
     elif name == "xor":
@@ -191,7 +179,7 @@ def _alu(op: str, a: int, b: int) -> int:
 
 
 def _taken(op: str, a: int, b: int) -> bool:
-    sa, sb = _signed(a, 64), _signed(b, 64)
+    sa, sb = signed(a, 64), signed(b, 64)
     return {"eq": a == b, "ne": a != b, "lt": sa < sb, "ge": sa >= sb, "ltu": a < b, "geu": a >= b}[op]
 
 

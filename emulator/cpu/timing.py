@@ -72,6 +72,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .riscv import bits
+
 TIMING_ROCKET = "rocket"
 TIMING_IPC1 = "ipc1"
 TIMING_MODELS = (TIMING_ROCKET, TIMING_IPC1)
@@ -133,10 +135,6 @@ class Insn:
     ret: bool = False                # jalr through x1 or x5 that writes neither
 
 
-def _bits(word: int, low: int, count: int) -> int:
-    return (word >> low) & ((1 << count) - 1)
-
-
 def _regs(*numbers: int) -> tuple[int, ...]:
     """Registers read, without x0 (always ready)."""
     return tuple(n for n in numbers if n != 0)
@@ -164,8 +162,8 @@ _MULDIV = {0: (Kind.MUL, False, False, False), 1: (Kind.MUL, True, True, True),
 
 
 def _decode32(w: int) -> Insn:
-    opcode, rd, f3 = w & 0x7F, _bits(w, 7, 5), _bits(w, 12, 3)
-    rs1, rs2, f7 = _bits(w, 15, 5), _bits(w, 20, 5), _bits(w, 25, 7)
+    opcode, rd, f3 = w & 0x7F, bits(w, 11, 7), bits(w, 14, 12)
+    rs1, rs2, f7 = bits(w, 19, 15), bits(w, 24, 20), bits(w, 31, 25)
     if opcode in (0x37, 0x17):                                   # lui, auipc
         return Insn(4, writes=_written(rd))
     if opcode == 0x6F:
@@ -207,8 +205,8 @@ def _decode32(w: int) -> Insn:
         return Insn(4, writes=_written(rd), reads=reads, latency=LATENCY["csr_read"],
                     extra=CSR_WRITE_FLUSH if writes_csr else 0)
     if opcode in (0x43, 0x47, 0x4B, 0x4F):                       # fmadd, fmsub, fnmsub, fnmadd
-        double = _bits(w, 25, 2) == 1
-        return Insn(4, writes=FP + rd, reads=(FP + rs1, FP + rs2, FP + _bits(w, 27, 5)),
+        double = bits(w, 26, 25) == 1
+        return Insn(4, writes=FP + rd, reads=(FP + rs1, FP + rs2, FP + bits(w, 31, 27)),
                     latency=LATENCY["fp_double" if double else "fp_single"])
     if opcode == 0x53:
         return _decode_op_fp(rd, rs1, rs2, f3, f7)
@@ -238,10 +236,10 @@ def _decode_op_fp(rd: int, rs1: int, rs2: int, f3: int, f7: int) -> Insn:
 
 
 def _decode16(h: int) -> Insn:
-    quadrant, f3 = h & 3, _bits(h, 13, 3)
-    rd = _bits(h, 7, 5)
-    rs2 = _bits(h, 2, 5)
-    rdp, rs2p = 8 + _bits(h, 7, 3), 8 + _bits(h, 2, 3)     # the 3-bit register fields (x8..x15)
+    quadrant, f3 = h & 3, bits(h, 15, 13)
+    rd = bits(h, 11, 7)
+    rs2 = bits(h, 6, 2)
+    rdp, rs2p = 8 + bits(h, 9, 7), 8 + bits(h, 4, 2)     # the 3-bit register fields (x8..x15)
     if quadrant == 0:
         if f3 == 0:                                              # c.addi4spn
             return Insn(2, writes=rs2p, reads=(2,))
@@ -260,7 +258,7 @@ def _decode16(h: int) -> Insn:
         if f3 in (2, 3):                                         # c.li, c.lui, c.addi16sp
             return Insn(2, writes=_written(rd), reads=_regs(rd) if f3 == 3 and rd == 2 else ())
         if f3 == 4:
-            if _bits(h, 10, 2) == 3:                             # c.sub ... c.addw
+            if bits(h, 11, 10) == 3:                             # c.sub ... c.addw
                 return Insn(2, writes=rdp, reads=(rdp, rs2p))
             return Insn(2, writes=rdp, reads=(rdp,))             # c.srli, c.srai, c.andi
         if f3 == 5:                                              # c.j
@@ -274,7 +272,7 @@ def _decode16(h: int) -> Insn:
         if f3 in (2, 3):                                         # c.lwsp, c.ldsp
             return Insn(2, writes=_written(rd), reads=(2,), latency=LATENCY["load_word"])
         if f3 == 4:
-            if not _bits(h, 12, 1):
+            if not bits(h, 12, 12):
                 if rs2 == 0:                                     # c.jr
                     return _jump(2, Kind.JALR, 0, rd)
                 return Insn(2, writes=_written(rd), reads=_regs(rs2))   # c.mv
