@@ -518,6 +518,14 @@ def test_eeprom_read_with_the_command_written_after_the_select(bus):
     assert spi.read(s.DR_FIRST, 4, t + 2 * FRAME8 + EPS) == 0x42
 
 
+def test_a_frame_written_while_an_eeprom_reply_comes_in_is_unmodelled(bus):
+    board, spi, dev = bus
+    setup(spi, ctrlr0(8, s.TMOD_EEPROM), ctrlr1=3)
+    spi.write(s.DR_FIRST, 4, 0x05, 0.0)
+    with pytest.raises(UnmodelledAccess, match="while the reply is being clocked in"):
+        spi.write(s.DR_FIRST, 4, 0x06, 2 * FRAME8 + EPS)
+
+
 def spi_ctrlr0(trans=0, addr_bits=0, inst_bits=0, wait=0) -> int:
     inst = {0: 0, 4: 1, 8: 2, 16: 3}[inst_bits]
     return trans | (addr_bits // 4) << 2 | inst << 8 | wait << 11

@@ -626,7 +626,10 @@ class SpiController(Peripheral):
         joins the command (the FIFO had not run empty yet); the filler moves behind it."""
         self._check_wire_format()
         train = self._train
-        if train is not None and self._eeprom_fill and train.started(now) <= train.count - self._eeprom_fill:
+        if train is not None and self._eeprom_fill and now < train.end() - EPSILON:
+            if train.started(now) > train.count - self._eeprom_fill:
+                raise UnmodelledAccess(f"{self.NAME}: a frame written in EEPROM-read mode while the reply is "
+                                       f"being clocked in (what the controller does with it is not modelled)")
             train.frames.pop()                           # the filler, always its own chunk
             train.count -= self._eeprom_fill
             self._eeprom_fill = 0
