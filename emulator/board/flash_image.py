@@ -16,6 +16,7 @@ ROM checks the hash and copies the program to 0x8000_0000, where both harts star
 from __future__ import annotations
 
 import hashlib
+import io
 import json
 import re
 import struct
@@ -81,7 +82,6 @@ class FlashImage:
 
     def _write_package(self, raw: bytes) -> None:
         """A kfpkg: flash-list.json's files, in its order (a later one overwrites an earlier)."""
-        import io
         try:
             package = zipfile.ZipFile(io.BytesIO(raw))
             names = set(package.namelist())
