@@ -17,6 +17,7 @@ from PIL import Image
 from conftest import GOLDEN, GOLDEN_FRAMES, ROOT, run_emulator
 from emulator_runs import run_module
 
+from emulator import errors
 from golden_scenes import SCENES
 
 BOOT_STAGES = ["boot: hart 0 up", "clocks:", "pins:", "lcd: ST7789V ready", "hart 1: display loop"]
@@ -401,10 +402,14 @@ def test_an_unusable_output_folder_is_bad_input(firmware, tmp_path, where, expec
 
 
 def test_help_lists_every_exit_status():
+    # every status errors.py defines (the one home of their numbers), in --help and in the README
+    codes = sorted(value for name, value in vars(errors).items() if name.startswith("EXIT_"))
+    assert codes == list(range(len(codes)))
     result = run_emulator("run", "--help")
     assert result.returncode == 0
     statuses = result.stdout[result.stdout.index("exit status:"):]
-    for status in range(11):
+    assert [int(line.split()[0]) for line in statuses.splitlines() if re.match(r" {1,2}\d+  ", line)] == codes
+    for status in codes:
         assert f"\n{status:>3}  " in statuses, status
     # the refusals this command makes are among them
     for phrase in ("--tolerance without --golden", "--sd-fault", "a --grab of a symbol the firmware does not define",
@@ -412,7 +417,7 @@ def test_help_lists_every_exit_status():
         assert phrase in " ".join(statuses.split()), phrase
     readme = (ROOT / "README.md").read_text()
     section = readme[readme.index("## The board model"):readme.index("## The firmware")]
-    for status in range(11):
+    for status in codes:
         assert f"| {status} |" in section, f"README's board-model section does not list exit status {status}"
 
 
