@@ -26,11 +26,13 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
+from typing import Iterable, TypeVar
 
 from .riscv import CSR_CYCLE, CSR_MCYCLE, bits, instruction_at, signed
 from .shared_memory import MAX_LOOP_BYTES, PollLoop, _backward_branches
 
 MASK = (1 << 64) - 1
+_L = TypeVar("_L", PollLoop, "TimeLoop")
 
 
 def _sx32(value: int) -> int:
@@ -230,17 +232,21 @@ def find_idle_loops(code: bytes, base: int) -> list[PollLoop]:
 
 
 @functools.lru_cache(maxsize=8)
+def _first_at_each_head(found: Iterable[_L | None]) -> tuple[_L, ...]:
+    """The loops found, the first one for each head address (several closing jumps may share one)."""
+    loops: dict[int, _L] = {}
+    for loop in found:
+        if loop is not None and loop.head not in loops:
+            loops[loop.head] = loop
+    return tuple(loops.values())
+
+
 def _idle_loops(code: bytes, base: int) -> tuple[PollLoop, ...]:
-    loops = {}
     halves = [int.from_bytes(code[i:i + 2], "little") for i in range(0, len(code) - 1, 2)]
     to_itself = [2 * i for i, half in enumerate(halves)
                  if half == C_J_TO_ITSELF or (half == JAL_TO_ITSELF & 0xFFFF and i + 1 < len(halves) and
                                               half | halves[i + 1] << 16 == JAL_TO_ITSELF)]
-    for offset in [*_backward_branches(code), *to_itself]:
-        loop = _idle_loop_at(code, base, offset)
-        if loop is not None and loop.head not in loops:
-            loops[loop.head] = loop
-    return tuple(loops.values())
+    return _first_at_each_head(_idle_loop_at(code, base, offset) for offset in [*_backward_branches(code), *to_itself])
 
 
 def _idle_loop_at(code: bytes, base: int, branch_offset: int) -> PollLoop | None:
@@ -276,12 +282,7 @@ def find_time_loops(code: bytes, base: int) -> list[TimeLoop]:
 
 @functools.lru_cache(maxsize=8)
 def _time_loops(code: bytes, base: int) -> tuple[TimeLoop, ...]:
-    loops = {}
-    for offset in _backward_branches(code):
-        loop = _time_loop_at(code, base, offset)
-        if loop is not None and loop.head not in loops:
-            loops[loop.head] = loop
-    return tuple(loops.values())
+    return _first_at_each_head(_time_loop_at(code, base, offset) for offset in _backward_branches(code))
 
 
 def _time_loop_at(code: bytes, base: int, branch_offset: int) -> TimeLoop | None:

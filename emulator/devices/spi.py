@@ -155,10 +155,9 @@ class SpiController(Peripheral):
         self.tx_dma: "DmaChannel | None" = None
         self.rx_dma: "DmaChannel | None" = None
         self._dma_started = 0.0
-        # EEPROM-read mode: frames at the train's end that clock the reply in (not transmit data),
-        # and written frames whose replies are still to be dropped
+        # EEPROM-read mode: frames at the train's end that clock the reply in (not transmit data);
+        # the frames before them are the command, whose replies are dropped
         self._eeprom_fill = 0
-        self._eeprom_drop = 0
 
     def reset(self, now: float) -> None:
         """peri_reset: FIFOs, transfers and registers back to reset; devices deselected."""
@@ -176,7 +175,7 @@ class SpiController(Peripheral):
         self._held.clear()
         self._rx.clear()
         self._raw_int = 0
-        self._eeprom_fill = self._eeprom_drop = 0
+        self._eeprom_fill = 0
         self.tx_dma = self.rx_dma = None
 
     # --- configuration decoded -----------------------------------------------------------
@@ -249,7 +248,7 @@ class SpiController(Peripheral):
         if self._train is not None:
             self.ports.signal(min(at, self._train.end()), f"spi{self.index}_sclk", 0)
         self._train = None
-        self._eeprom_fill = self._eeprom_drop = 0
+        self._eeprom_fill = 0
 
     def _update_selection(self, now: float) -> None:
         low = bool(self.enabled and self.values[SER])
@@ -298,9 +297,10 @@ class SpiController(Peripheral):
             reply = device.spi_transfer(data, FORMAT_LANES[self.frame_format], now)
         else:
             reply = np.full(len(data), 0xFF, dtype=np.uint8)  # MISO pulled up: nothing answers
-        if self.tmod == TMOD_EEPROM and self._eeprom_drop:
-            dropped = min(self._eeprom_drop, len(frames))
-            self._eeprom_drop -= dropped
+        train = self._train
+        if self.tmod == TMOD_EEPROM and train is not None:
+            # these frames are train.delivered - len(frames) onwards; the command ends at count - fill
+            dropped = min(len(frames), max(0, train.count - self._eeprom_fill - (train.delivered - len(frames))))
             reply = reply[dropped * nbytes:]
             if not len(reply):
                 return
@@ -636,7 +636,6 @@ class SpiController(Peripheral):
         self._push(frames, now)
         if self._train is None:
             return                                       # held until a slave is selected (write_register)
-        self._eeprom_drop += len(frames)
         if not self._eeprom_fill:
             count = (self.values[CTRLR1] & 0xFFFF) + 1
             self._push(np.full(count, (1 << self.frame_bits) - 1, dtype=np.uint32), now)
