@@ -42,8 +42,8 @@ firmware: toolchain $(BUILD)/firmware.elf
 # The C test firmware (tests/firmware/): a small driver layer in the SDK's manner and the
 # programs built on it, with Debian's gcc-riscv64-unknown-elf and picolibc.
 CFW_DIR      := tests/firmware
-CFW_PROGRAMS := hello blink lcd_demo echo syscalls timers watchdog
-CFW_LIB      := start sysctl fpioa gpio uarths uart clint dmac spi lcd plic timer trap
+CFW_PROGRAMS := hello blink lcd_demo echo syscalls timers watchdog flash
+CFW_LIB      := start sysctl fpioa gpio uarths uart clint dmac spi spi3 lcd plic timer trap
 CFW_CFLAGS   := -march=rv64imafdc -mabi=lp64d -mcmodel=medany -Os -g -std=gnu11 -Wall -Wextra -Werror \
                 -ffunction-sections -fdata-sections -fstrict-volatile-bitfields --specs=picolibc.specs
 CFW_LDFLAGS  := -nostartfiles -T $(CFW_DIR)/k210.ld -Wl,--gc-sections -Wl,--no-relax -Wl,--no-warn-rwx-segments

@@ -162,9 +162,13 @@ class RecordingDevice:
         self.received = bytearray()
         self.transfers: list[tuple[float, bytes, int]] = []
         self.selects: list[tuple[bool, float]] = []
+        self.dummies: list[tuple[float, int]] = []
 
     def spi_select(self, selected: bool, now: float) -> None:
         self.selects.append((selected, now))
+
+    def spi_dummy(self, clocks: int, now: float) -> None:
+        self.dummies.append((now, clocks))
 
     def spi_transfer(self, data: np.ndarray, lanes: int, now: float) -> np.ndarray:
         data = bytes(np.asarray(data, dtype=np.uint8))

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -264,3 +265,58 @@ def test_an_unfed_watchdog_interrupts_then_resets_and_the_program_finds_out(c_fi
                                    "restarted by the watchdog"]
     (reset,) = summary["resets"]
     assert reset["cause"] == "WDT0" and 0.0100 < reset["virtual_time_s"] < 0.0102   # two timeouts of 2^16 / 13 MHz
+
+
+# --- the flash on SPI3 ------------------------------------------------------------------------
+
+FLASH_TEST_DATA = 0x100000
+
+
+def flash_dump(tmp_path) -> Path:
+    """A dump of the flash's first MiB and 16 bytes: erased, but 16 known bytes at 0x100000."""
+    dump = bytearray(b"\xFF") * (FLASH_TEST_DATA + 16)
+    dump[FLASH_TEST_DATA:] = bytes(range(0x10, 0x20))
+    path = tmp_path / "flash.img"
+    path.write_bytes(dump)
+    return path
+
+
+def flash_run(c_firmware, out, *flags) -> list[str]:
+    run = run_emulator("run", str(c_firmware / "flash.elf"), "--until", "1", "--expect", "flash done", "--quiet",
+                       "--out", str(out), *flags)
+    assert run.returncode == 0, run.stderr
+    return console_of(json.loads((out / "run.json").read_text()))
+
+
+def test_flash_id_erase_quad_program_and_reads_on_spi3(c_firmware, tmp_path):
+    """flash.c through SPI3 (the DWC_ssi layout): the W25Q128's JEDEC ID, a sector erase, a quad
+    page program by DMA read back in quad I/O by DMA (8-bit frames) and with the standard read,
+    programming that only clears bits; the test's bytes read as 32-bit quad frames come first byte
+    in the top bits (as MicroPython's w25qxx driver expects: it swaps each word's bytes back)."""
+    dump = flash_dump(tmp_path)
+    before = dump.read_bytes()
+    lines = flash_run(c_firmware, tmp_path / "out", "--flash", str(dump))
+    assert lines[1:] == ["jedec id ef 40 18, quad on", "erased: all ff",
+                         "programmed: quad read matches, standard read matches", "f0 then 0f: all 00",
+                         "erased again: all ff", "test data 10111213 14151617 18191a1b 1c1d1e1f",
+                         "runs before this one: 0"]
+    assert dump.read_bytes() == before                 # read-only unless asked
+
+
+def test_flash_writes_reach_the_dump_only_when_asked(c_firmware, tmp_path):
+    dump = flash_dump(tmp_path)
+    saved = tmp_path / "saved.img"
+    assert flash_run(c_firmware, tmp_path / "a", "--flash", str(dump), "--flash-save", str(saved))[-1] == \
+        "runs before this one: 0"
+    assert len(saved.read_bytes()) == 16 * 1024 * 1024 and saved.read_bytes()[0x300000] == 0
+    assert flash_run(c_firmware, tmp_path / "b", "--flash", str(saved), "--flash-writable")[-1] == "runs before this one: 1"
+    assert flash_run(c_firmware, tmp_path / "c", "--flash", str(saved))[-1] == "runs before this one: 2"
+    assert saved.read_bytes()[0x300000:0x300003] == b"\x00\x00\xFF"
+
+
+def test_flash_writable_refuses_a_kfpkg_or_a_program(c_firmware, tmp_path):
+    program = tmp_path / "firmware.bin"
+    program.write_bytes((c_firmware / "hello.elf").read_bytes()[:64])
+    run = run_emulator("run", str(c_firmware / "flash.elf"), "--flash", str(program), "--flash-writable", "--quiet",
+                       "--out", str(tmp_path / "out"))
+    assert run.returncode == 6 and "cannot take the flash's changes back" in run.stderr

@@ -546,25 +546,92 @@ def test_enhanced_phases_sent_like_frames_are_accepted(bus, dfs, phases):
     assert dev.transfers[0][2] == 8
 
 
-@pytest.mark.parametrize("dfs, phases", [
-    (32, dict(trans=2, inst_bits=8)),                  # instruction shorter than the frame
-    (8, dict(trans=2, addr_bits=24)),
-    (8, dict(trans=0, inst_bits=8)),                   # instruction on one line
-    (8, dict(trans=1, inst_bits=8)),
-    (8, dict(trans=2, inst_bits=8, wait=4)),           # wait cycles
+def sclk(spi) -> float:
+    return spi.sclk_hz()
+
+
+def test_quad_transmit_with_instruction_and_address_on_one_line(bus):
+    """The W25Q's quad page program as the SDK sends it (spi_init_non_standard(8, 24, 0, standard)):
+    the instruction and the address go out on one line, then the 32-bit frames on four."""
+    board, spi, dev = bus
+    setup(spi, ctrlr0(32, s.TMOD_TX, 2), ser=0, spi_ctrlr0=spi_ctrlr0(trans=0, inst_bits=8, addr_bits=24))
+    for value in (0x32, 0x012345, 0xA1B2C3D4, 0x01020304):
+        spi.write(s.DR_FIRST, 4, value, 0.0)
+    spi.write(s.SER, 4, 1, 0.0)
+    assert dev.transfers[:2] == [(0.0, b"\x32", 1), (0.0, b"\x01\x23\x45", 1)]
+    header = (8 + 24) / sclk(spi)
+    frame = 32 / 4 / sclk(spi)
+    assert spi.busy(header + 2 * frame - EPS) and not spi.busy(header + 2 * frame + EPS)
+    spi.advance(1.0)
+    assert bytes(dev.received[4:]) == bytes.fromhex("A1B2C3D4 01020304")
+    assert {lanes for _, _, lanes in dev.transfers[2:]} == {4}
+    assert dev.dummies == []                           # wait cycles come only before received data
+
+
+@pytest.mark.parametrize("tmod", [s.TMOD_RX, s.TMOD_EEPROM])
+def test_quad_receive_with_phases_and_wait_cycles(bus, tmod):
+    """The W25Q's fast read quad I/O as the SDK reads it (8-bit instruction on one line, 32-bit
+    address on four, 4 wait cycles; tmod 3, as spi_receive_data_multiple sets it, or 2, as the
+    FreeRTOS SDK does): the replies to the phases are dropped, ctrlr1 + 1 frames come in."""
+    board, spi, dev = bus
+    dev.replies = bytearray(b"\xEE" * 5 + b"\x11\x22\x33")
+    setup(spi, ctrlr0(8, tmod, 2), ser=0, ctrlr1=2, spi_ctrlr0=spi_ctrlr0(trans=1, inst_bits=8, addr_bits=32, wait=4))
+    spi.write(s.DR_FIRST, 4, 0xEB, 0.0)
+    spi.write(s.DR_FIRST, 4, 0x12345600, 0.0)
+    assert spi.read(s.TXFLR, 4, 0.0) == 2              # waiting in the FIFO for a slave
+    spi.write(s.SER, 4, 1, 0.0)
+    assert dev.transfers[:2] == [(0.0, b"\xEB", 1), (0.0, b"\x12\x34\x56\x00", 4)]
+    assert dev.dummies == [(0.0, 4)]
+    done = (8 + 32 / 4 + 4 + 3 * 8 / 4) / sclk(spi)
+    assert spi.read(s.RXFLR, 4, done - EPS) == 2
+    assert spi.read(s.RXFLR, 4, done + EPS) == 3
+    assert [spi.read(s.DR_FIRST, 4, done + EPS) for _ in range(3)] == [0x11, 0x22, 0x33]
+    assert spi.read(s.TXFLR, 4, done + EPS) == 0
+
+
+def test_a_second_quad_receive_starts_after_the_first(bus):
+    # the instruction and address written during a receive wait in the FIFO for the next one
+    board, spi, dev = bus
+    setup(spi, ctrlr0(8, s.TMOD_RX, 2), ctrlr1=0, spi_ctrlr0=spi_ctrlr0(trans=1, inst_bits=8, addr_bits=24))
+    spi.write(s.DR_FIRST, 4, 0x6B, 0.0)
+    spi.write(s.DR_FIRST, 4, 0x000100, 0.0)
+    spi.write(s.DR_FIRST, 4, 0x6B, 0.0)
+    spi.write(s.DR_FIRST, 4, 0x000200, 0.0)
+    assert spi.read(s.TXFLR, 4, 0.0) == 2
+    spi.advance(1.0)
+    assert [data for _, data, _ in dev.transfers] == [b"\x6B", b"\x00\x01\x00", b"\xFF", b"\x6B",
+                                                      b"\x00\x02\x00", b"\xFF"]
+    assert spi.read(s.RXFLR, 4, 1.0) == 2
+
+
+@pytest.mark.parametrize("phases, message", [
+    (dict(trans=3, inst_bits=8), "transfer type 3"),
+    (dict(trans=1, inst_bits=4), "4-bit instruction"),
+    (dict(trans=1, inst_bits=8, addr_bits=28), "28-bit address"),
 ])
-def test_enhanced_phase_lengths_that_differ_from_frames_are_unmodelled(bus, dfs, phases):
+def test_phases_the_model_cannot_pass_as_bytes_are_unmodelled(bus, phases, message):
     board, spi, dev = bus
-    setup(spi, ctrlr0(dfs, s.TMOD_TX, 3), spi_ctrlr0=spi_ctrlr0(**phases))
-    with pytest.raises(UnmodelledAccess, match="octal format"):
+    setup(spi, ctrlr0(8, s.TMOD_TX, 2), spi_ctrlr0=spi_ctrlr0(**phases))
+    with pytest.raises(UnmodelledAccess, match=message):
+        spi.write(s.DR_FIRST, 4, 1, 0.0)
         spi.write(s.DR_FIRST, 4, 1, 0.0)
 
 
-def test_receiving_in_an_enhanced_format_is_unmodelled(bus):
+def test_transmit_and_receive_in_quad_format_is_unmodelled(bus):
     board, spi, dev = bus
-    setup(spi, ctrlr0(8, s.TMOD_RX, 2), ctrlr1=0)
-    with pytest.raises(UnmodelledAccess, match="receiving in quad"):
+    setup(spi, ctrlr0(8, s.TMOD_TX_RX, 2))
+    with pytest.raises(UnmodelledAccess, match="transmit-and-receive mode in quad"):
         spi.write(s.DR_FIRST, 4, 1, 0.0)
+
+
+def test_spi3_ctrlr0_fields_sit_where_the_dwc_ssi_has_them(board):
+    """SPI3 (DWC_ssi): dfs [4:0], work mode [9:8], tmod [11:10], frame format [23:22] (the SDK's
+    spi.c offsets for spi_num 3); reset: 8-bit frames."""
+    spi = board.spi3
+    assert spi.frame_bits == 8 and spi.tmod == s.TMOD_TX_RX and spi.frame_format == 0
+    spi.write(s.CTRLR0, 4, 31 | s.TMOD_RX << 10 | 2 << 22, 0.0)
+    assert (spi.frame_bits, spi.tmod, spi.frame_format) == (32, s.TMOD_RX, 2)
+    assert spi.read(s.XIP_CTRL, 4, 0.0) == 0            # the XIP registers exist (XIP itself is not modelled)
 
 
 def test_endian_conversion_is_unmodelled(bus):

@@ -37,7 +37,8 @@ firmware is handed", lists the same with sources):
   msip clear (whether the ROM leaves hart 1's IPI pending is not documented: cleared, as a
   wait loop that has taken its IPI leaves it). mcycle, minstret and mtime start at 0 (the
   time the ROM spent depends on the image and is not modelled).
-- SPI3 and the flash: used by the ROM, not modelled (an access still stops the run).
+- SPI3: left at its reset values (the registers the ROM leaves after reading the flash are not
+  documented; the SDK's spi_init and the FreeRTOS SDK set every one they use).
 """
 from __future__ import annotations
 

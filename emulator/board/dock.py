@@ -42,7 +42,8 @@ from .scheduler import (DEFAULT_HANG_BUDGET_S, DEFAULT_QUANTUM, HARTS, FrameReco
 from ..devices.sdcard import SdCard, SdImage
 from ..cpu.shared_memory import find_poll_loops
 from ..cpu.time_loops import find_idle_loops, find_time_loops
-from ..devices.spi import SpiController
+from ..devices.spi import DWC_SSI, SpiController
+from ..devices.w25q128 import W25Q128
 from ..devices.st7789v import ST7789V
 from ..cpu.timing import MISPREDICT_PENALTY, TIMING_IPC1, TIMING_MODELS, TIMING_ROCKET, build_table
 from ..devices.sysctl import Sysctl
@@ -158,6 +159,7 @@ class Board:
         self.gpio = Gpio(ports, pad_inputs=lambda first, count: self.wiring.pad_inputs(first, count))
         self._console = console or (lambda byte: None)
         self._console_line = bytearray()
+        self.console_byte_time = 0.0                       # when the console's last byte was out
         self._line_began = 0.0                             # when the line under way began
         self.completed_line_began = float("-inf")          # when the last complete line began
         self.console_lines: list[tuple[float, str]] = []   # (virtual time the line ended, text)
@@ -176,14 +178,20 @@ class Board:
         self.plic = Plic(ports, high_sources=self._high_sources)
         self.spi0 = SpiController(0, ports, source_hz=lambda: self.sysctl.spi_source_hz(0))
         self.spi1 = SpiController(1, ports, source_hz=lambda: self.sysctl.spi_source_hz(1))
+        self.spi3 = SpiController(3, ports, source_hz=lambda: self.sysctl.spi_source_hz(3), layout=DWC_SSI)
+        # the on-board flash: SPI3's pads are its own (not routed through FPIOA), chip select 0
+        self.flash = flash if flash is not None else FlashImage.erased()
+        self.flash_chip = W25Q128(self.flash.data, warn=self.warn)
+        self.spi3.device_for_ss = lambda ss: self.flash_chip if ss == 0 else None
         self.dmac = Dmac(ports, self.memory, requests=self.sysctl.dma_request,
-                         peripherals={"spi0": self.spi0, "spi1": self.spi1, **{uart.GATE: uart for uart in self.uarts}})
+                         peripherals={"spi0": self.spi0, "spi1": self.spi1, "spi3": self.spi3,
+                                      **{uart.GATE: uart for uart in self.uarts}})
         self.peripherals: list[Peripheral] = [self.sysctl, self.fpioa, self.gpiohs, self.gpio, self.uarths, *self.uarts, *self.timers, *self.watchdogs, self.rtc, self.sha256,
-                                              self.clint, self.plic, self.dmac, self.spi0, self.spi1]
+                                              self.clint, self.plic, self.dmac, self.spi0, self.spi1, self.spi3]
         self._interrupting = [(p, K210_BLOCKS[p.NAME].irqs) for p in self.peripherals if K210_BLOCKS[p.NAME].irqs]
         self.signals = None                    # a vcd.SignalLog with --vcd
         # the blocks a DMA channel serves advance before the DMAC, which completes what they finished
-        self.timed_devices = [self.uarths, self.spi0, self.spi1, *self.uarts, self.dmac, self.sysctl, self.clint,
+        self.timed_devices = [self.uarths, self.spi0, self.spi1, self.spi3, *self.uarts, self.dmac, self.sysctl, self.clint,
                               *self.timers, *self.watchdogs, self.rtc, self.pins]
         self.cold = cold
         if not cold:
@@ -208,7 +216,6 @@ class Board:
         self.spi1.device_for_ss = self.wiring.spi1_device
         self.bus = Bus(self, strict)
         self.write_watch: WriteWatch | None = None
-        self.flash = flash
         if firmware is None:
             if flash is None:
                 raise ValueError("a Board needs a firmware file or a flash to boot from")
@@ -357,7 +364,7 @@ class Board:
 
     def reset_peripheral(self, name: str, now: float) -> None:
         """SYSCTL peri_reset released a block: it returns to its reset state."""
-        target = {"spi0": self.spi0, "spi1": self.spi1, "dma": self.dmac, "fpioa": self.fpioa,
+        target = {"spi0": self.spi0, "spi1": self.spi1, "spi3": self.spi3, "dma": self.dmac, "fpioa": self.fpioa,
                   "gpio": self.gpio, **{block.GATE: block for block in (*self.uarts, *self.timers, *self.watchdogs, self.rtc,
                                                     self.sha256)}}.get(name)
         if target is not None:
@@ -409,6 +416,7 @@ class Board:
     def _console_byte(self, byte: int, at: float) -> None:
         """Console output (`at`: when the byte's stop bit was out); a line `error <code> ...` is the
         firmware's fatal error report."""
+        self.console_byte_time = at
         self._console(byte)
         if not self._console_line:
             self._line_began = at

@@ -8,6 +8,11 @@ What a file means, by its kind:
 - anything else: the flash's content from address 0 (a dump), at most 16 MiB.
 Bytes nothing was written to read as erased flash, 0xFF.
 
+The file is read once and never written unless asked: `--flash-writable` writes the flash's 16 MiB
+back to a dump when the run ends (a kfpkg or a program cannot take the flash's changes back), and
+`--flash-save DUMP` writes them to another file, whatever the image was. Either goes through a
+temporary file renamed over the target, so an interrupted save leaves the old file whole.
+
 The boot header (kflash.py's flash_firmware): a flag byte (bit 0: the program is AES-128-CBC
 encrypted with the key in OTP; bit 1: the ROM reads the flash in dual-I/O mode), the program's
 length as 4 little-endian bytes, the program, and the SHA-256 of everything before it. The mask
@@ -18,7 +23,9 @@ from __future__ import annotations
 import hashlib
 import io
 import json
+import os
 import re
+import tempfile
 import struct
 import zipfile
 from dataclasses import dataclass
@@ -30,6 +37,7 @@ from ..memory_map import SRAM_SIZE
 FLASH_SIZE = 16 * 1024 * 1024        # the Dock's W25Q128 (Sipeed's schematic; MicroPython's flash layout)
 ERASED = 0xFF
 KFPKG_SUFFIX, PROGRAM_SUFFIX = ".kfpkg", ".bin"
+KFPKG, PROGRAM, DUMP = "kfpkg", "program", "dump"
 ZIP_MAGIC = b"PK\x03\x04"
 HEADER = struct.Struct("<BI")         # flag, program length
 HASH_SIZE = 32
@@ -45,15 +53,24 @@ def with_boot_header(program: bytes, flag: int = FLAG_DUAL_IO) -> bytes:
 
 @dataclass
 class FlashImage:
-    """The flash's 16 MiB; `path` names the file it came from in messages."""
+    """The flash's 16 MiB; `path` names the file it came from in messages, `kind` what it was (KFPKG,
+    PROGRAM or DUMP), `writable` whether the run's changes go back to it (a dump only)."""
 
     path: Path
     data: bytearray
+    kind: str = DUMP
+    writable: bool = False
 
     @staticmethod
-    def open(path: str | Path) -> "FlashImage":
-        """Reads a kfpkg, a program or a dump (module docstring). Raises BadInput naming the file
-        and what is wrong with it."""
+    def erased() -> "FlashImage":
+        """The flash of a run given no --flash: every byte erased (a Dock's flash holds what was last
+        written to it; a run that needs that gives it)."""
+        return FlashImage(Path("(erased flash)"), bytearray([ERASED]) * FLASH_SIZE)
+
+    @staticmethod
+    def open(path: str | Path, writable: bool = False) -> "FlashImage":
+        """Reads a kfpkg, a program or a dump (module docstring); `writable`: the run's changes go back
+        to the file (a dump only). Raises BadInput naming the file and what is wrong with it."""
         path = Path(path)
         if not path.is_file():
             raise BadInput(f"flash image {path} does not exist")
@@ -63,8 +80,10 @@ class FlashImage:
             raise BadInput(f"{path}: cannot read it ({error.strerror or error})") from None
         flash = FlashImage(path, bytearray([ERASED]) * FLASH_SIZE)
         if raw.startswith(ZIP_MAGIC) or path.suffix.lower() == KFPKG_SUFFIX:
+            flash.kind = KFPKG
             flash._write_package(raw)
         elif path.suffix.lower() == PROGRAM_SUFFIX:
+            flash.kind = PROGRAM
             if not raw:
                 raise BadInput(f"{path}: the program is empty")
             flash._place(0, with_boot_header(raw), path.name)
@@ -72,7 +91,34 @@ class FlashImage:
             if len(raw) > FLASH_SIZE:
                 raise BadInput(f"{path}: {len(raw)} bytes, more than the Dock's {FLASH_SIZE}-byte flash")
             flash.data[:len(raw)] = raw
+        if writable:
+            if flash.kind != DUMP:
+                raise BadInput(f"--flash-writable: {path} is a {flash.kind} ({'the files' if flash.kind == KFPKG else 'a program'} "
+                               f"kflash would write), which cannot take the flash's changes back; keep them with "
+                               f"--flash-save DUMP, and run on DUMP with --flash-writable from then on")
+            if not os.access(path, os.W_OK):
+                raise BadInput(f"--flash-writable: {path} cannot be written (its permissions)")
+            flash.writable = True
         return flash
+
+    def save(self, target: str | Path | None = None) -> Path:
+        """Writes the flash's 16 MiB to `target` (else back to the dump it came from, which must be
+        writable) through a temporary file in the same folder. Raises BadInput if it cannot."""
+        target = Path(target) if target is not None else self.path
+        if target == self.path and not self.writable:
+            raise ValueError(f"{self.path} was opened read-only")
+        try:
+            handle, temporary = tempfile.mkstemp(prefix=f".{target.name}.", dir=target.parent)
+            try:
+                with os.fdopen(handle, "wb") as out:
+                    out.write(self.data)
+                os.replace(temporary, target)
+            except BaseException:
+                os.unlink(temporary)
+                raise
+        except OSError as error:
+            raise BadInput(f"cannot save the flash to {target} ({error.strerror or error})") from None
+        return target
 
     def _place(self, address: int, data: bytes, what: str) -> None:
         if address < 0 or address + len(data) > FLASH_SIZE:

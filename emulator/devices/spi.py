@@ -33,7 +33,7 @@ import numpy as np
 
 from ..errors import UnmodelledAccess
 from ..memory_map import K210_BLOCKS
-from .mmio import Peripheral, Register, field
+from .mmio import Peripheral, Register
 from .ports import Ports
 
 if TYPE_CHECKING:
@@ -45,6 +45,8 @@ TXOICR, RXOICR, RXUICR, MSTICR, ICR = 0x38, 0x3C, 0x40, 0x44, 0x48
 DMACR, DMATDLR, DMARDLR, IDR, VERSION = 0x4C, 0x50, 0x54, 0x58, 0x5C
 DR_FIRST, DR_LAST = 0x60, 0xEC
 RX_SAMPLE_DELAY, SPI_CTRLR0, XIP_MODE_BITS, ENDIAN = 0xF0, 0xF4, 0xFC, 0x118
+# SPI3's (DWC_ssi's) execute-in-place registers (the FreeRTOS SDK's spi_t)
+XIP_INCR_INST, XIP_WRAP_INST, XIP_CTRL, XIP_SER, XRXOICR, XIP_CNT_TIME_OUT = 0x100, 0x104, 0x108, 0x10C, 0x110, 0x114
 
 FIFO_DEPTH = 32
 TMOD_TX_RX, TMOD_TX, TMOD_RX, TMOD_EEPROM = 0, 1, 2, 3
@@ -67,12 +69,34 @@ STATUS_REGISTERS = {TXFLR, RXFLR, SR, RISR, ISR}
 STABLE_MARGIN = 1e-5       # frames: stable_until's bounds keep this far from a frame's edge
 
 
+@dataclass(frozen=True)
+class Ctrlr0Layout:
+    """Where ctrlr0's fields sit. The K210 has two versions of the SSI: SPI0-2 are DW_apb_ssi,
+    SPI3 is DWC_ssi, whose ctrlr0 moves every field (the SDK's spi.c: dfs_offset, tmod_offset,
+    frf_offset and work_mode_offset per controller)."""
+
+    dfs: int            # data frame size - 1, 5 bits
+    frf: int            # frame format (standard, dual, quad, octal), 2 bits
+    tmod: int           # transfer mode, 2 bits
+    work_mode: int      # SCPH/SCPOL, 2 bits
+    reset: int          # ctrlr0's reset value: 8-bit frames
+
+
+APB_SSI = Ctrlr0Layout(dfs=16, frf=21, tmod=8, work_mode=6, reset=0x0007_0000)
+DWC_SSI = Ctrlr0Layout(dfs=0, frf=22, tmod=10, work_mode=8, reset=0x0000_0007)
+# spi_ctrlr0's trans_type: which phases go out on the frame format's lanes (the others on one)
+TRANS_ALL_STANDARD, TRANS_ADDRESS_WIDE, TRANS_ALL_WIDE = 0, 1, 2
+
+
 class SpiDevice(Protocol):
     """A device on an SPI bus: what the board wires behind a chip select."""
 
     def spi_select(self, selected: bool, now: float) -> None: ...
 
     def spi_transfer(self, data: np.ndarray, lanes: int, now: float) -> np.ndarray: ...
+
+    def spi_dummy(self, clocks: int, now: float) -> None:
+        """Clock cycles with no data (the wait cycles of a dual/quad/octal read)."""
 
 
 @dataclass
@@ -137,13 +161,23 @@ class SpiController(Peripheral):
         XIP_MODE_BITS: Register("xip_mode_bits"), ENDIAN: Register("endian"),
     }
 
-    def __init__(self, index: int, ports: Ports, source_hz: Callable[[], float]) -> None:
-        """source_hz: the clock SYSCTL gives the controller (its baud rate is that / baudr)."""
+    def __init__(self, index: int, ports: Ports, source_hz: Callable[[], float],
+                 layout: Ctrlr0Layout = APB_SSI) -> None:
+        """source_hz: the clock SYSCTL gives the controller (its baud rate is that / baudr).
+        layout: APB_SSI for SPI0/1, DWC_SSI for SPI3 (which also has the XIP registers)."""
         self.index = index
         self.source_hz = source_hz
         self.NAME = f"SPI{index}"
         block = K210_BLOCKS[self.NAME]
         self.GATE, self.BASE, self.SIZE = block.gate, block.base, block.size
+        self.layout = layout
+        self._dfs_shift, self._frf_shift, self._tmod_shift = layout.dfs, layout.frf, layout.tmod
+        self.REGISTERS = {**SpiController.REGISTERS, CTRLR0: Register("ctrlr0", reset=layout.reset)}
+        if layout is DWC_SSI:
+            self.REGISTERS.update({
+                XIP_INCR_INST: Register("xip_incr_inst"), XIP_WRAP_INST: Register("xip_wrap_inst"),
+                XIP_CTRL: Register("xip_ctrl"), XIP_SER: Register("xip_ser"),
+                XRXOICR: Register("xrxoicr", writable=False), XIP_CNT_TIME_OUT: Register("xip_cnt_time_out")})
         super().__init__(ports)
         self.device_for_ss = lambda ss: None   # set by the board's wiring
         self._train: _Train | None = None
@@ -158,6 +192,11 @@ class SpiController(Peripheral):
         # EEPROM-read mode: frames at the train's end that clock the reply in (not transmit data);
         # the frames before them are the command, whose replies are dropped
         self._eeprom_fill = 0
+        # a dual/quad/octal transfer whose instruction and address are phases of their own
+        # (_push_phased): the FIFO entries taken so far as its instruction and address, and
+        # whether they have gone out (the transfer is open: what follows is data)
+        self._phase_entries: list[int] = []
+        self._phases_sent = False
 
     def reset(self, now: float) -> None:
         """peri_reset: FIFOs, transfers and registers back to reset; devices deselected."""
@@ -176,6 +215,7 @@ class SpiController(Peripheral):
         self._rx.clear()
         self._raw_int = 0
         self._eeprom_fill = 0
+        self._phase_entries.clear()
         self.tx_dma = self.rx_dma = None
 
     # --- configuration decoded -----------------------------------------------------------
@@ -183,15 +223,23 @@ class SpiController(Peripheral):
     # (bit fields spelled out: these are read on every register access)
     @property
     def frame_bits(self) -> int:
-        return ((self.values[CTRLR0] >> 16) & 0x1F) + 1
+        return ((self.values[CTRLR0] >> self._dfs_shift) & 0x1F) + 1
 
     @property
     def tmod(self) -> int:
-        return (self.values[CTRLR0] >> 8) & 3
+        """The transfer mode. In a dual, quad or octal format EEPROM-read mode acts as receive-only:
+        the instruction and address go out as phases and ctrlr1 + 1 frames come in. The SDK's
+        spi_receive_data_multiple[_dma] reads the Dock's flash this way (tmod 3, quad); the
+        FreeRTOS SDK's spi.cpp reads the same flash with tmod 2."""
+        ctrlr0 = self.values[CTRLR0]
+        mode = (ctrlr0 >> self._tmod_shift) & 3
+        if mode == TMOD_EEPROM and (ctrlr0 >> self._frf_shift) & 3:
+            return TMOD_RX
+        return mode
 
     @property
     def frame_format(self) -> int:
-        return (self.values[CTRLR0] >> 21) & 3
+        return (self.values[CTRLR0] >> self._frf_shift) & 3
 
     @property
     def enabled(self) -> bool:
@@ -209,6 +257,29 @@ class SpiController(Peripheral):
             return float("inf")
         return self.frame_bits / FORMAT_LANES[self.frame_format] / hz
 
+    def _phases(self) -> tuple[int, int, int, int, int]:
+        """spi_ctrlr0 decoded: (instruction bits, its lanes, address bits, its lanes, wait cycles)."""
+        spi_ctrlr0 = self.values[SPI_CTRLR0]
+        trans_type = spi_ctrlr0 & 3
+        lanes = FORMAT_LANES[self.frame_format]
+        inst_bits = (0, 4, 8, 16)[(spi_ctrlr0 >> 8) & 3]
+        addr_bits = ((spi_ctrlr0 >> 2) & 0xF) * 4
+        inst_lanes = lanes if trans_type == TRANS_ALL_WIDE else 1
+        addr_lanes = 1 if trans_type == TRANS_ALL_STANDARD else lanes
+        return inst_bits, inst_lanes, addr_bits, addr_lanes, (spi_ctrlr0 >> 11) & 0x1F
+
+    def _phased(self) -> bool:
+        """Whether a dual/quad/octal transfer sends its instruction and address as phases of their
+        own (_push_phased): always when receiving; when transmitting, unless each phase is absent or
+        exactly a frame on the format's lanes, in which case it goes out as one (wait cycles only
+        come before received data)."""
+        if self.tmod == TMOD_RX:
+            return True
+        inst_bits, inst_lanes, addr_bits, addr_lanes, _ = self._phases()
+        bits, lanes = self.frame_bits, FORMAT_LANES[self.frame_format]
+        return not all(n == 0 or (n == bits and on == lanes) for n, on in ((inst_bits, inst_lanes),
+                                                                           (addr_bits, addr_lanes)))
+
     def _check_wire_format(self) -> None:
         """The model passes whole bytes to devices; say so clearly for anything else."""
         bits = self.frame_bits
@@ -216,22 +287,17 @@ class SpiController(Peripheral):
             raise UnmodelledAccess(f"{self.NAME}: {bits}-bit frames (only whole bytes reach devices in the model)")
         if self.values[ENDIAN]:
             raise UnmodelledAccess(f"{self.NAME}.endian = 0x{self.values[ENDIAN]:x}: byte-order conversion is not modelled")
+        if self.frame_format and self.tmod == TMOD_TX_RX:
+            raise UnmodelledAccess(f"{self.NAME}: transmit-and-receive mode in {FORMAT_NAMES[self.frame_format]} "
+                                   f"format (the SSI transmits or receives there, not both)")
         if self.frame_format:
-            spi_ctrlr0 = self.values[SPI_CTRLR0]
-            trans_type = field(spi_ctrlr0, 0, 2)
-            addr_bits = field(spi_ctrlr0, 2, 4) * 4
-            inst_bits = {0: 0, 1: 4, 2: 8, 3: 16}[field(spi_ctrlr0, 8, 2)]
-            wait = field(spi_ctrlr0, 11, 5)
-            if inst_bits not in (0, bits) or addr_bits not in (0, bits) or wait or (
-                    trans_type != 2 and (inst_bits or addr_bits)):
+            trans_type = self.values[SPI_CTRLR0] & 3
+            inst_bits, _, addr_bits, _, _ = self._phases()
+            if trans_type == 3 or inst_bits % 8 or addr_bits % 8:
                 raise UnmodelledAccess(
-                    f"{self.NAME}: {FORMAT_NAMES[self.frame_format]} format with instruction {inst_bits} bits, "
-                    f"address {addr_bits} bits, {wait} wait cycles, transfer type {trans_type}: the model "
-                    f"supports instruction/address phases sent like frames (lengths 0 or the frame size, "
-                    f"type 2, no wait cycles)"
-                )
-            if self.tmod != TMOD_TX:
-                raise UnmodelledAccess(f"{self.NAME}: receiving in {FORMAT_NAMES[self.frame_format]} format is not modelled")
+                    f"{self.NAME}: {FORMAT_NAMES[self.frame_format]} format with a {inst_bits}-bit instruction, "
+                    f"a {addr_bits}-bit address and transfer type {trans_type}: the model passes instruction "
+                    f"and address phases of whole bytes, transfer types 0-2")
 
     # --- chip select and device wiring -------------------------------------------------------
 
@@ -249,6 +315,7 @@ class SpiController(Peripheral):
             self.ports.signal(min(at, self._train.end()), f"spi{self.index}_sclk", 0)
         self._train = None
         self._eeprom_fill = 0
+        self._phases_sent = False
 
     def _update_selection(self, now: float) -> None:
         low = bool(self.enabled and self.values[SER])
@@ -285,6 +352,11 @@ class SpiController(Peripheral):
             self._deliver(train.take(done - train.delivered), now)
         if train.delivered == train.count and now >= train.end() - EPSILON:
             self._end_train(now)
+            if self._phase_entries and self.frame_format and self.tmod == TMOD_RX:
+                # instruction and address written during the receive that ended begin the next
+                self._start_phased(self.frame_period(), train.end())
+                if self._train is not None:
+                    self.advance(now)
 
     def _deliver(self, frames: np.ndarray, now: float) -> None:
         nbytes = self.frame_bits // 8
@@ -334,6 +406,9 @@ class SpiController(Peripheral):
         if period == float("inf"):
             self._held.extend(int(v) for v in values)
             return
+        if self.frame_format and self._phased():
+            self._push_phased(values, period, now)
+            return
         train = self._train
         if train is None or train.end() < now - EPSILON:
             if train is not None:
@@ -344,9 +419,65 @@ class SpiController(Peripheral):
         train.frames.append(values.astype(np.uint32))
         train.count += len(values)
 
+    def _push_phased(self, values: np.ndarray, period: float, now: float) -> None:
+        """A dual/quad/octal transfer with instruction and address phases (_phased). Its first FIFO
+        entries are the instruction (when spi_ctrlr0's inst_l is not 0) and the address (when addr_l
+        is not 0); once they are in, both go out (each on one lane or on the format's, as trans_type
+        says), then: receiving, wait_cycles clocks with no data and ctrlr1 + 1 frames clocked in;
+        transmitting, the entries after them as frames, for as long as the FIFO does not run empty.
+        Entries written during a receive wait in the FIFO and begin the next transfer."""
+        train = self._train
+        if self._phases_sent and train is not None:
+            if self.tmod == TMOD_RX:
+                self._phase_entries.extend(int(v) for v in values)
+            else:
+                train.frames.append(values.astype(np.uint32))
+                train.count += len(values)
+            return
+        self._phase_entries.extend(int(v) for v in values)
+        self._start_phased(period, now)
+
+    def _start_phased(self, period: float, now: float) -> None:
+        """Sends the phases of a transfer once its entries are in, and puts its frames on the wire."""
+        inst_bits, inst_lanes, addr_bits, addr_lanes, wait = self._phases()
+        phases = [(bits, lanes) for bits, lanes in ((inst_bits, inst_lanes), (addr_bits, addr_lanes)) if bits]
+        receiving = self.tmod == TMOD_RX
+        entries = self._phase_entries
+        # receive-only with neither phase: a write starts the transfer, as in the standard format
+        if len(entries) < max(len(phases), 1 if receiving else 0):
+            return
+        self._check_wire_format()
+        device = self._selected
+        clocks = 0
+        for (bits, lanes), value in zip(phases, entries):
+            if device is not None:
+                device.spi_transfer(np.frombuffer((value & ((1 << bits) - 1)).to_bytes(bits // 8, "big"),
+                                                  dtype=np.uint8), lanes, now)
+            clocks += bits // lanes
+        if receiving and wait:
+            if device is not None:
+                device.spi_dummy(wait, now)
+            clocks += wait
+        train = self._train = _Train(start=now + clocks / self.sclk_hz(), period=period, bits=self.frame_bits)
+        self.ports.signal(now, f"spi{self.index}_sclk", 1)
+        self._phases_sent = True
+        rest = entries[max(len(phases), 1 if receiving else 0):]
+        if receiving:
+            count = (self.values[CTRLR1] & 0xFFFF) + 1
+            train.frames.append(np.full(count, (1 << self.frame_bits) - 1, dtype=np.uint32))
+            train.count = count
+            self._phase_entries = rest
+        else:
+            self._phase_entries = []
+            if rest:
+                train.frames.append(np.array(rest, dtype=np.uint32))
+                train.count = len(rest)
+
     def tx_level(self, now: float) -> int:
         """txflr: frames in the FIFO that have not started shifting out."""
-        held = len(self._held)
+        held = len(self._held) + len(self._phase_entries)
+        if self.tmod == TMOD_RX and self.frame_format:
+            return min(FIFO_DEPTH, held)      # phase entries waiting for the next transfer
         if self.tmod == TMOD_RX:
             # receive-only: the frames on the wire are clocks, not transmit data; the dummy
             # word that starts them leaves the FIFO at once (it waits there only while no
@@ -581,6 +712,7 @@ class SpiController(Peripheral):
                 # disabling halts any transfer and clears both FIFOs
                 self._end_train(now)
                 self._held.clear()
+                self._phase_entries.clear()
                 self._rx.clear()
                 self._raw_int = 0
             self._update_selection(now)
@@ -606,13 +738,17 @@ class SpiController(Peripheral):
             # no value in the text: repeated losses are counted as one warning
             self.ports.warn(f"{self.NAME}: a frame written to a full transmit FIFO was lost", now)
             return
-        if self.tmod == TMOD_RX:
+        if self.tmod == TMOD_RX and not self.frame_format:
             # receive-only: one write starts clocking ctrlr1 + 1 frames in (sending 0xFF filler,
             # the idle level of the data-out line)
             self._check_wire_format()
             count = (self.values[CTRLR1] & 0xFFFF) + 1
             filler = (1 << self.frame_bits) - 1
             self._push(np.full(count, filler, dtype=np.uint32), now)
+            return
+        if self.frame_format and self._phased():
+            # instruction and address entries are wider than a frame may be: kept whole
+            self._push(np.array([value & 0xFFFF_FFFF], dtype=np.uint32), now)
             return
         frame = np.array([value & ((1 << self.frame_bits) - 1)], dtype=np.uint32)
         if self.tmod == TMOD_EEPROM:

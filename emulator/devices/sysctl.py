@@ -56,7 +56,7 @@ PERI_BITS = {
 }
 # which APB bus each gated peripheral hangs off (the SDK's sysctl_clock_bus_en)
 PERI_BUS = {"gpio": CENT_APB0, "fpioa": CENT_APB0, "spi0": CENT_APB2, "spi1": CENT_APB2,
-            "spi2": CENT_APB0, "spi3": CENT_APB2, "dma": None,
+            "spi2": CENT_APB0, "spi3": None, "dma": None,
             "uart1": CENT_APB0, "uart2": CENT_APB0, "uart3": CENT_APB0,
             "timer0": CENT_APB0, "timer1": CENT_APB0, "timer2": CENT_APB0,
             "wdt0": CENT_APB1, "wdt1": CENT_APB1, "rtc": CENT_APB1, "sha": CENT_APB0}
@@ -66,10 +66,12 @@ RESET_STATUS = 0x60
 RESET_STS_CLR = 1
 # reset_status's cause bits (sysctl.h sysctl_reset_status_t)
 RESET_CAUSE_BITS = {"pin": 1 << 1, "WDT0": 1 << 2, "WDT1": 1 << 3, "soft": 1 << 4}
+SPI3_CLK_SEL_BIT = 12        # clk_sel0: SPI3's source, 0 IN0, 1 PLL0
 TIMER0_CLK_SEL_BIT = 13      # clk_sel0: timer n's source, 0 IN0, 1 PLL0
 
 # DMA request codes selected by dma_sel (SDK sysctl_dma_select_t): the ones of modelled blocks
 DMA_REQUESTS = {0: ("spi0", "rx"), 1: ("spi0", "tx"), 2: ("spi1", "rx"), 3: ("spi1", "tx"),
+                6: ("spi3", "rx"), 7: ("spi3", "tx"),
                 14: ("uart1", "rx"), 15: ("uart1", "tx"), 16: ("uart2", "rx"), 17: ("uart2", "tx"),
                 18: ("uart3", "rx"), 19: ("uart3", "tx")}
 
@@ -185,9 +187,14 @@ class Sysctl(Peripheral):
         return source / ((field(self.values[CLK_TH2], 8 * index, 8) + 1) * 2)
 
     def spi_source_hz(self, index: int) -> float:
-        """SPIn source clock = PLL0 / ((threshold + 1) * 2) (SDK formula)."""
+        """SPIn source clock = source / ((clk_th1 byte n + 1) * 2), the source PLL0, or for SPI3
+        IN0 or PLL0 as clk_sel0.spi3_clk_sel says (the SDK's sysctl_clock_get_freq; its spi_init
+        selects PLL0 for SPI3)."""
         threshold = field(self.values[CLK_TH1], 8 * index, 8)
-        return self.pll_hz(PLL0) / ((threshold + 1) * 2)
+        source = self.pll_hz(PLL0)
+        if index == 3 and not self.values[CLK_SEL0] >> SPI3_CLK_SEL_BIT & 1:
+            source = float(OSC_HZ)
+        return source / ((threshold + 1) * 2)
 
     def gate_open(self, name: str) -> bool:
         """Whether the named peripheral's clock gate and its bus gate are both on."""

@@ -145,6 +145,12 @@ def build_parser() -> argparse.ArgumentParser:
                      help="the content of the Dock's 16 MiB SPI flash: a .kfpkg (each file at its address, "
                           "as kflash writes it), a program .bin (written at 0 with the ROM's boot header, as "
                           "`make flash` writes it) or any other file as a dump of the flash from address 0")
+    run.add_argument("--flash-writable", action="store_true",
+                     help="with --flash: write the flash's content back to IMAGE when the run ends (IMAGE must "
+                          "be a dump; without this the firmware's programs and erases last for the run only)")
+    run.add_argument("--flash-save", metavar="DUMP", default=None,
+                     help="when the run ends, write the flash's 16 MiB to DUMP (a dump later runs can give to "
+                          "--flash), whatever --flash was")
     run.add_argument("--sd", metavar="IMAGE", help="SD card image in the Dock's slot (opened read-only: the "
                      "firmware's writes are kept in memory for the run)")
     run.add_argument("--sd-writable", action="store_true", help="with --sd: let the firmware's writes reach the "
@@ -307,6 +313,8 @@ def option_problem(args: argparse.Namespace) -> str | None:
         return "give a firmware file, or --flash IMAGE to boot the program in the flash as the mask ROM does"
     if args.firmware is None and args.profile:
         return "--profile needs the firmware's ELF for its symbols (give it as well as --flash)"
+    if args.flash is None and args.flash_writable:
+        return "--flash-writable needs --flash (the dump the flash's changes would go back to)"
     if args.sd is None and args.sd_writable:
         return "--sd-writable needs --sd (the card image the firmware's writes would reach)"
     if args.sd is None and args.sd_fault:
@@ -520,7 +528,7 @@ def main(argv: list[str] | None = None) -> int:
         flash = None
         if args.flash is not None:
             from ..board.flash_image import FlashImage
-            flash = FlashImage.open(args.flash)
+            flash = FlashImage.open(args.flash, writable=args.flash_writable)
         uart_input = UartInput.open(args.uart_input) if args.uart_input is not None else None
         pins = list(args.pins)
         if args.pin_file is not None:
@@ -541,7 +549,7 @@ def main(argv: list[str] | None = None) -> int:
     def console(byte: int) -> None:
         output.console_byte(byte)
         terminal.console_byte(byte)
-        watch.byte(byte, board.uarths.last_byte_time)
+        watch.byte(byte, board.console_byte_time)
 
     taken: set[int] = set()
 
@@ -613,6 +621,15 @@ def main(argv: list[str] | None = None) -> int:
         uart_input.close()
     if board is not None:
         board.close()
+        try:
+            if board.flash.writable and board.flash_chip.changed:
+                board.flash.save()
+            if args.flash_save is not None:
+                board.flash.save(args.flash_save)
+        except BoardStop as stop:
+            terminal.message(f"[board] {stop}")
+            if status == EXIT_OK:
+                status, kind, message = stop.exit_status, stop.kind, str(stop)
         for text in board.repeated_warnings:
             terminal.warning(f"repeated: {text}")
     frames = board.frames if board is not None else []
@@ -656,6 +673,9 @@ def main(argv: list[str] | None = None) -> int:
     summary["uart_output"] = ({name: bytes(sent).decode("utf-8", "replace") for name, sent in board.uart_output.items()}
                               if board is not None else {})
     summary["lcd_interface"] = args.lcd_interface
+    summary["flash"] = ({"image": str(board.flash.path), "kind": board.flash.kind, "writable": board.flash.writable,
+                         "changed": board.flash_chip.changed, "saved_to": args.flash_save}
+                        if board is not None else {})
     summary["bus_warnings"] = dict(board.bus.questionable) if board is not None else {}
     summary["until_s"] = args.until
     summary.update(pad_changes_summary(board))

@@ -54,6 +54,31 @@ void dmac_start(int channel, const void *source, volatile void *destination, int
     dmac_write(DMAC_CHEN, dmac_read(DMAC_CHEN) | enable_bit | enable_bit << DMAC_CHEN_WE_SHIFT);
 }
 
+/* One block of `items` items of `width` from a fixed peripheral address (its FIFO) to memory,
+ * incrementing: the peripheral's request paces the channel (dmac_set_single_mode's other way). */
+void dmac_receive(int channel, volatile const void *source, void *destination, enum dma_width width, size_t items)
+{
+    uint32_t ch = DMAC_CH(channel);
+    uint64_t enable_bit = 1ull << channel;
+    dmac_write(ch + DMAC_CH_INTCLEAR, 0xFFFFFFFFu);
+    dmac_write(DMAC_CHEN, (dmac_read(DMAC_CHEN) & ~enable_bit) | enable_bit << DMAC_CHEN_WE_SHIFT);
+    while (channel_busy(channel))
+        ;
+    uint64_t cfg = dmac_read(ch + DMAC_CH_CFG) & ~(DMAC_CFG_FIELDS_SET | DMAC_CFG_MULTBLK_TYPES);
+    cfg |= (uint64_t)DMAC_TT_PRF2MEM << DMAC_CFG_TT_FC_SHIFT | DMAC_CFG_HS_SEL_DST
+         | (uint64_t)channel << DMAC_CFG_SRC_PER_SHIFT | (uint64_t)channel << DMAC_CFG_DST_PER_SHIFT;
+    dmac_write(ch + DMAC_CH_CFG, cfg);
+    dmac_write(ch + DMAC_CH_SAR, (uint64_t)(uintptr_t)source);
+    dmac_write(ch + DMAC_CH_DAR, (uint64_t)(uintptr_t)destination);
+    uint64_t ctl = dmac_read(ch + DMAC_CH_CTL) & ~DMAC_CTL_FIELDS_SET;
+    ctl |= 1ull << DMAC_CTL_SMS_SHIFT | 1ull << DMAC_CTL_SINC_SHIFT | (uint64_t)width << DMAC_CTL_SRC_WIDTH_SHIFT
+         | (uint64_t)width << DMAC_CTL_DST_WIDTH_SHIFT;   /* bursts of one item, as the SDK reads SPI */
+    dmac_write(ch + DMAC_CH_CTL, ctl);
+    dmac_write(ch + DMAC_CH_BLOCK_TS, items - 1);
+    dmac_write(DMAC_CFG, dmac_read(DMAC_CFG) | DMAC_CFG_EN | DMAC_CFG_INT_EN);
+    dmac_write(DMAC_CHEN, dmac_read(DMAC_CHEN) | enable_bit | enable_bit << DMAC_CHEN_WE_SHIFT);
+}
+
 /* The block is done when the channel's enable bit drops (dmac_wait_done polls chen). */
 void dmac_wait_done(int channel)
 {

@@ -12,11 +12,12 @@
 
 /* sysctl.c: clocks, as handed over; nothing here touches the PLLs */
 enum clock { CLOCK_FPIOA, CLOCK_GPIO, CLOCK_SPI0, CLOCK_DMA, CLOCK_UART1, CLOCK_UART2, CLOCK_UART3, CLOCK_TIMER0,
-             CLOCK_TIMER1, CLOCK_TIMER2, CLOCK_WDT0, CLOCK_RTC };
+             CLOCK_TIMER1, CLOCK_TIMER2, CLOCK_WDT0, CLOCK_RTC, CLOCK_SPI3 };
 void clock_enable(enum clock clock);
 uint32_t pll0_hz(void);
 uint32_t cpu_hz(void);
 uint32_t spi0_source_hz(void);
+uint32_t spi3_source_hz(void);
 uint32_t apb0_hz(void);
 uint32_t timer_hz(int timer);
 uint32_t wdt_hz(void);
@@ -75,6 +76,7 @@ enum dma_width { DMA_WIDTH_8 = 0, DMA_WIDTH_16 = 1, DMA_WIDTH_32 = 2 };
 void dmac_init(void);
 void dmac_start(int channel, const void *source, volatile void *destination, int source_fixed,
                 enum dma_width width, size_t items);
+void dmac_receive(int channel, volatile const void *source, void *destination, enum dma_width width, size_t items);
 void dmac_wait_done(int channel);
 
 /* spi.c: SPI0, transmit only */
@@ -83,6 +85,15 @@ void spi0_init_non_standard(int instruction_bits, int address_bits, int wait_cyc
 uint32_t spi0_set_clock(uint32_t hz);
 void spi0_send_dma(int channel, int chip_select, const void *items, size_t count, enum dma_width width);
 void spi0_fill_dma(int channel, int chip_select, const uint32_t *word, size_t count);
+
+/* spi3.c: SPI3 (DWC_ssi), whose chip select 0 is the Dock's flash */
+void spi3_init(int frame_format, int frame_bits);
+void spi3_init_non_standard(int instruction_bits, int address_bits, int wait_cycles, int trans_mode);
+uint32_t spi3_set_clock(uint32_t hz);
+void spi3_send(const uint8_t *bytes, size_t count);
+void spi3_receive(const uint8_t *command, size_t command_length, uint8_t *reply, size_t count);
+void spi3_send_dma(int channel, const uint32_t *items, size_t count);
+void spi3_receive_dma(int channel, uint32_t instruction, uint32_t address, uint32_t *items, size_t count);
 
 /* lcd.c: the Maix Dock's ST7789V, 8-bit parallel on SPI0's octal lines */
 #define LCD_WIDTH 320

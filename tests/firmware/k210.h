@@ -26,6 +26,7 @@ static inline void mmio_write64(uintptr_t address, uint64_t value) { *(volatile 
 #define FPIOA_BASE      0x502B0000u
 #define SYSCTL_BASE     0x50440000u
 #define SPI0_BASE       0x52000000u
+#define SPI3_BASE       0x54000000u        /* the on-board flash's controller */
 #define UART1_BASE      0x50210000u        /* UARTn at UART1_BASE + 0x10000 (n - 1) */
 #define PLIC_BASE       0x0C000000u
 #define TIMER0_BASE     0x502D0000u        /* TIMERn at TIMER0_BASE + 0x10000 n */
@@ -57,6 +58,8 @@ static inline void mmio_write64(uintptr_t address, uint64_t value) { *(volatile 
 #define PERI_DMA                (1u << 1)
 #define PERI_GPIO               (1u << 5)
 #define PERI_SPI0               (1u << 6)
+#define PERI_SPI3               (1u << 9)  /* SPI3 sits on no APB bus */
+#define CLK_SEL0_SPI3_PLL0      (1u << 12) /* SPI3's source: 0 IN0, 1 PLL0 */
 #define PERI_FPIOA              (1u << 20)
 #define PERI_UART1              (1u << 16) /* UART2, UART3: the next two bits */
 #define PERI_TIMER0             (1u << 21) /* TIMER1, TIMER2: the next two bits */
@@ -76,6 +79,8 @@ static inline void mmio_write64(uintptr_t address, uint64_t value) { *(volatile 
 #define RESET_STS_PIN           (1u << 1)
 #define DMA_SEL_WIDTH           6
 #define DMA_REQ_SSI0_TX         1          /* sysctl_dma_select_t */
+#define DMA_REQ_SSI3_RX         6
+#define DMA_REQ_SSI3_TX         7
 
 /* --- FPIOA (fpioa.h, fpioa.c's function_config) ------------------------------------------ */
 #define FPIOA_DS_MAX            (0xFu << 8)
@@ -205,10 +210,12 @@ static inline void mmio_write64(uintptr_t address, uint64_t value) { *(volatile 
 
 /* --- SPI0 (spi.h: DesignWare SSI; ctrlr0 as on SPI0 and SPI1) --------------------------- */
 #define SPI_CTRLR0              0x00
+#define SPI_CTRLR1              0x04       /* receive: frames to clock in, less one */
 #define SPI_SSIENR              0x08
 #define SPI_SER                 0x10
 #define SPI_BAUDR               0x14
 #define SPI_TXFLR               0x20
+#define SPI_RXFLR               0x24
 #define SPI_SR                  0x28
 #define SPI_IMR                 0x2C
 #define SPI_DMACR               0x4C
@@ -222,18 +229,29 @@ static inline void mmio_write64(uintptr_t address, uint64_t value) { *(volatile 
 #define SPI_TMOD_SHIFT          8
 #define SPI_TMOD_MASK           (3u << SPI_TMOD_SHIFT)
 #define SPI_TMOD_TRANSMIT       1
+#define SPI_TMOD_RECEIVE        2
+#define SPI_TMOD_EEPROM         3          /* send a command, then clock the reply in */
 #define SPI_DFS_SHIFT           16         /* data frame size - 1, [20:16] */
 #define SPI_FRF_SHIFT           21         /* frame format, [22:21] */
 #define SPI_FF_STANDARD         0
+#define SPI_FF_QUAD             2
 #define SPI_FF_OCTAL            3
 #define SPI_SR_BUSY             (1u << 0)
 #define SPI_SR_TFE              (1u << 2)
+#define SPI_DMACR_RDMAE         (1u << 0)
 #define SPI_DMACR_TDMAE         (1u << 1)
+#define SPI_AITM_STANDARD       0          /* instruction and address on one line */
+#define SPI_AITM_ADDR_STANDARD  1          /* instruction on one line, address in the frame format */
 #define SPI_AITM_AS_FRAME_FORMAT 2         /* instruction and address in the frame format */
 #define SPI_INST_L_SHIFT        8
 #define SPI_ADDR_L_SHIFT        2
 #define SPI_WAIT_CYCLES_SHIFT   11
 #define SPI_FIFO_DEPTH          32
+/* SPI3 is a DWC_ssi: ctrlr0's fields sit elsewhere (the SDK's spi.c, spi_num == 3) */
+#define SPI3_DFS_SHIFT          0          /* [4:0] */
+#define SPI3_WORK_MODE_SHIFT    8
+#define SPI3_TMOD_SHIFT         10
+#define SPI3_FRF_SHIFT          22
 
 /* --- DMAC (dmac.h: DesignWare AXI DMAC, 64-bit registers) ------------------------------- */
 #define DMAC_CFG                0x10
@@ -264,7 +282,9 @@ static inline void mmio_write64(uintptr_t address, uint64_t value) { *(volatile 
 #define DMAC_MSIZE_4            1
 #define DMAC_CFG_TT_FC_SHIFT    32
 #define DMAC_TT_MEM2PRF         1
+#define DMAC_TT_PRF2MEM         2
 #define DMAC_CFG_HS_SEL_SRC     (1ull << 35) /* 1 = software handshake (memory side) */
+#define DMAC_CFG_HS_SEL_DST     (1ull << 36)
 #define DMAC_CFG_SRC_PER_SHIFT  39
 #define DMAC_CFG_DST_PER_SHIFT  44
 #define DMAC_INT_DMA_TFR_DONE   (1ull << 1)

@@ -28,6 +28,11 @@ void clock_enable(enum clock clock)
     case CLOCK_DMA:
         sysctl_set_bits(SYSCTL_CLK_EN_PERI, PERI_DMA);
         break;
+    case CLOCK_SPI3:        /* from PLL0, threshold 0, as spi_init's spi_clk_init sets it */
+        sysctl_set_bits(SYSCTL_CLK_SEL0, CLK_SEL0_SPI3_PLL0);
+        sysctl_set_bits(SYSCTL_CLK_EN_PERI, PERI_SPI3);
+        sysctl_write(SYSCTL_CLK_TH1, sysctl_read(SYSCTL_CLK_TH1) & ~0xFF000000u);
+        break;
     case CLOCK_UART1:
     case CLOCK_UART2:
     case CLOCK_UART3:
@@ -100,6 +105,14 @@ uint32_t spi0_source_hz(void)
 {
     uint32_t threshold = sysctl_read(SYSCTL_CLK_TH1) & 0xFF;
     return pll0_hz() / ((threshold + 1) * 2);
+}
+
+/* SPI3's clock: IN0 or PLL0 (clk_sel0.spi3_clk_sel) / ((clk_th1 byte 3 + 1) x 2). */
+uint32_t spi3_source_hz(void)
+{
+    uint32_t threshold = sysctl_read(SYSCTL_CLK_TH1) >> 24;
+    uint32_t source = sysctl_read(SYSCTL_CLK_SEL0) & CLK_SEL0_SPI3_PLL0 ? pll0_hz() : OSC_HZ;
+    return source / ((threshold + 1) * 2);
 }
 
 /* Routes a DMA request (sysctl_dma_select_t) to a DMAC channel's handshake interface 0..4. */
