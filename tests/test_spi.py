@@ -602,6 +602,8 @@ def test_a_second_quad_receive_starts_after_the_first(bus):
     assert [data for _, data, _ in dev.transfers] == [b"\x6B", b"\x00\x01\x00", b"\xFF", b"\x6B",
                                                       b"\x00\x02\x00", b"\xFF"]
     assert spi.read(s.RXFLR, 4, 1.0) == 2
+    # the slave select rose between the two transfers, so the device saw two commands
+    assert [selected for selected, _ in dev.selects] == [True, False, True]
 
 
 @pytest.mark.parametrize("phases, message", [

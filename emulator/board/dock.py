@@ -26,6 +26,7 @@ from .flash_image import FlashImage
 from .raw_image import load_firmware, load_program
 from ..errors import BoardStop
 from ..devices.fpioa import FUNC_UART1_RX, FUNC_UART1_TX, FUNC_UARTHS_RX, FUNC_UARTHS_TX, Fpioa
+from ..devices.fft import Fft
 from ..devices.gpio import Gpio
 from ..devices.gpiohs import Gpiohs
 from ..cpu.hart import ENGINE_FAST, ENGINES, Hart
@@ -174,6 +175,7 @@ class Board:
                           for n in range(2)]
         self.rtc = Rtc(ports, pulse=lambda at: self.plic.latch(K210_BLOCKS["RTC"].irqs[0], at))
         self.sha256 = Sha256(ports)
+        self.fft = Fft(ports)
         self.clint = Clint(ports, counter=self.clock)
         self.plic = Plic(ports, high_sources=self._high_sources)
         self.spi0 = SpiController(0, ports, source_hz=lambda: self.sysctl.spi_source_hz(0))
@@ -186,7 +188,7 @@ class Board:
         self.dmac = Dmac(ports, self.memory, requests=self.sysctl.dma_request,
                          peripherals={"spi0": self.spi0, "spi1": self.spi1, "spi3": self.spi3,
                                       **{uart.GATE: uart for uart in self.uarts}})
-        self.peripherals: list[Peripheral] = [self.sysctl, self.fpioa, self.gpiohs, self.gpio, self.uarths, *self.uarts, *self.timers, *self.watchdogs, self.rtc, self.sha256,
+        self.peripherals: list[Peripheral] = [self.sysctl, self.fpioa, self.gpiohs, self.gpio, self.uarths, *self.uarts, *self.timers, *self.watchdogs, self.rtc, self.sha256, self.fft,
                                               self.clint, self.plic, self.dmac, self.spi0, self.spi1, self.spi3]
         self._interrupting = [(p, K210_BLOCKS[p.NAME].irqs) for p in self.peripherals if K210_BLOCKS[p.NAME].irqs]
         self.signals = None                    # a vcd.SignalLog with --vcd
@@ -366,7 +368,7 @@ class Board:
         """SYSCTL peri_reset released a block: it returns to its reset state."""
         target = {"spi0": self.spi0, "spi1": self.spi1, "spi3": self.spi3, "dma": self.dmac, "fpioa": self.fpioa,
                   "gpio": self.gpio, **{block.GATE: block for block in (*self.uarts, *self.timers, *self.watchdogs, self.rtc,
-                                                    self.sha256)}}.get(name)
+                                                    self.sha256, self.fft)}}.get(name)
         if target is not None:
             self.advance_devices(now)
             target.reset(now)

@@ -197,6 +197,7 @@ class SpiController(Peripheral):
         # whether they have gone out (the transfer is open: what follows is data)
         self._phase_entries: list[int] = []
         self._phases_sent = False
+        self._phased_since_select = False     # the selected device has seen a phased transfer
 
     def reset(self, now: float) -> None:
         """peri_reset: FIFOs, transfers and registers back to reset; devices deselected."""
@@ -324,6 +325,7 @@ class SpiController(Peripheral):
             self.ports.signal(now, f"spi{self.index}_ss_n", 0 if low else 1)
         device = self._slave() if self.enabled and self.values[SER] else None
         if device is not self._selected:
+            self._phased_since_select = False
             if self._selected is not None:
                 self._selected.spi_select(False, now)
             self._selected = device
@@ -448,6 +450,11 @@ class SpiController(Peripheral):
             return
         self._check_wire_format()
         device = self._selected
+        if device is not None and self._phased_since_select:
+            # a transfer after one that ended: the controller raised its slave select between them
+            device.spi_select(False, now)
+            device.spi_select(True, now)
+        self._phased_since_select = True
         clocks = 0
         for (bits, lanes), value in zip(phases, entries):
             if device is not None:
