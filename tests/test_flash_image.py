@@ -15,7 +15,7 @@ import zipfile
 import pytest
 
 from conftest import ROOT, run_emulator
-from emulator.board.flash_image import ERASED, FLASH_SIZE, FlashImage, with_boot_header
+from emulator.board.flash_image import ERASED, FLASH_SIZE, HEADER, FlashImage, with_boot_header
 from emulator.errors import EXIT_BAD_INPUT, EXIT_USAGE, BadInput
 
 PROGRAM = bytes(range(256)) * 3
@@ -149,3 +149,22 @@ def test_the_renderer_booted_from_its_flash_image_draws_the_golden_frames(firmwa
                        "--golden", str(ROOT / "tests" / "golden" / "default"), "--quiet", "--out", str(tmp_path / "out"))
     assert run.returncode == 0, run.stderr
     assert "all 2 frames match" in run.stderr
+
+
+def test_a_chip_reset_boots_the_flash_again_as_the_rom_does(hello_bin):
+    """After a chip reset the ROM reads the flash again: the same program comes back; one the run
+    rewrote, or a flash it left unbootable, is a clear stop (booting a new program mid-run is not
+    modelled)."""
+    from emulator.board import Board
+    from emulator.errors import UnmodelledAccess
+    board = Board(None, flash=FlashImage.open(hello_bin))
+    board.memory.load(0x8000_0000, b"\x00" * 16)         # the program's first bytes overwritten in SRAM
+    board.reset_chip("soft", 0.001)
+    assert board.memory.read(0x8000_0000, 16) == hello_bin.read_bytes()[:16]
+    board.flash.data[HEADER.size + 8] ^= 0xFF              # the program in the flash changed
+    with pytest.raises(UnmodelledAccess, match="the ROM would not boot the flash any more"):
+        board.reset_chip("soft", 0.002)
+    rewritten = with_boot_header(hello_bin.read_bytes()[:-4] + b"\x13\x00\x00\x00")
+    board.flash.data[:len(rewritten)] = rewritten
+    with pytest.raises(UnmodelledAccess, match="the program in the flash has changed"):
+        board.reset_chip("soft", 0.003)

@@ -24,7 +24,7 @@ from ..devices.dmac import Dmac
 from .elf import LoadedImage
 from .flash_image import FlashImage
 from .raw_image import load_firmware, load_program
-from ..errors import BoardStop
+from ..errors import BadInput, BoardStop, UnmodelledAccess
 from ..devices.fpioa import FUNC_UART1_RX, FUNC_UART1_TX, FUNC_UARTHS_RX, FUNC_UARTHS_TX, Fpioa
 from ..devices.fft import Fft
 from ..devices.gpio import Gpio
@@ -218,6 +218,7 @@ class Board:
         self.spi1.device_for_ss = self.wiring.spi1_device
         self.bus = Bus(self, strict)
         self.write_watch: WriteWatch | None = None
+        self.booted_from_flash = firmware is None
         if firmware is None:
             if flash is None:
                 raise ValueError("a Board needs a firmware file or a flash to boot from")
@@ -384,6 +385,17 @@ class Board:
         if not self.cold:
             bootrom.hand_over(self.sysctl, self.fpioa, self.uarths)
         self.sysctl.record_reset(cause)
+        if self.booted_from_flash:
+            # the ROM boots what the flash holds now; the model's code analyses (poll loops, cycle
+            # table, decoded blocks) belong to the program it booted first
+            try:
+                program = self.flash.boot_program()
+            except BadInput as error:
+                raise UnmodelledAccess(f"chip reset at {at * 1e3:.3f} ms: the ROM would not boot the flash any "
+                                       f"more ({error}); its ISP mode is not modelled") from None
+            if program != self._program[0][1]:
+                raise UnmodelledAccess(f"chip reset at {at * 1e3:.3f} ms: the program in the flash has changed "
+                                       f"since the run booted it, and booting a rewritten program is not modelled")
         for address, data in self._program:
             self.memory.load(address, data)
         self.wiring.changed(at)
