@@ -197,3 +197,72 @@ def test_which_loops_can_only_be_polling(source, polls):
     image = load_elf(elf, Sram(fill_seed=None))
     loops = [loop for address, code in image.code_ranges for loop in find_poll_loops(code, address)]
     assert bool(loops) is polls
+
+
+# FreeRTOS's cross-core critical section, as LoBo's MicroPython runs it on both cores: hart 0 takes a
+# spinlock (spin while it is held, then amoswap), raises a request, releases the lock and waits for
+# the request to be served; hart 1 takes the same lock to serve it, then goes about its own work
+# (WORK instructions) and comes back to the lock. Each hart leaves the lock's poll loop and comes
+# back to it many times.
+SPINLOCK = """
+    .option norelax
+    .equ    ROUNDS, {rounds}
+    .equ    WORK, {work}
+    .globl _start
+_start:
+    csrr    t0, mhartid
+    la      s0, lock
+    la      s1, request
+    li      s2, ROUNDS
+    li      a1, -1
+    bnez    t0, hart1
+    li      s3, 0
+1:  call    take
+    li      t1, 1
+    sw      t1, 0(s1)               # the request
+    fence
+    sw      zero, 0(s0)             # release
+2:  lw      t1, 0(s1)               # until hart 1 has served it
+    bnez    t1, 2b
+    addi    s3, s3, 1
+    blt     s3, s2, 1b
+done:
+    j       done
+hart1:
+    li      s3, 0
+3:  call    take
+    lw      t1, 0(s1)
+    beqz    t1, 4f
+    sw      zero, 0(s1)             # served
+    addi    s3, s3, 1
+4:  fence
+    sw      zero, 0(s0)             # release
+    li      t2, WORK
+5:  addi    t2, t2, -1
+    bnez    t2, 5b
+    blt     s3, s2, 3b
+hart1_done:
+    j       hart1_done
+take:
+6:  lw      t1, 0(s0)               # while it is held
+    bnez    t1, 6b
+    mv      t1, a1
+    amoswap.w.aq t1, t1, (s0)
+    bnez    t1, 6b
+    ret
+    .data
+    .balign 8
+lock:    .word 0
+request: .word 0
+"""
+
+
+@pytest.mark.parametrize("work", [3, 40, 400])
+def test_harts_taking_turns_at_a_spinlock_never_lose_a_wake_up(work):
+    """Hart 1 came back to the lock's poll loop, and the model took its last look at the lock, from
+    when it left the loop the time before, as if it were one iteration ago: it waited on a lock
+    already free, while hart 0 waited for it, for ever."""
+    board = make_board(build_elf(SPINLOCK.format(rounds=ROUNDS, work=work)))
+    run_until(board, lambda b: b.harts[0].pc == symbol(b, "done") and b.harts[1].pc == symbol(b, "hart1_done"),
+              max_time_s=0.2, max_steps=400_000)
+    assert reg(board, "s3", hart=0) == ROUNDS and reg(board, "s3", hart=1) == ROUNDS

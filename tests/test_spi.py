@@ -550,6 +550,19 @@ def sclk(spi) -> float:
     return spi.sclk_hz()
 
 
+def ctrlr0_dwc(dfs=8, tmod=s.TMOD_TX, fmt=0) -> int:
+    """SPI3's ctrlr0 (DWC_ssi): frame size [4:0], tmod [11:10], frame format [23:22]."""
+    return (dfs - 1) | tmod << 10 | fmt << 22
+
+
+@pytest.fixture
+def bus3(board):  # noqa: F811
+    dev = RecordingDevice()
+    board.spi3.device_for_ss = lambda ss: dev if ss == 0 else None
+    board.sysctl.values[0x3C] &= 0x00FF_FFFF          # SPI3's clock threshold 0, as spi_init sets it
+    return board, board.spi3, dev
+
+
 def test_quad_transmit_with_instruction_and_address_on_one_line(bus):
     """The W25Q's quad page program as the SDK sends it (spi_init_non_standard(8, 24, 0, standard)):
     the instruction and the address go out on one line, then the 32-bit frames on four."""
@@ -569,13 +582,13 @@ def test_quad_transmit_with_instruction_and_address_on_one_line(bus):
 
 
 @pytest.mark.parametrize("tmod", [s.TMOD_RX, s.TMOD_EEPROM])
-def test_quad_receive_with_phases_and_wait_cycles(bus, tmod):
+def test_quad_receive_with_phases_and_wait_cycles(bus3, tmod):
     """The W25Q's fast read quad I/O as the SDK reads it (8-bit instruction on one line, 32-bit
     address on four, 4 wait cycles; tmod 3, as spi_receive_data_multiple sets it, or 2, as the
     FreeRTOS SDK does): the replies to the phases are dropped, ctrlr1 + 1 frames come in."""
-    board, spi, dev = bus
+    board, spi, dev = bus3
     dev.replies = bytearray(b"\xEE" * 5 + b"\x11\x22\x33")
-    setup(spi, ctrlr0(8, tmod, 2), ser=0, ctrlr1=2, spi_ctrlr0=spi_ctrlr0(trans=1, inst_bits=8, addr_bits=32, wait=4))
+    setup(spi, ctrlr0_dwc(8, tmod, 2), ser=0, ctrlr1=2, spi_ctrlr0=spi_ctrlr0(trans=1, inst_bits=8, addr_bits=32, wait=4))
     spi.write(s.DR_FIRST, 4, 0xEB, 0.0)
     spi.write(s.DR_FIRST, 4, 0x12345600, 0.0)
     assert spi.read(s.TXFLR, 4, 0.0) == 2              # waiting in the FIFO for a slave
@@ -589,10 +602,10 @@ def test_quad_receive_with_phases_and_wait_cycles(bus, tmod):
     assert spi.read(s.TXFLR, 4, done + EPS) == 0
 
 
-def test_a_second_quad_receive_starts_after_the_first(bus):
+def test_a_second_quad_receive_starts_after_the_first(bus3):
     # the instruction and address written during a receive wait in the FIFO for the next one
-    board, spi, dev = bus
-    setup(spi, ctrlr0(8, s.TMOD_RX, 2), ctrlr1=0, spi_ctrlr0=spi_ctrlr0(trans=1, inst_bits=8, addr_bits=24))
+    board, spi, dev = bus3
+    setup(spi, ctrlr0_dwc(8, s.TMOD_RX, 2), ctrlr1=0, spi_ctrlr0=spi_ctrlr0(trans=1, inst_bits=8, addr_bits=24))
     spi.write(s.DR_FIRST, 4, 0x6B, 0.0)
     spi.write(s.DR_FIRST, 4, 0x000100, 0.0)
     spi.write(s.DR_FIRST, 4, 0x6B, 0.0)
@@ -617,6 +630,25 @@ def test_phases_the_model_cannot_pass_as_bytes_are_unmodelled(bus, phases, messa
     with pytest.raises(UnmodelledAccess, match=message):
         spi.write(s.DR_FIRST, 4, 1, 0.0)
         spi.write(s.DR_FIRST, 4, 1, 0.0)
+
+
+def test_receiving_in_quad_format_on_spi0_or_spi1_is_unmodelled(bus):
+    # the LCD and the SD card neither answer in quad nor take wait cycles
+    board, spi, dev = bus
+    setup(spi, ctrlr0(8, s.TMOD_RX, 2), ctrlr1=0, spi_ctrlr0=spi_ctrlr0(trans=1, inst_bits=8))
+    with pytest.raises(UnmodelledAccess, match="receiving in quad format"):
+        spi.write(s.DR_FIRST, 4, 0x6B, 0.0)
+
+
+def test_a_queued_receive_does_not_start_once_the_select_is_cleared(bus3):
+    board, spi, dev = bus3
+    setup(spi, ctrlr0_dwc(8, s.TMOD_RX, 2), ctrlr1=0, spi_ctrlr0=spi_ctrlr0(trans=1, inst_bits=8, addr_bits=24))
+    for value in (0x6B, 0x000100, 0x6B, 0x000200):
+        spi.write(s.DR_FIRST, 4, value, 0.0)
+    spi.write(s.SER, 4, 0, 1e-9)
+    spi.advance(1.0)
+    assert [data for _, data, _ in dev.transfers][:2] == [b"\x6B", b"\x00\x01\x00"]
+    assert b"\x00\x02\x00" not in [data for _, data, _ in dev.transfers]
 
 
 def test_transmit_and_receive_in_quad_format_is_unmodelled(bus):

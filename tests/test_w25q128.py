@@ -166,3 +166,29 @@ def test_what_the_model_does_not_have_is_said():
     chip = Chip()
     chip.one_line(b"\x5A\x00\x00\x00\x00\x00")
     assert "not one the model knows" in chip.warnings[0]
+
+
+def test_mode_bits_clocked_as_wait_cycles_read_high_and_the_read_works():
+    """A controller set up with a 24-bit address and 6 wait cycles for EBh clocks the mode byte as
+    wait cycles: the lines are undriven and read high (not the continuous read mode)."""
+    chip = Chip(b"\x00\x00\x00\x00\x5A\xA5")
+    assert chip.transaction((b"\xEB", 1), (b"\x00\x00\x04", 4), 6, (b"\x00\x00", 4))[4:] == b"\x5A\xA5"
+    assert chip.transaction((b"\xBB", 1), (b"\x00\x00\x05", 2), 4, (b"\x00", 2))[4:] == b"\xA5"
+    assert chip.warnings == []
+
+
+def test_reset_needs_99h_right_after_66h_and_lock_bits_stay_set():
+    chip = Chip()
+    chip.write_enable()
+    chip.one_line(b"\x66")
+    chip.status1()
+    chip.one_line(b"\x99")                             # not right after 66h: nothing
+    assert chip.status1() & w.SR1_WEL
+    chip.one_line(b"\x66")
+    chip.one_line(b"\x99")
+    assert not chip.status1() & w.SR1_WEL
+    chip.one_line(b"\x50")
+    chip.one_line(b"\x31\x0A")                         # QE and LB1
+    chip.one_line(b"\x50")
+    chip.one_line(b"\x31\x02")                         # LB1 cannot be cleared
+    assert chip.one_line(b"\x35\x00")[1] == 0x0A

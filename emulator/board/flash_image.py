@@ -37,7 +37,7 @@ from ..memory_map import SRAM_SIZE
 FLASH_SIZE = 16 * 1024 * 1024        # the Dock's W25Q128 (Sipeed's schematic; MicroPython's flash layout)
 ERASED = 0xFF
 KFPKG_SUFFIX, PROGRAM_SUFFIX = ".kfpkg", ".bin"
-KFPKG, PROGRAM, DUMP = "kfpkg", "program", "dump"
+KFPKG, PROGRAM, DUMP, ERASED_KIND = "kfpkg", "program", "dump", "erased"
 ZIP_MAGIC = b"PK\x03\x04"
 HEADER = struct.Struct("<BI")         # flag, program length
 HASH_SIZE = 32
@@ -65,7 +65,7 @@ class FlashImage:
     def erased() -> "FlashImage":
         """The flash of a run given no --flash: every byte erased (a Dock's flash holds what was last
         written to it; a run that needs that gives it)."""
-        return FlashImage(Path("(erased flash)"), bytearray([ERASED]) * FLASH_SIZE)
+        return FlashImage(Path("(erased flash)"), bytearray([ERASED]) * FLASH_SIZE, kind=ERASED_KIND)
 
     @staticmethod
     def open(path: str | Path, writable: bool = False) -> "FlashImage":
@@ -96,22 +96,31 @@ class FlashImage:
                 raise BadInput(f"--flash-writable: {path} is a {flash.kind} ({'the files' if flash.kind == KFPKG else 'a program'} "
                                f"kflash would write), which cannot take the flash's changes back; keep them with "
                                f"--flash-save DUMP, and run on DUMP with --flash-writable from then on")
-            if not os.access(path, os.W_OK):
-                raise BadInput(f"--flash-writable: {path} cannot be written (its permissions)")
+            if not os.access(path, os.W_OK) or not os.access(path.resolve().parent, os.W_OK):
+                raise BadInput(f"--flash-writable: {path} cannot be written, or its folder cannot take the "
+                               f"temporary file a save goes through (permissions)")
             flash.writable = True
         return flash
 
     def save(self, target: str | Path | None = None) -> Path:
         """Writes the flash's 16 MiB to `target` (else back to the dump it came from, which must be
-        writable) through a temporary file in the same folder. Raises BadInput if it cannot."""
-        target = Path(target) if target is not None else self.path
-        if target == self.path and not self.writable:
-            raise ValueError(f"{self.path} was opened read-only")
+        writable) through a temporary file in the same folder, flushed to the disk before it takes the
+        target's name; a symbolic link's target is written, and an existing file keeps its
+        permissions. Raises BadInput if it cannot."""
+        target = (Path(target) if target is not None else self.path).resolve()
+        if target == self.path.resolve() and not self.writable:
+            raise BadInput(f"--flash-save {target}: that is the --flash image, opened read-only; to write the "
+                           f"flash back to it, give --flash-writable (a dump only)")
         try:
+            mode = target.stat().st_mode & 0o7777 if target.exists() else None
             handle, temporary = tempfile.mkstemp(prefix=f".{target.name}.", dir=target.parent)
             try:
                 with os.fdopen(handle, "wb") as out:
                     out.write(self.data)
+                    out.flush()
+                    os.fsync(out.fileno())
+                if mode is not None:
+                    os.chmod(temporary, mode)
                 os.replace(temporary, target)
             except BaseException:
                 os.unlink(temporary)

@@ -176,7 +176,7 @@ class Scheduler:
         self._race_until = shared_memory.RACE_WINDOW_CYCLES / self._hz
         self._priority: tuple[Hart, int] | None = None    # a hart woken by a store, and its turn's length
         # per hart: the poll loop it last came round without waiting, and what that loop read then
-        self._poll_seen: dict[int, tuple[int, list[bytes]]] = {}
+        self._poll_seen: dict[int, tuple[int, list[bytes], int]] = {}   # hart: (loop head, what it read, executed)
         self._alone_plan = AlonePlan()
 
     def _mcycle_reader(self, h: int) -> Callable[[], int]:
@@ -315,8 +315,10 @@ class Scheduler:
         memory = self.board.memory.bytes
         seen = [memory[o:o + w].tobytes() for o, w in spans]
         previous = self._poll_seen.get(hart.hart_id)
-        self._poll_seen[hart.hart_id] = (loop.head, seen)
-        if hart.executed - loop.body <= turn_start and previous != (loop.head, seen):
+        self._poll_seen[hart.hart_id] = (loop.head, seen, hart.executed)
+        # (the earlier look counts only if it was one iteration ago: the hart may have left the loop
+        # and come back to it since, and what it saw then says nothing about what it reads now)
+        if hart.executed - loop.body <= turn_start and previous != (loop.head, seen, hart.executed - loop.body):
             # the last iteration began before this turn: the next one decides. Meanwhile the harts
             # run in lockstep, since what it polls may be about to change for a moment only
             self._race_until = max(self._race_until,

@@ -320,6 +320,9 @@ class Dmac(Peripheral):
             raise HardwareMisuse(f"DMAC channel {n}: handshake interface {handshake} has no peripheral request "
                                  f"selected in SYSCTL dma_sel")
         device_name, direction = request
+        if device_name not in self.peripherals:
+            raise UnmodelledAccess(f"DMAC channel {n}: transfers handshaking with {device_name.upper()} "
+                                   f"{direction.upper()} are not modelled")
         if direction != ("tx" if to_peripheral else "rx"):
             raise HardwareMisuse(f"DMAC channel {n}: {'memory-to-peripheral' if to_peripheral else 'peripheral-to-memory'} "
                                  f"transfer handshakes with {device_name.upper()} {direction.upper()}")

@@ -14,7 +14,9 @@
 Every register is 64 bits wide (the SDK's `fft_t`, bit fields of uint64_t). Firmware that only
 opens the block (the FreeRTOS SDK's fft driver clears and unmasks the done interrupt when the
 device is first opened, which MicroPython does at start-up) runs on; the calculation itself (its
-fixed-point scaling and rounding are not documented) is not modelled and says so. Sources: the
+fixed-point scaling and rounding are not documented) is not modelled and says so, whether the data
+comes from the CPU or from a DMA channel (dma_sel requests 23 and 24 stop the run when a channel
+starts on them). Sources: the
 SDK's `fft.h` (register table and fields), `plic.h` (IRQN_FFT_INTERRUPT 26), the FreeRTOS SDK's
 `fft.cpp` (`on_first_open`).
 """

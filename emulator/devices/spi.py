@@ -1,4 +1,5 @@
-"""SPI0 / SPI1: the DesignWare SSI controllers as configured on the K210.
+"""SPI0, SPI1 and SPI3: the DesignWare SSI controllers as configured on the K210 (SPI3, the flash's,
+is the newer DWC_ssi: its ctrlr0 fields sit elsewhere, Ctrlr0Layout).
 
 Frames written to the data register go through a 32-entry transmit FIFO and
 out on the wire at the serial clock the firmware programmed: a frame of `dfs`
@@ -288,6 +289,10 @@ class SpiController(Peripheral):
             raise UnmodelledAccess(f"{self.NAME}: {bits}-bit frames (only whole bytes reach devices in the model)")
         if self.values[ENDIAN]:
             raise UnmodelledAccess(f"{self.NAME}.endian = 0x{self.values[ENDIAN]:x}: byte-order conversion is not modelled")
+        if self.frame_format and self.tmod == TMOD_RX and self.layout is APB_SSI:
+            # the devices on SPI0 and SPI1 (the LCD, the SD card) neither answer nor take wait cycles
+            raise UnmodelledAccess(f"{self.NAME}: receiving in {FORMAT_NAMES[self.frame_format]} format is not "
+                                   f"modelled (SPI3 receives so)")
         if self.frame_format and self.tmod == TMOD_TX_RX:
             raise UnmodelledAccess(f"{self.NAME}: transmit-and-receive mode in {FORMAT_NAMES[self.frame_format]} "
                                    f"format (the SSI transmits or receives there, not both)")
@@ -354,7 +359,7 @@ class SpiController(Peripheral):
             self._deliver(train.take(done - train.delivered), now)
         if train.delivered == train.count and now >= train.end() - EPSILON:
             self._end_train(now)
-            if self._phase_entries and self.frame_format and self.tmod == TMOD_RX:
+            if self._phase_entries and self.frame_format and self.tmod == TMOD_RX and self.values[SER]:
                 # instruction and address written during the receive that ended begin the next
                 self._start_phased(self.frame_period(), train.end())
                 if self._train is not None:
@@ -626,8 +631,10 @@ class SpiController(Peripheral):
             return
         if not (self.values[DMACR] & DMACR_TDMAE) or not self.enabled:
             return   # no request reaches the DMAC: the channel waits (a hang report says why)
+        if self._phases_sent and self.tmod == TMOD_RX:
+            return   # entries for the transfer after this receive: written when it ends (none of the SDKs do)
         if self._train is None:
-            room = FIFO_DEPTH - len(self._held)
+            room = FIFO_DEPTH - len(self._held) - len(self._phase_entries)
             if room <= 0:
                 return
             self._push(channel.read_for_peripheral(min(room, channel.remaining())), now)

@@ -70,10 +70,16 @@ SPI3_CLK_SEL_BIT = 12        # clk_sel0: SPI3's source, 0 IN0, 1 PLL0
 TIMER0_CLK_SEL_BIT = 13      # clk_sel0: timer n's source, 0 IN0, 1 PLL0
 
 # DMA request codes selected by dma_sel (SDK sysctl_dma_select_t): the ones of modelled blocks
+# sysctl_dma_select_t (the SDK's sysctl.h): which request a DMA handshake interface is given
 DMA_REQUESTS = {0: ("spi0", "rx"), 1: ("spi0", "tx"), 2: ("spi1", "rx"), 3: ("spi1", "tx"),
-                6: ("spi3", "rx"), 7: ("spi3", "tx"),
+                4: ("spi2", "rx"), 5: ("spi2", "tx"), 6: ("spi3", "rx"), 7: ("spi3", "tx"),
+                8: ("i2c0", "rx"), 9: ("i2c0", "tx"), 10: ("i2c1", "rx"), 11: ("i2c1", "tx"),
+                12: ("i2c2", "rx"), 13: ("i2c2", "tx"),
                 14: ("uart1", "rx"), 15: ("uart1", "tx"), 16: ("uart2", "rx"), 17: ("uart2", "tx"),
-                18: ("uart3", "rx"), 19: ("uart3", "tx")}
+                18: ("uart3", "rx"), 19: ("uart3", "tx"),
+                20: ("aes", "tx"), 21: ("sha", "tx"), 22: ("ai", "rx"), 23: ("fft", "rx"), 24: ("fft", "tx"),
+                25: ("i2s0", "tx"), 26: ("i2s0", "rx"), 27: ("i2s1", "tx"), 28: ("i2s1", "rx"),
+                29: ("i2s2", "tx"), 30: ("i2s2", "rx")}
 
 
 @dataclass

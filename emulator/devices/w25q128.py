@@ -61,7 +61,8 @@ ERASED = 0xFF
 SR1_BUSY, SR1_WEL = 0x01, 0x02
 SR1_PROTECT = 0x7C               # BP0-2, TB, SEC
 SR2_QE, SR2_CMP = 0x02, 0x40
-SR1_WRITABLE, SR2_WRITABLE, SR3_WRITABLE = 0xFC, 0x7B, 0x64   # bits a status write changes
+SR1_WRITABLE, SR2_WRITABLE, SR3_WRITABLE = 0xFC, 0x7B, 0xE4   # bits a status write changes
+SR2_LOCK_BITS = 0x38             # LB1-3: one-time programmable, set and never cleared
 
 # typical times (datasheet section 9.6)
 T_PAGE_PROGRAM, T_WRITE_STATUS = 0.7e-3, 10e-3
@@ -140,6 +141,7 @@ class W25Q128:
         self.reset_enabled = False
         self.changed = False             # a program or erase has happened
         self._wel_clears_at: float | None = None   # WEL clears when the program or erase under way ends
+        self._reset_armed = False        # this command is 99h right after 66h
         self._begin()
 
     # --- the SpiDevice port ---------------------------------------------------------------------
@@ -161,6 +163,14 @@ class W25Q128:
         return reply
 
     def spi_dummy(self, clocks: int, now: float) -> None:
+        if self._stage == MODE:
+            # a controller set up for the address alone clocks the mode bits as wait cycles: its lines
+            # are not driven then and read high, M7-0 = FFh, which is not the continuous read mode
+            mode_clocks = 8 // self._command.address_lines
+            if clocks < mode_clocks:
+                self._refuse(f"{clocks} clocks with no data where the mode byte goes", now)
+                return
+            self._stage, clocks = DUMMY, clocks - mode_clocks
         if self._stage != DUMMY:
             if self._stage != IGNORE:
                 self._refuse(f"{clocks} clocks with no data", now)
@@ -232,6 +242,7 @@ class W25Q128:
 
     def _start(self, code: int, lanes: int, now: float) -> None:
         self._settle(now)
+        reset_enabled, self.reset_enabled = self.reset_enabled, False    # 66h arms only the next command
         command = COMMANDS.get(code)
         self._command = command
         if lanes != 1:
@@ -245,6 +256,7 @@ class W25Q128:
                       now)
             self._stage = IGNORE
             return
+        self._reset_armed = reset_enabled and code == 0x99
         if code == 0xAB:
             self.powered_down = False
         if self.powered_down:
@@ -302,10 +314,8 @@ class W25Q128:
             self.powered_down = True
         elif code == 0x66:
             self.reset_enabled = True
-            return
-        elif code == 0x99 and self.reset_enabled:
+        elif code == 0x99 and self._reset_armed:
             self.write_enabled = self.volatile_write = False
-        self.reset_enabled = False
 
     # --- data phases --------------------------------------------------------------------------
 
@@ -400,9 +410,9 @@ class W25Q128:
         if code == 0x01:
             self.status[0] = (self.status[0] & ~SR1_WRITABLE) | (int(data[0]) & SR1_WRITABLE)
             if len(data) > 1:
-                self.status[1] = (self.status[1] & ~SR2_WRITABLE) | (int(data[1]) & SR2_WRITABLE)
+                self._write_status2(int(data[1]))
         elif code == 0x31:
-            self.status[1] = (self.status[1] & ~SR2_WRITABLE) | (int(data[0]) & SR2_WRITABLE)
+            self._write_status2(int(data[0]))
         else:
             self.status[2] = (self.status[2] & ~SR3_WRITABLE) | (int(data[0]) & SR3_WRITABLE)
         if self.volatile_write:
@@ -410,3 +420,7 @@ class W25Q128:
         else:
             self.busy_until = now + T_WRITE_STATUS
             self._wel_clears_at = self.busy_until
+
+    def _write_status2(self, value: int) -> None:
+        old = self.status[1]
+        self.status[1] = (old & ~SR2_WRITABLE) | (value & SR2_WRITABLE) | (old & SR2_LOCK_BITS)

@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 import gc
 import math
+import os
 import sys
 import time
 from pathlib import Path
@@ -315,6 +316,13 @@ def option_problem(args: argparse.Namespace) -> str | None:
         return "--profile needs the firmware's ELF for its symbols (give it as well as --flash)"
     if args.flash is None and args.flash_writable:
         return "--flash-writable needs --flash (the dump the flash's changes would go back to)"
+    if args.flash_save is not None:
+        target = Path(args.flash_save).resolve()
+        if args.flash is not None and target == Path(args.flash).resolve() and not args.flash_writable:
+            return (f"--flash-save {args.flash_save} names the --flash image, which stays read-only unless "
+                    f"--flash-writable is given (for a dump)")
+        if not target.parent.is_dir() or not os.access(target.parent, os.W_OK):
+            return f"--flash-save {args.flash_save}: its folder does not exist or cannot be written"
     if args.sd is None and args.sd_writable:
         return "--sd-writable needs --sd (the card image the firmware's writes would reach)"
     if args.sd is None and args.sd_fault:
@@ -545,6 +553,7 @@ def main(argv: list[str] | None = None) -> int:
     terminal = Terminal(args.quiet, immediate=uart_input is not None and uart_input.interactive)
     watch = ConsoleWatch(args.expected, args.failures)
     board = None
+    flash_saved = None                 # where --flash-save wrote the flash, once it has
 
     def console(byte: int) -> None:
         output.console_byte(byte)
@@ -626,6 +635,7 @@ def main(argv: list[str] | None = None) -> int:
                 board.flash.save()
             if args.flash_save is not None:
                 board.flash.save(args.flash_save)
+                flash_saved = args.flash_save
         except BoardStop as stop:
             terminal.message(f"[board] {stop}")
             if status == EXIT_OK:
@@ -674,7 +684,7 @@ def main(argv: list[str] | None = None) -> int:
                               if board is not None else {})
     summary["lcd_interface"] = args.lcd_interface
     summary["flash"] = ({"image": str(board.flash.path), "kind": board.flash.kind, "writable": board.flash.writable,
-                         "changed": board.flash_chip.changed, "saved_to": args.flash_save}
+                         "changed": board.flash_chip.changed, "saved_to": flash_saved}
                         if board is not None else {})
     summary["bus_warnings"] = dict(board.bus.questionable) if board is not None else {}
     summary["until_s"] = args.until
