@@ -185,6 +185,11 @@ def build_parser() -> argparse.ArgumentParser:
                           "the firmware set (each when the receiver is on and has room); '-' reads "
                           "standard input: piped, all of it; from a terminal, each key as it is typed, with "
                           "virtual time held to the host's clock")
+    run.add_argument("--uart-script", metavar="FILE", default=None,
+                     help="hold a conversation with the console: FILE's lines 'expect TEXT', 'expect-re REGEX', "
+                          "'send TEXT' (\\r, \\n, \\xNN escapes), 'sleep SECONDS' and 'timeout SECONDS' (how long "
+                          "each later expect may wait; 10 s), in order; sends go where --uart-input's would. The "
+                          "run ends when the last step is done, or fails (status 12) at an expect not met in time")
     run.add_argument("--pin", dest="pins", action="append", default=[], metavar="PAD=LEVEL@SECONDS", type=pin_change,
                      help="drive a pad from outside from SECONDS of virtual time on: LEVEL 0 or 1, or z to let "
                           "go of it (a key: the Dock's BOOT key is pad 16, pressed = 0); repeatable. GPIOHS and "
@@ -303,6 +308,10 @@ def option_problem(args: argparse.Namespace) -> str | None:
         return "--gdb-wait needs --gdb (the port GDB attaches to)"
     if args.gdb is not None and (args.expected or args.failures):
         return "--gdb excludes --expect and --fail-on (under GDB, GDB decides when the run stops)"
+    if args.uart_script is not None and (args.uart_input is not None or args.expected or args.frames is not None
+                                         or args.gdb is not None):
+        return ("--uart-script excludes --uart-input, --expect, --frames and --gdb (the script sends to the "
+                "console, waits for it and ends the run; add --until to bound it in virtual time)")
     if args.expected and args.frames is not None:
         return ("--expect and --frames exclude each other (with --expect the run ends when the console has "
                 "printed the texts; add --until to bound it in virtual time)")
@@ -372,6 +381,16 @@ def grab_problem(grabs: list, firmware: str | None) -> str | None:
 # --expect without --until: how far the run may go in virtual time at most (the --budget
 # deadline after each expected text ends it long before)
 EXPECT_HORIZON_S = 1e6
+
+
+def run_script(board, script, until_s: float | None, progress):
+    """--uart-script: runs until the script ends the run (done: ConsoleExpectationsMet; an expect not
+    met in its time: ConsoleExpectationUnmet), or fails at --until's time."""
+    from ..errors import ConsoleExpectationUnmet
+    board.run_until(until_s if until_s is not None else EXPECT_HORIZON_S, progress=progress)
+    step = script.step
+    raise ConsoleExpectationUnmet(f"--uart-script {script.path}:{step.line}: {step.describe()}: not done by "
+                                  f"{board.time:g} s of virtual time (--until)")
 
 
 def run_expecting(board, watch, until_s: float | None, budget_s: float, progress):
@@ -514,7 +533,7 @@ def main(argv: list[str] | None = None) -> int:
     problem = option_problem(args)
     if problem:
         return usage_error(problem)
-    if args.until is None and args.frames is None and not args.expected:
+    if args.until is None and args.frames is None and not args.expected and args.uart_script is None:
         args.frames = DEFAULT_FRAMES
     from ..board import Board
     from .console_watch import ConsoleWatch
@@ -538,6 +557,10 @@ def main(argv: list[str] | None = None) -> int:
             from ..board.flash_image import FlashImage
             flash = FlashImage.open(args.flash, writable=args.flash_writable)
         uart_input = UartInput.open(args.uart_input) if args.uart_input is not None else None
+        script = None
+        if args.uart_script is not None:
+            from .uart_script import UartScript
+            script = UartScript.open(args.uart_script)
         pins = list(args.pins)
         if args.pin_file is not None:
             from ..board.pins import load_schedule
@@ -559,6 +582,8 @@ def main(argv: list[str] | None = None) -> int:
         output.console_byte(byte)
         terminal.console_byte(byte)
         watch.byte(byte, board.console_byte_time)
+        if script is not None:
+            script.console_byte(byte, board.console_byte_time)
 
     taken: set[int] = set()
 
@@ -595,7 +620,11 @@ def main(argv: list[str] | None = None) -> int:
         if trace_file is not None:
             trace = InstructionTrace(board, trace_file, args.trace_from or 0.0, args.trace_to)
         watch.attach(board.stop_run)
-        board.uarths.every_byte_heard = watch.active    # it may end the run the moment a byte is out
+        # it may end the run (or answer) the moment a byte is out
+        board.uarths.every_byte_heard = watch.active or script is not None
+        if script is not None:
+            board.connect_serial_input(script)
+            script.attach(board)
         # One board a process, and what exists now lives until the run ends: frozen, it is no
         # longer scanned by every full collection, which the scheduler's allocations set off
         # every few virtual ms (each took milliseconds of host time).
@@ -607,6 +636,8 @@ def main(argv: list[str] | None = None) -> int:
             result = run_under_gdb(board, args, terminal)
         elif args.expected:
             result = run_expecting(board, watch, args.until, args.budget, progress)
+        elif script is not None:
+            result = run_script(board, script, args.until, progress)
         elif args.until is not None:
             result = board.run_until(args.until, progress=progress)
         else:
@@ -708,6 +739,7 @@ def main(argv: list[str] | None = None) -> int:
             summary["profile"] = None
     summary["trace_insn"] = None if trace is None else {
         "file": str(args.trace_insn), "from_s": args.trace_from or 0.0, "to_s": args.trace_to, "lines": trace.lines}
+    summary["uart_script"] = None if script is None else script.summary()
     summary["uart_input"] = None if uart_input is None else {
         "source": args.uart_input, "interactive": uart_input.interactive, "bytes": uart_input.total,
         # what each UART's receiver took of it (the one FPIOA routed from pad 4 at the time)
