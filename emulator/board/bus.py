@@ -483,6 +483,7 @@ class Bus:
         checked)."""
         scheduler = self.scheduler
         timed = peripheral in self._timed_set
+        moved = self.board.devices_a_store_moves(peripheral) if timed else None
         gate = getattr(peripheral, "GATE", None)
         sysctl = self.board.sysctl
         device_writes, harts = self.device_writes, len(self._split)
@@ -503,7 +504,11 @@ class Bus:
             # (Without mstatus.MIE nothing can preempt the hart; status reads are exact in any
             # case, and sleeping harts wake at the event's own time.)
             if timed and hart.m_interrupts_enabled():
-                event = self.board.next_device_event(now)
+                if moved is None:
+                    event = self.board.next_device_event(now)
+                else:
+                    times = [t for t in (device.next_event_time(now) for device in moved) if t is not None and t > now]
+                    event = min(times) if times else None
                 if event is not None and event < scheduler.turn_horizon:
                     hart.request_stop()
         return store

@@ -542,6 +542,17 @@ class Board:
         bytes_per_frame = max(1, self.spi0.frame_bits // 8)
         return self.spi0.earliest_delivery(-(-self.lcd.cells_missing() // bytes_per_frame), now)
 
+    def devices_a_store_moves(self, peripheral: Peripheral) -> tuple | None:
+        """The timed devices whose next event a store to `peripheral` can bring forward: the block
+        itself, and the DMAC for a block it serves (a store can start a handshake); None: any of them
+        (SYSCTL's clocks and resets reach every block, the DMAC's channels every block it serves).
+        Between turns the board's next event bounds every turn, so only these can move before it."""
+        if peripheral is self.sysctl or peripheral is self.dmac:
+            return None
+        if peripheral in self.dmac.peripherals.values():
+            return (peripheral, self.dmac)
+        return (peripheral,)
+
     def next_device_event(self, now: float, past_quiet_console: bool = False) -> float | None:
         """The first moment after `now` a device changes state by itself; with past_quiet_console,
         the console's quiet bytes (Uarths.quiet_ticks) do not count."""
