@@ -37,3 +37,39 @@ def test_every_interrupt_line_reaches_its_source(board):
             device.irq_lines = lambda line=line: 1 << line
             assert board._high_sources() == [source], device.NAME
         device.irq_lines = lambda: 0
+
+
+# --- the copies the firmware needs (assembly and C), checked against the map ---------------------
+
+import re  # noqa: E402
+
+from conftest import ROOT  # noqa: E402
+
+# name in the firmware's headers -> (block, line within the block, or None for its base)
+HEADER_NAMES = {"SPI0": "SPI0", "SPI1": "SPI1", "SPI3": "SPI3", "UART1": "UART1", "TIMER0": "TIMER0", "WDT0": "WDT0",
+                "SYSCTL": "SYSCTL", "DMAC": "DMAC", "GPIO": "GPIO", "GPIOHS": "GPIOHS", "FPIOA": "FPIOA",
+                "UARTHS": "UARTHS", "CLINT": "CLINT", "PLIC": "PLIC", "RTC": "RTC"}
+
+
+def header_values(path, pattern: str) -> dict[str, int]:
+    return {name: int(value, 0) for name, value in re.findall(pattern, path.read_text(), re.MULTILINE)}
+
+
+def test_the_firmware_headers_agree_with_the_map():
+    """firmware/include/k210.inc (our assembly firmware) and tests/firmware/k210.h (the C test
+    firmware) copy block addresses and PLIC sources from the map: every copy matches it."""
+    inc = header_values(ROOT / "firmware" / "include" / "k210.inc", r"^\s*\.equ\s+(\w+),\s*(0x[0-9A-Fa-f]+|\d+)\b")
+    h = header_values(ROOT / "tests" / "firmware" / "k210.h", r"^#define\s+(\w+)\s+(0x[0-9A-Fa-f]+|\d+)u?\b")
+    checked = 0
+    for values in (inc, h):
+        for name, value in values.items():
+            if name.endswith("_BASE") and name[:-5] in HEADER_NAMES:
+                assert value == K210_BLOCKS[HEADER_NAMES[name[:-5]]].base, name
+                checked += 1
+    sources = {"PLIC_SRC_SPI0": K210_BLOCKS["SPI0"].irqs[0], "PLIC_SRC_DMA0": K210_BLOCKS["DMAC"].irqs[0],
+               "PLIC_SRC_UARTHS": K210_BLOCKS["UARTHS"].irqs[0], "IRQ_TIMER0A": K210_BLOCKS["TIMER0"].irqs[0],
+               "IRQ_RTC": K210_BLOCKS["RTC"].irqs[0], "IRQ_WDT0": K210_BLOCKS["WDT0"].irqs[0],
+               "IRQ_GPIOHS0": K210_BLOCKS["GPIOHS"].irqs[0]}
+    for name, source in sources.items():
+        assert {**inc, **h}[name] == source, name
+    assert checked >= 20
