@@ -75,3 +75,20 @@ def test_a_script_excludes_the_options_that_would_fight_it(c_firmware, tmp_path)
     run = run_emulator("run", str(c_firmware / "echo.elf"), "--uart-script", str(tmp_path / "s.txt"), "--expect", "x",
                        "--out", str(tmp_path / "out"))
     assert run.returncode == 2 and "--uart-script excludes" in run.stderr
+
+
+def test_text_printed_during_a_sleep_counts_and_lines_start_after_the_match(c_firmware, tmp_path):
+    run, summary = script_run(c_firmware, tmp_path, "sleep 0.05\nexpect name? \nsend Ada\\r\nexpect-re ^Ada$\n")
+    assert run.returncode == 0, run.stderr
+
+
+def test_a_script_ending_in_a_sleep_at_the_until_time_ends_cleanly(c_firmware, tmp_path):
+    run, summary = script_run(c_firmware, tmp_path, "sleep 0.01\n", "--until", "0.01")
+    assert run.returncode == 0 and "Traceback" not in run.stderr, run.stderr
+
+
+def test_a_character_beyond_latin_1_is_bad_input_naming_its_line(c_firmware, tmp_path):
+    (tmp_path / "session.txt").write_text("expect name? \nsend 5 \u20ac\\r\n", encoding="utf-8")
+    run = run_emulator("run", str(c_firmware / "echo.elf"), "--uart-script", str(tmp_path / "session.txt"),
+                       "--quiet", "--out", str(tmp_path / "out"))
+    assert run.returncode == 6 and "session.txt:2:" in run.stderr and "beyond 0xFF" in run.stderr

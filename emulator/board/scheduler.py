@@ -442,6 +442,11 @@ class Scheduler:
         while self.time < until_s or self._report_pending():
             if not self._report_pending() and not any(h.state is HartState.RUNNING for h in self.harts) and \
                     self.board.next_device_event(self.time) is None:
+                if self._grabs and self._grabs[0][0] < until_s:
+                    # nothing moves before the grab, which may set something going (a script's send)
+                    self._set_time(max(self.time, self._grabs[0][0]))
+                    self._run_grabs()
+                    continue
                 idle_since = self.time
                 self._set_time(until_s)
                 if self._grabs:

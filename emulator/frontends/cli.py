@@ -387,10 +387,15 @@ def run_script(board, script, until_s: float | None, progress):
     """--uart-script: runs until the script ends the run (done: ConsoleExpectationsMet; an expect not
     met in its time: ConsoleExpectationUnmet), or fails at --until's time."""
     from ..errors import ConsoleExpectationUnmet
-    board.run_until(until_s if until_s is not None else EXPECT_HORIZON_S, progress=progress)
+    result = board.run_until(until_s if until_s is not None else EXPECT_HORIZON_S, progress=progress)
+    if board.scheduler.pending_stop is not None:
+        raise board.scheduler.pending_stop          # the script ended (or failed) as the run did
     step = script.step
+    if step is None:
+        return result
+    bound = "--until" if until_s is not None else "the longest run"
     raise ConsoleExpectationUnmet(f"--uart-script {script.path}:{step.line}: {step.describe()}: not done by "
-                                  f"{board.time:g} s of virtual time (--until)")
+                                  f"{board.time:g} s of virtual time ({bound})")
 
 
 def run_expecting(board, watch, until_s: float | None, budget_s: float, progress):

@@ -3,15 +3,18 @@ Uart" / "Write Line To Uart" keywords and Wokwi's automation scenarios hold one.
 
 One step a line, taken in order:
 
-    expect TEXT        wait until the console prints TEXT (anywhere in the stream, after what the
-                       previous expect matched: a prompt that ends no line is found too)
-    expect-re REGEX    wait until a completed console line matches REGEX (after the previous match)
+    expect TEXT        wait until the console has printed TEXT (anywhere in the stream after what
+                       the previous expect matched, so also during an earlier sleep or send; a
+                       prompt that ends no line is found too)
+    expect-re REGEX    likewise, until a console line completed after the previous match matches
+                       REGEX (the line without its line ending)
     send TEXT          send TEXT to the receiver routed from pad 4, as --uart-input does
     sleep SECONDS      let SECONDS of virtual time pass
     timeout SECONDS    how long each later expect may wait, in virtual time (10 s unless set)
 
 TEXT runs to the line's end, leading spaces after the keyword's one space kept; `\\r`, `\\n`, `\\t`,
-`\\\\` and `\\xNN` stand for those bytes. Blank lines and lines starting with `#` are skipped. An
+`\\\\` and `\\xNN` stand for those bytes. Console bytes are characters 0-255 (latin-1), so TEXT is
+too: a character beyond is bad input. Blank lines and lines starting with `#` are skipped. An
 expect not met in its time fails the run (the expectation status, 12), naming the script's line;
 the run ends with status 0 once the last step is done.
 """
@@ -26,6 +29,7 @@ from typing import Callable
 from ..errors import BadInput, BoardStop, ConsoleExpectationsMet, ConsoleExpectationUnmet
 
 DEFAULT_TIMEOUT_S = 10.0
+MAX_KEPT = 1 << 16          # console characters and lines kept while a step waits (the oldest go)
 KEYWORDS = ("expect", "expect-re", "send", "sleep", "timeout")
 _ESCAPE = re.compile(r"\\(x[0-9A-Fa-f]{2}|.|$)")
 _ESCAPES = {"r": "\r", "n": "\n", "t": "\t", "\\": "\\"}
@@ -87,7 +91,13 @@ def parse(text: str, name: str) -> list[Step]:
             except re.error as error:
                 raise BadInput(f"{where}: {rest!r} is not a regular expression ({error})") from None
             continue
-        steps.append(Step(number, keyword, _unescape(rest, where), seconds=timeout))
+        text = _unescape(rest, where)
+        try:
+            text.encode("latin-1")
+        except UnicodeEncodeError:
+            raise BadInput(f"{where}: {text!r} holds a character beyond 0xFF (console bytes are latin-1 "
+                           f"characters; write such bytes as \\xNN)") from None
+        steps.append(Step(number, keyword, text, seconds=timeout))
     return steps
 
 
@@ -104,7 +114,8 @@ class UartScript:
         self._queue: deque[int] = deque()
         self._index = 0
         self._started = 0.0                             # when the step under way began
-        self._text: list[str] = []                      # the console since the last match
+        self._text = ""                                 # the console since the last match
+        self._lines: list[str] = []                     # the lines completed since the last match
         self._line: list[str] = []                      # the console line under way
         self._board = None
         self._stop: Callable[[BoardStop], None] = lambda error: None
@@ -146,25 +157,37 @@ class UartScript:
     # --- the console's side -----------------------------------------------------------------------
 
     def console_byte(self, byte: int, at_s: float) -> None:
-        char = chr(byte)
-        step = self.step
-        if step is None:
+        if self.step is None:
             return
-        self._text.append(char)
-        if step.keyword == "expect" and "".join(self._text[-len(step.text):]) == step.text:
-            self._met(at_s)
-        elif step.keyword == "expect-re" and char == "\n":
-            line = "".join(self._line).rstrip("\r")
-            if step.regex.search(line):
-                self._met(at_s)
+        char = chr(byte)
+        self._text = (self._text + char)[-MAX_KEPT:]
         if char == "\n":
+            self._lines = (self._lines + ["".join(self._line).rstrip("\r")])[-MAX_KEPT:]
             self._line.clear()
         else:
             self._line.append(char)
+        if self._index < len(self.steps) and self.steps[self._index].keyword.startswith("expect"):
+            self._look(at_s)
 
-    def _met(self, at_s: float) -> None:
-        self._text.clear()
-        self._line.clear()
+    def _look(self, at_s: float) -> None:
+        """The expect under way is met if what the console printed since the last match holds it:
+        the text and lines after the match are kept for the next expect."""
+        step = self.step
+        if step.keyword == "expect":
+            found = self._text.find(step.text)
+            if found < 0:
+                return
+            self._text = self._text[found + len(step.text):]
+            self._lines = []
+            self._line = list(self._text.rsplit("\n", 1)[-1]) if "\n" in self._text else list(self._text)
+        else:
+            matched = next((n for n, line in enumerate(self._lines) if step.regex.search(line)), None)
+            if matched is None:
+                return
+            self._lines = self._lines[matched + 1:]
+            # the text after the matched line's end
+            ends = [n for n, char in enumerate(self._text) if char == "\n"]
+            self._text = self._text[ends[-1 - len(self._lines)] + 1:] if len(ends) > len(self._lines) else self._text
         self._finish(at_s)
 
     # --- stepping ---------------------------------------------------------------------------------
@@ -195,11 +218,16 @@ class UartScript:
                 self._board.grab_at(end, lambda board: self._slept(index, end))
                 return
             self._board.grab_at(end, lambda board: self._expired(index))
+            self._look(now)          # printed already, during a sleep or a send
             return
 
     def _slept(self, index: int, at_s: float) -> None:
         if self._index == index:
             self._finish(at_s)
+            if self._queue:
+                # (called between turns) the receiver takes the first byte a send queued now, as it
+                # would at a turn's start: with every hart asleep no turn would come to start it
+                self._board.advance_devices(at_s)
 
     def _expired(self, index: int) -> None:
         if self._index != index:
