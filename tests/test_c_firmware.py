@@ -217,6 +217,18 @@ def test_syscalls_ecall_and_misaligned_load_served_by_the_trap_handler(c_firmwar
     assert set(board.uart_output) == {"UART3"}
 
 
+def test_an_expected_text_on_a_uart3_console_is_timed_by_uart3(c_firmware, tmp_path):
+    """--expect times each match by the byte's end on the UART that drives pad 5 (here UART3; the
+    time was UARTHS's, 0 ms, before 2026-11-28)."""
+    run = run_emulator("run", str(c_firmware / "syscalls.elf"), "--expect", "misaligned lw read", "--quiet",
+                       "--out", str(tmp_path / "out"))
+    assert run.returncode == 0, run.stderr
+    (match,) = json.loads((tmp_path / "out" / "run.json").read_text())["expect_matched"]
+    printed = json.loads((tmp_path / "out" / "run.json").read_text())["console"]
+    assert 0.0005 < match["virtual_time_s"] < 0.05
+    assert match["virtual_time_s"] > printed[0]["virtual_time_s"]      # after the first line ended
+
+
 def test_stop_on_trap_fails_the_syscalls_program_at_its_first_ecall(c_firmware, tmp_path):
     result = run_emulator("run", str(c_firmware / "syscalls.elf"), "--out", str(tmp_path), "--quiet",
                           "--until", "0.05", "--stop-on-trap")
