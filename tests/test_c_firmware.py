@@ -332,3 +332,17 @@ def test_flash_writable_refuses_a_kfpkg_or_a_program(c_firmware, tmp_path):
     run = run_emulator("run", str(c_firmware / "flash.elf"), "--flash", str(program), "--flash-writable", "--quiet",
                        "--out", str(tmp_path / "out"))
     assert run.returncode == 6 and "cannot take the flash's changes back" in run.stderr
+
+
+def test_both_harts_yield_through_ecalls_and_share_a_spinlock(c_firmware, tmp_path):
+    """dualcore.c, the paths FreeRTOS's two-core port takes: hart 1 started by hart 0's software
+    interrupt, each hart's yields served by its own trap handler run, and a spinlock the two take
+    turns at around a read-modify-write of a shared counter: no increment is lost."""
+    out = tmp_path / "out"
+    run = run_emulator("run", str(c_firmware / "dualcore.elf"), "--until", "0.05", "--quiet", "--out", str(out))
+    assert run.returncode == 0, run.stderr
+    summary = json.loads((out / "run.json").read_text())
+    assert console_of(summary) == ["hart 0 starts hart 1",
+                                   "shared 400 (hart 0 200, hart 1 200), yields 200 and 200"]
+    assert summary["exceptions"] == {"environment call from M-mode": 400}
+    assert min(summary["instructions"]) > 10_000          # both harts ran their rounds

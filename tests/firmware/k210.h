@@ -204,6 +204,7 @@ static inline void mmio_write64(uintptr_t address, uint64_t value) { *(volatile 
 #define SYS_WRITE               64         /* newlib's system call numbers (a7) */
 
 /* --- CLINT (clint.h) ------------------------------------------------------------------- */
+#define CLINT_MSIP1_OFFSET      0x0004     /* hart 1's msip */
 #define CLINT_MTIMECMP0         0x4000
 #define CLINT_MTIME             0xBFF8
 #define CLINT_MTIME_DIVIDER     50         /* mtime counts CPU clock / 50 */

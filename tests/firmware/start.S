@@ -2,8 +2,8 @@
 #
 # Hart 0 sets up the C world (global pointer, its stack, .bss, thread-local storage for
 # picolibc's errno, the FPU) and calls main(); a main() that returns ends in a wfi loop
-# with interrupts off. Hart 1, should it arrive here too, parks in wfi with every
-# interrupt masked: these programs use one hart. Traps save the caller-saved registers
+# with interrupts off. Hart 1 parks in wfi with every interrupt masked, unless the program
+# defines hart1_main: then it waits for hart 0's software interrupt (msip[1]) and calls it. Traps save the caller-saved registers
 # and call trap_handler(mcause, mepc, mtval, frame) in C, which returns the pc to resume at;
 # frame holds the saved registers (ra, t0-t6, a0-a7: struct trap_frame), which the handler
 # may change (a system call's result, an emulated load's destination).
@@ -11,6 +11,8 @@
     .equ    STACK_SIZE, 16384           # per hart, as k210.ld lays out
     .equ    FRAME, 20 * 8               # ra, t0-t6, a0-a7, and mepc's slot (one spare)
     .equ    MSTATUS_FS_INITIAL, (1 << 13)
+    .equ    MIE_MSIE, (1 << 3)
+    .equ    CLINT_MSIP1, 0x02000004     # hart 1's msip (CLINT_BASE + 4)
 
     .section .text.start, "ax", @progbits
     .globl  _start
@@ -41,8 +43,32 @@ _start:
     call    main
 park:
     csrw    mie, zero
+    csrr    t0, mhartid
+    beqz    t0, 3f                      # hart 0, after main
+    ld      t1, hart1_main_address      # 0 unless the program defines hart1_main
+    beqz    t1, 3f
+    li      t0, MSTATUS_FS_INITIAL
+    csrs    mstatus, t0
+    fscsr   zero
+    li      t0, MIE_MSIE                # wake on hart 0's software interrupt (no trap: MIE stays clear)
+    csrw    mie, t0
+    li      t2, CLINT_MSIP1
+4:  wfi
+    lw      t0, 0(t2)
+    beqz    t0, 4b
+    sw      zero, 0(t2)
+    csrw    mie, zero
+    jalr    t1                          # hart1_main; parks when it returns
+    csrw    mie, zero
 3:  wfi
     j       3b
+
+    .section .data
+    .balign 8
+    .weak   hart1_main
+hart1_main_address:
+    .dword  hart1_main                  # (an absolute word: a weak symbol left undefined is 0)
+    .text
 
 # trap_entry: saves the registers a C function may clobber, calls trap_handler(mcause, mepc,
 # mtval, frame), resumes at the pc it returns with the registers from the frame.
