@@ -44,3 +44,34 @@ def test_not_complete_until_the_last_block_and_more_words_overflow(idle_elf):
     for _ in range(17):
         device.write(sh.DATA_IN, 4, 0, 0.0)
     assert device.read(sh.FUNCTION0, 4, 0.0) & (sh.ENABLE | sh.OVERFLOW) == sh.ENABLE | sh.OVERFLOW
+
+
+def test_a_dma_channel_feeds_the_message_as_the_freertos_sdk_does(idle_elf):
+    """sha256.cpp's way: the channel (32-bit items to sha_data_in1, dma_sel SHA request 21) is
+    started, then sha_function_reg_1's DMA bit set; the digest is hashlib's and the channel completes."""
+    from emulator.devices import dmac as d
+    board = make_board(idle_elf, cold=False)
+    message = bytes(range(200))
+    blocks = (len(message) + 64 + 8) // 64
+    padded = message + b"\x80" + b"\0" * ((56 - len(message) - 1) % 64) + struct.pack(">Q", 8 * len(message))
+    source = 0x8010_0000
+    board.memory.load(source, padded)
+    sha = board.sha256
+    sha.write(sh.NUM, 4, blocks, 0.0)
+    sha.write(sh.FUNCTION0, 4, sh.BIG_ENDIAN | sh.ENABLE, 0.0)
+    board.sysctl.write(0x64, 4, 21, 0.0)                          # dma_sel: channel 0 <- SHA
+    channel = d.CH_BASE
+    board.dmac.write(d.CFG, 8, d.CFG_ENABLE, 0.0)
+    board.dmac.write(channel + d.SAR, 8, source, 0.0)
+    board.dmac.write(channel + d.DAR, 8, sh.Sha256.BASE + sh.DATA_IN, 0.0)
+    board.dmac.write(channel + d.BLOCK_TS, 8, len(padded) // 4 - 1, 0.0)
+    board.dmac.write(channel + d.CTL, 8, 1 << 6 | 2 << 8 | 2 << 11, 0.0)        # fixed destination, 32-bit items
+    board.dmac.write(channel + d.CH_CFG, 8, d.TT_MEM2PER << 32 | 1 << 35, 0.0)  # handshake 0 on the SHA side
+    board.dmac.write(d.CHEN, 8, 0x0101, 0.0)
+    assert not sha.read(sh.FUNCTION0, 4, 0.0) & sh.ENABLE       # nothing taken before the DMA bit
+    sha.write(sh.FUNCTION1, 4, sh.DMA_ENABLE, 1e-6)
+    board.advance_devices(2e-6)
+    assert sha.read(sh.FUNCTION0, 4, 2e-6) & sh.ENABLE
+    digest = b"".join(struct.pack("<I", sha.read(sh.RESULT + 4 * (7 - i), 4, 2e-6)) for i in range(8))
+    assert digest == hashlib.sha256(message).digest()
+    assert not board.dmac.read(d.CHEN, 8, 2e-6) & 1               # the channel is done

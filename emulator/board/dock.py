@@ -186,7 +186,7 @@ class Board:
         self.flash_chip = W25Q128(self.flash.data, warn=self.warn)
         self.spi3.device_for_ss = lambda ss: self.flash_chip if ss == 0 else None
         self.dmac = Dmac(ports, self.memory, requests=self.sysctl.dma_request,
-                         peripherals={"spi0": self.spi0, "spi1": self.spi1, "spi3": self.spi3,
+                         peripherals={"spi0": self.spi0, "spi1": self.spi1, "spi3": self.spi3, "sha": self.sha256,
                                       **{uart.GATE: uart for uart in self.uarts}})
         self.peripherals: list[Peripheral] = [self.sysctl, self.fpioa, self.gpiohs, self.gpio, self.uarths, *self.uarts, *self.timers, *self.watchdogs, self.rtc, self.sha256, self.fft,
                                               self.clint, self.plic, self.dmac, self.spi0, self.spi1, self.spi3]

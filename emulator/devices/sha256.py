@@ -11,18 +11,27 @@ With bit 16 set (the SDK's SHA256_BIG_ENDIAN) each word written is the message's
 as a little-endian load reads them, and the accelerator takes them in message order; with it
 clear the word itself is the big-endian message word. Each block is hashed as it fills (the
 FIFO is never full here) and after the last the result reads back as the SDK's sha256_final takes
-it: the digest's word i (as a little-endian store writes it) is sha_result[7 - i]. Not modelled:
-the DMA handshake (a DMAC channel routed to it stops the run).
+it: the digest's word i (as a little-endian store writes it) is sha_result[7 - i].
+
+DMA (the FreeRTOS SDK's sha256.cpp, as MicroPython builds it): a DMAC channel with dma_sel's
+SHA request (21) writes 32-bit items to sha_data_in1 while sha_function_reg_1 bit 0 is set; the
+SDK starts the channel, then sets the bit. Each item is taken as a CPU write would be, all at
+once: the accelerator's throughput is not documented, and the model hashes as the words come.
 """
 from __future__ import annotations
+
+from typing import TYPE_CHECKING
 
 from ..memory_map import K210_BLOCKS
 from .mmio import Peripheral, Register
 from .ports import Ports
 
+if TYPE_CHECKING:
+    from .dmac import DmaChannel
+
 RESULT, DATA_IN, NUM, FUNCTION0, FUNCTION1 = 0x00, 0x20, 0x28, 0x2C, 0x34
 ENABLE, OVERFLOW, BIG_ENDIAN = 1, 1 << 8, 1 << 16
-FIFO_FULL = 1 << 8
+DMA_ENABLE, FIFO_FULL = 1, 1 << 8
 
 _K = (0x428a2f98, 0x71374491, 0xb5c0fbcf, 0xe9b5dba5, 0x3956c25b, 0x59f111f1, 0x923f82a4, 0xab1c5ed5,
       0xd807aa98, 0x12835b01, 0x243185be, 0x550c7dc3, 0x72be5d74, 0x80deb1fe, 0x9bdc06a7, 0xc19bf174,
@@ -69,6 +78,7 @@ class Sha256(Peripheral):
 
     def __init__(self, ports: Ports) -> None:
         super().__init__(ports)
+        self.tx_dma: "DmaChannel | None" = None
         self._clear()
 
     def _clear(self) -> None:
@@ -79,8 +89,36 @@ class Sha256(Peripheral):
         self._overflow = False
 
     def reset(self, now: float) -> None:
+        if self.tx_dma is not None:
+            self.tx_dma.peripheral_gone()
+            self.tx_dma = None
         super().reset(now)
         self._clear()
+
+    # --- the DMA handshake (dmac.HandshakePeripheral) ---------------------------------------------
+
+    def is_data_register(self, address: int) -> bool:
+        return address == self.BASE + DATA_IN
+
+    def attach_tx_dma(self, channel: "DmaChannel", now: float) -> None:
+        self.tx_dma = channel
+        self._dma_take(now)
+
+    def attach_rx_dma(self, channel: "DmaChannel", now: float) -> None:
+        raise AssertionError("the SHA request is a transmit request: the DMAC checks the direction first")
+
+    def detach_dma(self, channel: "DmaChannel") -> None:
+        if self.tx_dma is channel:
+            self.tx_dma = None
+
+    def _dma_take(self, now: float) -> None:
+        """While the DMA handshake is on, the channel's items are the message's words."""
+        channel = self.tx_dma
+        if channel is None or not self.values[FUNCTION1] & DMA_ENABLE or not channel.remaining():
+            return
+        for item in channel.read_for_peripheral(channel.remaining()):
+            self._take_word(int(item))
+        channel.peripheral_done(now)
 
     def read_register(self, offset: int, reg: Register, now: float) -> int:
         if offset < DATA_IN:
@@ -105,18 +143,24 @@ class Sha256(Peripheral):
                 self._running = self.values[NUM] & 0xFFFF > 0
             return
         if offset == DATA_IN:
-            if not self._running:
-                self._overflow = True
-                return
-            word = value & _M
-            if self.values[FUNCTION0] & BIG_ENDIAN:
-                word = int.from_bytes(word.to_bytes(4, "little"), "big")
-            self._words.append(word)
-            if len(self._words) == 16:
-                self._state = compress(self._state, self._words)
-                self._words = []
-                self._blocks += 1
-                if self._blocks >= self.values[NUM] & 0xFFFF:
-                    self._running = False
+            self._take_word(value)
             return
         self.values[offset] = value
+        if offset == FUNCTION1:
+            self._dma_take(now)
+
+    def _take_word(self, value: int) -> None:
+        """The message's next word (from the CPU or a DMA channel)."""
+        if not self._running:
+            self._overflow = True
+            return
+        word = value & _M
+        if self.values[FUNCTION0] & BIG_ENDIAN:
+            word = int.from_bytes(word.to_bytes(4, "little"), "big")
+        self._words.append(word)
+        if len(self._words) == 16:
+            self._state = compress(self._state, self._words)
+            self._words = []
+            self._blocks += 1
+            if self._blocks >= self.values[NUM] & 0xFFFF:
+                self._running = False
