@@ -49,12 +49,13 @@ K210_BLOCKS: dict[str, Block] = {
     **{f"SPI{n}": Block(0x5200_0000 + 0x0100_0000 * n, 0x1000, (1 + n,), f"spi{n}") for n in (0, 1)},
     "SPI3": Block(0x5400_0000, 0x1000, (4,), "spi3"),
     "FFT": Block(0x4200_0000, 0x1000, (26,), "fft"),
+    "OTP": Block(0x5042_0000, 0x1000, (), "otp"),
 }
 
 # Blocks the model knows by name but does not build: an access there stops the run naming them
 K210_UNMODELLED: tuple[tuple[int, int, str], ...] = (
     (0x5020_1000, 0xF000, "GPIO (past its registers)"), (0x5024_0000, 0x1_0000, "SPI slave"),
-    (0x5025_0000, 0x3_0000, "I2S"), (0x5028_0000, 0x3_0000, "I2C"), (0x5042_0000, 0x1_0000, "OTP"),
+    (0x5025_0000, 0x3_0000, "I2S"), (0x5028_0000, 0x3_0000, "I2C"), (0x5042_1000, 0xF000, "OTP (past its registers)"),
     (0x5043_0000, 0x1_0000, "DVP"), (0x5045_0000, 0x1_0000, "AES"),
     (0x5400_1000, 0xFF_F000, "SPI3 (past its registers)"), (0x5000_0000 + 0x1000, 0xF000, "DMAC (past its registers)"),
     (0x5100_0000, 0x100_0000, "SPI2"), (0x4080_0000, 0x100_0000, "KPU"), (0x4200_1000, 0xFF_F000, "FFT (past its registers)"),

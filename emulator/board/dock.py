@@ -27,6 +27,7 @@ from .raw_image import load_firmware, load_program
 from ..errors import BadInput, BoardStop, UnmodelledAccess
 from ..devices.fpioa import FUNC_UART1_RX, FUNC_UART1_TX, FUNC_UARTHS_RX, FUNC_UARTHS_TX, Fpioa
 from ..devices.fft import Fft
+from ..devices.otp import Otp
 from ..devices.gpio import Gpio
 from ..devices.gpiohs import Gpiohs
 from ..cpu.hart import ENGINE_FAST, ENGINES, Hart
@@ -116,7 +117,8 @@ class Board:
                  sd_image: str | None = None, sd_writable: bool = False,
                  sd_faults: frozenset[str] = frozenset(), check_writes: bool = False, strict: bool = False,
                  lcd_interface: str = LCD_8080, cold: bool = False, timing: str = TIMING_ROCKET,
-                 engine: str = ENGINE_FAST, pins: list[PinChange] = ()) -> None:
+                 engine: str = ENGINE_FAST, pins: list[PinChange] = (), otp: bytes | None = None,
+                 otp_source: str = "") -> None:
         """firmware: an ELF or a raw .bin, copied into SRAM; or None: boot the program in `flash` as the
         mask ROM does (flash_image.py).
         flash: the on-board SPI flash's content (--flash).
@@ -132,6 +134,7 @@ class Board:
         timing: what an instruction costs, "rocket" (the K210's Rocket core, timing.py) or "ipc1"
         (one cycle each).
         pins: levels driven on pads from outside at given times (pins.py, --pin).
+        otp: the OTP's content (--otp; None: blank), `otp_source` naming where it came from.
         engine: "fast" runs each hart on our interpreter of the code in SRAM where it can, handing
         the rest to Unicorn, "precise" on Unicorn alone, counting each instruction (hart.py,
         _fast_engine.c); what runs and every count are the same."""
@@ -176,6 +179,7 @@ class Board:
         self.rtc = Rtc(ports, pulse=lambda at: self.plic.latch(K210_BLOCKS["RTC"].irqs[0], at))
         self.sha256 = Sha256(ports)
         self.fft = Fft(ports)
+        self.otp = Otp(ports, otp, otp_source)
         self.clint = Clint(ports, counter=self.clock)
         self.plic = Plic(ports, high_sources=self._high_sources)
         self.spi0 = SpiController(0, ports, source_hz=lambda: self.sysctl.spi_source_hz(0))
@@ -189,7 +193,7 @@ class Board:
                          peripherals={"spi0": self.spi0, "spi1": self.spi1, "spi3": self.spi3, "sha": self.sha256,
                                       **{uart.GATE: uart for uart in self.uarts}})
         self.peripherals: list[Peripheral] = [self.sysctl, self.fpioa, self.gpiohs, self.gpio, self.uarths, *self.uarts, *self.timers, *self.watchdogs, self.rtc, self.sha256, self.fft,
-                                              self.clint, self.plic, self.dmac, self.spi0, self.spi1, self.spi3]
+                                              self.otp, self.clint, self.plic, self.dmac, self.spi0, self.spi1, self.spi3]
         self._interrupting = [(p, K210_BLOCKS[p.NAME].irqs) for p in self.peripherals if K210_BLOCKS[p.NAME].irqs]
         self.signals = None                    # a vcd.SignalLog with --vcd
         # the blocks a DMA channel serves advance before the DMAC, which completes what they finished
@@ -369,7 +373,7 @@ class Board:
         """SYSCTL peri_reset released a block: it returns to its reset state."""
         target = {"spi0": self.spi0, "spi1": self.spi1, "spi3": self.spi3, "dma": self.dmac, "fpioa": self.fpioa,
                   "gpio": self.gpio, **{block.GATE: block for block in (*self.uarts, *self.timers, *self.watchdogs, self.rtc,
-                                                    self.sha256, self.fft)}}.get(name)
+                                                    self.sha256, self.fft, self.otp)}}.get(name)
         if target is not None:
             self.advance_devices(now)
             target.reset(now)

@@ -152,6 +152,9 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--flash-save", metavar="DUMP", default=None,
                      help="when the run ends, write the flash's 16 MiB to DUMP (a dump later runs can give to "
                           "--flash), whatever --flash was")
+    run.add_argument("--otp", metavar="FILE", default=None,
+                     help="the K210's 16 KiB OTP content (a dump; shorter files are padded with 0), which "
+                          "firmware reads through the OTP block; without it the OTP reads as blank (all 0)")
     run.add_argument("--sd", metavar="IMAGE", help="SD card image in the Dock's slot (opened read-only: the "
                      "firmware's writes are kept in memory for the run)")
     run.add_argument("--sd-writable", action="store_true", help="with --sd: let the firmware's writes reach the "
@@ -383,6 +386,19 @@ def grab_problem(grabs: list, firmware: str | None) -> str | None:
 EXPECT_HORIZON_S = 1e6
 
 
+def read_otp(source: str) -> bytes:
+    """--otp FILE's bytes: at most the OTP's 16 KiB. BadInput naming the file otherwise."""
+    from ..devices.otp import SIZE_BYTES
+    path = Path(source)
+    try:
+        data = path.read_bytes()
+    except OSError as error:
+        raise BadInput(f"--otp {source}: cannot read it ({error.strerror or error})") from None
+    if len(data) > SIZE_BYTES:
+        raise BadInput(f"--otp {source}: {len(data)} bytes, more than the OTP's {SIZE_BYTES}")
+    return data
+
+
 def run_script(board, script, until_s: float | None, progress):
     """--uart-script: runs until the script ends the run (done: ConsoleExpectationsMet; an expect not
     met in its time: ConsoleExpectationUnmet), or fails at --until's time."""
@@ -562,6 +578,7 @@ def main(argv: list[str] | None = None) -> int:
             from ..board.flash_image import FlashImage
             flash = FlashImage.open(args.flash, writable=args.flash_writable)
         uart_input = UartInput.open(args.uart_input) if args.uart_input is not None else None
+        otp = read_otp(args.otp) if args.otp is not None else None
         script = None
         if args.uart_script is not None:
             from .uart_script import UartScript
@@ -613,7 +630,8 @@ def main(argv: list[str] | None = None) -> int:
                       on_frame=on_frame, on_warning=terminal.warning, permissive=args.permissive,
                       sd_image=args.sd, sd_writable=args.sd_writable, sd_faults=frozenset(args.sd_fault),
                       check_writes=args.check_writes, strict=args.strict, lcd_interface=args.lcd_interface,
-                      cold=args.cold, timing=args.timing, engine=args.engine, pins=pins)
+                      cold=args.cold, timing=args.timing, engine=args.engine, pins=pins,
+                      otp=otp, otp_source=f"--otp {args.otp}" if args.otp is not None else "")
         if uart_input is not None:
             board.connect_serial_input(uart_input)
         board.scheduler.traps.stop_on_trap = args.stop_on_trap
