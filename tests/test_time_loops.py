@@ -93,3 +93,35 @@ def test_running_alone_the_wait_is_skipped_to_the_next_event_with_the_same_resul
         board.run_until(0.004)
         states.append((state(board), board.time, board.harts[0].time))
     assert states[0] == states[1]
+
+
+# the SDK's msleep(1000) at 26 MHz: 26 million cycles of waiting
+MSLEEP_1S = USLEEP.replace("li      s1, 52000", "li      s1, 26000000")
+
+
+@pytest.mark.parametrize("engine", [ENGINE_FAST, ENGINE_PRECISE])
+def test_a_hart_alone_skips_a_long_wait_past_its_turns(engine, monkeypatch):
+    """With hart 1 asleep and nothing due before the wait ends, the skip goes past the turn's end in
+    one go (Scheduler._alone_until): a second of msleep takes a handful of turns, not one a
+    quantum, and ends where turn-by-turn skipping ends: mcycle and minstret read after the loop, the
+    registers, mispredictions and stalls. Where run_until's end falls in the spin after it agrees
+    to the float rounding of the turns' times (sums of different terms): an instruction at most."""
+    from emulator.board import scheduler as schedmod
+    results = []
+    for beyond in (True, False):
+        board = make_board(program(MSLEEP_1S), engine=engine)
+        turns = []
+        original = schedmod.Scheduler._turn
+        monkeypatch.setattr(schedmod.Scheduler, "_turn", lambda self, *a, **k: (turns.append(1), original(self, *a, **k)))
+        if not beyond:
+            monkeypatch.setattr(schedmod.Scheduler, "_alone_until", lambda self, *a: None)
+        board.run_until(1.01)
+        monkeypatch.undo()
+        results.append((state(board), board.harts[0].time, len(turns)))
+    (alone, alone_time, alone_turns), (turn_by_turn, turn_time, many_turns) = results
+    assert alone["registers"] == turn_by_turn["registers"]          # s2, s3: mcycle and minstret after the loop
+    assert (alone["mispredicts"], alone["stalls"]) == (turn_by_turn["mispredicts"], turn_by_turn["stalls"])
+    assert abs(alone["executed"] - turn_by_turn["executed"]) <= 1
+    assert 26_000_000 <= reg_value(alone, 2) - reg_value(alone, 0) < 26_000_100
+    assert alone_time == pytest.approx(turn_time, abs=1.5 / 26e6)        # a cycle
+    assert alone_turns < 50 < 1000 < many_turns

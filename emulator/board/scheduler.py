@@ -586,7 +586,9 @@ class Scheduler:
         budget = max(1, math.ceil((horizon - t0) * hz - 1e-9))
         self.turn_horizon = t0 + budget / hz
         precise_runs, device_accesses = hart.precise_runs, hart.device_accesses
+        hart.time_skip_limit = self._alone_until(hart, t0, hz, outer) if alone else None
         ran = self._run_hart(hart, t0, budget, hz, instruction_limit)
+        hart.time_skip_limit = None
         if self.pending_stop is not None:
             raise self.pending_stop
         hart.time = t0 + ran / hz
@@ -625,6 +627,24 @@ class Scheduler:
         if self.until is not None and self.until > t0:
             outer = min(outer, self.until)
         return outer
+
+    def _alone_until(self, hart: Hart, t0: float, hz: float, outer: float) -> int | None:
+        """The cycle count up to which a time loop (usleep, msleep) may be skipped past the turn's end:
+        where a turn from t0 would end at the first thing that can happen (`outer`: a device event,
+        a grab, run_until's end; a frame capture; the hang budget), while the other harts sleep in
+        wfi or wait on SRAM (a time loop stores nothing that could wake them) and nothing else holds
+        the turns short. The turns in between would each begin with the board as it is and end with
+        only time moved on; the skip ends the turn, and the next one goes on from the loop's exit.
+        None: the skip stops at the turn's end."""
+        if self._trap_deadline is not None or self._draining or hart.polling or \
+                any(other.state is HartState.RUNNING for other in self.harts if other is not hart):
+            return None
+        stop_at = min(outer, self.board.earliest_frame_capture(t0))
+        if self.until is None:
+            stop_at = min(stop_at, self._last_frame_time + self.hang_budget_s)
+        if not stop_at < math.inf or stop_at <= t0:
+            return None
+        return hart.cycles + max(1, math.ceil((stop_at - t0) * hz - 1e-9))
 
     def _go_on_alone(self, hart: Hart, hz: float, t0: float, outer: float, horizon: float) -> float:
         """The hart ran a turn alone on the fast engine, the others asleep in wfi, and nothing in it

@@ -142,6 +142,9 @@ class Hart:
         self._csr_words: dict[int, int] = {}          # address -> instruction word of each CSR site
         self.time_loops: dict[int, TimeLoop] = {}     # by the address of their time read (time_loops.py)
         self._turn_limit = NO_LIMIT
+        # the cycle count a time loop's skip may reach past the turn's end (the scheduler's to set,
+        # for a hart that runs alone with nothing happening before then); None: the turn's end
+        self.time_skip_limit: int | None = None
         self._csr_table: ctypes.Array | None = None   # the counter's table of CSR sites, kept alive here
         self.csr_listeners: list[Callable[["Hart", int], None]] = []   # called before a CSR site is carried out
         self.poll_loops: dict[int, tuple[shared_memory.PollLoop, shared_memory.LoopSlot]] = {}
@@ -714,7 +717,8 @@ class Hart:
         loop = self.time_loops.get(address)
         if loop is not None:
             self.skipper.at_time_read(loop, lambda: self._csr_value(csr),
-                                      lambda r: self.reg(rv.UC_RISCV_REG_X0 + r), self._turn_limit)
+                                      lambda r: self.reg(rv.UC_RISCV_REG_X0 + r), self._turn_limit,
+                                      self.time_skip_limit)
         if self.privilege < (csr >> 8) & 3:
             # a CSR of a more privileged mode (bits 9:8 of its number): an illegal instruction. The
             # user counters (cycle, instret) are let through, as the 1.9.1 counter-enable bits reset

@@ -350,10 +350,14 @@ class LoopSkipper:
             return None
         return last, step
 
-    def _room(self, body: int, cycles_per: int, turn_limit: int) -> int:
+    def _room(self, body: int, cycles_per: int, turn_limit: int, beyond_turn: int | None = None) -> int:
         """Iterations that fit in the rest of the hart's turn: where running would stop too (beyond
-        it, where the next turns would end depends on the scheduler's float arithmetic of time)."""
+        it, where the next turns would end depends on the scheduler's float arithmetic of time).
+        `beyond_turn`: the cycle count up to which the scheduler lets the hart go past its turn's end
+        (Scheduler._alone_until: it runs alone and nothing happens before then)."""
         counter = self.counter
+        if beyond_turn is not None and beyond_turn > counter.cycle_limit:
+            return (beyond_turn - counter.cycles) // cycles_per
         return min((counter.cycle_limit - counter.cycles) // cycles_per,
                    (max(counter.limit, turn_limit) - counter.executed) // body)
 
@@ -364,10 +368,11 @@ class LoopSkipper:
         counter.mispredicts += iterations * step[2]
         counter.stall_cycles += iterations * step[3]
 
-    def at_time_read(self, loop: TimeLoop, time_now, register, turn_limit: int) -> None:
+    def at_time_read(self, loop: TimeLoop, time_now, register, turn_limit: int, beyond_turn: int | None = None) -> None:
         """At a time loop's read (counted, not carried out; `time_now()` the value it would read,
         `register(n)` the hart's registers): the iterations before the first that ends the loop are
-        counted, and the read then returns the time of the iteration it now is."""
+        counted, and the read then returns the time of the iteration it now is. `beyond_turn`: as
+        _room's (a skip past the turn's end ends the turn right after it)."""
         time = time_now()
         steady = self._steady(loop.site, self._state() + (time,), loop.body)
         if steady is None:
@@ -376,7 +381,7 @@ class LoopSkipper:
         cycles_per = step[1]
         if time - last[8] != cycles_per:
             return                               # the clock changed, or mcycle was written
-        limit = self._room(loop.body, cycles_per, turn_limit)
+        limit = self._room(loop.body, cycles_per, turn_limit, beyond_turn)
         if limit <= 0 or loop.exits(time, register):
             return
         if not loop.exits(time + limit * cycles_per, register):
