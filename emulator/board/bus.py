@@ -423,6 +423,8 @@ class Bus:
 
         def load(pc: int, offset: int, width: int, whole: bool) -> int:
             now = scheduler.hart_now(hart)
+            # a device access can set off an event the turn's long-skip limit did not know of
+            hart.time_skip_limit = None
             again = stable[h]
             if again is not None:
                 if again[0] == pc and again[1] == offset and again[2] is peripheral and now < again[4]:
@@ -490,6 +492,7 @@ class Bus:
 
         def store(offset: int, width: int, value: int) -> None:
             now = scheduler.hart_now(hart)
+            hart.time_skip_limit = None     # (as in load)
             scheduler.forget_poll(hart)
             device_writes.setdefault(peripheral.NAME, [0] * harts)[hart.hart_id] += 1
             try:

@@ -276,6 +276,8 @@ class Scheduler:
         then, and a running hart with interrupts enabled ends its turn to take it."""
         self._wake_sleepers(self.time if now is None else now)
         hart = self.current
+        if hart is not None:
+            hart.time_skip_limit = None             # the turn's long-skip limit predates the change
         if hart is not None and hart.m_interrupts_enabled():
             hart.request_stop()
 
@@ -400,6 +402,8 @@ class Scheduler:
 
     def grab_at(self, at_s: float, action: Callable[["Board"], None]) -> None:
         """Calls action(board) once the board's virtual time reaches at_s (a framebuffer grab)."""
+        if self.current is not None:
+            self.current.time_skip_limit = None     # asked mid-turn: the turn's long-skip limit predates it
         self._grabs.append((at_s, action))
         self._grabs.sort(key=lambda item: item[0])
 
