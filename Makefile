@@ -42,7 +42,7 @@ firmware: toolchain $(BUILD)/firmware.elf
 # The C test firmware (tests/firmware/): a small driver layer in the SDK's manner and the
 # programs built on it, with Debian's gcc-riscv64-unknown-elf and picolibc.
 CFW_DIR      := tests/firmware
-CFW_PROGRAMS := hello blink lcd_demo echo syscalls timers watchdog flash dualcore
+CFW_PROGRAMS := hello blink lcd_demo echo syscalls timers watchdog flash maixpy_boot
 CFW_LIB      := start sysctl fpioa gpio uarths uart clint dmac spi spi3 lcd plic timer trap
 CFW_CFLAGS   := -march=rv64imafdc -mabi=lp64d -mcmodel=medany -Os -g -std=gnu11 -Wall -Wextra -Werror \
                 -ffunction-sections -fdata-sections -fstrict-volatile-bitfields --specs=picolibc.specs

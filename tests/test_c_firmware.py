@@ -334,15 +334,23 @@ def test_flash_writable_refuses_a_kfpkg_or_a_program(c_firmware, tmp_path):
     assert run.returncode == 6 and "cannot take the flash's changes back" in run.stderr
 
 
-def test_both_harts_yield_through_ecalls_and_share_a_spinlock(c_firmware, tmp_path):
-    """dualcore.c, the paths FreeRTOS's two-core port takes: hart 1 started by hart 0's software
-    interrupt, each hart's yields served by its own trap handler run, and a spinlock the two take
-    turns at around a read-modify-write of a shared counter: no increment is lost."""
+def test_the_paths_maixpy_boots_through(c_firmware, tmp_path):
+    """maixpy_boot.c, the paths LoBo's MaixPy (FreeRTOS on both cores) takes at boot: hart 1 started
+    by hart 0's software interrupt, each hart's yields served by its own trap handler run, a spinlock
+    the two take turns at around a read-modify-write of a shared counter (no increment lost); the
+    file system's first block read from the flash in quad output by DMA, the channel's completion
+    taken as its PLIC interrupt with intsignal_en as at reset; the BOOT key on its pulled-up pad."""
+    dump = bytearray(b"\xFF") * (0x500000 + 64)
+    dump[0x500000:0x500010] = bytes([1, 0, 0, 0, 0xF0, 0x0F, 0xFF, 0xF7]) + b"littlefs"   # a LittleFS superblock's start
+    (tmp_path / "flash.img").write_bytes(dump)
     out = tmp_path / "out"
-    run = run_emulator("run", str(c_firmware / "dualcore.elf"), "--until", "0.05", "--quiet", "--out", str(out))
+    run = run_emulator("run", str(c_firmware / "maixpy_boot.elf"), "--flash", str(tmp_path / "flash.img"),
+                       "--until", "0.05", "--quiet", "--out", str(out))
     assert run.returncode == 0, run.stderr
     summary = json.loads((out / "run.json").read_text())
     assert console_of(summary) == ["hart 0 starts hart 1",
-                                   "shared 400 (hart 0 200, hart 1 200), yields 200 and 200"]
+                                   "shared 400 (hart 0 200, hart 1 200), yields 200 and 200",
+                                   "file system block: littlefs, by the DMA interrupt",
+                                   "BOOT key reads 1"]
     assert summary["exceptions"] == {"environment call from M-mode": 400}
     assert min(summary["instructions"]) > 10_000          # both harts ran their rounds

@@ -94,6 +94,8 @@ void spi3_send(const uint8_t *bytes, size_t count);
 void spi3_receive(const uint8_t *command, size_t command_length, uint8_t *reply, size_t count);
 void spi3_send_dma(int channel, const uint32_t *items, size_t count);
 void spi3_receive_dma(int channel, uint32_t instruction, uint32_t address, uint32_t *items, size_t count);
+void spi3_receive_dma_start(int channel, uint32_t instruction, uint32_t address, uint32_t *items, size_t count);
+void spi3_receive_end(void);
 
 /* lcd.c: the Maix Dock's ST7789V, 8-bit parallel on SPI0's octal lines */
 #define LCD_WIDTH 320

@@ -110,6 +110,15 @@ void spi3_send_dma(int channel, const uint32_t *items, size_t count)
  * spi.cpp reads the flash). */
 void spi3_receive_dma(int channel, uint32_t instruction, uint32_t address, uint32_t *items, size_t count)
 {
+    spi3_receive_dma_start(channel, instruction, address, items, count);
+    dmac_wait_done(channel);
+    spi3_receive_end();
+}
+
+/* spi3_receive_dma's first half: the transfer under way, the channel completing when the last
+ * frame is in memory (its interrupt, or dmac_wait_done, says when). */
+void spi3_receive_dma_start(int channel, uint32_t instruction, uint32_t address, uint32_t *items, size_t count)
+{
     set_tmod(SPI_TMOD_RECEIVE);
     spi_write(SPI_CTRLR1, (uint32_t)(count - 1));
     spi_write(SPI_DMACR, SPI_DMACR_RDMAE);
@@ -119,7 +128,11 @@ void spi3_receive_dma(int channel, uint32_t instruction, uint32_t address, uint3
     spi_write(SPI_DR0, instruction);
     spi_write(SPI_DR0, address);
     spi_write(SPI_SER, FLASH_SELECT);
-    dmac_wait_done(channel);
+}
+
+/* Deselects the flash, disables the controller and its DMA requests. */
+void spi3_receive_end(void)
+{
     spi_write(SPI_SER, 0);
     spi_write(SPI_SSIENR, 0);
     spi_write(SPI_DMACR, 0);
