@@ -75,3 +75,15 @@ def test_an_otp_file_larger_than_the_otp_is_bad_input(idle_elf, tmp_path):
                        "--out", str(tmp_path / "out"))
     assert run.returncode == 0, run.stderr
     assert json.loads((tmp_path / "out" / "run.json").read_text())["exit"] == "ok"
+
+
+def test_otp_init_writes_every_register_it_clears(idle_elf):
+    """The SDK's otp_init (and its status handshakes) write registers the hardware sets: taken, with
+    no warning (a strict run would stop at a read-only register)."""
+    board = make_board(idle_elf, cold=False, strict=True)
+    for name in ("otp_cpu_ctrl", "otp_thershold", "data_blk_ctrl", "gb_otp_en", "otp_pwr_mode", "otp_web_cpu",
+                 "otp_rstb_cpu", "otp_seltm_cpu", "otp_readen_cpu", "otp_pgmen_cpu", "otp_dle_cpu",
+                 "otp_din_cpu", "otp_cpumpen_cpu", "otp_cle_cpu", "otp_ceb_cpu", "otp_adr_cpu", "otp_dat_cpu",
+                 "blank_finish", "bisr_finish", "key_cmp_result", "data_acp_flag", "otp_wrg_adr_flag"):
+        board.otp.write(o.OFFSET[name], 4, 0, 0.0)
+    assert not board.warnings

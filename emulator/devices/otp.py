@@ -62,9 +62,9 @@ _BLOCK = K210_BLOCKS["OTP"]
 class Otp(Peripheral):
     NAME = "OTP"
     BASE, SIZE, GATE = _BLOCK.base, _BLOCK.size, _BLOCK.gate
-    REGISTERS = {OFFSET[name]: Register(name, writable=OFFSET[name] not in STATUS | {DATA, ADR_IN_FLAG, DATA_RDY,
-                                                                                     DAT_CPU})
-                 for name in NAMES}
+    # every register takes writes (otp_init and the SDK's status handshakes clear several that the
+    # hardware sets); reads of the ones the hardware answers are worked out below
+    REGISTERS = {OFFSET[name]: Register(name) for name in NAMES}
 
     def __init__(self, ports: Ports, content: bytes | None = None, source: str = "") -> None:
         """content: the OTP's bytes (at most 16 KiB, the rest 0); None: blank. source: where it came

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from ..errors import UnmodelledAccess
 from ..memory_map import K210_BLOCKS
 from .mmio import Peripheral, Register
 from .ports import Ports
@@ -85,7 +86,7 @@ class Sha256(Peripheral):
         self._state = _H0
         self._words: list[int] = []
         self._blocks = 0
-        self._running = False
+        self._started = False             # sha_en written: the blocks sha_num_reg counts are taken
         self._overflow = False
 
     def reset(self, now: float) -> None:
@@ -101,6 +102,9 @@ class Sha256(Peripheral):
         return address == self.BASE + DATA_IN
 
     def attach_tx_dma(self, channel: "DmaChannel", now: float) -> None:
+        if channel.transfer.dst_width != 4:
+            raise UnmodelledAccess(f"SHA256: DMAC channel {channel.index} writes {8 * channel.transfer.dst_width}-bit "
+                                   f"items to sha_data_in1 (the SDK writes 32-bit items, one message word each)")
         self.tx_dma = channel
         self._dma_take(now)
 
@@ -119,17 +123,24 @@ class Sha256(Peripheral):
         for item in channel.read_for_peripheral(channel.remaining()):
             self._take_word(int(item))
         channel.peripheral_done(now)
+        # the channel's completion (its interrupt) is due now: the DMAC catches up at once, as a
+        # block it serves through a FIFO would have it when its own event came
+        self.ports.catch_up(now)
+        self.ports.irq_changed(now)
+
+    def _running(self) -> bool:
+        return self._started and self._blocks < self.values[NUM] & 0xFFFF
 
     def read_register(self, offset: int, reg: Register, now: float) -> int:
         if offset < DATA_IN:
-            if self._running:
+            if self._running():
                 return 0
             # the SDK stores sha_result[7 - i] little-endian as the digest's bytes 4i..4i+3
             return int.from_bytes(self._state[7 - offset // 4].to_bytes(4, "big"), "little")
         if offset == NUM:
             return (self.values[NUM] & 0xFFFF) | self._blocks << 16
         if offset == FUNCTION0:
-            done = 0 if self._running else ENABLE
+            done = 0 if self._running() else ENABLE
             return done | (OVERFLOW if self._overflow else 0) | (self.values[FUNCTION0] & BIG_ENDIAN)
         if offset == FUNCTION1:
             return self.values[FUNCTION1] & 1              # the FIFO is never full
@@ -139,8 +150,9 @@ class Sha256(Peripheral):
         if offset == FUNCTION0:
             self.values[offset] = value & (BIG_ENDIAN | ENABLE)
             if value & ENABLE:
+                # (the FreeRTOS SDK writes sha_num_reg after sha_en, the standalone SDK before)
                 self._state, self._words, self._blocks, self._overflow = _H0, [], 0, False
-                self._running = self.values[NUM] & 0xFFFF > 0
+                self._started = True
             return
         if offset == DATA_IN:
             self._take_word(value)
@@ -151,7 +163,7 @@ class Sha256(Peripheral):
 
     def _take_word(self, value: int) -> None:
         """The message's next word (from the CPU or a DMA channel)."""
-        if not self._running:
+        if not self._running():
             self._overflow = True
             return
         word = value & _M
@@ -162,5 +174,4 @@ class Sha256(Peripheral):
             self._state = compress(self._state, self._words)
             self._words = []
             self._blocks += 1
-            if self._blocks >= self.values[NUM] & 0xFFFF:
-                self._running = False
+

@@ -50,6 +50,7 @@ park:
     li      t0, MSTATUS_FS_INITIAL
     csrs    mstatus, t0
     fscsr   zero
+    la      tp, __tls_base              # hart 0's thread-local block: errno is shared
     li      t0, MIE_MSIE                # wake on hart 0's software interrupt (no trap: MIE stays clear)
     csrw    mie, t0
     li      t2, CLINT_MSIP1
@@ -68,7 +69,7 @@ park:
     .weak   hart1_main
 hart1_main_address:
     .dword  hart1_main                  # (an absolute word: a weak symbol left undefined is 0)
-    .text
+    .previous
 
 # trap_entry: saves the registers a C function may clobber, calls trap_handler(mcause, mepc,
 # mtval, frame), resumes at the pc it returns with the registers from the frame.
