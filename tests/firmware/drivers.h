@@ -79,7 +79,9 @@ void dmac_start(int channel, const void *source, volatile void *destination, int
 void dmac_receive(int channel, volatile const void *source, void *destination, enum dma_width width, size_t items);
 void dmac_wait_done(int channel);
 
-/* spi.c: SPI0, transmit only */
+/* spi.c: either SSI layout's configuration, and SPI0, transmit only */
+void ssi_init(uintptr_t base, unsigned frf_shift, unsigned dfs_shift, int frame_format, int frame_bits);
+void ssi_init_non_standard(uintptr_t base, int instruction_bits, int address_bits, int wait_cycles, int trans_mode);
 void spi0_init(int frame_format, int frame_bits);
 void spi0_init_non_standard(int instruction_bits, int address_bits, int wait_cycles, int trans_mode);
 uint32_t spi0_set_clock(uint32_t hz);

@@ -8,32 +8,46 @@
 static uint32_t spi_read(uint32_t offset) { return mmio_read32(SPI0_BASE + offset); }
 static void spi_write(uint32_t offset, uint32_t value) { mmio_write32(SPI0_BASE + offset, value); }
 
-/* Disabled, no interrupts or DMA, mode 0, the given frame format and size, plain phases. */
+/* A DesignWare SSI at `base` (SPI0's ctrlr0 layout, or SPI3's: the shifts say where its frame
+ * format and frame size go), clocked: disabled, no interrupts or DMA, mode 0, the given frame
+ * format and size, plain phases, in spi_init's order. */
+void ssi_init(uintptr_t base, unsigned frf_shift, unsigned dfs_shift, int frame_format, int frame_bits)
+{
+    if (mmio_read32(base + SPI_BAUDR) == 0)
+        mmio_write32(base + SPI_BAUDR, 0x14);
+    mmio_write32(base + SPI_IMR, 0);
+    mmio_write32(base + SPI_DMACR, 0);
+    mmio_write32(base + SPI_DMATDLR, 0x10);
+    mmio_write32(base + SPI_DMARDLR, 0);
+    mmio_write32(base + SPI_SER, 0);
+    mmio_write32(base + SPI_SSIENR, 0);
+    mmio_write32(base + SPI_CTRLR0, (uint32_t)frame_format << frf_shift | (uint32_t)(frame_bits - 1) << dfs_shift);
+    mmio_write32(base + SPI_SPI_CTRLR0, 0);
+    mmio_write32(base + SPI_ENDIAN, 0);
+}
+
+/* The instruction, address and wait phases of the dual/quad/octal formats (spi_ctrlr0, at the same
+ * place on both layouts). */
+void ssi_init_non_standard(uintptr_t base, int instruction_bits, int address_bits, int wait_cycles, int trans_mode)
+{
+    uint32_t inst_l = instruction_bits == 0 ? 0 : instruction_bits == 4 ? 1 : instruction_bits == 8 ? 2 : 3;
+    mmio_write32(base + SPI_SPI_CTRLR0, (uint32_t)wait_cycles << SPI_WAIT_CYCLES_SHIFT | inst_l << SPI_INST_L_SHIFT
+                 | (uint32_t)(address_bits / 4) << SPI_ADDR_L_SHIFT | (uint32_t)trans_mode);
+}
+
 void spi0_init(int frame_format, int frame_bits)
 {
     clock_enable(CLOCK_SPI0);
-    if (spi_read(SPI_BAUDR) == 0)
-        spi_write(SPI_BAUDR, 0x14);
-    spi_write(SPI_IMR, 0);
-    spi_write(SPI_DMACR, 0);
-    spi_write(SPI_DMATDLR, 0x10);
-    spi_write(SPI_DMARDLR, 0);
-    spi_write(SPI_SER, 0);
-    spi_write(SPI_SSIENR, 0);
-    spi_write(SPI_CTRLR0, (uint32_t)frame_format << SPI_FRF_SHIFT | (uint32_t)(frame_bits - 1) << SPI_DFS_SHIFT);
-    spi_write(SPI_SPI_CTRLR0, 0);
-    spi_write(SPI_ENDIAN, 0);
+    ssi_init(SPI0_BASE, SPI_FRF_SHIFT, SPI_DFS_SHIFT, frame_format, frame_bits);
 }
 
-/* The instruction and address phases of the dual/quad/octal formats (spi_ctrlr0). */
 void spi0_init_non_standard(int instruction_bits, int address_bits, int wait_cycles, int trans_mode)
 {
-    uint32_t inst_l = instruction_bits == 0 ? 0 : instruction_bits == 4 ? 1 : instruction_bits == 8 ? 2 : 3;
-    spi_write(SPI_SPI_CTRLR0, (uint32_t)wait_cycles << SPI_WAIT_CYCLES_SHIFT | inst_l << SPI_INST_L_SHIFT
-              | (uint32_t)(address_bits / 4) << SPI_ADDR_L_SHIFT | (uint32_t)trans_mode);
+    ssi_init_non_standard(SPI0_BASE, instruction_bits, address_bits, wait_cycles, trans_mode);
 }
 
-/* The nearest serial clock at or below hz (the divider is even, 2..65534); returns it. */
+/* A serial clock at or above hz: the divider is source / hz rounded down to even (2..65534), as
+ * the SDK's spi_set_clk_rate divides; returns the clock. */
 uint32_t spi0_set_clock(uint32_t hz)
 {
     uint32_t source = spi0_source_hz();

@@ -27,25 +27,12 @@ static void finish(void)
 void spi3_init(int frame_format, int frame_bits)
 {
     clock_enable(CLOCK_SPI3);
-    if (spi_read(SPI_BAUDR) == 0)
-        spi_write(SPI_BAUDR, 0x14);
-    spi_write(SPI_IMR, 0);
-    spi_write(SPI_DMACR, 0);
-    spi_write(SPI_DMATDLR, 0x10);
-    spi_write(SPI_DMARDLR, 0);
-    spi_write(SPI_SER, 0);
-    spi_write(SPI_SSIENR, 0);
-    spi_write(SPI_CTRLR0, (uint32_t)frame_format << SPI3_FRF_SHIFT | (uint32_t)(frame_bits - 1) << SPI3_DFS_SHIFT);
-    spi_write(SPI_SPI_CTRLR0, 0);
-    spi_write(SPI_ENDIAN, 0);
+    ssi_init(SPI3_BASE, SPI3_FRF_SHIFT, SPI3_DFS_SHIFT, frame_format, frame_bits);
 }
 
-/* The instruction, address and wait phases of the dual/quad formats (spi_ctrlr0). */
 void spi3_init_non_standard(int instruction_bits, int address_bits, int wait_cycles, int trans_mode)
 {
-    uint32_t inst_l = instruction_bits == 0 ? 0 : instruction_bits == 4 ? 1 : instruction_bits == 8 ? 2 : 3;
-    spi_write(SPI_SPI_CTRLR0, (uint32_t)wait_cycles << SPI_WAIT_CYCLES_SHIFT | inst_l << SPI_INST_L_SHIFT
-              | (uint32_t)(address_bits / 4) << SPI_ADDR_L_SHIFT | (uint32_t)trans_mode);
+    ssi_init_non_standard(SPI3_BASE, instruction_bits, address_bits, wait_cycles, trans_mode);
 }
 
 /* The fastest serial clock at or below hz (the divider is even, 2..65534); returns it. */
