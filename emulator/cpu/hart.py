@@ -33,18 +33,23 @@ from unicorn.unicorn_py3 import unicorn as _ucpy
 from . import shared_memory, timing
 from .native import (COUNT_HOOK, NO_LIMIT, AlonePlan, Counter, FastHead, add_native_hook, address_table,
                      counter_lib, fast_step)
-from .riscv import (CAUSE_BREAKPOINT, CAUSE_ECALL_U, CAUSE_ILLEGAL_INSTRUCTION, CAUSE_INTERRUPT,
+from .riscv import (CAUSE_BREAKPOINT, CAUSE_ECALL_U, CAUSE_ILLEGAL_INSTRUCTION,
                     CAUSE_LOAD_MISALIGNED, CAUSE_STORE_MISALIGNED, CSR_CYCLE, CSR_INSTRET, CSR_MCYCLE,
-                    CSR_MHARTID, CSR_MIE, CSR_MINSTRET, CSR_MIP, CSR_MSTATUS, INSN_MRET, INSN_WFI,
+                    CSR_MHARTID, CSR_MIE, CSR_MINSTRET, CSR_MIP, CSR_MSTATUS, CSR_MTVEC, INSN_MRET, INSN_WFI,
                     MSTATUS_MIE, MSTATUS_MPIE, MSTATUS_MPP, PRIV_M, PRIV_U)
 from .time_loops import LoopSkipper, TimeLoop
+from ..errors import UnmodelledAccess
 from ..memory_map import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE
 
 # CSR numbers the board answers itself
 # mstatus and mie are real Unicorn CSRs; they are intercepted only so that a write that may
 # unmask a pending interrupt ends the hart's turn, and the interrupt is taken right there
 INTERRUPT_ENABLE_CSRS = {CSR_MSTATUS: rv.UC_RISCV_REG_MSTATUS, CSR_MIE: rv.UC_RISCV_REG_MIE}
-INTERCEPTED_CSRS = {CSR_MHARTID, CSR_MCYCLE, CSR_MINSTRET, CSR_CYCLE, CSR_INSTRET, CSR_MIP, *INTERRUPT_ENABLE_CSRS}
+INTERCEPTED_CSRS = {CSR_MHARTID, CSR_MCYCLE, CSR_MINSTRET, CSR_CYCLE, CSR_INSTRET, CSR_MIP, CSR_MTVEC,
+                    *INTERRUPT_ENABLE_CSRS}
+# mstatus.VM (bits 28:24) of privileged spec 1.9.1, the K210's: paged virtual memory, which the model
+# does not have (Unicorn follows 1.10, where the field is gone and satp selects paging)
+MSTATUS_VM_1_9_1 = 0x1F00_0000
 READ_ONLY_CSRS = {CSR_MHARTID, CSR_CYCLE, CSR_INSTRET}
 
 
@@ -664,11 +669,8 @@ class Hart:
         uc.reg_write(rv.UC_RISCV_REG_MEPC, epc)
         uc.reg_write(rv.UC_RISCV_REG_MCAUSE, cause)
         uc.reg_write(rv.UC_RISCV_REG_MTVAL, tval)
-        mtvec = uc.reg_read(rv.UC_RISCV_REG_MTVEC)
-        base = mtvec & ~3
-        if (mtvec & 3) == 1 and cause & CAUSE_INTERRUPT:
-            base += 4 * (cause & 0xFFFF)
-        self.pc = base
+        # no vectored mode: the K210's Rocket predates it (see _csr_write)
+        self.pc = uc.reg_read(rv.UC_RISCV_REG_MTVEC) & ~3
         self.state = HartState.RUNNING
 
     def m_interrupts_enabled(self) -> bool:
@@ -768,6 +770,8 @@ class Hart:
             return self.uc.reg_read(INTERRUPT_ENABLE_CSRS[csr])
         if csr == CSR_MHARTID:
             return self.hart_id
+        if csr == CSR_MTVEC:
+            return self.uc.reg_read(rv.UC_RISCV_REG_MTVEC)
         if csr in (CSR_MCYCLE, CSR_CYCLE):
             return (self.csr_context.mcycle() + self.mcycle_offset) & (2**64 - 1)
         if csr in (CSR_MINSTRET, CSR_INSTRET):
@@ -780,6 +784,10 @@ class Hart:
         if csr in INTERRUPT_ENABLE_CSRS:
             register = INTERRUPT_ENABLE_CSRS[csr]
             if csr == CSR_MSTATUS:
+                if value & MSTATUS_VM_1_9_1:
+                    raise UnmodelledAccess(
+                        f"hart {self.hart_id}: mstatus.VM = {(value & MSTATUS_VM_1_9_1) >> 24} turns on the paged "
+                        f"virtual memory of privileged spec 1.9.1 (the K210's MMU), which the model does not have")
                 # FS must stay as written (it turns the FPU on); WPRI fields read back as zero
                 value &= 0x8000_000F_007F_FFEA
             unmasks = value & ~self.uc.reg_read(register)
@@ -787,7 +795,11 @@ class Hart:
             if unmasks:
                 self.request_stop()
             return
-        if csr == CSR_MCYCLE:
+        if csr == CSR_MTVEC:
+            # Rocket of early 2017 (privileged spec 1.9.1, before vectored interrupts came with
+            # 1.10): `reg_mtvec := wdata >> 2 << 2` (rocket-chip rocket/CSR.scala, 2017-03-14)
+            self.uc.reg_write(rv.UC_RISCV_REG_MTVEC, value & ~3)
+        elif csr == CSR_MCYCLE:
             self.mcycle_offset = value - self.csr_context.mcycle()
         elif csr == CSR_MINSTRET:
             # the write replaces the CSR instruction's own increment: the next instruction
