@@ -35,6 +35,30 @@
     j       8f
 .endm
 
+# LOAD_TEXTURE
+#   a5, a6, a7 = the texture's texels, width and height (raster_texture.S
+#   raster_set_texture). Clobbers t0.
+.macro LOAD_TEXTURE
+    la      t0, raster_texture
+    ld      a5, 0(t0)
+    la      t0, raster_tex_w
+    ld      a6, 0(t0)
+    la      t0, raster_tex_h
+    ld      a7, 0(t0)
+.endm
+
+# DEPTH_AT_X depth16
+#   a1 = the depth buffer at the span's first pixel: t6 = depth at (xmin,
+#   row), t0 = 2 (x - xmin). Clobbers t1.
+.macro DEPTH_AT_X depth16
+    .if \depth16
+    add     a1, t6, t0
+    .else
+    slli    t1, t0, 1
+    add     a1, t6, t1
+    .endif
+.endm
+
 # PLANES_AT_X textured, gouraud, affine
 #   The attribute planes at the span's first pixel: t0 = 2 (x - xmin).
 #   Clobbers t0, ft9.
@@ -51,6 +75,22 @@
     .endif
     .if \gouraud
     fmadd.s fs0, fs1, ft9, fs2
+    .endif
+.endm
+
+# PLANES_DOWN textured, gouraud, affine
+#   The attribute planes at the row's first pixel stepped one row down.
+.macro PLANES_DOWN textured, gouraud, affine
+    fadd.s  ft0, ft0, ft4
+    .if \textured
+    .if !\affine
+    fadd.s  ft1, ft1, ft5
+    .endif
+    fadd.s  ft2, ft2, ft6
+    fadd.s  ft3, ft3, ft7
+    .endif
+    .if \gouraud
+    fadd.s  fs2, fs2, fs3
     .endif
 .endm
 
@@ -156,28 +196,40 @@
     .endif
 .endm
 
-# BLEND_COVERAGE
-#   t2 = the spread colour (RGB565_SPREAD_MASK) drawn over the framebuffer's
-#   pixel (at a0 ^ FB_PAIR_XOR) by coverage t1: (c a + old (64 - a)) / 64 per
+# BLEND_BEHIND colour, behind, coverage, mask, round, load_round=0
+#   The spread colour (RGB565_SPREAD_MASK) drawn over the framebuffer's pixel
+#   (at a0 ^ FB_PAIR_XOR) by its coverage a: (c a + old (64 - a)) / 64 per
 #   channel, rounded to nearest, in one multiplication as the light is (the
-#   fields' borrows cancel: every field's result fits it); a whole pixel
-#   keeps c. Needs t5 = RGB565_SPREAD_MASK, ra = LIGHT_ROUND_SPREAD.
-#   Clobbers t0, t3.
+#   fields' borrows cancel: every field's result fits it); the result, spread,
+#   in colour. Needs mask = RGB565_SPREAD_MASK and round = LIGHT_ROUND_SPREAD
+#   (with load_round, loaded into round here once behind is done with, for
+#   the FILTERED fills, short of registers). Clobbers t3, behind.
+.macro BLEND_BEHIND colour, behind, coverage, mask, round, load_round=0
+    xori    t3, a0, FB_PAIR_XOR
+    lhu     \behind, 0(t3)              # what is behind
+    slli    t3, \behind, RGB565_SPREAD_SHIFT
+    or      \behind, \behind, t3
+    and     \behind, \behind, \mask
+    sub     \colour, \colour, \behind
+    mul     \colour, \colour, \coverage
+    slli    \behind, \behind, AA_SHIFT
+    add     \colour, \colour, \behind
+    .if \load_round
+    li      \round, LIGHT_ROUND_SPREAD
+    .endif
+    add     \colour, \colour, \round
+    srli    \colour, \colour, AA_SHIFT
+    and     \colour, \colour, \mask
+.endm
+
+# BLEND_COVERAGE
+#   FILL's coverage blend: t2 = the spread colour over what is behind by
+#   coverage t1 (BLEND_BEHIND); a whole pixel keeps c. Needs t5 =
+#   RGB565_SPREAD_MASK, ra = LIGHT_ROUND_SPREAD. Clobbers t0, t3.
 .macro BLEND_COVERAGE
     li      t3, AA_FULL
     bge     t1, t3, .Lwhole\@
-    xori    t3, a0, FB_PAIR_XOR
-    lhu     t0, 0(t3)                   # what is behind
-    slli    t3, t0, RGB565_SPREAD_SHIFT
-    or      t0, t0, t3
-    and     t0, t0, t5
-    sub     t2, t2, t0
-    mul     t2, t2, t1
-    slli    t0, t0, AA_SHIFT
-    add     t2, t2, t0
-    add     t2, t2, ra
-    srli    t2, t2, AA_SHIFT
-    and     t2, t2, t5
+    BLEND_BEHIND t2, t0, t1, t5, ra
 .Lwhole\@:
 .endm
 
@@ -194,12 +246,7 @@
 #   epilogue).
 .macro FILL textured, gouraud, affine, depth16, aa=0
     .if \textured
-    la      t0, raster_texture
-    ld      a5, 0(t0)
-    la      t0, raster_tex_w
-    ld      a6, 0(t0)
-    la      t0, raster_tex_h
-    ld      a7, 0(t0)
+    LOAD_TEXTURE
     .endif
     li      t5, RGB565_SPREAD_MASK
     .if \textured || \gouraud || \aa
@@ -216,12 +263,7 @@
     mv      a0, a3
     SKIP_TO_INSIDE
 3:  sub     t0, a0, a3                  # 2 (x - xmin)
-    .if \depth16
-    add     a1, t6, t0
-    .else
-    slli    t1, t0, 1
-    add     a1, t6, t1
-    .endif
+    DEPTH_AT_X \depth16
     PLANES_AT_X \textured, \gouraud, \affine
 4:
     .if \aa
@@ -290,17 +332,7 @@
     .else
     addi    t6, t6, DEPTH_ROW_BYTES
     .endif
-    fadd.s  ft0, ft0, ft4
-    .if \textured
-    .if !\affine
-    fadd.s  ft1, ft1, ft5
-    .endif
-    fadd.s  ft2, ft2, ft6
-    fadd.s  ft3, ft3, ft7
-    .endif
-    .if \gouraud
-    fadd.s  fs2, fs2, fs3
-    .endif
+    PLANES_DOWN \textured, \gouraud, \affine
     addi    a4, a4, -1
     bnez    a4, 1b
     j       90f
@@ -352,12 +384,7 @@
     li      t0, MIP_TABLE_BIAS << MIP_ENTRY_SHIFT
     add     s10, s10, t0                # s10 = level 0's entry
     .else
-    la      t0, raster_texture
-    ld      a5, 0(t0)
-    la      t0, raster_tex_w
-    ld      a6, 0(t0)
-    la      t0, raster_tex_h
-    ld      a7, 0(t0)
+    LOAD_TEXTURE
     .endif
     li      t5, BLEND_SPREAD_MASK
     li      s9, BLEND_SPREAD_MUL
@@ -370,12 +397,7 @@
 3:  ld      t6, RT_ROW_FB(sp)
     sub     t0, a0, t6                  # 2 (x - xmin)
     ld      t6, RT_ROW_DEPTH(sp)
-    .if \depth16
-    add     a1, t6, t0
-    .else
-    slli    t1, t0, 1
-    add     a1, t6, t1
-    .endif
+    DEPTH_AT_X \depth16
     PLANES_AT_X 1, \gouraud, \affine
 4:
     .if \aa
@@ -481,8 +503,8 @@
     andi    t2, t2, BLEND_B_MASK
     or      t1, t1, t2
     .if \aa
-    # the lit texel t1 over what is behind, by the coverage (BLEND_COVERAGE's
-    # arithmetic with this loop's registers)
+    # the lit texel t1 over what is behind, by the coverage (as FILL's, with
+    # this loop's registers: none is free to keep the mask or the rounding)
     ld      t6, RT_AA(sp)
     li      t3, AA_FULL
     bge     t6, t3, .Lwhole\@
@@ -490,19 +512,7 @@
     slli    t3, t1, RGB565_SPREAD_SHIFT
     or      t2, t1, t3
     and     t2, t2, t0
-    xori    t3, a0, FB_PAIR_XOR
-    lhu     t1, 0(t3)                   # what is behind
-    slli    t3, t1, RGB565_SPREAD_SHIFT
-    or      t1, t1, t3
-    and     t1, t1, t0
-    sub     t2, t2, t1
-    mul     t2, t2, t6
-    slli    t1, t1, AA_SHIFT
-    add     t2, t2, t1
-    li      t1, LIGHT_ROUND_SPREAD
-    add     t2, t2, t1
-    srli    t2, t2, AA_SHIFT
-    and     t2, t2, t0
+    BLEND_BEHIND t2, t1, t6, t0, t1, 1
     srli    t1, t2, RGB565_SPREAD_SHIFT
     or      t1, t1, t2
 .Lwhole\@:
@@ -533,15 +543,7 @@
     addi    t0, t0, DEPTH_ROW_BYTES
     .endif
     sd      t0, RT_ROW_DEPTH(sp)
-    fadd.s  ft0, ft0, ft4
-    .if !\affine
-    fadd.s  ft1, ft1, ft5
-    .endif
-    fadd.s  ft2, ft2, ft6
-    fadd.s  ft3, ft3, ft7
-    .if \gouraud
-    fadd.s  fs2, fs2, fs3
-    .endif
+    PLANES_DOWN 1, \gouraud, \affine
     ld      t0, RT_ROW_LEFT(sp)
     addi    t0, t0, -1
     sd      t0, RT_ROW_LEFT(sp)
