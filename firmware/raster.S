@@ -58,7 +58,9 @@ raster_set_band:
 # ---------------------------------------------------------------------------
     .bss
     .balign 8
-# Where raster_* draw, and the texture of textured fills.
+# Where the raster_*.S files draw (raster_begin; the depth buffer:
+# raster_clear.S raster_set_depth), and the texture of textured fills
+# (raster_texture.S raster_set_texture).
     .globl raster_fb
 raster_fb:
     .space  8
@@ -77,23 +79,24 @@ raster_depth:
     .globl raster_depth_mode
 raster_depth_mode:
     .space  8
-# filter = mipmap: the level table (raster_build_mips) and the triangle's
-# rho^2 constant (|det H| or, affine, |det J|; raster_triangle)
+# filter = mipmap: the level table (raster_texture.S raster_build_mips)
     .globl raster_mip_table
 raster_mip_table:
     .space  8
-# antialias = supersample: the sums of the samples (raster_set_sums)
+# antialias = supersample: the sums of the samples (raster_supersample.S
+# raster_set_sums)
     .globl raster_sums
 raster_sums:
     .space  8
 # antialias = supersample, wireframe: the union lines' cells and spans
-# (raster_set_union)
+# (raster_lines.S raster_set_union)
     .globl raster_union
 raster_union:
     .space  8
 # Hart-local (k210.inc HART_LOCAL_STRIDE; tp selects the copy): the rows this
-# hart draws (raster_set_band), and filter = mipmap's rho^2 constant of the
-# triangle being drawn (|det H| or, affine, |det J|; raster_triangle).
+# hart draws (raster_set_band), filter = mipmap's rho^2 constant of the
+# triangle being drawn (|det H| or, affine, |det J|; raster_triangle), and
+# the offset of the sample it draws (raster_supersample.S raster_set_sample).
     .balign 8
     .globl raster_band
 raster_band:

@@ -345,7 +345,7 @@ render_band:
     call    draw_triangles
     j       9f
     # antialias = supersample: the band drawn once per sample, each time
-    # cleared, its colours summed; then the sums' means (raster.S)
+    # cleared, its colours summed; then the sums' means (raster_supersample.S)
 2:  li      s3, 0                       # s3 = sample
 3:  la      t0, supersample_offsets
     slli    t1, s3, SAMPLE_OFFSET_SHIFT
@@ -395,7 +395,8 @@ render_band:
     .section .rodata
     .balign 4
 # The clip planes, d = a x + b y + c z + e w >= 0 inside (render.inc
-# PLANE_*): the near plane, then the guard band's sides.
+# PLANE_*): the near plane, then the guard band's sides (render_clip.S,
+# render_wireframe.S).
     .globl clip_planes
 clip_planes:
     .word   0, 0, F32_ONE, 0                            # z >= 0
@@ -406,6 +407,8 @@ clip_planes:
 .if CLIP_PLANES != 5
     .error "clip_planes lists five planes"
 .endif
+# The heap blocks' names, for heap_alloc_or_fail's message: render_init's,
+# and those of render_edges.S (edges_build, adjacency_build, vertex_canon).
     .globl msg_edge_list
 msg_edge_list:      .asciz "edge list"
 msg_supersample_sums: .asciz "supersample sums"
@@ -441,16 +444,17 @@ msg_normal_intensities: .asciz "normal intensities"
 render_fill:
     .space  8
 # normal_light: address (heap) of one f32 intensity (0 .. LIGHT_ONE) per
-# mesh normal, this frame's (Gouraud only).
+# mesh normal, this frame's (Gouraud only; render_light.S normals_light).
     .globl normal_light
 normal_light:
     .space  8
 # light_quantum: f32 levels - 1, then f32 LIGHT_ONE / (levels - 1)
-# (light_level; render_init).
+# (render_light.S light_level; render_init).
     .globl light_quantum
 light_quantum:
     .space  LIGHT_QUANTUM_BYTES
-# The wireframe's unique edges: address (heap) and count.
+# The wireframe's unique edges: address (heap) and count (render_edges.S
+# edges_build; render_wireframe.S draws them).
     .globl edge_list
 edge_list:
     .space  8
@@ -458,7 +462,7 @@ edge_list:
 edge_count:
     .space  8
 # adjacency: address (heap) of the triangle adjacency (antialias = edge;
-# adjacency_build).
+# render_edges.S adjacency_build, aa_neighbours).
     .globl adjacency
 adjacency:
     .space  8
@@ -466,9 +470,11 @@ adjacency:
 render_vertices:
     .space  8
 # Hart-local (k210.inc HART_LOCAL_STRIDE; tp selects the copy): scratch of
-# one triangle: its corners for raster_triangle; when it is clipped, the
-# polygon as clip vertices (two buffers: each plane's output is the next
-# one's input), projected, and one triangle of its fan.
+# one triangle: its corners for raster_triangle (render_triangles.S, with
+# render_light.S's intensities and render_texels.S's texel coordinates); when
+# it is clipped (render_clip.S), the polygon as clip vertices (two buffers:
+# each plane's output is the next one's input), projected, and one triangle
+# of its fan.
     .balign 8
 render_hart_local:
     .globl render_rv
@@ -486,7 +492,8 @@ render_rv_out:
     .globl render_rv_fan
 render_rv_fan:
     .space  TRIANGLE_CORNERS * RV_BYTES
-# A wireframe edge cut in clip space: its ends' clip-space positions.
+# A wireframe edge cut in clip space: its ends' clip-space positions
+# (render_wireframe.S).
     .globl segment_ends
 segment_ends:
     .space  2 * CLIP_POS_BYTES

@@ -25,7 +25,7 @@
     .globl clip_and_draw
 # clip_and_draw
 #   What: a triangle with a corner behind the near plane or beyond the guard
-#         band (file comment, step 4): cut in clip space against each plane
+#         band (file comment): cut in clip space against each plane
 #         one of its corners is outside of, projected, and drawn as a fan of
 #         triangles (0, 1, 2), then (i, i + 1, 0) for i = 2, 3, ...
 #   Arguments: a0 = the face (its texel coordinates and intensities in

@@ -41,7 +41,7 @@ shade_rgb565:
 
     .globl face_light
 # face_light
-#   What: the face's light intensity (file comment, step 2), from its
+#   What: the face's light intensity (file comment), from its
 #         corners' world-space positions: the vertex stage's
 #         (vertex_world_array, flat shading) or, where it keeps none,
 #         computed (face_world).

@@ -13,8 +13,8 @@
     .text
     .globl face_texels
 # face_texels
-#   What: the texel coordinates of a face's three corners (file comment,
-#         step 3) into RV_S and RV_T of the three records of render_rv.
+#   What: the texel coordinates of a face's three corners (file comment)
+#         into RV_S and RV_T of the three records of render_rv.
 #   Arguments: a0 = the face (MESH_F_BYTES).
 #   Results: none.
 #   Clobbers: only ABI temporaries.
