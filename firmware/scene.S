@@ -41,11 +41,12 @@
 # depth       int16 | float32                         int16         SCENE_DEPTH
 # snap        subpixel | pixel                        subpixel      SCENE_SNAP
 # filter      nearest | bilinear | mipmap             nearest       SCENE_FILTER
-#             (texture filtering, raster.S; its default, 0, is the
+#             (texture filtering, raster_fills.S; its default, 0, is the
 #             zeros scene_defaults leaves after scene_default_values)
 # antialias   off | edge | supersample                off           SCENE_ANTIALIAS
 #             (edge: silhouette pixels blended by their coverage,
-#             raster.S; supersample: four samples a pixel, render.S;
+#             raster_fills.S; supersample: four samples a pixel,
+#             render.S render_band;
 #             the same zero default)
 #
 # Not what is drawn, only how fast (main.S; the same default, 0):

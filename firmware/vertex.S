@@ -11,7 +11,7 @@
 #   Q4, z / w and 1 / w (project_clip).
 # With flat shading it also fills vertex_world_array, every vertex's
 # world-space position (the faces' lighting). Triangles and edges then only
-# look these up (render.S). The few that need a vertex's clip-space position
+# look these up (render_triangles.S, render_wireframe.S). The few that need a vertex's clip-space position
 # (to be cut) ask vertex_clip, which computes it again, bit for bit as here,
 # rather than keep it for every vertex; so do Gouraud's faces without
 # normals for their world-space positions (face_world).
