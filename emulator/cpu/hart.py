@@ -31,13 +31,15 @@ from unicorn import riscv_const as rv
 from unicorn.unicorn_py3 import unicorn as _ucpy
 
 from . import shared_memory, timing
+from .decode import decode_memory_access
 from .native import (COUNT_HOOK, NO_LIMIT, AlonePlan, Counter, FastHead, add_native_hook, address_table,
                      counter_lib, fast_step)
 from .riscv import (CAUSE_BREAKPOINT, CAUSE_ECALL_U, CAUSE_ILLEGAL_INSTRUCTION,
                     CAUSE_LOAD_MISALIGNED, CAUSE_STORE_MISALIGNED, CSR_CYCLE, CSR_INSTRET, CSR_MCYCLE,
-                    CSR_MHARTID, CSR_MIE, CSR_MINSTRET, CSR_MIP, CSR_MSTATUS, CSR_MTVEC, INSN_MRET, INSN_WFI,
-                    MSTATUS_MIE, MSTATUS_MPIE, MSTATUS_MPP, PRIV_M, PRIV_U)
+                    CSR_MHARTID, CSR_MIE, CSR_MINSTRET, CSR_MIP, CSR_MSTATUS, CSR_MTVEC, INSN_MRET,
+                    INSN_SFENCE_VM, INSN_WFI, MASK_SFENCE_VM, MSTATUS_MIE, MSTATUS_MPIE, MSTATUS_MPP, PRIV_M, PRIV_U)
 from .time_loops import LoopSkipper, TimeLoop
+from .triggers import TRIGGER_CSRS, TriggerUnit
 from ..errors import UnmodelledAccess
 from ..memory_map import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE
 
@@ -46,7 +48,7 @@ from ..memory_map import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE
 # unmask a pending interrupt ends the hart's turn, and the interrupt is taken right there
 INTERRUPT_ENABLE_CSRS = {CSR_MSTATUS: rv.UC_RISCV_REG_MSTATUS, CSR_MIE: rv.UC_RISCV_REG_MIE}
 INTERCEPTED_CSRS = {CSR_MHARTID, CSR_MCYCLE, CSR_MINSTRET, CSR_CYCLE, CSR_INSTRET, CSR_MIP, CSR_MTVEC,
-                    *INTERRUPT_ENABLE_CSRS}
+                    *INTERRUPT_ENABLE_CSRS, *TRIGGER_CSRS}
 # mstatus.VM (bits 28:24) of privileged spec 1.9.1, the K210's: paged virtual memory, which the model
 # does not have (Unicorn follows 1.10, where the field is gone and satp selects paging)
 MSTATUS_VM_1_9_1 = 0x1F00_0000
@@ -170,6 +172,8 @@ class Hart:
         self._write_watch: ctypes.Structure | None = None   # --check-writes (attach_write_watch)
         self._repeats_answered: RepeatsAnswered | None = None
         self._holding = False     # the fast engine holds the registers during a device access
+        self.triggers = TriggerUnit()
+        self._trigger_hook: int | None = None   # watches every instruction while a trigger is armed
 
     def add_native_hook(self, kind: int, callback: int, user_data: ctypes.Structure, begin: int, end: int,
                         what: str) -> int:
@@ -423,6 +427,8 @@ class Hart:
         self.open_trap = None
         self.polling = False
         self.skipper.forget()
+        self.triggers.reset()
+        self._watch_triggers()
         self.forget_pending_transfer()
         self.forget_decodings()
         self.pc = pc
@@ -709,15 +715,19 @@ class Hart:
         return handle
 
     def _carry_out_csr(self, address: int, word: int) -> int:
-        """Executes the CSR instruction or mret `word` at `address` (already counted); returns the
+        """Executes the CSR instruction, mret or sfence.vm `word` at `address` (already counted); returns the
         pc the hart goes on from: the next instruction, or the site itself when it traps."""
         if word == INSN_MRET:
             if self.privilege != PRIV_M:
                 return self._illegal(address, word)
             return self._carry_out_mret()
+        if word & MASK_SFENCE_VM == INSN_SFENCE_VM:
+            # 1.9.1's TLB flush, legal in S- and M-mode; without paging (mstatus.VM stops the run)
+            # there is nothing to flush. Unicorn, following 1.10, would call it illegal
+            return self._illegal(address, word) if self.privilege == PRIV_U else address + 4
         csr = word >> 20
         loop = self.time_loops.get(address)
-        if loop is not None:
+        if loop is not None and not self.triggers.armed:      # skipped iterations would not be watched
             self.skipper.at_time_read(loop, lambda: self._csr_value(csr),
                                       lambda r: self.reg(rv.UC_RISCV_REG_X0 + r), self._turn_limit,
                                       self.time_skip_limit)
@@ -740,6 +750,32 @@ class Hart:
         if rd:
             self.uc.reg_write(rv.UC_RISCV_REG_X0 + rd, old)
         return address + 4
+
+    def _watch_triggers(self) -> None:
+        """While a trigger is armed, a hook looks at every instruction before it runs (on the
+        precise engine: the fast one does not carry hooks); otherwise nothing is paid."""
+        armed = self.triggers.armed
+        if armed and self._trigger_hook is None:
+            self._trigger_hook = self.add_stop_hook(self._on_trigger_watch, None, 1, 0)
+        elif not armed and self._trigger_hook is not None:
+            self.delete_hook(self._trigger_hook)
+            self._trigger_hook = None
+
+    def _on_trigger_watch(self, uc: unicorn.Uc, address: int, size: int, _: object) -> None:
+        """Before an instruction: the breakpoint exception if the trigger matches its pc or its
+        load/store address. The instruction is neither counted nor retired."""
+        word = self.read_u16(address)
+        if word & 3 == 3:
+            word = self.read_u32(address)
+        access = decode_memory_access(word)
+        effective = None
+        if access is not None:
+            _, rs1, imm = access
+            effective = ((uc.reg_read(rv.UC_RISCV_REG_X0 + rs1) if rs1 else 0) + imm) & (2**64 - 1)
+        tval = self.triggers.check(word, address, self.privilege, effective)
+        if tval is not None:
+            self.pending_exception = PendingException(CAUSE_BREAKPOINT, address, tval)
+            uc.emu_stop()
 
     def _illegal(self, address: int, word: int) -> int:
         """The instruction `word` at `address` (counted, not retired) raises an illegal-instruction
@@ -772,6 +808,8 @@ class Hart:
             return self.hart_id
         if csr == CSR_MTVEC:
             return self.uc.reg_read(rv.UC_RISCV_REG_MTVEC)
+        if csr in TRIGGER_CSRS:
+            return self.triggers.read(csr)
         if csr in (CSR_MCYCLE, CSR_CYCLE):
             return (self.csr_context.mcycle() + self.mcycle_offset) & (2**64 - 1)
         if csr in (CSR_MINSTRET, CSR_INSTRET):
@@ -795,7 +833,10 @@ class Hart:
             if unmasks:
                 self.request_stop()
             return
-        if csr == CSR_MTVEC:
+        if csr in TRIGGER_CSRS:
+            self.triggers.write(csr, value)
+            self._watch_triggers()
+        elif csr == CSR_MTVEC:
             # Rocket of early 2017 (privileged spec 1.9.1, before vectored interrupts came with
             # 1.10): `reg_mtvec := wdata >> 2 << 2` (rocket-chip rocket/CSR.scala, 2017-03-14)
             self.uc.reg_write(rv.UC_RISCV_REG_MTVEC, value & ~3)
@@ -835,6 +876,7 @@ def _csr_sites(code: bytes, base: int) -> tuple[tuple[int, int], ...]:
     sites = []
     for offset in range(0, len(code) - 3, 2):
         word = int.from_bytes(code[offset:offset + 4], "little")
-        if (word & 0x7F == 0x73 and (word >> 12) & 3 and (word >> 20) in INTERCEPTED_CSRS) or word == INSN_MRET:
+        if (word & 0x7F == 0x73 and (word >> 12) & 3 and (word >> 20) in INTERCEPTED_CSRS) or word == INSN_MRET \
+                or word & MASK_SFENCE_VM == INSN_SFENCE_VM:
             sites.append((base + offset, word))
     return tuple(sites)

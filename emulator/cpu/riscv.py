@@ -50,6 +50,8 @@ PRIV_U, PRIV_M = 0, 3
 
 INSN_WFI = 0x10500073
 INSN_MRET = 0x30200073
+# sfence.vm rs1 of privileged spec 1.9.1 (1.10 replaced it with sfence.vma): match and mask
+INSN_SFENCE_VM, MASK_SFENCE_VM = 0x10400073, 0xFFF07FFF
 
 
 def bits(word: int, high: int, low: int) -> int:
