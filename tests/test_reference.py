@@ -12,6 +12,8 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from k210_common.exit_status import EXIT_BAD_INPUT
+
 ROOT = Path(__file__).resolve().parent.parent
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
@@ -595,7 +597,7 @@ def test_cli_renders_a_folder_and_a_card(tmp_path):
     assert image.shape == (240, 320, 3) and (image != image[0, 0]).any()
     (folder / "scene.ini").write_text("mode = flat\nnear = -1\n")
     result = run_module("reference", "render", folder, "--out", out)
-    assert result.returncode == 3 and "bad scene.ini line 2: bad value (must be greater than 0)" in result.stderr
+    assert result.returncode == EXIT_BAD_INPUT and "bad scene.ini line 2: bad value (must be greater than 0)" in result.stderr
     if DEFAULT_CARD.exists():
         result = run_module("reference", "render-card", DEFAULT_CARD, "--out", tmp_path / "card-out", "--quiet")
         assert result.returncode == 0, result.stderr
