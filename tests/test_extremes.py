@@ -70,7 +70,6 @@ from __future__ import annotations
 
 import os
 import re
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -80,14 +79,13 @@ from PIL import Image
 import reference
 from k210_common.exit_status import EXIT_FIRMWARE_ERROR
 from k210_common.firmware_errors import firmware_error
-from conftest import ROOT, make_card, run_emulator
+from conftest import make_card, run_emulator
 from extremes_support import (FILE_TOO_LARGE, FILE_TOO_LARGE_OUTCOME, MODEL_TOO_LARGE, MODEL_TOO_LARGE_OUTCOME,
                               TEXTURE_1X1, boot_allocations, boot_outcomes, compare, compare_texels, heap_layout,
                               largest, limits, lighting_ok, outline_mask, reference_depth, run_scene, texel_index,
                               unique_texture, within_one_pixel)
 
-sys.path.insert(0, str(ROOT / "tools"))
-import make_assets  # noqa: E402  (tools/ is not a package on the path)
+from tools import make_assets
 
 TEXTURE = TEXTURE_1X1
 BAD_MODEL = firmware_error("BAD_MODEL")

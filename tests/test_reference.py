@@ -3,7 +3,6 @@ errors, and a loose agreement with the firmware's golden frames (a convention ch
 from __future__ import annotations
 
 import math
-import sys
 import warnings
 from dataclasses import replace
 from pathlib import Path
@@ -15,15 +14,13 @@ from PIL import Image
 from k210_common.exit_status import EXIT_BAD_INPUT
 
 ROOT = Path(__file__).resolve().parent.parent
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
 
-from golden_scenes import DEFAULT_CARD, GOLDEN, SCENES  # noqa: E402
-from emulator_runs import run_module  # noqa: E402
-from reference import (Mesh, ModelError, Scene, SceneError, TextureError, load_card_image,  # noqa: E402
+from golden_scenes import DEFAULT_CARD, GOLDEN, SCENES
+from emulator_runs import run_module
+from reference import (Mesh, ModelError, Scene, SceneError, TextureError, load_card_image,
                        load_files, parse_obj, parse_ppm, parse_scene, render_frame, render_ideal_frame,
                        render_image)
-from reference.render import FLAT_COLOUR, Target, model_matrix, raster_triangle, shade  # noqa: E402
+from reference.render import FLAT_COLOUR, Target, model_matrix, raster_triangle, shade
 
 W, H = 320, 240
 BG = 0x0000
