@@ -2,51 +2,43 @@
 
 Every way a run can go wrong has its own exception class and its own exit
 status, so scripts and CI can tell a firmware trap from a hang from an access
-to hardware the model does not implement.
+to hardware the model does not implement. The numbers and their names are
+k210_common/exit_status.py's, shared with the project's other commands.
 """
 from __future__ import annotations
 
-EXIT_OK = 0
-EXIT_INTERNAL = 1
-EXIT_USAGE = 2
-EXIT_TRAP = 3
-EXIT_HANG = 4
-EXIT_UNMODELLED = 5
-EXIT_BAD_INPUT = 6
-EXIT_MISUSE = 7
-EXIT_FIRMWARE_ERROR = 8
-EXIT_GOLDEN_MISMATCH = 9
-EXIT_STRAY_WRITE = 10
-EXIT_FAIL_ON = 11
-EXIT_EXPECT_UNMET = 12
+from k210_common.exit_status import (BY_CODE, EXIT_BAD_INPUT, EXIT_EXPECT_UNMET, EXIT_FAIL_ON, EXIT_FIRMWARE_ERROR,
+                                     EXIT_HANG, EXIT_INTERNAL, EXIT_MISUSE, EXIT_OK, EXIT_STRAY_WRITE, EXIT_TRAP,
+                                     EXIT_UNMODELLED)
 
 
 class BoardStop(Exception):
     """Base of every reason that ends a run early; `exit_status` is the CLI's exit code."""
 
     exit_status = EXIT_INTERNAL
-    kind = "internal"
+
+    @property
+    def kind(self) -> str:
+        """How the run ended, in run.json: the exit status's name."""
+        return BY_CODE[self.exit_status].name
 
 
 class FirmwareTrap(BoardStop):
     """The firmware took a synchronous exception that its own handler could not deal with."""
 
     exit_status = EXIT_TRAP
-    kind = "trap"
 
 
 class HangDetected(BoardStop):
     """No frame reached the LCD within the virtual-time budget, or every hart waits forever."""
 
     exit_status = EXIT_HANG
-    kind = "hang"
 
 
 class UnmodelledAccess(BoardStop):
     """A load or store hit an address or register that no model implements."""
 
     exit_status = EXIT_UNMODELLED
-    kind = "unmodelled"
 
 
 class RegisterRuleViolation(UnmodelledAccess):
@@ -60,7 +52,6 @@ class BadInput(BoardStop):
     """The firmware image (or another input file) is missing or malformed."""
 
     exit_status = EXIT_BAD_INPUT
-    kind = "bad-input"
 
 
 class HardwareMisuse(BoardStop):
@@ -69,7 +60,6 @@ class HardwareMisuse(BoardStop):
     peripheral whose clock is gated)."""
 
     exit_status = EXIT_MISUSE
-    kind = "misuse"
 
 
 class FirmwareReportedError(BoardStop):
@@ -77,7 +67,6 @@ class FirmwareReportedError(BoardStop):
     (a line `error <code> <words>`), e.g. no SD card or a missing file."""
 
     exit_status = EXIT_FIRMWARE_ERROR
-    kind = "firmware-error"
 
     def __init__(self, message: str, code: int) -> None:
         super().__init__(message)
@@ -90,7 +79,6 @@ class StrayWrite(BoardStop):
     through; the board model's checker reports it."""
 
     exit_status = EXIT_STRAY_WRITE
-    kind = "stray-write"
 
 
 class ConsoleExpectationsMet(BoardStop):
@@ -98,14 +86,12 @@ class ConsoleExpectationsMet(BoardStop):
     ends here with status 0, as a run that showed its frames does."""
 
     exit_status = EXIT_OK
-    kind = "ok"
 
 
 class ConsoleFailText(BoardStop):
     """--fail-on: the console printed a text the user named as failure."""
 
     exit_status = EXIT_FAIL_ON
-    kind = "fail-on"
 
 
 class ConsoleExpectationUnmet(BoardStop):
@@ -113,4 +99,3 @@ class ConsoleExpectationUnmet(BoardStop):
     without the next expected text) before the console printed every expected text."""
 
     exit_status = EXIT_EXPECT_UNMET
-    kind = "expect-unmet"

@@ -16,6 +16,10 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
+from k210_common.exit_status import (EXIT_BAD_INPUT, EXIT_CORRUPT_CARD, EXIT_INTERNAL, EXIT_OK, EXIT_USAGE, EXIT_WRITE_FAILED,
+                                     help_epilog)
+from k210_common.firmware_errors import firmware_error
+
 from .ideal import DEFAULT_DENSITY, DENSITY_MAX, LINE_ROWS_PER_DENSITY, render_ideal_image
 from .load import load_card_folder, load_card_image
 from .obj import Mesh, ModelError
@@ -23,20 +27,22 @@ from .ppm import TextureError
 from .render import render_image
 from .scene import Scene, SceneError
 
-EXIT_OK = 0
-EXIT_OUTPUT = 1
-EXIT_USAGE = 2
-EXIT_BAD_FILE = 3
-EXIT_BAD_CARD = 4
+# When this command returns each status (k210_common/exit_status.py holds the numbers and
+# names); --help and the README's table are made from it (tests/test_exit_status.py)
+EXIT_STATUS_DETAILS: dict[int, str] = {
+    EXIT_OK: "the frames were written",
+    EXIT_INTERNAL: "an internal error of the reference renderer (a bug: please report it with the command line)",
+    EXIT_USAGE: f"bad command line (a `--density` outside 1 to {DENSITY_MAX}, or without `--ideal`), or a "
+                "missing input: FOLDER, CARD, or a file the scene names",
+    EXIT_BAD_INPUT: "a bad scene.ini, model or texture, with the firmware's error text (its errors "
+                    f"{firmware_error('BAD_SCENE').code}, {firmware_error('BAD_MODEL').code} and "
+                    f"{firmware_error('BAD_TEXTURE').code})",
+    EXIT_CORRUPT_CARD: "render-card: the card image is not an MBR-partitioned FAT32 card, or is damaged (the "
+                       "message names the broken structure)",
+    EXIT_WRITE_FAILED: "the output folder or a frame could not be written (not a folder, permissions, disk full)",
+}
 
-EXIT_STATUS_HELP = """exit status:
-  0  the frames were written
-  1  the output folder or a frame could not be written (not a folder, permissions, disk full)
-  2  bad command line, or a missing input: FOLDER, CARD, or a file the scene names
-  3  a bad scene.ini, model or texture, with the firmware's error text (errors 9, 10, 11)
-  4  render-card: the card image is not an MBR-partitioned FAT32 card, or is damaged (the
-     message names the broken structure)
-"""
+EXIT_STATUS_HELP = help_epilog(EXIT_STATUS_DETAILS)
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -103,13 +109,13 @@ def load_source(source: Path, folder: bool) -> tuple[Scene, Mesh, np.ndarray | N
         return load_card_image(source)
     except (SceneError, ModelError, TextureError) as exc:
         print(f"error: {exc}", file=sys.stderr)
-        return EXIT_BAD_FILE
+        return EXIT_BAD_INPUT
     except UsageError as exc:          # a file the scene names is not on the card
         print(f"error: {exc}", file=sys.stderr)
         return EXIT_USAGE
     except SdImageError as exc:
         print(f"error: {source}: not a readable card image: {exc}", file=sys.stderr)
-        return EXIT_BAD_CARD
+        return EXIT_CORRUPT_CARD
     except FileNotFoundError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return EXIT_USAGE
@@ -136,7 +142,7 @@ def main(argv: list[str] | None = None) -> int:
     problem = _prepare_output(args.out)
     if problem:
         print(f"error: {problem}", file=sys.stderr)
-        return EXIT_OUTPUT
+        return EXIT_WRITE_FAILED
     for n in range(args.first, args.first + args.frames):
         start = time.perf_counter()
         path = args.out / f"frame_{n:04d}.png"
@@ -148,7 +154,7 @@ def main(argv: list[str] | None = None) -> int:
             Image.fromarray(image).save(path)
         except OSError as exc:
             print(f"error: cannot write {path}: {exc.strerror or exc}", file=sys.stderr)
-            return EXIT_OUTPUT
+            return EXIT_WRITE_FAILED
         if not args.quiet:
             print(f"{path} ({time.perf_counter() - start:.2f} s)")
     return EXIT_OK

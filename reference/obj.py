@@ -22,6 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from k210_common.firmware_errors import FirmwareError, firmware_error
+
 from .numbers import finite_single, parse_number
 
 CORNER = re.compile(r"(-?\d+)(?:/(-?\d+)?(?:/(-?\d+))?)?\Z")
@@ -30,12 +32,17 @@ NO_INDEX = -1
 
 
 class ModelError(ValueError):
-    """A bad model (the firmware's error 10)."""
+    """A bad model (the firmware's ERR_BAD_MODEL, whose words start the message)."""
 
     def __init__(self, line: int | None, what: str):
-        super().__init__(f"bad model line {line}: {what}" if line is not None else f"bad model: {what}")
+        words = self.firmware_error.words[0]
+        super().__init__(f"{words} line {line}: {what}" if line is not None else f"{words}: {what}")
         self.line = line
         self.what = what
+
+    @property
+    def firmware_error(self) -> FirmwareError:
+        return firmware_error("BAD_MODEL")
 
 
 @dataclass

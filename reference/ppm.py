@@ -16,16 +16,22 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from k210_common.firmware_errors import FirmwareError, firmware_error
+
 WHITESPACE = b" \t\r\n\x0b\x0c"
 NUMBER_LIMIT = 2 ** 31
 
 
 class TextureError(ValueError):
-    """A bad texture (the firmware's error 11)."""
+    """A bad texture (the firmware's ERR_BAD_TEXTURE, whose words start the message)."""
 
     def __init__(self, what: str):
-        super().__init__(f"bad texture: {what}")
+        super().__init__(f"{self.firmware_error.words[0]}: {what}")
         self.what = what
+
+    @property
+    def firmware_error(self) -> FirmwareError:
+        return firmware_error("BAD_TEXTURE")
 
 
 def rgb565_from_samples(r, g, b, maxval: int):

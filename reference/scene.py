@@ -38,6 +38,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from k210_common.firmware_errors import FirmwareError, firmware_error
+
 from .numbers import finite_single, parse_number, single
 from .ppm import rgb565_from_samples
 
@@ -70,12 +72,16 @@ VALUE_MAX = 256          # a path of this many bytes or more is too long (NUL in
 
 
 class SceneError(ValueError):
-    """A bad scene.ini line (the firmware's error 9)."""
+    """A bad scene.ini line (the firmware's ERR_BAD_SCENE, whose words start the message)."""
 
     def __init__(self, line: int, what: str):
-        super().__init__(f"bad scene.ini line {line}: {what}")
+        super().__init__(f"{self.firmware_error.words[0]} line {line}: {what}")
         self.line = line
         self.what = what
+
+    @property
+    def firmware_error(self) -> FirmwareError:
+        return firmware_error("BAD_SCENE")
 
 
 @dataclass

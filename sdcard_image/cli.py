@@ -11,26 +11,32 @@ from pathlib import Path
 
 from . import fat32
 from .convert import parse_scene_args, parse_texture_size
-from .errors import (EXIT_USAGE, OutputExistsError, OutputWriteError,
-                     SdImageError, UsageError)
+from k210_common.exit_status import (EXIT_BAD_INPUT, EXIT_CARD_TOO_SMALL, EXIT_CORRUPT_CARD, EXIT_INTERNAL,
+                                     EXIT_OK, EXIT_OUTPUT_EXISTS, EXIT_USAGE, EXIT_WRITE_FAILED, help_epilog)
+from .errors import OutputExistsError, OutputWriteError, SdImageError, UsageError
 from .image import DEFAULT_SIZE_MIB, build_image, extract_all, list_image, read_file
 
 PROG = "python -m sdcard_image"
 
-EXIT_STATUS_HELP = """exit status:
-  0  done
-  1  internal error of this tool (a bug: please report it with the command line)
-  2  bad command line: an unknown option or bad value, a missing input, names that collide on
-     the card, the output among the inputs, a --scene value the firmware would refuse, no such
-     file on the card
-  3  build: a bad input file (.obj, .ppm, image, scene.ini), named with its line
-  4  the output exists: add --force to replace it
-  5  build: the content does not fit in the --size given (or in the largest card)
-  6  list, extract: the image is not an MBR-partitioned FAT32 card, or is damaged (the message
-     names the broken structure)
-  7  an output could not be written (disk full, permissions): nothing is left half-written
-     for build; extract names the file it stopped at
-"""
+# When this command returns each status (k210_common/exit_status.py holds the numbers and
+# names); --help and sdcard_image/README.md's table are made from it (tests/test_exit_status.py)
+EXIT_STATUS_DETAILS: dict[int, str] = {
+    EXIT_OK: "done",
+    EXIT_INTERNAL: "an internal error of this tool (a bug: please report it with the command line)",
+    EXIT_USAGE: "bad command line: an unknown option or bad value, a missing or unreadable input, names that "
+                "collide on the card, the output among the inputs, a `--scene` value the firmware would refuse, "
+                "no such file on the card",
+    EXIT_BAD_INPUT: "build: a bad input file (`.obj`, `.ppm`, image, `scene.ini`), named with its line",
+    EXIT_OUTPUT_EXISTS: "the output exists: add `--force` to replace it",
+    EXIT_CARD_TOO_SMALL: "build: the content does not fit in the `--size` given (or in the largest card)",
+    EXIT_CORRUPT_CARD: "list, extract: the image is not an MBR-partitioned FAT32 card, or is damaged (the message "
+                       "names the broken structure)",
+    EXIT_WRITE_FAILED: "an output could not be written (disk full, permissions): the message names the image or "
+                       "the extracted file, never a temporary file; a failed build leaves nothing behind, "
+                       "extract names the file it stopped at",
+}
+
+EXIT_STATUS_HELP = help_epilog(EXIT_STATUS_DETAILS)
 
 
 class _Parser(argparse.ArgumentParser):
@@ -149,9 +155,9 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{PROG} {args.command}: error: {exc}", file=sys.stderr)
         return exc.exit_status
     except BrokenPipeError:
-        return 0
+        return EXIT_OK
     except OSError as exc:  # an input or the image could not be read
         what = f"{exc.filename}: " if exc.filename else ""
         print(f"{PROG} {args.command}: error: {what}{exc.strerror or exc}", file=sys.stderr)
         return EXIT_USAGE
-    return 0
+    return EXIT_OK

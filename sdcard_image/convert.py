@@ -162,8 +162,7 @@ def parse_scene_args(items: list[str]) -> dict[str, str]:
 
 # scene.ini is held to the firmware's rules (firmware/scene.S), written once on the host in
 # `reference.scene`, which the reference renderer reads scenes with too: every key, value and
-# line the firmware would refuse with error 9 is refused here with its line and words.
-SCENE_FIRMWARE_ERROR = 9
+# line the firmware would refuse with ERR_BAD_SCENE is refused here with its line and words.
 
 
 def scene_ini(scene: dict[str, str]) -> tuple[bytes, Scene]:
@@ -185,7 +184,7 @@ def scene_ini(scene: dict[str, str]) -> tuple[bytes, Scene]:
     except SceneError as exc:
         key, value = list(scene.items())[exc.line - 1]
         raise UsageError(f"--scene {key}={value}: {exc.what} (firmware error "
-                         f"{SCENE_FIRMWARE_ERROR})") from None
+                         f"{exc.firmware_error.code})") from None
 
 
 def check_scene_ini(data: bytes, path: Path | str) -> Scene:
@@ -194,12 +193,12 @@ def check_scene_ini(data: bytes, path: Path | str) -> Scene:
     try:
         return parse_scene(data)
     except SceneError as exc:
-        raise BadInputError(path, f"{exc.what} (firmware error {SCENE_FIRMWARE_ERROR})",
+        raise BadInputError(path, f"{exc.what} (firmware error {exc.firmware_error.code})",
                             exc.line) from None
 
 
 def scene_warnings(scene: Scene, card_files: dict[str, str], origin: str) -> list[str]:
-    """Notes on files the scene names that the card lacks (the firmware's error 6): the model,
+    """Notes on files the scene names that the card lacks (the firmware's ERR_NOT_FOUND): the model,
     and the texture in textured mode (flat and wireframe scenes read none). When the card holds
     a file of that name in a folder, says so: an input folder lands as a folder on the card.
     `card_files`: each file's card path folded as FAT compares names -> the path itself."""

@@ -1,25 +1,21 @@
 """Errors of the card-image tool, each tied to the exit status the command line reports.
 
 Callers of the Python API catch `SdImageError` (or one subclass); the command line turns
-`exit_status` into the process status so scripts can tell the failures apart.
+`exit_status` into the process status so scripts can tell the failures apart. The numbers are
+k210_common/exit_status.py's, shared with the project's other commands.
 """
 from __future__ import annotations
 
 from pathlib import Path
 
-EXIT_OK = 0
-EXIT_USAGE = 2
-EXIT_BAD_INPUT = 3
-EXIT_OUTPUT_EXISTS = 4
-EXIT_TOO_SMALL = 5
-EXIT_CORRUPT_IMAGE = 6
-EXIT_WRITE_FAILED = 7
+from k210_common.exit_status import (EXIT_BAD_INPUT, EXIT_CARD_TOO_SMALL, EXIT_CORRUPT_CARD, EXIT_INTERNAL,
+                                     EXIT_OUTPUT_EXISTS, EXIT_USAGE, EXIT_WRITE_FAILED)
 
 
 class SdImageError(Exception):
     """Base class: a failure the user can act on (never a bug in this tool)."""
 
-    exit_status = 1
+    exit_status = EXIT_INTERNAL
 
 
 class UsageError(SdImageError):
@@ -50,13 +46,13 @@ class OutputExistsError(SdImageError):
 class ImageTooSmallError(SdImageError):
     """The content does not fit in the requested image size."""
 
-    exit_status = EXIT_TOO_SMALL
+    exit_status = EXIT_CARD_TOO_SMALL
 
 
 class CorruptImageError(SdImageError):
     """An image to read is not an MBR-partitioned FAT32 card, or its FAT32 is damaged."""
 
-    exit_status = EXIT_CORRUPT_IMAGE
+    exit_status = EXIT_CORRUPT_CARD
 
 
 class OutputWriteError(SdImageError):

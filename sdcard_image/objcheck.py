@@ -3,7 +3,7 @@
 The rules are the firmware's (firmware/obj.S), written once on the host in `reference.obj`,
 which the reference renderer reads models with too: a model the card builder accepts is a model
 the firmware accepts, and a refusal names the line the firmware would name, in its words
-(`bad model line N: <what>`, its error 10). The file is then copied unchanged.
+(`bad model line N: <what>`, its ERR_BAD_MODEL). The file is then copied unchanged.
 """
 from __future__ import annotations
 
@@ -14,8 +14,6 @@ from pathlib import Path
 from reference.obj import ModelError, parse_obj
 
 from .errors import BadInputError
-
-FIRMWARE_ERROR = 10
 
 
 @dataclass(frozen=True)
@@ -42,7 +40,7 @@ _PASSED_KEPT = 64
 
 def check_obj(data: bytes, path: Path | str = "<obj>") -> ObjStats:
     """Parses an OBJ by the firmware's rules; raises `BadInputError` (file, the firmware's line
-    and words) on the first problem, as the firmware's error 10 would."""
+    and words) on the first problem, as the firmware's ERR_BAD_MODEL would."""
     digest = hashlib.sha256(data).digest()
     stats = _PASSED.get(digest)
     if stats is not None:
@@ -50,7 +48,7 @@ def check_obj(data: bytes, path: Path | str = "<obj>") -> ObjStats:
     try:
         mesh = parse_obj(data)
     except ModelError as exc:
-        raise BadInputError(path, f"{exc.what} (firmware error {FIRMWARE_ERROR})", exc.line) \
+        raise BadInputError(path, f"{exc.what} (firmware error {exc.firmware_error.code})", exc.line) \
             from None
     stats = ObjStats(vertices=len(mesh.vertices), texcoords=len(mesh.texcoords),
                      normals=len(mesh.normals), triangles=len(mesh.faces))

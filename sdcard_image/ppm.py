@@ -4,7 +4,7 @@ Textures go on the card as binary PPM (P6, maxval 255): the firmware can read th
 tiny header parser and no decompression. PPM files given as input are only validated, by the
 firmware's rules (firmware/ppm.S), written once on the host in `reference.ppm`, which the
 reference renderer reads textures with too: the card builder refuses exactly the textures the
-firmware refuses, in its words (`bad texture: <what>`, its error 11).
+firmware refuses, in its words (`bad texture: <what>`, its ERR_BAD_TEXTURE).
 """
 from __future__ import annotations
 
@@ -15,8 +15,6 @@ from reference.ppm import TextureError, parse_header
 from reference.ppm import parse_ppm as decode_ppm
 
 from .errors import BadInputError
-
-FIRMWARE_ERROR = 11
 
 
 @dataclass(frozen=True)
@@ -36,7 +34,7 @@ def parse_ppm(data: bytes, path: Path | str = "<ppm>") -> PpmInfo:
         decode_ppm(data)
         header = parse_header(data)
     except TextureError as exc:
-        raise BadInputError(path, f"{exc} (firmware error {FIRMWARE_ERROR})") from None
+        raise BadInputError(path, f"{exc} (firmware error {exc.firmware_error.code})") from None
     return PpmInfo(magic=header.magic, width=header.width, height=header.height,
                    maxval=header.maxval)
 

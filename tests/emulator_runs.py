@@ -197,5 +197,4 @@ def run_emulator(*args: str, timeout: float = 600) -> subprocess.CompletedProces
 
 
 if __name__ == "__main__":
-    sys.path.insert(0, str(ROOT))
     serve()

@@ -29,6 +29,8 @@ import reference
 import reference.render as reference_render
 from conftest import make_card, run_emulator
 from firmware_calls import elf_symbols
+from k210_common.exit_status import EXIT_FIRMWARE_ERROR
+from k210_common.firmware_errors import firmware_error
 
 TEXTURE_1X1 = b"P6\n1 1\n255\n\x80\x40\x20"
 
@@ -91,7 +93,13 @@ def run_scene(firmware: Path, folder: Path, model: str | bytes, scene: str | Non
 
 
 ONE_TRIANGLE = "v 0 0 -1\nv 1 0 -1\nv 0 1 -1\nf 1 2 3\n"
-EXIT_BAD_INPUT = 8     # the board's exit status when the firmware reports a fatal error (README)
+# the firmware's errors these tests meet (firmware/include/errors.inc), and the outcomes
+# boot_allocations names them by
+BAD_SCENE = firmware_error("BAD_SCENE")
+FILE_TOO_LARGE = firmware_error("TOO_LARGE")
+MODEL_TOO_LARGE = firmware_error("MODEL_TOO_LARGE")
+FILE_TOO_LARGE_OUTCOME = f"error {FILE_TOO_LARGE.code}"
+MODEL_TOO_LARGE_OUTCOME = f"error {MODEL_TOO_LARGE.code}"
 
 
 def check_scene_key_agreement(firmware: Path, folder: Path, key: str, value: str, refusal: str | None) -> None:
@@ -110,7 +118,8 @@ def check_scene_key_agreement(firmware: Path, folder: Path, key: str, value: str
         assert host is None and run.returncode == 0, (host, run.stderr)
     else:
         assert host == refusal
-        assert run.returncode == EXIT_BAD_INPUT and f"error 9 {host}" in run.console, (run.returncode, run.stderr)
+        assert run.returncode == EXIT_FIRMWARE_ERROR and f"error {BAD_SCENE.code} {host}" in run.console, \
+            (run.returncode, run.stderr)
 
 
 # --------------------------------------------------------------------------- comparisons
@@ -286,7 +295,8 @@ class Heap:
         """heap.S heap_alloc_or_fail: on failure remembers its error 12 line."""
         address = self.alloc(size)
         if address is None:
-            self.failed = f"error 12 model too large for memory ({name}: {size} bytes needed, {self.free} bytes free)"
+            self.failed = (f"{MODEL_TOO_LARGE.console_starts[0]} ({name}: {size} bytes needed, "
+                           f"{self.free} bytes free)")
         return address
 
     def release(self, address: int) -> None:
@@ -321,7 +331,7 @@ def boot_allocations(layout: HeapLayout, texture: int | None, vertices: int, tex
     `filter = mipmap` (mipmap = the texture's (width, height)), the mip chain (raster.S
     raster_build_mips: `mip_chain_bytes`); each of these blocks is
     error 12 "model too large for memory (<block>: n bytes needed, m bytes free)".
-    Returns ("ok" | "error 7" | "error 12", heap); heap.failed is the console line for the block
+    Returns ("ok" | FILE_TOO_LARGE_OUTCOME | MODEL_TOO_LARGE_OUTCOME, heap); heap.failed is the console line for the block
     that did not fit (for error 7 its start: the line goes on with the file's name and sizes)."""
     heap = Heap(layout)
     sector = layout.FAT_SECTOR_BYTES
@@ -330,13 +340,13 @@ def boot_allocations(layout: HeapLayout, texture: int | None, vertices: int, tex
             continue
         address = heap.alloc(-(-size // sector) * sector)
         if address is None:
-            heap.failed = "error 7 file too large for memory: "
-            return "error 7", heap
+            heap.failed = f"{FILE_TOO_LARGE.console_starts[0]}: "
+            return FILE_TOO_LARGE_OUTCOME, heap
         if not kept:
             heap.release(address)
     window = heap.alloc_or_fail("model text window", layout.OBJ_WINDOW_BYTES)
     if window is None:
-        return "error 12", heap
+        return MODEL_TOO_LARGE_OUTCOME, heap
     heap.release(window)
     ok, free, needed, align = True, heap.free, 0, layout.HEAP_ALIGN
     for count, each in ((vertices, layout.MESH_V_BYTES), (texcoords, layout.MESH_T_BYTES),
@@ -346,11 +356,11 @@ def boot_allocations(layout: HeapLayout, texture: int | None, vertices: int, tex
             ok = heap.alloc(count * each) is not None and ok
             needed += -(-count * each // align) * align
     if not ok:
-        heap.failed = f"error 12 model too large for memory: {needed} bytes needed, {free} bytes free"
-        return "error 12", heap
+        heap.failed = f"{MODEL_TOO_LARGE.console_starts[0]}: {needed} bytes needed, {free} bytes free"
+        return MODEL_TOO_LARGE_OUTCOME, heap
     window = heap.alloc_or_fail("model text window", layout.OBJ_WINDOW_BYTES)
     if window is None:
-        return "error 12", heap
+        return MODEL_TOO_LARGE_OUTCOME, heap
     heap.release(window)
     blocks = [("vertex records", vertices * layout.VTX_BYTES)]
     if not wireframe and not gouraud:
@@ -372,9 +382,9 @@ def boot_allocations(layout: HeapLayout, texture: int | None, vertices: int, tex
             blocks.append(("mip chain", mip_chain_bytes(layout, *mipmap)))
     for name, size in blocks:
         if heap.alloc_or_fail(name, size) is None:
-            return "error 12", heap
+            return MODEL_TOO_LARGE_OUTCOME, heap
         if name == "adjacency" and not _adjacency_scratch(heap, layout, vertices, triangles):
-            return "error 12", heap
+            return MODEL_TOO_LARGE_OUTCOME, heap
     return "ok", heap
 
 

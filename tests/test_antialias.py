@@ -6,18 +6,16 @@ against two: tests/test_both_harts_draw.py; extremes and memory: tests/test_extr
 from __future__ import annotations
 
 import functools
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 import reference
-from conftest import ROOT, run_together, shared_value
+from conftest import run_together, shared_value
 from extremes_support import check_scene_key_agreement, outline_mask, run_scene
 
-sys.path.insert(0, str(ROOT / "tools"))
-from make_assets import cube, sphere, torus  # noqa: E402
+from tools.make_assets import cube, sphere, torus
 
 FRAMES = 2
 # Flat and lit at intensity 1 (ambient 1): every face the same colour, so what differs from the

@@ -5,7 +5,6 @@ from __future__ import annotations
 import csv
 import io
 import math
-import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -13,11 +12,9 @@ import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
 
-from tools import quality  # noqa: E402
-from tools.quality import pareto_front  # noqa: E402
+from tools import quality
+from tools.quality import pareto_front
 
 SVG = "{http://www.w3.org/2000/svg}"
 

@@ -92,7 +92,8 @@ def test_our_firmware_draws_the_same_frames_from_either_state(firmware, card, fi
         # less, since the cycle-timed instructions before meet its answers at other moments
         assert [f["instructions"] for f in summary["frames"][1:]] == \
             [f["instructions"] for f in default["frames"][1:4]]
-        for cold_count, warm_count in zip(summary["frames"][0]["instructions"], default["frames"][0]["instructions"]):
+        for cold_count, warm_count in zip(summary["frames"][0]["instructions"], default["frames"][0]["instructions"],
+                                          strict=True):
             assert abs(cold_count - warm_count) <= warm_count // 1000
     assert result.returncode == 0, result.stderr
     assert summary["cold"] is cold and summary["warnings"] == []

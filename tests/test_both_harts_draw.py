@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import functools
 import json
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -18,8 +17,7 @@ from conftest import run_together, shared_value
 from extremes_support import check_scene_key_agreement, run_scene
 
 ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT / "tools"))
-from make_assets import cube, sphere, texture  # noqa: E402
+from tools.make_assets import cube, sphere, texture
 
 FRAMES = 4                  # frame 0 is hart 0's alone (hart 1 brings the LCD up); 1.. are split
 # hart 1's instructions in a frame when it only sends the frame and waits, against when it draws
@@ -143,7 +141,7 @@ def test_auto_draws_on_both_harts_when_drawing_is_slower_than_the_lcd(runs):
     the frame before, and frame 0 is always hart 0's), and the frames are the same."""
     auto = runs["plain", "auto"]
     assert auto.returncode == 0, auto.stderr
-    assert all(np.array_equal(a, b) for a, b in zip(auto.frames, runs["plain", "1"].frames))
+    assert all(np.array_equal(a, b) for a, b in zip(auto.frames, runs["plain", "1"].frames, strict=True))
     assert min(hart1_instructions(auto.out)[2:]) > HART1_DRAWING_MIN
 
 

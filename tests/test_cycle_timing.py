@@ -266,7 +266,7 @@ def test_ipc1_reproduces_the_model_before_cycle_timing(firmware, card, firmware_
     assert all(f["cycles"] == f["instructions"] for f in frames)
     _, out, rocket = firmware_run
     assert rocket["timing"] == "rocket"
-    for flat, timed in zip(frames[1:], rocket["frames"][1:]):
+    for flat, timed in zip(frames[1:], rocket["frames"][1:], strict=True):
         assert timed["instructions"][0] == flat["instructions"][0]     # the drawing is the same work
         assert timed["cycles"][0] > 1.5 * timed["instructions"][0]    # which costs more than a cycle each
     for index in range(len(BEFORE_CYCLES)):

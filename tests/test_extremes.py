@@ -70,7 +70,6 @@ from __future__ import annotations
 
 import os
 import re
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -78,15 +77,18 @@ import pytest
 from PIL import Image
 
 import reference
-from conftest import ROOT, make_card, run_emulator
-from extremes_support import (TEXTURE_1X1, boot_allocations, boot_outcomes, compare, compare_texels, heap_layout,
+from k210_common.exit_status import EXIT_FIRMWARE_ERROR
+from k210_common.firmware_errors import firmware_error
+from conftest import make_card, run_emulator
+from extremes_support import (FILE_TOO_LARGE, FILE_TOO_LARGE_OUTCOME, MODEL_TOO_LARGE, MODEL_TOO_LARGE_OUTCOME,
+                              TEXTURE_1X1, boot_allocations, boot_outcomes, compare, compare_texels, heap_layout,
                               largest, limits, lighting_ok, outline_mask, reference_depth, run_scene, texel_index,
                               unique_texture, within_one_pixel)
 
-sys.path.insert(0, str(ROOT / "tools"))
-import make_assets  # noqa: E402  (tools/ is not a package on the path)
+from tools import make_assets
 
 TEXTURE = TEXTURE_1X1
+BAD_MODEL = firmware_error("BAD_MODEL")
 TRIANGLE = "v 0 0 -1\nv 1 0 -1\nv 0 1 -1\nf 1 2 3\n"
 FRAMES = 3
 OUTLINE_BUDGET = 77         # pixels (0.1 % of the screen) beyond the lighting tolerance, all on the outline
@@ -165,7 +167,7 @@ def test_largest_model(firmware, layout, tmp_path, case, data):
         result = compare(run.frames[0], reference.render_image(scene, mesh, ref_texture, 0), run.background)
         assert result.drawn_shown > 1000 and result.beyond_lighting_off_outline == 0, str(result)
     else:
-        assert run.returncode == 8, run.stderr + run.console
+        assert run.returncode == EXIT_FIRMWARE_ERROR, run.stderr + run.console
         failed = boot_allocations(layout, len(data), 3, 0, 0, triangles)[1].failed
         assert (run.error_line() or "").startswith(failed), (failed, run.console)
 
@@ -208,7 +210,7 @@ def test_100k_triangles_with_a_256x256_texture(firmware, layout, tmp_path, case)
         result = compare(run.frames[0], reference.render_image(scene, mesh, texture, 0), run.background)
         assert result.drawn_shown > 1000 and result.beyond_lighting_off_outline == 0, str(result)
     else:
-        assert run.returncode == 8, run.stderr + run.console
+        assert run.returncode == EXIT_FIRMWARE_ERROR, run.stderr + run.console
         failed = boot_allocations(layout, len(TEXTURE_256), vertices, 3, 0, HUNDRED_THOUSAND)[1].failed
         assert (run.error_line() or "").startswith(failed), (failed, run.console)
 
@@ -279,12 +281,12 @@ def test_mesh_arrays_that_do_not_fit(firmware, layout, tmp_path):
         return boot_allocations(layout, len(TEXTURE), 3, 0, 0, n)[1].failed or ""
 
     def arrays_fit(n: int) -> bool:
-        return not failed_line(n).startswith("error 12 model too large for memory:")
+        return not failed_line(n).startswith(f"{MODEL_TOO_LARGE.console_starts[0]}:")
 
     triangles = largest(arrays_fit, 1, layout.size // layout.MESH_F_BYTES + 1) + 1
     run = run_scene(firmware, tmp_path, fan_model(triangles), None, frames=1)
-    assert run.returncode == 8, run.stderr + run.console
-    found = re.fullmatch(r"error 12 model too large for memory: (\d+) bytes needed, (\d+) bytes free",
+    assert run.returncode == EXIT_FIRMWARE_ERROR, run.stderr + run.console
+    found = re.fullmatch(re.escape(MODEL_TOO_LARGE.console_starts[0]) + r": (\d+) bytes needed, (\d+) bytes free",
                          run.error_line() or "")
     assert found and run.error_line() == failed_line(triangles), run.console
     needed, free = (int(g) for g in found.groups())
@@ -328,7 +330,7 @@ def test_largest_texture_beside_a_model(firmware, layout, tmp_path, case):
         # texel columns near 3.3e4, where float32 steps are 1/256 texel: 2% (measured 1.1%)
         assert result.neighbour <= result.drawn // 50 and result.coverage <= OUTLINE_BUDGET, str(result)
     else:
-        assert run.returncode == 8, run.stderr + run.console
+        assert run.returncode == EXIT_FIRMWARE_ERROR, run.stderr + run.console
         failed = boot_allocations(layout, len(data), 3, 3, 0, filler, scene_ini=len(MAGENTA))[1].failed
         # "(depth buffer)" today
         assert (run.error_line() or "").startswith(failed), (failed, run.console)
@@ -363,8 +365,8 @@ def test_largest_texture_with_a_mip_chain(firmware, layout, tmp_path, case):
         assert f"texture: {most}x1" in run.console and f"model: {filler} triangles" in run.console
         assert failed is None
     else:
-        assert failed and failed.startswith("error 12 model too large for memory (mip chain: "), failed
-        assert run.returncode == 8, run.stderr + run.console
+        assert failed and failed.startswith(f"{MODEL_TOO_LARGE.console_starts[0]} (mip chain: "), failed
+        assert run.returncode == EXIT_FIRMWARE_ERROR, run.stderr + run.console
         assert run.error_line() == failed, (failed, run.console)
 
 
@@ -403,13 +405,13 @@ def test_texture_file_larger_than_the_free_heap_is_error_7(firmware, layout, tmp
         return boot_outcomes(layout, len(f"P6\n{texels} 1\n255\n") + 3 * texels, 3, 3, 0, 1)
 
     # the first error 7
-    texels = limits(lambda n: {"error 7" if o == "error 7" else "ok" for o in outcomes(n)}, 1, layout.size)[1]
+    texels = limits(lambda n: {o if o == FILE_TOO_LARGE_OUTCOME else "ok" for o in outcomes(n)}, 1, layout.size)[1]
     data = f"P6\n{texels} 1\n255\n".encode() + bytes(3 * texels)
     sector = layout.FAT_SECTOR_BYTES
     free = layout.size                                          # when the texture is loaded
     run = run_scene(firmware, tmp_path, small, None, texture=data, frames=1)
-    assert run.returncode == 8, run.stderr + run.console
-    found = re.fullmatch(r"error 7 file too large for memory: texture\.ppm \((\d+) bytes, (\d+) in whole sectors, "
+    assert run.returncode == EXIT_FIRMWARE_ERROR, run.stderr + run.console
+    found = re.fullmatch(re.escape(FILE_TOO_LARGE.console_starts[0]) + r": texture\.ppm \((\d+) bytes, (\d+) in whole sectors, "
                          r"(\d+) bytes free\)", run.error_line() or "")
     assert found, run.console
     size, taken, shown_free = (int(g) for g in found.groups())
@@ -440,7 +442,7 @@ def test_largest_texture_alone(firmware, layout, tmp_path, case):
         assert f"texture: {most}x1" in run.console
         assert run.compare(0).drawn_shown > 1000
     else:
-        assert run.returncode == 8, run.stderr + run.console
+        assert run.returncode == EXIT_FIRMWARE_ERROR, run.stderr + run.console
         codes = {outcome.split()[1] for outcome in outcomes(texels)}
         assert (run.error_line() or "").split()[1] in codes, (codes, run.console)   # 12 today
         assert (run.error_line() or "").startswith(
@@ -494,8 +496,8 @@ def test_non_finite_numbers_are_a_clear_error(firmware, tmp_path, name):
     result = run_emulator("run", str(firmware), "--sd", str(card), "--frames", "1", "--out", str(out), "--quiet",
                           "--check-writes")
     console = (out / "console.log").read_text()
-    assert result.returncode == 8, result.stderr + console
-    assert re.search(rf"^error 10 bad model line 1: .*{words}", console, re.M), console
+    assert result.returncode == EXIT_FIRMWARE_ERROR, result.stderr + console
+    assert re.search(rf"^{re.escape(BAD_MODEL.console_starts[0])} line 1: .*{words}", console, re.M), console
 
 
 # =========================================================================== near plane, huge triangles
@@ -607,15 +609,15 @@ def test_edge_antialiasing_adjacency_too_large_for_memory(firmware, layout, tmp_
     most, _ = limits(lambda n: model_outcomes(layout, n), 1, layout.size // layout.MESH_F_BYTES + 1)
     assert boot_allocations(layout, len(TEXTURE), 3, 0, 0, most)[0] == "ok"
     outcome, heap = boot_allocations(layout, len(TEXTURE), 3, 0, 0, most, antialias="edge")
-    assert outcome == "error 12" and heap.failed.startswith("error 12 model too large for memory (adjacency: ")
+    assert outcome == MODEL_TOO_LARGE_OUTCOME and heap.failed.startswith(f"{MODEL_TOO_LARGE.console_starts[0]} (adjacency: ")
     run = run_scene(firmware, tmp_path, fan_model(most), "antialias = edge\n", texture=TEXTURE, frames=1)
-    assert run.returncode == 8, run.stderr + run.console
+    assert run.returncode == EXIT_FIRMWARE_ERROR, run.stderr + run.console
     assert (run.error_line() or "") == heap.failed, (heap.failed, run.console)
     # the largest that fits with the adjacency: its keys are the block that fails one triangle on
     fits = largest(lambda n: boot_allocations(layout, len(TEXTURE), 3, 0, 0, n, antialias="edge")[0] == "ok",
                    1, most)
     _, heap = boot_allocations(layout, len(TEXTURE), 3, 0, 0, fits + 1, antialias="edge")
-    assert heap.failed.startswith("error 12 model too large for memory (adjacency keys: ")
+    assert heap.failed.startswith(f"{MODEL_TOO_LARGE.console_starts[0]} (adjacency keys: ")
 
 
 def test_supersampling_sums_too_large_for_memory(firmware, layout, tmp_path):
@@ -623,10 +625,10 @@ def test_supersampling_sums_too_large_for_memory(firmware, layout, tmp_path):
     the largest model without antialiasing fails with error 12 naming that block."""
     most, _ = limits(lambda n: model_outcomes(layout, n), 1, layout.size // layout.MESH_F_BYTES + 1)
     outcome, heap = boot_allocations(layout, len(TEXTURE), 3, 0, 0, most, antialias="supersample")
-    assert outcome == "error 12" and heap.failed.startswith(
-        f"error 12 model too large for memory (supersample sums: {layout.SUM_BUFFER_BYTES} bytes needed, ")
+    assert outcome == MODEL_TOO_LARGE_OUTCOME and heap.failed.startswith(
+        f"{MODEL_TOO_LARGE.console_starts[0]} (supersample sums: {layout.SUM_BUFFER_BYTES} bytes needed, ")
     run = run_scene(firmware, tmp_path, fan_model(most), "antialias = supersample\n", texture=TEXTURE, frames=1)
-    assert run.returncode == 8, run.stderr + run.console
+    assert run.returncode == EXIT_FIRMWARE_ERROR, run.stderr + run.console
     assert (run.error_line() or "") == heap.failed, (heap.failed, run.console)
 
 
@@ -640,10 +642,10 @@ def test_union_line_cells_too_large_for_memory(firmware, layout, tmp_path):
     most = largest(fits("supersample"), 1, layout.size // layout.MESH_F_BYTES + 1)
     assert fits("edge")(most + 1)
     outcome, heap = boot_allocations(layout, None, 3, 0, 0, most + 1, wireframe=True, antialias="supersample")
-    assert outcome == "error 12" and heap.failed.startswith(
-        f"error 12 model too large for memory (line coverage cells: {layout.WIRE_BUFFER_BYTES} bytes needed, ")
+    assert outcome == MODEL_TOO_LARGE_OUTCOME and heap.failed.startswith(
+        f"{MODEL_TOO_LARGE.console_starts[0]} (line coverage cells: {layout.WIRE_BUFFER_BYTES} bytes needed, ")
     run = run_scene(firmware, tmp_path, fan_model(most + 1), "mode = wireframe\nantialias = supersample\n", frames=1)
-    assert run.returncode == 8, run.stderr + run.console
+    assert run.returncode == EXIT_FIRMWARE_ERROR, run.stderr + run.console
     assert (run.error_line() or "") == heap.failed, (heap.failed, run.console)
 
 

@@ -28,8 +28,7 @@ import pytest
 from conftest import ROOT
 from emulator.board.flash_image import FlashImage
 
-sys.path.insert(0, str(ROOT))
-from tools.flash import BOARD, kflash_arguments  # noqa: E402
+from tools.flash import BOARD, kflash_arguments
 
 OK = 0xE0
 HARNESS = ("import runpy, sys, serial; "

@@ -16,7 +16,8 @@ import pytest
 
 from conftest import ROOT, run_emulator
 from emulator.board.flash_image import ERASED, FLASH_SIZE, HEADER, FlashImage, with_boot_header
-from emulator.errors import EXIT_BAD_INPUT, EXIT_USAGE, BadInput
+from emulator.errors import BadInput
+from k210_common.exit_status import EXIT_BAD_INPUT, EXIT_USAGE
 
 PROGRAM = bytes(range(256)) * 3
 

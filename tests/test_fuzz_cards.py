@@ -27,6 +27,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from conftest import make_card, run_emulator
+from k210_common.exit_status import EXIT_CORRUPT_CARD, EXIT_FIRMWARE_ERROR, EXIT_OK, EXIT_USAGE
+from k210_common.firmware_errors import firmware_errors
 from sdcard_image import cli as sd_cli
 from sdcard_image import mbr, rawfat
 
@@ -36,8 +38,8 @@ FUZZ_SETTINGS = settings(max_examples=EXAMPLES, deadline=None, derandomize=True,
                          suppress_health_check=[HealthCheck.function_scoped_fixture,
                                                 HealthCheck.too_slow])
 USED_BYTES = 4 << 20               # the card's structures and files lie in its first 4 MiB
-HOST_STATUSES = {0, 2, 6}          # ok; the damage hid the requested file; corrupt image
-FIRMWARE_ERROR_CODES = set(range(1, 13))
+HOST_STATUSES = {EXIT_OK, EXIT_USAGE, EXIT_CORRUPT_CARD}   # or the damage hid the requested file
+FIRMWARE_ERROR_CODES = firmware_errors().codes
 
 MODEL = (b"v -0.5 -0.5 0\nv 0.5 -0.5 0\nv 0.5 0.5 0\nv -0.5 0.5 0\n"
          b"vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nf 1/1 2/2 3/3 4/4\n")
@@ -236,8 +238,8 @@ def test_firmware_boots_corrupt_cards_without_trap_hang_or_stray_store(case, fir
     result = run_emulator("run", str(firmware), "--sd", str(image), "--frames", "1", "--out",
                           str(out), "--quiet", "--check-writes", "--budget", "2")
     where = f"damage {damage}: {result.stderr[-600:]}"
-    assert result.returncode in (0, 8), where
-    if result.returncode == 8:
+    assert result.returncode in (EXIT_OK, EXIT_FIRMWARE_ERROR), where
+    if result.returncode == EXIT_FIRMWARE_ERROR:
         summary = json.loads((out / "run.json").read_text())
         errors = [c["line"] for c in summary["console"] if c["line"].startswith("error ")]
         assert errors, where
@@ -277,7 +279,7 @@ def test_names_no_fat_driver_accepts_are_corrupt_not_paths(damage_kind, tmp_path
             image.seek(offset - rawfat.DIR_ENTRY_SIZE)
             image.write(_lfn_rewritten(slot, expected_name))
     for argv in (["list", str(card)], ["extract", str(card), "--all", str(tmp_path / "out")]):
-        assert sd_cli.main(argv) == 6
+        assert sd_cli.main(argv) == EXIT_CORRUPT_CARD
         err = capsys.readouterr().err
         assert (f"/Models: the entry at image byte {offset:#x} has a name FAT does not allow: "
                 f"{expected_name!r}") in err

@@ -315,7 +315,7 @@ def host_scene(text: bytes) -> str:
     try:
         parse_scene(text)
     except SceneError as error:
-        return f"error 9 {error}"
+        return f"error {error.firmware_error.code} {error}"
     return "ok"
 
 
@@ -323,7 +323,7 @@ def host_model(text: bytes) -> str:
     try:
         mesh = parse_obj(text)
     except ModelError as error:
-        return f"error 10 {error}"
+        return f"error {error.firmware_error.code} {error}"
     # the parsers run on a cleared scene: mode textured, shading flat, so normals are counted
     # but not stored (obj.S keeps them only for Gouraud shading)
     return (f"model: {len(mesh.faces)} triangles, {len(mesh.vertices)} vertices, "
@@ -440,5 +440,5 @@ def test_what_the_fuzz_stage_found(parsers, reader, data):
             parse_ppm(data)
             expected = "ok"
         except TextureError as error:
-            expected = f"error 11 {error}"
+            expected = f"error {error.firmware_error.code} {error}"
         assert parsers.texture(data)[0] == expected

@@ -13,6 +13,7 @@ import pytest
 from conftest import make_card
 from emulator.board import Board
 from emulator.errors import FirmwareReportedError
+from k210_common.firmware_errors import firmware_error
 from sdcard_image import BadInputError
 from sdcard_image.convert import check_scene_ini
 from sdcard_image.objcheck import check_obj
@@ -22,34 +23,36 @@ TRIANGLE = b"v 0 0 -1\nv 1 0 -1\nv 0 1 -1\nf 1 2 3\n"
 TEXTURE = b"P6\n1 1\n255\n\x10\x20\x30"
 ERROR = re.compile(r"^error (\d+) (.*)$")
 LINE = re.compile(r"line (\d+)")
+# the firmware's error codes (firmware/include/errors.inc)
+BAD_SCENE, BAD_MODEL, BAD_TEXTURE = (firmware_error(name).code for name in ("BAD_SCENE", "BAD_MODEL", "BAD_TEXTURE"))
 
 # (what, file name on the card, its bytes, the firmware's error code or None to accept)
 CASES = [
-    ("obj beyond double precision", "model.obj", b"v 1e400 0 -1\nv 1 0 -1\nv 0 1 -1\nf 1 2 3\n", 10),
-    ("obj beyond single precision", "model.obj", b"v 0 0 -1\nv 3.5e38 0 -1\nv 0 1 -1\nf 1 2 3\n", 10),
+    ("obj beyond double precision", "model.obj", b"v 1e400 0 -1\nv 1 0 -1\nv 0 1 -1\nf 1 2 3\n", BAD_MODEL),
+    ("obj beyond single precision", "model.obj", b"v 0 0 -1\nv 3.5e38 0 -1\nv 0 1 -1\nf 1 2 3\n", BAD_MODEL),
     ("obj largest single", "model.obj", b"v 0 0 -1\nv 3.4e38 0 -1\nv 0 1 -1\nf 1 2 3\n", None),
     # float() rounds it to the largest single, parse.S (which the firmware reads with) beyond it
     ("obj 19 digits beyond single precision", "model.obj",
-     b"v 0 0 -1\nv 3.402823567797336323e38 0 -1\nv 0 1 -1\nf 1 2 3\n", 10),
-    ("obj CR line ends", "model.obj", TRIANGLE.replace(b"\n", b"\r"), 10),
-    ("obj CR CR LF line ends", "model.obj", TRIANGLE.replace(b"\n", b"\r\r\n"), 10),
+     b"v 0 0 -1\nv 3.402823567797336323e38 0 -1\nv 0 1 -1\nf 1 2 3\n", BAD_MODEL),
+    ("obj CR line ends", "model.obj", TRIANGLE.replace(b"\n", b"\r"), BAD_MODEL),
+    ("obj CR CR LF line ends", "model.obj", TRIANGLE.replace(b"\n", b"\r\r\n"), BAD_MODEL),
     ("obj CR LF line ends", "model.obj", TRIANGLE.replace(b"\n", b"\r\n"), None),
     ("ppm two-byte sample above maxval", "texture.ppm",
-     b"P6\n1 1\n1000\n\x03\xe8\x03\xe9\x00\x00", 11),
+     b"P6\n1 1\n1000\n\x03\xe8\x03\xe9\x00\x00", BAD_TEXTURE),
     ("ppm two-byte sample at maxval", "texture.ppm", b"P6\n1 1\n1000\n\x03\xe8\x03\xe8\x00\x00", None),
-    ("ppm magic run into the width", "texture.ppm", b"P68 8 255\n" + bytes(192), 11),
-    ("scene fov beyond 180", "scene.ini", b"mode = textured\nfov = 200\n", 9),
-    ("scene unknown mode", "scene.ini", b"mode = textures\n", 9),
-    ("scene unknown key", "scene.ini", b"cull = off\nspeed = 3\n", 9),
-    ("scene 19 digits beyond single precision", "scene.ini", b"scale = 3.402823567797336323e38\n", 9),
+    ("ppm magic run into the width", "texture.ppm", b"P68 8 255\n" + bytes(192), BAD_TEXTURE),
+    ("scene fov beyond 180", "scene.ini", b"mode = textured\nfov = 200\n", BAD_SCENE),
+    ("scene unknown mode", "scene.ini", b"mode = textures\n", BAD_SCENE),
+    ("scene unknown key", "scene.ini", b"cull = off\nspeed = 3\n", BAD_SCENE),
+    ("scene 19 digits beyond single precision", "scene.ini", b"scale = 3.402823567797336323e38\n", BAD_SCENE),
     ("scene fine", "scene.ini", b"mode = flat\nfov = 179.5\n", None),
 ]
 
 
 def host_verdict(name: str, data: bytes) -> tuple[int | None, int | None]:
     """(the firmware error code the host check predicts, or None; its line)."""
-    check, code = {"model.obj": (check_obj, 10), "texture.ppm": (parse_ppm, 11),
-                   "scene.ini": (check_scene_ini, 9)}[name]
+    check, code = {"model.obj": (check_obj, BAD_MODEL), "texture.ppm": (parse_ppm, BAD_TEXTURE),
+                   "scene.ini": (check_scene_ini, BAD_SCENE)}[name]
     try:
         check(data, name)
     except BadInputError as exc:

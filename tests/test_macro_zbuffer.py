@@ -10,11 +10,8 @@ from pathlib import Path
 import pytest
 
 from conftest import ROOT
-
-sys.path.insert(0, str(ROOT / "tools"))
-
-import macro_zbuffer  # noqa: E402
-from reference.load import load_files  # noqa: E402
+from reference.load import load_files
+from tools import macro_zbuffer
 
 SCENE = "mode = flat\ncull = off\ntranslate = 0 0 -3\n"
 # one large triangle in front (z = 0) and a small square behind its middle (z = -1), then the same

@@ -11,6 +11,8 @@ import pytest
 
 from conftest import make_card, run_emulator
 from emulator.board import Board
+from k210_common.exit_status import EXIT_FIRMWARE_ERROR
+from k210_common.firmware_errors import firmware_error
 
 TRIANGLE = "v 0 0 -1\nv 1 0 -1\nv 0 1 -1\nf 1 2 3\n"
 TEXTURE = b"P6\n1 1\n255\n\x10\x20\x30"
@@ -146,28 +148,30 @@ def test_textures_convert_to_rgb565(firmware, tmp_path, ppm, expected):
     assert [p[0] for p in pixels] == expected
 
 
+# the firmware's error codes (firmware/include/errors.inc)
+BAD_SCENE, BAD_MODEL, BAD_TEXTURE = (firmware_error(name).code for name in ("BAD_SCENE", "BAD_MODEL", "BAD_TEXTURE"))
 BAD_FILES = {
     # name: (files, error code, words in the error line)
-    "obj-index-out-of-range": ({"/model.obj": b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n"}, 10, "line 4"),
-    "obj-negative-index-before-start": ({"/model.obj": b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf -4 1 2\n"}, 10, "line 4"),
-    "obj-index-zero": ({"/model.obj": b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n"}, 10, "line 4"),
-    "obj-face-with-two-vertices": ({"/model.obj": b"v 0 0 0\nv 1 0 0\nf 1 2\n"}, 10, "line 3"),
-    "obj-malformed-number": ({"/model.obj": b"v 0 0 0\nv 1.2.3 0 0\n"}, 10, "line 2"),
-    "obj-unknown-statement": ({"/model.obj": TRIANGLE.encode() + b"l 1 2\n"}, 10, "line 5"),
-    "obj-no-faces": ({"/model.obj": b"v 0 0 0\n"}, 10, "no faces"),
-    "ppm-truncated": ({"/texture.ppm": b"P6\n4 4\n255\n\x00\x00"}, 11, "truncated"),
-    "ppm-bad-magic": ({"/texture.ppm": b"P5\n1 1\n255\n\x00"}, 11, "not a PPM"),
-    "ppm-bad-maxval": ({"/texture.ppm": b"P3\n1 1\n70000\n1 2 3\n"}, 11, "maxval"),
-    "ppm-sample-above-maxval": ({"/texture.ppm": b"P3\n1 1\n15\n1 2 16\n"}, 11, "above maxval"),
-    "scene-unknown-key": ({"/scene.ini": b"mode = flat\nshiny = yes\n"}, 9, "line 2"),
-    "scene-bad-mode": ({"/scene.ini": b"# modes\nmode = glossy\n"}, 9, "line 2"),
-    "scene-vector-too-short": ({"/scene.ini": b"translate = 0 0\n"}, 9, "line 1"),
-    "scene-zero-axis": ({"/scene.ini": b"axis = 0 0 0\n"}, 9, "line 1"),
-    "scene-far-before-near": ({"/scene.ini": b"near = 5\nfar = 2\n"}, 9, "line 2"),
-    "scene-bad-number": ({"/scene.ini": b"scale = 1e\n"}, 9, "line 1"),
-    "scene-light-levels-fraction": ({"/scene.ini": b"light_levels = 3.5\n"}, 9, "line 1: bad value (must be a whole"),
-    "scene-light-levels-too-many": ({"/scene.ini": b"\nlight_levels = 66\n"}, 9, "line 2: bad value (must be a whole"),
-    "scene-bad-depth": ({"/scene.ini": b"depth = 24\n"}, 9, "line 1: bad value (expected int16 or float32)"),
+    "obj-index-out-of-range": ({"/model.obj": b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n"}, BAD_MODEL, "line 4"),
+    "obj-negative-index-before-start": ({"/model.obj": b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf -4 1 2\n"}, BAD_MODEL, "line 4"),
+    "obj-index-zero": ({"/model.obj": b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n"}, BAD_MODEL, "line 4"),
+    "obj-face-with-two-vertices": ({"/model.obj": b"v 0 0 0\nv 1 0 0\nf 1 2\n"}, BAD_MODEL, "line 3"),
+    "obj-malformed-number": ({"/model.obj": b"v 0 0 0\nv 1.2.3 0 0\n"}, BAD_MODEL, "line 2"),
+    "obj-unknown-statement": ({"/model.obj": TRIANGLE.encode() + b"l 1 2\n"}, BAD_MODEL, "line 5"),
+    "obj-no-faces": ({"/model.obj": b"v 0 0 0\n"}, BAD_MODEL, "no faces"),
+    "ppm-truncated": ({"/texture.ppm": b"P6\n4 4\n255\n\x00\x00"}, BAD_TEXTURE, "truncated"),
+    "ppm-bad-magic": ({"/texture.ppm": b"P5\n1 1\n255\n\x00"}, BAD_TEXTURE, "not a PPM"),
+    "ppm-bad-maxval": ({"/texture.ppm": b"P3\n1 1\n70000\n1 2 3\n"}, BAD_TEXTURE, "maxval"),
+    "ppm-sample-above-maxval": ({"/texture.ppm": b"P3\n1 1\n15\n1 2 16\n"}, BAD_TEXTURE, "above maxval"),
+    "scene-unknown-key": ({"/scene.ini": b"mode = flat\nshiny = yes\n"}, BAD_SCENE, "line 2"),
+    "scene-bad-mode": ({"/scene.ini": b"# modes\nmode = glossy\n"}, BAD_SCENE, "line 2"),
+    "scene-vector-too-short": ({"/scene.ini": b"translate = 0 0\n"}, BAD_SCENE, "line 1"),
+    "scene-zero-axis": ({"/scene.ini": b"axis = 0 0 0\n"}, BAD_SCENE, "line 1"),
+    "scene-far-before-near": ({"/scene.ini": b"near = 5\nfar = 2\n"}, BAD_SCENE, "line 2"),
+    "scene-bad-number": ({"/scene.ini": b"scale = 1e\n"}, BAD_SCENE, "line 1"),
+    "scene-light-levels-fraction": ({"/scene.ini": b"light_levels = 3.5\n"}, BAD_SCENE, "line 1: bad value (must be a whole"),
+    "scene-light-levels-too-many": ({"/scene.ini": b"\nlight_levels = 66\n"}, BAD_SCENE, "line 2: bad value (must be a whole"),
+    "scene-bad-depth": ({"/scene.ini": b"depth = 24\n"}, BAD_SCENE, "line 1: bad value (expected int16 or float32)"),
 }
 
 
@@ -179,7 +183,7 @@ def test_bad_files_end_in_their_error(firmware, tmp_path, name):
     out = tmp_path / "out"
     result = run_emulator("run", str(firmware), "--sd", str(card), "--frames", "1", "--out", str(out), "--quiet")
     console = (out / "console.log").read_text()
-    assert result.returncode == 8, result.stderr + console     # a reported error: no trap, no hang
+    assert result.returncode == EXIT_FIRMWARE_ERROR, result.stderr + console     # a reported error: no trap, no hang
     errors = ERROR.findall(console)
     assert errors and int(errors[0][0]) == code and words in errors[0][1], console
     frames = sorted(out.glob("frame_*.png"))

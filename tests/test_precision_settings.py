@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import json
 import re
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -13,11 +12,9 @@ import pytest
 from PIL import Image
 
 import reference
-from conftest import ROOT, make_card, run_emulator, shared_value
+from conftest import make_card, run_emulator, shared_value
 
-sys.path.insert(0, str(ROOT / "tools"))
-import make_assets  # noqa: E402  (tools/ is not a package on the path)
-import quality  # noqa: E402
+from tools import make_assets, quality
 
 FRAMES = 2
 
@@ -70,11 +67,11 @@ def test_every_setting_changes_the_frames_or_their_cost(firmware, torus_files, t
     images, instructions, _ = _run(firmware, tmp_path, model, texture, {**TORUS_SCENE, **SINGLE_KNOBS[name]})
     default_images, default_instructions, _ = torus_default
     if name == "depth-float32":
-        assert all(np.array_equal(a, b) for a, b in zip(images, default_images))
+        assert all(np.array_equal(a, b) for a, b in zip(images, default_images, strict=True))
         # the 32-bit buffer is twice as large to clear: 76,800 more bytes than 153,600, 8 stores a round
         assert instructions[1] - default_instructions[1] > 20_000
     else:   # (at 20 degrees, frame 1, the angle table is exact: frame 0 is at 17)
-        assert not all(np.array_equal(a, b) for a, b in zip(images, default_images))
+        assert not all(np.array_equal(a, b) for a, b in zip(images, default_images, strict=True))
 
 
 def test_the_angle_table_is_exact_on_its_2_degree_grid_and_rounds_between(firmware, torus_files, tmp_path):
@@ -98,7 +95,7 @@ def test_gouraud_on_a_model_without_normals_is_flat_shading(firmware, tmp_path):
     scene = {**TORUS_SCENE, "mode": "flat"}
     flat, _, _ = _run(firmware, tmp_path / "flat", model, texture, scene)
     gouraud, _, _ = _run(firmware, tmp_path / "gouraud", model, texture, {**scene, "shading": "gouraud"})
-    assert all(np.array_equal(a, b) for a, b in zip(flat, gouraud))
+    assert all(np.array_equal(a, b) for a, b in zip(flat, gouraud, strict=True))
 
 
 def test_gouraud_is_nearer_the_smooth_reference_on_a_smooth_model(firmware, torus_files, torus_default, tmp_path):

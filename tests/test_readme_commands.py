@@ -93,6 +93,10 @@ def _lists_exit_statuses(result: subprocess.CompletedProcess) -> None:
     assert "exit status:" in result.stdout
 
 
+def _tables_match(result: subprocess.CompletedProcess) -> None:
+    assert "(differ)" not in result.stdout and "tables all, emulator, reference" in result.stdout
+
+
 def _prints_agreement(result: subprocess.CompletedProcess) -> None:
     from golden_scenes import SCENES            # one line per golden scene with triangles
     assert result.stdout.count("lit per face: identical") == len(SCENES)
@@ -147,6 +151,7 @@ COMMANDS = {
     '--expect "hello, Ada!" --expect bye --out build/echo': ("run", _console_says("build/echo", "hello, Ada!", "bye")),
     ".venv/bin/python -m pytest tests/test_reference.py -k first_golden -s":
         ("run", _prints_agreement),
+    "python -m tools.exit_status_tables --check": ("run", _tables_match),
 }
 #: Each needs the one before (assemble, link, run), so they run in this order in one test.
 OWN_FIRMWARE_COMMANDS = {

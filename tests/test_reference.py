@@ -3,7 +3,6 @@ errors, and a loose agreement with the firmware's golden frames (a convention ch
 from __future__ import annotations
 
 import math
-import sys
 import warnings
 from dataclasses import replace
 from pathlib import Path
@@ -12,16 +11,16 @@ import numpy as np
 import pytest
 from PIL import Image
 
-ROOT = Path(__file__).resolve().parent.parent
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
+from k210_common.exit_status import EXIT_BAD_INPUT
 
-from golden_scenes import DEFAULT_CARD, GOLDEN, SCENES  # noqa: E402
-from emulator_runs import run_module  # noqa: E402
-from reference import (Mesh, ModelError, Scene, SceneError, TextureError, load_card_image,  # noqa: E402
+ROOT = Path(__file__).resolve().parent.parent
+
+from golden_scenes import DEFAULT_CARD, GOLDEN, SCENES
+from emulator_runs import run_module
+from reference import (Mesh, ModelError, Scene, SceneError, TextureError, load_card_image,
                        load_files, parse_obj, parse_ppm, parse_scene, render_frame, render_ideal_frame,
                        render_image)
-from reference.render import FLAT_COLOUR, Target, model_matrix, raster_triangle, shade  # noqa: E402
+from reference.render import FLAT_COLOUR, Target, model_matrix, raster_triangle, shade
 
 W, H = 320, 240
 BG = 0x0000
@@ -595,7 +594,7 @@ def test_cli_renders_a_folder_and_a_card(tmp_path):
     assert image.shape == (240, 320, 3) and (image != image[0, 0]).any()
     (folder / "scene.ini").write_text("mode = flat\nnear = -1\n")
     result = run_module("reference", "render", folder, "--out", out)
-    assert result.returncode == 3 and "bad scene.ini line 2: bad value (must be greater than 0)" in result.stderr
+    assert result.returncode == EXIT_BAD_INPUT and "bad scene.ini line 2: bad value (must be greater than 0)" in result.stderr
     if DEFAULT_CARD.exists():
         result = run_module("reference", "render-card", DEFAULT_CARD, "--out", tmp_path / "card-out", "--quiet")
         assert result.returncode == 0, result.stderr

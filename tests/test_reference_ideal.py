@@ -4,7 +4,6 @@ bench scene. Small regions and single frames keep it to a few seconds."""
 from __future__ import annotations
 
 import math
-import sys
 from dataclasses import replace
 from pathlib import Path
 
@@ -13,12 +12,10 @@ import pytest
 from PIL import Image
 
 ROOT = Path(__file__).resolve().parent.parent
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
 
-from emulator_runs import run_module  # noqa: E402
-from reference import Mesh, Scene, load_card_image, render_frame, render_image  # noqa: E402
-from reference.ideal import (BoxTexture, channels, ideal_channels, line_coverage,  # noqa: E402
+from emulator_runs import run_module
+from reference import Mesh, Scene, load_card_image, render_frame, render_image
+from reference.ideal import (BoxTexture, channels, ideal_channels, line_coverage,
                              render_ideal_frame, render_ideal_image)
 
 BG = 0x0000

@@ -20,6 +20,8 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from k210_common.exit_status import (EXIT_BAD_INPUT, EXIT_CARD_TOO_SMALL, EXIT_CORRUPT_CARD, EXIT_OUTPUT_EXISTS,
+                                     EXIT_USAGE)
 from sdcard_image import (BadInputError, CorruptImageError, ImageTooSmallError, OutputExistsError,
                           UsageError, build_image, list_image, read_file)
 from sdcard_image import cli, fat32, image as image_mod, layouts
@@ -428,7 +430,7 @@ def test_extract_single_file_all_and_stdout(sample_img, inputs, tmp_path):
     assert run_cli("extract", sample_img, "/models/cube.obj", out).returncode == 0
     assert out.read_bytes() == CUBE_OBJ
     again = run_cli("extract", sample_img, "/models/cube.obj", out)
-    assert again.returncode == 4 and "--force" in again.stderr
+    assert again.returncode == EXIT_OUTPUT_EXISTS and "--force" in again.stderr
     assert run_cli("extract", sample_img, "/models/cube.obj", out, "--force").returncode == 0
     # FAT names are case-insensitive: so is the lookup; a folder as OUT keeps the name.
     assert run_cli("extract", sample_img, "/LONG FOLDER NAME/sub folder/"
@@ -443,9 +445,9 @@ def test_extract_single_file_all_and_stdout(sample_img, inputs, tmp_path):
     got = {"/" + p.relative_to(dest).as_posix(): p.read_bytes()
            for p in dest.rglob("*") if p.is_file()}
     assert got == expected
-    assert run_cli("extract", sample_img, "--all", dest).returncode == 4
+    assert run_cli("extract", sample_img, "--all", dest).returncode == EXIT_OUTPUT_EXISTS
     missing = run_cli("extract", sample_img, "/nope.txt", tmp_path / "x")
-    assert missing.returncode == 2 and "nope.txt" in missing.stderr
+    assert missing.returncode == EXIT_USAGE and "nope.txt" in missing.stderr
 
 
 # --- API -----------------------------------------------------------------------------------------
@@ -514,7 +516,7 @@ def test_texture_size_resizes_converted_images_only(tmp_path):
     assert "keep.ppm" in result.stderr and "kept at 1x1" in result.stderr
     assert "resized to 4x2" in result.stdout
     bad = run_cli("build", tmp_path / "d.img", src / "t.png", "--texture-size", "4by2")
-    assert bad.returncode == 2 and "WxH" in bad.stderr
+    assert bad.returncode == EXIT_USAGE and "WxH" in bad.stderr
 
 
 def test_obj_is_copied_unchanged_and_accepts_all_face_forms():
@@ -586,7 +588,7 @@ def test_bad_obj_on_command_line_exits_3_with_line(tmp_path):
     obj = tmp_path / "broken.obj"
     obj.write_bytes(b"v 0 0 0\nv 1 0 0\nv 0 1 0\n\nf 1 2 9\n")
     result = run_process("build", tmp_path / "c.img", obj)
-    assert result.returncode == 3
+    assert result.returncode == EXIT_BAD_INPUT
     assert f"{obj}:5: vertex index out of range" in result.stderr
     assert "Traceback" not in result.stderr
     assert not (tmp_path / "c.img").exists() and not list(tmp_path.glob(".c.img*"))
@@ -608,7 +610,7 @@ def test_bad_ppm_exits_3(tmp_path, data, message):
     ppm = tmp_path / "bad.ppm"
     ppm.write_bytes(data)
     result = run_cli("build", tmp_path / "c.img", ppm)
-    assert result.returncode == 3, result.stderr
+    assert result.returncode == EXIT_BAD_INPUT, result.stderr
     assert "bad.ppm: " in result.stderr and message in result.stderr
     assert "bad texture: " in result.stderr and "(firmware error 11)" in result.stderr
 
@@ -623,7 +625,7 @@ def test_undecodable_image_exits_3(tmp_path):
     png = tmp_path / "fake.png"
     png.write_bytes(b"\x89PNG\r\n\x1a\n" + b"garbage" * 10)
     result = run_cli("build", tmp_path / "c.img", png)
-    assert result.returncode == 3 and "fake.png" in result.stderr
+    assert result.returncode == EXIT_BAD_INPUT and "fake.png" in result.stderr
     assert "Traceback" not in result.stderr
 
 
@@ -638,12 +640,12 @@ def test_scene_from_options_and_from_input(tmp_path, sample_img):
     assert run_cli("build", out, ini, "--size", "34").returncode == 0
     assert read_file(out, "/scene.ini") == b"# mine\nmodel = a.obj\n"
     both = run_cli("build", tmp_path / "d.img", ini, "--scene", "model=b.obj")
-    assert both.returncode == 2 and "scene.ini" in both.stderr
+    assert both.returncode == EXIT_USAGE and "scene.ini" in both.stderr
     ini.write_bytes(b"model = a.obj\nthis line is wrong\n")
     broken = run_cli("build", tmp_path / "e.img", ini)
-    assert broken.returncode == 3 and f"{ini}:2:" in broken.stderr
+    assert broken.returncode == EXIT_BAD_INPUT and f"{ini}:2:" in broken.stderr
     bad_opt = run_cli("build", tmp_path / "f.img", "--scene", "novalue")
-    assert bad_opt.returncode == 2 and "KEY=VALUE" in bad_opt.stderr
+    assert bad_opt.returncode == EXIT_USAGE and "KEY=VALUE" in bad_opt.stderr
 
 
 @pytest.mark.parametrize("text,line,message", [
@@ -663,7 +665,7 @@ def test_scene_ini_follows_the_firmware_rules(tmp_path, text, line, message):
     ini = tmp_path / "scene.ini"
     ini.write_bytes(text)
     result = run_cli("build", tmp_path / "c.img", ini)
-    assert result.returncode == 3
+    assert result.returncode == EXIT_BAD_INPUT
     assert f"{ini}:{line}: " in result.stderr and message in result.stderr
 
 
@@ -677,9 +679,9 @@ def test_scene_ini_accepts_bom_crlf_and_comments_and_refuses_what_the_firmware_r
     assert result.returncode == 0, result.stderr
     assert "no such file" not in result.stderr      # flat: no texture needed
     hash_in_value = run_cli("build", tmp_path / "d.img", "--scene", "model=a#b.obj")
-    assert hash_in_value.returncode == 2 and "starts a comment" in hash_in_value.stderr
+    assert hash_in_value.returncode == EXIT_USAGE and "starts a comment" in hash_in_value.stderr
     twice = run_cli("build", tmp_path / "e.img", "--scene", "model=a", "--scene", "Model=b")
-    assert twice.returncode == 2 and "twice" in twice.stderr
+    assert twice.returncode == EXIT_USAGE and "twice" in twice.stderr
     missing = run_cli("build", tmp_path / "f.img", "--scene", "texture=t.ppm", "--size", "34")
     assert missing.returncode == 0 and "texture = t.ppm: no such file on the card" in missing.stderr
     assert "model = model.obj: no such file on the card (the firmware's default)" in missing.stderr
@@ -695,7 +697,7 @@ def test_scene_ini_accepts_bom_crlf_and_comments_and_refuses_what_the_firmware_r
 def test_scene_options_the_firmware_refuses_are_usage_errors(tmp_path, option, message):
     """Issue 14: these built with exit 0 and stopped the firmware at boot with error 9."""
     result = run_cli("build", tmp_path / "c.img", "--scene", "model=m.obj", "--scene", option)
-    assert result.returncode == 2, result.stderr
+    assert result.returncode == EXIT_USAGE, result.stderr
     assert message in result.stderr
     assert not (tmp_path / "c.img").exists()
 
@@ -717,7 +719,7 @@ def test_refuses_to_overwrite_without_force(tmp_path, inputs):
     out = tmp_path / "c.img"
     out.write_bytes(b"precious")
     result = run_cli("build", out, inputs / "one.bin")
-    assert result.returncode == 4 and "--force" in result.stderr
+    assert result.returncode == EXIT_OUTPUT_EXISTS and "--force" in result.stderr
     assert out.read_bytes() == b"precious"
     result = run_cli("build", out, inputs / "one.bin", "--force", "--size", "34")
     assert result.returncode == 0, result.stderr
@@ -744,19 +746,19 @@ def test_too_small_exits_5(tmp_path, inputs):
     with open(blob, "wb") as f:
         f.truncate(33 * MIB)
     result = run_cli("build", tmp_path / "d.img", blob, "--size", "34")
-    assert result.returncode == 5 and "--size" in result.stderr
+    assert result.returncode == EXIT_CARD_TOO_SMALL and "--size" in result.stderr
     assert not (tmp_path / "d.img").exists() and not list(tmp_path.glob(".d.img*"))
-    assert run_cli("build", tmp_path / "e.img", blob, "--size", "20").returncode == 2
+    assert run_cli("build", tmp_path / "e.img", blob, "--size", "20").returncode == EXIT_USAGE
 
 
 def test_usage_errors_exit_2(tmp_path, inputs):
-    assert run_process().returncode == 2
-    assert run_cli("build").returncode == 2
-    assert run_cli("frobnicate").returncode == 2
-    assert run_cli("build", tmp_path / "c.img", tmp_path / "missing.obj").returncode == 2
-    assert run_cli("build", tmp_path / "nofolder" / "c.img", inputs / "one.bin").returncode == 2
-    assert run_cli("extract", tmp_path / "x.img").returncode == 2
-    assert run_cli("list", tmp_path / "missing.img").returncode == 2
+    assert run_process().returncode == EXIT_USAGE
+    assert run_cli("build").returncode == EXIT_USAGE
+    assert run_cli("frobnicate").returncode == EXIT_USAGE
+    assert run_cli("build", tmp_path / "c.img", tmp_path / "missing.obj").returncode == EXIT_USAGE
+    assert run_cli("build", tmp_path / "nofolder" / "c.img", inputs / "one.bin").returncode == EXIT_USAGE
+    assert run_cli("extract", tmp_path / "x.img").returncode == EXIT_USAGE
+    assert run_cli("list", tmp_path / "missing.img").returncode == EXIT_USAGE
 
 
 def test_names_differing_only_in_case_are_refused_in_one_folder(tmp_path):
@@ -767,12 +769,12 @@ def test_names_differing_only_in_case_are_refused_in_one_folder(tmp_path):
     (tmp_path / "b" / "cube.OBJ").write_bytes(triangle)
     result = run_cli("build", tmp_path / "c.img", tmp_path / "a" / "Cube.obj",
                      tmp_path / "b" / "cube.OBJ")
-    assert result.returncode == 2 and "case" in result.stderr
+    assert result.returncode == EXIT_USAGE and "case" in result.stderr
     # A converted image and a PPM of the same base name collide too.
     gradient(2, 2).save(tmp_path / "a" / "cube.png")
     (tmp_path / "a" / "cube.ppm").write_bytes(b"P6\n1 1\n255\n\0\0\0")
     result = run_cli("build", tmp_path / "d.img", tmp_path / "a")
-    assert result.returncode == 2 and "/a/cube.ppm" in result.stderr
+    assert result.returncode == EXIT_USAGE and "/a/cube.ppm" in result.stderr
 
 
 # --- corrupt images -------------------------------------------------------------------------------
@@ -824,17 +826,17 @@ def _corrupt(small_img: Path, tmp_path: Path, how: str) -> Path:
     ("bare volume", "bare volume without a partition table"),
     ("cluster loop", "loops back"),
 ])
-def test_corrupt_images_exit_6_with_reason(small_img, tmp_path, how, message):
+def test_corrupt_images_exit_corrupt_card_with_reason(small_img, tmp_path, how, message):
     img = _corrupt(small_img, tmp_path, how)
     for args in (("list", img), ("extract", img, "/big.bin", tmp_path / "out.bin")):
         result = run_cli(*args)
-        assert result.returncode == 6, (args, result.stdout, result.stderr)
+        assert result.returncode == EXIT_CORRUPT_CARD, (args, result.stdout, result.stderr)
         assert message in result.stderr and "Traceback" not in result.stderr
     with pytest.raises(CorruptImageError):
         list_image(img)
     if how == "cluster loop":
         result = run_process("list", img)
-        assert result.returncode == 6 and "Traceback" not in result.stderr
+        assert result.returncode == EXIT_CORRUPT_CARD and "Traceback" not in result.stderr
 
 
 # --- special layouts ------------------------------------------------------------------------------
@@ -1008,4 +1010,4 @@ def test_a_card_laid_out_as_mkfs_fat_does(tmp_path, size_mib, bytes_per_cluster)
 
 def test_an_unknown_layout_is_a_usage_error(tmp_path):
     result = run_module("sdcard_image", "build", tmp_path / "c.img", "--layout", "exfat", "--scene", "model=x.obj")
-    assert result.returncode == 2 and "invalid choice: 'exfat'" in result.stderr
+    assert result.returncode == EXIT_USAGE and "invalid choice: 'exfat'" in result.stderr

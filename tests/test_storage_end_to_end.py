@@ -13,6 +13,8 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from k210_common.exit_status import EXIT_FIRMWARE_ERROR
+from k210_common.firmware_errors import firmware_error
 from conftest import ROOT, copy_card, make_card, run_emulator, shared_value
 from firmware_calls import FirmwareCaller
 from sdcard_image.fat32 import CardWriter
@@ -24,22 +26,6 @@ ERROR = re.compile(r"^error (\d+) (.*)$", re.M)
 BIG_BYTES = 2 * 1024 * 1024 + 12345
 LONG_PATH = "Long Folder Name/deeper/a file with a rather long name.obj"
 SCENE_BYTES = 512   # scene.ini is written once as a one-cluster placeholder and patched per test
-
-
-def _error_colours() -> dict[int, tuple[int, int, int]]:
-    """Error code -> RGB888 of its screen colour, from the firmware's own table."""
-    text = (ROOT / "firmware" / "include" / "errors.inc").read_text()
-    codes = {name: int(value, 0) for name, value in re.findall(r"\.equ ERR_(\w+),\s+(\w+)", text)
-             if not name.startswith("COLOUR") and name != "CODE_COUNT"}
-    colours = {}
-    for name, code in codes.items():
-        match = re.search(rf"\.equ ERR_COLOUR_{name},\s+(\w+)", text)
-        if match:
-            rgb565 = int(match.group(1), 0)
-            # as the panel shows it: 5-bit red/blue widened to its 6-bit GRAM, then to 8 bits
-            r6, g6, b6 = (rgb565 >> 11) << 1 | rgb565 >> 15, (rgb565 >> 5) & 63, (rgb565 & 31) << 1 | (rgb565 >> 4) & 1
-            colours[code] = tuple((c << 2) | (c >> 4) for c in (r6, g6, b6))
-    return colours
 
 
 TRIANGLE = b"v 0 0 -1\nv 1 0 -1\nv 0 1 -1\nf 1 2 3\n"
@@ -202,7 +188,7 @@ def test_tiny_files_load_exactly_then_fail_as_models(firmware, loader_card, tmp_
     image, files = loader_card
     result, console, out = run_scene(firmware, image, f"model={model}\n{WIREFRAME}", tmp_path)
     assert _load_line(model, files["/" + model]) in console
-    assert_error(result, console, out, 10, "no faces")
+    assert_error(result, console, out, "BAD_MODEL", "no faces")
 
 
 def test_a_directory_spanning_several_clusters(firmware, loader_card, tmp_path):
@@ -257,39 +243,37 @@ def test_blocks_whose_token_gaps_vary_load_byte_for_byte_without_reading_any_aga
 
 # --- failures ---------------------------------------------------------------------------------
 
-def assert_error(result, console: str, out: Path, code: int, words: str) -> None:
-    assert result.returncode == 8, result.stderr + console
+def assert_error(result, console: str, out: Path, name: str, words: str) -> None:
+    """The run ended with the firmware's error ERR_<name> (firmware/include/errors.inc): its
+    console line, with `words` in it, and its screen colour."""
+    error = firmware_error(name)
+    assert result.returncode == EXIT_FIRMWARE_ERROR, result.stderr + console
     errors = ERROR.findall(console)
-    assert errors and int(errors[0][0]) == code, console
+    assert errors and int(errors[0][0]) == error.code, console
+    assert error.reported_by(f"error {errors[0][0]} {errors[0][1]}"), (error.words, console)
     assert words in errors[0][1], console
     frames = sorted(out.glob("frame_*.png"))
     assert frames, "no error screen was shown"
     screen = np.asarray(Image.open(frames[-1]).convert("RGB"))
-    colour = _error_colours()[code]
-    assert (screen == colour).all(), f"error screen is not the colour of code {code}"
-
-
-def test_error_colours_are_distinct():
-    colours = _error_colours()
-    assert len(colours) >= 9 and len(set(colours.values())) == len(colours)
+    assert (screen == error.rgb888).all(), f"error screen is not the colour of ERR_{name} ({error.colour_name})"
 
 
 def test_no_card(firmware, tmp_path):
     out = tmp_path / "out"
     result = run_emulator("run", str(firmware), "--frames", "1", "--out", str(out), "--quiet")
-    assert_error(result, (out / "console.log").read_text(), out, 1, "no card")
+    assert_error(result, (out / "console.log").read_text(), out, "NO_CARD", "no card")
 
 
 def test_card_that_never_initialises_times_out(firmware, loader_card, tmp_path):
     result, console, out = run_scene(firmware, loader_card[0], f"model=sizes/cluster.obj\n{WIREFRAME}", tmp_path,
                                      "--sd-fault", "no-init")
-    assert_error(result, console, out, 2, "timeout")
+    assert_error(result, console, out, "CARD_TIMEOUT", "timeout")
 
 
 def test_blocks_that_stay_bad_are_a_crc_error(firmware, loader_card, tmp_path):
     result, console, out = run_scene(firmware, loader_card[0], f"model=sizes/cluster.obj\n{WIREFRAME}", tmp_path,
                                      "--sd-fault", "bad-crc")
-    assert_error(result, console, out, 4, "CRC")
+    assert_error(result, console, out, "CRC", "CRC")
 
 
 def test_card_without_fat32_partition(firmware, tmp_path):
@@ -297,7 +281,7 @@ def test_card_without_fat32_partition(firmware, tmp_path):
     blank.write_bytes(bytes(4 * 1024 * 1024))
     out = tmp_path / "out"
     result = run_emulator("run", str(firmware), "--sd", str(blank), "--frames", "1", "--out", str(out), "--quiet")
-    assert_error(result, (out / "console.log").read_text(), out, 5, "FAT32")
+    assert_error(result, (out / "console.log").read_text(), out, "NO_FAT32", "FAT32")
 
 
 MIB = 1024 * 1024
@@ -326,7 +310,7 @@ def test_a_card_cut_short_is_a_partition_error_naming_the_block(firmware, tmp_pa
     result = run_emulator("run", str(firmware), "--sd", str(card), "--frames", "1", "--out", str(out), "--quiet")
     console = (out / "console.log").read_text()
     end = 64 * MIB // 512 - 1
-    assert_error(result, console, out, 5, f"no FAT32 partition: the partition ends at block {end}, "
+    assert_error(result, console, out, "NO_FAT32", f"no FAT32 partition: the partition ends at block {end}, "
                                           f"past the card's last block {blocks - 1}")
     assert f"sd: card ready, SDHC (block addressing), {blocks} blocks" in console
     warnings = json.loads((out / "run.json").read_text())["warnings"]
@@ -343,7 +327,7 @@ def test_a_volume_past_the_card_is_an_invalid_boot_sector(firmware, tmp_path):
         handle.write(bytes(4))
     out = tmp_path / "out"
     result = run_emulator("run", str(firmware), "--sd", str(card), "--frames", "1", "--out", str(out), "--quiet")
-    assert_error(result, (out / "console.log").read_text(), out, 5,
+    assert_error(result, (out / "console.log").read_text(), out, "NO_FAT32",
                  f"invalid BPB: the volume ends at block {64 * MIB // 512 - 1}, past the card's last block "
                  f"{blocks - 1}")
 
@@ -443,7 +427,7 @@ def test_a_folder_of_more_than_65536_entries_is_a_corrupt_directory(firmware, tm
     entries took more than the 5 s budget). The model's entry comes first: the answer does not
     depend on where the wanted entry lies."""
     result, console, out, timed = _run_long_folder(firmware, tmp_path, DIR_LIMIT + 16)
-    assert_error(result, console, out, 8, f"corrupt directory: /big has more than {DIR_LIMIT} entries")
+    assert_error(result, console, out, "BAD_CHAIN", f"corrupt directory: /big has more than {DIR_LIMIT} entries")
     times = {entry["line"].split()[0]: entry["virtual_time_s"] for entry in timed}
     assert times["error"] - times["load"] < 0.05, times      # from scene.ini's load line
 
@@ -456,7 +440,7 @@ def test_a_folder_of_exactly_65536_entries_still_works(firmware, tmp_path):
 
 def test_missing_file(firmware, loader_card, tmp_path):
     result, console, out = run_scene(firmware, loader_card[0], f"model=sizes/none.obj\n{WIREFRAME}", tmp_path)
-    assert_error(result, console, out, 6, "sizes/none.obj")
+    assert_error(result, console, out, "NOT_FOUND", "sizes/none.obj")
 
 
 @pytest.mark.parametrize("mode", ["textured", "flat"])
@@ -466,7 +450,7 @@ def test_only_textured_mode_needs_its_texture(firmware, loader_card, tmp_path, m
     result, console, out = run_scene(firmware, loader_card[0], f"model=sizes/cluster.obj\ntexture=sizes/none.ppm\n"
                                                                 f"mode = {mode}\n", tmp_path)
     if mode == "textured":
-        assert_error(result, console, out, 6, "file not found: sizes/none.ppm")
+        assert_error(result, console, out, "NOT_FOUND", "file not found: sizes/none.ppm")
     else:
         assert result.returncode == 0, result.stderr + console
         assert "texture: not loaded (mode flat)" in console.splitlines()
@@ -481,7 +465,7 @@ def test_file_too_large_for_memory(firmware, loader_card, tmp_path):
     subprocess.run(["mcopy", "-i", f"{image}@@1M", str(huge), "::/huge.ppm"], check=True)
     result, console, out = run_scene(firmware, image, "model = sizes/cluster.obj\ntexture = huge.ppm\n",
                                      tmp_path / "run")
-    assert_error(result, console, out, 7, "huge.ppm")
+    assert_error(result, console, out, "TOO_LARGE", "huge.ppm")
 
 
 def _fat_entry_offsets(image: Path, cluster: int) -> list[int]:
@@ -501,13 +485,13 @@ def test_corrupt_chain(firmware, loader_card, tmp_path, damage):
             handle.seek(offset)
             handle.write(target.to_bytes(4, "little"))
     result, console, out = run_scene(firmware, image, f"model=frag/fragmented.obj\n{WIREFRAME}", tmp_path / "run")
-    assert_error(result, console, out, 8, "chain")
+    assert_error(result, console, out, "BAD_CHAIN", "chain")
 
 
 def test_unknown_scene_key_names_its_line(firmware, loader_card, tmp_path):
     result, console, out = run_scene(firmware, loader_card[0], "model=sizes/cluster.obj\n# fine\nshiny = yes\n",
                                      tmp_path)
-    assert_error(result, console, out, 9, "line 3")
+    assert_error(result, console, out, "BAD_SCENE", "line 3")
 
 
 def test_the_firmware_reads_a_card_laid_out_as_mkfs_fat_does(firmware, card, tmp_path):

@@ -115,7 +115,7 @@ def test_magnified_texture_against_the_reference_with_the_same_filter(magnified_
 def test_magnified_mipmap_samples_level_0_as_bilinear(magnified_runs):
     """A magnified texture's footprint is under a texel: level 0 everywhere, so the mip chain's
     frames are bilinear's, and bilinear's are not nearest's."""
-    for a, b in zip(magnified_runs["mipmap"][0], magnified_runs["bilinear"][0]):
+    for a, b in zip(magnified_runs["mipmap"][0], magnified_runs["bilinear"][0], strict=True):
         assert np.array_equal(a, b)
     assert not np.array_equal(magnified_runs["bilinear"][0][0], magnified_runs["nearest"][0][0])
 

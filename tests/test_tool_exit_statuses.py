@@ -6,12 +6,15 @@ from __future__ import annotations
 
 import errno
 import hashlib
+import re
 import subprocess
 from pathlib import Path
 
 import pytest
 
 from emulator_runs import run_module as run_tool_module
+from k210_common.exit_status import EXIT_CORRUPT_CARD, EXIT_USAGE, EXIT_WRITE_FAILED
+from reference.cli import EXIT_STATUS_DETAILS
 from sdcard_image import cli as sd_cli
 from sdcard_image import fat32
 
@@ -35,7 +38,7 @@ def test_build_refuses_an_output_that_is_an_input(tmp_path):
     model.write_bytes(TRIANGLE)
     before = digest(model)
     result = run_module("sdcard_image", "build", "--force", model, model)
-    assert result.returncode == 2, result.stderr
+    assert result.returncode == EXIT_USAGE, result.stderr
     assert f"{model} is also an input: the image would replace it" in result.stderr
     assert "Traceback" not in result.stderr
     assert digest(model) == before
@@ -47,7 +50,7 @@ def test_build_refuses_an_output_reached_through_a_link_to_an_input(tmp_path):
     link = tmp_path / "link.img"
     link.symlink_to(model)
     result = run_module("sdcard_image", "build", "--force", link, model)
-    assert result.returncode == 2 and "is also an input" in result.stderr
+    assert result.returncode == EXIT_USAGE and "is also an input" in result.stderr
     assert model.read_bytes() == TRIANGLE
 
 
@@ -56,13 +59,13 @@ def test_build_refuses_an_output_inside_an_input_folder(tmp_path):
     folder.mkdir()
     (folder / "model.obj").write_bytes(TRIANGLE)
     result = run_module("sdcard_image", "build", folder / "card.img", folder)
-    assert result.returncode == 2
+    assert result.returncode == EXIT_USAGE
     assert f"lies inside the input folder {folder}" in result.stderr
     assert sorted(p.name for p in folder.iterdir()) == ["model.obj"]
 
 
 def test_build_write_failure_names_the_output_not_its_temporary_file(tmp_path, monkeypatch, capsys):
-    """A full disk (ENOSPC while formatting) exits 7 naming the image the user asked for, and
+    """A full disk (ENOSPC while formatting) exits with write-failed naming the image the user asked for, and
     leaves neither the image nor a temporary file behind."""
     (tmp_path / "model.obj").write_bytes(TRIANGLE)
     out = tmp_path / "out" / "card.img"
@@ -74,7 +77,7 @@ def test_build_write_failure_names_the_output_not_its_temporary_file(tmp_path, m
     monkeypatch.setattr(fat32.CardWriter, "create", staticmethod(full_disk))
     status = sd_cli.main(["build", "-q", str(out), str(tmp_path / "model.obj")])
     err = capsys.readouterr().err
-    assert status == 7
+    assert status == EXIT_WRITE_FAILED
     assert f"cannot write {out} (64 MiB): No space left on device; nothing was written" in err
     assert ".tmp" not in err and "[Errno" not in err
     assert list(out.parent.iterdir()) == []
@@ -83,7 +86,7 @@ def test_build_write_failure_names_the_output_not_its_temporary_file(tmp_path, m
 def test_build_into_a_folder_that_cannot_hold_files(tmp_path):
     (tmp_path / "model.obj").write_bytes(TRIANGLE)
     result = run_module("sdcard_image", "build", "/proc/card.img", tmp_path / "model.obj")
-    assert result.returncode == 7
+    assert result.returncode == EXIT_WRITE_FAILED
     assert "cannot write /proc/card.img: cannot create a file in /proc" in result.stderr
     assert "[Errno" not in result.stderr and "Traceback" not in result.stderr
 
@@ -96,7 +99,7 @@ def test_extract_write_failure_names_the_file(tmp_path, monkeypatch, capsys):
     blocker = tmp_path / "blocked"
     blocker.write_text("a file where a folder is wanted")
     status = sd_cli.main(["extract", str(card), "/model.obj", str(blocker / "model.obj")])
-    assert status == 2 and "folder does not exist" in capsys.readouterr().err
+    assert status == EXIT_USAGE and "folder does not exist" in capsys.readouterr().err
 
     def refuse(self, data):
         raise OSError(errno.EDQUOT, "Disk quota exceeded")
@@ -104,7 +107,7 @@ def test_extract_write_failure_names_the_file(tmp_path, monkeypatch, capsys):
     monkeypatch.setattr(Path, "write_bytes", refuse)
     status = sd_cli.main(["extract", str(card), "--all", str(tmp_path / "all")])
     err = capsys.readouterr().err
-    assert status == 7
+    assert status == EXIT_WRITE_FAILED
     assert f"cannot write {tmp_path / 'all' / 'model.obj'}: Disk quota exceeded" in err
 
 
@@ -113,8 +116,8 @@ def test_sdcard_image_help_lists_every_exit_status(command):
     result = run_module("sdcard_image", *command, "--help")
     assert result.returncode == 0
     statuses = [line.split()[0] for line in result.stdout.split("exit status:")[1].splitlines()
-                if line.startswith("  ") and line.split()[0].isdigit()]
-    assert statuses == [str(n) for n in range(8)]
+                if re.match(r" {1,2}\d+  ", line)]
+    assert statuses == [str(n) for n in sorted(sd_cli.EXIT_STATUS_DETAILS)]
 
 
 # --------------------------------------------------------------------------- reference
@@ -128,16 +131,16 @@ def unpartitioned(tmp_path_factory) -> Path:
 
 def test_reference_on_a_card_without_a_partition_table(unpartitioned, tmp_path):
     result = run_module("reference", "render-card", unpartitioned, "--out", tmp_path / "out")
-    assert result.returncode == 4, result.stderr
+    assert result.returncode == EXIT_CORRUPT_CARD, result.stderr
     assert "Traceback" not in result.stderr
     assert f"{unpartitioned}: not a readable card image: no MBR signature" in result.stderr
 
 
 def test_reference_missing_inputs_and_bad_output(tmp_path):
     result = run_module("reference", "render-card", tmp_path / "none.img", "--out", tmp_path)
-    assert result.returncode == 2 and "none.img: no such image file" in result.stderr
+    assert result.returncode == EXIT_USAGE and "none.img: no such image file" in result.stderr
     result = run_module("reference", "render", tmp_path / "none", "--out", tmp_path)
-    assert result.returncode == 2 and "none: no such folder" in result.stderr
+    assert result.returncode == EXIT_USAGE and "none: no such folder" in result.stderr
     folder = tmp_path / "card"
     folder.mkdir()
     (folder / "model.obj").write_bytes(TRIANGLE)
@@ -146,7 +149,7 @@ def test_reference_missing_inputs_and_bad_output(tmp_path):
     taken = tmp_path / "taken"
     taken.write_text("not a folder")
     result = run_module("reference", "render", folder, "--out", taken)
-    assert result.returncode == 1 and f"--out {taken}: exists and is not a folder" in result.stderr
+    assert result.returncode == EXIT_WRITE_FAILED and f"--out {taken}: exists and is not a folder" in result.stderr
     assert "Traceback" not in result.stderr
 
 
@@ -155,8 +158,8 @@ def test_reference_help_describes_options_and_statuses():
         result = run_module("reference", *command, "--help")
         assert result.returncode == 0
         statuses = [line.split()[0] for line in result.stdout.split("exit status:")[1].splitlines()
-                    if line.startswith("  ") and line.split()[0].isdigit()]
-        assert statuses == ["0", "1", "2", "3", "4"]
+                    if re.match(r" {1,2}\d+  ", line)]
+        assert statuses == [str(n) for n in sorted(EXIT_STATUS_DETAILS)]
     result = run_module("reference", "render", "--help")
     for option in ("--out DIR", "--frames N", "--first K", "--quiet"):
         line = next(l for l in result.stdout.splitlines() if l.strip().startswith(option))

@@ -7,7 +7,8 @@ import json
 import pytest
 
 from conftest import run_emulator
-from emulator.errors import EXIT_EXPECT_UNMET, BadInput
+from emulator.errors import BadInput
+from k210_common.exit_status import EXIT_EXPECT_UNMET
 from emulator.frontends.uart_script import DEFAULT_TIMEOUT_S, parse
 
 

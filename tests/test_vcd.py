@@ -61,7 +61,7 @@ def test_the_lcd_s_select_clock_bursts_and_pins(c_firmware, tmp_path):
     starts = [t for t, v in bursts if v == "1"]
     assert starts and all(any(lo <= t <= hi for lo, hi in lows) for t in starts)   # clocks only while selected
     ends = [t for t, v in bursts[1:] if v == "0"]
-    assert all(e > s for s, e in zip(starts, ends))
+    assert all(e > s for s, e in zip(starts, ends, strict=True))
 
 
 def test_a_vcd_that_cannot_be_written_is_bad_input(c_firmware, tmp_path):

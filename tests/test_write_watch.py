@@ -17,7 +17,8 @@ from PIL import Image
 from conftest import GOLDEN_FRAMES, ROOT, run_emulator
 from emulator.devices import dmac as d
 from emulator.cpu.hart import ENGINE_FAST, ENGINE_PRECISE
-from emulator.errors import EXIT_STRAY_WRITE, FirmwareTrap, StrayWrite
+from emulator.errors import FirmwareTrap, StrayWrite
+from k210_common.exit_status import EXIT_STRAY_WRITE
 from emulator.cpu.hart import HartState
 from emulator.memory_map import SRAM_BASE, SRAM_SIZE
 from emulator.board.write_watch import CODE, DATA, HEAP, UNOWNED, Rule, plan_layout, stack_name

@@ -9,8 +9,7 @@ bridge: it resets the board into the ROM's ISP mode with DTR/RTS as the Dock wir
 little-endian u32, the firmware, then the SHA-256 of those three. The ROM copies the firmware to
 0x8000_0000 at the next reset and starts both harts there, as the board model does.
 
-Exit status: 0 written; 2 bad command line (no port, a port that does not exist, no image);
-3 kflash failed (its own messages above say why: no board answering, a port in use, ...).
+Exit statuses: EXIT_STATUS_DETAILS (the numbers are k210_common/exit_status.py's).
 """
 from __future__ import annotations
 
@@ -20,11 +19,20 @@ import subprocess
 import sys
 from pathlib import Path
 
+from k210_common.exit_status import EXIT_KFLASH_FAILED, EXIT_OK, EXIT_USAGE, help_epilog
+
 ROOT = Path(__file__).resolve().parent.parent
 BOARD = "dan"                 # kflash's name for the Maix Dock (CH552 serial bridge, its reset wiring)
 DEFAULT_BAUD = 1_500_000      # what the Dock's bridge takes for uploads (kflash's README for `dan`)
 CONSOLE_BAUD = 115_200        # the firmware's console (firmware/include/k210.inc UARTHS_BAUD)
-EXIT_USAGE, EXIT_KFLASH = 2, 3
+
+# When this command returns each status; --help and the README's table are made from it
+# (tests/test_exit_status.py)
+EXIT_STATUS_DETAILS: dict[int, str] = {
+    EXIT_OK: "the firmware was written to the board",
+    EXIT_USAGE: "bad command line: no port, a port that does not exist, no image",
+    EXIT_KFLASH_FAILED: "kflash failed (its own messages above say why: no board answering, a port in use, ...)",
+}
 
 
 def kflash_arguments(port: str, baud: int, image: Path) -> list[str]:
@@ -33,7 +41,9 @@ def kflash_arguments(port: str, baud: int, image: Path) -> list[str]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="tools/flash.py", description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(prog="tools/flash.py", description=__doc__.split("\n\n")[0],
+                                     epilog=help_epilog(EXIT_STATUS_DETAILS),
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--port", default="", help="the Dock's serial port, e.g. /dev/ttyUSB0")
     parser.add_argument("--baud", type=int, default=DEFAULT_BAUD, help=f"upload baud rate (default {DEFAULT_BAUD})")
     parser.add_argument("image", nargs="?", type=Path, default=ROOT / "build" / "firmware.bin")
@@ -52,9 +62,9 @@ def main(argv: list[str] | None = None) -> int:
     result = subprocess.run(command)
     if result.returncode != 0:
         print(f"flash: kflash failed (exit {result.returncode}); the board was not written as asked", file=sys.stderr)
-        return EXIT_KFLASH
+        return EXIT_KFLASH_FAILED
     print(f"flash: written; see it run with: {sys.executable} -m serial.tools.miniterm {args.port} {CONSOLE_BAUD}")
-    return 0
+    return EXIT_OK
 
 
 if __name__ == "__main__":

@@ -183,9 +183,10 @@ def format_report(records: list[dict]) -> list[str]:
 
 
 def main(argv: list[str]) -> int:
-    """The command line; returns the exit status (the reference renderer's: 2 a bad command line or
-    a missing card or file, 3 a bad scene, model or texture, 4 a damaged card image)."""
-    from reference.cli import EXIT_USAGE, load_source
+    """The command line; returns the exit status (the reference renderer's, for the card it reads:
+    `python -m reference --help`)."""
+    from k210_common.exit_status import EXIT_USAGE
+    from reference.cli import load_source
     if not argv:
         print("\n".join(format_report(report())))
         return 0

@@ -11,6 +11,8 @@ The project's scenes' goldens live in tests/golden/<scene>/. A scene folder of o
 scene.ini and the files it names, laid out as they are to be on the card (its files and folders
 go to the card's root); its goldens go to DIR/golden/. --check runs the firmware on the folder's
 card against them instead of writing them (the board model's --golden: status 9 on a mismatch).
+
+Exit statuses: EXIT_STATUS_DETAILS (the numbers are k210_common/exit_status.py's).
 """
 from __future__ import annotations
 
@@ -24,11 +26,18 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests"))
 from emulator.frontends.golden import compare_frame  # noqa: E402
+from k210_common.exit_status import EXIT_GOLDEN_MISMATCH, EXIT_OK, EXIT_USAGE, help_epilog  # noqa: E402
 from golden_scenes import GOLDEN, SCENES, scene_card  # noqa: E402
 
 FOLDER_GOLDEN = "golden"        # a scene folder's goldens: DIR/golden/frame_NNNN.png
 DEFAULT_FOLDER_FRAMES = 4
-EXIT_USAGE = 2
+# When this command returns each status; --help is made from it. A failed run of the board
+# model passes its own status on (`python -m emulator run --help` lists them).
+EXIT_STATUS_DETAILS: dict[int, str] = {
+    EXIT_OK: "the goldens were written (or, with `--check`, every frame matches its golden)",
+    EXIT_USAGE: "bad command line, an unknown scene, or a scene folder whose card cannot be built",
+    EXIT_GOLDEN_MISMATCH: "`--check`: a frame differs from its golden (diff images in the board model's output)",
+}
 
 
 def regenerate(name: str, firmware: Path, work: Path) -> int:
@@ -84,12 +93,15 @@ def write_goldens(name: str, firmware: Path, card: Path, frames: int, folder: Pa
             state = "new"
         shutil.copyfile(new, old)
         print(f"{old}: {state}")
-    return 0
+    return EXIT_OK
 
 
 def main(argv: list[str]) -> int:
     import argparse
-    parser = argparse.ArgumentParser(prog="tools/regen_goldens.py", description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(prog="tools/regen_goldens.py", description=__doc__.split("\n")[0],
+                                     epilog=help_epilog(EXIT_STATUS_DETAILS) + "any other: the board model's "
+                                     "status for a run that failed (python -m emulator run --help)\n",
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("scenes", nargs="*", metavar="SCENE", help=f"project scenes ({', '.join(SCENES)})")
     parser.add_argument("--folder", action="append", default=[], type=Path, metavar="DIR",
                         help="a scene folder of one's own (scene.ini and its files); goldens in DIR/golden")
@@ -115,7 +127,7 @@ def main(argv: list[str]) -> int:
     unknown = [n for n in names if n not in SCENES]
     if unknown:
         print(f"unknown scene(s): {', '.join(unknown)}; known: {', '.join(SCENES)}", file=sys.stderr)
-        return 2
+        return EXIT_USAGE
     status = folder_status
     with tempfile.TemporaryDirectory() as tmp:
         for name in names:

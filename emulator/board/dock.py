@@ -58,8 +58,10 @@ from ..devices.uarths import Uarths
 from .pins import ExternalPins, PinChange
 from .wiring import LCD_8080, ChipPins, DockWiring, LcdPort, RoutedInput, SdSlot
 from .write_watch import WriteWatch
+from k210_common.firmware_errors import CONSOLE_PREFIX
 
-FIRMWARE_ERROR_PREFIX = b"error "
+# a fatal error's console line, "error <code> <words>", as firmware/include/errors.inc describes it
+FIRMWARE_ERROR_PREFIX = CONSOLE_PREFIX.encode()
 # What a run keeps of each UART's output for run.json; beyond it only the count goes on
 MAX_UART_OUTPUT = 1 << 20
 # Distinct warnings kept in a run's list: a firmware that keeps doing something new and wrong

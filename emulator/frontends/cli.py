@@ -10,8 +10,10 @@ import time
 from pathlib import Path
 from typing import TextIO
 
-from ..errors import (EXIT_BAD_INPUT, EXIT_GOLDEN_MISMATCH, EXIT_INTERNAL, EXIT_OK, EXIT_USAGE, BadInput,
-                     BoardStop)
+from k210_common.exit_status import (BY_CODE, EXIT_BAD_INPUT, EXIT_EXPECT_UNMET, EXIT_FAIL_ON, EXIT_FIRMWARE_ERROR,
+                                     EXIT_GOLDEN_MISMATCH, EXIT_HANG, EXIT_INTERNAL, EXIT_MISUSE, EXIT_OK,
+                                     EXIT_STRAY_WRITE, EXIT_TRAP, EXIT_UNMODELLED, EXIT_USAGE, help_epilog)
+from ..errors import BadInput, BoardStop
 from ..devices.sdcard import FAULTS
 from ..cpu.timing import TIMING_MODELS, TIMING_ROCKET
 from ..cpu.hart import ENGINE_FAST, ENGINES
@@ -23,41 +25,51 @@ MAX_TOLERANCE = 255            # a channel of an RGB888 pixel differs by at most
 DEFAULT_FRAMES = 8
 MAX_PAD_CHANGES_IN_RUN_JSON = 10_000    # a pin toggled for ever must not bloat run.json
 
-EXIT_STATUS_HELP = f"""exit status:
-  0  the requested frames were shown, or --until's time was reached, or (with --expect) the console
-     printed every expected text (with --golden: all match; every --grab was taken)
-  1  internal error of the board model
-  2  bad command line: an unknown option or a value out of range (--frames, --quantum 1..{MAX_QUANTUM},
-     --budget and --until above 0 and finite, --tolerance 0..{MAX_TOLERANCE}, --sd-fault, --timing, a --grab's syntax
-     or time, a --pin that is not PAD=LEVEL@SECONDS with a pad 0..47), an option without the one it needs (--tolerance without --golden, --sd-writable or
-     --sd-fault without --sd), --until with --frames, a --grab of a symbol the firmware does not define
-     or of a buffer outside SRAM, an empty --expect/--fail-on text or a regular expression that does
-     not compile, --expect with --frames, --trace-from/--trace-to without --trace-insn or in the wrong
-     order, --gdb-wait without --gdb, --gdb with --expect or --fail-on, a --gdb port above 65535;
-     or, after a run that ended well, a --grab whose time the run ended before
-  3  the firmware trapped: an exception whose handler never returned, after which no hart could
-     go on (the handler parked the harts) or no frame came within the budget; an exception with
-     mtvec pointing at no memory; a jump into a block the model lacks; with --stop-on-trap, any
-     exception (after its handler's 0.5 s of virtual time to report it)
-  4  hang: no frame within the virtual-time budget, or every hart waits forever (neither with
-     --until), or a trap storm (the same exception at the same pc with the same registers again
-     and again, no device store in between)
-  5  the firmware touched an address or register the model does not implement; with --strict also
-     an access the K210's bus answers in a way of its own (see --strict)
-  6  bad input: a file or folder the command line names cannot be used: the firmware image (missing,
-     unreadable, not a RISC-V ELF, a raw .bin that is empty or larger than SRAM), the card image
-     (missing, truncated), the --uart-input or --pin-file file (missing, unreadable; a --pin-file line
-     that is not SECONDS PAD LEVEL), the --trace-insn file (cannot
-     be written), the --vcd file (cannot be written), the --gdb port (in use), the --golden folder (missing or a file) or one of its
-     frames (not a readable PNG), the --out folder (a file of that name exists, or it cannot be
-     created or written in)
-  7  hardware misuse: something the real K210 would not do (e.g. CPU on an unlocked PLL)
-  8  the firmware reported a fatal error on its console ("error <code> <words>")
-  9  --golden: a shown frame differs from its golden PNG (diff images are in the output folder)
- 10  --check-writes: a store (a hart's or a DMA channel's) landed in SRAM outside the firmware's buffers
- 11  --fail-on: the console printed a failure text
- 12  --expect: the run ended (--until's time, or --budget seconds of virtual time without the next
-     expected text) before the console printed every expected text
+# When this command returns each status (k210_common/exit_status.py holds the numbers and
+# names); --help and the README's table are made from it (tests/test_exit_status.py)
+EXIT_STATUS_DETAILS: dict[int, str] = {
+    EXIT_OK: "the requested frames were shown, or `--until`'s time was reached, or (with `--expect`) the console "
+             "printed every expected text (with `--golden`: all match; every `--grab` was taken)",
+    EXIT_INTERNAL: "an internal error of the board model",
+    EXIT_USAGE: f"bad command line: an unknown option or a value out of range (`--frames`, `--quantum` 1..{MAX_QUANTUM}, "
+                f"`--budget` and `--until` above 0 and finite, `--tolerance` 0..{MAX_TOLERANCE}, `--sd-fault`, "
+                "`--lcd-interface`, `--timing`, a `--grab`'s syntax or time, a `--pin` that is not `PAD=LEVEL@SECONDS` "
+                "with a pad 0..47), an option without the one it needs (`--tolerance` without `--golden`, "
+                "`--sd-writable` or `--sd-fault` without `--sd`), `--until` or `--expect` with `--frames`, "
+                "`--gdb-wait` without `--gdb`, `--gdb` with `--expect`/`--fail-on`, a `--gdb` port above 65535, "
+                "`--trace-from`/`--trace-to` without `--trace-insn` or in the wrong order, a `--grab` of a symbol "
+                "the firmware does not define or of a buffer outside SRAM, an empty `--expect`/`--fail-on` text or "
+                "a regular expression that does not compile; or, after a run that ended well, a `--grab` whose "
+                "time the run ended before",
+    EXIT_TRAP: "the firmware trapped: an exception whose handler never returned, after which no hart could go on "
+               "(the handler parked the harts) or no frame came within `--budget`; an exception with `mtvec` "
+               "pointing at no memory; a jump into a block the model lacks; with `--stop-on-trap`, any exception "
+               "(after its handler's 0.5 s of virtual time to report it)",
+    EXIT_HANG: "no frame within `--budget` virtual seconds, or every hart waits forever (neither with `--until`), "
+               "or a trap storm (the same exception at the same pc with the same registers 1,000 times in a row, "
+               "no device store in between)",
+    EXIT_UNMODELLED: "the firmware touched an address or register the model does not implement; with `--strict` "
+                     "also an access the K210's bus answers in a way of its own (see `--strict`)",
+    EXIT_BAD_INPUT: "a file or folder the command line names cannot be used: the firmware image (missing, "
+                    "unreadable, not a RISC-V ELF, a raw `.bin` that is empty or larger than SRAM), the "
+                    "`--uart-input` or `--pin-file` file (missing or unreadable; a `--pin-file` line that is not "
+                    "`SECONDS PAD LEVEL`), the `--trace-insn` or `--vcd` file (cannot be written), the `--gdb` "
+                    "port (in use), the card image (missing, empty, or not a whole number of 512-byte blocks), "
+                    "the `--golden` folder (missing or a file) or one of its frames (not a readable PNG), the "
+                    "`--out` folder (a file of that name exists, or it cannot be created or written in)",
+    EXIT_MISUSE: "something the real K210 does not do, such as running the CPU from PLL0 "
+                 "before it locked, or using a peripheral whose clock is gated",
+    EXIT_FIRMWARE_ERROR: "the firmware reported a fatal error on its console (`error <code> <words>`)",
+    EXIT_GOLDEN_MISMATCH: "`--golden`: a shown frame differs from its golden PNG (diff images are in the output "
+                          "folder)",
+    EXIT_STRAY_WRITE: "`--check-writes`: a store (a hart's or a DMA channel's) landed in SRAM outside the "
+                      "firmware's buffers",
+    EXIT_FAIL_ON: "the console printed a `--fail-on`/`--fail-on-re` text",
+    EXIT_EXPECT_UNMET: "`--expect`: the run ended (`--until`'s time, or `--budget` virtual seconds without the "
+                       "next expected text) before the console printed every expected text",
+}
+
+EXIT_STATUS_HELP = help_epilog(EXIT_STATUS_DETAILS) + """
 The command line, then the --golden frames, the --grab buffers and the --out folder are checked
 before the run: a refusal there (2 or 6) writes nothing. Every run that starts writes run.json in
 the output folder, whatever its status. After the run the first that applies decides: how the run
@@ -668,11 +680,11 @@ def main(argv: list[str] | None = None) -> int:
             board.finish_console_line()
         if board.scheduler.pending_stop is not None:
             raise board.scheduler.pending_stop     # recorded as the run's last turn ended
-        status, kind, message = EXIT_OK, "ok", result.message
+        status, kind, message = EXIT_OK, BY_CODE[EXIT_OK].name, result.message
     except BoardStop as stop:
         status, kind, message = stop.exit_status, stop.kind, str(stop)
     except Exception as error:  # an internal bug must still leave a run.json behind
-        status, kind, message = EXIT_INTERNAL, "internal", f"{type(error).__name__}: {error}"
+        status, kind, message = EXIT_INTERNAL, BY_CODE[EXIT_INTERNAL].name, f"{type(error).__name__}: {error}"
         import traceback
         traceback.print_exc()
     terminal.finish()
@@ -711,7 +723,7 @@ def main(argv: list[str] | None = None) -> int:
         for comparison in mismatches:
             terminal.message(f"[golden] {comparison.describe()}")
         if status == EXIT_OK and mismatches:
-            status, kind = EXIT_GOLDEN_MISMATCH, "golden-mismatch"
+            status, kind = EXIT_GOLDEN_MISMATCH, BY_CODE[EXIT_GOLDEN_MISMATCH].name
             message = f"{len(mismatches)} of {len(comparisons)} frames differ from {args.golden}"
         elif status == EXIT_OK:
             terminal.message(f"[golden] all {len(comparisons)} frames match {args.golden}")
