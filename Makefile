@@ -15,15 +15,17 @@ FRAMES  ?= 8
 # The firmware's objects in link order. The order sets every code and data
 # address, and the cycle counts depend on them (the timing model's branch
 # predictor is indexed by PC), so it is fixed here rather than left to the
-# file names: raster_*.S and render_*.S follow their own raster.S and render.S
-# in the order the code had when each was one file. Every firmware/*.S is
-# listed once.
-FW_ORDER := boot clocks console crc errors fat32 heap lcd main maths obj parse pins ppm \
+# file names: fat32_*.S, raster_*.S, render_*.S and sd_*.S follow their own
+# fat32.S, raster.S, render.S and sd.S in the order the code had when each was
+# one file. Every firmware/*.S is listed once.
+FW_ORDER := boot clocks console crc errors \
+            fat32 fat32_lookup fat32_names fat32_read fat32_chain \
+            heap lcd main maths obj parse pins ppm \
             raster raster_supersample raster_texture raster_clear raster_triangle raster_fills \
             raster_lines \
             render render_triangles render_light render_texels render_clip render_wireframe \
             render_edges \
-            scene sd spi_dma timer trap vertex
+            scene sd sd_read sd_command sd_spi spi_dma timer trap vertex
 FW_SRCS := $(wildcard firmware/*.S)
 ifneq ($(sort $(FW_ORDER)),$(sort $(patsubst firmware/%.S,%,$(FW_SRCS))))
 $(error FW_ORDER (Makefile) must list every firmware/*.S and no other)

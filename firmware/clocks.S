@@ -106,7 +106,7 @@ clocks_init:
     sw      t0, SYSCTL_CLK_EN_PERI(s0)
 
     # SPI0 and SPI1 sources = PLL0 / ((0 + 1) * 2); the LCD's and the SD
-    # card's serial clocks are divided from these by baudr (spi_dma.S, sd.S).
+    # card's serial clocks are divided from these by baudr (spi_dma.S, sd_spi.S).
     lw      t0, SYSCTL_CLK_TH1(s0)
     li      t1, ~(CLK_TH1_SPI0_MASK | CLK_TH1_SPI1_MASK)
     and     t0, t0, t1

@@ -4,7 +4,7 @@
 # (clocks, pins, console, the DMAC's reset) and releases hart 1; then hart 1
 # brings the LCD up (lcd.S: about 125 ms, nearly all of it the ST7789V's
 # datasheet waits, asleep in WFI) while hart 0 loads scene.ini and the files it
-# names from the SD card (sd.S, fat32.S, scene.S), parses the model and the
+# names from the SD card (sd*.S, fat32*.S, scene.S), parses the model and the
 # texture into `scene` (obj.S, ppm.S; any failure there is fatal, errors.S)
 # and draws frames forever. Hart 1 then sends finished frames to the LCD and
 # reports each one.

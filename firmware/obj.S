@@ -56,7 +56,7 @@
 # (model text window: <n> bytes needed, <m> bytes free)", heap.S
 # heap_alloc_or_fail; "(model text window for a longer word: ...)" when a
 # word outgrows the heap). Errors of the card
-# and its chains (4, 8) as in fat32.S.
+# and its chains (4, 8) as in fat32_read.S and fat32_chain.S.
 
     .option norelax
     .include "k210.inc"

@@ -9,7 +9,7 @@
 #                                            ie_en | Schmitt trigger
 # (the GPIOHS block's output_en, not the pad, decides the direction of a
 # GPIOHS line; SPI1 in standard format drives D0 and listens on D1).
-# The SD card's chip select (pad 29) is GPIOHS7 driven by software (sd.S),
+# The SD card's chip select (pad 29) is GPIOHS7 driven by software (sd_spi.S),
 # not SPI1_SSn: the controller's own select drops whenever its FIFO runs dry.
 # Unlike the SDK, no other pad is scanned for the same function: nothing but
 # this firmware has routed pads since reset.

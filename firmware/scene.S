@@ -59,7 +59,7 @@
 #
 # Numbers are parse.S's (sign, digits, fraction, exponent: -1.5e-3), each
 # rounded to single precision, which must be finite. Vectors are numbers
-# separated by spaces or tabs. Paths are from the card's root (fat32.S).
+# separated by spaces or tabs. Paths are from the card's root (fat32_lookup.S).
 #
 # An unknown key, a duplicate key, a line without '=', an empty key or value,
 # a path of SCENE_VALUE_MAX bytes or more, a control character outside a

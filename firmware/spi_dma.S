@@ -1,6 +1,6 @@
 # spi_dma.S: SPI0 in octal transmit-only mode (the LCD bus), DMAC channel 0
 # feeding it, and the PLIC wait for a DMA channel to finish (any channel:
-# sd.S waits on its own channel the same way).
+# sd_read.S waits on its own channel the same way).
 #
 # Two frame layouts, both "instruction/address as frame format" so that what
 # reaches the wire is exactly each FIFO frame, most significant bit first:

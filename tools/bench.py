@@ -318,8 +318,8 @@ def texture_of_size(size: int) -> bytes:
 
 def load_figures(firmware: Path, folder: Path) -> dict:
     """Host seconds to load textures of LOAD_SIZES through the firmware: from the console's
-    "load scene.ini" line to its "load <texture>" line (fat32.S reading the file by SD block with
-    its CRC16 and CRC-32 checks), each line's time taken when its newline reaches the console
+    "load scene.ini" line to its "load <texture>" line (fat32_read.S reading the file by SD block with
+    its CRC16 and CRC-32 checks, sd_read.S), each line's time taken when its newline reaches the console
     (hart 1 relays hart 0's lines, so both ends lag the event by the relay's backlog, alike). The
     run stops at the texture's line (the texture's conversion and the first frame are not in it).
     Also the virtual time of the same span."""
