@@ -33,7 +33,7 @@ endif
 FW_OBJS := $(patsubst %,$(BUILD)/fw/%.o,$(FW_ORDER))
 FW_INCS := $(wildcard firmware/include/*.inc)
 
-.PHONY: all toolchain venv firmware c-firmware card flash-to-emulator flash debug test bench goldens golden-check clean
+.PHONY: all toolchain venv firmware c-firmware card flash-to-emulator flash debug test bench goldens golden-check clean riscv-tests
 
 all: firmware
 
@@ -116,6 +116,13 @@ flash-to-emulator: firmware venv $(CARD)
 test: firmware c-firmware venv $(CARD)
 	$(PYTHON) -m compileall -q emulator reference sdcard_image tools tests
 	$(PYTHON) -m pytest -q -n 2
+
+# riscv-tests' isa/ suites on both engines (README, "The ISA the K210 has"):
+# make riscv-tests RISCV_TESTS=DIR [RISCV_TESTS_ENV=DIR] [RISCV_TESTS_SUITE=early-2017|current]
+RISCV_TESTS_SUITE ?= early-2017
+riscv-tests: venv
+	$(PYTHON) tools/riscv_tests.py "$(RISCV_TESTS)" $(if $(RISCV_TESTS_ENV),--env "$(RISCV_TESTS_ENV)") \
+	    --suite $(RISCV_TESTS_SUITE) --out $(BUILD)/riscv-tests
 
 # A real Dock: make flash PORT=/dev/ttyUSB0 [FLASH_BAUD=N] (tools/flash.py runs kflash)
 PORT ?=
