@@ -15,7 +15,7 @@ from emulator.board.memory import Sram
 from emulator.cpu.decode import decode_memory_access
 from emulator.cpu.hart import ENGINE_FAST, ENGINE_PRECISE, CsrContext, Hart, HartState, RunEnd
 from emulator.cpu.native import counter_lib
-from emulator.cpu.riscv import CAUSE_INTERRUPT, IRQ_MEI, IRQ_MSI, IRQ_MTI, IRQ_SEI
+from emulator.cpu.riscv import CAUSE_INTERRUPT, IRQ_MEI, IRQ_MSI, IRQ_MTI, IRQ_SEI, IRQ_SSI, IRQ_STI
 from emulator.errors import FirmwareTrap, HangDetected, UnmodelledAccess
 from k210_fixtures import at_done, build_elf, make_board, program, reg, run_to_done, run_until, symbol
 
@@ -212,9 +212,9 @@ def test_illegal_instruction_enters_mtvec(layout, fault_label):
     fault = symbol(board, fault_label)
     assert reg(board, "s8") == 2
     assert reg(board, "s9") == fault
-    low = int.from_bytes(board.memory.read(fault, 2), "little")
-    word = low if low & 3 != 3 else int.from_bytes(board.memory.read(fault, 4), "little")
-    assert reg(board, "s10") == word                     # mtval: the instruction bits
+    # mbadaddr (mtval) is written only for breakpoints, misaligned accesses and access faults on
+    # the K210's Rocket (rocket-chip CSR.scala, `write_badaddr`): here it keeps its reset value
+    assert reg(board, "s10") == 0
     status = reg(board, "s11")
     assert status & MSTATUS_MPP == MSTATUS_MPP and not status & MSTATUS_MIE
     assert "illegal instruction" in board.last_exception
@@ -956,14 +956,14 @@ def test_mip_reads_the_board_pending_bits():
         sd      zero, 0(t0)                   # mtimecmp[0] = 0: timer pending
         csrr    s3, mip
         li      t0, -1
-        csrw    mip, t0                       # the machine bits of mip are read-only
+        csrw    mip, t0                       # the machine bits of mip are read-only, SSIP and STIP not
         csrr    s4, mip
     """))
     run_to_done(board)
     assert reg(board, "s1") == 0
     assert reg(board, "s2") == 1 << IRQ_MSI
     assert reg(board, "s3") == 1 << IRQ_MSI | 1 << IRQ_MTI
-    assert reg(board, "s4") == 1 << IRQ_MSI | 1 << IRQ_MTI
+    assert reg(board, "s4") == 1 << IRQ_MSI | 1 << IRQ_MTI | 1 << IRQ_SSI | 1 << IRQ_STI
 
 
 def test_software_interrupt_wins_over_timer():

@@ -506,7 +506,7 @@ class Bus:
             # it: a store that schedules something before this turn's planned end ends the turn.
             # (Without mstatus.MIE nothing can preempt the hart; status reads are exact in any
             # case, and sleeping harts wake at the event's own time.)
-            if timed and hart.m_interrupts_enabled():
+            if timed and hart.interrupts_enabled():
                 if moved is None:
                     event = self.board.next_device_event(now)
                 else:

@@ -15,7 +15,7 @@ from typing import Callable
 import numpy as np
 
 from . import bootrom
-from ..cpu import hart as hartmod
+from ..cpu.privileged import find_csr_sites
 from ..cpu import riscv
 from .bus import Bus
 from ..devices.clint import Clint
@@ -239,7 +239,7 @@ class Board:
             self.warn(f"ELF entry is 0x{self.image.entry:x}, but the K210 starts both harts at 0x{RESET_PC:x}")
         sites, loops, time_loops = [], [], []
         for address, code in self.image.code_ranges:
-            sites.extend(hartmod.find_csr_sites(code, address))
+            sites.extend(find_csr_sites(code, address))
             loops.extend(find_poll_loops(code, address))
             loops.extend(find_idle_loops(code, address))
             time_loops.extend(find_time_loops(code, address))
@@ -529,7 +529,7 @@ class Board:
             value |= 1 << riscv.IRQ_MEI
         if mask >> riscv.IRQ_SEI & 1 and self.plic.external_pending(plic_s_context(h)):
             value |= 1 << riscv.IRQ_SEI
-        return value
+        return value | (self.harts[h].soft_mip & mask)     # SSIP, STIP: written by software
 
     def interrupts_may_have_changed(self, now: float | None = None) -> None:
         """A device changed an interrupt input at `now` (see Scheduler)."""

@@ -278,19 +278,17 @@ class Scheduler:
         hart = self.current
         if hart is not None:
             hart.time_skip_limit = None             # the turn's long-skip limit predates the change
-        if hart is not None and hart.m_interrupts_enabled():
+        if hart is not None and hart.interrupts_enabled():
             hart.request_stop()
 
     def _wake_sleepers(self, now: float) -> None:
         """Harts asleep in wfi with an enabled interrupt pending wake; so do harts polling SRAM when
-        they would take the interrupt (mstatus.MIE set)."""
+        they would take the interrupt (privileged.py: takeable_interrupts)."""
         for hart in self.harts:
             if hart.state is HartState.RUNNING:
                 continue
             if hart.state is HartState.WAITING:
-                if not hart.m_interrupts_enabled():
-                    continue
-                enabled = self.traps.taken_in_m_mode(hart)
+                enabled = hart.takeable_interrupts()
             else:
                 enabled = hart.reg(rv.UC_RISCV_REG_MIE)   # wfi wakes on any enabled interrupt
             if enabled and self.board.mip(hart.hart_id, now, enabled):

@@ -8,7 +8,8 @@ from typing import TYPE_CHECKING, Callable, Protocol
 from unicorn import riscv_const as rv
 
 from ..cpu import riscv
-from ..cpu.hart import Hart, PendingException
+from ..cpu.hart import Hart
+from ..cpu.privileged import PendingException, lowest_interrupt
 from ..errors import FirmwareTrap, HangDetected
 from .elf import symbolize
 
@@ -53,22 +54,15 @@ class Traps:
         self.report = None
         self._storm.clear()
 
-    @staticmethod
-    def taken_in_m_mode(hart: Hart) -> int:
-        """The interrupts the hart, in M-mode with mstatus.MIE set, would take: those enabled in
-        mie and not delegated to S-mode in mideleg (privileged spec 1.10, 3.1.14)."""
-        return hart.reg(rv.UC_RISCV_REG_MIE) & ~hart.reg(rv.UC_RISCV_REG_MIDELEG)
-
     def take_interrupt(self, hart: Hart) -> None:
-        """Before a turn: a pending enabled interrupt with mstatus.MIE set enters mtvec."""
-        if not hart.m_interrupts_enabled():
+        """Before a turn: of the pending interrupts the hart would take (privileged.py), the
+        lowest-numbered enters its trap vector."""
+        takeable = hart.takeable_interrupts()
+        if not takeable:
             return
-        enabled = self.taken_in_m_mode(hart)
-        pending = self.board.mip(hart.hart_id, hart.time, enabled) & enabled
-        for irq in riscv.IRQ_PRIORITY:
-            if pending >> irq & 1:
-                hart.enter_trap(riscv.CAUSE_INTERRUPT | irq, hart.pc, 0)
-                return
+        irq = lowest_interrupt(self.board.mip(hart.hart_id, hart.time, takeable) & takeable)
+        if irq is not None:
+            hart.enter_trap(riscv.CAUSE_INTERRUPT | irq, hart.pc, 0)
 
     def deliver_exception(self, hart: Hart, open_grace: Callable[[], None]) -> None:
         """A synchronous exception enters the firmware's trap handler, as on the chip, and the run

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import ctypes
 import enum
-import functools
 import math
 import weakref
 from dataclasses import dataclass
@@ -31,29 +30,14 @@ from unicorn import riscv_const as rv
 from unicorn.unicorn_py3 import unicorn as _ucpy
 
 from . import shared_memory, timing
-from .decode import decode_memory_access
 from .native import (COUNT_HOOK, NO_LIMIT, AlonePlan, Counter, FastHead, add_native_hook, address_table,
                      counter_lib, fast_step)
-from .riscv import (CAUSE_BREAKPOINT, CAUSE_ECALL_U, CAUSE_ILLEGAL_INSTRUCTION,
-                    CAUSE_LOAD_MISALIGNED, CAUSE_STORE_MISALIGNED, CSR_CYCLE, CSR_INSTRET, CSR_MCYCLE,
-                    CSR_MHARTID, CSR_MIE, CSR_MINSTRET, CSR_MIP, CSR_MSTATUS, CSR_MTVEC, INSN_MRET,
-                    INSN_SFENCE_VM, INSN_WFI, MASK_SFENCE_VM, MSTATUS_MIE, MSTATUS_MPIE, MSTATUS_MPP, PRIV_M, PRIV_U)
+from .privileged import PendingException, PrivilegedArchitecture
+from .riscv import (CAUSE_BREAKPOINT, CAUSE_ECALL_U, CAUSE_ILLEGAL_INSTRUCTION, CAUSE_LOAD_MISALIGNED,
+                    CAUSE_STORE_MISALIGNED, INSN_WFI, PRIV_M)
 from .time_loops import LoopSkipper, TimeLoop
-from .triggers import TRIGGER_CSRS, TriggerUnit
-from ..errors import UnmodelledAccess
+from .triggers import TriggerUnit
 from ..memory_map import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE
-
-# CSR numbers the board answers itself
-# mstatus and mie are real Unicorn CSRs; they are intercepted only so that a write that may
-# unmask a pending interrupt ends the hart's turn, and the interrupt is taken right there
-INTERRUPT_ENABLE_CSRS = {CSR_MSTATUS: rv.UC_RISCV_REG_MSTATUS, CSR_MIE: rv.UC_RISCV_REG_MIE}
-INTERCEPTED_CSRS = {CSR_MHARTID, CSR_MCYCLE, CSR_MINSTRET, CSR_CYCLE, CSR_INSTRET, CSR_MIP, CSR_MTVEC,
-                    *INTERRUPT_ENABLE_CSRS, *TRIGGER_CSRS}
-# mstatus.VM (bits 28:24) of privileged spec 1.9.1, the K210's: paged virtual memory, which the model
-# does not have (Unicorn follows 1.10, where the field is gone and satp selects paging)
-MSTATUS_VM_1_9_1 = 0x1F00_0000
-READ_ONLY_CSRS = {CSR_MHARTID, CSR_CYCLE, CSR_INSTRET}
-
 
 _NOT_CSRS = frozenset([rv.UC_RISCV_REG_PC, *range(rv.UC_RISCV_REG_X0, rv.UC_RISCV_REG_X31 + 1),
                        *range(rv.UC_RISCV_REG_F0, rv.UC_RISCV_REG_F31 + 1)])
@@ -103,13 +87,6 @@ class RunEnd(enum.Enum):
 
 
 @dataclass
-class PendingException:
-    cause: int
-    epc: int
-    tval: int
-
-
-@dataclass
 class CsrContext:
     """What a CSR read needs from the board at the moment of the read."""
 
@@ -117,7 +94,7 @@ class CsrContext:
     mip: Callable[[], int]
 
 
-class Hart:
+class Hart(PrivilegedArchitecture):
     """A hart of the K210. The board maps memory and MMIO into `uc` and calls `run`."""
 
     def __init__(self, hart_id: int, csr_context: CsrContext) -> None:
@@ -173,6 +150,7 @@ class Hart:
         self._repeats_answered: RepeatsAnswered | None = None
         self._holding = False     # the fast engine holds the registers during a device access
         self.triggers = TriggerUnit()
+        self.soft_mip = 0         # mip's SSIP and STIP as software wrote them (privileged.py)
         self._trigger_hook: int | None = None   # watches every instruction while a trigger is armed
 
     def add_native_hook(self, kind: int, callback: int, user_data: ctypes.Structure, begin: int, end: int,
@@ -429,6 +407,7 @@ class Hart:
         self.skipper.forget()
         self.triggers.reset()
         self._watch_triggers()
+        self.soft_mip = 0
         self.forget_pending_transfer()
         self.forget_decodings()
         self.pc = pc
@@ -659,30 +638,9 @@ class Hart:
         self.pc = self.uc.reg_read(rv.UC_RISCV_REG_PC)
         self.pending_exception = PendingException(CAUSE_BREAKPOINT, self.pc, self.pc)
 
-    def enter_trap(self, cause: int, epc: int, tval: int) -> None:
-        """Takes a trap into machine mode exactly as the privileged spec describes: MPIE = MIE,
-        MIE = 0, MPP = the mode the hart was in, and the hart in M-mode."""
-        self.forget_pending_transfer()
-        uc = self.uc
-        privilege = self.privilege
-        if privilege != PRIV_M:
-            uc.reg_write(rv.UC_RISCV_REG_PRIV, PRIV_M)
-            self.privilege = PRIV_M
-        mstatus = uc.reg_read(rv.UC_RISCV_REG_MSTATUS)
-        mie_bit = 1 if mstatus & MSTATUS_MIE else 0
-        mstatus = (mstatus & ~(MSTATUS_MIE | MSTATUS_MPIE | MSTATUS_MPP)) | (mie_bit << 7) | (privilege << 11)
-        uc.reg_write(rv.UC_RISCV_REG_MSTATUS, mstatus)
-        uc.reg_write(rv.UC_RISCV_REG_MEPC, epc)
-        uc.reg_write(rv.UC_RISCV_REG_MCAUSE, cause)
-        uc.reg_write(rv.UC_RISCV_REG_MTVAL, tval)
-        # no vectored mode: the K210's Rocket predates it (see _csr_write)
-        self.pc = uc.reg_read(rv.UC_RISCV_REG_MTVEC) & ~3
+    def wake(self) -> None:
+        """The hart runs on (a trap taken from wfi or a wait)."""
         self.state = HartState.RUNNING
-
-    def m_interrupts_enabled(self) -> bool:
-        """Whether an enabled M-mode interrupt would be taken now: always below M-mode, in M-mode
-        when mstatus.MIE is set (privileged spec 1.10, 3.1.6.1)."""
-        return self.privilege != PRIV_M or bool(self.reg(rv.UC_RISCV_REG_MSTATUS) & MSTATUS_MIE)
 
     def csr(self, reg: int) -> int:
         return self._as_machine(lambda: self.uc.reg_read(reg))
@@ -714,141 +672,6 @@ class Hart:
         self._hooks_needing_precision.add(handle)
         return handle
 
-    def _carry_out_csr(self, address: int, word: int) -> int:
-        """Executes the CSR instruction, mret or sfence.vm `word` at `address` (already counted); returns the
-        pc the hart goes on from: the next instruction, or the site itself when it traps."""
-        if word == INSN_MRET:
-            if self.privilege != PRIV_M:
-                return self._illegal(address, word)
-            return self._carry_out_mret()
-        if word & MASK_SFENCE_VM == INSN_SFENCE_VM:
-            # 1.9.1's TLB flush, legal in S- and M-mode; without paging (mstatus.VM stops the run)
-            # there is nothing to flush. Unicorn, following 1.10, would call it illegal
-            return self._illegal(address, word) if self.privilege == PRIV_U else address + 4
-        csr = word >> 20
-        loop = self.time_loops.get(address)
-        if loop is not None and not self.triggers.armed:      # skipped iterations would not be watched
-            self.skipper.at_time_read(loop, lambda: self._csr_value(csr),
-                                      lambda r: self.reg(rv.UC_RISCV_REG_X0 + r), self._turn_limit,
-                                      self.time_skip_limit)
-        if self.privilege < (csr >> 8) & 3:
-            # a CSR of a more privileged mode (bits 9:8 of its number): an illegal instruction. The
-            # user counters (cycle, instret) are let through, as the 1.9.1 counter-enable bits reset
-            return self._illegal(address, word)
-        rd = (word >> 7) & 31
-        rs1 = (word >> 15) & 31
-        funct3 = (word >> 12) & 7
-        operand = rs1 if funct3 & 4 else (self.reg(rv.UC_RISCV_REG_X0 + rs1) if rs1 else 0)
-        writes = (funct3 & 3) == 1 or rs1 != 0
-        if writes and csr in READ_ONLY_CSRS:
-            return self._illegal(address, word)     # a write to a read-only CSR, as on the real hart
-        old = self._csr_value(csr)
-        if writes:
-            op = funct3 & 3
-            new = operand if op == 1 else (old | operand if op == 2 else old & ~operand)
-            self._csr_write(csr, new & (2**64 - 1))
-        if rd:
-            self.uc.reg_write(rv.UC_RISCV_REG_X0 + rd, old)
-        return address + 4
-
-    def _watch_triggers(self) -> None:
-        """While a trigger is armed, a hook looks at every instruction before it runs (on the
-        precise engine: the fast one does not carry hooks); otherwise nothing is paid."""
-        armed = self.triggers.armed
-        if armed and self._trigger_hook is None:
-            self._trigger_hook = self.add_stop_hook(self._on_trigger_watch, None, 1, 0)
-        elif not armed and self._trigger_hook is not None:
-            self.delete_hook(self._trigger_hook)
-            self._trigger_hook = None
-
-    def _on_trigger_watch(self, uc: unicorn.Uc, address: int, size: int, _: object) -> None:
-        """Before an instruction: the breakpoint exception if the trigger matches its pc or its
-        load/store address. The instruction is neither counted nor retired."""
-        word = self.read_u16(address)
-        if word & 3 == 3:
-            word = self.read_u32(address)
-        access = decode_memory_access(word)
-        effective = None
-        if access is not None:
-            _, rs1, imm = access
-            effective = ((uc.reg_read(rv.UC_RISCV_REG_X0 + rs1) if rs1 else 0) + imm) & (2**64 - 1)
-        tval = self.triggers.check(word, address, self.privilege, effective)
-        if tval is not None:
-            self.pending_exception = PendingException(CAUSE_BREAKPOINT, address, tval)
-            uc.emu_stop()
-
-    def _illegal(self, address: int, word: int) -> int:
-        """The instruction `word` at `address` (counted, not retired) raises an illegal-instruction
-        exception; returns the pc the hart stays at."""
-        self.pending_exception = PendingException(CAUSE_ILLEGAL_INSTRUCTION, address, word)
-        self.retired_adjust += 1
-        return address
-
-    def _carry_out_mret(self) -> int:
-        """mret (privileged spec 1.10, 3.2.2; 1.9.1 the same): MIE = MPIE, MPIE = 1, the hart goes
-        to mode MPP, MPP = U (the K210 has U-mode: misa bit 20), and on at mepc. Carried out here so
-        that the board knows the trap handler has returned (open_trap)."""
-        uc = self.uc
-        mstatus = uc.reg_read(rv.UC_RISCV_REG_MSTATUS)
-        privilege = (mstatus & MSTATUS_MPP) >> 11
-        mpie = 1 if mstatus & MSTATUS_MPIE else 0
-        mstatus = (mstatus & ~(MSTATUS_MIE | MSTATUS_MPP)) | (mpie << 3) | MSTATUS_MPIE | (PRIV_U << 11)
-        self._csr_write(CSR_MSTATUS, mstatus)      # may unmask a pending interrupt: taken right after
-        pc = uc.reg_read(rv.UC_RISCV_REG_MEPC) & ~1
-        if privilege != PRIV_M:
-            uc.reg_write(rv.UC_RISCV_REG_PRIV, privilege)
-            self.privilege = privilege
-        self.open_trap = None
-        return pc
-
-    def _csr_value(self, csr: int) -> int:
-        if csr in INTERRUPT_ENABLE_CSRS:
-            return self.uc.reg_read(INTERRUPT_ENABLE_CSRS[csr])
-        if csr == CSR_MHARTID:
-            return self.hart_id
-        if csr == CSR_MTVEC:
-            return self.uc.reg_read(rv.UC_RISCV_REG_MTVEC)
-        if csr in TRIGGER_CSRS:
-            return self.triggers.read(csr)
-        if csr in (CSR_MCYCLE, CSR_CYCLE):
-            return (self.csr_context.mcycle() + self.mcycle_offset) & (2**64 - 1)
-        if csr in (CSR_MINSTRET, CSR_INSTRET):
-            # the counting hook has already counted the CSR instruction itself, which has
-            # not retired yet: a read returns the instructions retired before it
-            return (self.instret - 1 + self.minstret_offset) & (2**64 - 1)
-        return self.csr_context.mip()
-
-    def _csr_write(self, csr: int, value: int) -> None:
-        if csr in INTERRUPT_ENABLE_CSRS:
-            register = INTERRUPT_ENABLE_CSRS[csr]
-            if csr == CSR_MSTATUS:
-                if value & MSTATUS_VM_1_9_1:
-                    raise UnmodelledAccess(
-                        f"hart {self.hart_id}: mstatus.VM = {(value & MSTATUS_VM_1_9_1) >> 24} turns on the paged "
-                        f"virtual memory of privileged spec 1.9.1 (the K210's MMU), which the model does not have")
-                # FS must stay as written (it turns the FPU on); WPRI fields read back as zero
-                value &= 0x8000_000F_007F_FFEA
-            unmasks = value & ~self.uc.reg_read(register)
-            self.uc.reg_write(register, value)
-            if unmasks:
-                self.request_stop()
-            return
-        if csr in TRIGGER_CSRS:
-            self.triggers.write(csr, value)
-            self._watch_triggers()
-        elif csr == CSR_MTVEC:
-            # Rocket of early 2017 (privileged spec 1.9.1, before vectored interrupts came with
-            # 1.10): `reg_mtvec := wdata >> 2 << 2` (rocket-chip rocket/CSR.scala, 2017-03-14)
-            self.uc.reg_write(rv.UC_RISCV_REG_MTVEC, value & ~3)
-        elif csr == CSR_MCYCLE:
-            self.mcycle_offset = value - self.csr_context.mcycle()
-        elif csr == CSR_MINSTRET:
-            # the write replaces the CSR instruction's own increment: the next instruction
-            # reads exactly `value` (privileged spec, "CSR side effects")
-            self.minstret_offset = value - self.instret
-        # mip: MSIP/MTIP/MEIP are read-only in mip; the writable bits belong to S/U modes,
-        # which the K210 firmware here does not use. Writes are ignored like the hardware does.
-
 
 def _first_cycle_at(until: float, t0: float, start: int, hz: float) -> int:
     """The least cycle count c at which the hart's time t0 + (c - start) / hz (Scheduler.hart_now's
@@ -861,22 +684,3 @@ def _first_cycle_at(until: float, t0: float, start: int, hz: float) -> int:
     while c > start and t0 + (c - 1 - start) / hz >= until:
         c -= 1
     return min(c, NO_LIMIT)
-
-
-def find_csr_sites(code: bytes, base: int) -> list[tuple[int, int]]:
-    """Every 2-byte-aligned address in `code` holding a CSR instruction on an intercepted CSR.
-    Sites that are really the middle of another instruction never execute, so extra
-    candidates are harmless."""
-    return list(_csr_sites(code, base))
-
-
-@functools.lru_cache(maxsize=8)
-def _csr_sites(code: bytes, base: int) -> tuple[tuple[int, int], ...]:
-    """find_csr_sites, once a process for the same code (every board of a firmware scans it)."""
-    sites = []
-    for offset in range(0, len(code) - 3, 2):
-        word = int.from_bytes(code[offset:offset + 4], "little")
-        if (word & 0x7F == 0x73 and (word >> 12) & 3 and (word >> 20) in INTERCEPTED_CSRS) or word == INSN_MRET \
-                or word & MASK_SFENCE_VM == INSN_SFENCE_VM:
-            sites.append((base + offset, word))
-    return tuple(sites)

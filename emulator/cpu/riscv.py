@@ -13,14 +13,19 @@ FPR_NAMES = ("ft0", "ft1", "ft2", "ft3", "ft4", "ft5", "ft6", "ft7", "fs0", "fs1
 
 # CSR numbers
 CSR_FFLAGS, CSR_FRM, CSR_FCSR = 0x001, 0x002, 0x003
+CSR_SSTATUS, CSR_SIE, CSR_STVEC, CSR_SIP = 0x100, 0x104, 0x105, 0x144
+CSR_MEDELEG, CSR_MIDELEG = 0x302, 0x303
 CSR_MSTATUS, CSR_MISA, CSR_MIE, CSR_MTVEC = 0x300, 0x301, 0x304, 0x305
 CSR_MSCRATCH, CSR_MEPC, CSR_MCAUSE, CSR_MTVAL, CSR_MIP = 0x340, 0x341, 0x342, 0x343, 0x344
 CSR_MCYCLE, CSR_MINSTRET = 0xB00, 0xB02
 CSR_CYCLE, CSR_INSTRET = 0xC00, 0xC02
 CSR_MHARTID = 0xF14
 
+MSTATUS_SIE = 1 << 1
 MSTATUS_MIE = 1 << 3
+MSTATUS_SPIE = 1 << 5
 MSTATUS_MPIE = 1 << 7
+MSTATUS_SPP = 1 << 8
 MSTATUS_MPP = 3 << 11
 
 # mcause
@@ -40,18 +45,19 @@ EXCEPTION_NAMES = {
     11: "environment call from M-mode",
 }
 
-# interrupts (mip/mie bits, and mcause's code with CAUSE_INTERRUPT)
-IRQ_MSI, IRQ_MTI, IRQ_SEI, IRQ_MEI = 3, 7, 9, 11
-# the order in which pending interrupts are taken (privileged spec 1.10, 3.1.14: MEI, MSI, MTI,
-# then the S-mode ones; SSI and STI are software-written bits of mip, which the model ignores)
-IRQ_PRIORITY = (IRQ_MEI, IRQ_MSI, IRQ_MTI, IRQ_SEI)
+# interrupts (mip/mie bits, and mcause's code with CAUSE_INTERRUPT); of those pending and takeable
+# the K210's Rocket takes the lowest-numbered first (privileged.py)
+IRQ_SSI, IRQ_MSI, IRQ_STI, IRQ_MTI, IRQ_SEI, IRQ_MEI = 1, 3, 5, 7, 9, 11
 
-PRIV_U, PRIV_M = 0, 3
+PRIV_U, PRIV_S, PRIV_M = 0, 1, 3
 
 INSN_WFI = 0x10500073
 INSN_MRET = 0x30200073
+INSN_SRET = 0x10200073
 # sfence.vm rs1 of privileged spec 1.9.1 (1.10 replaced it with sfence.vma): match and mask
 INSN_SFENCE_VM, MASK_SFENCE_VM = 0x10400073, 0xFFF07FFF
+# sfence.vma rs1, rs2 of 1.10, which the K210 (1.9.1) does not have
+INSN_SFENCE_VMA, MASK_SFENCE_VMA = 0x12000073, 0xFE007FFF
 
 
 def bits(word: int, high: int, low: int) -> int:
