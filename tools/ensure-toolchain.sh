@@ -6,7 +6,9 @@
 #   - picolibc-riscv64-unknown-elf, the C library the C test firmware (tests/firmware/) links
 #     against (gcc's --specs=picolibc.specs comes from it);
 #   - dosfstools and mtools, with which the tests check SD card images independently;
-#   - gdb-multiarch, which the tests drive against the board model's GDB stub (make debug).
+#   - gdb-multiarch, which the tests drive against the board model's GDB stub (make debug);
+#   - gcc-aarch64-linux-gnu and qemu-user, with which the tests build the fast engine for AArch64
+#     and check its host floating-point probe there (tests/test_host_fp.py).
 set -euo pipefail
 missing=""
 for tool in riscv64-unknown-elf-as riscv64-unknown-elf-ld riscv64-unknown-elf-objcopy; do
@@ -16,6 +18,8 @@ done
 command -v fsck.fat >/dev/null || [ -x /usr/sbin/fsck.fat ] || [ -x /sbin/fsck.fat ] || missing="$missing dosfstools"
 command -v mdir >/dev/null || missing="$missing mtools"
 command -v gdb-multiarch >/dev/null || missing="$missing gdb-multiarch"
+command -v aarch64-linux-gnu-gcc >/dev/null || missing="$missing gcc-aarch64-linux-gnu"
+command -v qemu-aarch64 >/dev/null || missing="$missing qemu-user"
 [ -z "$missing" ] && exit 0
 echo "[setup] missing tools: installing Debian packages: $missing"
 echo "[setup] (this needs root: apt-get update && apt-get install)"

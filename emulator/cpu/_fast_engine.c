@@ -24,9 +24,12 @@
  * result is rounded (conversions to integers take any mode), or with the FPU off. Registers move
  * between the engines at each hand-over (fast_run loads them from Unicorn and stores them back).
  *
- * Floating point is the host's (IEEE 754 binary32/64, round to nearest even; x86-64 SSE detects
- * tininess after rounding, as RISC-V does); its exception flags accumulate in the host's MXCSR
- * while the engine runs and are added to fflags when it stops. Results follow Unicorn 2.1.4
+ * Floating point is the host's (IEEE 754 binary32/64, round to nearest even), through C99's <fenv.h>
+ * so that any host builds it: its exception flags accumulate in the host's floating-point
+ * environment while the engine runs and are added to fflags when it stops. RISC-V detects tininess
+ * after rounding, as x86-64 SSE does; a host that detects it before rounding (AArch64, FPCR.AH = 0)
+ * would raise underflow where the K210 does not, so there the operations that round hand over to
+ * the precise engine (host_tiny_before_rounding). Results follow Unicorn 2.1.4
  * (QEMU 5.0) where it departs from the RISC-V spec of today: single-precision results other
  * than loads are not NaN-boxed, and single-precision operands are the low 32 bits whatever the
  * upper half holds. tests/test_fast_engine.py compares this engine with the precise one.
@@ -36,10 +39,11 @@
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
-#include <xmmintrin.h>
+#include <fenv.h>
 
 #include "_counter.h"
 #include "_fast_engine.h"
+#include "_host_fp.h"
 #include "_rocket_timing.h"
 #include "_write_check.h"
 
@@ -52,10 +56,9 @@
 #define UC_F0 158
 #define UC_PC 190
 
-/* The host's MXCSR while the guest computes: every exception masked, round to nearest even, no
- * flush-to-zero or denormals-are-zero, the flags clear (whatever a library loaded in the process
- * may have set: the results must be IEEE's, as QEMU's softfloat gives them) */
-#define MXCSR_FOR_GUEST 0x1F80u
+/* The guest computes in the host's default environment (FE_DFL_ENV): every exception masked, round
+ * to nearest even, no flush-to-zero or denormals-are-zero, the flags clear (whatever a library
+ * loaded in the process may have set: the results must be IEEE's, as QEMU's softfloat gives them). */
 
 #define MSTATUS_FS (3ull << 13)
 #define MSTATUS_SD (1ull << 63)
@@ -149,7 +152,7 @@ typedef struct {
 typedef struct {
     uint64_t pc, address, value;   /* the load, and the value the device gave (before extension) */
     uint64_t until;                /* the hart's cycle count at which that stops (hart.py works it out: no
-                                      float arithmetic here, where the guest's MXCSR collects flags) */
+                                      float arithmetic here, where the guest's environment collects flags) */
     uint32_t width, armed;
     uint32_t repeats, needed;      /* note_poll's count of identical reads so far, POLL_REPEATS */
     uint32_t answered, polling;    /* out: loads answered here; the count reached `needed` */
@@ -167,7 +170,7 @@ typedef struct fast_state {
     uint32_t windows;        /* device windows in window_base/window_end */
     uint32_t devices_here;   /* during a run: device accesses stop with STOP_DEVICE (else hand over) */
     uint64_t window_base[MAX_WINDOWS], window_end[MAX_WINDOWS];
-    unsigned host_mxcsr;     /* the host's MXCSR while the guest's is in place */
+    fenv_t host_env;         /* the host's floating-point environment while the guest's is in place */
     uint64_t epoch;          /* see block_t.checked */
     const uint8_t *code_lo, *code_hi;   /* the SRAM bytes some decoded block covers lie in [lo, hi) */
     uint8_t *sram;
@@ -520,6 +523,19 @@ static uint16_t decode_op_fp(uint32_t w)
     }
 }
 
+/* The OP-FP operations whose result can round into the subnormal range (and so underflow). */
+static int rounds_below_normal(uint16_t op)
+{
+    switch (op) {
+    case OP_FADD_S: case OP_FSUB_S: case OP_FMUL_S: case OP_FDIV_S: case OP_FSQRT_S:
+    case OP_FADD_D: case OP_FSUB_D: case OP_FMUL_D: case OP_FDIV_D: case OP_FSQRT_D:
+    case OP_FCVT_S_D:
+        return 1;
+    default:
+        return 0;
+    }
+}
+
 static void decode(const insn_counter_t *c, insn_t *in, uint64_t pc, uint32_t fetched)
 {
     memset(in, 0, sizeof *in);
@@ -631,6 +647,8 @@ static void decode(const insn_counter_t *c, insn_t *in, uint64_t pc, uint32_t fe
     case 0x43: case 0x47: case 0x4B: case 0x4F: {
         uint32_t fmt = (w >> 25) & 3;
         int which = (int)((opcode >> 2) & 3);   /* fmadd, fmsub, fnmsub, fnmadd */
+        if (host_tiny_before_rounding())
+            break;                              /* they round: see the file's notes */
         if (fmt == 0)
             op = (uint16_t)(OP_FMADD_S + which);
         else if (fmt == 1)
@@ -639,6 +657,8 @@ static void decode(const insn_counter_t *c, insn_t *in, uint64_t pc, uint32_t fe
     }
     case 0x53:
         op = decode_op_fp(w);
+        if (rounds_below_normal(op) && host_tiny_before_rounding())
+            op = OP_HANDOFF;
         switch (op) {
         case OP_FEQ_S: case OP_FLT_S: case OP_FLE_S: case OP_FCLASS_S: case OP_FMV_X_W:
         case OP_FCVT_W_S: case OP_FCVT_WU_S: case OP_FCVT_L_S: case OP_FCVT_LU_S:
@@ -794,15 +814,15 @@ static inline int nan64(uint64_t v)
     return (v & 0x7FFFFFFFFFFFFFFFull) > 0x7FF0000000000000ull;
 }
 
-/* The RISC-V flags the host's MXCSR has collected (its denormal-operand flag has no counterpart). */
-static uint64_t flags_from_mxcsr(unsigned mxcsr)
+/* The RISC-V flags the host's environment has collected. */
+static uint64_t flags_from_host(int raised)
 {
     uint64_t flags = 0;
-    if (mxcsr & 0x01) flags |= FF_NV;
-    if (mxcsr & 0x04) flags |= FF_DZ;
-    if (mxcsr & 0x08) flags |= FF_OF;
-    if (mxcsr & 0x10) flags |= FF_UF;
-    if (mxcsr & 0x20) flags |= FF_NX;
+    if (raised & FE_INVALID) flags |= FF_NV;
+    if (raised & FE_DIVBYZERO) flags |= FF_DZ;
+    if (raised & FE_OVERFLOW) flags |= FF_OF;
+    if (raised & FE_UNDERFLOW) flags |= FF_UF;
+    if (raised & FE_INEXACT) flags |= FF_NX;
     return flags;
 }
 
@@ -934,7 +954,7 @@ static inline uint64_t limit_check(uint64_t executed, uint64_t cycles, uint64_t 
  * Runs the hart from f->pc (its registers in `f`) until an instruction needs the precise engine
  * (STOP_HANDOFF: f->pc names it, not counted), a device access is left to the caller (STOP_DEVICE:
  * f->pc names it, counted; f->dev describes it) or the counter's limits are reached (STOP_LIMIT; a
- * poll loop's head lowers the limit as count_instruction does). The host's MXCSR collects the
+ * poll loop's head lowers the limit as count_instruction does). The host's environment collects the
  * floating-point flags meanwhile (the callers set the guest's and collect them: no float arithmetic
  * of the board's own belongs in here).
  */
@@ -1389,18 +1409,18 @@ out:
 #undef XRES
 }
 
-/* The guest's MXCSR in place of the host's (see MXCSR_FOR_GUEST), and back: the flags the guest
- * raised meanwhile are kept, so that Python running between (a device access) adds none. */
+/* The guest's environment in place of the host's, and back: the flags the guest raised meanwhile
+ * are kept, so that Python running between (a device access) adds none. */
 static void enter_guest_fp(fast_state_t *f)
 {
-    f->host_mxcsr = _mm_getcsr();
-    _mm_setcsr(MXCSR_FOR_GUEST);
+    fegetenv(&f->host_env);
+    fesetenv(FE_DFL_ENV);
 }
 
 static void leave_guest_fp(fast_state_t *f)
 {
-    f->soft_flags |= flags_from_mxcsr(_mm_getcsr());
-    _mm_setcsr(f->host_mxcsr);
+    f->soft_flags |= flags_from_host(fetestexcept(FE_ALL_EXCEPT));
+    fesetenv(&f->host_env);
 }
 
 /* Before the interpreter runs: the hart's registers from the precise engine. */
