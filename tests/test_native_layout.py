@@ -11,6 +11,7 @@ import pytest
 
 from conftest import ROOT
 from emulator.cpu import native
+from unicorn import riscv_const
 
 CPU = ROOT / "emulator" / "cpu"
 
@@ -59,3 +60,13 @@ def test_the_field_parser_sees_multiple_declarators_and_arrays():
     # repeat_t declares several fields a line; fast_state_t has pointers and arrays
     assert c_fields("repeat_t")[:4] == ["pc", "address", "value", "until"]
     assert "code_hi" in c_fields("fast_state_t") and "window_end" in c_fields("fast_state_t")
+
+
+def test_the_unicorn_register_ids_the_fast_engine_uses_are_unicorn_s():
+    """_fast_engine.c names Unicorn's register ids itself (it does not include unicorn/riscv.h):
+    each must be the id the Python binding of the installed Unicorn gives."""
+    source = (CPU / "_fast_engine.c").read_text()
+    ids = dict(re.findall(r"^#define UC_(\w+) (\d+)$", source, re.MULTILINE))
+    assert set(ids) == {"X1", "FFLAGS", "FRM", "MSTATUS", "F0", "PC"}
+    for name, value in ids.items():
+        assert getattr(riscv_const, f"UC_RISCV_REG_{name}") == int(value), name
