@@ -75,12 +75,12 @@ class Traps:
         where = symbolize(self.board.image.symbols, exc.epc)
         report = (f"hart {hart.hart_id}: {name} at pc 0x{exc.epc:08x}{f' <{where}>' if where else ''} "
                   f"({self.board.disassemble_at(exc.epc)}), mtval 0x{exc.tval:x}")
-        mtvec = hart.csr(rv.UC_RISCV_REG_MTVEC)
+        vector_name, vector = hart.trap_vector(exc.cause)
         if self.report is not None:
             where = "in the trap handler" if hart.open_trap is not None else "after the trap handler returned"
             raise FirmwareTrap(f"{self.report}; then, {where}, {report}")
-        if mtvec & ~3 == 0 or not self.board.bus.is_sram(mtvec & ~3):
-            raise FirmwareTrap(f"{report}; mtvec = 0x{mtvec:x} points at no trap handler")
+        if vector & ~3 == 0 or not self.board.bus.is_sram(vector & ~3):
+            raise FirmwareTrap(f"{report}; {vector_name} = 0x{vector:x} points at no trap handler")
         self.taken[name] = self.taken.get(name, 0) + 1
         self.last = report
         if self.stop_on_trap:

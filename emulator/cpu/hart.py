@@ -32,9 +32,9 @@ from unicorn.unicorn_py3 import unicorn as _ucpy
 from . import shared_memory, timing
 from .native import (COUNT_HOOK, NO_LIMIT, AlonePlan, Counter, FastHead, add_native_hook, address_table,
                      counter_lib, fast_step)
-from .privileged import PendingException, PrivilegedArchitecture
+from .privileged import COUNTER_BITS, MSTATUS_RESET, PendingException, PrivilegedArchitecture
 from .riscv import (CAUSE_BREAKPOINT, CAUSE_ECALL_U, CAUSE_ILLEGAL_INSTRUCTION, CAUSE_LOAD_MISALIGNED,
-                    CAUSE_STORE_MISALIGNED, INSN_WFI, PRIV_M)
+                    CAUSE_STORE_MISALIGNED, INSN_WFI, PRIV_M, PRIV_S, PRIV_U)
 from .time_loops import LoopSkipper, TimeLoop
 from .triggers import TriggerUnit
 from ..memory_map import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE
@@ -100,13 +100,14 @@ class Hart(PrivilegedArchitecture):
     def __init__(self, hart_id: int, csr_context: CsrContext) -> None:
         self.hart_id = hart_id
         self.uc = unicorn.Uc(unicorn.UC_ARCH_RISCV, unicorn.UC_MODE_RISCV64)
+        self.uc.reg_write(rv.UC_RISCV_REG_MSTATUS, MSTATUS_RESET)
         self.csr_context = csr_context
         self.state = HartState.RUNNING
         self.time = 0.0          # virtual time the hart has reached (asleep: when it went to sleep)
         self.polling = False     # set during a turn when the board saw it poll an unchanging register
         self.pc = 0
         self.pending_exception: PendingException | None = None
-        # the exception this hart's trap handler is handling, until it returns with mret (the board
+        # the exception this hart's trap handler is handling, until it returns with mret or sret (the board
         # tells a trap that ends the program from one the program handles: scheduler.py)
         self.open_trap: str | None = None
         # the mode the hart runs in: it changes only at a trap (enter_trap) and at mret, both carried
@@ -151,6 +152,7 @@ class Hart(PrivilegedArchitecture):
         self._holding = False     # the fast engine holds the registers during a device access
         self.triggers = TriggerUnit()
         self.soft_mip = 0         # mip's SSIP and STIP as software wrote them (privileged.py)
+        self.counter_enables = {PRIV_U: COUNTER_BITS, PRIV_S: COUNTER_BITS}   # mucounteren, mscounteren
         self._trigger_hook: int | None = None   # watches every instruction while a trigger is armed
 
     def add_native_hook(self, kind: int, callback: int, user_data: ctypes.Structure, begin: int, end: int,
@@ -343,7 +345,9 @@ class Hart(PrivilegedArchitecture):
                                               ctypes.byref(plan))
 
     def _fast_usable(self) -> bool:
-        return self._fast_state is not None and not self._hooks_needing_precision
+        # below M-mode Unicorn gives no CSR to the fast engine's register load (mstatus: FS), and
+        # CSR accesses are the precise engine's anyway: S- and U-mode code runs there
+        return self._fast_state is not None and not self._hooks_needing_precision and self.privilege == PRIV_M
 
     def install_poll_loops(self, loops: list[shared_memory.PollLoop]) -> None:
         """Hands the native counter the loops that can only be polling (shared_memory.py): it ends
@@ -395,7 +399,8 @@ class Hart(PrivilegedArchitecture):
             uc.reg_write(register, 0)
         for register in range(rv.UC_RISCV_REG_F0, rv.UC_RISCV_REG_F31 + 1):
             uc.reg_write(register, 0)
-        for register in (rv.UC_RISCV_REG_MSTATUS, rv.UC_RISCV_REG_MIE, rv.UC_RISCV_REG_MTVEC, rv.UC_RISCV_REG_MEPC,
+        uc.reg_write(rv.UC_RISCV_REG_MSTATUS, MSTATUS_RESET)
+        for register in (rv.UC_RISCV_REG_MIE, rv.UC_RISCV_REG_MTVEC, rv.UC_RISCV_REG_MEPC,
                          rv.UC_RISCV_REG_MCAUSE, rv.UC_RISCV_REG_MTVAL, rv.UC_RISCV_REG_MSCRATCH,
                          rv.UC_RISCV_REG_MIDELEG, rv.UC_RISCV_REG_MEDELEG):
             uc.reg_write(register, 0)
@@ -408,6 +413,7 @@ class Hart(PrivilegedArchitecture):
         self.triggers.reset()
         self._watch_triggers()
         self.soft_mip = 0
+        self.counter_enables = {PRIV_U: COUNTER_BITS, PRIV_S: COUNTER_BITS}
         self.forget_pending_transfer()
         self.forget_decodings()
         self.pc = pc
@@ -644,6 +650,10 @@ class Hart(PrivilegedArchitecture):
 
     def csr(self, reg: int) -> int:
         return self._as_machine(lambda: self.uc.reg_read(reg))
+
+    def set_csr(self, reg: int, value: int) -> None:
+        """Writes a Unicorn CSR as M-mode does (a debugger's write), whatever mode the hart is in."""
+        self._as_machine(lambda: self.uc.reg_write(reg, value) or 0)
 
     # --- CSR interception --------------------------------------------------------------
 

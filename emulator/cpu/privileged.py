@@ -34,7 +34,8 @@ from .decode import decode_memory_access
 from .riscv import (CAUSE_BREAKPOINT, CAUSE_FETCH_FAULT, CAUSE_ILLEGAL_INSTRUCTION, CAUSE_INTERRUPT,
                     CAUSE_LOAD_FAULT, CAUSE_LOAD_MISALIGNED, CAUSE_STORE_FAULT, CAUSE_STORE_MISALIGNED,
                     CSR_CYCLE, CSR_INSTRET, CSR_MCYCLE, CSR_MEDELEG, CSR_MHARTID, CSR_MIDELEG, CSR_MIE,
-                    CSR_MINSTRET, CSR_MIP, CSR_MSTATUS, CSR_MTVEC, CSR_SIE, CSR_SIP, CSR_SSTATUS, CSR_STVEC,
+                    CSR_MINSTRET, CSR_MIP, CSR_MSCOUNTEREN, CSR_MSTATUS, CSR_MTVEC, CSR_MUCOUNTEREN, CSR_SIE,
+                    CSR_SIP, CSR_SPTBR, CSR_SSTATUS, CSR_STVEC,
                     INSN_MRET, INSN_SFENCE_VM, INSN_SFENCE_VMA, INSN_SRET, MASK_SFENCE_VM, MASK_SFENCE_VMA, MSTATUS_MIE, MSTATUS_MPIE,
                     MSTATUS_MPP, MSTATUS_SIE, MSTATUS_SPIE, MSTATUS_SPP, PRIV_M, PRIV_S, PRIV_U)
 from .triggers import TRIGGER_CSRS
@@ -51,16 +52,19 @@ class PendingException:
 # pending interrupt ends the hart's turn, and the interrupt is taken right there
 INTERRUPT_ENABLE_CSRS = {CSR_MSTATUS: rv.UC_RISCV_REG_MSTATUS, CSR_MIE: rv.UC_RISCV_REG_MIE}
 INTERCEPTED_CSRS = {CSR_MHARTID, CSR_MCYCLE, CSR_MINSTRET, CSR_CYCLE, CSR_INSTRET, CSR_MIP, CSR_MTVEC,
-                    CSR_MIDELEG, CSR_MEDELEG, CSR_SSTATUS, CSR_SIE, CSR_SIP, CSR_STVEC,
+                    CSR_MIDELEG, CSR_MEDELEG, CSR_SSTATUS, CSR_SIE, CSR_SIP, CSR_STVEC, CSR_SPTBR,
+                    CSR_MUCOUNTEREN, CSR_MSCOUNTEREN,
                     *INTERRUPT_ENABLE_CSRS, *TRIGGER_CSRS}
 READ_ONLY_CSRS = {CSR_MHARTID, CSR_CYCLE, CSR_INSTRET}
 # mstatus.VM (bits 28:24) of 1.9.1: 0 (bare) or 9 (Sv39) are taken, others ignored; the model has no
 # paging, so 9 stops the run
 MSTATUS_VM_1_9_1, VM_SV39 = 0x1F00_0000, 9
 # what a write to mstatus changes (Rocket: SIE, MIE, SPIE, MPIE, SPP, MPP, FS, MPRV, PUM, MXR; SD
-# follows FS, and the rest reads 0); FS written non-zero reads 3 (`Fill(2, fs.orR)`), MPP written 2 reads 0
+# follows FS, and the rest reads 0); FS written non-zero reads 3 (`Fill(2, fs.orR)`); MPP keeps even
+# 2 (`trimPrivilege` with VM: an mret then restores MIE and enters U-mode)
 MSTATUS_WRITABLE = 0x000E_79AA
 MSTATUS_FS = 3 << 13
+MSTATUS_RESET = MSTATUS_MPP        # Rocket's `reset_mstatus.mpp := PRV.M`, the rest 0
 # sstatus's view of mstatus (1.9.1: SD, MXR, PUM, XS, FS, SPP, SPIE, SIE) and what a write changes
 # (SIE, SPIE, SPP, PUM, FS)
 SSTATUS_READ = 0x8000_0000_000D_E122
@@ -72,6 +76,14 @@ SIP_WRITABLE = 0x2                            # sip.SSIP
 # Rocket's delegable exceptions: misaligned and faulting fetches, breakpoints, load and store
 # faults, U-mode ecalls (not misaligned loads and stores, nor illegal instructions)
 DELEGABLE_EXCEPTIONS = (1 << 0) | (1 << 1) | (1 << 3) | (1 << 5) | (1 << 7) | (1 << 8)
+# 1.9.1's counter enables: which of cycle (bit 0) and instret (bit 2) U-mode (mucounteren) and
+# S-mode (mscounteren) may read (Rocket's delegable_counters with no performance counters; time is
+# not implemented). Rocket gives them no reset value: chosen both enabled, as the model always let
+# the counters through
+COUNTER_BITS = 0b101
+# sptbr keeps the root page number only (`reg_sptbr.ppn := wdata(ppnBits-1,0)`: 32-bit physical
+# addresses, 4 KiB pages), so Unicorn's satp never selects a paging mode
+SPTBR_PPN = (1 << 20) - 1
 WRITES_BADADDR = {CAUSE_BREAKPOINT, 0, CAUSE_LOAD_MISALIGNED, CAUSE_STORE_MISALIGNED, CAUSE_FETCH_FAULT,
                   CAUSE_LOAD_FAULT, CAUSE_STORE_FAULT}
 
@@ -81,8 +93,6 @@ def legal_mstatus(value: int) -> int:
     value &= MSTATUS_WRITABLE
     if value & MSTATUS_FS:
         value |= MSTATUS_FS
-    if value & MSTATUS_MPP == 2 << 11:
-        value &= ~MSTATUS_MPP
     return value
 
 
@@ -114,6 +124,19 @@ class PrivilegedArchitecture:
         return bool(self.takeable_interrupts())
 
     # --- trap entry and return ------------------------------------------------------------------
+
+    def delegated(self, cause: int) -> bool:
+        """Whether a trap of `cause` taken now goes to S-mode (medeleg or mideleg, from below M)."""
+        if self.privilege == PRIV_M:
+            return False
+        register = rv.UC_RISCV_REG_MIDELEG if cause & CAUSE_INTERRUPT else rv.UC_RISCV_REG_MEDELEG
+        return bool(self.reg(register) >> (cause & 0x3F) & 1)
+
+    def trap_vector(self, cause: int) -> tuple[str, int]:
+        """(name, value) of the vector register a trap of `cause` taken now enters at."""
+        if self.delegated(cause):
+            return "stvec", self.reg(rv.UC_RISCV_REG_STVEC)
+        return "mtvec", self.reg(rv.UC_RISCV_REG_MTVEC)
 
     def enter_trap(self, cause: int, epc: int, tval: int) -> None:
         """Takes a trap as Rocket does (the module's notes): into S-mode when delegated, else
@@ -155,22 +178,21 @@ class PrivilegedArchitecture:
         self.privilege = privilege
 
     def _carry_out_mret(self) -> int:
-        """mret: to mode MPP at mepc; MIE = MPIE when that mode is M, SIE = MPIE when it is S;
-        MPIE = 1, MPP = U. Carried out here so that the board knows the trap handler has returned
-        (open_trap)."""
+        """mret: MIE = MPIE when MPP's high bit is set (M, or the H that MPP can hold), SIE = MPIE when
+        MPP is S; MPIE = 1, MPP = U; to mode MPP (H becomes U) at mepc. Carried out here so that the
+        board knows the trap handler has returned (open_trap)."""
         uc = self.uc
         mstatus = uc.reg_read(rv.UC_RISCV_REG_MSTATUS)
-        privilege = (mstatus & MSTATUS_MPP) >> 11
+        mpp = (mstatus & MSTATUS_MPP) >> 11
         mpie = 1 if mstatus & MSTATUS_MPIE else 0
-        if privilege == PRIV_M:
+        if mpp & 2:
             mstatus = (mstatus & ~MSTATUS_MIE) | (mpie << 3)
-        elif privilege == PRIV_S:
+        elif mpp == PRIV_S:
             mstatus = (mstatus & ~MSTATUS_SIE) | (mpie << 1)
         mstatus = (mstatus & ~MSTATUS_MPP) | MSTATUS_MPIE | (PRIV_U << 11)
         self._write_status(rv.UC_RISCV_REG_MSTATUS, mstatus)    # may unmask a pending interrupt
         pc = uc.reg_read(rv.UC_RISCV_REG_MEPC) & ~1
-        self._set_privilege(privilege)
-        self.open_trap = None
+        self._return_to(PRIV_U if mpp == 2 else mpp)
         return pc
 
     def _carry_out_sret(self, address: int, word: int) -> int:
@@ -186,8 +208,17 @@ class PrivilegedArchitecture:
         mstatus = (mstatus & ~MSTATUS_SPP) | MSTATUS_SPIE
         self._write_status(rv.UC_RISCV_REG_MSTATUS, mstatus)
         pc = uc.reg_read(rv.UC_RISCV_REG_SEPC) & ~1
-        self._set_privilege(privilege)
+        self._return_to(privilege)
         return pc
+
+    def _return_to(self, privilege: int) -> None:
+        """After mret or sret: the hart in `privilege`, its trap handled. Interrupts of a higher
+        level are enabled whatever the enable bits below it, so a lower mode ends the turn: a
+        pending one is taken before the first instruction there."""
+        if privilege < self.privilege:
+            self.request_stop()
+        self._set_privilege(privilege)
+        self.open_trap = None
 
     def _illegal(self, address: int, word: int) -> int:
         """The instruction `word` at `address` (counted, not retired) raises an illegal-instruction
@@ -229,9 +260,12 @@ class PrivilegedArchitecture:
                                       lambda r: self.reg(rv.UC_RISCV_REG_X0 + r), self._turn_limit,
                                       self.time_skip_limit)
         if self.privilege < (csr >> 8) & 3:
-            # a CSR of a more privileged mode (bits 9:8 of its number): an illegal instruction. The
-            # user counters (cycle, instret) are let through, as the 1.9.1 counter-enable bits reset
+            # a CSR of a more privileged mode (bits 9:8 of its number): an illegal instruction
             return self._illegal(address, word)
+        if csr in (CSR_CYCLE, CSR_INSTRET) and self.privilege < PRIV_M:
+            enables = self.counter_enables[self.privilege]
+            if not enables >> (csr & 0x1F) & 1:
+                return self._illegal(address, word)
         rd = (word >> 7) & 31
         rs1 = (word >> 15) & 31
         funct3 = (word >> 12) & 7
@@ -262,6 +296,12 @@ class PrivilegedArchitecture:
             return uc.reg_read(rv.UC_RISCV_REG_MIE) & uc.reg_read(rv.UC_RISCV_REG_MIDELEG)
         if csr in TRIGGER_CSRS:
             return self.triggers.read(csr)
+        if csr == CSR_MUCOUNTEREN:
+            return self.counter_enables[PRIV_U]
+        if csr == CSR_MSCOUNTEREN:
+            return self.counter_enables[PRIV_S]
+        if csr == CSR_SPTBR:
+            return uc.reg_read(rv.UC_RISCV_REG_SATP) & SPTBR_PPN
         if csr in (CSR_MCYCLE, CSR_CYCLE):
             return (self.csr_context.mcycle() + self.mcycle_offset) & (2**64 - 1)
         if csr in (CSR_MINSTRET, CSR_INSTRET):
@@ -305,6 +345,10 @@ class PrivilegedArchitecture:
         elif csr in TRIGGER_CSRS:
             self.triggers.write(csr, value)
             self._watch_triggers()
+        elif csr in (CSR_MUCOUNTEREN, CSR_MSCOUNTEREN):
+            self.counter_enables[PRIV_U if csr == CSR_MUCOUNTEREN else PRIV_S] = value & COUNTER_BITS
+        elif csr == CSR_SPTBR:
+            uc.reg_write(rv.UC_RISCV_REG_SATP, value & SPTBR_PPN)
         elif csr in (CSR_MTVEC, CSR_STVEC):
             # `reg_mtvec := wdata >> 2 << 2`, and stvec alike: no vectored mode before 1.10
             uc.reg_write(_UNICORN_CSR[csr], value & ~3)

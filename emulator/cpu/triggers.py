@@ -21,7 +21,7 @@ tdata1 (Rocket's BPControl, most significant field first):
 | 3     | u       | fires in U-mode |
 | 2     | x       | before an instruction at the address is executed |
 | 1     | w       | before a store (SC and AMOs too) to it |
-| 0     | r       | before a load (LR and AMOs too) from it |
+| 0     | r       | before a load (LR, SC and AMOs too) from it |
 
 tdata2 holds the address, 39 bits (vaddrBits), read back sign-extended. A match raises the
 breakpoint exception (mcause 3) before the instruction has any effect; mtval (mbadaddr) is the pc
@@ -120,7 +120,8 @@ class TriggerUnit:
 
 
 def access_kind(word: int) -> int:
-    """R, W or R | W for a load, store or AMO (as Rocket's isRead and isWrite see them), else 0."""
+    """R, W or R | W for a load, store or AMO, else 0: as Rocket's isRead and isWrite see them
+    (rocket-chip uncore/Consts.scala: isRead covers M_XSC and the AMOs, isWrite M_XSC and the AMOs)."""
     if word & 3 != 3:
         op, funct3 = word & 3, bits(word, 15, 13)
         if op in (0, 2) and funct3 in (1, 2, 3):
@@ -135,5 +136,5 @@ def access_kind(word: int) -> int:
         return W
     if opcode == 0x2F:
         funct5 = word >> 27
-        return R if funct5 == 0b00010 else W if funct5 == 0b00011 else R | W   # LR, SC, AMOs
+        return R if funct5 == 0b00010 else R | W   # LR reads; SC and the AMOs read and write
     return 0

@@ -377,7 +377,7 @@ class Debugger:
             return None
         _, number, register = csr
         if register is not None:
-            return hart.uc.reg_read(register)
+            return hart.csr(register)
         if number == CSR_MINSTRET:
             return (hart.instret + hart.minstret_offset) & (2**64 - 1)
         return hart._csr_value(number)
@@ -393,7 +393,7 @@ class Debugger:
         elif FIRST_FPR_REGNUM <= regnum < FIRST_FPR_REGNUM + 32:
             hart.uc.reg_write(rv.UC_RISCV_REG_F0 + regnum - FIRST_FPR_REGNUM, value)
         elif regnum in CSR_BY_REGNUM and CSR_BY_REGNUM[regnum][2] is not None:
-            hart.uc.reg_write(CSR_BY_REGNUM[regnum][2], value)
+            hart.set_csr(CSR_BY_REGNUM[regnum][2], value)
         else:
             return False
         return True
