@@ -72,3 +72,20 @@ def test_the_firmware_headers_agree_with_the_map():
                 assert value == K210_BLOCKS[first_line[name]].irqs[0], f"{file}: {name}"
                 checked += 1
     assert checked >= 27
+
+
+def test_the_firmware_headers_pads_are_the_dock_s():
+    """Every PAD_ number in k210.inc and k210.h is the Dock's (board/maix_dock.py), by name."""
+    from emulator.board.maix_dock import DOCK_PADS, PAD_ALIASES
+    files = {"k210.inc": (ROOT / "firmware" / "include" / "k210.inc", r"^\s*\.equ\s+PAD_(\w+),\s*(\d+)"),
+             "k210.h": (ROOT / "tests" / "firmware" / "k210.h", r"^#define\s+PAD_(\w+)\s+(\d+)")}
+    checked = 0
+    for file, (path, pattern) in files.items():
+        for name, value in header_values(path, pattern).items():
+            if name.startswith("WORD") or name.endswith("SHIFT"):
+                continue
+            key = PAD_ALIASES.get(name, name)
+            assert key in DOCK_PADS, f"{file}: PAD_{name} is no pad of the Dock's table"
+            assert int(value) == DOCK_PADS[key].number, f"{file}: PAD_{name}"
+            checked += 1
+    assert checked >= 18

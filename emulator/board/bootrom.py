@@ -48,6 +48,7 @@ from ..devices.sysctl import (CENT_APB0, CENT_APB1, CENT_APB2, CENT_CPU, CENT_SR
                      CLK_SEL0, OSC_HZ, PERI_BITS, PLL0, PLL_CLKF, PLL_CLKOD, PLL_CLKR, PLL_LOCK_TIME_S,
                      PLL_OUT_EN_BIT, PLL_PWRD_BIT, Sysctl)
 from ..devices.uarths import DIV, RXCTRL, TXCTRL, Uarths
+from .maix_dock import PAD_CONSOLE_RX, PAD_CONSOLE_TX
 
 PLL0_CLKF = 29                     # 26 MHz x (29 + 1) = 780 MHz
 PLL_BWADJ_SHIFT = 14
@@ -61,7 +62,7 @@ CLK_EN_PERI_HANDED_OVER = sum(1 << PERI_BITS[name] for name in PERIPHERAL_CLOCKS
 
 # FPIOA pad words as the SDK's fpioa_set_function writes them (function_config[]):
 # function [7:0], drive [11:8], oe_en 12, ie_en 20, schmitt trigger 23
-PAD_UARTHS_RX, PAD_UARTHS_TX = 4, 5
+PAD_UARTHS_RX, PAD_UARTHS_TX = PAD_CONSOLE_RX, PAD_CONSOLE_TX
 PAD_WORD_UARTHS_RX = FUNC_UARTHS_RX | (1 << 20) | (1 << 23)
 PAD_WORD_UARTHS_TX = FUNC_UARTHS_TX | (0xF << 8) | (1 << 12)
 

@@ -27,12 +27,10 @@ from ..devices.spi import SpiController
 from ..devices.st7789v import ST7789V
 from ..devices.sysctl import Sysctl
 from ..devices.timer import CHANNELS as TIMER_CHANNELS
+from .maix_dock import (PAD_CONSOLE_RX, PAD_CONSOLE_TX, PAD_LCD_CS, PAD_LCD_DC, PAD_LCD_RST, PAD_LCD_SCLK, PAD_SD_CS,
+                        PAD_SD_MISO, PAD_SD_MOSI, PAD_SD_SCLK)
 from ..devices.timer import DwTimer
 
-# Maix Dock pads
-PAD_CONSOLE_RX, PAD_CONSOLE_TX = 4, 5       # the USB-serial bridge's TX reaches pad 4, pad 5 reaches its RX
-PAD_LCD_CS, PAD_LCD_RST, PAD_LCD_DC, PAD_LCD_SCLK = 36, 37, 38, 39
-PAD_SD_MISO, PAD_SD_SCLK, PAD_SD_MOSI, PAD_SD_CS = 26, 27, 28, 29
 # The LCD's bus: the Dock's panel (8-bit MCU interface) or a 4-line serial ST7789V module
 LCD_8080, LCD_SPI = "8080", "spi"
 LCD_INTERFACES = (LCD_8080, LCD_SPI)
