@@ -230,7 +230,7 @@ class Bus:
         """A jump to where no memory answers: Rocket's instruction access fault (mcause 1,
         mepc and mtval = the address; rocket/TLB.scala xcpt_if, rocket/CSR.scala). A device the
         model lacks, the debug region (its ROM is not modelled) and --strict stop the run."""
-        jumped_from = hart.uc.reg_read(rv.UC_RISCV_REG_PC)
+        jumped_from = hart.reg(rv.UC_RISCV_REG_PC)
         if name is not None or self.strict or DEBUG_BASE <= address < DEBUG_BASE + DEBUG_SIZE:
             what = f"{name}, which the board model does not implement" if name else "not memory"
             self.scheduler.stop(FirmwareTrap(

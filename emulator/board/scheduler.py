@@ -741,7 +741,7 @@ class Scheduler:
             if end is RunEnd.WFI and self._stopped_by_a_watch(hart):
                 end = RunEnd.STOPPED       # the run ended at a watched store, not at a wfi before it
         except unicorn.UcError as error:
-            hart.pc = hart.uc.reg_read(rv.UC_RISCV_REG_PC)
+            hart.pc = hart.reg(rv.UC_RISCV_REG_PC)
             if hart.pending_exception is not None:
                 end = RunEnd.EXCEPTION     # the bus turned the access into an access fault
             elif self.pending_stop is None:

@@ -651,6 +651,21 @@ class Hart(PrivilegedArchitecture):
     def csr(self, reg: int) -> int:
         return self._as_machine(lambda: self.uc.reg_read(reg))
 
+    def set_reg(self, register: int, value: int) -> None:
+        """Writes a register (x, f, pc or a Unicorn CSR) of a hart that is not running (a debugger)."""
+        if register == rv.UC_RISCV_REG_PC:
+            self.pc = value
+        if self.privilege != PRIV_M and register not in _NOT_CSRS:
+            self.set_csr(register, value)
+        else:
+            self.uc.reg_write(register, value)
+
+    def code_written(self, start: int, end: int) -> None:
+        """Code in [start, end) may have changed from outside the harts (a debugger's write): what
+        either engine decoded from it is dropped."""
+        self.uc.ctl_remove_cache(start, end)
+        self.forget_decodings()
+
     def set_csr(self, reg: int, value: int) -> None:
         """Writes a Unicorn CSR as M-mode does (a debugger's write), whatever mode the hart is in."""
         self._as_machine(lambda: self.uc.reg_write(reg, value) or 0)

@@ -367,11 +367,11 @@ class Debugger:
 
     def read_register(self, hart: "Hart", regnum: int) -> int | None:
         if regnum < 32:
-            return hart.uc.reg_read(rv.UC_RISCV_REG_X0 + regnum) if regnum else 0
+            return hart.reg(rv.UC_RISCV_REG_X0 + regnum) if regnum else 0
         if regnum == PC_REGNUM:
             return hart.pc
         if FIRST_FPR_REGNUM <= regnum < FIRST_FPR_REGNUM + 32:
-            return hart.uc.reg_read(rv.UC_RISCV_REG_F0 + regnum - FIRST_FPR_REGNUM)
+            return hart.reg(rv.UC_RISCV_REG_F0 + regnum - FIRST_FPR_REGNUM)
         csr = CSR_BY_REGNUM.get(regnum)
         if csr is None:
             return None
@@ -384,14 +384,13 @@ class Debugger:
 
     def write_register(self, hart: "Hart", regnum: int, value: int) -> bool:
         if 0 < regnum < 32:
-            hart.uc.reg_write(rv.UC_RISCV_REG_X0 + regnum, value)
+            hart.set_reg(rv.UC_RISCV_REG_X0 + regnum, value)
         elif regnum == 0:
             pass
         elif regnum == PC_REGNUM:
-            hart.pc = value
-            hart.uc.reg_write(rv.UC_RISCV_REG_PC, value)
+            hart.set_reg(rv.UC_RISCV_REG_PC, value)
         elif FIRST_FPR_REGNUM <= regnum < FIRST_FPR_REGNUM + 32:
-            hart.uc.reg_write(rv.UC_RISCV_REG_F0 + regnum - FIRST_FPR_REGNUM, value)
+            hart.set_reg(rv.UC_RISCV_REG_F0 + regnum - FIRST_FPR_REGNUM, value)
         elif regnum in CSR_BY_REGNUM and CSR_BY_REGNUM[regnum][2] is not None:
             hart.set_csr(CSR_BY_REGNUM[regnum][2], value)
         else:
@@ -428,7 +427,7 @@ class Debugger:
         if bus.is_sram(address) and bus.is_sram(address + len(data) - 1):
             self.board.memory.load(address, data)
             for hart in self.board.harts:       # code may have changed: drop what was translated
-                hart.uc.ctl_remove_cache(address, address + len(data))
+                hart.code_written(address, address + len(data))
             return True
         if address % 4 or len(data) % 4:
             return False
