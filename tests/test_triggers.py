@@ -6,7 +6,8 @@ import pytest
 
 from emulator.cpu.hart import ENGINE_FAST, ENGINE_PRECISE
 from emulator.cpu.riscv import CAUSE_BREAKPOINT
-from emulator.cpu.triggers import R, W, X, Trigger, access_kind
+from emulator.cpu.decode import memory_access_kind as access_kind
+from emulator.cpu.triggers import R, W, X, Trigger
 from k210_fixtures import make_board, program, reg, run_to_done, symbol
 
 # a trap handler that records mcause, mepc and mtval and steps over the instruction (4 bytes)

@@ -1,6 +1,6 @@
 """What the board needs to know of an instruction word without executing it: the memory access a
 load, store or AMO makes (the bus reports a faulting access by it; the poll-loop finder reads
-what a loop loads)."""
+what a loop loads; the hardware breakpoint matches its address) and whether it reads or writes."""
 from __future__ import annotations
 
 from .riscv import bits, signed
@@ -33,3 +33,27 @@ def decode_memory_access(word: int) -> tuple[int, int, int] | None:
     if opcode == 0x2F:                                         # AMOs and LR/SC
         return (8 if funct3 == 3 else 4), rs1, 0
     return None
+
+
+READS, WRITES = 1, 2
+
+
+def memory_access_kind(word: int) -> int:
+    """READS, WRITES or both for a load, store or AMO, else 0: as Rocket's isRead and isWrite see
+    them (rocket-chip uncore/Consts.scala: isRead covers M_XSC and the AMOs, isWrite M_XSC and the
+    AMOs)."""
+    if word & 3 != 3:
+        op, funct3 = word & 3, bits(word, 15, 13)
+        if op in (0, 2) and funct3 in (1, 2, 3):
+            return READS                                # c.fld c.lw c.ld, c.fldsp c.lwsp c.ldsp
+        if op in (0, 2) and funct3 in (5, 6, 7):
+            return WRITES                               # c.fsd c.sw c.sd, c.fsdsp c.swsp c.sdsp
+        return 0
+    opcode = word & 0x7F
+    if opcode in (0x03, 0x07):
+        return READS
+    if opcode in (0x23, 0x27):
+        return WRITES
+    if opcode == 0x2F:
+        return READS if word >> 27 == 0b00010 else READS | WRITES   # LR reads; SC and the AMOs both
+    return 0

@@ -32,6 +32,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from .decode import READS, WRITES, memory_access_kind
 from .riscv import bits
 
 CSR_TSELECT, CSR_TDATA1, CSR_TDATA2 = 0x7A0, 0x7A1, 0x7A2
@@ -43,7 +44,7 @@ VADDR_BITS = 39
 VADDR_MASK = (1 << VADDR_BITS) - 1
 # the bits a write keeps outside debug mode: match, m, s, u, x, w, r
 WRITABLE = (3 << 7) | (1 << 6) | (1 << 4) | (1 << 3) | 7
-R, W, X = 1, 2, 4
+R, W, X = READS, WRITES, 4     # tdata1's r, w, x bits (decode.py's access kinds are r and w)
 MODE_BITS = {0: 1 << 3, 1: 1 << 4, 3: 1 << 6}    # privilege level -> its enable bit (U, S, M)
 
 
@@ -113,28 +114,7 @@ class TriggerUnit:
         if self.trigger.fires(X, privilege, pc):
             return pc
         if effective_address is not None:
-            kind = access_kind(word)
+            kind = memory_access_kind(word)
             if kind and any(self.trigger.fires(k, privilege, effective_address) for k in (R, W) if kind & k):
                 return effective_address & (2**64 - 1)
         return None
-
-
-def access_kind(word: int) -> int:
-    """R, W or R | W for a load, store or AMO, else 0: as Rocket's isRead and isWrite see them
-    (rocket-chip uncore/Consts.scala: isRead covers M_XSC and the AMOs, isWrite M_XSC and the AMOs)."""
-    if word & 3 != 3:
-        op, funct3 = word & 3, bits(word, 15, 13)
-        if op in (0, 2) and funct3 in (1, 2, 3):
-            return R                                   # c.fld c.lw c.ld, c.fldsp c.lwsp c.ldsp
-        if op in (0, 2) and funct3 in (5, 6, 7):
-            return W                                   # c.fsd c.sw c.sd, c.fsdsp c.swsp c.sdsp
-        return 0
-    opcode = word & 0x7F
-    if opcode in (0x03, 0x07):
-        return R
-    if opcode in (0x23, 0x27):
-        return W
-    if opcode == 0x2F:
-        funct5 = word >> 27
-        return R if funct5 == 0b00010 else R | W   # LR reads; SC and the AMOs read and write
-    return 0
