@@ -124,24 +124,21 @@ class Bus:
 
     def attach(self, hart: Hart) -> None:
         """Maps SRAM (both views) and every device window into a hart's engine."""
-        uc = hart.uc
         self._map_windows(hart, 0)
         hart.trap_misaligned(self.board.memory.address)
-        uc.hook_add(unicorn.UC_HOOK_MEM_UNMAPPED | unicorn.UC_HOOK_MEM_FETCH_PROT | unicorn.UC_HOOK_MEM_READ_PROT
-                    | unicorn.UC_HOOK_MEM_WRITE_PROT, self._unmapped(hart))
+        hart.on_unmapped(self._unmapped(hart))
         hart.attach_devices([(p.BASE, p.BASE + p.SIZE) for p in self.peripherals], self._direct_access(),
                             self.scheduler.repeats_answered)
 
     def _map_windows(self, hart: Hart, upper: int) -> None:
         """Maps SRAM's two views and every device window at `upper` (0, or an upper half of the
         address space that aliases the 32-bit physical one) into a hart's engine."""
-        uc = hart.uc
         memory = self.board.memory
-        uc.mem_map_ptr(upper + SRAM_BASE, SRAM_SIZE, unicorn.UC_PROT_ALL, memory.address)
-        uc.mem_map_ptr(upper + SRAM_UNCACHED_BASE, SRAM_SIZE, unicorn.UC_PROT_ALL, memory.address)
+        hart.map_memory(upper + SRAM_BASE, SRAM_SIZE, memory.address)
+        hart.map_memory(upper + SRAM_UNCACHED_BASE, SRAM_SIZE, memory.address)
         for peripheral in self.peripherals:
-            uc.mmio_map(upper + peripheral.BASE, peripheral.SIZE,
-                        self._mmio_reader(hart, peripheral), None, self._mmio_writer(hart, peripheral), None)
+            hart.map_device(upper + peripheral.BASE, peripheral.SIZE, self._mmio_reader(hart, peripheral),
+                            self._mmio_writer(hart, peripheral))
 
     def answers(self, address: int) -> bool:
         """Whether memory or a modelled device answers at a 32-bit physical address."""

@@ -660,6 +660,23 @@ class Hart(PrivilegedArchitecture):
         else:
             self.uc.reg_write(register, value)
 
+    # --- what the bus maps into the hart's engines ---------------------------------------
+
+    def map_memory(self, address: int, size: int, host_address: int) -> None:
+        """Memory at `address` (SRAM, or one of its views) backed by host memory at `host_address`."""
+        self.uc.mem_map_ptr(address, size, unicorn.UC_PROT_ALL, host_address)
+
+    def map_device(self, address: int, size: int, read: Callable, write: Callable) -> None:
+        """A device window: loads call read(uc, offset, width, user_data), stores
+        write(uc, offset, width, value, user_data), as Unicorn's MMIO callbacks."""
+        self.uc.mmio_map(address, size, read, None, write, None)
+
+    def on_unmapped(self, callback: Callable) -> None:
+        """Accesses and fetches where nothing is mapped (or not as asked) call
+        callback(uc, access, address, size, value, user_data)."""
+        self.uc.hook_add(unicorn.UC_HOOK_MEM_UNMAPPED | unicorn.UC_HOOK_MEM_FETCH_PROT | unicorn.UC_HOOK_MEM_READ_PROT
+                         | unicorn.UC_HOOK_MEM_WRITE_PROT, callback)
+
     def code_written(self, start: int, end: int) -> None:
         """Code in [start, end) may have changed from outside the harts (a debugger's write): what
         either engine decoded from it is dropped."""

@@ -81,7 +81,7 @@ class InstructionTrace:
         self._stop(self.board)
         self.out.close()
 
-    def _hook(self, uc: unicorn.Uc, address: int, size: int, hart: "Hart") -> None:
+    def _hook(self, uc: unicorn.Uc | None, address: int, size: int, hart: "Hart") -> None:
         self._finish(hart)
         text = self._texts.get(address)
         if text is None:
@@ -93,7 +93,7 @@ class InstructionTrace:
                                                 [hart.reg(r) for r in FPRS] if floating else None)
 
     def _on_csr_site(self, hart: "Hart", address: int) -> None:
-        self._hook(hart.uc, address, 4, hart)
+        self._hook(None, address, 4, hart)
 
     def _finish(self, hart: "Hart") -> None:
         """Writes the line of the hart's previous instruction, now that it has run."""
