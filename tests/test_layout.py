@@ -122,3 +122,17 @@ def test_the_checker_sees_a_cycle_and_a_layer_broken(tmp_path, monkeypatch):
         assert "emulator.devices.a imports emulator.board.b" in str(error)
     else:
         raise AssertionError("the broken layer was not found")
+
+
+def test_only_cpu_touches_a_hart_s_unicorn():
+    """The engines stay behind the hart: outside emulator/cpu/ nothing reaches a hart's Unicorn
+    instance (`hart.uc`); the hart's methods (reg, set_reg, map_memory, ...) do it."""
+    import re
+    offenders = []
+    for path in sorted(EMULATOR.rglob("*.py")):
+        if path.parent.name == "cpu":
+            continue
+        for number, line in enumerate(path.read_text().splitlines(), 1):
+            if re.search(r"\.uc\b", line.split("#")[0]):
+                offenders.append(f"{path.relative_to(EMULATOR.parent)}:{number}: {line.strip()}")
+    assert not offenders, "\n".join(offenders)
