@@ -1,20 +1,23 @@
 """One K210 hart: a Unicorn RV64GC engine plus what Unicorn does not do by itself.
 
-Unicorn executes the instructions; this module adds the parts of a K210 hart
-that Unicorn leaves out (see ../shared/unicorn-riscv-notes.md):
+Unicorn executes the instructions; this module adds the parts of a K210 hart that Unicorn 2.1.4
+leaves out (it counts no instructions, reads mhartid as 0 on every engine, enters no trap vector
+and ends a run at wfi):
 
 - an exact instruction count (a native per-instruction hook, `_insn_counter.c`), and the
   cycles the instructions take on the K210's Rocket core (the same hook, from timing.py's table;
   without a table one cycle each),
-- `mhartid`, `mcycle`, `minstret`, `cycle`, `instret` and `mip` reads: the native counter
-  stops before every CSR instruction that names them and `run` carries it out (a code hook per
-  such instruction would cost every instruction: Unicorn walks all its code hooks on each one),
-- synchronous exceptions and interrupts entering `mtvec` the way the privileged
-  spec says, delivered by the board between runs,
+- the CSRs the board answers (`mhartid`, `mcycle`, `minstret`, `mip`, the trap and delegation
+  registers, the trigger): the native counter stops before every CSR instruction that names them
+  and privileged.py carries it out (a code hook per such instruction would cost every instruction:
+  Unicorn walks all its code hooks on each one),
+- synchronous exceptions and interrupts entering their trap vector as the K210's Rocket does
+  (privileged.py), delivered by the board between runs,
 - `wfi`, which ends a run: the board keeps the hart asleep until an enabled
   interrupt is pending;
 - poll loops on SRAM, which end a run too: the board keeps the hart waiting until
-  what it polls changes (shared_memory.py).
+  what it polls changes (shared_memory.py);
+- the fast engine (`_fast_engine.c`), which runs what it can of M-mode code in SRAM itself.
 """
 from __future__ import annotations
 
