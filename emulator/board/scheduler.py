@@ -31,11 +31,12 @@ from unicorn import riscv_const as rv
 
 from ..cpu import shared_memory
 from ..cpu.native import AlonePlan
-from .elf import symbolize
+from .deadlines import Deadlines
+from .sram_waits import SramWaits
 from .traps import Traps
-from ..errors import BoardStop, FirmwareReportedError, FirmwareTrap, HangDetected
+from ..errors import BoardStop, FirmwareTrap
 from ..cpu.hart import CsrContext, Hart, HartState, RunEnd
-from ..memory_map import RESET_PC, SRAM_BASE, SRAM_UNCACHED_BASE
+from ..memory_map import RESET_PC
 
 if TYPE_CHECKING:
     from ..devices.mmio import Peripheral
@@ -48,12 +49,10 @@ if TYPE_CHECKING:
 HARTS = 2
 DEFAULT_QUANTUM = 20_000          # CPU cycles per hart per turn
 DEFAULT_HANG_BUDGET_S = 5.0       # virtual seconds without a new frame before a run counts as hung
-TRAP_GRACE_S = 0.5                # virtual time the firmware's trap handler gets to report
 POLL_REPEATS = 8                  # identical reads at one pc before a hart counts as polling
 # After the last requested frame the run goes on this long at most, so that the console line
 # the firmware begins after that frame (this firmware's "frame N") is not cut off.
 CONSOLE_DRAIN_S = 5e-3
-WARNINGS_IN_HANG_REPORT = 6       # the most recent distinct warnings a hang report repeats
 MTIME_DIVIDER = 50                # mtime ticks at CPU clock / 50
 NO_POLL = (-1, -1, -1, 0)
 UNLIMITED_FRAMES = 1 << 62        # run_until: no frame count ends a turn
@@ -132,8 +131,9 @@ class Board(Protocol):
     def interrupts_may_have_changed(self, now: float | None = None) -> None: ...
 
 
-class Scheduler:
-    """Owns virtual time and the harts; runs them in turns between device events."""
+class Scheduler(SramWaits, Deadlines):
+    """Owns virtual time and the harts; runs them in turns between device events (harts waiting
+    on SRAM: sram_waits.py; grace periods and hangs: deadlines.py)."""
 
     def __init__(self, board: Board, quantum: int, hang_budget_s: float) -> None:
         self.board = board
@@ -296,79 +296,6 @@ class Scheduler:
                     self._end_wait(hart, now, by_store=False)
                 hart.state = HartState.RUNNING
                 hart.time = max(hart.time, now)
-
-    # --- harts polling SRAM (shared_memory.py) ------------------------------------------------
-
-    def _begin_wait(self, hart: Hart, turn_start: int) -> bool:
-        """The hart came round a poll loop again: when the loop reads only SRAM, and it ran its
-        last iteration on memory as it is now (the iteration ran in this turn, so nothing else
-        wrote meanwhile; or, in lockstep, what it reads was the same one iteration ago), the
-        hart waits, with a store watch on the other harts over what it reads. False: it goes on."""
-        loop, slot = hart.take_poll_report()
-        if not loop.loads:
-            hart.skip_idle(loop)    # it only spins: nothing to wait for, its iterations are counted
-            return False
-        spans = shared_memory.polled_spans(loop, lambda r: hart.reg(rv.UC_RISCV_REG_X0 + r))
-        if spans is None:
-            slot.ignore = 1     # it polls a device: the bus's poll detection is for those
-            return False
-        memory = self.board.memory.bytes
-        seen = [memory[o:o + w].tobytes() for o, w in spans]
-        previous = self._poll_seen.get(hart.hart_id)
-        self._poll_seen[hart.hart_id] = (loop.head, seen, hart.executed)
-        # (the earlier look counts only if it was one iteration ago: the hart may have left the loop
-        # and come back to it since, and what it saw then says nothing about what it reads now)
-        if hart.executed - loop.body <= turn_start and previous != (loop.head, seen, hart.executed - loop.body):
-            # the last iteration began before this turn: the next one decides. Meanwhile the harts
-            # run in lockstep, since what it polls may be about to change for a moment only
-            self._race_until = max(self._race_until,
-                                   self.hart_now(hart) + shared_memory.RACE_WINDOW_CYCLES / self._hz)
-            return False
-        del self._poll_seen[hart.hart_id]
-        wait = shared_memory.Wait(loop, spans, seen)
-        for other in self.harts:
-            if other is hart:
-                continue
-            watch = shared_memory.StoreWatch(other.counter_address, 0, 0)
-            handles = [other.add_native_hook(unicorn.UC_HOOK_MEM_WRITE, shared_memory.STORE_WATCH_HOOK, watch,
-                                             view + offset, view + offset + width - 1, "a store watch")
-                       for offset, width in spans for view in (SRAM_BASE, SRAM_UNCACHED_BASE)]
-            wait.watches.append((other, watch, handles))
-        hart.wait = wait
-        hart.state = HartState.WAITING
-        return True
-
-    def _end_wait(self, hart: Hart, now: float, by_store: bool) -> None:
-        """A waiting hart runs again from `now`; woken by a store, it runs before the storer goes on
-        (one whole iteration of its loop), and the harts race in lockstep for a moment."""
-        wait = hart.wait
-        for other, _, handles in wait.watches:
-            for handle in handles:
-                other.remove_hook(handle)
-        hart.wait = None
-        hart.state = HartState.RUNNING
-        hart.time = max(hart.time, now)
-        self._race_until = max(self._race_until, hart.time + shared_memory.RACE_WINDOW_CYCLES / self._hz)
-        if by_store:
-            self._priority = (hart, max(shared_memory.RACE_TURN, wait.loop.body))
-
-    def _check_waiters(self, now: float, storer: Hart | None = None) -> None:
-        """Waiting harts whose SRAM changed wake at `now` (after `storer`'s turn: at its store)."""
-        memory = self.board.memory.bytes
-        for hart in self.harts:
-            if hart.state is not HartState.WAITING:
-                continue
-            wait = hart.wait
-            stored = False
-            for other, watch, _ in wait.watches:
-                if other is storer and watch.hits:
-                    stored, watch.hits = True, 0
-            if any(memory[o:o + w].tobytes() != seen for (o, w), seen in zip(wait.spans, wait.seen)):
-                self._end_wait(hart, now, by_store=stored)
-
-    def _stopped_by_a_watch(self, hart: Hart) -> bool:
-        return any(other is hart and watch.hits for waiter in self.harts if waiter.wait is not None
-                   for other, watch, _ in waiter.wait.watches)
 
     # --- frames and grabs ---------------------------------------------------------------------
 
@@ -765,71 +692,3 @@ class Scheduler:
             elif end is RunEnd.EXCEPTION:
                 self.traps.deliver_exception(hart, self._open_grace)
         return ran
-
-    # --- traps, error reports and deadlines ----------------------------------------------------
-
-    def _open_grace(self) -> None:
-        """A trap handler that may never return gets the grace period to report before the run ends."""
-        self._trap_deadline = self.time + TRAP_GRACE_S
-
-    def firmware_reported_error(self, code: int, line: str) -> None:
-        """The firmware printed its fatal error report: the run ends after the grace period."""
-        if self._error_report is None:
-            self._error_report = (code, line)
-            self._trap_deadline = self.time + TRAP_GRACE_S
-
-    def _report_pending(self) -> bool:
-        """An error report or a --stop-on-trap exception waits for its grace period to end the run
-        (--until's time does not cut it short; a trap handler that has not returned does not hold
-        up --until, whose time is the user's)."""
-        return self._trap_deadline is not None and (self.traps.report is not None or self._error_report is not None)
-
-    def _check_deadlines(self) -> None:
-        if self._trap_deadline is not None:
-            everyone_waits = all(h.state is not HartState.RUNNING for h in self.harts) and \
-                self.board.next_device_event(self.time) is None
-            if self.traps.report is not None or self._error_report is not None:
-                if self.time >= self._trap_deadline or everyone_waits:
-                    if self.traps.report is not None:
-                        raise FirmwareTrap(self.traps.report + " (the firmware's trap handler has run; see the console)")
-                    code, line = self._error_report
-                    raise FirmwareReportedError(f"the firmware reported: {line}", code)
-            elif everyone_waits:
-                self._report_hang("every hart sleeps in wfi and no device will ever raise an interrupt")
-            elif self.time >= self._trap_deadline or not any(h.open_trap for h in self.harts):
-                # the handler returned, or runs on as the program's own code: the run goes on
-                self._trap_deadline = None
-        if self.time - self._last_frame_time > self.hang_budget_s and not self._draining and self.until is None:
-            self._report_hang(f"no frame reached the LCD for {self.hang_budget_s:g} s of virtual time")
-
-    def _report_hang(self, why: str) -> None:
-        """Ends the run: no hart can make progress. When a hart is in a trap handler it never
-        returned from, the exception is what ended the program (a handler that reports and parks
-        the harts, as most firmware's does for an exception it cannot handle): a trap."""
-        board = self.board
-        open_traps = [h.open_trap for h in self.harts if h.open_trap is not None]
-        if open_traps:
-            raise FirmwareTrap(f"{'; '.join(open_traps)}; the trap handler did not return, and then {why} "
-                               f"(see the console)")
-        lines = [why]
-        if self.traps.last is not None:
-            lines.append(f"the last exception taken (its handler returned): {self.traps.last}")
-        for hart in self.harts:
-            where = symbolize(board.image.symbols, hart.pc)
-            state = hart.state.value
-            if hart.wait is not None:
-                state += f" ({hart.wait.describe()})"
-            lines.append(f"hart {hart.hart_id}: {state} at pc 0x{hart.pc:08x}"
-                         f"{f' <{where}>' if where else ''} ({board.disassemble_at(hart.pc)}), "
-                         f"mie 0x{hart.csr(rv.UC_RISCV_REG_MIE):x}, mip 0x{board.mip(hart.hart_id, self.time):x}")
-        for peripheral in board.peripherals:
-            text = peripheral.describe_wait()
-            if text:
-                lines.append(text)
-        lines.append(f"LCD: {board.lcd.frames_captured} frames captured, display "
-                     f"{'on' if board.lcd.display_on else 'off'}, {'asleep' if board.lcd.sleeping else 'awake'}")
-        recent = board.recent_warnings(WARNINGS_IN_HANG_REPORT)
-        if recent:
-            lines.append(f"the most recent warnings (of {len(board.warnings)} in the run, every one in run.json):")
-            lines.extend(f"  {text}" for text in recent)
-        raise HangDetected("\n  ".join(lines))
