@@ -8,8 +8,8 @@ k210_common/exit_status.py's, shared with the project's other commands.
 from __future__ import annotations
 
 from k210_common.exit_status import (BY_CODE, EXIT_BAD_INPUT, EXIT_EXPECT_UNMET, EXIT_FAIL_ON, EXIT_FIRMWARE_ERROR,
-                                     EXIT_HANG, EXIT_INTERNAL, EXIT_MISUSE, EXIT_OK, EXIT_STRAY_WRITE, EXIT_TRAP,
-                                     EXIT_UNMODELLED)
+                                     EXIT_HANG, EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_MISUSE, EXIT_OK,
+                                     EXIT_STRAY_WRITE, EXIT_TERMINATED, EXIT_TRAP, EXIT_UNMODELLED)
 
 
 class BoardStop(Exception):
@@ -99,3 +99,13 @@ class ConsoleExpectationUnmet(BoardStop):
     without the next expected text) before the console printed every expected text."""
 
     exit_status = EXIT_EXPECT_UNMET
+
+
+class Interrupted(BoardStop):
+    """A signal asked the run to end (Ctrl-C's SIGINT, SIGTERM): it ends after the instruction
+    under way and writes everything it has, as any other end does."""
+
+    def __init__(self, signal_number: int, name: str) -> None:
+        super().__init__(f"{name} received: the run was stopped there")
+        self.exit_status = EXIT_TERMINATED if name == "SIGTERM" else EXIT_INTERRUPTED
+        self.signal_number = signal_number

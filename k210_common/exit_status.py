@@ -7,7 +7,8 @@ rows it returns, and when, in a mapping code -> its own words (`details`); its `
 epilog (`help_epilog`) and its table in the README (`markdown_table`, checked by
 tests/test_exit_status.py) are generated from that mapping and this table.
 
-New statuses are appended (13 on): the board model's 0-12 are in use in scripts and CI.
+New statuses are appended (13 on): the board model's 0-12 are in use in scripts and CI. A run
+ended by a signal returns 128 + its number, as shells report it (130 for SIGINT, 143 for SIGTERM).
 """
 from __future__ import annotations
 
@@ -33,6 +34,8 @@ EXIT_CARD_TOO_SMALL = 14
 EXIT_CORRUPT_CARD = 15
 EXIT_WRITE_FAILED = 16
 EXIT_KFLASH_FAILED = 17
+EXIT_INTERRUPTED = 130      # 128 + SIGINT
+EXIT_TERMINATED = 143       # 128 + SIGTERM
 
 
 @dataclass(frozen=True)
@@ -61,6 +64,8 @@ TABLE: tuple[ExitStatus, ...] = (
     ExitStatus(EXIT_CORRUPT_CARD, "corrupt-card", "a card image is not an MBR-partitioned FAT32 card, or is damaged"),
     ExitStatus(EXIT_WRITE_FAILED, "write-failed", "an output could not be written"),
     ExitStatus(EXIT_KFLASH_FAILED, "kflash-failed", "kflash could not write the firmware to the board"),
+    ExitStatus(EXIT_INTERRUPTED, "interrupted", "stopped by Ctrl-C (SIGINT)"),
+    ExitStatus(EXIT_TERMINATED, "terminated", "stopped by SIGTERM"),
 )
 
 BY_CODE: dict[int, ExitStatus] = {status.code: status for status in TABLE}

@@ -5,15 +5,17 @@ import argparse
 import gc
 import math
 import os
+import signal
 import sys
 import time
 from pathlib import Path
 from typing import TextIO
 
 from k210_common.exit_status import (BY_CODE, EXIT_BAD_INPUT, EXIT_EXPECT_UNMET, EXIT_FAIL_ON, EXIT_FIRMWARE_ERROR,
-                                     EXIT_GOLDEN_MISMATCH, EXIT_HANG, EXIT_INTERNAL, EXIT_MISUSE, EXIT_OK,
-                                     EXIT_STRAY_WRITE, EXIT_TRAP, EXIT_UNMODELLED, EXIT_USAGE, help_epilog)
-from ..errors import BadInput, BoardStop
+                                     EXIT_GOLDEN_MISMATCH, EXIT_HANG, EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_MISUSE,
+                                     EXIT_OK, EXIT_STRAY_WRITE, EXIT_TERMINATED, EXIT_TRAP, EXIT_UNMODELLED,
+                                     EXIT_USAGE, help_epilog)
+from ..errors import BadInput, BoardStop, Interrupted
 from ..devices.sdcard import FAULTS
 from ..cpu.timing import TIMING_MODELS, TIMING_ROCKET
 from ..cpu.hart import ENGINE_FAST, ENGINES
@@ -67,6 +69,10 @@ EXIT_STATUS_DETAILS: dict[int, str] = {
     EXIT_FAIL_ON: "the console printed a `--fail-on`/`--fail-on-re` text",
     EXIT_EXPECT_UNMET: "`--expect`: the run ended (`--until`'s time, or `--budget` virtual seconds without the "
                        "next expected text) before the console printed every expected text",
+    EXIT_INTERRUPTED: "Ctrl-C (SIGINT) stopped the run: it ends after the instruction under way and writes "
+                      "run.json, console.log, the frames shown so far and the animation as any end does; a second "
+                      "Ctrl-C ends the process at once",
+    EXIT_TERMINATED: "SIGTERM stopped the run, as Ctrl-C does",
 }
 
 EXIT_STATUS_HELP = help_epilog(EXIT_STATUS_DETAILS) + """
@@ -561,6 +567,19 @@ def usage_error(message: str) -> int:
     return EXIT_USAGE
 
 
+def stop_on_signals(board) -> dict:
+    """SIGINT and SIGTERM end the run after the instruction under way, so that everything it has is
+    written (Interrupted); a second one while that stop is under way ends the process at once, as
+    it would have without this. Returns the handlers replaced, to put back after the run."""
+    def stop(number: int, _frame) -> None:
+        if isinstance(board.scheduler.pending_stop, Interrupted):
+            signal.signal(number, signal.SIG_DFL)
+            os.kill(os.getpid(), number)
+            return
+        board.stop_run(Interrupted(number, signal.Signals(number).name))
+    return {number: signal.signal(number, stop) for number in (signal.SIGINT, signal.SIGTERM)}
+
+
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     problem = option_problem(args)
@@ -631,6 +650,7 @@ def main(argv: list[str] | None = None) -> int:
     trace = None
     profiler = None
     signal_log = None
+    previous_handlers: dict = {}
 
     def on_frame(record, image) -> None:
         output.frame(record, image)
@@ -667,6 +687,7 @@ def main(argv: list[str] | None = None) -> int:
         for index, request in enumerate(grabs):
             board.grab_at(request.at_s, grab_action(index, request))
         progress = terminal.progress if terminal.shows_progress else None
+        previous_handlers = stop_on_signals(board)
         if args.gdb is not None:
             result = run_under_gdb(board, args, terminal)
         elif args.expected:
@@ -687,6 +708,8 @@ def main(argv: list[str] | None = None) -> int:
         status, kind, message = EXIT_INTERNAL, BY_CODE[EXIT_INTERNAL].name, f"{type(error).__name__}: {error}"
         import traceback
         traceback.print_exc()
+    for number, handler in previous_handlers.items():
+        signal.signal(number, handler)
     terminal.finish()
     if trace is not None:
         trace.close()
