@@ -552,3 +552,21 @@ def test_the_progress_line_is_cleared_before_console_lines(assemble, tmp_path):
     where = text.index("console line")
     on_that_line = text[text.rfind("\n", 0, where) + 1:where]
     assert on_that_line == "" or on_that_line.endswith("\r\x1b[K"), repr(on_that_line)
+
+
+@pytest.mark.parametrize("where", ["golden", "inside golden", "card folder"])
+def test_an_output_folder_that_would_overwrite_an_input_is_refused(firmware, card, tmp_path, where):
+    """--out the --golden folder used to replace the goldens with the run's frames (issue 35)."""
+    golden = tmp_path / "golden"
+    golden.mkdir()
+    (golden / "frame_0000.png").write_bytes(b"kept")
+    placed = tmp_path / "cards" / "card.img"
+    placed.parent.mkdir()
+    placed.write_bytes(card.read_bytes())
+    out = {"golden": golden, "inside golden": golden / "run", "card folder": placed.parent}[where]
+    result = run_emulator("run", str(firmware), "--sd", str(placed), "--frames", "1", "--golden", str(golden),
+                          "--out", str(out), "--quiet")
+    assert result.returncode == 2, result.stderr
+    assert "--out" in result.stderr
+    assert (golden / "frame_0000.png").read_bytes() == b"kept"
+    assert not (out / "run.json").exists()

@@ -36,7 +36,8 @@ EXIT_STATUS_DETAILS: dict[int, str] = {
     EXIT_USAGE: f"bad command line: an unknown option or a value out of range (`--frames`, `--quantum` 1..{MAX_QUANTUM}, "
                 f"`--budget` and `--until` above 0 and finite, `--tolerance` 0..{MAX_TOLERANCE}, `--sd-fault`, "
                 "`--lcd-interface`, `--timing`, a `--grab`'s syntax or time, a `--pin` that is not `PAD=LEVEL@SECONDS` "
-                "with a pad 0..47), an option without the one it needs (`--tolerance` without `--golden`, "
+                "with a pad 0..47), `--out` equal to or inside `--golden` or the folder of the `--sd` image, "
+                "an option without the one it needs (`--tolerance` without `--golden`, "
                 "`--sd-writable` or `--sd-fault` without `--sd`), `--until` or `--expect` with `--frames`, "
                 "`--gdb-wait` without `--gdb`, `--gdb` with `--expect`/`--fail-on`, a `--gdb` port above 65535, "
                 "`--trace-from`/`--trace-to` without `--trace-insn` or in the wrong order, a `--grab` of a symbol "
@@ -357,6 +358,21 @@ def option_problem(args: argparse.Namespace) -> str | None:
         return "--sd-writable needs --sd (the card image the firmware's writes would reach)"
     if args.sd is None and args.sd_fault:
         return "--sd-fault needs --sd (a card in the slot to misbehave)"
+    return output_overwrites_input(args)
+
+
+def output_overwrites_input(args: argparse.Namespace) -> str | None:
+    """The run writes frame_NNNN.png, run.json and more into --out: refused where that would
+    replace what the run compares with (the golden frames) or mix with a card's files."""
+    out = Path(args.out).resolve()
+    if args.golden is not None:
+        golden = Path(args.golden).resolve()
+        if out == golden or golden in out.parents:
+            return (f"--out {args.out} is the --golden folder {args.golden} (or inside it): the run's frames "
+                    f"would replace the goldens; give another output folder")
+    if args.sd is not None and out == Path(args.sd).resolve().parent:
+        return (f"--out {args.out} is the folder the --sd card image {args.sd} is in: the run's output would be "
+                f"written beside the card; give another output folder")
     return None
 
 
