@@ -259,3 +259,55 @@ def test_read_and_access_watchpoints_stop_after_the_access():
     event = debugger.run_until_stop(lambda: False)
     assert event.extra == f"awatch:{cell:x};" and hart.pc == symbol(board, "store") + 4
     assert int.from_bytes(board.memory.read(cell, 8), "little") == 42
+
+
+def test_malformed_packets_get_an_error_reply_and_the_run_goes_on(c_firmware, tmp_path):
+    """Issue 35's packets, which ended the run with a traceback or set the board running: each
+    gets E01 (or the empty reply of an unknown packet), nothing runs, and the stub goes on."""
+    process, port = start_board(str(c_firmware / "hello.elf"), "--until", "0.02", "--out", str(tmp_path / "out"))
+    client = Client(port)
+    pc = client.ask("p20")
+    for payload in ["m", "m80000000", "mzz,4", "Hgzz", "H", "vCont;s:9", "vCont;x", "vCont;", "vCont;c:zz", "Z0",
+                    "Z0,zz,4", "p", "pzz", "P20", "Gzz", "T", "qThreadExtraInfo,9", "qXfer:features:read:target.xml:",
+                    "M80000000,4", "X80000000"]:
+        assert client.ask(payload) == "E01", payload
+    assert client.ask("") == ""                                    # the empty packet: no command
+    assert client.ask("p20") == pc                                 # nothing ran meanwhile
+    client.send_raw(b"$" + b"m" * 70_000)                          # longer than PacketSize, no end yet
+    assert client.ack() == b"-"                                    # refused at once
+    client.send_raw(b"#00")                                        # its tail: noise between packets
+    assert client.ask("p20") == pc
+    client.send("vKill;1")
+    assert client.ack() == b"+" and client.reply() == "OK"
+    client.sock.close()
+    status, errors = finish(process)
+    assert status == 0 and "Traceback" not in errors, errors
+
+
+def test_any_packet_gets_a_reply_without_running_the_board():
+    """Hypothesis: whatever bytes a packet holds (but the commands that run, kill or detach), the
+    stub answers it (a reply, E.., or the empty reply) and the board has not moved."""
+    from hypothesis import given, settings
+    from hypothesis import strategies as st
+
+    from emulator.frontends.gdbstub import GdbServer, StopEvent
+    from k210_fixtures import make_board
+
+    board = make_board()
+    server = GdbServer(board, 0, lambda text: None)
+    verbs = st.sampled_from(["m", "M", "X", "g", "G", "p", "P", "H", "T", "z", "Z", "q", "qXfer:features:read:",
+                             "qThreadExtraInfo,", "vCont;", "?", ""])
+    try:
+        @settings(max_examples=400, deadline=None, derandomize=True)
+        @given(verbs, st.binary(max_size=40))
+        def check(verb: str, rest: bytes) -> None:
+            packet = verb.encode() + rest
+            if verb == "vCont;" and any(v in rest for v in (b"c", b"s", b"C", b"S")):
+                return                                   # a well-formed one would run the board
+            before = (board.time, [h.executed for h in board.harts])
+            reply = server.handle(packet)
+            assert isinstance(reply, (str, bytes, StopEvent)), packet   # '?' answers with the stop
+            assert (board.time, [h.executed for h in board.harts]) == before, packet
+        check()
+    finally:
+        server.close()

@@ -19,6 +19,7 @@ counter, so the instruction it stops before is neither counted nor timed until i
 """
 from __future__ import annotations
 
+import re
 import select
 import socket
 from dataclasses import dataclass
@@ -43,6 +44,8 @@ CAUSE_SIGNALS = {0: SIGBUS, 1: SIGSEGV, 2: SIGILL, 3: SIGTRAP, 4: SIGBUS, 5: SIG
                  8: SIGTRAP, 9: SIGTRAP, 11: SIGTRAP}
 INTERRUPT_BYTE = 0x03
 PACKET_SIZE = 0x4000
+# the most a packet may take on the wire: PACKET_SIZE of payload, every byte escaped, and $, #, checksum
+MAX_PACKET_BYTES = 2 * PACKET_SIZE + 4
 # GDB's numbering for RISC-V (gdb/riscv-tdep.h): x0..x31, pc, f0..f31, then CSR n at 65 + n
 PC_REGNUM, FIRST_FPR_REGNUM, FIRST_CSR_REGNUM = 32, 33, 65
 # GDB's own names (gdb/features/riscv/64bit-cpu.xml) are the psABI's, but x8 is "fp"
@@ -140,7 +143,10 @@ class Connection:
         return interrupted
 
     def receive(self) -> bytes:
-        """The next packet's payload (acknowledged); a bare Ctrl-C comes back as b'\\x03'."""
+        """The next packet's payload (acknowledged); a bare Ctrl-C comes back as b'\\x03'. A packet
+        longer than the PacketSize the stub advertises (a payload of PACKET_SIZE bytes, its
+        escapes counted) is refused whole: its bytes are dropped and GDB is told to send again."""
+        scanned = 0                          # how far the search for the packet's end has looked
         while True:
             start = self._buffer.find(b"$")
             if self.interrupted or (start < 0 and INTERRUPT_BYTE in self._buffer):
@@ -148,17 +154,25 @@ class Connection:
                 self._buffer = self._buffer.replace(bytes((INTERRUPT_BYTE,)), b"", 1)
                 return bytes((INTERRUPT_BYTE,))
             if start >= 0:
-                end = self._buffer.find(b"#", start)
+                end = self._buffer.find(b"#", max(start, scanned))
                 if end >= 0 and len(self._buffer) >= end + 3:
                     payload = bytes(self._buffer[start + 1:end])
                     sent_sum = bytes(self._buffer[end + 1:end + 3]).lower()
                     del self._buffer[:end + 3]
+                    scanned = 0
                     if self.acks:
                         good = sent_sum == checksum(payload)
                         self.sock.sendall(b"+" if good else b"-")
                         if not good:
                             continue
                     return payload
+                if end < 0:
+                    scanned = len(self._buffer)
+                    if scanned - start > MAX_PACKET_BYTES:
+                        del self._buffer[:]          # too long: refused, and whatever follows in it
+                        scanned = 0
+                        self.sock.sendall(b"-")
+                        continue
             elif self._buffer:
                 del self._buffer[:]          # acknowledgements and noise between packets
             self._fill(None)
@@ -513,7 +527,18 @@ class GdbServer:
         return self.debugger.run_until_stop(self.conn.poll_interrupt)
 
     def handle(self, packet: bytes):
-        """The reply to one packet: bytes/str to send, a StopEvent, or None for no reply."""
+        """The reply to one packet: bytes/str to send, a StopEvent, or None for no reply. A packet
+        that does not parse (a missing field, a number that is not hex, a thread that does not
+        exist) gets an error reply, E01, as the remote protocol has it, and the run goes on."""
+        try:
+            return self._handle(packet)
+        except (ValueError, IndexError) as error:
+            self.log(f"[gdb] malformed packet {packet[:40]!r}: {error}")
+            return "E01"
+
+    def _handle(self, packet: bytes):
+        if not packet:
+            return ""                        # the empty packet: not a command
         if packet == bytes((INTERRUPT_BYTE,)):
             return StopEvent(SIGINT, self.general)
         text = packet.decode("latin-1")
@@ -539,11 +564,13 @@ class GdbServer:
         if text == "qAttached":
             return "1"
         if text.startswith("qThreadExtraInfo,"):
-            hart = self.board.harts[int(text.split(",")[1], 16) - 1]
+            hart = self.board.harts[self._thread_index(text.split(",")[1])]
             return f"hart {hart.hart_id}: {hart.state.value}".encode().hex()
         if text == "?":
             return StopEvent(SIGTRAP, self.general)
         if command == "H":
+            if text[1:2] not in ("g", "c"):
+                raise ValueError("H without g or c")
             thread = int(text[2:], 16) if text[2:] not in ("", "-1") else 0
             if thread > 0:
                 if thread > len(self.board.harts):
@@ -574,14 +601,18 @@ class GdbServer:
             return "E14" if data is None else data.hex()
         if command == "M":
             where, data = text[1:].split(":")
-            address = int(where.split(",")[0], 16)
+            address, length = (int(x, 16) for x in where.split(","))
+            if len(data) != 2 * length:
+                raise ValueError("M's length is not its data's")
             return "OK" if self.debugger.write_memory(address, bytes.fromhex(data)) else "E14"
         if command == "X":
-            head, _, data = packet[1:].partition(b":")
-            address = int(head.split(b",")[0], 16)
-            data = unescape(data)
+            head, colon, data = packet[1:].partition(b":")
+            where, length = head.split(b",")
+            address, data = int(where, 16), unescape(data)
+            if not colon or len(data) != int(length, 16):
+                raise ValueError("X's length is not its data's")
             return "OK" if not data or self.debugger.write_memory(address, data) else "E14"
-        if command in "zZ" and len(text) > 1:
+        if command in ("z", "Z"):
             kind, address, length = text[1:].split(";")[0].split(",")
             kind, address, length = int(kind), int(address, 16), int(length, 16)
             if kind in (0, 1):
@@ -601,9 +632,9 @@ class GdbServer:
             return "vCont;c;C;s;S"
         if text.startswith("vCont;"):
             return self._vcont(text[6:])
-        if command in "cC":
+        if command in ("c", "C"):
             return self._run(None)
-        if command in "sS":
+        if command in ("s", "S"):
             return self._run(self.general)
         if command == "D":
             self.outcome = "detached-now"
@@ -615,12 +646,26 @@ class GdbServer:
         return ""            # not supported: GDB falls back or says so
 
     def _vcont(self, actions: str):
+        """vCont;ACTION[:THREAD]...: continue (c, Cxx) or step (s, Sxx) a hart; anything else, or
+        no action, is an error and nothing runs."""
         step_hart = None
+        if not actions:
+            raise ValueError("vCont without an action")
         for action in actions.split(";"):
             verb, _, thread = action.partition(":")
-            if verb[:1] in "sS":
-                step_hart = int(thread, 16) - 1 if thread not in ("", "-1") else self.general
+            if not re.fullmatch(r"[cs]|[CS][0-9a-fA-F]{2}", verb):
+                raise ValueError(f"vCont action {verb!r}")
+            hart = self._thread_index(thread) if thread not in ("", "-1") else self.general
+            if verb[0] in "sS":
+                step_hart = hart
         return self._run(step_hart)
+
+    def _thread_index(self, thread: str) -> int:
+        """A hart's index from GDB's thread id (1, 2: hart 0, 1)."""
+        index = int(thread, 16) - 1
+        if not 0 <= index < len(self.board.harts):
+            raise ValueError(f"no thread {thread}")
+        return index
 
     def _hex64(self, value: int) -> str:
         return (value & (2**64 - 1)).to_bytes(8, "little").hex()
