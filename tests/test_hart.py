@@ -16,7 +16,7 @@ from emulator.cpu.decode import decode_memory_access
 from emulator.cpu.hart import ENGINE_FAST, ENGINE_PRECISE, CsrContext, Hart, HartState, RunEnd
 from emulator.cpu.native import counter_lib
 from emulator.cpu.riscv import CAUSE_INTERRUPT, IRQ_MEI, IRQ_MSI, IRQ_MTI, IRQ_SEI, IRQ_SSI, IRQ_STI
-from emulator.errors import FirmwareTrap, HangDetected, UnmodelledAccess
+from emulator.errors import BadInput, FirmwareTrap, HangDetected, UnmodelledAccess
 from k210_fixtures import at_done, build_elf, make_board, program, reg, run_to_done, run_until, symbol
 
 CPU_HZ = 26e6
@@ -1050,3 +1050,53 @@ def test_an_elf_without_execute_flags_runs_its_code_sections(tmp_path):
     assert any(address <= image.entry < address + len(code) for address, code in image.code_ranges)
     board = make_board(str(bare))
     run_to_done(board)
+
+
+def _phdr_field(data: bytearray, index: int, offset: int, value: int | None = None) -> int:
+    """Reads (or writes) an 8-byte field of program header `index` (Elf64_Phdr: p_offset 8,
+    p_vaddr 16, p_paddr 24, p_filesz 32, p_memsz 40)."""
+    phoff, phentsize = int.from_bytes(data[0x20:0x28], "little"), int.from_bytes(data[0x36:0x38], "little")
+    at = phoff + index * phentsize + offset
+    if value is not None:
+        data[at:at + 8] = value.to_bytes(8, "little")
+    return int.from_bytes(data[at:at + 8], "little")
+
+
+def _first_load(data: bytearray) -> int:
+    phoff, phentsize, phnum = (int.from_bytes(data[0x20:0x28], "little"), int.from_bytes(data[0x36:0x38], "little"),
+                               int.from_bytes(data[0x38:0x3A], "little"))
+    return next(i for i in range(phnum) if int.from_bytes(data[phoff + i * phentsize:phoff + i * phentsize + 4], "little") == 1)
+
+
+@pytest.mark.parametrize("damage, words", [
+    ("cut", "run past the file"),
+    ("huge filesz", "run past the file"),
+    ("filesz over memsz", "more than p_memsz"),
+    ("past SRAM", "do not lie in the K210's 8 MiB SRAM"),
+    ("huge section", "runs past the file"),
+])
+def test_a_damaged_elf_is_bad_input_naming_the_field(tmp_path, damage, words):
+    """Issue 35: a cut ELF used to load short and trap, a huge p_filesz or sh_size gave exit 1
+    (OverflowError, MemoryError), a segment past SRAM was taken."""
+    data = bytearray(Path(program("    nop\n")).read_bytes())
+    load = _first_load(data)
+    if damage == "cut":
+        data = data[:_phdr_field(data, load, 8) + _phdr_field(data, load, 32) // 2]
+    elif damage == "huge filesz":
+        _phdr_field(data, load, 32, 2**63)
+        _phdr_field(data, load, 40, 2**63)
+    elif damage == "filesz over memsz":
+        _phdr_field(data, load, 40, _phdr_field(data, load, 32) - 1)
+    elif damage == "past SRAM":
+        _phdr_field(data, load, 40, 64 << 20)
+    else:
+        shoff, shentsize, shnum = (int.from_bytes(data[0x28:0x30], "little"), int.from_bytes(data[0x3A:0x3C], "little"),
+                                   int.from_bytes(data[0x3C:0x3E], "little"))
+        for i in range(shnum):
+            header = shoff + i * shentsize
+            if int.from_bytes(data[header + 4:header + 8], "little") == 2:       # SHT_SYMTAB
+                data[header + 32:header + 40] = (24 << 58).to_bytes(8, "little")     # sh_size, whole entries
+    bad = tmp_path / "bad.elf"
+    bad.write_bytes(bytes(data))
+    with pytest.raises(BadInput, match=words):
+        load_elf(bad, Sram())

@@ -53,8 +53,11 @@ def load_elf(path: str | Path, memory: Sram) -> LoadedImage:
             if elf.header["e_machine"] != EM_RISCV or elf.elfclass != 64:
                 raise BadInput(f"{path}: not a 64-bit RISC-V ELF (machine {elf.header['e_machine']}, "
                                f"class {elf.elfclass})")
+            size = path.stat().st_size
             code_ranges, segments, loaded, total = [], [], [], 0
-            for segment in elf.iter_segments():
+            for number, segment in enumerate(elf.iter_segments()):
+                if segment["p_type"] == "PT_LOAD":
+                    _check_segment(path, number, segment, size)
                 if segment["p_type"] == "PT_LOAD" and segment["p_memsz"] > 0:
                     segments.append(Segment(segment["p_paddr"], segment["p_memsz"],
                                             bool(segment["p_flags"] & P_FLAGS.PF_W),
@@ -74,12 +77,28 @@ def load_elf(path: str | Path, memory: Sram) -> LoadedImage:
                 code_ranges = _code_by_sections(elf, loaded)
             if not code_ranges:
                 raise BadInput(f"{path}: no executable segment to run")
-            symbols, values = _symbol_tables(elf)
+            symbols, values = _symbol_tables(elf, size)
             return LoadedImage(elf.header["e_entry"], code_ranges, symbols, total, segments, values)
-    except (ELFError, ValueError) as error:
-        raise BadInput(f"{path}: not a valid ELF file ({error})") from None
+    except (ELFError, ValueError, OverflowError, MemoryError, struct.error) as error:
+        raise BadInput(f"{path}: not a valid ELF file ({type(error).__name__}: {error})") from None
     except OSError as error:
         raise BadInput(f"{path}: cannot read it ({error.strerror or error})") from None
+
+
+def _check_segment(path: Path, number: int, segment, file_size: int) -> None:
+    """A PT_LOAD's fields against the file and SRAM, before any of its bytes are read: its file
+    bytes inside the file, no more of them than its memory size, all of it (.bss too) in SRAM."""
+    offset, filesz, memsz, address = (segment["p_offset"], segment["p_filesz"], segment["p_memsz"],
+                                      segment["p_paddr"])
+    where = f"{path}: program header {number} (PT_LOAD at 0x{address:x})"
+    if offset + filesz > file_size:
+        raise BadInput(f"{where}: p_offset 0x{offset:x} + p_filesz 0x{filesz:x} run past the file's "
+                       f"{file_size} bytes (a cut or damaged ELF)")
+    if filesz > memsz:
+        raise BadInput(f"{where}: p_filesz 0x{filesz:x} is more than p_memsz 0x{memsz:x}")
+    if memsz and not _in_sram(address, memsz):
+        raise BadInput(f"{where}: its {memsz} bytes (p_memsz) do not lie in the K210's 8 MiB SRAM at "
+                       f"0x{SRAM_BASE:x} (or its uncached view at 0x{SRAM_UNCACHED_BASE:x})")
 
 
 def _code_by_sections(elf: ELFFile, loaded: list[tuple[int, bytes]]) -> list[tuple[int, bytes]]:
@@ -97,7 +116,7 @@ _ELF64_SYM = struct.Struct("<IBBHQQ")
 _STT_NOTYPE, _STT_FUNC = 0, 2
 
 
-def _symbol_tables(elf: ELFFile) -> tuple[dict[int, str], dict[str, int]]:
+def _symbol_tables(elf: ELFFile, file_size: int) -> tuple[dict[int, str], dict[str, int]]:
     """(address -> name of code and label symbols, for pc reports; name -> value of every
     named symbol). The table is unpacked in one pass over its bytes: pyelftools parses each
     symbol on its own, a third of a second for our firmware, paid by every run."""
@@ -108,7 +127,12 @@ def _symbol_tables(elf: ELFFile) -> tuple[dict[int, str], dict[str, int]]:
         return symbols, values
     if symtab["sh_entsize"] != _ELF64_SYM.size:
         raise ValueError(f".symtab entries of {symtab['sh_entsize']} bytes, not {_ELF64_SYM.size}")
-    symbols, values = _symbols_of(symtab.data(), elf.get_section(symtab["sh_link"]).data())
+    strtab = elf.get_section(symtab["sh_link"])
+    for section in (symtab, strtab):
+        if section["sh_offset"] + section["sh_size"] > file_size:
+            raise ValueError(f"section {section.name or '?'} (sh_offset 0x{section['sh_offset']:x}, sh_size "
+                             f"0x{section['sh_size']:x}) runs past the file's {file_size} bytes")
+    symbols, values = _symbols_of(symtab.data(), strtab.data())
     return dict(symbols), dict(values)
 
 
@@ -139,9 +163,9 @@ def read_symbol_values(path: str | Path) -> dict[str, int]:
         raise BadInput(f"firmware image {path} does not exist (build it with `make firmware`)")
     try:
         with path.open("rb") as handle:
-            return _symbol_tables(ELFFile(handle))[1]
-    except (ELFError, ValueError) as error:
-        raise BadInput(f"{path}: not a valid ELF file ({error})") from None
+            return _symbol_tables(ELFFile(handle), path.stat().st_size)[1]
+    except (ELFError, ValueError, OverflowError, MemoryError, struct.error) as error:
+        raise BadInput(f"{path}: not a valid ELF file ({type(error).__name__}: {error})") from None
     except OSError as error:
         raise BadInput(f"{path}: cannot read it ({error.strerror or error})") from None
 
