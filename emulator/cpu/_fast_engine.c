@@ -826,15 +826,34 @@ static uint64_t flags_from_host(int raised)
     return flags;
 }
 
-/* `v` rounded to an integral value in rounding mode rm (0 RNE, 1 RTZ, 2 RDN, 3 RUP, 4 RMM). */
+/* `v` (not a NaN) rounded toward zero to an integral value by clearing its fraction bits: exact, so
+ * it raises no host flag. trunc, floor and ceil may raise inexact: GCC expands them inline through
+ * cvttsd2si on x86-64 without SSE4.1, and an inexact raised there reached fflags next to the invalid
+ * of a conversion out of range (fcvt.wu.s of -0.3 rounding down: NV, not NV and NX). */
+static inline double trunc_quietly(double v)
+{
+    uint64_t u;
+    memcpy(&u, &v, 8);
+    int e = (int)((u >> 52) & 0x7FF) - 1023;
+    if (e >= 52)
+        return v;                                   /* integral already, or an infinity */
+    u &= e < 0 ? 1ull << 63 : ~((1ull << (52 - e)) - 1);    /* below 1: a zero of v's sign */
+    memcpy(&v, &u, 8);
+    return v;
+}
+
+/* `v` (not a NaN) rounded to an integral value in rounding mode rm (0 RNE, 1 RTZ, 2 RDN, 3 RUP,
+ * 4 RMM), raising no host flag (the caller works out fflags). The integral t is below 2^52 in
+ * magnitude where t - 1 or t + 1 is taken: exact. */
 static inline double round_integral(double v, int rm)
 {
+    double t;
     switch (rm) {
-    case 0: return nearbyint(v);   /* the host rounds to nearest even */
-    case 1: return trunc(v);
-    case 2: return floor(v);
-    case 3: return ceil(v);
-    default: return round(v);      /* halves away from zero */
+    case 0: return nearbyint(v);   /* the host rounds to nearest even; nearbyint raises nothing */
+    case 1: return trunc_quietly(v);
+    case 2: t = trunc_quietly(v); return t > v ? t - 1.0 : t;
+    case 3: t = trunc_quietly(v); return t < v ? t + 1.0 : t;
+    default: return round(v);      /* halves away from zero (glibc's round raises nothing) */
     }
 }
 
