@@ -1,6 +1,8 @@
 """The SD card model against the SPI-mode protocol: exact bytes for each command."""
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
 
@@ -364,3 +366,43 @@ def test_the_csd_states_the_whole_512_kib_the_image_holds(tmp_path, blocks, c_si
     assert card.csd_c_size == c_size
     assert heard == ([] if note is None else [f"SD card image {image}: {note}"])
     card.close()
+
+
+def test_an_image_cut_short_during_the_run_stops_clearly(tmp_path):
+    """The image is read as the run goes (not mapped): a file another program truncates
+    meanwhile is a clear stop naming the block, where a mapping ended the model with SIGBUS."""
+    from emulator.devices.sdcard import SdImage
+    path = tmp_path / "card.img"
+    path.write_bytes(bytes(range(256)) * 2 * 2048)            # 2048 blocks
+    image = SdImage(path)
+    assert image.read(2047)[:2] == bytes((0, 1))
+    os.truncate(path, 512 * 1000)
+    with pytest.raises(BadInput, match="block 2047 is gone: the file is 512000 bytes now"):
+        image.read(2047)
+    image.close()
+
+
+def test_an_image_that_cannot_be_opened_is_bad_input(tmp_path, monkeypatch):
+    from emulator.devices.sdcard import SdImage
+    path = tmp_path / "card.img"
+    path.write_bytes(bytes(512 * 1024))
+
+    def refused(self, *args, **kwargs):
+        raise PermissionError(13, "Permission denied")
+    monkeypatch.setattr(type(path), "open", refused)
+    with pytest.raises(BadInput, match="cannot open it for writing \\(--sd-writable\\) \\(Permission denied\\)"):
+        SdImage(path, writable=True)
+
+
+def test_an_image_over_what_a_csd_can_state_is_refused(tmp_path):
+    """CSD 2.0's C_SIZE has 22 bits: 2 TiB at most, which an image one 512 KiB unit larger exceeds
+    (a sparse file: no disk is used)."""
+    from emulator.devices.sdcard import SdImage
+    path = tmp_path / "huge.img"
+    with path.open("wb") as handle:
+        handle.truncate((2 << 40) + (512 << 10))
+    with pytest.raises(BadInput, match="more than the 2 TiB"):
+        SdImage(path)
+    with path.open("r+b") as handle:
+        handle.truncate(2 << 40)
+    SdImage(path).close()                                      # exactly 2 TiB: stated

@@ -45,7 +45,7 @@ from __future__ import annotations
 
 import binascii
 
-import mmap
+import os
 from pathlib import Path
 from typing import Callable
 
@@ -69,6 +69,7 @@ ERROR_TOKEN_OUT_OF_RANGE = 0x08
 DATA_ACCEPTED, DATA_CRC_ERROR = 0x05, 0x0B
 OCR_POWERED_UP, OCR_CCS, OCR_VOLTAGE = 1 << 31, 1 << 30, 0x00FF_8000
 CSD_UNIT_BLOCKS = 1024   # an SDHC CSD counts capacity in 512 KiB: (C_SIZE + 1) * 1024 blocks
+CSD_C_SIZE_MAX = (1 << 22) - 1   # C_SIZE's 22 bits: 2 TiB at most
 MBR_SIGNATURE = b"\x55\xaa"
 MBR_TABLE, MBR_ENTRY_BYTES, MBR_ENTRIES = 446, 16, 4
 
@@ -121,8 +122,14 @@ class SdImage:
                            f"(truncated?)")
         self.path = path
         self.writable = writable
-        self._file = path.open("r+b" if writable else "rb")
-        self._map = mmap.mmap(self._file.fileno(), 0, access=mmap.ACCESS_WRITE if writable else mmap.ACCESS_READ)
+        if size // BLOCK // CSD_UNIT_BLOCKS > CSD_C_SIZE_MAX + 1:
+            raise BadInput(f"SD card image {path}: {size} bytes is more than the 2 TiB a card's CSD (version 2.0, "
+                           f"C_SIZE of 22 bits) can state")
+        try:
+            self._file = path.open("r+b" if writable else "rb", buffering=0)
+        except OSError as error:
+            purpose = "for writing (--sd-writable)" if writable else "for reading"
+            raise BadInput(f"SD card image {path}: cannot open it {purpose} ({error.strerror or error})") from None
         self.blocks = size // BLOCK
         self.overlay: dict[int, bytes] = {}
         notes = self._capacity_notes() + self._partition_notes()
@@ -149,7 +156,7 @@ class SdImage:
     def _partition_notes(self) -> list[str]:
         """Every MBR entry that runs past the image's end: the card is what it is, but an image
         whose partition table claims more than it holds was probably cut short."""
-        mbr = self._map[:BLOCK]
+        mbr = os.pread(self._file.fileno(), BLOCK, 0)
         if mbr[BLOCK - len(MBR_SIGNATURE):] != MBR_SIGNATURE:
             return []   # no MBR: a superfloppy or a blank card; the firmware will say what it thinks
         notes = []
@@ -165,20 +172,31 @@ class SdImage:
         return notes
 
     def read(self, block: int) -> bytes:
+        """A block as the image holds it now. The image is read (pread), not mapped: a file cut
+        short while the run goes on is then a clear stop, not a SIGBUS."""
         if block in self.overlay:
             return self.overlay[block]
-        return self._map[block * BLOCK:(block + 1) * BLOCK]
+        data = os.pread(self._file.fileno(), BLOCK, block * BLOCK)
+        if len(data) != BLOCK:
+            self._gone(block)
+        return data
 
     def write(self, block: int, data: bytes) -> None:
-        if self.writable:
-            self._map[block * BLOCK:(block + 1) * BLOCK] = data
-        else:
+        if not self.writable:
             self.overlay[block] = bytes(data)
+            return
+        if block >= self.blocks or os.fstat(self._file.fileno()).st_size < (block + 1) * BLOCK:
+            self._gone(block)
+        os.pwrite(self._file.fileno(), bytes(data), block * BLOCK)
+
+    def _gone(self, block: int) -> None:
+        size = os.fstat(self._file.fileno()).st_size
+        raise BadInput(f"SD card image {self.path}: block {block} is gone: the file is {size} bytes now, "
+                       f"{self.blocks * BLOCK} when the run began (changed by another program during the run)")
 
     def close(self) -> None:
         if self.writable:
-            self._map.flush()
-        self._map.close()
+            os.fsync(self._file.fileno())
         self._file.close()
 
 
