@@ -1,5 +1,6 @@
 """What a run leaves in its output folder: frame_NNNN.png per frame, animation.png
-(an animated PNG of all frames), console.log and run.json."""
+(an animated PNG of all frames, written as they come: apng.py), console.log and run.json. Nothing
+of a frame stays in memory once the next has come, however long the run."""
 from __future__ import annotations
 
 import json
@@ -12,6 +13,7 @@ from PIL import Image
 
 from ..board import FrameRecord
 from ..errors import BadInput
+from .apng import ApngWriter
 
 ANIMATION_NAME = "animation.png"
 FRAME_PATTERN = "frame_{:04d}.png"
@@ -60,13 +62,13 @@ class RunOutput:
         """The folder must exist and be writable (prepare_output_folder)."""
         self.folder = Path(folder)
         stale_files = list(self.folder.glob("frame_*.png")) + list(self.folder.glob("diff_*.png")) + \
-            list(self.folder.glob("grab_*.png")) + [self.folder / ANIMATION_NAME]
+            list(self.folder.glob("grab_*.png")) + [self.folder / ANIMATION_NAME, self.folder / (ANIMATION_NAME + ".frames")]
         for stale in stale_files:
             stale.unlink(missing_ok=True)
         self.console_path = self.folder / "console.log"
         self._console = self.console_path.open("wb")
         self.frame_paths: list[Path] = []
-        self._frame_images: list[Image.Image] = []    # the animation's frames, not read back from the files
+        self._animation = ApngWriter(self.folder / ANIMATION_NAME, PNG_COMPRESS_LEVEL)
         self.frame_times: list[float] = []
         self.grabs: list[dict] = []
         self.animation: dict | None = None
@@ -79,8 +81,9 @@ class RunOutput:
         picture = Image.fromarray(image, "RGB")
         picture.save(path, compress_level=PNG_COMPRESS_LEVEL)
         self.frame_paths.append(path)
-        self._frame_images.append(picture)
+        previous_ms = ((record.virtual_time_s - self.frame_times[-1]) * 1e3 if self.frame_times else None)
         self.frame_times.append(record.virtual_time_s)
+        self._animation.add(image, None if previous_ms is None else max(previous_ms, MIN_ANIMATION_FRAME_MS))
 
     def grab(self, request, board) -> None:
         """Writes grab_<what>_<ms>ms.png for a --grab request (see grab.py; the request was
@@ -96,14 +99,13 @@ class RunOutput:
 
     def finish(self, summary: dict) -> None:
         self._console.close()
-        images = self._frame_images
-        if images:
+        if self.frame_times:
             durations, lengthened = animation_durations(self.frame_times)
-            # Pillow writes each duration as an exact fraction delay_num/delay_den of a second
-            images[0].save(self.folder / ANIMATION_NAME, save_all=True, append_images=images[1:],
-                           duration=durations, loop=0, compress_level=PNG_COMPRESS_LEVEL)
+            self._animation.finish(durations[-1])
             self.animation = {"file": ANIMATION_NAME, "frame_durations_ms": durations,
                               "lengthened_to_ms": MIN_ANIMATION_FRAME_MS, "lengthened_frames": lengthened}
+        else:
+            self._animation.discard()
         summary["animation"] = self.animation
         (self.folder / "run.json").write_text(json.dumps(summary, indent=2) + "\n")
 
