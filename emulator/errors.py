@@ -9,7 +9,8 @@ from __future__ import annotations
 
 from k210_common.exit_status import (BY_CODE, EXIT_BAD_INPUT, EXIT_EXPECT_UNMET, EXIT_FAIL_ON, EXIT_FIRMWARE_ERROR,
                                      EXIT_HANG, EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_MISUSE, EXIT_OK,
-                                     EXIT_STRAY_WRITE, EXIT_TERMINATED, EXIT_TRAP, EXIT_UNMODELLED)
+                                     EXIT_STRAY_WRITE, EXIT_TERMINATED, EXIT_TRAP, EXIT_UNMODELLED,
+                                     EXIT_WRITE_FAILED)
 
 
 class BoardStop(Exception):
@@ -109,3 +110,16 @@ class Interrupted(BoardStop):
         super().__init__(f"{name} received: the run was stopped there")
         self.exit_status = EXIT_TERMINATED if name == "SIGTERM" else EXIT_INTERRUPTED
         self.signal_number = signal_number
+
+
+class OutputFailed(BoardStop):
+    """An output the run writes as it goes (a frame, console.log, the animation, --trace-insn)
+    could not be written (a full disk, a file size limit): the run stops there and writes what it
+    still can, run.json first."""
+
+    exit_status = EXIT_WRITE_FAILED
+
+
+def write_failed(path, error: OSError) -> OutputFailed:
+    """The stop for a failed write of `path`, naming the file and the system's reason."""
+    return OutputFailed(f"cannot write {path}: {error.strerror or error}")

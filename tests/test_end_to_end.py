@@ -407,7 +407,7 @@ def test_help_lists_every_exit_status():
     # every status the board model returns (its EXIT_STATUS_DETAILS; the numbers are
     # k210_common/exit_status.py's) is in --help; tests/test_exit_status.py checks the README
     codes = sorted(EXIT_STATUS_DETAILS)
-    assert codes == list(range(13)) + [130, 143]        # and 128 + the signal for SIGINT, SIGTERM
+    assert codes == list(range(13)) + [16, 130, 143]    # write-failed; 128 + the signal for SIGINT, SIGTERM
     result = run_emulator("run", "--help")
     assert result.returncode == 0
     statuses = result.stdout[result.stdout.index("exit status:"):]

@@ -42,8 +42,14 @@ def _power_on_file(seed: int) -> int | None:
     if not hasattr(os, "memfd_create"):
         return None
     descriptor = os.memfd_create(f"k210-sram-power-on-{seed:#x}", os.MFD_CLOEXEC)
-    with open(descriptor, "wb", closefd=False) as file:     # (a buffered write writes it all)
-        file.write(_draw_power_on_pattern(seed).tobytes())
+    try:
+        with open(descriptor, "wb", closefd=False) as file:     # (a buffered write writes it all)
+            file.write(_draw_power_on_pattern(seed).tobytes())
+    except OSError:
+        # a memory file counts against a file size limit (RLIMIT_FSIZE) too: the copy in memory
+        # then serves, as where there is no memfd_create
+        os.close(descriptor)
+        return None
     return descriptor
 
 

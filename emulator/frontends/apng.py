@@ -31,7 +31,7 @@ class ApngWriter:
     def __init__(self, path: Path, compress_level: int) -> None:
         self.path = path
         self._side = path.with_name(path.name + ".frames")
-        self._frames = self._side.open("wb")
+        self._frames = self._side.open("wb", buffering=0)    # a failed write fails at its frame
         self._level = compress_level
         self._size: tuple[int, int] | None = None
         self._pending: bytes | None = None          # the last frame's compressed scanlines
@@ -81,5 +81,9 @@ class ApngWriter:
         self._side.unlink()
 
     def discard(self) -> None:
-        self._frames.close()
+        """Drops the frames (none came, or the animation cannot be written)."""
+        try:
+            self._frames.close()
+        except OSError:
+            pass                          # what could not be written is dropped with the rest
         self._side.unlink(missing_ok=True)

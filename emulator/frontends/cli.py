@@ -14,7 +14,7 @@ from typing import TextIO
 from k210_common.exit_status import (BY_CODE, EXIT_BAD_INPUT, EXIT_EXPECT_UNMET, EXIT_FAIL_ON, EXIT_FIRMWARE_ERROR,
                                      EXIT_GOLDEN_MISMATCH, EXIT_HANG, EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_MISUSE,
                                      EXIT_OK, EXIT_STRAY_WRITE, EXIT_TERMINATED, EXIT_TRAP, EXIT_UNMODELLED,
-                                     EXIT_USAGE, help_epilog)
+                                     EXIT_USAGE, EXIT_WRITE_FAILED, help_epilog)
 from ..errors import BadInput, BoardStop, Interrupted
 from ..devices.sdcard import FAULTS
 from ..cpu.timing import TIMING_MODELS, TIMING_ROCKET
@@ -70,6 +70,9 @@ EXIT_STATUS_DETAILS: dict[int, str] = {
     EXIT_FAIL_ON: "the console printed a `--fail-on`/`--fail-on-re` text",
     EXIT_EXPECT_UNMET: "`--expect`: the run ended (`--until`'s time, or `--budget` virtual seconds without the "
                        "next expected text) before the console printed every expected text",
+    EXIT_WRITE_FAILED: "an output could not be written during or after the run (a frame, console.log, the "
+                       "animation, `--trace-insn`, `--vcd`: a full disk, a file size limit): the run stops there, "
+                       "and run.json (with `output_failed`) and what else can be written are written",
     EXIT_INTERRUPTED: "Ctrl-C (SIGINT) stopped the run: it ends after the instruction under way and writes "
                       "run.json, console.log, the frames shown so far and the animation as any end does; a second "
                       "Ctrl-C ends the process at once",
@@ -727,10 +730,14 @@ def main(argv: list[str] | None = None) -> int:
     for number, handler in previous_handlers.items():
         signal.signal(number, handler)
     terminal.finish()
-    if trace is not None:
-        trace.close()
-    elif trace_file is not None:
-        trace_file.close()
+    output_problems = []
+    try:
+        if trace is not None:
+            trace.close()
+        elif trace_file is not None:
+            trace_file.close()
+    except OSError as error:
+        output_problems.append(f"{args.trace_insn}: {error.strerror or error}")
     if uart_input is not None:
         uart_input.close()
     if board is not None:
@@ -800,11 +807,14 @@ def main(argv: list[str] | None = None) -> int:
     summary["timing_warnings"] = dict(board.timing_warnings) if board is not None else {}
     summary.update(watch.summary())
     if vcd_file is not None:
-        if signal_log is not None:
-            changes = signal_log.write(vcd_file, board.time)
-            summary["vcd"] = {"file": str(args.vcd), "value_changes": changes}
-        else:
-            vcd_file.close()
+        try:
+            if signal_log is not None:
+                changes = signal_log.write(vcd_file, board.time)
+                summary["vcd"] = {"file": str(args.vcd), "value_changes": changes}
+            else:
+                vcd_file.close()
+        except OSError as error:
+            output_problems.append(f"{args.vcd}: {error.strerror or error}")
     if profiler is not None:
         try:
             summary["profile"] = profiler.write(args.out)
@@ -820,7 +830,15 @@ def main(argv: list[str] | None = None) -> int:
         "received": sum(uart.bytes_received for uart in (board.uarths, *board.uarts)) if board is not None else 0,
         "received_by": ({uart.NAME: uart.bytes_received for uart in (board.uarths, *board.uarts) if uart.bytes_received}
                         if board is not None else {})}
-    output.finish(summary)
+    if output_problems and status == EXIT_OK:
+        status, kind = EXIT_WRITE_FAILED, BY_CODE[EXIT_WRITE_FAILED].name
+        message = f"cannot write {'; '.join(output_problems)}"
+        summary["exit"], summary["message"] = kind, message
+    unwritten = output.finish(summary)
+    if unwritten is not None:
+        terminal.message(f"[board] cannot write {unwritten}")
+        if status == EXIT_OK:
+            status, kind, message = EXIT_WRITE_FAILED, BY_CODE[EXIT_WRITE_FAILED].name, f"cannot write {unwritten}"
     if status == EXIT_OK:
         terminal.message(f"[board] {message}; {board.time * 1e3:.2f} ms virtual; output in {args.out}")
     else:

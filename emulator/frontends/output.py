@@ -12,7 +12,7 @@ import numpy as np
 from PIL import Image
 
 from ..board import FrameRecord
-from ..errors import BadInput
+from ..errors import BadInput, write_failed
 from .apng import ApngWriter
 
 ANIMATION_NAME = "animation.png"
@@ -74,16 +74,26 @@ class RunOutput:
         self.animation: dict | None = None
 
     def console_byte(self, byte: int) -> None:
-        self._console.write(bytes((byte,)))
+        try:
+            self._console.write(bytes((byte,)))
+        except OSError as error:
+            raise write_failed(self.console_path, error) from None
 
     def frame(self, record: FrameRecord, image: np.ndarray) -> None:
         path = self.folder / FRAME_PATTERN.format(record.index)
-        picture = Image.fromarray(image, "RGB")
-        picture.save(path, compress_level=PNG_COMPRESS_LEVEL)
-        self.frame_paths.append(path)
+        try:
+            Image.fromarray(image, "RGB").save(path, compress_level=PNG_COMPRESS_LEVEL)
+        except OSError as error:
+            path.unlink(missing_ok=True)                 # no half-written frame is left
+            raise write_failed(path, error) from None
         previous_ms = ((record.virtual_time_s - self.frame_times[-1]) * 1e3 if self.frame_times else None)
+        try:
+            self._animation.add(image, None if previous_ms is None else max(previous_ms, MIN_ANIMATION_FRAME_MS))
+        except OSError as error:
+            path.unlink(missing_ok=True)
+            raise write_failed(self._animation.path, error) from None
+        self.frame_paths.append(path)
         self.frame_times.append(record.virtual_time_s)
-        self._animation.add(image, None if previous_ms is None else max(previous_ms, MIN_ANIMATION_FRAME_MS))
 
     def grab(self, request, board) -> None:
         """Writes grab_<what>_<ms>ms.png for a --grab request (see grab.py; the request was
@@ -97,17 +107,36 @@ class RunOutput:
         self.grabs.append({"request": request.label,
                            "error": f"not taken: the run ended at {end_s:.6f} s of virtual time, before it"})
 
-    def finish(self, summary: dict) -> None:
-        self._console.close()
-        if self.frame_times:
-            durations, lengthened = animation_durations(self.frame_times)
-            self._animation.finish(durations[-1])
-            self.animation = {"file": ANIMATION_NAME, "frame_durations_ms": durations,
-                              "lengthened_to_ms": MIN_ANIMATION_FRAME_MS, "lengthened_frames": lengthened}
-        else:
+    def finish(self, summary: dict) -> str | None:
+        """Writes console.log's end, the animation and run.json; returns what could not be written
+        (the run's output is kept as far as it goes), or None."""
+        problems = []
+        try:
+            self._console.close()
+        except OSError as error:
+            problems.append(f"{self.console_path}: {error.strerror or error}")
+        try:
+            if self.frame_times:
+                durations, lengthened = animation_durations(self.frame_times)
+                self._animation.finish(durations[-1])
+                self.animation = {"file": ANIMATION_NAME, "frame_durations_ms": durations,
+                                  "lengthened_to_ms": MIN_ANIMATION_FRAME_MS, "lengthened_frames": lengthened}
+            else:
+                self._animation.discard()
+        except OSError as error:
+            problems.append(f"{self._animation.path}: {error.strerror or error}")
             self._animation.discard()
+            (self.folder / ANIMATION_NAME).unlink(missing_ok=True)
+        if problems:
+            summary["output_failed"] = problems
+            if summary.get("exit") == "ok":
+                summary["exit"], summary["message"] = "write-failed", f"cannot write {'; '.join(problems)}"
         summary["animation"] = self.animation
-        (self.folder / "run.json").write_text(json.dumps(summary, indent=2) + "\n")
+        try:
+            (self.folder / "run.json").write_text(json.dumps(summary, indent=2) + "\n")
+        except OSError as error:
+            problems.append(f"{self.folder / 'run.json'}: {error.strerror or error}")
+        return "; ".join(problems) or None
 
 
 def summary_dict(exit_kind: str, message: str, frames: list[FrameRecord], virtual_time_s: float,

@@ -17,7 +17,7 @@ import unicorn
 from unicorn import riscv_const as rv
 
 from ..cpu.riscv import FPR_NAMES, GPR_NAMES
-from ..errors import BadInput
+from ..errors import BadInput, write_failed
 
 if TYPE_CHECKING:
     from ..board import Board
@@ -105,6 +105,9 @@ class InstructionTrace:
         if pending.fprs is not None:
             written += [f"{FPR_NAMES[n]}=0x{value:x}" for n, (old, value)
                         in enumerate(zip(pending.fprs, (hart.reg(r) for r in FPRS))) if value != old]
-        self.out.write(f"{hart.hart_id} {pending.time:.9f} 0x{pending.pc:08x} {pending.text}"
-                       f"{'  ; ' + ' '.join(written) if written else ''}\n")
+        try:
+            self.out.write(f"{hart.hart_id} {pending.time:.9f} 0x{pending.pc:08x} {pending.text}"
+                           f"{'  ; ' + ' '.join(written) if written else ''}\n")
+        except OSError as error:
+            raise write_failed(getattr(self.out, "name", "--trace-insn"), error) from None
         self.lines += 1
