@@ -1100,3 +1100,11 @@ def test_a_damaged_elf_is_bad_input_naming_the_field(tmp_path, damage, words):
     bad.write_bytes(bytes(data))
     with pytest.raises(BadInput, match=words):
         load_elf(bad, Sram())
+
+
+def test_constants_name_no_address(firmware):
+    """An .equ constant that looks like an address (OBJ_INDEX_LIMIT is 0x8000_0000) is an absolute
+    symbol: stop reports used to name heap addresses after it (issue 35)."""
+    image = load_elf(firmware, Sram())
+    assert "OBJ_INDEX_LIMIT" in image.symbol_values
+    assert "OBJ_INDEX_LIMIT" not in image.symbols.values()

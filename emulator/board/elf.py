@@ -114,6 +114,7 @@ def _code_by_sections(elf: ELFFile, loaded: list[tuple[int, bytes]]) -> list[tup
 # Elf64_Sym: st_name, st_info, st_other, st_shndx, st_value, st_size (System V ABI, "Symbol Table")
 _ELF64_SYM = struct.Struct("<IBBHQQ")
 _STT_NOTYPE, _STT_FUNC = 0, 2
+_SHN_ABS = 0xFFF1
 
 
 def _symbol_tables(elf: ELFFile, file_size: int) -> tuple[dict[int, str], dict[str, int]]:
@@ -142,7 +143,7 @@ def _symbols_of(data: bytes, strtab: bytes) -> tuple[dict[int, str], dict[str, i
     (every board of a firmware reads them); the callers get copies."""
     symbols: dict[int, str] = {}
     values: dict[str, int] = {}
-    for st_name, st_info, _, _, st_value, _ in _ELF64_SYM.iter_unpack(data[:len(data) - len(data) % _ELF64_SYM.size]):
+    for st_name, st_info, _, st_shndx, st_value, _ in _ELF64_SYM.iter_unpack(data[:len(data) - len(data) % _ELF64_SYM.size]):
         if not st_name:
             continue
         end = strtab.find(b"\0", st_name)
@@ -150,7 +151,9 @@ def _symbols_of(data: bytes, strtab: bytes) -> tuple[dict[int, str], dict[str, i
         if not name or name.startswith("$"):
             continue
         values.setdefault(name, st_value)
-        if st_info & 0xF in (_STT_NOTYPE, _STT_FUNC) and st_value:
+        # places in the program name pcs and addresses; an absolute symbol (an .equ constant such
+        # as a limit that happens to look like an address) names none
+        if st_info & 0xF in (_STT_NOTYPE, _STT_FUNC) and st_value and st_shndx != _SHN_ABS:
             symbols.setdefault(st_value, name)
     return symbols, values
 
