@@ -18,7 +18,7 @@ from conftest import GOLDEN, GOLDEN_FRAMES, ROOT, run_emulator
 from emulator_runs import run_module
 
 from emulator import errors
-from emulator.frontends.cli import EXIT_STATUS_DETAILS
+from emulator.frontends.options import EXIT_STATUS_DETAILS
 from k210_common.exit_status import BY_CODE
 from golden_scenes import SCENES
 

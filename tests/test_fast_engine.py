@@ -16,7 +16,7 @@ import json
 import pytest
 
 from conftest import GOLDEN_FRAMES, run_emulator
-from emulator.frontends.cli import build_parser
+from emulator.frontends.options import build_parser
 from emulator.errors import FirmwareTrap
 from emulator.cpu.hart import ENGINE_FAST, ENGINE_PRECISE, Hart
 from emulator.cpu.timing import TIMING_IPC1, TIMING_ROCKET

@@ -31,7 +31,7 @@ COMMANDS = {"emulator": "python -m emulator", "sdcard_image": "python -m sdcard_
 def command_details() -> dict[str, Mapping[int, str]]:
     """Each command's statuses and when it returns them, by its key in COMMANDS."""
     # imported here: the board model's command line loads the whole model
-    from emulator.frontends.cli import EXIT_STATUS_DETAILS as emulator
+    from emulator.frontends.options import EXIT_STATUS_DETAILS as emulator
     from reference.cli import EXIT_STATUS_DETAILS as reference
     from sdcard_image.cli import EXIT_STATUS_DETAILS as sdcard_image
     from tools.flash import EXIT_STATUS_DETAILS as flash
