@@ -354,3 +354,12 @@ def test_bench_shares_the_reference_frames_among_precision_settings():
     off = frame.copy()
     off[0, 0, 1] = 255
     assert bench.distance([off], [frame])["psnr_db"] == pytest.approx(10 * math.log10(12))
+
+
+def test_the_output_memory_figure_measures_a_run_s_growth():
+    """make bench's output_memory: resident memory before and after N frames of output, each count
+    in a process of its own; 100 frames of noise (23 MB of pixels) leave it within a few MB."""
+    from tools.bench import output_memory_figures
+    figures = output_memory_figures((100,))
+    figure = figures["100"]
+    assert figure["rss_after_mb"] - figure["rss_before_mb"] < 8 and figure["host_s"] > 0

@@ -842,6 +842,36 @@ def print_load_figures(loads: dict) -> None:
 THESIS_START_UP_MS = {"A": 344.3, "B": 122.2, "C": 87.8}   # power-up to its main loop, measured on a Dock
 
 
+def output_memory_figures(counts: tuple[int, ...] = (1_000, 10_000)) -> dict:
+    """The run output's memory against its length (issue 35): the process's resident memory after
+    `counts` frames written through RunOutput (frame_NNNN.png and the animation as they come), in a
+    child process each, so that one count's memory does not carry into the next. Frames are
+    noise, the worst case for compression."""
+    figures = {}
+    for count in counts:
+        code = (
+            "import os, sys, tempfile, numpy as np\n"
+            "from emulator.board import FrameRecord\n"
+            "from emulator.frontends.output import RunOutput\n"
+            "def rss(): return int(open('/proc/self/statm').read().split()[1]) * os.sysconf('SC_PAGE_SIZE')\n"
+            "rng = np.random.default_rng(1)\n"
+            "with tempfile.TemporaryDirectory() as folder:\n"
+            "    output = RunOutput(folder)\n"
+            "    start = rss()\n"
+            f"    for index in range({count}):\n"
+            "        output.frame(FrameRecord(index, index * 0.05, [0, 0], [0, 0], 0.0),\n"
+            "                     rng.integers(0, 256, (240, 320, 3), dtype=np.uint8))\n"
+            "    end = rss()\n"
+            "    output.finish({})\n"
+            "print(start, end)\n")
+        started = time.perf_counter()
+        result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+        start, end = (int(x) for x in result.stdout.split())
+        figures[str(count)] = {"rss_before_mb": start / 1e6, "rss_after_mb": end / 1e6,
+                               "host_s": time.perf_counter() - started}
+    return figures
+
+
 def speed_figures(args: argparse.Namespace) -> None:
     """Raw Unicorn, a board hart and the board model running the firmware; SD timings. Printed and
     written to build/bench.json."""
@@ -861,6 +891,7 @@ def speed_figures(args: argparse.Namespace) -> None:
         sd = sd_figures(Path(args.firmware), Path(tmp))
         sd_ipc1 = sd_figures(Path(args.firmware), Path(tmp), timing=TIMING_IPC1)
         loads = load_figures(Path(args.firmware), Path(tmp))
+    output_memory = output_memory_figures()
     results = {
         "raw_unicorn_mips": raw,
         "hart_with_counter_mips": counted,
@@ -876,7 +907,11 @@ def speed_figures(args: argparse.Namespace) -> None:
         "profile": profile,
         "drawing": drawing,
         "firmware_precise_engine": precise,
+        "output_memory": output_memory,
     }
+    for count, figure in output_memory.items():
+        print(f"run output, {int(count):6,} frames: resident memory {figure['rss_before_mb']:.0f} -> "
+              f"{figure['rss_after_mb']:.0f} MB ({figure['host_s']:.0f} s)")
     print(f"raw Unicorn, tight loop, no limit:         {raw:8.1f} MIPS")
     print(f"board hart, same loop, exact counting:     {counted:8.1f} MIPS  ({counted / raw:.2f} x raw)")
     print(f"board model running the firmware:          {board['effective_mips']:8.1f} MIPS  "
