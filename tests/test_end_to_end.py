@@ -599,3 +599,40 @@ def test_a_long_run_holds_no_frame_in_memory(tmp_path):
     assert animation.n_frames == 200 and not (tmp_path / "animation.png.frames").exists()
     animation.seek(137)
     assert np.array_equal(np.asarray(animation.convert("RGB")), np.asarray(Image.open(tmp_path / "frame_0137.png")))
+
+
+def test_a_frame_the_animation_cannot_take_leaves_it_whole(tmp_path):
+    """A write that fails part-way through a frame's chunks (a full disk) leaves the animation's
+    side file as it was: animation.png then holds the frames before, every one readable."""
+    from emulator.frontends.apng import ApngWriter
+
+    writer = ApngWriter(tmp_path / "animation.png", 1)
+    real = writer._frames
+
+    class FailingOnce:
+        def __init__(self) -> None:
+            self.calls = 0
+
+        def write(self, data):
+            self.calls += 1
+            if self.calls == 3:                              # the third frame's piece
+                real.write(bytes(data)[:100])                # a part of it reached the disk
+                raise OSError(28, "No space left on device")
+            return real.write(data)
+
+        def __getattr__(self, name):
+            return getattr(real, name)
+    writer._frames = FailingOnce()
+    frames = [np.full((240, 320, 3), 40 * i, dtype=np.uint8) for i in range(5)]
+    for index, image in enumerate(frames):
+        try:
+            writer.add(image, 50.0 if index else None)
+        except OSError:
+            break
+    writer._frames = real
+    writer.finish(50.0)
+    animation = Image.open(tmp_path / "animation.png")
+    assert animation.n_frames == writer.count == 2
+    for index in range(2):
+        animation.seek(index)
+        assert np.array_equal(np.asarray(animation.convert("RGB")), frames[index])

@@ -82,3 +82,12 @@ def test_bash_process_substitution_and_an_endless_pipe(c_firmware, tmp_path):
     assert run.returncode == 0, run.stderr
     summary = json.loads((endless / "run.json").read_text())
     assert summary["uart_input"]["received"] > 0
+
+
+def test_a_regular_file_counts_whole_and_does_not_grow(tmp_path):
+    path = tmp_path / "input.bin"
+    path.write_bytes(bytes(3 * CHUNK + 7))
+    source = UartInput.open(str(path))
+    assert source.total == 3 * CHUNK + 7 and not source.may_grow
+    assert len(drain(source)) == 3 * CHUNK + 7 and source.total == 3 * CHUNK + 7
+    source.close()

@@ -51,7 +51,7 @@ from typing import Callable
 
 import numpy as np
 
-from ..errors import BadInput
+from ..errors import BadInput, write_failed
 
 BLOCK = 512
 NCR_BYTES = 1            # bytes of 0xFF between a command and its response (spec: 1..8)
@@ -187,7 +187,13 @@ class SdImage:
             return
         if block >= self.blocks or os.fstat(self._file.fileno()).st_size < (block + 1) * BLOCK:
             self._gone(block)
-        os.pwrite(self._file.fileno(), bytes(data), block * BLOCK)
+        piece, at = memoryview(bytes(data)), block * BLOCK
+        try:
+            while piece:
+                written = os.pwrite(self._file.fileno(), piece, at)
+                piece, at = piece[written:], at + written
+        except OSError as error:                   # a full disk under a sparse image
+            raise write_failed(self.path, error) from None
 
     def _gone(self, block: int) -> None:
         size = os.fstat(self._file.fileno()).st_size

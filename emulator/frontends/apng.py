@@ -52,24 +52,37 @@ class ApngWriter:
         self._pending = zlib.compress(rows.tobytes(), self._level)     # filter type 0 on every row
 
     def _write_pending(self, ms: float) -> None:
+        """Writes the held frame's control and data chunks as one piece: a write that fails
+        leaves the side file as it was (cut back) and the frame dropped, never half a frame."""
         width, height = self._size
         numerator, denominator = delay(ms)
         control = struct.pack(">IIIIIHHBB", self._sequence, width, height, 0, 0, numerator, denominator, 0, 0)
-        self._frames.write(chunk(b"fcTL", control))
-        self._sequence += 1
         if self.count == 0:
-            self._frames.write(chunk(b"IDAT", self._pending))          # the first frame is the image itself
+            data = chunk(b"IDAT", self._pending)                         # the first frame is the image itself
         else:
-            self._frames.write(chunk(b"fdAT", struct.pack(">I", self._sequence) + self._pending))
-            self._sequence += 1
-        self.count += 1
+            data = chunk(b"fdAT", struct.pack(">I", self._sequence + 1) + self._pending)
+        piece = memoryview(chunk(b"fcTL", control) + data)
         self._pending = None
+        start = self._frames.tell()
+        try:
+            while piece:
+                written = self._frames.write(piece)
+                piece = piece[written:]
+        except OSError:
+            self._frames.truncate(start)
+            self._frames.seek(start)
+            raise
+        self._sequence += 1 if self.count == 0 else 2
+        self.count += 1
 
     def finish(self, last_shown_ms: float) -> None:
         """Writes animation.png from the frames so far; the last one is shown for last_shown_ms."""
         if self._pending is not None:
             self._write_pending(last_shown_ms)
         self._frames.close()
+        if self.count == 0:
+            self._side.unlink()
+            return
         width, height = self._size
         with self.path.open("wb") as out, self._side.open("rb") as frames:
             out.write(SIGNATURE)

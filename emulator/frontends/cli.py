@@ -195,17 +195,41 @@ def usage_error(message: str) -> int:
     return EXIT_USAGE
 
 
-def stop_on_signals(board) -> dict:
-    """SIGINT and SIGTERM end the run after the instruction under way, so that everything it has is
-    written (Interrupted); a second one while that stop is under way ends the process at once, as
-    it would have without this. Returns the handlers replaced, to put back after the run."""
-    def stop(number: int, _frame) -> None:
-        if isinstance(board.scheduler.pending_stop, Interrupted):
+class SignalStop:
+    """SIGINT (Ctrl-C) and SIGTERM while the command runs. Before the board exists a signal raises
+    Interrupted at once; afterwards it asks the board to stop after the instruction under way (the
+    waits that could block for ever, for GDB or for a pipe's writer, look at `asked` a few times a
+    second and raise it), and a second one before that stop is taken ends the process at once.
+    Once the run has ended and its outputs are being written, a signal is ignored: they are
+    finished first. The handlers replaced are put back by restore()."""
+
+    def __init__(self) -> None:
+        self.board = None
+        self.writing = False
+        self.asked: Interrupted | None = None
+        self._previous = {number: signal.signal(number, self._on_signal) for number in (signal.SIGINT, signal.SIGTERM)}
+
+    def _on_signal(self, number: int, _frame) -> None:
+        if self.writing:
+            return
+        stop = Interrupted(number, signal.Signals(number).name)
+        if self.board is None:
+            raise stop
+        if self.asked is not None:
             signal.signal(number, signal.SIG_DFL)
             os.kill(os.getpid(), number)
             return
-        board.stop_run(Interrupted(number, signal.Signals(number).name))
-    return {number: signal.signal(number, stop) for number in (signal.SIGINT, signal.SIGTERM)}
+        self.asked = stop
+        self.board.stop_run(stop)
+
+    def check(self) -> None:
+        """For a wait that may block: raises the stop a signal asked for, if one did."""
+        if self.asked is not None and not self.writing:
+            raise self.asked
+
+    def restore(self) -> None:
+        for number, handler in self._previous.items():
+            signal.signal(number, handler)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -213,6 +237,20 @@ def main(argv: list[str] | None = None) -> int:
     problem = option_problem(args)
     if problem:
         return usage_error(problem)
+    signals = SignalStop()
+    opened: list = []                  # what must be given back however the command ends (a terminal)
+    try:
+        return run_command(args, signals, opened)
+    except Interrupted as stop:        # before the run began, or while no hart ran
+        print(f"[board] stopped ({stop.kind}): {stop}", file=sys.stderr)
+        return stop.exit_status
+    finally:
+        signals.restore()
+        for thing in opened:
+            thing.close()
+
+
+def run_command(args: argparse.Namespace, signals: SignalStop, opened: list) -> int:
     if args.until is None and args.frames is None and not args.expected and args.uart_script is None:
         args.frames = DEFAULT_FRAMES
     from ..board import Board
@@ -237,6 +275,8 @@ def main(argv: list[str] | None = None) -> int:
             from ..board.flash_image import FlashImage
             flash = FlashImage.open(args.flash, writable=args.flash_writable)
         uart_input = UartInput.open(args.uart_input) if args.uart_input is not None else None
+        if uart_input is not None:
+            opened.append(uart_input)
         otp = read_otp(args.otp) if args.otp is not None else None
         script = None
         if args.uart_script is not None:
@@ -278,7 +318,6 @@ def main(argv: list[str] | None = None) -> int:
     trace = None
     profiler = None
     signal_log = None
-    previous_handlers: dict = {}
 
     def on_frame(record, image) -> None:
         output.frame(record, image)
@@ -315,7 +354,9 @@ def main(argv: list[str] | None = None) -> int:
         for index, request in enumerate(grabs):
             board.grab_at(request.at_s, grab_action(index, request))
         progress = terminal.progress if terminal.shows_progress else None
-        previous_handlers = stop_on_signals(board)
+        signals.board = board
+        if uart_input is not None:
+            uart_input.stop_check = signals.check
         if args.gdb is not None:
             result = run_under_gdb(board, args, terminal)
         elif args.expected:
@@ -336,8 +377,7 @@ def main(argv: list[str] | None = None) -> int:
         status, kind, message = EXIT_INTERNAL, BY_CODE[EXIT_INTERNAL].name, f"{type(error).__name__}: {error}"
         import traceback
         traceback.print_exc()
-    for number, handler in previous_handlers.items():
-        signal.signal(number, handler)
+    signals.writing = True             # the run is over: what it has is written whatever comes
     terminal.finish()
     output_problems = []
     try:
@@ -347,10 +387,11 @@ def main(argv: list[str] | None = None) -> int:
             trace_file.close()
     except OSError as error:
         output_problems.append(f"{args.trace_insn}: {error.strerror or error}")
-    if uart_input is not None:
-        uart_input.close()
     if board is not None:
-        board.close()
+        try:
+            board.close()
+        except OSError as error:           # an SD card image's writes could not be made durable
+            output_problems.append(f"{args.sd}: {error.strerror or error}")
         try:
             if board.flash.writable and board.flash_chip.changed:
                 board.flash.save()
@@ -429,6 +470,9 @@ def main(argv: list[str] | None = None) -> int:
             summary["profile"] = profiler.write(args.out)
         except BadInput as error:
             terminal.message(f"[board] {error}")
+            summary["profile"] = None
+        except OSError as error:
+            output_problems.append(f"the --profile files in {args.out}: {error.strerror or error}")
             summary["profile"] = None
     summary["trace_insn"] = None if trace is None else {
         "file": str(args.trace_insn), "from_s": args.trace_from or 0.0, "to_s": args.trace_to, "lines": trace.lines}

@@ -28,7 +28,8 @@ from typing import TYPE_CHECKING, Callable
 import unicorn
 from unicorn import riscv_const as rv
 
-from ..errors import BadInput, BoardStop, ConsoleExpectationsMet, FirmwareReportedError, FirmwareTrap, HangDetected
+from ..errors import (BadInput, BoardStop, ConsoleExpectationsMet, FirmwareReportedError, FirmwareTrap, HangDetected,
+                      Interrupted)
 from ..cpu import riscv
 from ..cpu.hart import HartState
 from ..cpu.riscv import CAUSE_INTERRUPT, CSR_MCYCLE, CSR_MHARTID, CSR_MINSTRET
@@ -44,6 +45,7 @@ CAUSE_SIGNALS = {0: SIGBUS, 1: SIGSEGV, 2: SIGILL, 3: SIGTRAP, 4: SIGBUS, 5: SIG
                  8: SIGTRAP, 9: SIGTRAP, 11: SIGTRAP}
 INTERRUPT_BYTE = 0x03
 PACKET_SIZE = 0x4000
+STOP_LOOK_S = 0.25      # how often a wait for GDB looks whether the board model was asked to stop
 # the most a packet may take on the wire: PACKET_SIZE of payload, every byte escaped, and $, #, checksum
 MAX_PACKET_BYTES = 2 * PACKET_SIZE + 4
 # GDB's numbering for RISC-V (gdb/riscv-tdep.h): x0..x31, pc, f0..f31, then CSR n at 65 + n
@@ -81,6 +83,13 @@ def target_xml() -> str:
             f'<feature name="org.gnu.gdb.riscv.csr">{csrs}</feature></target>')
 
 
+def _hex(text: str) -> int:
+    """A number of the remote protocol: hex digits only (int() would take a sign or spaces too)."""
+    if not re.fullmatch(r"[0-9a-fA-F]+", text):
+        raise ValueError(f"not a hex number: {text!r}")
+    return int(text, 16)
+
+
 def checksum(payload: bytes) -> bytes:
     return f"{sum(payload) & 0xFF:02x}".encode()
 
@@ -115,8 +124,9 @@ class ProtocolError(Exception):
 class Connection:
     """One GDB connection: packets in and out, acknowledgements, the interrupt byte."""
 
-    def __init__(self, sock: socket.socket) -> None:
+    def __init__(self, sock: socket.socket, stop_check: Callable[[], None] = lambda: None) -> None:
         self.sock = sock
+        self.stop_check = stop_check     # raises when the board model was asked to stop (a signal)
         self.acks = True
         self._buffer = bytearray()
         self.interrupted = False
@@ -171,11 +181,18 @@ class Connection:
                     if scanned - start > MAX_PACKET_BYTES:
                         del self._buffer[:]          # too long: refused, and whatever follows in it
                         scanned = 0
-                        self.sock.sendall(b"-")
+                        if self.acks:
+                            self.sock.sendall(b"-")
                         continue
             elif self._buffer:
                 del self._buffer[:]          # acknowledgements and noise between packets
-            self._fill(None)
+            self._wait()
+
+    def _wait(self) -> None:
+        """Waits for GDB's next bytes, looking a few times a second whether a signal asked the
+        board model to stop (the wait would otherwise outlast it)."""
+        while not self._fill(STOP_LOOK_S):
+            self.stop_check()
 
     def wait_for_close(self, timeout: float = 2.0) -> None:
         """After a kill: GDB closes the connection itself (closing first would be an error to it)."""
@@ -194,7 +211,7 @@ class Connection:
                 return
             while True:
                 while not self._buffer:
-                    self._fill(None)
+                    self._wait()
                 byte = self._buffer[0]
                 if byte in b"+-":
                     del self._buffer[:1]
@@ -342,6 +359,8 @@ class Debugger:
                     break
                 try:
                     scheduler.step()
+                except Interrupted:
+                    raise                  # Ctrl-C or SIGTERM to the board model itself ends the run
                 except BoardStop as stop:
                     self.event = self._board_stopped(stop)
             return self.event
@@ -484,10 +503,18 @@ class GdbServer:
         self.listener.close()
 
     def accept(self) -> None:
+        while not select.select([self.listener], [], [], STOP_LOOK_S)[0]:
+            self._stop_check()
         sock, _ = self.listener.accept()
         sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        self.conn = Connection(sock)
+        self.conn = Connection(sock, self._stop_check)
         self.log(f"[gdb] connected on {HOST}:{self.port}")
+
+    def _stop_check(self) -> None:
+        """A signal to the board model (SIGINT, SIGTERM) ends the run, even while GDB is quiet."""
+        stop = self.board.scheduler.pending_stop
+        if isinstance(stop, Interrupted):
+            raise stop
 
     def serve(self) -> str:
         """Answers GDB until it detaches or kills the run; returns which ('detached', 'killed',
@@ -596,12 +623,12 @@ class GdbServer:
                                               int.from_bytes(bytes.fromhex(value), "little"))
             return "OK" if ok else "E45"
         if command == "m":
-            address, length = (int(x, 16) for x in text[1:].split(","))
+            address, length = (_hex(x) for x in text[1:].split(","))
             data = self.debugger.read_memory(address, min(length, PACKET_SIZE // 2))
             return "E14" if data is None else data.hex()
         if command == "M":
             where, data = text[1:].split(":")
-            address, length = (int(x, 16) for x in where.split(","))
+            address, length = (_hex(x) for x in where.split(","))
             if len(data) != 2 * length:
                 raise ValueError("M's length is not its data's")
             return "OK" if self.debugger.write_memory(address, bytes.fromhex(data)) else "E14"
@@ -661,7 +688,11 @@ class GdbServer:
         return self._run(step_hart)
 
     def _thread_index(self, thread: str) -> int:
-        """A hart's index from GDB's thread id (1, 2: hart 0, 1)."""
+        """A hart's index from GDB's thread id (1, 2: hart 0, 1; 0: any, the selected one)."""
+        if not re.fullmatch(r"[0-9a-fA-F]+", thread):
+            raise ValueError(f"thread id {thread!r}")
+        if int(thread, 16) == 0:
+            return self.general
         index = int(thread, 16) - 1
         if not 0 <= index < len(self.board.harts):
             raise ValueError(f"no thread {thread}")

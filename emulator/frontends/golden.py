@@ -38,7 +38,8 @@ class FrameComparison:
         x0, y0, x1, y1 = self.bounding_box
         return (f"frame {self.index}: {self.differing_pixels} pixels differ from {self.golden} "
                 f"(largest channel error {self.max_channel_error}, within x {x0}..{x1}, y {y0}..{y1}; "
-                f"{x1 - x0 + 1}x{y1 - y0 + 1}); diff image {self.diff_image}")
+                f"{x1 - x0 + 1}x{y1 - y0 + 1}); "
+                + (f"diff image {self.diff_image}" if self.diff_image else "its diff image could not be written"))
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -104,7 +105,12 @@ def compare_frame(index: int, actual_path: Path, golden_path: Path, diff_path: P
     ys, xs = np.nonzero(differs)
     diff = (golden // 3).astype(np.uint8)
     diff[differs] = DIFF_COLOUR
-    Image.fromarray(diff).save(diff_path)
+    try:
+        Image.fromarray(diff).save(diff_path)
+    except OSError:
+        diff_path.unlink(missing_ok=True)       # the comparison stands; only its picture is missing
+        return FrameComparison(index, str(golden_path), False, count, int(error.max()),
+                               (int(xs.min()), int(ys.min()), int(xs.max()), int(ys.max())), None)
     return FrameComparison(index, str(golden_path), False, count, int(error.max()),
                            (int(xs.min()), int(ys.min()), int(xs.max()), int(ys.max())), str(diff_path))
 

@@ -66,7 +66,7 @@ class RunOutput:
         for stale in stale_files:
             stale.unlink(missing_ok=True)
         self.console_path = self.folder / "console.log"
-        self._console = self.console_path.open("wb")
+        self._console = self.console_path.open("wb", buffering=0)     # current while the run goes on (tail -f)
         self.frame_paths: list[Path] = []
         self._animation = ApngWriter(self.folder / ANIMATION_NAME, PNG_COMPRESS_LEVEL)
         self.frame_times: list[float] = []
@@ -100,7 +100,11 @@ class RunOutput:
         checked against the firmware before the run)."""
         from .grab import grab
         name = f"grab_{request.what}_{request.at_s * 1e3:.3f}ms.png".replace("/", "_")
-        Image.fromarray(grab(board, request), "RGB").save(self.folder / name)
+        try:
+            Image.fromarray(grab(board, request), "RGB").save(self.folder / name)
+        except OSError as error:
+            (self.folder / name).unlink(missing_ok=True)
+            raise write_failed(self.folder / name, error) from None
         self.grabs.append({"request": request.label, "virtual_time_s": board.time, "file": name})
 
     def missed_grab(self, request, end_s: float) -> None:
@@ -119,8 +123,11 @@ class RunOutput:
             if self.frame_times:
                 durations, lengthened = animation_durations(self.frame_times)
                 self._animation.finish(durations[-1])
-                self.animation = {"file": ANIMATION_NAME, "frame_durations_ms": durations,
-                                  "lengthened_to_ms": MIN_ANIMATION_FRAME_MS, "lengthened_frames": lengthened}
+                if self._animation.count:
+                    shown = self._animation.count      # fewer than the frames when a write failed
+                    self.animation = {"file": ANIMATION_NAME, "frame_durations_ms": durations[:shown],
+                                      "lengthened_to_ms": MIN_ANIMATION_FRAME_MS,
+                                      "lengthened_frames": [i for i in lengthened if i < shown]}
             else:
                 self._animation.discard()
         except OSError as error:

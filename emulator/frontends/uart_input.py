@@ -16,12 +16,14 @@ import select
 import stat
 import sys
 import time
+from typing import Callable
 
 from ..errors import BadInput
 
 STDIN = "-"
 POLL_S = 0.05              # longest single host wait while the board waits for a key
 CHUNK = 65536              # what one read of a file or pipe takes
+STOP_LOOK_S = 0.25         # how often a wait for a pipe's writer looks whether the run was asked to stop
 
 
 class UartInput:
@@ -37,6 +39,12 @@ class UartInput:
         self._owns_fd = owns_fd
         self._saved_terminal = None
         self._eof = fd is None
+        # a regular file's bytes are all there: its length is what run.json reports, and it does
+        # not grow (a pipe's or FIFO's count as they are read)
+        self._regular = fd is not None and stat.S_ISREG(os.fstat(fd).st_mode)
+        if self._regular:
+            self.total = os.fstat(fd).st_size
+        self.stop_check: Callable[[], None] = lambda: None   # raises when a signal asked the run to stop
         self._host_start = time.monotonic()
         if interactive:
             import termios
@@ -68,8 +76,8 @@ class UartInput:
 
     @property
     def may_grow(self) -> bool:
-        """More bytes may still come (the source has not reached its end)."""
-        return not self._eof
+        """More bytes may still come (a pipe, FIFO or terminal that has not reached its end)."""
+        return not self._eof and not self._regular
 
     def has_byte(self, virtual_now: float) -> bool:
         if self._next < len(self._buffer):
@@ -78,7 +86,7 @@ class UartInput:
             if self._interactive:
                 self._pace(virtual_now)
             else:
-                self._take(os.read(self._fd, CHUNK))     # waits for a pipe's writer
+                self._read_waiting()
         return self._next < len(self._buffer)
 
     def pop(self) -> int:
@@ -93,6 +101,13 @@ class UartInput:
         else:
             self._buffer.insert(0, byte)
 
+    def _read_waiting(self) -> None:
+        """The next chunk, waiting for a pipe's writer as long as it takes, but looking a few
+        times a second whether a signal asked the run to stop."""
+        while not self._regular and not select.select([self._fd], [], [], STOP_LOOK_S)[0]:
+            self.stop_check()
+        self._take(os.read(self._fd, CHUNK))
+
     def _take(self, chunk: bytes) -> None:
         """A read's bytes after what is left; the bytes already given are dropped first."""
         if not chunk:
@@ -101,7 +116,8 @@ class UartInput:
         del self._buffer[:self._next]
         self._next = 0
         self._buffer += chunk
-        self.total += len(chunk)
+        if not self._regular:
+            self.total += len(chunk)
 
     def _pace(self, virtual_now: float) -> None:
         """Takes what the user has typed; waits (for a key at most) while virtual time is
