@@ -106,13 +106,19 @@ def _looks_like_bare_fat(sector0: bytes) -> bool:
 
 
 def find_fat32_partition(sector0: bytes, image_sectors: int) -> tuple[int, PartitionEntry]:
-    """The first FAT32 partition (index 0..3 and entry), checked to lie inside the image."""
+    """The first FAT32 partition (index 0..3 and entry), checked to lie inside the image. An
+    entry's type and start decide, as for FatFs (the Kendryte SDK's and MaixPy's FAT driver reads
+    no more of it) and the firmware (fat32.S): one whose length is 0 is taken, the volume's BPB
+    then giving its size."""
     entries = parse_mbr(sector0)
     for index, entry in enumerate(entries):
-        if entry.type in FAT32_TYPES and not entry.is_empty:
+        if entry.type in FAT32_TYPES:
             if entry.start_lba == 0:
                 raise CorruptImageError(f"partition {index + 1} starts at sector 0, on top of "
                                         f"the MBR")
+            if entry.start_lba >= image_sectors:
+                raise CorruptImageError(f"partition {index + 1} starts at sector {entry.start_lba} but the "
+                                        f"image has only {image_sectors} sectors (truncated image?)")
             if entry.end_lba > image_sectors:
                 raise CorruptImageError(
                     f"partition {index + 1} ends at sector {entry.end_lba} but the image has "

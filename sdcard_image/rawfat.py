@@ -237,9 +237,13 @@ class Fat32Volume:
         if self.boot.bytes_per_sector != mbr.SECTOR_SIZE:
             raise CorruptImageError(f"bad BPB: {self.boot.bytes_per_sector} bytes per sector; "
                                     f"SD cards use {mbr.SECTOR_SIZE}")
-        if self.boot.total_sectors > self.partition.sector_count:
+        if self.partition.sector_count and self.boot.total_sectors > self.partition.sector_count:
             raise CorruptImageError(f"bad BPB: the volume has {self.boot.total_sectors} sectors "
                                     f"but its partition only {self.partition.sector_count}")
+        if self.partition.start_lba + self.boot.total_sectors > image_size // mbr.SECTOR_SIZE:
+            raise CorruptImageError(f"bad BPB: the volume's {self.boot.total_sectors} sectors from sector "
+                                    f"{self.partition.start_lba} run past the image's "
+                                    f"{image_size // mbr.SECTOR_SIZE} (truncated image?)")
         fat_bytes = self._read_at(self.partition_offset
                                   + self.boot.reserved_sectors * self.boot.bytes_per_sector,
                                   (self.boot.cluster_count + 2) * 4)

@@ -1011,3 +1011,22 @@ def test_a_card_laid_out_as_mkfs_fat_does(tmp_path, size_mib, bytes_per_cluster)
 def test_an_unknown_layout_is_a_usage_error(tmp_path):
     result = run_module("sdcard_image", "build", tmp_path / "c.img", "--layout", "exfat", "--scene", "model=x.obj")
     assert result.returncode == EXIT_USAGE and "invalid choice: 'exfat'" in result.stderr
+
+
+def test_a_partition_entry_of_no_length_is_read_as_the_firmware_boots_it(card, firmware, tmp_path):
+    """An MBR entry of type 0x0C whose sector count is 0: FatFs (the SDK's and MaixPy's FAT
+    driver) and the firmware take its type and start and let the BPB give the volume's size; the
+    card tool used to call it empty and refuse the card (issue 35). Both sides agree now."""
+    from conftest import run_emulator
+    patched = tmp_path / "card.img"
+    data = bytearray(card.read_bytes())
+    entry = 446                                            # the first partition entry
+    assert data[entry + 4] in (0x0B, 0x0C) and int.from_bytes(data[entry + 12:entry + 16], "little")
+    data[entry + 12:entry + 16] = bytes(4)
+    patched.write_bytes(bytes(data))
+    listed = run_process("list", str(patched))
+    assert listed.returncode == 0, listed.stderr
+    assert "scene.ini" in listed.stdout
+    run = run_emulator("run", str(firmware), "--sd", str(patched), "--frames", "1", "--out", str(tmp_path / "out"),
+                       "--quiet")
+    assert run.returncode == 0, run.stderr
