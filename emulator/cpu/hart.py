@@ -688,7 +688,13 @@ class Hart(PrivilegedArchitecture):
 
     def set_csr(self, reg: int, value: int) -> None:
         """Writes a Unicorn CSR as M-mode does (a debugger's write), whatever mode the hart is in."""
-        self._as_machine(lambda: self.uc.reg_write(reg, value) or 0)
+        if self.privilege != PRIV_M:
+            self.uc.reg_write(rv.UC_RISCV_REG_PRIV, PRIV_M)
+        try:
+            self.uc.reg_write(reg, value)
+        finally:
+            if self.privilege != PRIV_M:
+                self.uc.reg_write(rv.UC_RISCV_REG_PRIV, self.privilege)
 
     # --- CSR interception --------------------------------------------------------------
 

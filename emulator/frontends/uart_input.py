@@ -41,9 +41,10 @@ class UartInput:
         self._eof = fd is None
         # a regular file's bytes are all there: its length is what run.json reports, and it does
         # not grow (a pipe's or FIFO's count as they are read)
-        self._regular = fd is not None and stat.S_ISREG(os.fstat(fd).st_mode)
+        status = os.fstat(fd) if fd is not None else None
+        self._regular = status is not None and stat.S_ISREG(status.st_mode)
         if self._regular:
-            self.total = os.fstat(fd).st_size
+            self.total = status.st_size
         self.stop_check: Callable[[], None] = lambda: None   # raises when a signal asked the run to stop
         self._host_start = time.monotonic()
         if interactive:
