@@ -22,6 +22,7 @@ import pytest
 from unicorn import riscv_const as rv
 
 from emulator.board import Board
+from emulator.vtime import NEVER, Time, from_seconds, to_seconds
 
 AS = "riscv64-unknown-elf-as"
 LD = "riscv64-unknown-elf-ld"
@@ -102,7 +103,7 @@ def make_board(elf: str | None = None, **kwargs) -> Board:
     kwargs.setdefault("cold", True)
     board = Board(elf or build_elf(IDLE_SOURCE), **kwargs)
     board._frames_wanted = 1 << 60   # step freely: no frame count ends a turn early
-    board.hang_budget_s = 1e9
+    board.hang_budget = NEVER
     return board
 
 
@@ -129,14 +130,15 @@ def symbol(board: Board, name: str) -> int:
 
 def run_until(board: Board, done: Callable[[Board], bool], max_time_s: float = 0.01,
               max_steps: int = 100_000) -> None:
-    """Steps the board until done(board) or max_time_s of virtual time passed."""
+    """Steps the board until done(board) or max_time_s seconds of virtual time passed."""
+    limit = from_seconds(max_time_s)
     for _ in range(max_steps):
         if done(board):
             return
-        if board.time > max_time_s:
+        if board.time > limit:
             break
         board._step()
-    assert done(board), f"condition not reached by t = {board.time:.6g} s"
+    assert done(board), f"condition not reached by t = {to_seconds(board.time):.6g} s"
 
 
 def at_done(board: Board, hart: int = 0) -> bool:
@@ -160,17 +162,17 @@ class RecordingDevice:
     def __init__(self, replies: bytes = b"") -> None:
         self.replies = bytearray(replies)
         self.received = bytearray()
-        self.transfers: list[tuple[float, bytes, int]] = []
-        self.selects: list[tuple[bool, float]] = []
-        self.dummies: list[tuple[float, int]] = []
+        self.transfers: list[tuple[Time, bytes, int]] = []
+        self.selects: list[tuple[bool, Time]] = []
+        self.dummies: list[tuple[Time, int]] = []
 
-    def spi_select(self, selected: bool, now: float) -> None:
+    def spi_select(self, selected: bool, now: Time) -> None:
         self.selects.append((selected, now))
 
-    def spi_dummy(self, clocks: int, now: float) -> None:
+    def spi_dummy(self, clocks: int, now: Time) -> None:
         self.dummies.append((now, clocks))
 
-    def spi_transfer(self, data: np.ndarray, lanes: int, now: float) -> np.ndarray:
+    def spi_transfer(self, data: np.ndarray, lanes: int, now: Time) -> np.ndarray:
         data = bytes(np.asarray(data, dtype=np.uint8))
         self.received += data
         self.transfers.append((now, data, lanes))

@@ -18,6 +18,7 @@ from PIL import Image
 from conftest import ROOT, run_emulator
 from emulator.board import Board
 from emulator.errors import UnmodelledAccess
+from emulator.vtime import PS_PER_MS, PS_PER_US
 
 LCD_GOLDEN = ROOT / "tests" / "golden" / "c-lcd-demo"
 LCD_FRAMES = 4
@@ -34,7 +35,7 @@ def console_of(summary: dict) -> list[str]:
 def test_hello_prints_through_picolibc_with_the_clocks_as_handed_over(c_firmware):
     board = Board(str(c_firmware / "hello.elf"))
     reset_status = board.sysctl.values[0x60]          # as the firmware finds it
-    result = board.run_until(0.05)
+    result = board.run_until(50 * PS_PER_MS)
     pin_reset = "the reset pin" if reset_status & 2 else "power-on"
     cpu, pll0 = int(board.sysctl.cpu_hz()), int(board.sysctl.pll_hz(0x08))
     assert [line for _, line in board.console_lines] == [
@@ -54,7 +55,7 @@ def test_hello_stops_a_strict_run_at_its_64_bit_sysctl_load(c_firmware):
     board = Board(str(c_firmware / "hello.elf"), strict=True)
     with pytest.raises(UnmodelledAccess, match=r"<reset_status\+0x[0-9a-f]+> \(c\.ld .*load of 8 bytes at "
                                                r"0x50440060"):
-        board.run_until(0.05)
+        board.run_until(50 * PS_PER_MS)
 
 
 # --- blink ------------------------------------------------------------------------------------
@@ -207,7 +208,7 @@ def test_syscalls_ecall_and_misaligned_load_served_by_the_trap_handler(c_firmwar
     on both, the run goes on (before 2026-11-28 the model ended it at the second exception,
     and let the misaligned load through)."""
     board = Board(str(c_firmware / "syscalls.elf"), engine=engine)
-    board.run_until(0.05)
+    board.run_until(50 * PS_PER_MS)
     assert [line for _, line in board.console_lines] == [
         "hello from UART3, through an ecall",
         "write returned 35; misaligned lw read 0x54433221",
@@ -263,8 +264,8 @@ def test_timers_tick_pwm_alarm_and_a_key_through_the_plic(c_firmware, tmp_path):
     _, changes = read_vcd((tmp_path / "t.vcd").read_text())
     edges = [t for t, v in changes["pad24"]]                # low from the start, then high, ...
     assert [v for t, v in changes["pad24"][:3]] == ["0", "1", "0"]
-    lows = {round((b - a) / 1e3) for a, b in zip(edges[0::2], edges[1::2])}
-    highs = {round((b - a) / 1e3) for a, b in zip(edges[1::2], edges[2::2])}
+    lows = {round((b - a) / PS_PER_US) for a, b in zip(edges[0::2], edges[1::2])}
+    highs = {round((b - a) / PS_PER_US) for a, b in zip(edges[1::2], edges[2::2])}
     assert lows == {750} and highs == {250}                 # microseconds
 
 

@@ -15,6 +15,7 @@ import pytest
 from conftest import ROOT, run_emulator
 from emulator.frontends.console_watch import ConsolePattern, ConsoleWatch
 from emulator.errors import ConsoleExpectationsMet, ConsoleFailText
+from emulator.vtime import PS_PER_US
 
 ECHO_INPUT = b"Ada\r\nhello world\nquit\n"
 
@@ -28,7 +29,7 @@ def summary_of(out) -> dict:
 def feed(watch: ConsoleWatch, text: str, stops: list) -> None:
     watch.attach(stops.append)
     for i, ch in enumerate(text.encode()):
-        watch.byte(ch, i * 1e-4)
+        watch.byte(ch, i * 100 * PS_PER_US)
 
 
 def test_texts_are_found_in_the_stream_in_order_and_across_lines():

@@ -20,6 +20,7 @@ from emulator.frontends.options import build_parser
 from emulator.errors import FirmwareTrap
 from emulator.cpu.hart import ENGINE_FAST, ENGINE_PRECISE, Hart
 from emulator.cpu.timing import TIMING_IPC1, TIMING_ROCKET
+from emulator.vtime import PS_PER_MS
 from k210_fixtures import RecordingDevice, at_done, make_board, program, reg, run_to_done, run_until, symbol
 from unicorn import riscv_const as rv
 
@@ -672,7 +673,7 @@ def test_the_turns_alone_leave_the_guests_flags_alone():
         turns_alone = []
         run_alone = board.harts[0].run_alone
         board.harts[0].run_alone = lambda plan: (turns_alone.append(plan), run_alone(plan))
-        board.run_until(0.02)      # (the scheduler's own run: stepping keeps single turns)
+        board.run_until(20 * PS_PER_MS)      # (the scheduler's own run: stepping keeps single turns)
         boards.append(board)
     precise, fast = boards
     assert turns_alone, "no turns alone"
@@ -725,9 +726,9 @@ def test_the_turns_alone_run_past_the_consoles_quiet_bytes_changing_nothing_else
             run_alone = board.harts[0].run_alone
             board.harts[0].run_alone = lambda plan: (quiet.append(plan.ticks), run_alone(plan))
         else:
-            board.scheduler._go_on_alone = lambda hart, hz, t0, outer, horizon: horizon
+            board.scheduler._go_on_alone = lambda hart, t0, outer, horizon: horizon
         try:
-            board.run_until(0.004)
+            board.run_until(4 * PS_PER_MS)
             ended = "ran"
         except FirmwareTrap as error:
             ended = str(error)

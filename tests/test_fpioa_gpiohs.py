@@ -10,19 +10,22 @@ from emulator.devices import gpiohs as g
 from emulator.errors import UnmodelledAccess
 from emulator.devices.fpioa import FUNC_GPIOHS0, FUNC_SPI0_SS0, FUNC_UARTHS_TX, PAD_COUNT
 from emulator.devices.plic import SOURCE_GPIOHS0
+from emulator.vtime import PS_PER_MS, PS_PER_US
 from k210_fixtures import board, idle_elf, make_board, program, run_to_done  # noqa: F401
 
 OE_EN, IE_EN = 1 << 12, 1 << 20
 
+US, MS = PS_PER_US, PS_PER_MS
 
-def route(board, pad, function, now=0.0, extra=OE_EN):
+
+def route(board, pad, function, now=0, extra=OE_EN):
     board.fpioa.write(4 * pad, 4, function | extra, now)
 
 
 # --- FPIOA -----------------------------------------------------------------------------
 
 def test_pads_start_unrouted(board):
-    board.gpiohs.write(g.OUTPUT_EN, 4, 0xFFFF_FFFF, 0.0)
+    board.gpiohs.write(g.OUTPUT_EN, 4, 0xFFFF_FFFF, 0)
     for pad in range(PAD_COUNT):
         assert board.wiring.gpiohs_level_on_pad(pad) is None, pad
     assert board.fpioa.pads_with_function(FUNC_SPI0_SS0 + 3) == []
@@ -34,90 +37,90 @@ def test_function_of_pad_is_the_low_byte(board):
     route(board, 36, FUNC_SPI0_SS0 + 3)
     assert board.fpioa.function_of_pad(5) == FUNC_UARTHS_TX
     assert board.fpioa.function_of_pad(36) == 15
-    assert board.fpioa.read(4 * 5, 4, 0.0) == FUNC_UARTHS_TX | OE_EN | 0xF << 8 | 1 << 16
+    assert board.fpioa.read(4 * 5, 4, 0) == FUNC_UARTHS_TX | OE_EN | 0xF << 8 | 1 << 16
     assert board.fpioa.pads_with_function(15) == [36]
     route(board, 40, 15)
     assert board.fpioa.pads_with_function(15) == [36, 40]
 
 
 def test_fpioa_register_map_ends_after_the_tie_registers(board):
-    board.fpioa.write(4 * 47, 4, 24, 0.0)
-    board.fpioa.write(0xC0, 4, 1, 0.0)            # tie_en[0] follows io[47]
-    board.fpioa.write(0xFC, 4, 1, 0.0)            # tie_val[7]
+    board.fpioa.write(4 * 47, 4, 24, 0)
+    board.fpioa.write(0xC0, 4, 1, 0)              # tie_en[0] follows io[47]
+    board.fpioa.write(0xFC, 4, 1, 0)              # tie_val[7]
     with pytest.raises(UnmodelledAccess):
-        board.fpioa.write(0x100, 4, 24, 0.0)
+        board.fpioa.write(0x100, 4, 24, 0)
 
 
 # --- GPIOHS outputs ------------------------------------------------------------------------
 
 def test_output_level_needs_output_enable_and_follows_xor(board):
     gp = board.gpiohs
-    gp.write(g.OUTPUT_VAL, 4, 0b0110, 0.0)
+    gp.write(g.OUTPUT_VAL, 4, 0b0110, 0)
     assert gp.driven_level(1) is None                  # not an output yet
-    gp.write(g.OUTPUT_EN, 4, 0b1111, 0.0)
+    gp.write(g.OUTPUT_EN, 4, 0b1111, 0)
     assert [gp.driven_level(n) for n in range(4)] == [0, 1, 1, 0]
-    gp.write(g.OUTPUT_XOR, 4, 0b0011, 0.0)
+    gp.write(g.OUTPUT_XOR, 4, 0b0011, 0)
     assert [gp.driven_level(n) for n in range(4)] == [1, 0, 1, 0]
-    gp.write(g.OUTPUT_EN, 4, 0b1011, 0.0)
+    gp.write(g.OUTPUT_EN, 4, 0b1011, 0)
     assert gp.driven_level(2) is None
-    assert gp.read(g.OUTPUT_VAL, 4, 0.0) == 0b0110  # output_val reads what was written
+    assert gp.read(g.OUTPUT_VAL, 4, 0) == 0b0110    # output_val reads what was written
 
 
 def test_input_readback(board):
     gp = board.gpiohs
-    gp.write(g.OUTPUT_EN, 4, 0b0011, 0.0)
-    gp.write(g.OUTPUT_VAL, 4, 0b0001, 0.0)
-    gp.write(g.PUE, 4, 0b0100, 0.0)                 # line 2 pulled up, line 3 floating
-    assert gp.read(g.INPUT_VAL, 4, 0.0) == 0           # input_en off: reads 0
-    gp.write(g.INPUT_EN, 4, 0b1111, 0.0)
-    assert gp.read(g.INPUT_VAL, 4, 0.0) == 0b0101
-    gp.write(g.OUTPUT_XOR, 4, 0b0011, 0.0)
-    assert gp.read(g.INPUT_VAL, 4, 0.0) == 0b0110
-    gp.write(g.PDE, 4, 0b0100, 0.0)                 # both pulls: not a clear high
-    assert gp.read(g.INPUT_VAL, 4, 0.0) & 0b0100 == 0
+    gp.write(g.OUTPUT_EN, 4, 0b0011, 0)
+    gp.write(g.OUTPUT_VAL, 4, 0b0001, 0)
+    gp.write(g.PUE, 4, 0b0100, 0)                   # line 2 pulled up, line 3 floating
+    assert gp.read(g.INPUT_VAL, 4, 0) == 0             # input_en off: reads 0
+    gp.write(g.INPUT_EN, 4, 0b1111, 0)
+    assert gp.read(g.INPUT_VAL, 4, 0) == 0b0101
+    gp.write(g.OUTPUT_XOR, 4, 0b0011, 0)
+    assert gp.read(g.INPUT_VAL, 4, 0) == 0b0110
+    gp.write(g.PDE, 4, 0b0100, 0)                   # both pulls: not a clear high
+    assert gp.read(g.INPUT_VAL, 4, 0) & 0b0100 == 0
     with pytest.raises(UnmodelledAccess, match="read-only"):
-        gp.write(g.INPUT_VAL, 4, 1, 0.0)
+        gp.write(g.INPUT_VAL, 4, 1, 0)
 
 
 def test_edge_pending_bits_and_write_one_to_clear(board):
     gp = board.gpiohs
     line = 1 << 5
-    gp.write(g.INPUT_EN, 4, line, 0.0)
-    gp.write(g.OUTPUT_EN, 4, line, 0.0)
-    gp.write(g.RISE_IP, 4, 0xFFFF_FFFF, 0.0)       # start clean
-    gp.write(g.FALL_IP, 4, 0xFFFF_FFFF, 0.0)
-    assert gp.read(g.RISE_IP, 4, 0.0) == 0 and gp.read(g.FALL_IP, 4, 0.0) == 0
-    gp.write(g.OUTPUT_VAL, 4, line, 1e-6)            # rise
-    assert gp.read(g.RISE_IP, 4, 1e-6) == line
-    assert gp.read(g.FALL_IP, 4, 1e-6) == 0
-    assert gp.read(g.HIGH_IP, 4, 1e-6) == line and gp.read(g.LOW_IP, 4, 1e-6) == 0
-    gp.write(g.OUTPUT_VAL, 4, 0, 2e-6)               # fall
-    assert gp.read(g.FALL_IP, 4, 2e-6) == line
-    assert gp.read(g.RISE_IP, 4, 2e-6) == line       # sticky until cleared
-    assert gp.read(g.LOW_IP, 4, 2e-6) == line and gp.read(g.HIGH_IP, 4, 2e-6) == 0
-    gp.write(g.RISE_IP, 4, 0, 3e-6)                  # writing 0 clears nothing
-    assert gp.read(g.RISE_IP, 4, 3e-6) == line
-    gp.write(g.RISE_IP, 4, line, 3e-6)               # write 1 to clear
-    assert gp.read(g.RISE_IP, 4, 3e-6) == 0
-    assert gp.read(g.FALL_IP, 4, 3e-6) == line
-    gp.write(g.FALL_IP, 4, line, 4e-6)
-    assert gp.read(g.FALL_IP, 4, 4e-6) == 0
+    gp.write(g.INPUT_EN, 4, line, 0)
+    gp.write(g.OUTPUT_EN, 4, line, 0)
+    gp.write(g.RISE_IP, 4, 0xFFFF_FFFF, 0)         # start clean
+    gp.write(g.FALL_IP, 4, 0xFFFF_FFFF, 0)
+    assert gp.read(g.RISE_IP, 4, 0) == 0 and gp.read(g.FALL_IP, 4, 0) == 0
+    gp.write(g.OUTPUT_VAL, 4, line, US)              # rise
+    assert gp.read(g.RISE_IP, 4, US) == line
+    assert gp.read(g.FALL_IP, 4, US) == 0
+    assert gp.read(g.HIGH_IP, 4, US) == line and gp.read(g.LOW_IP, 4, US) == 0
+    gp.write(g.OUTPUT_VAL, 4, 0, 2 * US)             # fall
+    assert gp.read(g.FALL_IP, 4, 2 * US) == line
+    assert gp.read(g.RISE_IP, 4, 2 * US) == line     # sticky until cleared
+    assert gp.read(g.LOW_IP, 4, 2 * US) == line and gp.read(g.HIGH_IP, 4, 2 * US) == 0
+    gp.write(g.RISE_IP, 4, 0, 3 * US)                # writing 0 clears nothing
+    assert gp.read(g.RISE_IP, 4, 3 * US) == line
+    gp.write(g.RISE_IP, 4, line, 3 * US)             # write 1 to clear
+    assert gp.read(g.RISE_IP, 4, 3 * US) == 0
+    assert gp.read(g.FALL_IP, 4, 3 * US) == line
+    gp.write(g.FALL_IP, 4, line, 4 * US)
+    assert gp.read(g.FALL_IP, 4, 4 * US) == 0
     # an xor flip is an edge too
-    gp.write(g.OUTPUT_XOR, 4, line, 5e-6)
-    assert gp.read(g.RISE_IP, 4, 5e-6) == line
+    gp.write(g.OUTPUT_XOR, 4, line, 5 * US)
+    assert gp.read(g.RISE_IP, 4, 5 * US) == line
 
 
 def test_gpiohs_interrupt_line_needs_enable(board):
     gp = board.gpiohs
     line = 1 << 3
-    gp.write(g.INPUT_EN, 4, line, 0.0)
-    gp.write(g.OUTPUT_EN, 4, line, 0.0)
-    gp.write(g.OUTPUT_VAL, 4, line, 1e-6)
+    gp.write(g.INPUT_EN, 4, line, 0)
+    gp.write(g.OUTPUT_EN, 4, line, 0)
+    gp.write(g.OUTPUT_VAL, 4, line, US)
     assert not gp.irq_line(3)
-    gp.write(g.RISE_IE, 4, line, 2e-6)
+    gp.write(g.RISE_IE, 4, line, 2 * US)
     assert gp.irq_line(3) and not gp.irq_line(4)
     assert SOURCE_GPIOHS0 + 3 in board._high_sources()
-    gp.write(g.RISE_IP, 4, line, 3e-6)
+    gp.write(g.RISE_IP, 4, line, 3 * US)
     assert not gp.irq_line(3)
 
 
@@ -125,8 +128,8 @@ def test_gpiohs_interrupt_line_needs_enable(board):
 
 def test_gpiohs_level_on_pad_follows_fpioa_routing(board):
     gp = board.gpiohs
-    gp.write(g.OUTPUT_EN, 4, 0b11, 0.0)
-    gp.write(g.OUTPUT_VAL, 4, 0b10, 0.0)
+    gp.write(g.OUTPUT_EN, 4, 0b11, 0)
+    gp.write(g.OUTPUT_VAL, 4, 0b10, 0)
     assert board.wiring.gpiohs_level_on_pad(38) is None          # pad not routed to GPIOHS
     route(board, 38, FUNC_GPIOHS0 + 1)
     assert board.wiring.gpiohs_level_on_pad(38) == 1
@@ -143,17 +146,17 @@ def test_lcd_reset_pin_follows_the_gpiohs_line_on_pad_37(board):
     original = board.lcd.set_reset_pin
     board.lcd.set_reset_pin = lambda level, now: (calls.append((level, now)), original(level, now))
     gp = board.gpiohs
-    route(board, 37, FUNC_GPIOHS0 + 4, now=1e-6)
+    route(board, 37, FUNC_GPIOHS0 + 4, now=US)
     assert calls == []                                     # undriven: the LCD's pull keeps RESX high
-    gp.write(g.OUTPUT_VAL, 4, 0, 2e-6)
-    gp.write(g.OUTPUT_EN, 4, 1 << 4, 3e-6)
-    assert calls == [(0, 3e-6)]
-    gp.write(g.OUTPUT_XOR, 4, 1 << 4, 4e-3)                # inverted: high again
-    assert calls == [(0, 3e-6), (1, 4e-3)]
-    gp.write(g.OUTPUT_VAL, 4, 1 << 4, 5e-3)                # val ^ xor = 0
-    assert calls[-1] == (0, 5e-3)
-    route(board, 37, 0xFF, now=6e-3)                       # pad released: RESX pulled high
-    assert calls[-1] == (1, 6e-3)
+    gp.write(g.OUTPUT_VAL, 4, 0, 2 * US)
+    gp.write(g.OUTPUT_EN, 4, 1 << 4, 3 * US)
+    assert calls == [(0, 3 * US)]
+    gp.write(g.OUTPUT_XOR, 4, 1 << 4, 4 * MS)              # inverted: high again
+    assert calls == [(0, 3 * US), (1, 4 * MS)]
+    gp.write(g.OUTPUT_VAL, 4, 1 << 4, 5 * MS)              # val ^ xor = 0
+    assert calls[-1] == (0, 5 * MS)
+    route(board, 37, 0xFF, now=6 * MS)                     # pad released: RESX pulled high
+    assert calls[-1] == (1, 6 * MS)
 
 
 def test_lcd_dc_through_a_program():
@@ -191,15 +194,15 @@ def test_the_lcd_takes_the_frame_format_its_interface_has(idle_elf, interface, l
     import numpy as np
     from emulator.errors import HardwareMisuse
     board = make_board(idle_elf, lcd_interface=interface)
-    board.sysctl.write(0x54, 4, 1 << 10, 0.0)               # misc: SPI0's data lines to the connector
+    board.sysctl.write(0x54, 4, 1 << 10, 0)                 # misc: SPI0's data lines to the connector
     route(board, 39, 17)                                     # SPI0_SCLK
     route(board, 38, FUNC_GPIOHS0 + 1)
-    board.gpiohs.write(g.OUTPUT_EN, 4, 1 << 1, 0.0)         # D/C driven, low: a command
+    board.gpiohs.write(g.OUTPUT_EN, 4, 1 << 1, 0)           # D/C driven, low: a command
     if routed_d0:
         route(board, 40, 4)                                  # SPI0_D0
     if expected is None:
-        board.lcd_port.spi_transfer(np.array([0x29], dtype=np.uint8), lanes, 0.0)    # DISPON
+        board.lcd_port.spi_transfer(np.array([0x29], dtype=np.uint8), lanes, 0)      # DISPON
         assert board.lcd.display_on
         return
     with pytest.raises(HardwareMisuse, match=re.escape(expected)):
-        board.lcd_port.spi_transfer(np.array([0x29], dtype=np.uint8), lanes, 0.0)
+        board.lcd_port.spi_transfer(np.array([0x29], dtype=np.uint8), lanes, 0)

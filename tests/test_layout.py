@@ -8,8 +8,8 @@ from pathlib import Path
 
 EMULATOR = Path(__file__).resolve().parent.parent / "emulator"
 
-# what each package may import besides itself (emulator.errors and emulator.memory_map: everyone)
-SHARED = {"emulator.errors", "emulator.memory_map"}
+# what each package may import besides itself (emulator.errors, emulator.memory_map and emulator.vtime: everyone)
+SHARED = {"emulator.errors", "emulator.memory_map", "emulator.vtime"}
 ALLOWED = {
     "emulator.cpu": set(),
     "emulator.devices": set(),

@@ -20,7 +20,18 @@ a texture large enough that most of the run is the SD card's SPI traffic, once h
 with every block's first CRC16 wrong (each block read again: the firmware's retry path). A change to
 the firmware changes them on purpose: take them again with `python tests/test_model_speed_unchanged.py`
 run against commit fb8377d's emulator with that fix (its `emulator` package first on PYTHONPATH),
-on the new firmware."""
+on the new firmware.
+
+Taken again when virtual time became whole picoseconds (issue 33), with this model: the frames'
+pixels, the console's lines and the warnings are as fb8377d gave them; the times (console lines
+in picoseconds now) and some counts moved, and why was traced. Every duration is rounded up to a
+picosecond, which by 120 ms adds up to about 400 ps; and fb8377d's float sums decided which of two
+moments that are equal, or a cycle apart, came first (29 times in two frames under ipc1 the harts'
+times were within a picosecond of each other but unequal). So at 120.24 ms, hart 1's timer wake
+(mtime reaching mtimecmp) came a cycle after mtimecmp's time there, since hart 0's turn ran a
+cycle past it, and exactly at it now. From there hart 0 runs 3 more instructions (4 cycles) by the
+first frame, hart 1 3 more (healthy card) or as many (flaky-crc), the first frame 17.4 ns later
+(healthy) or 0.3 ns (flaky-crc), and no console line more than 17.4 ns later."""
 from __future__ import annotations
 
 import hashlib
@@ -80,54 +91,55 @@ def test_runs_are_as_before_the_speed_work(firmware, tmp_path, faults):
     assert seen["warnings"] == expected["warnings"]
 
 
-BEFORE: dict = {'flaky-crc': {'console': [(0.001627389578163772, 'boot: hart 0 up'),
-                           (0.005446545905707199, 'clocks: PLL0 806000000 Hz, CPU 403000000 Hz'),
-                           (0.008050516129032263, 'pins: LCD, UART and SD routed'),
-                           (0.02194345657568239,
-                            'sd: card ready, SDHC (block addressing), 131072 blocks, SPI1 22388888 Hz'),
-                           (0.0277589900744417, 'fat32: partition at block 2048, 512-byte clusters, 126990 clusters'),
-                           (0.03062335732009927, 'load scene.ini 74 crc32=e26782a2'),
-                           (0.06544877171215877, 'load texture.ppm 76815 crc32=de4b3ef2'),
-                           (0.06831313895781634, 'load model.obj 92 crc32=3c4c9e13'),
-                           (0.074823064516129,
-                            'model: 2 triangles, 4 vertices, 4 uv, 0 normals (not stored: shading flat)'),
-                           (0.07629864764267986, 'texture: 160x160'),
-                           (0.1345205260545903, 'lcd: ST7789V ready'),
-                           (0.13634330521091756, 'hart 1: display loop'),
-                           (0.1370376972704708, 'frame 0')],
-               'frames': [(0.13287108188585608,
-                           [5389829, 14250],
-                           [8257429, 18685],
-                           '1c68b7264b348dde68bcdf72c02e69c59d2e0e5ccd04a813c863c8465ed1b5da'),
-                          (0.14388041935483817,
-                           [6424930, 17236],
-                           [10139543, 23004],
-                           '5a089b29ba6c9e0266be6e56579f22a4f8442afd74fb140ac3800d6e55e952de')],
-               'warnings': []},
- 'healthy': {'console': [(0.001627389578163772, 'boot: hart 0 up'),
-                         (0.005446545905707199, 'clocks: PLL0 806000000 Hz, CPU 403000000 Hz'),
-                         (0.008050516129032263, 'pins: LCD, UART and SD routed'),
-                         (0.021198267990074446,
-                          'sd: card ready, SDHC (block addressing), 131072 blocks, SPI1 22388888 Hz'),
-                         (0.027013801488833755, 'fat32: partition at block 2048, 512-byte clusters, 126990 clusters'),
-                         (0.029878168734491325, 'load scene.ini 74 crc32=e26782a2'),
-                         (0.048469538461538265, 'load texture.ppm 76815 crc32=de4b3ef2'),
-                         (0.051333905707195836, 'load model.obj 92 crc32=3c4c9e13'),
-                         (0.057843831265508495,
-                          'model: 2 triangles, 4 vertices, 4 uv, 0 normals (not stored: shading flat)'),
-                         (0.059319414392059365, 'texture: 160x160'),
-                         (0.13452050868486326, 'lcd: ST7789V ready'),
-                         (0.1363432878411905, 'hart 1: display loop'),
-                         (0.13703767990074375, 'frame 0')],
-             'frames': [(0.13287106451612904,
-                         [5055526, 14157],
-                         [7841743, 18557],
+BEFORE: dict = {'healthy': {'frames': [(0.132871081889,
+                         [5055529, 14160],
+                         [7841747, 18564],
                          '1c68b7264b348dde68bcdf72c02e69c59d2e0e5ccd04a813c863c8465ed1b5da'),
-                        (0.14388040198511112,
-                         [6090627, 17143],
-                         [9723857, 22879],
+                        (0.143880419361,
+                         [6090630, 17146],
+                         [9723861, 22886],
                          '5a089b29ba6c9e0266be6e56579f22a4f8442afd74fb140ac3800d6e55e952de')],
-             'warnings': []}}
+             'console': [(1627389582, 'boot: hart 0 up'),
+                         (5446545909, 'clocks: PLL0 806000000 Hz, CPU 403000000 Hz'),
+                         (8050516132, 'pins: LCD, UART and SD routed'),
+                         (21198268010,
+                          'sd: card ready, SDHC (block addressing), 131072 blocks, SPI1 22388888 Hz'),
+                         (27013801509, 'fat32: partition at block 2048, 512-byte clusters, 126990 clusters'),
+                         (29878168754, 'load scene.ini 74 crc32=e26782a2'),
+                         (48469538586, 'load texture.ppm 76815 crc32=de4b3ef2'),
+                         (51333905832, 'load model.obj 92 crc32=3c4c9e13'),
+                         (57843831390,
+                          'model: 2 triangles, 4 vertices, 4 uv, 0 normals (not stored: shading flat)'),
+                         (59319414517, 'texture: 160x160'),
+                         (134520526059, 'lcd: ST7789V ready'),
+                         (136343305215, 'hart 1: display loop'),
+                         (137037697275, 'frame 0')],
+             'warnings': []},
+ 'flaky-crc': {'frames': [(0.132871081889,
+                           [5389832, 14250],
+                           [8257433, 18685],
+                           '1c68b7264b348dde68bcdf72c02e69c59d2e0e5ccd04a813c863c8465ed1b5da'),
+                          (0.143880419361,
+                           [6424933, 17236],
+                           [10139547, 23004],
+                           '5a089b29ba6c9e0266be6e56579f22a4f8442afd74fb140ac3800d6e55e952de')],
+               'console': [(1627389582, 'boot: hart 0 up'),
+                           (5446545909, 'clocks: PLL0 806000000 Hz, CPU 403000000 Hz'),
+                           (8050516132, 'pins: LCD, UART and SD routed'),
+                           (21943456602,
+                            'sd: card ready, SDHC (block addressing), 131072 blocks, SPI1 22388888 Hz'),
+                           (27758990101,
+                            'fat32: partition at block 2048, 512-byte clusters, 126990 clusters'),
+                           (30623357346, 'load scene.ini 74 crc32=e26782a2'),
+                           (65448772025, 'load texture.ppm 76815 crc32=de4b3ef2'),
+                           (68313139271, 'load model.obj 92 crc32=3c4c9e13'),
+                           (74823064829,
+                            'model: 2 triangles, 4 vertices, 4 uv, 0 normals (not stored: shading flat)'),
+                           (76298647956, 'texture: 160x160'),
+                           (134520526059, 'lcd: ST7789V ready'),
+                           (136343305215, 'hart 1: display loop'),
+                           (137037697275, 'frame 0')],
+               'warnings': []}}
 
 if __name__ == "__main__":
     import pprint

@@ -15,20 +15,20 @@ from k210_fixtures import idle_elf, make_board  # noqa: F401
 
 def read_bytes(otp, address: int, length: int) -> tuple[list[int], bool]:
     """otp_read_byte, register by register: (the bytes, whether the address was refused)."""
-    otp.write(o.CLE, 4, 0, 0.0)
-    otp.write(o.MODE, 4, 0, 0.0)
-    otp.write(o.WRG_ADR_FLAG, 4, 0, 0.0)
-    otp.write(o.CEB, 4, 0, 0.0)
+    otp.write(o.CLE, 4, 0, 0)
+    otp.write(o.MODE, 4, 0, 0)
+    otp.write(o.WRG_ADR_FLAG, 4, 0, 0)
+    otp.write(o.CEB, 4, 0, 0)
     out = []
     for n in range(length):
-        assert otp.read(o.ADR_IN_FLAG, 4, 0.0) == 1
+        assert otp.read(o.ADR_IN_FLAG, 4, 0) == 1
         if n == length - 1:
-            otp.write(o.OFFSET["otp_last_dat"], 4, 1, 0.0)
-        otp.write(o.APB_ADR, 4, 8 * (address + n), 0.0)
-        assert otp.read(o.DATA_RDY, 4, 0.0) == 1
-        if otp.read(o.WRG_ADR_FLAG, 4, 0.0) == 1:
+            otp.write(o.OFFSET["otp_last_dat"], 4, 1, 0)
+        otp.write(o.APB_ADR, 4, 8 * (address + n), 0)
+        assert otp.read(o.DATA_RDY, 4, 0) == 1
+        if otp.read(o.WRG_ADR_FLAG, 4, 0) == 1:
             return out, True
-        out.append(otp.read(o.DATA, 4, 0.0))
+        out.append(otp.read(o.DATA, 4, 0))
     return out, False
 
 
@@ -43,13 +43,13 @@ def test_reads_give_the_content_and_a_blank_otp_says_so(idle_elf):
 def test_the_cpu_driven_read(idle_elf):
     board = make_board(idle_elf, cold=False, otp=b"\x00\x11\x22\x33")
     otp = board.otp
-    otp.write(o.OFFSET["otp_ceb_cpu"], 4, 0, 0.0)
+    otp.write(o.OFFSET["otp_ceb_cpu"], 4, 0, 0)
     got = []
     for n in range(4):
-        otp.write(o.ADR_CPU, 4, 8 * n, 0.0)
-        otp.write(o.READEN_CPU, 4, 1, 0.0)
-        got.append(otp.read(o.DAT_CPU, 4, 0.0))
-        otp.write(o.READEN_CPU, 4, 0, 0.0)
+        otp.write(o.ADR_CPU, 4, 8 * n, 0)
+        otp.write(o.READEN_CPU, 4, 1, 0)
+        got.append(otp.read(o.DAT_CPU, 4, 0))
+        otp.write(o.READEN_CPU, 4, 0, 0)
     assert got == [0x00, 0x11, 0x22, 0x33]
 
 
@@ -62,7 +62,7 @@ def test_the_aes_key_is_never_given_out(idle_elf):
 def test_programming_and_test_modes_stop_clearly(idle_elf, name, value):
     board = make_board(idle_elf, cold=False)
     with pytest.raises(UnmodelledAccess, match="OTP"):
-        board.otp.write(o.OFFSET[name], 4, value, 0.0)
+        board.otp.write(o.OFFSET[name], 4, value, 0)
 
 
 def test_an_otp_file_larger_than_the_otp_is_bad_input(idle_elf, tmp_path):
@@ -85,5 +85,5 @@ def test_otp_init_writes_every_register_it_clears(idle_elf):
                  "otp_rstb_cpu", "otp_seltm_cpu", "otp_readen_cpu", "otp_pgmen_cpu", "otp_dle_cpu",
                  "otp_din_cpu", "otp_cpumpen_cpu", "otp_cle_cpu", "otp_ceb_cpu", "otp_adr_cpu", "otp_dat_cpu",
                  "blank_finish", "bisr_finish", "key_cmp_result", "data_acp_flag", "otp_wrg_adr_flag"):
-        board.otp.write(o.OFFSET[name], 4, 0, 0.0)
+        board.otp.write(o.OFFSET[name], 4, 0, 0)
     assert not board.warnings

@@ -12,6 +12,7 @@ from emulator.devices import gpio as g
 from emulator.devices import gpiohs as h
 from emulator.devices.fpioa import FUNC_GPIO0, FUNC_GPIOHS0
 from emulator.errors import BadInput
+from emulator.vtime import PS_PER_MS, PS_PER_US
 from k210_fixtures import make_board, program, reg, run_to_done
 
 PAD_BOOT = 16                    # the Dock's BOOT key: pressed pulls the pad low
@@ -19,15 +20,15 @@ FPIOA_IE, FPIOA_PU = 1 << 20, 1 << 16
 
 
 def test_parse_pin_and_its_refusals(tmp_path):
-    assert parse_pin("16=0@0.5") == PinChange(0.5, 16, 0)
-    assert parse_pin("3=z@0") == PinChange(0.0, 3, None)
+    assert parse_pin("16=0@0.5") == PinChange(500 * PS_PER_MS, 16, 0)
+    assert parse_pin("3=z@0") == PinChange(0, 3, None)
     for bad, what in (("16=0", "PAD=LEVEL@SECONDS"), ("48=1@0", "pad 48 does not exist"), ("x=1@0", "not a number"),
                       ("1=2@0", "not 0, 1 or z"), ("1=1@-1", "0 or more"), ("1=1@inf", "finite")):
         with pytest.raises(ValueError, match=what):
             parse_pin(bad)
     schedule = tmp_path / "pins.txt"
     schedule.write_text("# the BOOT key\n0.001 16 0   # pressed\n0.002 16 z\n")
-    assert load_schedule(schedule) == [PinChange(0.001, 16, 0), PinChange(0.002, 16, None)]
+    assert load_schedule(schedule) == [PinChange(PS_PER_MS, 16, 0), PinChange(2 * PS_PER_MS, 16, None)]
     schedule.write_text("0.001 16\n")
     with pytest.raises(BadInput, match=r"pins.txt:1: expected SECONDS PAD LEVEL"):
         load_schedule(schedule)
@@ -78,24 +79,24 @@ def test_a_key_on_a_gpiohs_line_with_the_pads_pull_up_interrupts_on_its_edges():
         sw      t2, 0(t1)
         li      s5, 1
         mret
-    """), pins=[PinChange(1e-3, PAD_BOOT, 0), PinChange(2e-3, PAD_BOOT, None)], quantum=500)
+    """), pins=[PinChange(PS_PER_MS, PAD_BOOT, 0), PinChange(2 * PS_PER_MS, PAD_BOOT, None)], quantum=500)
     run_to_done(board, max_time_s=0.01)
     assert reg(board, "s3") >> 5 & 1 == 1
     assert reg(board, "s4") >> 5 & 1 == 0
     assert 1e-3 <= reg(board, "s6") / 26e6 < 1.05e-3
-    board.advance_devices(2.5e-3)
-    assert board.gpiohs.read(h.INPUT_VAL, 4, 2.5e-3) >> 5 & 1 == 1     # let go: the pull-up again
+    board.advance_devices(2500 * PS_PER_US)
+    assert board.gpiohs.read(h.INPUT_VAL, 4, 2500 * PS_PER_US) >> 5 & 1 == 1     # let go: the pull-up again
     assert [c.describe() for c in board.pins.played] == ["16=0@0.001", "16=z@0.002"]
 
 
 def test_a_slow_gpio_line_reads_the_outside_and_its_own_output_wins():
-    board = make_board(program(""), pins=[PinChange(1e-6, 20, 1)])
+    board = make_board(program(""), pins=[PinChange(PS_PER_US, 20, 1)])
     board.fpioa.write(4 * 20, 4, FUNC_GPIO0 + 2 | FPIOA_IE, 0.0)
     assert board.gpio.read(g.DATA_INPUT, 4, 0.0) >> 2 & 1 == 0
-    board.advance_devices(1e-6)
-    assert board.gpio.read(g.DATA_INPUT, 4, 1e-6) >> 2 & 1 == 1
-    board.gpio.write(g.DIRECTION, 4, 1 << 2, 2e-6)                     # the chip drives it low
-    assert board.gpio.read(g.DATA_INPUT, 4, 2e-6) >> 2 & 1 == 0
+    board.advance_devices(PS_PER_US)
+    assert board.gpio.read(g.DATA_INPUT, 4, PS_PER_US) >> 2 & 1 == 1
+    board.gpio.write(g.DIRECTION, 4, 1 << 2, 2 * PS_PER_US)            # the chip drives it low
+    assert board.gpio.read(g.DATA_INPUT, 4, 2 * PS_PER_US) >> 2 & 1 == 0
 
 
 def test_pins_from_the_command_line_and_a_file(tmp_path, assemble):

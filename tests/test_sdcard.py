@@ -9,8 +9,9 @@ import pytest
 from k210_fixtures import idle_elf, make_board  # noqa: F401
 
 from emulator.errors import BadInput
-from emulator.devices.sdcard import (BLOCK, INIT_TIME_S, NAC_BYTES, NCR_BYTES, RULE_POWER_UP_CLOCKS, VARYING_NAC_MAX, SdCard,
+from emulator.devices.sdcard import (BLOCK, INIT_TIME, NAC_BYTES, NCR_BYTES, RULE_POWER_UP_CLOCKS, VARYING_NAC_MAX, SdCard,
                              SdImage, command_frame, crc7, crc16, crc16_bitwise)
+from emulator.vtime import PS_PER_S, Time
 
 BLOCKS = 64
 
@@ -26,11 +27,11 @@ def image_path(tmp_path):
     return path
 
 
-def clock(card: SdCard, data: bytes, now: float = 0.0) -> bytes:
+def clock(card: SdCard, data: bytes, now: Time = 0) -> bytes:
     return card.exchange(np.frombuffer(data, dtype=np.uint8).copy(), now).tobytes()
 
 
-def command(card: SdCard, index: int, argument: int, reply_bytes: int, now: float = 0.0, crc: bool = True) -> bytes:
+def command(card: SdCard, index: int, argument: int, reply_bytes: int, now: Time = 0, crc: bool = True) -> bytes:
     """Sends a command and clocks reply_bytes of 0xFF; returns what came back after the frame."""
     frame = command_frame(index, argument)
     if not crc:
@@ -42,7 +43,7 @@ def command(card: SdCard, index: int, argument: int, reply_bytes: int, now: floa
 def powered(image_path, writable=False, faults: frozenset[str] = frozenset()) -> SdCard:
     card = SdCard(SdImage(image_path, writable=writable), faults=faults)
     clock(card, b"\xff" * 10)            # 80 clocks with CS high
-    card.set_selected(True, 0.0)
+    card.set_selected(True, 0)
     return card
 
 
@@ -50,7 +51,7 @@ def initialised(image_path, writable=False, faults: frozenset[str] = frozenset()
     card = powered(image_path, writable, faults)
     command(card, 0, 0, 2)
     command(card, 8, 0x1AA, 6)
-    for now in (0.0, INIT_TIME_S):
+    for now in (0, INIT_TIME):
         command(card, 55, 0, 2, now)
         command(card, 41, 0x4000_0000, 2, now)
     return card
@@ -75,7 +76,7 @@ def test_cmd0_without_power_up_clocks_is_answered_with_a_warning(image_path):
     card answers it, and the broken rule is a warning counted under its kind."""
     broken = []
     card = SdCard(SdImage(image_path), on_rule=lambda kind, now, text: broken.append((kind, text)))
-    card.set_selected(True, 0.0)
+    card.set_selected(True, 0)
     assert command(card, 0, 0, 4) == b"\xff" * NCR_BYTES + b"\x01" + b"\xff" * (3 - NCR_BYTES)
     [(kind, text)] = broken
     assert kind == RULE_POWER_UP_CLOCKS
@@ -86,13 +87,13 @@ def test_cmd0_without_power_up_clocks_is_answered_with_a_warning(image_path):
 def test_cmd0_needs_power_up_clocks_when_strict(image_path):
     warnings = []
     card = SdCard(SdImage(image_path), warn=warnings.append, strict=True)
-    card.set_selected(True, 0.0)
+    card.set_selected(True, 0)
     assert command(card, 0, 0, 4) == b"\xff" * 4
     assert warnings == ["SD card: CMD0 after only 0 clocks with CS high (the SD specification asks for at least "
                         "74 after power-up): ignored (--strict)"]
-    card.set_selected(False, 0.0)
+    card.set_selected(False, 0)
     clock(card, b"\xff" * 10)              # 80 clocks with CS high: now the card takes CMD0
-    card.set_selected(True, 0.0)
+    card.set_selected(True, 0)
     assert command(card, 0, 0, 3)[NCR_BYTES] == 0x01
 
 
@@ -102,7 +103,7 @@ def test_the_board_counts_the_broken_power_up_rule(image_path, idle_elf, strict)
     per rule (run.json's timing_warnings)."""
     board = make_board(idle_elf, sd_image=str(image_path), strict=strict)
     card = board.sd_slot.card
-    card.set_selected(True, 0.0)
+    card.set_selected(True, 0)
     reply = command(card, 0, 0, 3)
     assert reply[NCR_BYTES] == (0xFF if strict else 0x01)
     assert board.timing_warnings == {RULE_POWER_UP_CLOCKS: 1}
@@ -133,12 +134,12 @@ def test_cmd8_echoes_voltage_and_check_pattern(image_path):
 def test_acmd41_keeps_idle_until_the_initialisation_time(image_path):
     card = powered(image_path)
     command(card, 0, 0, 2)
-    command(card, 55, 0, 2, 0.0)
-    assert command(card, 41, 0x4000_0000, 2, 0.0)[NCR_BYTES] == 0x01
-    command(card, 55, 0, 2, INIT_TIME_S / 2)
-    assert command(card, 41, 0x4000_0000, 2, INIT_TIME_S / 2)[NCR_BYTES] == 0x01
-    command(card, 55, 0, 2, INIT_TIME_S)
-    assert command(card, 41, 0x4000_0000, 2, INIT_TIME_S)[NCR_BYTES] == 0x00
+    command(card, 55, 0, 2, 0)
+    assert command(card, 41, 0x4000_0000, 2, 0)[NCR_BYTES] == 0x01
+    command(card, 55, 0, 2, INIT_TIME // 2)
+    assert command(card, 41, 0x4000_0000, 2, INIT_TIME // 2)[NCR_BYTES] == 0x01
+    command(card, 55, 0, 2, INIT_TIME)
+    assert command(card, 41, 0x4000_0000, 2, INIT_TIME)[NCR_BYTES] == 0x00
 
 
 def test_cmd41_without_cmd55_is_illegal(image_path):
@@ -239,9 +240,9 @@ def test_crc_faults_reach_the_csd_too(image_path):
     for fault, wrong in (("flaky-crc", [True, False]), ("bad-crc", [True, True])):
         card = SdCard(SdImage(image_path), faults=frozenset({fault}))
         clock(card, b"\xff" * 10)
-        card.set_selected(True, 0.0)
+        card.set_selected(True, 0)
         command(card, 0, 0, 2)
-        for now in (0.0, INIT_TIME_S):
+        for now in (0, INIT_TIME):
             command(card, 55, 0, 2, now)
             command(card, 41, 0x4000_0000, 2, now)
         for expected in wrong:
@@ -250,7 +251,7 @@ def test_crc_faults_reach_the_csd_too(image_path):
             assert (crc != crc16(csd)) == expected, fault
 
 
-def _write_block(card: SdCard, index: int, block: int, data: bytes, now: float = 1.0) -> bytes:
+def _write_block(card: SdCard, index: int, block: int, data: bytes, now: Time = PS_PER_S) -> bytes:
     assert command(card, index, block, 2, now)[NCR_BYTES] == 0x00
     clock(card, b"\xff" + (b"\xfe" if index == 24 else b"\xfc") + data + crc16(data).to_bytes(2, "big"), now)
     return clock(card, b"\xff" * 2, now)
@@ -263,7 +264,7 @@ def test_write_lands_in_memory_only_when_read_only(image_path):
     response = _write_block(card, 24, 3, data)
     assert response[0] & 0x1F == 0x05
     assert response[1] == 0x00                         # busy while programming
-    assert clock(card, b"\xff", 2.0) == b"\xff"        # ready later
+    assert clock(card, b"\xff", 2 * PS_PER_S) == b"\xff"  # ready later
     assert card.image.read(3) == data                  # the firmware reads back what it wrote
     card.image.close()
     assert image_path.read_bytes() == before           # the file is untouched
@@ -280,22 +281,22 @@ def test_write_reaches_the_file_when_writable(image_path):
 def test_write_with_bad_crc_is_rejected_when_checking(image_path):
     card = initialised(image_path, writable=True)
     command(card, 59, 1, 2)
-    assert command(card, 24, 2, 2, 1.0)[NCR_BYTES] == 0x00
-    clock(card, b"\xff\xfe" + b"\x11" * BLOCK + b"\x00\x00", 1.0)
-    assert clock(card, b"\xff", 1.0)[0] & 0x1F == 0x0B
+    assert command(card, 24, 2, 2, PS_PER_S)[NCR_BYTES] == 0x00
+    clock(card, b"\xff\xfe" + b"\x11" * BLOCK + b"\x00\x00", PS_PER_S)
+    assert clock(card, b"\xff", PS_PER_S)[0] & 0x1F == 0x0B
     card.image.close()
     assert image_path.read_bytes()[2 * BLOCK:3 * BLOCK] == _pattern(2)
 
 
 def test_multi_block_write_with_stop_token(image_path):
     card = initialised(image_path, writable=True)
-    assert command(card, 25, 20, 2, 1.0)[NCR_BYTES] == 0x00
+    assert command(card, 25, 20, 2, PS_PER_S)[NCR_BYTES] == 0x00
     for n in range(2):
         data = bytes([n + 1]) * BLOCK
-        clock(card, b"\xff\xfc" + data + crc16(data).to_bytes(2, "big"), 1.0 + n)
-        assert clock(card, b"\xff", 1.0 + n)[0] & 0x1F == 0x05
-        clock(card, b"\xff" * 4, 2.0 + n)   # well after the programming time
-    clock(card, b"\xfd", 5.0)
+        clock(card, b"\xff\xfc" + data + crc16(data).to_bytes(2, "big"), (1 + n) * PS_PER_S)
+        assert clock(card, b"\xff", (1 + n) * PS_PER_S)[0] & 0x1F == 0x05
+        clock(card, b"\xff" * 4, (2 + n) * PS_PER_S)   # well after the programming time
+    clock(card, b"\xfd", 5 * PS_PER_S)
     card.image.close()
     written = image_path.read_bytes()
     assert written[20 * BLOCK:21 * BLOCK] == b"\x01" * BLOCK and written[21 * BLOCK:22 * BLOCK] == b"\x02" * BLOCK
@@ -303,7 +304,7 @@ def test_multi_block_write_with_stop_token(image_path):
 
 def test_deselected_card_does_not_answer(image_path):
     card = initialised(image_path)
-    card.set_selected(False, 0.0)
+    card.set_selected(False, 0)
     assert command(card, 13, 0, 3) == b"\xff" * 3
 
 

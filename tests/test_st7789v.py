@@ -6,6 +6,8 @@ import pytest
 
 from k210_fixtures import idle_elf, make_board  # noqa: F401
 
+from emulator.vtime import PS_PER_MS, PS_PER_US, Time
+
 from emulator.devices.st7789v import (
     CASET, COLMOD, DISPOFF, DISPON, INVOFF, INVON, MADCTL, NOP, NORON, PTLON,
     RAMWR, RASET, RULE_AFTER_RESET, RULE_AFTER_SLEEP, RULE_RESET_PULSE, RULE_SLEEP_TOGGLE, SLPIN, SLPOUT,
@@ -23,16 +25,16 @@ class Host:
 
     def __init__(self, on_frame=None, strict: bool = False) -> None:
         self.lcd = ST7789V(on_frame, strict=strict)
-        self.t = 0.0
+        self.t: Time = 0
 
-    def cmd(self, code: int, *params: int, gap_s: float = 1e-3) -> None:
-        self.t += gap_s
+    def cmd(self, code: int, *params: int, gap: Time = PS_PER_MS) -> None:
+        self.t += gap
         self.lcd.write(np.array([code], dtype=np.uint8), 0, self.t)
         if params:
             self.lcd.write(np.array(params, dtype=np.uint8), 1, self.t)
 
-    def data(self, payload, gap_s: float = 1e-3) -> None:
-        self.t += gap_s
+    def data(self, payload, gap: Time = PS_PER_MS) -> None:
+        self.t += gap
         self.lcd.write(np.asarray(payload, dtype=np.uint8), 1, self.t)
 
     def window(self, xs: int, xe: int, ys: int, ye: int) -> None:
@@ -41,7 +43,7 @@ class Host:
 
     def wake(self, madctl: int = 0xA0, colmod: int = 0x55) -> None:
         self.cmd(SLPOUT)
-        self.t += 0.120
+        self.t += 120 * PS_PER_MS
         self.cmd(NORON)
         self.cmd(MADCTL, madctl)
         self.cmd(COLMOD, colmod)
@@ -113,8 +115,8 @@ def test_hardware_reset_restores_defaults_and_keeps_gram() -> None:
     host.pixel(10, 20)
     _dirty_registers(host)
     gram_before = host.lcd.gram.copy()
-    host.lcd.set_reset_pin(0, host.t + 1e-3)
-    host.lcd.set_reset_pin(1, host.t + 2e-3)
+    host.lcd.set_reset_pin(0, host.t + PS_PER_MS)
+    host.lcd.set_reset_pin(1, host.t + 2 * PS_PER_MS)
     lcd = host.lcd
     assert lcd.sleeping and not lcd.display_on and not lcd.inverted and lcd.normal_mode
     assert (lcd.madctl, lcd.colmod, lcd.window) == (0x00, 0x66, (0, 0xEF, 0, 0x13F))
@@ -139,7 +141,7 @@ def test_command_within_5ms_of_swreset_is_carried_out_with_warning() -> None:
     command is carried out and the broken wait is a warning."""
     host = Host()
     host.cmd(SWRESET)
-    host.cmd(MADCTL, 0xA0, gap_s=4.9e-3)
+    host.cmd(MADCTL, 0xA0, gap=4_900 * PS_PER_US)
     assert host.lcd.madctl == 0xA0
     assert len(host.lcd.warnings) == 1
     assert "MADCTL (0x36) sent within 5 ms after SWRESET at t=" in host.lcd.warnings[0]
@@ -149,11 +151,11 @@ def test_command_within_5ms_of_swreset_is_carried_out_with_warning() -> None:
 def test_command_within_5ms_of_swreset_is_ignored_when_strict() -> None:
     host = Host(strict=True)
     host.cmd(SWRESET)
-    host.cmd(MADCTL, 0xA0, gap_s=4.9e-3)
+    host.cmd(MADCTL, 0xA0, gap=4_900 * PS_PER_US)
     assert host.lcd.madctl == 0x00
     assert len(host.lcd.warnings) == 1
     assert "MADCTL (0x36) ignored: chip busy for 5 ms after SWRESET at t=" in host.lcd.warnings[0]
-    host.cmd(MADCTL, 0xA0, gap_s=0.2e-3)   # 5.1 ms after SWRESET
+    host.cmd(MADCTL, 0xA0, gap=200 * PS_PER_US)   # 5.1 ms after SWRESET
     assert host.lcd.madctl == 0xA0
     assert len(host.lcd.warnings) == 1
 
@@ -161,22 +163,22 @@ def test_command_within_5ms_of_swreset_is_ignored_when_strict() -> None:
 @pytest.mark.parametrize("strict", [False, True])
 def test_command_within_5ms_of_resx_release(strict: bool) -> None:
     lcd = ST7789V(strict=strict)
-    lcd.set_reset_pin(0, 0.010)
-    lcd.set_reset_pin(1, 0.011)
-    lcd.write(np.array([INVON], dtype=np.uint8), 0, 0.0159)
+    lcd.set_reset_pin(0, 10 * PS_PER_MS)
+    lcd.set_reset_pin(1, 11 * PS_PER_MS)
+    lcd.write(np.array([INVON], dtype=np.uint8), 0, 15_900 * PS_PER_US)
     assert lcd.inverted is not strict
     assert len(lcd.warnings) == 1 and "INVON" in lcd.warnings[0] and "RESX release" in lcd.warnings[0]
-    lcd.write(np.array([INVON], dtype=np.uint8), 0, 0.0161)
+    lcd.write(np.array([INVON], dtype=np.uint8), 0, 16_100 * PS_PER_US)
     assert lcd.inverted
     assert len(lcd.warnings) == 1
 
 
 def test_bytes_while_reset_is_held_low_are_ignored() -> None:
     lcd = ST7789V()
-    lcd.set_reset_pin(0, 0.0)
-    lcd.write(np.array([INVON], dtype=np.uint8), 0, 0.001)
-    lcd.set_reset_pin(1, 0.002)
-    lcd.write(np.array([NOP], dtype=np.uint8), 0, 0.010)
+    lcd.set_reset_pin(0, 0)
+    lcd.write(np.array([INVON], dtype=np.uint8), 0, PS_PER_MS)
+    lcd.set_reset_pin(1, 2 * PS_PER_MS)
+    lcd.write(np.array([NOP], dtype=np.uint8), 0, 10 * PS_PER_MS)
     assert not lcd.inverted
     assert len(lcd.warnings) == 1 and "RESX is low" in lcd.warnings[0]
 
@@ -184,8 +186,8 @@ def test_bytes_while_reset_is_held_low_are_ignored() -> None:
 def test_short_reset_pulse_resets_with_a_warning() -> None:
     host = Host()
     host.cmd(INVON)
-    host.lcd.set_reset_pin(0, 0.1)
-    host.lcd.set_reset_pin(1, 0.1 + 5e-6)
+    host.lcd.set_reset_pin(0, 100 * PS_PER_MS)
+    host.lcd.set_reset_pin(1, 100 * PS_PER_MS + 5 * PS_PER_US)
     assert not host.lcd.inverted                   # taken as a reset
     assert len(host.lcd.warnings) == 1
     assert "RESX low pulse of 5.00 us is shorter than the 10 us" in host.lcd.warnings[0]
@@ -194,29 +196,29 @@ def test_short_reset_pulse_resets_with_a_warning() -> None:
 def test_short_reset_pulse_is_no_reset_when_strict() -> None:
     host = Host(strict=True)
     host.cmd(INVON)
-    host.lcd.set_reset_pin(0, 0.1)
-    host.lcd.set_reset_pin(1, 0.1 + 5e-6)
+    host.lcd.set_reset_pin(0, 100 * PS_PER_MS)
+    host.lcd.set_reset_pin(1, 100 * PS_PER_MS + 5 * PS_PER_US)
     assert host.lcd.inverted                       # the state before the pulse
     assert len(host.lcd.warnings) == 1 and "not taken as a reset (--strict)" in host.lcd.warnings[0]
-    host.cmd(INVOFF, gap_s=1e-6)                   # and no 5 ms wait follows it
+    host.cmd(INVOFF, gap=PS_PER_US)                   # and no 5 ms wait follows it
     assert not host.lcd.inverted and len(host.lcd.warnings) == 1
 
 
 def test_command_within_5ms_of_slpout_is_accepted_with_warning() -> None:
     host = Host()
     host.cmd(SLPOUT)
-    host.cmd(DISPON, gap_s=2e-3)
+    host.cmd(DISPON, gap=2 * PS_PER_MS)
     assert not host.lcd.sleeping and host.lcd.display_on
     assert len(host.lcd.warnings) == 1
     assert "DISPON" in host.lcd.warnings[0] and "SLPOUT" in host.lcd.warnings[0]
-    host.cmd(NOP, gap_s=4e-3)
+    host.cmd(NOP, gap=4 * PS_PER_MS)
     assert len(host.lcd.warnings) == 1
 
 
 def test_command_within_5ms_of_slpout_is_ignored_when_strict() -> None:
     host = Host(strict=True)
     host.cmd(SLPOUT)
-    host.cmd(DISPON, gap_s=2e-3)
+    host.cmd(DISPON, gap=2 * PS_PER_MS)
     assert not host.lcd.sleeping and not host.lcd.display_on
     assert len(host.lcd.warnings) == 1
     assert "DISPON (0x29) ignored: sent within 5 ms after SLPOUT at t=" in host.lcd.warnings[0]
@@ -226,11 +228,11 @@ def test_pixels_within_5ms_of_slpout_are_accepted_without_warning() -> None:
     host = ready_host(madctl=0x00)
     host.window(0, 0, 0, 0)
     host.cmd(SLPIN)
-    host.t += 0.2
+    host.t += 200 * PS_PER_MS
     host.cmd(RAMWR)
     host.cmd(SLPOUT)
-    host.cmd(RAMWR, gap_s=10e-3)
-    host.data(RED565, gap_s=0.1e-3)
+    host.cmd(RAMWR, gap=10 * PS_PER_MS)
+    host.data(RED565, gap=100 * PS_PER_US)
     assert host.lcd.gram[0, 0] == (63 << 12)
     assert host.lcd.warnings == []
 
@@ -239,7 +241,7 @@ def test_pixels_within_5ms_of_slpout_are_accepted_without_warning() -> None:
 def test_slpin_too_soon_after_slpout(strict: bool) -> None:
     host = Host(strict=strict)
     host.cmd(SLPOUT)
-    host.cmd(SLPIN, gap_s=50e-3)
+    host.cmd(SLPIN, gap=50 * PS_PER_MS)
     assert host.lcd.sleeping is not strict
     assert len(host.lcd.warnings) == 1 and "120 ms" in host.lcd.warnings[0]
     assert ("ignored (--strict)" if strict else "carried out") in host.lcd.warnings[0]
@@ -251,12 +253,12 @@ def test_the_board_hears_every_lcd_warning_and_counts_repeats(idle_elf) -> None:
     heard: list[str] = []
     board = make_board(idle_elf, on_warning=heard.append)
     lcd = board.lcd
-    lcd.set_reset_pin(0, 1e-3)
-    lcd.set_reset_pin(1, 1e-3 + 2e-6)                  # 2 us: too short
-    lcd.write(bytes([SLPOUT]), 0, 2e-3)                 # busy for 5 ms after the release
-    lcd.write(bytes([SLPOUT]), 0, 10e-3)
+    lcd.set_reset_pin(0, PS_PER_MS)
+    lcd.set_reset_pin(1, PS_PER_MS + 2 * PS_PER_US)     # 2 us: too short
+    lcd.write(bytes([SLPOUT]), 0, 2 * PS_PER_MS)        # busy for 5 ms after the release
+    lcd.write(bytes([SLPOUT]), 0, 10 * PS_PER_MS)
     for n in range(10):                                 # ten commands too soon after SLPOUT
-        lcd.write(bytes([NOP]), 0, 11e-3 + n * 1e-4)
+        lcd.write(bytes([NOP]), 0, 11 * PS_PER_MS + n * 100 * PS_PER_US)
     assert len(board.warnings) == 3, board.warnings
     reset, busy, soon = board.warnings
     assert reset.startswith("[     1.002 ms] ST7789V: RESX low pulse of 2.00 us")
@@ -598,8 +600,8 @@ def test_chip_deselect_discards_a_partial_pixel_but_keeps_ram_write() -> None:
     host.window(0, 2, 0, 0)
     host.cmd(RAMWR)
     host.data([0xF8, 0x00, 0x07])        # red, then half a pixel
-    host.lcd.set_chip_select(False, host.t + 1e-4)
-    host.lcd.set_chip_select(True, host.t + 2e-4)
+    host.lcd.set_chip_select(False, host.t + 100 * PS_PER_US)
+    host.lcd.set_chip_select(True, host.t + 200 * PS_PER_US)
     host.data([0x00, 0x1F])              # blue: a whole new pixel
     gram = host.lcd.gram
     assert gram[319, 0] == (63 << 12)
@@ -628,7 +630,7 @@ def test_parameters_continue_across_deselect() -> None:
 def test_accepts_bytes_objects() -> None:
     host = ready_host(madctl=0xA0)
     host.window(0, 0, 0, 0)
-    host.t += 1e-3
+    host.t += PS_PER_MS
     host.lcd.write(bytes([RAMWR]), 0, host.t)
     host.lcd.write(bytes(RED565), 1, host.t)
     assert tuple(host.lcd.shown_image()[0, 0]) == RED_RGB
@@ -709,7 +711,7 @@ def test_frame_capture_while_asleep_shows_black() -> None:
     host = ready_host(madctl=0xA0, on_frame=frames.append)
     host.cmd(SLPIN)
     host.window(0, 319, 0, 239)
-    host.cmd(RAMWR, gap_s=10e-3)
+    host.cmd(RAMWR, gap=10 * PS_PER_MS)
     host.data(np.full(320 * 240 * 2, 0xFF, dtype=np.uint8))
     assert len(frames) == 2 and not frames[-1].any()
     assert (host.lcd.gram == (1 << 18) - 1).all(), "GRAM is written in sleep mode"
@@ -718,10 +720,10 @@ def test_frame_capture_while_asleep_shows_black() -> None:
 def test_full_frame_in_one_write() -> None:
     frames: list[np.ndarray] = []
     lcd = ST7789V(on_frame=frames.append)
-    t = 0.0
-    for code, params, gap in ((SLPOUT, [], 0.0), (MADCTL, [0xA0], 0.120), (COLMOD, [0x55], 1e-3),
-                              (CASET, [0, 0, 0x01, 0x3F], 1e-3), (RASET, [0, 0, 0, 0xEF], 1e-3),
-                              (DISPON, [], 1e-3), (RAMWR, [], 1e-3)):
+    t = 0
+    for code, params, gap in ((SLPOUT, [], 0), (MADCTL, [0xA0], 120 * PS_PER_MS), (COLMOD, [0x55], PS_PER_MS),
+                              (CASET, [0, 0, 0x01, 0x3F], PS_PER_MS), (RASET, [0, 0, 0, 0xEF], PS_PER_MS),
+                              (DISPON, [], PS_PER_MS), (RAMWR, [], PS_PER_MS)):
         t += gap
         lcd.write(np.array([code], dtype=np.uint8), 0, t)
         if params:
@@ -730,7 +732,7 @@ def test_full_frame_in_one_write() -> None:
     picture = (((x * 31 // 319) << 11) | ((y * 63 // 239) << 5) | ((x + y) & 0x1F)).astype(np.uint16)
     payload = full_frame(picture)
     assert payload.size == 153_600
-    lcd.write(payload, 1, t + 1e-3)
+    lcd.write(payload, 1, t + PS_PER_MS)
     assert lcd.frames_captured == 1 and len(frames) == 1
     expected = expected_565(picture.astype(np.uint32))
     assert np.array_equal(frames[0], expected)

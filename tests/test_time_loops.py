@@ -10,6 +10,7 @@ import pytest
 from emulator.cpu import hart as hartmod
 from emulator.cpu.hart import ENGINE_FAST, ENGINE_PRECISE
 from emulator.cpu.time_loops import decode, find_time_loops
+from emulator.vtime import PS_PER_MS
 from k210_fixtures import make_board, program, reg, run_to_done
 
 # the SDK's usleep: while (read_cycle() - start < n) continue; (here 2 ms at 26 MHz, 52,000 cycles)
@@ -90,7 +91,7 @@ def test_running_alone_the_wait_is_skipped_to_the_next_event_with_the_same_resul
         if not skip:
             for hart in board.harts:
                 hart.time_loops.clear()
-        board.run_until(0.004)
+        board.run_until(4 * PS_PER_MS)
         states.append((state(board), board.time, board.harts[0].time))
     assert states[0] == states[1]
 
@@ -105,7 +106,7 @@ def test_a_hart_alone_skips_a_long_wait_past_its_turns(engine, monkeypatch):
     one go (Scheduler._alone_until): a second of msleep takes a handful of turns, not one a
     quantum, and ends where turn-by-turn skipping ends: mcycle and minstret read after the loop, the
     registers, mispredictions and stalls. Where run_until's end falls in the spin after it agrees
-    to the float rounding of the turns' times (sums of different terms): an instruction at most."""
+    too: time is whole picoseconds, a hart's reckoned from where it last stood still, whatever the turns."""
     from emulator.board import scheduler as schedmod
     results = []
     for beyond in (True, False):
@@ -115,15 +116,15 @@ def test_a_hart_alone_skips_a_long_wait_past_its_turns(engine, monkeypatch):
         monkeypatch.setattr(schedmod.Scheduler, "_turn", lambda self, *a, **k: (turns.append(1), original(self, *a, **k)))
         if not beyond:
             monkeypatch.setattr(schedmod.Scheduler, "_alone_until", lambda self, *a: None)
-        board.run_until(1.01)
+        board.run_until(1010 * PS_PER_MS)
         monkeypatch.undo()
         results.append((state(board), board.harts[0].time, len(turns)))
     (alone, alone_time, alone_turns), (turn_by_turn, turn_time, many_turns) = results
     assert alone["registers"] == turn_by_turn["registers"]          # s2, s3: mcycle and minstret after the loop
     assert (alone["mispredicts"], alone["stalls"]) == (turn_by_turn["mispredicts"], turn_by_turn["stalls"])
-    assert abs(alone["executed"] - turn_by_turn["executed"]) <= 1
+    assert alone["executed"] == turn_by_turn["executed"]
     assert 26_000_000 <= reg_value(alone, 2) - reg_value(alone, 0) < 26_000_100
-    assert alone_time == pytest.approx(turn_time, abs=1.5 / 26e6)        # a cycle
+    assert alone_time == turn_time
     assert alone_turns < 50 < 1000 < many_turns
 
 
@@ -176,13 +177,12 @@ def test_an_interrupt_a_store_set_off_is_not_skipped_past(monkeypatch):
         board = make_board(program(IRQ_DURING_A_WAIT), cold=False)
         if not beyond:
             monkeypatch.setattr(schedmod.Scheduler, "_alone_until", lambda self, *a: None)
-        board.run_until(0.15)
+        board.run_until(150 * PS_PER_MS)
         monkeypatch.undo()
         taken.append((reg(board, "s5") - reg(board, "s0"), reg(board, "s2") - reg(board, "s0")))
-    # the interrupt at the same cycle; the wait's end within a cycle: mcycle is read off float time
-    # (Scheduler.cycles floors (now - epoch) x hz + 1e-6), and ten thousand turns' sums drift by more
-    # than that millionth of a cycle, so turn by turn the floor comes a cycle short where the long
-    # skip's single sum does not (with a slack of 1e-3 both give 40,000,008); integer time ends this
-    assert taken[0][0] == taken[1][0]
+    # the interrupt at the same cycle, and the wait's end too: time is whole picoseconds, a hart's
+    # reckoned from where it last stood still, so ten thousand turns end where one long skip does
+    # (with float time, turn by turn came a cycle short)
+    assert taken[0] == taken[1]
     assert 0 < taken[0][0] < 100_000
-    assert 40_000_000 <= taken[1][1] <= taken[0][1] <= taken[1][1] + 1
+    assert 40_000_000 <= taken[1][1]

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 
 from conftest import run_emulator
+from emulator.vtime import PS_PER_MS, PS_PER_S
 
 
 def read_vcd(text: str) -> tuple[str, dict[str, list[tuple[int, str]]]]:
@@ -35,12 +36,12 @@ def test_leds_blink_on_their_pads_at_the_timer_s_pace(c_firmware, tmp_path):
                        "--vcd", str(tmp_path / "blink.vcd"))
     assert run.returncode == 0, run.stderr
     timescale, changes = read_vcd((tmp_path / "blink.vcd").read_text())
-    assert timescale == "1ns"
+    assert timescale == "1ps"
     blue = [t for t, v in changes["pad12"]]
-    gaps = {round((b - a) / 1e6, 3) for a, b in zip(blue[1:], blue[2:])}
+    gaps = {round((b - a) / PS_PER_MS, 3) for a, b in zip(blue[1:], blue[2:])}
     assert gaps == {50.0}                                       # ms between the blue LED's edges
     summary = json.loads((out / "run.json").read_text())
-    logged = [(round(c["virtual_time_s"] * 1e9), str(c["level"])) for c in summary["pad_changes"] if c["pad"] == 12]
+    logged = [(round(c["virtual_time_s"] * PS_PER_S), str(c["level"])) for c in summary["pad_changes"] if c["pad"] == 12]
     assert changes["pad12"] == logged
     assert summary["vcd"]["value_changes"] == sum(len(v) for v in changes.values())
 

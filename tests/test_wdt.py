@@ -8,10 +8,14 @@ import pytest
 from emulator.devices import sysctl as sc
 from emulator.devices import wdt as w
 from emulator.devices.plic import SOURCE_WDT0
+from emulator.vtime import PS_PER_MS, cycles_time
 from k210_fixtures import build_elf, idle_elf, make_board, reg, run_until  # noqa: F401
 
-WDT_HZ = 26e6 / 2                # clk_th6 byte 0: IN0 / 2
-TIMEOUT = (1 << 16) / WDT_HZ     # TOP 0: 2^16 clocks, 5.04 ms
+WDT_HZ = 26_000_000 // 2         # clk_th6 byte 0: IN0 / 2
+TIMEOUT = cycles_time(1 << 16, WDT_HZ)   # TOP 0: 2^16 clocks, 5.04 ms
+T15 = TIMEOUT * 3 // 2           # (TIMEOUT is even: these are exact)
+T25 = TIMEOUT * 5 // 2
+T26 = TIMEOUT * 26 // 10
 
 
 @pytest.fixture
@@ -22,41 +26,41 @@ def board(idle_elf):
 def test_interrupt_first_then_a_reset_if_nobody_clears_it(board):
     wdt = board.watchdogs[0]
     assert board.sysctl.wdt_hz(0) == WDT_HZ
-    wdt.write(w.CR, 4, w.CR_INTERRUPT_FIRST | w.CR_ENABLE, 0.0)
-    assert wdt.next_event_time(0.0) == pytest.approx(TIMEOUT)
+    wdt.write(w.CR, 4, w.CR_INTERRUPT_FIRST | w.CR_ENABLE, 0)
+    assert wdt.next_event_time(0) == TIMEOUT
     wdt.advance(TIMEOUT)
     assert wdt.read(w.STAT, 4, TIMEOUT) == 1 and wdt.irq_line()
     board.time = TIMEOUT
     assert SOURCE_WDT0 in board._high_sources()
     assert board.scheduler.reset_requested is None
     wdt.advance(2 * TIMEOUT)                                   # not cleared: the chip resets
-    assert board.scheduler.reset_requested == ("WDT0", pytest.approx(2 * TIMEOUT))
+    assert board.scheduler.reset_requested == ("WDT0", cycles_time(2 << 16, WDT_HZ))   # counted from the start
 
 
 def test_restarting_clears_and_eoi_clears_without_restarting(board):
     wdt = board.watchdogs[1]
-    wdt.write(w.CR, 4, w.CR_INTERRUPT_FIRST | w.CR_ENABLE, 0.0)
+    wdt.write(w.CR, 4, w.CR_INTERRUPT_FIRST | w.CR_ENABLE, 0)
     wdt.advance(TIMEOUT)
     wdt.write(w.CRR, 4, 0x12, TIMEOUT)                         # not the restart value: nothing
     assert wdt.read(w.STAT, 4, TIMEOUT) == 1
-    wdt.write(w.CRR, 4, w.RESTART, 1.5 * TIMEOUT)              # fed: cleared, a whole timeout again
-    assert wdt.read(w.STAT, 4, 1.5 * TIMEOUT) == 0
-    assert wdt.next_event_time(1.5 * TIMEOUT) == pytest.approx(2.5 * TIMEOUT)
+    wdt.write(w.CRR, 4, w.RESTART, T15)                        # fed: cleared, a whole timeout again
+    assert wdt.read(w.STAT, 4, T15) == 0
+    assert wdt.next_event_time(T15) == T25
     assert wdt.read(w.CCVR, 4, 2 * TIMEOUT) == pytest.approx((1 << 15), abs=2)
-    wdt.advance(2.5 * TIMEOUT)
-    wdt.read(w.EOI, 4, 2.6 * TIMEOUT)                          # cleared, the count goes on
-    assert wdt.read(w.STAT, 4, 2.6 * TIMEOUT) == 0
-    assert wdt.next_event_time(2.6 * TIMEOUT) == pytest.approx(3.5 * TIMEOUT)
+    wdt.advance(T25)
+    wdt.read(w.EOI, 4, T26)                                    # cleared, the count goes on
+    assert wdt.read(w.STAT, 4, T26) == 0
+    assert wdt.next_event_time(T26) == T15 + cycles_time(2 << 16, WDT_HZ)   # counted from the restart
 
 
 def test_once_enabled_only_a_reset_stops_it(board):
     """The SDK's wdt_stop clears cr bit 0: the DesignWare watchdog ignores that."""
     wdt = board.watchdogs[0]
-    wdt.write(w.CR, 4, w.CR_ENABLE, 0.0)
-    wdt.write(w.CR, 4, 0, 1e-3)
-    assert wdt.read(w.CR, 4, 1e-3) & w.CR_ENABLE
-    wdt.reset(2e-3)
-    assert not wdt.read(w.CR, 4, 2e-3) & w.CR_ENABLE and wdt.next_event_time(2e-3) is None
+    wdt.write(w.CR, 4, w.CR_ENABLE, 0)
+    wdt.write(w.CR, 4, 0, PS_PER_MS)
+    assert wdt.read(w.CR, 4, PS_PER_MS) & w.CR_ENABLE
+    wdt.reset(2 * PS_PER_MS)
+    assert not wdt.read(w.CR, 4, 2 * PS_PER_MS) & w.CR_ENABLE and wdt.next_event_time(2 * PS_PER_MS) is None
 
 
 BOOTS = """
@@ -113,4 +117,4 @@ def test_a_reset_starts_the_program_again_with_the_cause_in_reset_status(trigger
     if cause == "WDT0":
         assert board.scheduler.resets[0][0] == pytest.approx(TIMEOUT, rel=0.01)
     # as the ROM left it again: 390 MHz
-    assert board.scheduler.cpu_hz() == 390e6
+    assert board.scheduler.cpu_hz() == 390_000_000

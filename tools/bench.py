@@ -57,6 +57,7 @@ sys.path.insert(0, str(ROOT))
 from emulator.board import Board  # noqa: E402
 from emulator.cpu.hart import ENGINE_FAST, ENGINE_PRECISE, INSN_WFI, CsrContext, Hart, HartState  # noqa: E402
 from emulator.memory_map import SRAM_BASE  # noqa: E402
+from emulator.vtime import to_seconds  # noqa: E402
 from emulator.cpu.timing import TIMING_IPC1, TIMING_ROCKET  # noqa: E402
 from tools import quality  # noqa: E402
 
@@ -122,7 +123,7 @@ def firmware_figures(firmware: Path, card: Path, frames: int, check_writes: bool
         "mispredicts": [h.mispredicts for h in board.harts],
         "stall_cycles": [h.stall_cycles for h in board.harts],
         "host_time_s": host,
-        "virtual_time_s": board.time,
+        "virtual_time_s": to_seconds(board.time),
         "instructions": instructions,
         "effective_mips": sum(instructions) / host / 1e6,
         "mips_while_executing": sum(instructions) / board.host_time_in_harts / 1e6,

@@ -27,6 +27,7 @@ from pathlib import Path
 from emulator.board.dock import Board
 from emulator.cpu.hart import ENGINE_FAST, ENGINE_PRECISE
 from emulator.errors import BoardStop
+from emulator.vtime import PS_PER_MS
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -38,7 +39,7 @@ CC = "riscv64-unknown-elf-gcc"
 CFLAGS = ["-march=rv64gc_zicsr_zifencei", "-mabi=lp64", "-static", "-mcmodel=medany", "-fvisibility=hidden",
           "-nostdlib", "-nostartfiles"]
 # Every test has reported by then (the longest takes under 0.2 ms at 390 MHz).
-TIME_LIMIT_S = 0.002
+TIME_LIMIT = 2 * PS_PER_MS
 EXIT_OK, EXIT_DIFFERENT, EXIT_USAGE = 0, 1, 2
 
 
@@ -46,7 +47,7 @@ EXIT_OK, EXIT_DIFFERENT, EXIT_USAGE = 0, 1, 2
 class Outcome:
     """What a test reported: "pass", "fail N" (its test case N failed: riscv-tests' RVTEST_FAIL),
     "exception N" (an exception its trap vector did not expect, during case N: the env's 1337
-    marker), "no report" (tohost untouched by TIME_LIMIT_S) or "stop: ..." (the board stopped)."""
+    marker), "no report" (tohost untouched by TIME_LIMIT) or "stop: ..." (the board stopped)."""
     text: str
 
 
@@ -83,13 +84,13 @@ def build(checkout: Path, env: Path, out: Path, only: set[str]) -> list[Path]:
 
 def run(elf: Path, engine: str) -> Outcome:
     """Runs one test on a board (the mask ROM's hand-over state, as a kflash-loaded program
-    starts) for TIME_LIMIT_S of virtual time, then reads what it left in tohost: a test that has
+    starts) for TIME_LIMIT of virtual time, then reads what it left in tohost: a test that has
     reported spins rewriting it, so the run's end changes nothing."""
     board = Board(str(elf), engine=engine)
     tohost = board.image.symbol_values["tohost"]
     stopped = None
     try:
-        board.run_until(TIME_LIMIT_S)
+        board.run_until(TIME_LIMIT)
     except BoardStop as stop:
         stopped = stop
     value = int.from_bytes(board.memory.read(tohost, 8), "little")

@@ -6,6 +6,6 @@ rules; memory.py is the SRAM, elf.py and raw_image.py load firmware, flash_image
 (--flash) and the mask ROM's boot from it, bootrom.py sets the state the
 mask ROM leaves, write_watch.py checks stores (--check-writes).
 
-May import: emulator.errors, emulator.memory_map, emulator.cpu, emulator.devices, and this
+May import: emulator.errors, emulator.memory_map, emulator.vtime, emulator.cpu, emulator.devices, and this
 package. Never the front-ends."""
 from .dock import Board, FrameRecord, RunResult  # noqa: F401  (the board and its results)

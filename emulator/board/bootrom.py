@@ -45,7 +45,7 @@ from __future__ import annotations
 
 from ..devices.fpioa import FUNC_UARTHS_RX, FUNC_UARTHS_TX, Fpioa
 from ..devices.sysctl import (CENT_APB0, CENT_APB1, CENT_APB2, CENT_CPU, CENT_SRAM0, CENT_SRAM1, CLK_EN_CENT, CLK_EN_PERI,
-                     CLK_SEL0, OSC_HZ, PERI_BITS, PLL0, PLL_CLKF, PLL_CLKOD, PLL_CLKR, PLL_LOCK_TIME_S,
+                     CLK_SEL0, OSC_HZ, PERI_BITS, PLL0, PLL_CLKF, PLL_CLKOD, PLL_CLKR, PLL_LOCK_TIME,
                      PLL_OUT_EN_BIT, PLL_PWRD_BIT, Sysctl)
 from ..devices.uarths import DIV, RXCTRL, TXCTRL, Uarths
 from .maix_dock import PAD_CONSOLE_RX, PAD_CONSOLE_TX
@@ -76,7 +76,7 @@ def hand_over(sysctl: Sysctl, fpioa: Fpioa, uarths: Uarths) -> None:
     (module comment). Written straight into the register tables, before the board's clock and
     scheduler exist, as the state the program finds, not as accesses it makes."""
     sysctl.values[PLL0] = PLL0_HANDED_OVER
-    sysctl.plls[PLL0].running_since = -PLL_LOCK_TIME_S     # locked long before the program starts
+    sysctl.plls[PLL0].running_since = -PLL_LOCK_TIME     # locked long before the program starts
     sysctl.values[CLK_SEL0] = ACLK_SEL_PLL0
     sysctl.values[CLK_EN_CENT] = CLK_EN_CENT_HANDED_OVER
     sysctl.values[CLK_EN_PERI] = CLK_EN_PERI_HANDED_OVER

@@ -50,6 +50,7 @@ from ..cpu.decode import decode_memory_access
 from ..cpu.hart import Hart
 from .scheduler import POLL_REPEATS
 from ..memory_map import K210_UNMODELLED, SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE, is_sram
+from ..vtime import Time
 from ..devices.mmio import BUS_AHB, BUS_APB, BUS_TILELINK, Peripheral, Register
 from .write_watch import describe as describe_stray
 
@@ -91,11 +92,11 @@ class Board(Protocol):
     write_watch: "WriteWatch | None"
     permissive: bool
 
-    def warn(self, text: str, now: float | None = None) -> None: ...
+    def warn(self, text: str, now: Time | None = None) -> None: ...
 
     def disassemble_at(self, pc: int) -> str: ...
 
-    def next_device_event(self, now: float, past_quiet_console: bool = False) -> float | None: ...
+    def next_device_event(self, now: Time, past_quiet_console: bool = False) -> Time | None: ...
 
 
 class Bus:
@@ -115,7 +116,7 @@ class Bus:
         # effect until some virtual time (Peripheral.stable_until): (pc, offset, peripheral, value,
         # until). Only the same load again, with no other device access between, in the same turn,
         # is answered from it; a hart polling a status register does that several times a byte.
-        self._stable: list[tuple[int, int, Peripheral, int, float] | None] = [None] * harts
+        self._stable: list[tuple[int, int, Peripheral, int, Time] | None] = [None] * harts
         self._aliases: list[set[int]] = [set() for _ in range(harts)]    # upper halves mapped, per hart
         self.device_writes: dict[str, list[int]] = {}     # stores per device, per hart
         self.questionable: dict[str, int] = {}            # accesses the bus answered with a warning, per kind
@@ -557,7 +558,7 @@ class Bus:
 
     # --- what the buses do with accesses a register table does not take as they are -----------
 
-    def _load(self, hart: Hart, peripheral: Peripheral, offset: int, width: int, now: float) -> int:
+    def _load(self, hart: Hart, peripheral: Peripheral, offset: int, width: int, now: Time) -> int:
         try:
             return peripheral.read(offset, width, now)
         except RegisterRuleViolation:
@@ -568,7 +569,7 @@ class Bus:
                 raise     # an APB or AHB register the model may lack: --permissive decides
         return self._answer_load(hart, peripheral, offset, width, now, located)
 
-    def _answer_load(self, hart: Hart, peripheral: Peripheral, offset: int, width: int, now: float,
+    def _answer_load(self, hart: Hart, peripheral: Peripheral, offset: int, width: int, now: Time,
                      located: tuple[int, Register] | None) -> int:
         address = peripheral.BASE + offset
         if located is None:
@@ -594,7 +595,7 @@ class Bus:
                            f"addressed bytes returned")
         return part
 
-    def _store(self, hart: Hart, peripheral: Peripheral, offset: int, width: int, value: int, now: float) -> None:
+    def _store(self, hart: Hart, peripheral: Peripheral, offset: int, width: int, value: int, now: Time) -> None:
         try:
             peripheral.write(offset, width, value, now)
             return
@@ -607,7 +608,7 @@ class Bus:
         self._answer_store(hart, peripheral, offset, width, value, now, located)
 
     def _answer_store(self, hart: Hart, peripheral: Peripheral, offset: int, width: int, value: int,
-                      now: float, located: tuple[int, Register] | None) -> None:
+                      now: Time, located: tuple[int, Register] | None) -> None:
         address = peripheral.BASE + offset
         if located is None:
             self._questionable(hart, "no register", address, width, "store",
@@ -632,7 +633,7 @@ class Bus:
             peripheral.write_register(base, reg, new, now)
 
     def _narrow_store_result(self, peripheral: Peripheral, base: int, reg: Register, offset: int, width: int,
-                             value: int, now: float) -> tuple[int | None, str]:
+                             value: int, now: Time) -> tuple[int | None, str]:
         """The register's value after a store narrower than the register (None: unchanged), and
         how the bus came to it, for the warning. The text names no value: a firmware that keeps
         storing bytes from one instruction (a console's putc) gives one warning, counted."""

@@ -15,8 +15,9 @@ from ..cpu.hart import Hart, HartState
 from ..errors import FirmwareReportedError, FirmwareTrap, HangDetected
 from .elf import symbolize
 from .traps import Traps
+from ..vtime import PS_PER_MS, Time, to_seconds
 
-TRAP_GRACE_S = 0.5                # virtual time the firmware's trap handler gets to report
+TRAP_GRACE = 500 * PS_PER_MS      # virtual time the firmware's trap handler gets to report
 WARNINGS_IN_HANG_REPORT = 6       # the most recent distinct warnings a hang report repeats
 
 
@@ -25,24 +26,24 @@ class Deadlines:
 
     # besides the board (scheduler.py's Board protocol), what it uses of Scheduler:
     harts: list[Hart]
-    time: float
-    hang_budget_s: float
+    time: Time
+    hang_budget: Time
     traps: Traps
     _draining: bool
-    until: float | None
-    _last_frame_time: float
+    until: Time | None
+    _last_frame_time: Time
     _error_report: tuple[int, str] | None
-    _trap_deadline: float | None
+    _trap_deadline: Time | None
 
     def _open_grace(self) -> None:
         """A trap handler that may never return gets the grace period to report before the run ends."""
-        self._trap_deadline = self.time + TRAP_GRACE_S
+        self._trap_deadline = self.time + TRAP_GRACE
 
     def firmware_reported_error(self, code: int, line: str) -> None:
         """The firmware printed its fatal error report: the run ends after the grace period."""
         if self._error_report is None:
             self._error_report = (code, line)
-            self._trap_deadline = self.time + TRAP_GRACE_S
+            self._trap_deadline = self.time + TRAP_GRACE
 
     def _report_pending(self) -> bool:
         """An error report or a --stop-on-trap exception waits for its grace period to end the run
@@ -65,8 +66,8 @@ class Deadlines:
             elif self.time >= self._trap_deadline or not any(h.open_trap for h in self.harts):
                 # the handler returned, or runs on as the program's own code: the run goes on
                 self._trap_deadline = None
-        if self.time - self._last_frame_time > self.hang_budget_s and not self._draining and self.until is None:
-            self._report_hang(f"no frame reached the LCD for {self.hang_budget_s:g} s of virtual time")
+        if self.time - self._last_frame_time > self.hang_budget and not self._draining and self.until is None:
+            self._report_hang(f"no frame reached the LCD for {to_seconds(self.hang_budget):g} s of virtual time")
 
     def _report_hang(self, why: str) -> None:
         """Ends the run: no hart can make progress. When a hart is in a trap handler it never

@@ -39,7 +39,7 @@ from ..devices.plic import Plic
 from ..devices.ports import SerialInput
 from ..devices.plic import m_context as plic_m_context
 from ..devices.plic import s_context as plic_s_context
-from .scheduler import (DEFAULT_HANG_BUDGET_S, DEFAULT_QUANTUM, HARTS, FrameRecord, RunResult,  # noqa: F401
+from .scheduler import (DEFAULT_HANG_BUDGET, DEFAULT_QUANTUM, HARTS, FrameRecord, RunResult,  # noqa: F401
                         Scheduler)  # FrameRecord and RunResult: the board's results, imported from here
 from ..devices.sdcard import SdCard, SdImage
 from ..cpu.shared_memory import find_poll_loops
@@ -58,6 +58,7 @@ from ..devices.uarths import Uarths
 from .pins import ExternalPins, PinChange
 from .wiring import LCD_8080, ChipPins, DockWiring, LcdPort, RoutedInput, SdSlot
 from .write_watch import WriteWatch
+from ..vtime import PS_PER_MS, Time, ms
 from k210_common.firmware_errors import CONSOLE_PREFIX
 
 # a fatal error's console line, "error <code> <words>", as firmware/include/errors.inc describes it
@@ -77,19 +78,19 @@ class SchedulerClock:
     def __init__(self) -> None:
         self.scheduler: Scheduler | None = None
 
-    def cpu_hz(self) -> float:
+    def cpu_hz(self) -> int:
         return self.scheduler.cpu_hz()
 
-    def now(self) -> float:
+    def now(self) -> Time:
         return self.scheduler.time
 
-    def mtime(self, now: float) -> int:
+    def mtime(self, now: Time) -> int:
         return self.scheduler.mtime(now)
 
-    def set_mtime(self, value: int, now: float) -> None:
+    def set_mtime(self, value: int, now: Time) -> None:
         self.scheduler.set_mtime(value, now)
 
-    def time_of_mtime(self, value: int) -> float | None:
+    def time_of_mtime(self, value: int) -> Time | None:
         return self.scheduler.time_of_mtime(value)
 
 
@@ -97,14 +98,14 @@ class SchedulerClock:
 class WarningRecord:
     """One distinct warning of a run: what, when it was first and last given, how often."""
     text: str
-    first_s: float
-    last_s: float
+    first: Time
+    last: Time
     count: int = 1
 
     def describe(self) -> str:
-        line = f"[{self.first_s * 1e3:10.3f} ms] {self.text}"
+        line = f"[{self.first / PS_PER_MS:10.3f} ms] {self.text}"
         if self.count > 1:
-            line += f" ({self.count} times in all, the last at {self.last_s * 1e3:.3f} ms)"
+            line += f" ({self.count} times in all, the last at {ms(self.last)})"
         return line
 
 
@@ -112,7 +113,7 @@ class Board:
     """A Maix Dock running one firmware image."""
 
     def __init__(self, firmware: str | None, *, flash: FlashImage | None = None, quantum: int = DEFAULT_QUANTUM,
-                 hang_budget_s: float = DEFAULT_HANG_BUDGET_S,
+                 hang_budget: Time = DEFAULT_HANG_BUDGET,
                  console: Callable[[int], None] | None = None,
                  on_frame: Callable[[FrameRecord, np.ndarray], None] | None = None,
                  on_warning: Callable[[str], None] | None = None, permissive: bool = False,
@@ -165,10 +166,10 @@ class Board:
         self.gpio = Gpio(ports, pad_inputs=lambda first, count: self.wiring.pad_inputs(first, count))
         self._console = console or (lambda byte: None)
         self._console_line = bytearray()
-        self.console_byte_time = 0.0                       # when the console's last byte was out
-        self._line_began = 0.0                             # when the line under way began
-        self.completed_line_began = float("-inf")          # when the last complete line began
-        self.console_lines: list[tuple[float, str]] = []   # (virtual time the line ended, text)
+        self.console_byte_time: Time = 0                   # when the console's last byte was out
+        self._line_began: Time = 0                         # when the line under way began
+        self.completed_line_began: Time = -1               # when the last complete line began (-1: none)
+        self.console_lines: list[tuple[Time, str]] = []    # (virtual time the line ended, text)
         self.uart_output: dict[str, bytearray] = {}       # what each UART sent, wherever it went
         self.uarths = Uarths(ports, on_byte=lambda byte: self._serial_out(self.uarths, FUNC_UARTHS_TX, byte))
         self.uarts = [DwUart(n, ports, source_hz=self.sysctl.apb0_hz,
@@ -204,7 +205,7 @@ class Board:
         self.cold = cold
         if not cold:
             bootrom.hand_over(self.sysctl, self.fpioa, self.uarths)    # before the scheduler reads the CPU clock
-        self.scheduler = Scheduler(self, quantum, hang_budget_s)
+        self.scheduler = Scheduler(self, quantum, hang_budget)
         self.clock.scheduler = self.scheduler
         self.timing_warnings: dict[str, int] = {}     # broken datasheet waits, per rule (run.json)
         self.lcd = ST7789V(on_frame=self.scheduler.frame_captured,
@@ -269,11 +270,11 @@ class Board:
         return self.scheduler.harts
 
     @property
-    def time(self) -> float:
+    def time(self) -> Time:
         return self.scheduler.time
 
     @time.setter
-    def time(self, value: float) -> None:
+    def time(self, value: Time) -> None:
         self.scheduler.time = value
 
     @property
@@ -294,12 +295,12 @@ class Board:
         return self.scheduler.quantum
 
     @property
-    def hang_budget_s(self) -> float:
-        return self.scheduler.hang_budget_s
+    def hang_budget(self) -> Time:
+        return self.scheduler.hang_budget
 
-    @hang_budget_s.setter
-    def hang_budget_s(self, value: float) -> None:
-        self.scheduler.hang_budget_s = value
+    @hang_budget.setter
+    def hang_budget(self, value: Time) -> None:
+        self.scheduler.hang_budget = value
 
     @property
     def _frames_wanted(self) -> int:
@@ -334,11 +335,11 @@ class Board:
         """Runs until `frames` frames have been shown. Raises a BoardStop subclass otherwise."""
         return self.scheduler.run(frames, progress)
 
-    def run_until(self, until_s: float, progress: Callable[["Board"], None] | None = None) -> RunResult:
-        """Runs until `until_s` of virtual time, frames or not (Scheduler.run_until)."""
-        return self.scheduler.run_until(until_s, progress)
+    def run_until(self, until: Time, progress: Callable[["Board"], None] | None = None) -> RunResult:
+        """Runs until virtual time `until`, frames or not (Scheduler.run_until)."""
+        return self.scheduler.run_until(until, progress)
 
-    def signal(self, at: float, name: str, value: int | None) -> None:
+    def signal(self, at: Time, name: str, value: int | None) -> None:
         """A pin changed (wiring.py, spi.py): logged for --vcd when a log is attached."""
         if self.signals is not None:
             self.signals.record(at, name, value)
@@ -350,28 +351,28 @@ class Board:
         if self.scheduler.current is not None:
             self.scheduler.current.request_stop()
 
-    def finish_console_line(self, limit_s: float | None = None) -> None:
+    def finish_console_line(self, limit: Time | None = None) -> None:
         """After run(): lets the console line begun after the last frame end (Scheduler's doc)."""
-        if limit_s is None:
+        if limit is None:
             self.scheduler.finish_console_line()
         else:
-            self.scheduler.finish_console_line(limit_s)
+            self.scheduler.finish_console_line(limit)
 
     def _step(self) -> None:
         self.scheduler.step()
 
-    def grab_at(self, at_s: float, action: Callable[["Board"], None]) -> None:
-        """Calls action(board) once the board's virtual time reaches at_s (a framebuffer grab)."""
-        self.scheduler.grab_at(at_s, action)
+    def grab_at(self, at: Time, action: Callable[["Board"], None]) -> None:
+        """Calls action(board) once the board's virtual time reaches `at` (a framebuffer grab)."""
+        self.scheduler.grab_at(at, action)
 
     # --- wiring -----------------------------------------------------------------------
 
     @property
-    def pad_changes(self) -> list[tuple[float, int, int | None]]:
+    def pad_changes(self) -> list[tuple[Time, int, int | None]]:
         """Every change of a pad's GPIOHS/GPIO level: (virtual time, pad, level or None)."""
         return self.wiring.pad_changes
 
-    def reset_peripheral(self, name: str, now: float) -> None:
+    def reset_peripheral(self, name: str, now: Time) -> None:
         """SYSCTL peri_reset released a block: it returns to its reset state."""
         target = {"spi0": self.spi0, "spi1": self.spi1, "spi3": self.spi3, "dma": self.dmac, "fpioa": self.fpioa,
                   "gpio": self.gpio, **{block.GATE: block for block in (*self.uarts, *self.timers, *self.watchdogs, self.rtc,
@@ -380,7 +381,7 @@ class Board:
             self.advance_devices(now)
             target.reset(now)
 
-    def reset_chip(self, cause: str, at: float) -> None:
+    def reset_chip(self, cause: str, at: Time) -> None:
         """The whole chip resets (a watchdog, SYSCTL's soft_reset; the scheduler resets the harts):
         every block as at power-on, then as the mask ROM leaves it (unless the board started cold),
         the program in SRAM again as the ROM copies it from flash (the rest of SRAM keeps what it
@@ -397,10 +398,10 @@ class Board:
             try:
                 program = self.flash.boot_program()
             except BadInput as error:
-                raise UnmodelledAccess(f"chip reset at {at * 1e3:.3f} ms: the ROM would not boot the flash any "
+                raise UnmodelledAccess(f"chip reset at {ms(at)}: the ROM would not boot the flash any "
                                        f"more ({error}); its ISP mode is not modelled") from None
             if program != self._program[0][1]:
-                raise UnmodelledAccess(f"chip reset at {at * 1e3:.3f} ms: the program in the flash has changed "
+                raise UnmodelledAccess(f"chip reset at {ms(at)}: the program in the flash has changed "
                                        f"since the run booted it, and booting a rewritten program is not modelled")
         for address, data in self._program:
             self.memory.load(address, data)
@@ -433,7 +434,7 @@ class Board:
         if self.wiring.console_transmitter() == tx_function:
             self._console_byte(byte, uart.last_byte_time)
 
-    def _console_byte(self, byte: int, at: float) -> None:
+    def _console_byte(self, byte: int, at: Time) -> None:
         """Console output (`at`: when the byte's stop bit was out); a line `error <code> ...` is the
         firmware's fatal error report."""
         self.console_byte_time = at
@@ -462,7 +463,7 @@ class Board:
 
     # --- warnings ------------------------------------------------------------------------
 
-    def warn(self, text: str, now: float | None = None) -> None:
+    def warn(self, text: str, now: Time | None = None) -> None:
         """Every device's warnings come here (`now`: the virtual time the device noticed it,
         else the board's). A warning given again with the same text is counted, not repeated:
         on_warning hears only its first occurrence."""
@@ -470,7 +471,7 @@ class Board:
         record = self._warning_records.get(text)
         if record is not None:
             record.count += 1
-            record.last_s = max(record.last_s, at)
+            record.last = max(record.last, at)
             return
         if len(self._warning_records) >= MAX_DISTINCT_WARNINGS:
             self._warnings_unlisted += 1
@@ -479,7 +480,7 @@ class Board:
         self._warning_records[text] = record
         self.on_warning(record.describe())
 
-    def timing_rule_broken(self, kind: str, text: str, now: float) -> None:
+    def timing_rule_broken(self, kind: str, text: str, now: Time) -> None:
         """A device noticed firmware breaking one of its datasheet's waits (kind: the rule): a
         warning, and a count per rule for run.json's timing_warnings."""
         self.timing_warnings[kind] = self.timing_warnings.get(kind, 0) + 1
@@ -502,7 +503,7 @@ class Board:
 
     def recent_warnings(self, count: int) -> list[str]:
         """The `count` distinct warnings most recently given, oldest first."""
-        records = sorted(self._warning_records.values(), key=lambda record: record.last_s)[-count:]
+        records = sorted(self._warning_records.values(), key=lambda record: record.last)[-count:]
         return [record.describe() for record in records]
 
     # --- interrupts --------------------------------------------------------------------
@@ -517,7 +518,7 @@ class Board:
                 high.extend(source for line, source in enumerate(sources) if lines >> line & 1)
         return high
 
-    def mip(self, h: int, now: float, mask: int = ~0) -> int:
+    def mip(self, h: int, now: Time, mask: int = ~0) -> int:
         """The hart's pending interrupt bits; only those in `mask` are computed (sampling the
         PLIC is the expensive part, and a hart that has MEIE clear does not need it)."""
         value = 0
@@ -531,17 +532,17 @@ class Board:
             value |= 1 << riscv.IRQ_SEI
         return value | (self.harts[h].soft_mip & mask)     # SSIP, STIP: written by software
 
-    def interrupts_may_have_changed(self, now: float | None = None) -> None:
+    def interrupts_may_have_changed(self, now: Time | None = None) -> None:
         """A device changed an interrupt input at `now` (see Scheduler)."""
         self.scheduler.interrupts_may_have_changed(now)
 
     # --- devices ------------------------------------------------------------------------
 
-    def advance_devices(self, now: float) -> None:
+    def advance_devices(self, now: Time) -> None:
         for device in self.timed_devices:
             device.advance(now)
 
-    def earliest_frame_capture(self, now: float) -> float:
+    def earliest_frame_capture(self, now: Time) -> Time:
         """A time before which advancing the devices cannot capture a frame: the LCD, on SPI0, needs a
         byte at least for each cell it has not been written since its last frame (a 12-bit pixel
         takes one and a half)."""
@@ -559,7 +560,7 @@ class Board:
             return (peripheral, self.dmac)
         return (peripheral,)
 
-    def next_device_event(self, now: float, past_quiet_console: bool = False) -> float | None:
+    def next_device_event(self, now: Time, past_quiet_console: bool = False) -> Time | None:
         """The first moment after `now` a device changes state by itself; with past_quiet_console,
         the console's quiet bytes (Uarths.quiet_ticks) do not count."""
         # (a plain loop: the scheduler asks this several times a turn)

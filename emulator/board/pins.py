@@ -15,18 +15,19 @@ from typing import Callable
 
 from ..devices.fpioa import PAD_COUNT
 from ..errors import BadInput
+from ..vtime import Time, from_seconds, to_seconds
 
 LEVELS = {"0": 0, "1": 1, "z": None, "Z": None}
 
 
 @dataclass(frozen=True)
 class PinChange:
-    at: float            # virtual seconds
+    at: Time             # virtual time
     pad: int
     level: int | None    # None: the outside lets go of the pad
 
     def describe(self) -> str:
-        return f"{self.pad}={'z' if self.level is None else self.level}@{self.at:g}"
+        return f"{self.pad}={'z' if self.level is None else self.level}@{to_seconds(self.at):g}"
 
 
 def parse_pin(text: str) -> PinChange:
@@ -53,7 +54,7 @@ def _change(pad_text: str, level_text: str, time_text: str, what: str) -> PinCha
         raise ValueError(f"{what}: the time {time_text!r} is not a number of seconds") from None
     if not 0 <= at < math.inf:
         raise ValueError(f"{what}: the time must be 0 or more seconds, and finite")
-    return PinChange(at, pad, LEVELS[level_text])
+    return PinChange(from_seconds(at), pad, LEVELS[level_text])
 
 
 def load_schedule(path: Path) -> list[PinChange]:
@@ -80,7 +81,7 @@ def load_schedule(path: Path) -> list[PinChange]:
 class ExternalPins:
     """The schedule, played as virtual time passes (a timed device of the board)."""
 
-    def __init__(self, changes: list[PinChange], on_change: Callable[[float], None]) -> None:
+    def __init__(self, changes: list[PinChange], on_change: Callable[[Time], None]) -> None:
         """on_change: the levels changed at this time (the board's wiring follows)."""
         self._pending = sorted(changes, key=lambda change: change.at)
         self.levels: dict[int, int] = {}          # pads driven from outside now
@@ -88,10 +89,10 @@ class ExternalPins:
         self.on_change = on_change
         self.played: list[PinChange] = []
 
-    def next_event_time(self, now: float) -> float | None:
+    def next_event_time(self, now: Time) -> Time | None:
         return self._pending[0].at if self._pending else None
 
-    def advance(self, now: float) -> None:
+    def advance(self, now: Time) -> None:
         while self._pending and self._pending[0].at <= now:
             at = self._pending[0].at
             while self._pending and self._pending[0].at == at:

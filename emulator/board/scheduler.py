@@ -20,7 +20,6 @@ and then no hart could go on), a trap storm, a hang, or a stop recorded by the b
 """
 from __future__ import annotations
 
-import math
 import time as host_time
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Callable, Protocol
@@ -37,6 +36,7 @@ from .traps import Traps
 from ..errors import BoardStop, FirmwareTrap
 from ..cpu.hart import CsrContext, Hart, HartState, RunEnd
 from ..memory_map import RESET_PC
+from ..vtime import NEVER, PS_PER_MS, PS_PER_S, Time, cycles_in, cycles_time, ms
 
 if TYPE_CHECKING:
     from ..devices.mmio import Peripheral
@@ -48,11 +48,11 @@ if TYPE_CHECKING:
 
 HARTS = 2
 DEFAULT_QUANTUM = 20_000          # CPU cycles per hart per turn
-DEFAULT_HANG_BUDGET_S = 5.0       # virtual seconds without a new frame before a run counts as hung
+DEFAULT_HANG_BUDGET = 5 * PS_PER_S   # virtual time without a new frame before a run counts as hung
 POLL_REPEATS = 8                  # identical reads at one pc before a hart counts as polling
 # After the last requested frame the run goes on this long at most, so that the console line
 # the firmware begins after that frame (this firmware's "frame N") is not cut off.
-CONSOLE_DRAIN_S = 5e-3
+CONSOLE_DRAIN = 5 * PS_PER_MS
 MTIME_DIVIDER = 50                # mtime ticks at CPU clock / 50
 NO_POLL = (-1, -1, -1, 0)
 UNLIMITED_FRAMES = 1 << 62        # run_until: no frame count ends a turn
@@ -65,7 +65,7 @@ MAX_TURNS_ALONE = 256
 @dataclass
 class FrameRecord:
     index: int
-    virtual_time_s: float
+    virtual_time_s: float            # when its last data reached the LCD (a report: seconds)
     instructions: list[int]          # per hart, since the previous frame
     instructions_total: list[int]    # per hart, since reset
     host_time_s: float
@@ -109,16 +109,16 @@ class Board(Protocol):
     uarths: "Uarths"
     peripherals: "list[Peripheral]"
     on_frame: Callable[[FrameRecord, np.ndarray], None]
-    completed_line_began: float
+    completed_line_began: Time
     warnings: list[str]
 
-    def mip(self, h: int, now: float, mask: int = ~0) -> int: ...
+    def mip(self, h: int, now: Time, mask: int = ~0) -> int: ...
 
-    def next_device_event(self, now: float, past_quiet_console: bool = False) -> float | None: ...
+    def next_device_event(self, now: Time, past_quiet_console: bool = False) -> Time | None: ...
 
-    def advance_devices(self, now: float) -> None: ...
+    def advance_devices(self, now: Time) -> None: ...
 
-    def earliest_frame_capture(self, now: float) -> float: ...
+    def earliest_frame_capture(self, now: Time) -> Time: ...
 
     def loop_cycles_bound(self, instructions: int) -> int: ...
 
@@ -126,54 +126,54 @@ class Board(Protocol):
 
     def recent_warnings(self, count: int) -> list[str]: ...
 
-    def reset_chip(self, cause: str, at: float) -> None: ...
+    def reset_chip(self, cause: str, at: Time) -> None: ...
 
-    def interrupts_may_have_changed(self, now: float | None = None) -> None: ...
+    def interrupts_may_have_changed(self, now: Time | None = None) -> None: ...
 
 
 class Scheduler(SramWaits, Deadlines):
     """Owns virtual time and the harts; runs them in turns between device events (harts waiting
     on SRAM: sram_waits.py; grace periods and hangs: deadlines.py)."""
 
-    def __init__(self, board: Board, quantum: int, hang_budget_s: float) -> None:
+    def __init__(self, board: Board, quantum: int, hang_budget: Time) -> None:
         self.board = board
         self.quantum = quantum
-        self.hang_budget_s = hang_budget_s
-        self.time = 0.0
-        self.delivery_time = 0.0                          # when data last reached the LCD
+        self.hang_budget = hang_budget
+        self.time: Time = 0
+        self.delivery_time: Time = 0                      # when data last reached the LCD
         # clock epochs: cycles and mtime are integrals of the CPU clock over virtual time
-        self._epoch_time = 0.0
+        self._epoch_time: Time = 0
         self._epoch_cycles = 0
         self._epoch_mtime = 0
         self._hz = board.sysctl.cpu_hz()
         # per-run state
         self.frames: list[FrameRecord] = []
         self.frames_wanted = 0
-        self._last_frame_time = 0.0
+        self._last_frame_time: Time = 0
         self._last_frame_instret = [0] * HARTS
         self._last_frame_cycles = [0] * HARTS
         self._host_start = host_time.perf_counter()
-        self.until: float | None = None                   # run_until's end: virtual time, not frames
+        self.until: Time | None = None                    # run_until's end: virtual time, not frames
         self.pending_stop: BoardStop | None = None        # ends the run at the end of the turn
         self._draining = False                            # finish_console_line is running
         self._frame_while_draining = False
         self.current: Hart | None = None                  # the hart whose turn it is
-        self._quantum_t0 = 0.0
-        self._turn_hz = self._hz
-        self.turn_horizon = 0.0
-        self._quantum_start = [0] * HARTS                 # per hart: its cycle count when its turn began
+        self.turn_horizon: Time = 0
+        # per hart: (time, cycle count) when its time was last set other than by running, since when
+        # its time is that plus the time of the cycles it has run (hart_now): exact, whatever the turns
+        self._anchor: list[tuple[Time, int]] = [(0, 0)] * HARTS
         self._poll = [NO_POLL] * HARTS
-        self._grabs: list[tuple[float, Callable[["Board"], None]]] = []
+        self._grabs: list[tuple[Time, Callable[["Board"], None]]] = []
         self.host_time_in_harts = 0.0                     # host seconds spent executing guest code
         self.traps = Traps(board)                         # exceptions and interrupts entering mtvec
         self._error_report: tuple[int, str] | None = None
-        self._trap_deadline: float | None = None          # a grace period before the run may end
-        self.reset_requested: tuple[str, float] | None = None   # a chip reset, carried out after the turn
-        self.resets: list[tuple[float, str]] = []         # (virtual time, cause) of every chip reset
+        self._trap_deadline: Time | None = None           # a grace period before the run may end
+        self.reset_requested: tuple[str, Time] | None = None    # a chip reset, carried out after the turn
+        self.resets: list[tuple[Time, str]] = []          # (virtual time, cause) of every chip reset
         self.harts = [Hart(h, CsrContext(mcycle=self._mcycle_reader(h), mip=self._mip_reader(h)))
                       for h in range(HARTS)]
         # both harts start together: what one stores at once the other may be polling already
-        self._race_until = shared_memory.RACE_WINDOW_CYCLES / self._hz
+        self._race_until = cycles_time(shared_memory.RACE_WINDOW_CYCLES, self._hz)
         self._priority: tuple[Hart, int] | None = None    # a hart woken by a store, and its turn's length
         # per hart: the poll loop it last came round without waiting, and what that loop read then
         self._poll_seen: dict[int, tuple[int, list[bytes], int]] = {}   # hart: (loop head, what it read, executed)
@@ -192,42 +192,68 @@ class Scheduler(SramWaits, Deadlines):
 
     # --- virtual clock -----------------------------------------------------------------
 
-    def cpu_hz(self) -> float:
+    def cpu_hz(self) -> int:
         return self._hz
 
-    def hart_now(self, hart: Hart) -> float:
+    def hart_now(self, hart: Hart) -> Time:
         """The virtual time a hart has reached (mid-turn: counting its instructions so far)."""
         if hart is self.current:
-            return self._quantum_t0 + (hart.cycles - self._quantum_start[hart.hart_id]) / self._turn_hz
+            return self.time_at_cycles(hart, hart.cycles)
         return hart.time
 
-    def cycles(self, now: float) -> int:
-        return self._epoch_cycles + int((now - self._epoch_time) * self._hz + 1e-6)
+    def time_at_cycles(self, hart: Hart, cycles: int) -> Time:
+        """When a running hart's cycle count reaches `cycles`: its anchor's time and the time of the
+        cycles since (rounded up once, from the anchor, so never depending on where turns ended)."""
+        time, start = self._anchor[hart.hart_id]
+        return time + cycles_time(cycles - start, self._hz)
 
-    def mtime(self, now: float) -> int:
-        return self._epoch_mtime + int((now - self._epoch_time) * self._hz / MTIME_DIVIDER + 1e-6)
+    def cycles_until(self, hart: Hart, time: Time) -> int:
+        """The least cycle count at which the hart's time (time_at_cycles) is `time` or later."""
+        anchor, start = self._anchor[hart.hart_id]
+        return start + max(0, cycles_in(time - anchor - 1, self._hz) + 1)
 
-    def time_of_mtime(self, value: int) -> float | None:
+    def turn_clock(self, hart: Hart) -> tuple[Time, int, int]:
+        """The running hart's time is t + cycles_time(cycles - start, hz) (time_at_cycles): (t, start, hz)."""
+        time, start = self._anchor[hart.hart_id]
+        return time, start, self._hz
+
+    def move_hart(self, hart: Hart, time: Time) -> None:
+        """A hart's time moves on other than by running (it slept, waited, polled, was reset): it
+        goes on from here."""
+        if time != hart.time:
+            hart.time = time
+            self._anchor[hart.hart_id] = (time, hart.cycles)
+
+    def cycles(self, now: Time) -> int:
+        return self._epoch_cycles + cycles_in(now - self._epoch_time, self._hz)
+
+    def mtime(self, now: Time) -> int:
+        return self._epoch_mtime + cycles_in(now - self._epoch_time, self._hz) // MTIME_DIVIDER
+
+    def time_of_mtime(self, value: int) -> Time | None:
         if value >= 1 << 63:
             return None
-        return self._epoch_time + (value - self._epoch_mtime) * MTIME_DIVIDER / self._hz
+        return self._epoch_time + cycles_time((value - self._epoch_mtime) * MTIME_DIVIDER, self._hz)
 
-    def set_mtime(self, value: int, now: float) -> None:
+    def set_mtime(self, value: int, now: Time) -> None:
         self._rebase(now)
         self._epoch_mtime = value
 
-    def _rebase(self, now: float) -> None:
+    def _rebase(self, now: Time) -> None:
         self._epoch_cycles = self.cycles(now)
         self._epoch_mtime = self.mtime(now)
         self._epoch_time = now
 
-    def lcd_data_delivered(self, now: float) -> None:
+    def lcd_data_delivered(self, now: Time) -> None:
         """Data reached the LCD at `now` (a frame's time is when its last data arrived)."""
         self.delivery_time = now
 
-    def clock_changed(self, now: float) -> None:
-        """SYSCTL changed the CPU clock: later instructions take the new cycle time."""
+    def clock_changed(self, now: Time) -> None:
+        """SYSCTL changed the CPU clock: later cycles take the new cycle time. Every hart's time is
+        anchored where it is (the running one's at the change), its later cycles at the new rate."""
         self._rebase(now)
+        for hart in self.harts:
+            self._anchor[hart.hart_id] = (self.hart_now(hart), hart.cycles)
         self._hz = self.board.sysctl.cpu_hz()
         if self.current is not None:
             self.current.request_stop()
@@ -261,17 +287,13 @@ class Scheduler(SramWaits, Deadlines):
             hart.polling = True
             hart.request_stop()
 
-    def turn_clock(self, hart: Hart) -> tuple[float, int, float]:
-        """The running hart's time is t0 + (cycles - start) / hz (hart_now): (t0, start, hz)."""
-        return self._quantum_t0, self._quantum_start[hart.hart_id], self._turn_hz
-
     def forget_poll(self, hart: Hart) -> None:
         """A store to a device: whatever the hart polled next may change because of it."""
         self._poll[hart.hart_id] = NO_POLL
 
     # --- interrupts ---------------------------------------------------------------------------
 
-    def interrupts_may_have_changed(self, now: float | None = None) -> None:
+    def interrupts_may_have_changed(self, now: Time | None = None) -> None:
         """A device changed an interrupt input at `now`: sleeping harts it concerns wake
         then, and a running hart with interrupts enabled ends its turn to take it."""
         self._wake_sleepers(self.time if now is None else now)
@@ -281,7 +303,7 @@ class Scheduler(SramWaits, Deadlines):
         if hart is not None and hart.interrupts_enabled():
             hart.request_stop()
 
-    def _wake_sleepers(self, now: float) -> None:
+    def _wake_sleepers(self, now: Time) -> None:
         """Harts asleep in wfi with an enabled interrupt pending wake; so do harts polling SRAM when
         they would take the interrupt (privileged.py: takeable_interrupts)."""
         for hart in self.harts:
@@ -295,7 +317,7 @@ class Scheduler(SramWaits, Deadlines):
                 if hart.state is HartState.WAITING:
                     self._end_wait(hart, now, by_store=False)
                 hart.state = HartState.RUNNING
-                hart.time = max(hart.time, now)
+                self.move_hart(hart, max(hart.time, now))
 
     # --- frames and grabs ---------------------------------------------------------------------
 
@@ -310,7 +332,7 @@ class Scheduler(SramWaits, Deadlines):
         cycles = [h.cycles for h in self.harts]
         record = FrameRecord(
             index=len(self.frames),
-            virtual_time_s=self.delivery_time,
+            virtual_time_s=self.delivery_time / PS_PER_S,
             instructions=[t - last for t, last in zip(totals, self._last_frame_instret)],
             instructions_total=totals,
             host_time_s=host_time.perf_counter() - self._host_start,
@@ -325,11 +347,11 @@ class Scheduler(SramWaits, Deadlines):
         if len(self.frames) >= self.frames_wanted and self.current is not None and self._trap_deadline is None:
             self.current.request_stop()
 
-    def grab_at(self, at_s: float, action: Callable[["Board"], None]) -> None:
-        """Calls action(board) once the board's virtual time reaches at_s (a framebuffer grab)."""
+    def grab_at(self, at: Time, action: Callable[["Board"], None]) -> None:
+        """Calls action(board) once the board's virtual time reaches `at` (a framebuffer grab)."""
         if self.current is not None:
             self.current.time_skip_limit = None     # asked mid-turn: the turn's long-skip limit predates it
-        self._grabs.append((at_s, action))
+        self._grabs.append((at, action))
         self._grabs.sort(key=lambda item: item[0])
 
     def _run_grabs(self) -> None:
@@ -353,31 +375,31 @@ class Scheduler(SramWaits, Deadlines):
             if progress is not None and host_time.perf_counter() - last_progress > 0.5:
                 last_progress = host_time.perf_counter()
                 progress(self.board)
-        return RunResult("ok", f"{len(self.frames)} frames shown", self.frames, self.time,
+        return RunResult("ok", f"{len(self.frames)} frames shown", self.frames, self.time / PS_PER_S,
                          [h.instret for h in self.harts], host_time.perf_counter() - self._host_start,
                          self.board.warnings, [h.cycles for h in self.harts])
 
-    def run_until(self, until_s: float, progress: Callable[["Board"], None] | None = None) -> RunResult:
-        """Runs until `until_s` seconds of virtual time (--until), for firmware whose output is
+    def run_until(self, until: Time, progress: Callable[["Board"], None] | None = None) -> RunResult:
+        """Runs until virtual time `until` (--until), for firmware whose output is
         its console or its pins rather than frames: frames shown meanwhile are recorded but end
         nothing, and no frame budget applies. Once every hart sleeps in wfi with nothing that
-        could ever wake it, time moves straight on to until_s. A trap, an error report or a
+        could ever wake it, time moves straight on to `until`. A trap, an error report or a
         stop recorded by a device ends the run as in run()."""
         self.frames_wanted = UNLIMITED_FRAMES
-        self.until = until_s
+        self.until = until
         self._host_start = host_time.perf_counter()
         last_progress = 0.0
-        idle_since: float | None = None
-        while self.time < until_s or self._report_pending():
+        idle_since: Time | None = None
+        while self.time < until or self._report_pending():
             if not self._report_pending() and not any(h.state is HartState.RUNNING for h in self.harts) and \
                     self.board.next_device_event(self.time) is None:
-                if self._grabs and self._grabs[0][0] < until_s:
+                if self._grabs and self._grabs[0][0] < until:
                     # nothing moves before the grab, which may set something going (a script's send)
                     self._set_time(max(self.time, self._grabs[0][0]))
                     self._run_grabs()
                     continue
                 idle_since = self.time
-                self._set_time(until_s)
+                self._set_time(until)
                 if self._grabs:
                     self._run_grabs()
                 break
@@ -387,24 +409,23 @@ class Scheduler(SramWaits, Deadlines):
             if progress is not None and host_time.perf_counter() - last_progress > 0.5:
                 last_progress = host_time.perf_counter()
                 progress(self.board)
-        message = f"ran until {until_s * 1e3:.3f} ms of virtual time; {len(self.frames)} frames shown"
+        message = f"ran until {ms(until)} of virtual time; {len(self.frames)} frames shown"
         if idle_since is not None:
-            message += (f"; from {idle_since * 1e3:.3f} ms every hart slept in wfi with nothing that could "
-                        f"wake it")
-        return RunResult("ok", message, self.frames, self.time, [h.instret for h in self.harts],
+            message += f"; from {ms(idle_since)} every hart slept in wfi with nothing that could wake it"
+        return RunResult("ok", message, self.frames, self.time / PS_PER_S, [h.instret for h in self.harts],
                          host_time.perf_counter() - self._host_start, self.board.warnings,
                          [h.cycles for h in self.harts])
 
-    def finish_console_line(self, limit_s: float = CONSOLE_DRAIN_S) -> None:
+    def finish_console_line(self, limit: Time = CONSOLE_DRAIN) -> None:
         """After run(): runs on until the first console line begun after the last frame was
         shown has ended (this firmware's hart 1 reports "frame N" once frame N is sent, after
-        the LCD has it), for at most limit_s of virtual time, so that the console of an N-frame
+        the LCD has it), for at most `limit` of virtual time, so that the console of an N-frame
         run ends with its last frame's line. Frames shown meanwhile are not recorded and end
         it; so does a firmware that will never do anything again. A trap or error report
         meanwhile gets its grace period and ends the run as in run(). Kept out of run() so
         that a run's instruction counts up to its last frame (the bench's) do not change."""
         frame_time = self._last_frame_time
-        deadline = self.time + limit_s
+        deadline = self.time + limit
         self._draining, self._frame_while_draining = True, False
         self.frames_wanted = len(self.frames) + 1     # turn() moves time on as before a frame
         try:
@@ -433,7 +454,7 @@ class Scheduler(SramWaits, Deadlines):
         if self.pending_stop is not None:
             raise self.pending_stop
 
-    def request_reset(self, cause: str, at: float) -> None:
+    def request_reset(self, cause: str, at: Time) -> None:
         """A watchdog or SYSCTL's soft_reset resets the chip at `at`: carried out after the turn,
         when no hart is in the middle of an instruction (a hart running asks to stop)."""
         if self.reset_requested is None:
@@ -452,14 +473,15 @@ class Scheduler(SramWaits, Deadlines):
         self.board.reset_chip(cause, at)
         self.clock_changed(at)
         for hart in self.harts:
-            hart.time = max(hart.time, at)
             hart.reset(RESET_PC)
+            self.move_hart(hart, max(hart.time, at))
+            self._anchor[hart.hart_id] = (hart.time, hart.cycles)
         self.traps.chip_reset()
         self._trap_deadline = None
         self._poll = [NO_POLL] * HARTS
         self._poll_seen.clear()
         self._priority = None
-        self._race_until = max(self._race_until, at + shared_memory.RACE_WINDOW_CYCLES / self._hz)
+        self._race_until = max(self._race_until, at + cycles_time(shared_memory.RACE_WINDOW_CYCLES, self._hz))
         self.resets.append((at, cause))
         self.board.interrupts_may_have_changed(at)
 
@@ -489,16 +511,15 @@ class Scheduler(SramWaits, Deadlines):
                 hart, priority_turn = self._priority
             self._priority = None
         self.traps.take_interrupt(hart)
-        t0 = hart.time
-        hz = self._hz
+        t0, start = hart.time, hart.cycles
         outer = self._outer_bound(t0, board.next_device_event(t0))
-        horizon = min(t0 + self.quantum / hz, outer)
+        horizon = min(self.time_at_cycles(hart, start + self.quantum), outer)
         instruction_limit = None
         alone = False
         if priority_turn:
             # one iteration of the loop it woke in, counted in instructions: its cycles vary, and a
             # turn longer than the iteration would run the woken hart on past what the storer does next
-            horizon = min(horizon, t0 + self.board.loop_cycles_bound(priority_turn) / hz)
+            horizon = min(horizon, self.time_at_cycles(hart, start + self.board.loop_cycles_bound(priority_turn)))
             instruction_limit = priority_turn
         elif t0 < self._race_until:
             # lockstep: a hart behind catches up exactly, one level with the others runs RACE_TURN
@@ -506,23 +527,24 @@ class Scheduler(SramWaits, Deadlines):
             # each hart in turn, lowest hart first
             for other in running:
                 if other is not hart:
-                    horizon = min(horizon, other.time if other.time > t0 else t0 + shared_memory.RACE_TURN / hz)
+                    horizon = min(horizon, other.time if other.time > t0 else
+                                  self.time_at_cycles(hart, start + shared_memory.RACE_TURN))
         else:
             for other in running:
                 if other is not hart:
-                    horizon = min(horizon, other.time + self.quantum / hz)
+                    horizon = min(horizon, other.time + cycles_time(self.quantum, self._hz))
             alone = go_on_alone and len(running) == 1
-        budget = max(1, math.ceil((horizon - t0) * hz - 1e-9))
-        self.turn_horizon = t0 + budget / hz
+        budget = max(1, self.cycles_until(hart, horizon) - start)
+        self.turn_horizon = self.time_at_cycles(hart, start + budget)
         precise_runs, device_accesses = hart.precise_runs, hart.device_accesses
-        hart.time_skip_limit = self._alone_until(hart, t0, hz, outer) if alone else None
-        ran = self._run_hart(hart, t0, budget, hz, instruction_limit)
+        hart.time_skip_limit = self._alone_until(hart, t0, outer) if alone else None
+        self._run_hart(hart, budget, instruction_limit)
         hart.time_skip_limit = None
         if self.pending_stop is not None:
             raise self.pending_stop
-        hart.time = t0 + ran / hz
+        hart.time = self.time_at_cycles(hart, hart.cycles)
         if alone and hart.precise_runs == precise_runs and hart.device_accesses == device_accesses:
-            horizon = self._go_on_alone(hart, hz, t0, outer, horizon)
+            horizon = self._go_on_alone(hart, t0, outer, horizon)
         if hart.state is HartState.ASLEEP:
             # a wfi with an enabled interrupt already pending falls through (the privileged spec:
             # WFI resumes when an enabled interrupt is pending, whenever it became so); without
@@ -536,7 +558,7 @@ class Scheduler(SramWaits, Deadlines):
             # event: it waits until then (or the end of its turn) without executing
             hart.polling = False
             event = board.next_device_event(hart.time)
-            hart.time = max(hart.time, min(event, horizon) if event is not None else horizon)
+            self.move_hart(hart, max(hart.time, min(event, horizon) if event is not None else horizon))
         if len(self.frames) >= self.frames_wanted and self._trap_deadline is None:
             self.time = max(self.time, self.delivery_time)
             return
@@ -545,10 +567,10 @@ class Scheduler(SramWaits, Deadlines):
             self._set_time(min(running))
         self._check_deadlines()
 
-    def _outer_bound(self, t0: float, event: float | None) -> float:
+    def _outer_bound(self, t0: Time, event: Time | None) -> Time:
         """What bounds every turn from t0 until one of them happens: the device event `event`
-        (the board's next after t0), a grab, run_until's end."""
-        outer = math.inf
+        (the board's next after t0), a grab, run_until's end (NEVER: none)."""
+        outer = NEVER
         if event is not None:
             outer = min(outer, event)
         if self._grabs and self._grabs[0][0] > t0:
@@ -557,7 +579,7 @@ class Scheduler(SramWaits, Deadlines):
             outer = min(outer, self.until)
         return outer
 
-    def _alone_until(self, hart: Hart, t0: float, hz: float, outer: float) -> int | None:
+    def _alone_until(self, hart: Hart, t0: Time, outer: Time) -> int | None:
         """The cycle count up to which a time loop (usleep, msleep) may be skipped past the turn's end:
         where a turn from t0 would end at the first thing that can happen (`outer`: a device event,
         a grab, run_until's end; a frame capture; the hang budget), while the other harts sleep in
@@ -570,12 +592,12 @@ class Scheduler(SramWaits, Deadlines):
             return None
         stop_at = min(outer, self.board.earliest_frame_capture(t0))
         if self.until is None:
-            stop_at = min(stop_at, self._last_frame_time + self.hang_budget_s)
-        if not stop_at < math.inf or stop_at <= t0:
+            stop_at = min(stop_at, self._last_frame_time + self.hang_budget)
+        if stop_at >= NEVER or stop_at <= t0:
             return None
-        return hart.cycles + max(1, math.ceil((stop_at - t0) * hz - 1e-9))
+        return max(hart.cycles + 1, self.cycles_until(hart, stop_at))
 
-    def _go_on_alone(self, hart: Hart, hz: float, t0: float, outer: float, horizon: float) -> float:
+    def _go_on_alone(self, hart: Hart, t0: Time, outer: Time, horizon: Time) -> Time:
         """The hart ran a turn alone on the fast engine, the others asleep in wfi, and nothing in it
         needed the board (no device access, CSR, trap or wfi: the precise engine did not run, and the
         fast one left no device access to the bus). Until
@@ -583,7 +605,7 @@ class Scheduler(SramWaits, Deadlines):
         with the devices only moving on in time: no interrupt can come before the next device event
         (`outer` bounds those), no frame be captured before the LCD has the bytes for it, nobody
         else runs. So the hart runs them here, one after another, each exactly the turn _turn would
-        give it (same budget, from the same float time), without moving the devices on between them,
+        give it (the same budget, from the same time), without moving the devices on between them,
         which is what costs the host time; the last one ends where _turn goes on as usual. Returns
         the horizon of the last turn run (`horizon`, that of the turn _turn ran, when it ran none;
         `t0`: when that turn began, `outer` what bounded it)."""
@@ -600,15 +622,16 @@ class Scheduler(SramWaits, Deadlines):
             outer = self._outer_bound(t0, self.board.next_device_event(t0, past_quiet_console=True))
         stop_at = min(outer, self.board.earliest_frame_capture(hart.time))
         if self.until is None:
-            stop_at = min(stop_at, self._last_frame_time + self.hang_budget_s)
+            stop_at = min(stop_at, self._last_frame_time + self.hang_budget)
         if hart.time >= stop_at:
             return horizon
-        plan.t0, plan.hz, plan.quantum, plan.outer, plan.stop_at = hart.time, hz, self.quantum, outer, stop_at
+        plan.anchor_time, plan.anchor_cycles = self._anchor[hart.hart_id]
+        plan.hz, plan.quantum, plan.outer, plan.stop_at = self._hz, self.quantum, outer, stop_at
         plan.max_turns = MAX_TURNS_ALONE
         started = host_time.perf_counter()
         hart.run_alone(plan)
         self.host_time_in_harts += host_time.perf_counter() - started
-        self.turn_horizon = plan.t0 + plan.budget / hz
+        self.turn_horizon = self.time_at_cycles(hart, plan.start_cycles + plan.budget)
         if not plan.handed_over:
             hart.time = plan.end_time
             return plan.horizon
@@ -619,13 +642,13 @@ class Scheduler(SramWaits, Deadlines):
         hart.time = plan.t0
         self._set_time(plan.t0)
         self._check_deadlines()
-        ran = self._run_hart(hart, plan.t0, plan.budget, hz, since=(plan.start_executed, plan.start_cycles))
+        self._run_hart(hart, plan.budget, since=(plan.start_executed, plan.start_cycles))
         if self.pending_stop is not None:
             raise self.pending_stop
-        hart.time = plan.t0 + ran / hz
+        hart.time = self.time_at_cycles(hart, hart.cycles)
         return plan.horizon
 
-    def _set_time(self, now: float) -> None:
+    def _set_time(self, now: Time) -> None:
         """Moves the board's time (the earliest time a running hart has reached) forward:
         devices catch up and sleeping harts with a pending enabled interrupt wake."""
         if now > self.time:
@@ -634,7 +657,7 @@ class Scheduler(SramWaits, Deadlines):
         self._check_waiters(self.time)
         self._wake_sleepers(self.time)
 
-    def _run_hart(self, hart: Hart, t0: float, budget: int, hz: float, instruction_limit: int | None = None,
+    def _run_hart(self, hart: Hart, budget: int, instruction_limit: int | None = None,
                   since: tuple[int, int] | None = None) -> int:
         """Runs one turn of a hart, `budget` CPU cycles and at most `instruction_limit` instructions;
         returns how many cycles it used. `since`: the turn began earlier, with the hart's executed
@@ -643,9 +666,6 @@ class Scheduler(SramWaits, Deadlines):
         self.current = hart
         bus.turn_begins(hart)
         before, cycles_before = since if since is not None else (hart.executed, hart.cycles)
-        self._quantum_t0 = t0
-        self._turn_hz = hz
-        self._quantum_start[hart.hart_id] = cycles_before
         started = host_time.perf_counter()
         end = None
         try:

@@ -16,6 +16,7 @@ from unicorn import riscv_const as rv
 from ..cpu import shared_memory
 from ..cpu.hart import Hart, HartState
 from ..memory_map import SRAM_BASE, SRAM_UNCACHED_BASE
+from ..vtime import Time, cycles_time
 
 
 class SramWaits:
@@ -23,12 +24,13 @@ class SramWaits:
 
     # besides the board (scheduler.py's Board protocol), what it uses of Scheduler:
     harts: list[Hart]
-    _hz: float
-    _race_until: float
+    _hz: int
+    _race_until: Time
     _priority: tuple[Hart, int] | None
     _poll_seen: dict[int, tuple[int, list[bytes], int]]
 
-    hart_now: Callable[[Hart], float]
+    hart_now: Callable[[Hart], Time]
+    move_hart: Callable[[Hart, Time], None]
 
     def _begin_wait(self, hart: Hart, turn_start: int) -> bool:
         """The hart came round a poll loop again: when the loop reads only SRAM, and it ran its
@@ -53,7 +55,7 @@ class SramWaits:
             # the last iteration began before this turn: the next one decides. Meanwhile the harts
             # run in lockstep, since what it polls may be about to change for a moment only
             self._race_until = max(self._race_until,
-                                   self.hart_now(hart) + shared_memory.RACE_WINDOW_CYCLES / self._hz)
+                                   self.hart_now(hart) + cycles_time(shared_memory.RACE_WINDOW_CYCLES, self._hz))
             return False
         del self._poll_seen[hart.hart_id]
         wait = shared_memory.Wait(loop, spans, seen)
@@ -69,7 +71,7 @@ class SramWaits:
         hart.state = HartState.WAITING
         return True
 
-    def _end_wait(self, hart: Hart, now: float, by_store: bool) -> None:
+    def _end_wait(self, hart: Hart, now: Time, by_store: bool) -> None:
         """A waiting hart runs again from `now`; woken by a store, it runs before the storer goes on
         (one whole iteration of its loop), and the harts race in lockstep for a moment."""
         wait = hart.wait
@@ -78,12 +80,12 @@ class SramWaits:
                 other.remove_hook(handle)
         hart.wait = None
         hart.state = HartState.RUNNING
-        hart.time = max(hart.time, now)
-        self._race_until = max(self._race_until, hart.time + shared_memory.RACE_WINDOW_CYCLES / self._hz)
+        self.move_hart(hart, max(hart.time, now))
+        self._race_until = max(self._race_until, hart.time + cycles_time(shared_memory.RACE_WINDOW_CYCLES, self._hz))
         if by_store:
             self._priority = (hart, max(shared_memory.RACE_TURN, wait.loop.body))
 
-    def _check_waiters(self, now: float, storer: Hart | None = None) -> None:
+    def _check_waiters(self, now: Time, storer: Hart | None = None) -> None:
         """Waiting harts whose SRAM changed wake at `now` (after `storer`'s turn: at its store)."""
         memory = self.board.memory.bytes
         for hart in self.harts:

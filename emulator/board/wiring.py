@@ -15,6 +15,7 @@ from typing import Callable
 import numpy as np
 
 from ..errors import HardwareMisuse
+from ..vtime import Time
 from ..devices.fpioa import (FUNC_TIMER0_TOGGLE1, FUNC_GPIO0, FUNC_GPIOHS0, FUNC_SPI0_D0, FUNC_SPI0_SCLK, FUNC_SPI0_SS0, FUNC_SPI1_D0,
                     FUNC_SPI1_D1, FUNC_SPI1_SCLK, FUNC_SPI1_SS0, PAD_COUNT)
 from ..devices.fpioa import Fpioa
@@ -79,7 +80,7 @@ class LcdPort:
     with D/C as it is when the frame's last bit is out."""
 
     def __init__(self, chip: ChipPins, lcd: ST7789V, interface: str, pad_level: Callable[[int], int | None],
-                 on_delivery: Callable[[float], None]) -> None:
+                 on_delivery: Callable[[Time], None]) -> None:
         """pad_level: the level a line drives on a pad (DockWiring.pad_level). on_delivery: data
         reached the LCD at this time."""
         if interface not in LCD_INTERFACES:
@@ -90,7 +91,7 @@ class LcdPort:
         self.pad_level = pad_level
         self.on_delivery = on_delivery
 
-    def spi_select(self, selected: bool, now: float) -> None:
+    def spi_select(self, selected: bool, now: Time) -> None:
         self.lcd.set_chip_select(selected, now)
 
     def _check_data_lines(self, lanes: int) -> None:
@@ -113,7 +114,7 @@ class LcdPort:
             raise HardwareMisuse("SPI0 sends to the 4-line serial LCD but no pad carries SPI0_D0 (FPIOA "
                                  "function 4), its data line")
 
-    def spi_transfer(self, data: np.ndarray, lanes: int, now: float) -> np.ndarray:
+    def spi_transfer(self, data: np.ndarray, lanes: int, now: Time) -> np.ndarray:
         if self.chip.fpioa.function_of_pad(PAD_LCD_SCLK) != FUNC_SPI0_SCLK:
             raise HardwareMisuse("SPI0 sends to the LCD but pad 39 (LCD WRX/clock) is not routed to SPI0_SCLK")
         self._check_data_lines(lanes)
@@ -142,16 +143,16 @@ class SdSlot:
         """Whether pad 29 carries a GPIOHS or GPIO line (software chip select)."""
         return is_gpio_line(self.chip.fpioa.function_of_pad(PAD_SD_CS))
 
-    def spi_select(self, selected: bool, now: float) -> None:
+    def spi_select(self, selected: bool, now: Time) -> None:
         if not self.cs_is_gpio():
             self.card.set_selected(selected, now)
 
-    def gpio_changed(self, now: float) -> None:
+    def gpio_changed(self, now: Time) -> None:
         if self.cs_is_gpio():
             level = self.pad_level(PAD_SD_CS)
             self.card.set_selected(level == 0, now)
 
-    def spi_transfer(self, data: np.ndarray, lanes: int, now: float) -> np.ndarray:
+    def spi_transfer(self, data: np.ndarray, lanes: int, now: Time) -> np.ndarray:
         fpioa = self.chip.fpioa
         if fpioa.function_of_pad(PAD_SD_SCLK) != FUNC_SPI1_SCLK or fpioa.function_of_pad(PAD_SD_MOSI) != FUNC_SPI1_D0:
             return np.full(len(data), 0xFF, dtype=np.uint8)   # the card sees no clock or no data
@@ -189,7 +190,7 @@ class RoutedInput:
     def may_grow(self) -> bool:
         return self._routed() and self.source.may_grow
 
-    def has_byte(self, virtual_now: float) -> bool:
+    def has_byte(self, virtual_now: Time) -> bool:
         return self._routed() and self.source.has_byte(virtual_now)
 
     def pop(self) -> int:
@@ -203,7 +204,7 @@ class DockWiring:
     """Routes SPI chip selects and GPIOHS and GPIO lines to the LCD and the SD slot through FPIOA."""
 
     def __init__(self, chip: ChipPins, ports: Ports, lcd: ST7789V, lcd_interface: str, sd_card: SdCard | None,
-                 on_lcd_delivery: Callable[[float], None], outside: Callable[[], tuple[int, dict[int, int]]]) -> None:
+                 on_lcd_delivery: Callable[[Time], None], outside: Callable[[], tuple[int, dict[int, int]]]) -> None:
         """ports: the catch-up of the devices before pins change, warnings and the --vcd pins;
         on_lcd_delivery: data reached the LCD at this time; outside: the pads driven from outside
         (--pin), as (a version that changes with them, pad -> level)."""
@@ -218,7 +219,7 @@ class DockWiring:
         self._pad_levels: list[int | None] = [None] * PAD_COUNT
         self._driven_pads: set[int] = set()        # the pads whose _pad_levels entry is not None
         self._line_pads: tuple[int, tuple[int, ...]] = (-1, ())   # (FPIOA routing version, pads carrying a line)
-        self.pad_changes: list[tuple[float, int, int | None]] = []   # (virtual time, pad, level or None)
+        self.pad_changes: list[tuple[Time, int, int | None]] = []   # (virtual time, pad, level or None)
         self.pad_change_count = 0
 
     def spi0_device(self, ss: int) -> LcdPort | None:
@@ -275,7 +276,7 @@ class DockWiring:
             return self.chip.gpiohs.driven_level(function - FUNC_GPIOHS0)
         return None
 
-    def pad_level(self, pad: int, now: float | None = None) -> int | None:
+    def pad_level(self, pad: int, now: Time | None = None) -> int | None:
         """The level a GPIOHS or slow-GPIO line drives on a pad, or None when none drives it."""
         function = self.chip.fpioa.function_of_pad(pad)
         if FUNC_GPIOHS0 <= function < FUNC_GPIOHS0 + 32:
@@ -287,14 +288,14 @@ class DockWiring:
             return self.chip.timers[timer].toggle_level(channel, self.ports.clock.now() if now is None else now)
         return None
 
-    def timer_toggled(self, timer: int, channel: int, at: float, level: int) -> None:
+    def timer_toggled(self, timer: int, channel: int, at: Time, level: int) -> None:
         """A PWM output changed at `at` (the timer tells each change with its own time): the pads
         FPIOA routes it to follow, in the pad log and --vcd."""
         function = FUNC_TIMER0_TOGGLE1 + TIMER_CHANNELS * timer + channel
         for pad in self.chip.fpioa.pads_with_function(function):
             self._record_pad(pad, level, at)
 
-    def _log_pad_changes(self, now: float) -> None:
+    def _log_pad_changes(self, now: Time) -> None:
         # Only a pad that carries a GPIOHS or GPIO line can be driven now, and only one driven at the
         # last look can have stopped being driven: the others stay undriven (None) either way.
         fpioa = self.chip.fpioa
@@ -305,7 +306,7 @@ class DockWiring:
         for pad in sorted(self._driven_pads.union(line_pads)):
             self._record_pad(pad, self.pad_level(pad, now), now)
 
-    def _record_pad(self, pad: int, level: int | None, now: float) -> None:
+    def _record_pad(self, pad: int, level: int | None, now: Time) -> None:
         if level != self._pad_levels[pad]:
             self._pad_levels[pad] = level
             if level is None:
@@ -317,7 +318,7 @@ class DockWiring:
             if len(self.pad_changes) < MAX_PAD_CHANGES:
                 self.pad_changes.append((now, pad, level))
 
-    def changed(self, now: float) -> None:
+    def changed(self, now: Time) -> None:
         """FPIOA or a GPIOHS or GPIO output changed: the pad log, the LCD's reset pin, the SPI
         chip selects, the SD card's software chip select and the GPIO block's edge detection
         follow."""

@@ -4,5 +4,5 @@ fast interpreter beside them (_fast_engine.c), the native instruction counter an
 the RISC-V names and numbers (riscv.py: registers, CSRs, causes, interrupts); native.py mirrors
 the C extension's structures for ctypes.
 
-May import: emulator.errors, emulator.memory_map, and this package. Never the board, the devices
+May import: emulator.errors, emulator.memory_map, emulator.vtime, and this package. Never the board, the devices
 or the front-ends: the board hands a hart what it needs (CsrContext, device windows, hooks)."""

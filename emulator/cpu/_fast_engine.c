@@ -1525,29 +1525,56 @@ void fast_abandon(fast_state_t *f, void *uc)
 }
 
 /* The scheduler's turns of a hart running alone (scheduler.py, _go_on_alone), as fast_run_alone runs
- * them: in, the time and clock of the first and what bounds them; out, where the last one began and
- * how it ended. The float arithmetic is the scheduler's, operation for operation (IEEE doubles both). */
+ * them: in, the hart's clock and what bounds the turns; out, where the last one began and how it ended.
+ * Times are whole picoseconds (vtime.py), the arithmetic the scheduler's, exact in both. */
 typedef struct {
-    double t0;          /* in: when the first turn begins; out: when the last one began */
-    double hz;
-    double quantum;     /* cycles a turn */
-    double outer;       /* no turn runs past it (a device event, a grab, the run's end) */
-    double stop_at;     /* no turn begins at or after it */
+    int64_t anchor_time;    /* the hart's time is anchor_time + cycles_time(cycles - anchor_cycles, hz) */
+    uint64_t anchor_cycles;
+    uint64_t hz;
+    uint64_t quantum;   /* cycles a turn */
+    int64_t outer;      /* no turn runs past it (a device event, a grab, the run's end) */
+    int64_t stop_at;    /* no turn begins at or after it */
     uint64_t max_turns;
-    double horizon;     /* out: the last turn's horizon */
+    int64_t t0;         /* out: when the last turn began */
+    int64_t horizon;    /* out: the last turn's horizon */
     uint64_t budget;    /* out: its cycle budget */
     uint64_t start_cycles, start_executed;   /* out: the counter when it began */
     uint64_t turns;     /* out: turns begun */
     uint64_t handed_over;   /* out: 1 when the last turn stopped before its end (the pc needs the precise
                                engine, or a poll loop came round): the scheduler finishes it */
-    double end_time;    /* out, handed_over 0: when the last turn ended */
+    int64_t end_time;   /* out, handed_over 0: when the last turn ended */
     /* Device events that bound the turns as `outer` does but need no board between them (the console's
      * bytes leaving the UART while nothing else hears them: Uarths.quiet_ticks): `ticks` of them, the
-     * first at `tick`, each `tick_period` after the one before (the UART's own float sums). */
-    double tick;
-    double tick_period;
+     * first at `tick`, each `tick_period` after the one before (the UART's own sums). */
+    int64_t tick;
+    int64_t tick_period;
     uint64_t ticks;
 } alone_plan_t;
+
+#define PS_PER_S 1000000000000ULL
+
+/* vtime.cycles_time: how long `cycles` cycles at `hz` take, rounded up to a picosecond */
+static int64_t cycles_time(uint64_t cycles, uint64_t hz)
+{
+    unsigned __int128 ps = (unsigned __int128)cycles * PS_PER_S;
+    return (int64_t)((ps + hz - 1) / hz);
+}
+
+/* Scheduler.time_at_cycles: the hart's time at cycle count `cycles` */
+static int64_t plan_time_at(const alone_plan_t *plan, uint64_t cycles)
+{
+    return plan->anchor_time + cycles_time(cycles - plan->anchor_cycles, plan->hz);
+}
+
+/* Scheduler.cycles_until: the least cycle count at which the hart's time is `time` or later */
+static uint64_t plan_cycles_until(const alone_plan_t *plan, int64_t time)
+{
+    int64_t since = time - plan->anchor_time - 1;
+    if (since < 0)
+        return plan->anchor_cycles;
+    unsigned __int128 whole = (unsigned __int128)(uint64_t)since * plan->hz / PS_PER_S;
+    return plan->anchor_cycles + (uint64_t)whole + 1;
+}
 
 /* The sizes of the structures native.py mirrors for ctypes (tests/test_native_layout.py checks the
  * mirrors against them and against the field names here): predictor_t, insn_counter_t,
@@ -1574,8 +1601,8 @@ uint64_t fast_run_alone(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t f
 {
     begin_run(f, uc, from);
     f->devices_here = 0;   /* a device access ends the turns here: the scheduler finishes that turn */
-    double t0 = plan->t0;
-    double tick = plan->tick;
+    int64_t t0 = plan_time_at(plan, c->cycles);
+    int64_t tick = plan->tick;
     uint64_t ticks = plan->ticks;
     plan->turns = 0;
     plan->handed_over = 0;
@@ -1585,13 +1612,13 @@ uint64_t fast_run_alone(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t f
             tick = tick + plan->tick_period;
             ticks--;
         }
-        double horizon = t0 + plan->quantum / plan->hz;
+        int64_t horizon = plan_time_at(plan, c->cycles + plan->quantum);
         if (plan->outer < horizon)
             horizon = plan->outer;
         if (ticks != 0 && tick < horizon)
             horizon = tick;
-        double wanted = ceil((horizon - t0) * plan->hz - 1e-9);
-        uint64_t budget = wanted > 1.0 ? (uint64_t)wanted : 1;
+        uint64_t until = plan_cycles_until(plan, horizon);
+        uint64_t budget = until > c->cycles + 1 ? until - c->cycles : 1;
         plan->t0 = t0;
         plan->horizon = horizon;
         plan->budget = budget;
@@ -1600,14 +1627,14 @@ uint64_t fast_run_alone(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t f
         plan->turns++;
         c->limit = c->executed + budget;
         c->cycle_limit = c->cycles + budget;
-        enter_guest_fp(f);   /* (the turns' own arithmetic must not raise the guest's flags) */
+        enter_guest_fp(f);   /* (the interpreter's host arithmetic must not raise the guest's flags) */
         int why = interpret(f, c);
         leave_guest_fp(f);
         if (why != STOP_LIMIT || c->poll_report != 0 || (f->write_watch != NULL && f->write_watch->stray)) {
             plan->handed_over = 1;
             break;
         }
-        t0 = t0 + (double)(c->cycles - plan->start_cycles) / plan->hz;
+        t0 = plan_time_at(plan, c->cycles);
         plan->end_time = t0;
         if (t0 >= plan->stop_at || plan->turns >= plan->max_turns)
             break;

@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import ctypes
 import enum
-import math
 import weakref
 from dataclasses import dataclass
 from typing import Callable
@@ -33,6 +32,7 @@ from unicorn import riscv_const as rv
 from unicorn.unicorn_py3 import unicorn as _ucpy
 
 from . import shared_memory, timing
+from ..vtime import NEVER, Time, cycles_in
 from .native import (COUNT_HOOK, NO_LIMIT, AlonePlan, Counter, FastHead, add_native_hook, address_table,
                      counter_lib, fast_step)
 from .privileged import COUNTER_BITS, MSTATUS_RESET, PendingException, PrivilegedArchitecture
@@ -106,7 +106,7 @@ class Hart(PrivilegedArchitecture):
         self.uc.reg_write(rv.UC_RISCV_REG_MSTATUS, MSTATUS_RESET)
         self.csr_context = csr_context
         self.state = HartState.RUNNING
-        self.time = 0.0          # virtual time the hart has reached (asleep: when it went to sleep)
+        self.time: Time = 0      # virtual time the hart has reached (asleep: when it went to sleep)
         self.polling = False     # set during a turn when the board saw it poll an unchanging register
         self.pc = 0
         self.pending_exception: PendingException | None = None
@@ -284,12 +284,12 @@ class Hart(PrivilegedArchitecture):
         if self._fast_state is not None:
             counter_lib.fast_forget_decodings(self._fast_state)
 
-    def arm_repeats(self, pc: int, address: int, width: int, value: int, until: float, clock: tuple[float, int, float],
+    def arm_repeats(self, pc: int, address: int, width: int, value: int, until: Time, clock: tuple[Time, int, int],
                     repeats: int, needed: int) -> None:
         """During a device access the fast engine stopped at (a load of `width` bytes at `address` by
         the instruction at `pc`, which gave `value`): the same load again gives the same value and
-        changes nothing while the hart's time is before `until` (clock: the turn's t0, start cycles
-        and frequency, as Scheduler.hart_now works the time out) and no other device access comes
+        changes nothing while the hart's time is before `until` (clock: the hart's anchor time, anchor
+        cycles and frequency, as Scheduler.time_at_cycles works the time out) and no other device access comes
         between. The fast engine answers it so itself, counting each as a poll from `repeats` on; at
         `needed` the hart polls, and its run ends there (the board hears it through repeats_answered)."""
         rep = self._fast_head.rep
@@ -724,14 +724,9 @@ class Hart(PrivilegedArchitecture):
         return handle
 
 
-def _first_cycle_at(until: float, t0: float, start: int, hz: float) -> int:
-    """The least cycle count c at which the hart's time t0 + (c - start) / hz (Scheduler.hart_now's
-    arithmetic, operation for operation) is `until` or later; NO_LIMIT if never."""
-    if not until < math.inf:
+def _first_cycle_at(until: Time, anchor: Time, start: int, hz: int) -> int:
+    """The least cycle count c at which the hart's time anchor + cycles_time(c - start, hz)
+    (Scheduler.time_at_cycles) is `until` or later; NO_LIMIT if never."""
+    if until >= NEVER:
         return NO_LIMIT
-    c = max(start, start + math.ceil((until - t0) * hz) - 2)
-    while t0 + (c - start) / hz < until:      # the estimate is a cycle or two early; float rounding decides
-        c += 1
-    while c > start and t0 + (c - 1 - start) / hz >= until:
-        c -= 1
-    return min(c, NO_LIMIT)
+    return min(start + max(0, cycles_in(until - anchor - 1, hz) + 1), NO_LIMIT)

@@ -85,11 +85,12 @@ class FastHead(ctypes.Structure):
 
 class AlonePlan(ctypes.Structure):
     """_fast_engine.c's alone_plan_t: the turns of a hart running alone (Scheduler._go_on_alone)."""
-    _fields_ = [("t0", ctypes.c_double), ("hz", ctypes.c_double), ("quantum", ctypes.c_double),
-                ("outer", ctypes.c_double), ("stop_at", ctypes.c_double), ("max_turns", ctypes.c_uint64),
-                ("horizon", ctypes.c_double), ("budget", ctypes.c_uint64), ("start_cycles", ctypes.c_uint64),
+    _fields_ = [("anchor_time", ctypes.c_int64), ("anchor_cycles", ctypes.c_uint64), ("hz", ctypes.c_uint64),
+                ("quantum", ctypes.c_uint64), ("outer", ctypes.c_int64), ("stop_at", ctypes.c_int64),
+                ("max_turns", ctypes.c_uint64), ("t0", ctypes.c_int64), ("horizon", ctypes.c_int64),
+                ("budget", ctypes.c_uint64), ("start_cycles", ctypes.c_uint64),
                 ("start_executed", ctypes.c_uint64), ("turns", ctypes.c_uint64), ("handed_over", ctypes.c_uint64),
-                ("end_time", ctypes.c_double), ("tick", ctypes.c_double), ("tick_period", ctypes.c_double),
+                ("end_time", ctypes.c_int64), ("tick", ctypes.c_int64), ("tick_period", ctypes.c_int64),
                 ("ticks", ctypes.c_uint64)]
 
 

@@ -18,9 +18,8 @@ for a value to grow past a bound), and the ones before it are skipped: their ins
 cycles, mispredictions and stalls are counted, time moves on by their cycles, and the hart reads
 the time of the iteration that ends the loop, which it then runs. The skip stays within the
 hart's turn, whose end is where running would have stopped as well: a one-second wait costs a
-turn's overhead per 20,000 cycles instead of a CSR read per iteration (skipping on past the turn
-while the hart runs alone would need the scheduler's turn arithmetic, which floats make
-path-dependent: issue 33's integer time).
+turn's overhead per 20,000 cycles instead of a CSR read per iteration; while the hart runs alone
+with nothing due, the scheduler lets it skip past its turn's end (Scheduler._alone_until).
 """
 from __future__ import annotations
 
@@ -352,7 +351,7 @@ class LoopSkipper:
 
     def _room(self, body: int, cycles_per: int, turn_limit: int, beyond_turn: int | None = None) -> int:
         """Iterations that fit in the rest of the hart's turn: where running would stop too (beyond
-        it, where the next turns would end depends on the scheduler's float arithmetic of time).
+        it, the scheduler's to allow).
         `beyond_turn`: the cycle count up to which the scheduler lets the hart go past its turn's end
         (Scheduler._alone_until: it runs alone and nothing happens before then)."""
         counter = self.counter

@@ -3,4 +3,4 @@
 register table (mmio.py). A device is given ports (ports.py: its clock, interrupt notice,
 warnings, memory, the peers it talks to), never the board.
 
-May import: emulator.errors, emulator.memory_map, and this package."""
+May import: emulator.errors, emulator.memory_map, emulator.vtime, and this package."""

@@ -9,6 +9,7 @@ power-up contents almost always amount to.
 from __future__ import annotations
 
 from ..memory_map import K210_BLOCKS
+from ..vtime import Time
 from .mmio import BUS_TILELINK, Peripheral, Register
 from .ports import MtimeCounter, Ports
 
@@ -40,7 +41,7 @@ class Clint(Peripheral):
         super().__init__(ports)
         self.counter = counter
 
-    def reset(self, now: float) -> None:
+    def reset(self, now: Time) -> None:
         """A chip reset: msip and mtimecmp as at power-on, mtime from 0."""
         super().reset(now)
         self.counter.set_mtime(0, now)
@@ -48,22 +49,22 @@ class Clint(Peripheral):
     def msip(self, hart: int) -> bool:
         return bool(self.values[MSIP + 4 * hart] & 1)
 
-    def timer_pending(self, hart: int, now: float) -> bool:
+    def timer_pending(self, hart: int, now: Time) -> bool:
         return self.counter.mtime(now) >= self.values[MTIMECMP + 8 * hart]
 
-    def write(self, offset: int, size: int, value: int, now: float) -> None:
+    def write(self, offset: int, size: int, value: int, now: Time) -> None:
         if size == 4 and offset in (MTIME, MTIME + 4):
             # a 32-bit store replaces one half of the running counter; the other half is
             # what mtime holds now, not what was last written
             self.values[MTIME] = self.counter.mtime(now)
         super().write(offset, size, value, now)
 
-    def read_register(self, offset: int, reg: Register, now: float) -> int:
+    def read_register(self, offset: int, reg: Register, now: Time) -> int:
         if offset == MTIME:
             return self.counter.mtime(now)
         return self.values[offset]
 
-    def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
+    def write_register(self, offset: int, reg: Register, value: int, now: Time) -> None:
         if offset == MTIME:
             self.counter.set_mtime(value, now)
         elif offset < MTIMECMP:
@@ -72,7 +73,7 @@ class Clint(Peripheral):
             self.values[offset] = value
         self.ports.irq_changed(now)
 
-    def next_event_time(self, now: float) -> float | None:
+    def next_event_time(self, now: Time) -> Time | None:
         times = []
         for hart in range(HARTS):
             when = self.counter.time_of_mtime(self.values[MTIMECMP + 8 * hart])

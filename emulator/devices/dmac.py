@@ -21,6 +21,7 @@ import numpy as np
 
 from ..errors import HardwareMisuse, UnmodelledAccess
 from ..memory_map import K210_BLOCKS
+from ..vtime import Time, cycles_time
 from .mmio import BUS_AHB, Peripheral, Register, field
 from .ports import DmaMemory, Ports
 
@@ -78,7 +79,7 @@ class Transfer:
     src_fixed: bool
     dst_fixed: bool
     done_items: int = 0
-    done_at: float | None = None
+    done_at: Time | None = None
     peripheral: object = None
 
 
@@ -106,7 +107,7 @@ class DmaChannel:
         t.done_items += n
         return values
 
-    def accept_from_peripheral(self, values: np.ndarray, now: float) -> None:
+    def accept_from_peripheral(self, values: np.ndarray, now: Time) -> None:
         """Received items from a peripheral's receive FIFO, written to memory."""
         t = self.transfer
         if t is None:
@@ -124,7 +125,7 @@ class DmaChannel:
         if self.transfer is not None:
             self.transfer.peripheral = None
 
-    def peripheral_done(self, at: float) -> None:
+    def peripheral_done(self, at: Time) -> None:
         if self.transfer is not None:
             self.transfer.done_at = at
 
@@ -137,9 +138,9 @@ class HandshakePeripheral(Protocol):
 
     def is_data_register(self, address: int) -> bool: ...
 
-    def attach_tx_dma(self, channel: DmaChannel, now: float) -> None: ...
+    def attach_tx_dma(self, channel: DmaChannel, now: Time) -> None: ...
 
-    def attach_rx_dma(self, channel: DmaChannel, now: float) -> None: ...
+    def attach_rx_dma(self, channel: DmaChannel, now: Time) -> None: ...
 
     def detach_dma(self, channel: DmaChannel) -> None: ...
 
@@ -174,7 +175,7 @@ class Dmac(Peripheral):
         self.peripherals = peripherals
         self.channels = [DmaChannel(self, n) for n in range(CHANNELS)]
 
-    def reset(self, now: float) -> None:
+    def reset(self, now: Time) -> None:
         for channel in self.channels:
             if channel.transfer is not None and channel.transfer.peripheral is not None:
                 channel.transfer.peripheral.detach_dma(channel)
@@ -186,13 +187,13 @@ class Dmac(Peripheral):
 
     # --- time ------------------------------------------------------------------------
 
-    def advance(self, now: float) -> None:
+    def advance(self, now: Time) -> None:
         for channel in self.channels:
             t = channel.transfer
             if t is not None and t.done_at is not None and t.done_at <= now:
                 self._complete(channel)
 
-    def next_event_time(self, now: float) -> float | None:
+    def next_event_time(self, now: Time) -> Time | None:
         times = [c.transfer.done_at for c in self.channels
                  if c.transfer is not None and c.transfer.done_at is not None and c.transfer.done_at > now]
         return min(times) if times else None
@@ -234,7 +235,7 @@ class Dmac(Peripheral):
 
     # --- registers ------------------------------------------------------------------------
 
-    def read_register(self, offset: int, reg: Register, now: float) -> int:
+    def read_register(self, offset: int, reg: Register, now: Time) -> int:
         self.ports.catch_up(now)
         if offset == INTSTATUS:
             return sum(1 << n for n in range(CHANNELS) if self.values[self._ch(n, CH_INTSTATUS)])
@@ -242,7 +243,7 @@ class Dmac(Peripheral):
             return 0   # reset completes at once
         return self.values[offset]
 
-    def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
+    def write_register(self, offset: int, reg: Register, value: int, now: Time) -> None:
         if offset >= CH_BASE and (offset - CH_BASE) % CH_STRIDE in _SETUP_REGISTERS and \
                 self.channels[(offset - CH_BASE) // CH_STRIDE].transfer is None:
             # an idle channel's set-up: nothing the devices do until now depends on it (its start, at
@@ -268,7 +269,7 @@ class Dmac(Peripheral):
         if offset == CFG:
             self.ports.irq_changed(now)
 
-    def _write_chen(self, value: int, now: float) -> None:
+    def _write_chen(self, value: int, now: Time) -> None:
         old = self.values[CHEN]
         write_enable = (value >> 8) & 0x3F
         new = (old & ~write_enable) | (value & write_enable)
@@ -285,7 +286,7 @@ class Dmac(Peripheral):
                 raise UnmodelledAccess(f"DMAC: disabling channel {n} in the middle of a transfer is not modelled")
         self.values[CHEN] = (self.values[CHEN] & ~0x3F) | (new & 0x3F)
 
-    def _start(self, n: int, now: float) -> None:
+    def _start(self, n: int, now: Time) -> None:
         ctl = self.values[self._ch(n, CTL)]
         cfg = self.values[self._ch(n, CH_CFG)]
         if field(cfg, 0, 4) or self.values[self._ch(n, LLP)]:
@@ -306,7 +307,10 @@ class Dmac(Peripheral):
             values = memory.read_items(transfer.src, src_width, items, transfer.src_fixed)
             memory.write_items(transfer.dst, dst_width, values, transfer.dst_fixed, f"DMAC channel {n}")
             transfer.done_items = items
-            transfer.done_at = now + items * src_width / MEM2MEM_BYTES_PER_CYCLE / self.ports.clock.cpu_hz()
+            # items x width bytes at 8 bytes a cycle, as bytes at 8 x the clock rate: a copy that ends
+            # within a beat is not rounded to whole cycles (only to a whole picosecond, up)
+            bytes_per_second = MEM2MEM_BYTES_PER_CYCLE * self.ports.clock.cpu_hz()
+            transfer.done_at = now + cycles_time(items * src_width, bytes_per_second)
             return
         if kind not in (TT_MEM2PER, TT_PER2MEM):
             raise UnmodelledAccess(f"DMAC channel {n}: transfer type {kind} is not modelled")

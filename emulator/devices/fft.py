@@ -24,6 +24,7 @@ from __future__ import annotations
 
 from ..errors import UnmodelledAccess
 from ..memory_map import K210_BLOCKS
+from ..vtime import Time
 from .mmio import Peripheral, Register
 
 INPUT_FIFO, CTRL, FIFO_CTRL, INTR_MASK, INTR_CLEAR, STATUS, STATUS_RAW, OUTPUT_FIFO = range(0, 0x40, 8)
@@ -47,14 +48,14 @@ class Fft(Peripheral):
     def irq_line(self) -> bool:
         return False                    # no calculation ever completes
 
-    def read_register(self, offset: int, reg: Register, now: float) -> int:
+    def read_register(self, offset: int, reg: Register, now: Time) -> int:
         if offset == OUTPUT_FIFO:
             raise UnmodelledAccess("FFT: reading a result from fft_output_fifo: the FFT calculation is not modelled")
         if offset in (INTR_CLEAR, STATUS, STATUS_RAW):
             return 0
         return self.values[offset]
 
-    def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
+    def write_register(self, offset: int, reg: Register, value: int, now: Time) -> None:
         if offset == INPUT_FIFO:
             raise UnmodelledAccess("FFT: data written to fft_input_fifo: the FFT calculation is not modelled")
         if offset == INTR_CLEAR:

@@ -7,6 +7,7 @@ firmware routed, as on the Maix Dock.
 from __future__ import annotations
 
 from ..memory_map import K210_BLOCKS
+from ..vtime import Time
 from .mmio import Peripheral, Register
 from .ports import Ports
 
@@ -59,7 +60,7 @@ class Fpioa(Peripheral):
         self._pads_by_function.clear()
         self.routing_version += 1
 
-    def reset(self, now: float) -> None:
+    def reset(self, now: Time) -> None:
         super().reset(now)
         self._unroute_all()
         self.ports.wiring_changed(now)
@@ -74,7 +75,7 @@ class Fpioa(Peripheral):
                                                             if self.function_of_pad(pad) == function)
         return list(pads)
 
-    def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
+    def write_register(self, offset: int, reg: Register, value: int, now: Time) -> None:
         self.values[offset] = value
         self._pads_by_function.clear()
         self.routing_version += 1

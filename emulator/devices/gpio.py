@@ -23,6 +23,7 @@ from __future__ import annotations
 
 from .fpioa import FUNC_GPIO0
 from ..memory_map import K210_BLOCKS
+from ..vtime import Time
 from .mmio import Peripheral, Register
 from .ports import PadInputs, Ports
 
@@ -60,7 +61,7 @@ class Gpio(Peripheral):
         self._last_input = 0
         self._edges = 0            # latched edge interrupts, until cleared through eoi
 
-    def reset(self, now: float) -> None:
+    def reset(self, now: Time) -> None:
         super().reset(now)
         self._last_input = 0
         self._edges = 0
@@ -99,7 +100,7 @@ class Gpio(Peripheral):
             return False
         return bool(self._raw_status() & ~self.values[INT_MASK])
 
-    def wiring_changed(self, now: float) -> None:
+    def wiring_changed(self, now: Time) -> None:
         """Pad levels may have changed (FPIOA, this block's outputs): latch the edges the
         enabled edge-sensitive input lines saw."""
         inputs = self.input_value()
@@ -112,7 +113,7 @@ class Gpio(Peripheral):
 
     # --- registers ----------------------------------------------------------------------------
 
-    def read_register(self, offset: int, reg: Register, now: float) -> int:
+    def read_register(self, offset: int, reg: Register, now: Time) -> int:
         if offset == DATA_INPUT:
             return self.input_value()
         if offset == INT_RAW_STATUS:
@@ -121,7 +122,7 @@ class Gpio(Peripheral):
             return self._raw_status() & ~self.values[INT_MASK] & LINE_MASK
         return self.values[offset]
 
-    def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
+    def write_register(self, offset: int, reg: Register, value: int, now: Time) -> None:
         if offset == INT_CLEAR:
             self._edges &= ~value
             self.ports.irq_changed(now)

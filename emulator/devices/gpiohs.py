@@ -9,6 +9,7 @@ what it drives; else what drives the pad from outside (--pin); else its pull, GP
 from __future__ import annotations
 
 from ..memory_map import K210_BLOCKS
+from ..vtime import Time
 from .mmio import BUS_TILELINK, Peripheral, Register
 from .fpioa import FUNC_GPIOHS0
 from .ports import PadInputs, Ports
@@ -45,7 +46,7 @@ class Gpiohs(Peripheral):
         self.pad_inputs = pad_inputs
         self._last_input = 0
 
-    def reset(self, now: float) -> None:
+    def reset(self, now: Time) -> None:
         super().reset(now)
         self._last_input = 0
 
@@ -68,7 +69,7 @@ class Gpiohs(Peripheral):
         value = (out & driven) | (levels & outside & ~driven) | (pulled & ~outside & ~driven)
         return value & self.values[INPUT_EN] & MASK
 
-    def wiring_changed(self, now: float) -> None:
+    def wiring_changed(self, now: Time) -> None:
         """A pad's level from outside or FPIOA's routing may have changed: edges are latched."""
         self._sample_inputs()
         self.ports.irq_changed(now)
@@ -91,12 +92,12 @@ class Gpiohs(Peripheral):
         self.values[LOW_IP] = ~now_in & self.values[INPUT_EN] & MASK
         self._last_input = now_in
 
-    def read_register(self, offset: int, reg: Register, now: float) -> int:
+    def read_register(self, offset: int, reg: Register, now: Time) -> int:
         if offset == INPUT_VAL:
             return self.input_value()
         return self.values[offset]
 
-    def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
+    def write_register(self, offset: int, reg: Register, value: int, now: Time) -> None:
         if offset in (RISE_IP, FALL_IP):
             self.values[offset] &= ~value & MASK   # write 1 to clear
             return

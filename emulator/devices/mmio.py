@@ -18,6 +18,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from ..errors import RegisterRuleViolation
+from ..vtime import Time
 from .ports import Ports
 
 
@@ -66,7 +67,7 @@ class Peripheral:
         # lookup's answers by (offset, size, is_write): the table is fixed, and the firmware polls
         self._found: dict[tuple[int, int, bool], tuple[int, Register]] = {}
 
-    def reset(self, now: float) -> None:
+    def reset(self, now: Time) -> None:
         """A reset of this block (SYSCTL peri_reset): registers return to their reset values."""
         self.values = {off: reg.reset for off, reg in self.REGISTERS.items()}
 
@@ -111,11 +112,11 @@ class Peripheral:
             return double, reg
         return None
 
-    def merge_base(self, offset: int, reg: Register, now: float) -> int:
+    def merge_base(self, offset: int, reg: Register, now: Time) -> int:
         """What a store that changes only some bytes of a register leaves in the others."""
         return self.values[offset]
 
-    def read(self, offset: int, size: int, now: float) -> int:
+    def read(self, offset: int, size: int, now: Time) -> int:
         base, reg = self.lookup(offset, size, False)
         value = self.read_register(base, reg, now)
         if base != offset:
@@ -124,7 +125,7 @@ class Peripheral:
             return value & 0xFFFF_FFFF
         return value
 
-    def write(self, offset: int, size: int, value: int, now: float) -> None:
+    def write(self, offset: int, size: int, value: int, now: Time) -> None:
         base, reg = self.lookup(offset, size, True)
         if reg.width == 8 and size == 4:
             old = self.values.get(base, 0)
@@ -136,10 +137,10 @@ class Peripheral:
 
     # --- behaviour, overridden by subclasses ------------------------------------------
 
-    def read_register(self, offset: int, reg: Register, now: float) -> int:
+    def read_register(self, offset: int, reg: Register, now: Time) -> int:
         return self.values[offset]
 
-    def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
+    def write_register(self, offset: int, reg: Register, value: int, now: Time) -> None:
         self.values[offset] = value
 
     def irq_line(self) -> bool:
@@ -151,11 +152,11 @@ class Peripheral:
         PLIC source); a block with more than one line overrides this."""
         return 1 if self.irq_line() else 0
 
-    def next_event_time(self, now: float) -> float | None:
+    def next_event_time(self, now: Time) -> Time | None:
         """The next virtual time at which this device changes state by itself (None: never)."""
         return None
 
-    def stable_until(self, offset: int, now: float) -> float:
+    def stable_until(self, offset: int, now: Time) -> Time:
         """Right after a read of the register at `offset` at `now`: the virtual time before which
         reading it again would return the same value and change nothing, in the device or
         elsewhere (advancing the device to then included), provided no other access reaches the
@@ -164,7 +165,7 @@ class Peripheral:
         changes it says so here."""
         return now
 
-    def advance(self, now: float) -> None:
+    def advance(self, now: Time) -> None:
         """Brings the device's time-driven state up to `now`."""
 
     def describe_wait(self) -> str | None:

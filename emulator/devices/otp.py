@@ -31,6 +31,7 @@ from __future__ import annotations
 
 from ..errors import UnmodelledAccess
 from ..memory_map import K210_BLOCKS
+from ..vtime import Time
 from .mmio import Peripheral, Register
 from .ports import Ports
 
@@ -74,7 +75,7 @@ class Otp(Peripheral):
         self.source = source
         self._told = False
 
-    def _byte(self, bit_address: int, now: float) -> int | None:
+    def _byte(self, bit_address: int, now: Time) -> int | None:
         """The byte at a bit address; None where the array gives nothing out (the key, past the end)."""
         if not self._told:
             self._told = True
@@ -86,7 +87,7 @@ class Otp(Peripheral):
             return None
         return self.content[address]
 
-    def read_register(self, offset: int, reg: Register, now: float) -> int:
+    def read_register(self, offset: int, reg: Register, now: Time) -> int:
         if offset == ADR_IN_FLAG:
             return int(self.values[CEB] == 0 and self.values[MODE] == 0 and self.values[CLE] == 0)
         if offset == DAT_CPU:
@@ -96,7 +97,7 @@ class Otp(Peripheral):
             return 0
         return self.values[offset]
 
-    def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
+    def write_register(self, offset: int, reg: Register, value: int, now: Time) -> None:
         if offset in UNMODELLED_WHEN_SET and value:
             raise UnmodelledAccess(f"OTP.{UNMODELLED_WHEN_SET[offset]} = 0x{value:x}: programming the OTP, its test "
                                    f"modes, BISR and key compare are not modelled (reads are)")

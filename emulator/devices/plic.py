@@ -23,6 +23,7 @@ from __future__ import annotations
 from typing import Callable, Iterable
 
 from ..memory_map import K210_BLOCKS
+from ..vtime import Time
 from .mmio import BUS_TILELINK, Peripheral, Register, byte_fields
 from .ports import Ports
 
@@ -78,12 +79,12 @@ class Plic(Peripheral):
         self.pending: set[int] = set()
         self.in_service: set[int] = set()
 
-    def reset(self, now: float) -> None:
+    def reset(self, now: Time) -> None:
         super().reset(now)
         self.pending.clear()
         self.in_service.clear()
 
-    def latch(self, source: int, now: float) -> None:
+    def latch(self, source: int, now: Time) -> None:
         """A pulse on a source's line (a block whose interrupt is a pulse, the RTC's): the gateway
         latches it as pending, unless the source is being served."""
         if source not in self.in_service:
@@ -114,7 +115,7 @@ class Plic(Peripheral):
         self.sample()
         return self._best(context) != 0
 
-    def read_register(self, offset: int, reg: Register, now: float) -> int:
+    def read_register(self, offset: int, reg: Register, now: Time) -> int:
         self.ports.catch_up(now)
         self.sample()
         if PENDING <= offset < PENDING + 4 * WORDS:
@@ -131,7 +132,7 @@ class Plic(Peripheral):
             return source
         return self.values[offset]
 
-    def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
+    def write_register(self, offset: int, reg: Register, value: int, now: Time) -> None:
         if offset >= CLAIM - 4 and (offset - CLAIM) % CONTEXT_STRIDE == 0:
             self.in_service.discard(value)   # complete
             self.sample()

@@ -14,14 +14,16 @@ from typing import Callable, Protocol
 
 import numpy as np
 
+from ..vtime import Time
+
 
 class Clock(Protocol):
     """The board's virtual clock as devices see it."""
 
-    def cpu_hz(self) -> float:
-        """The CPU clock now (SYSCTL's ACLK): what bus, UARTHS and CLINT rates follow."""
+    def cpu_hz(self) -> int:
+        """The CPU clock now (SYSCTL's ACLK), in whole hertz: what bus, UARTHS and CLINT rates follow."""
 
-    def now(self) -> float:
+    def now(self) -> Time:
         """The board's virtual time, for a question asked outside an access (an interrupt line's level)."""
 
 
@@ -31,16 +33,16 @@ class Ports:
 
     clock: Clock
     # a warning, with the virtual time the device noticed it (None: the board's time)
-    warn: Callable[[str, float | None], None]
+    warn: Callable[[str, Time | None], None]
     # an interrupt line of this device may have changed at this time: the board samples the lines
     # (each device's irq_line) and wakes or interrupts the harts
-    irq_changed: Callable[[float], None]
+    irq_changed: Callable[[Time], None]
     # brings every timed device up to this time, before an access whose answer depends on them
-    catch_up: Callable[[float], None]
+    catch_up: Callable[[Time], None]
     # a pin changed: (time, signal name, level or None for high impedance), for --vcd
-    signal: Callable[[float, str, int | None], None]
+    signal: Callable[[Time, str, int | None], None]
     # something the Dock's wiring follows changed at this time (a pad's routing, a driven level)
-    wiring_changed: Callable[[float], None]
+    wiring_changed: Callable[[Time], None]
 
 
 class PadInputs(Protocol):
@@ -55,11 +57,11 @@ class MtimeCounter(Protocol):
     """The CLINT's mtime, which counts at CPU clock / 50 across clock changes: the board's clock
     keeps it, as an integral of the CPU clock over virtual time."""
 
-    def mtime(self, now: float) -> int: ...
+    def mtime(self, now: Time) -> int: ...
 
-    def set_mtime(self, value: int, now: float) -> None: ...
+    def set_mtime(self, value: int, now: Time) -> None: ...
 
-    def time_of_mtime(self, value: int) -> float | None:
+    def time_of_mtime(self, value: int) -> Time | None:
         """When mtime reaches `value` at today's clock (None: never)."""
 
 
@@ -76,7 +78,7 @@ class SerialInput(Protocol):
 
     may_grow: bool          # an interactive terminal: more may come later
 
-    def has_byte(self, virtual_now: float) -> bool: ...
+    def has_byte(self, virtual_now: Time) -> bool: ...
 
     def pop(self) -> int: ...
 

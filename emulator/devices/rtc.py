@@ -22,12 +22,12 @@ nothing in the RTC), which the PLIC's gateway latches as pending (source 20): th
 from __future__ import annotations
 
 import calendar
-import math
 from dataclasses import dataclass
 from datetime import datetime, timedelta
 from typing import Callable
 
 from ..memory_map import K210_BLOCKS
+from ..vtime import Time, cycles_in, cycles_time
 from .mmio import Peripheral, Register
 from .ports import Ports
 
@@ -98,7 +98,7 @@ class Rtc(Peripheral):
         EXTENDED: Register("extended"),
     }
 
-    def __init__(self, ports: Ports, pulse: Callable[[float], None]) -> None:
+    def __init__(self, ports: Ports, pulse: Callable[[Time], None]) -> None:
         """pulse: the interrupt line pulses at this time (the PLIC's gateway latches it)."""
         super().__init__(ports)
         self.pulse = pulse
@@ -106,10 +106,13 @@ class Rtc(Peripheral):
 
     def _clear(self) -> None:
         self.calendar = Calendar()
-        self._since: float | None = None       # running: when current_count had `_count`
+        self._since: Time | None = None        # running: when current_count had `_count`
         self._count = 0
+        # the seconds after _since whose start advance has told (the k-th begins _second_start(k)):
+        # each is counted in RTC clocks from _since, never by adding rounded second lengths
+        self._told = 0
 
-    def reset(self, now: float) -> None:
+    def reset(self, now: Time) -> None:
         super().reset(now)
         self._clear()
 
@@ -121,17 +124,25 @@ class Rtc(Peripheral):
     def _running(self) -> bool:
         return self.values[REGISTER_CTRL] & 3 == READ_ENABLE
 
-    def _position(self, now: float) -> tuple[int, int]:
-        """(whole seconds the calendar has moved on since _since, current_count now)."""
+    def _run(self, since: Time) -> None:
+        """The calendar runs from `since` on, current_count then being `_count`."""
+        self._since, self._told = since, 0
+
+    def _position(self, now: Time) -> tuple[int, int]:
+        """(whole seconds the calendar has moved on since the last second advance told (since
+        _since if none), current_count now)."""
         if self._since is None:
             return 0, self._count
-        ticks = int((now - self._since) * CLOCK_HZ + 1e-6)
+        # cycles since the start of the second current at _since
+        total = self._before() + cycles_in(now - self._since, CLOCK_HZ)
         per = self._per_second()
-        start = max(self._count, 1)
-        total = start - 1 + ticks                 # cycles since the start of the current second
-        return total // per, total % per + 1
+        return total // per - self._told, total % per + 1
 
-    def _settle(self, now: float) -> None:
+    def _before(self) -> int:
+        """Cycles of the second current at _since that had passed by then."""
+        return max(self._count, 1) - 1
+
+    def _settle(self, now: Time) -> None:
         """Folds the time run since _since into the calendar (before anything changes)."""
         if self._since is None:
             return
@@ -139,16 +150,21 @@ class Rtc(Peripheral):
         if seconds:
             self.calendar = self.calendar.plus(seconds)
         self._count = count
-        self._since = now
+        self._run(now)
 
-    def _second_starts(self, now: float) -> float | None:
+    def _second_start(self, k: int) -> Time:
+        """When the k-th second after _since begins (the first: 1)."""
+        return self._since + cycles_time(k * self._per_second() - self._before(), CLOCK_HZ)
+
+    def _second_after(self, now: Time) -> int:
+        """k of the first second after _since to begin after `now`."""
+        return (self._before() + cycles_in(now - self._since, CLOCK_HZ)) // self._per_second() + 1
+
+    def _second_starts(self, now: Time) -> Time | None:
         """When the next second begins after `now` (None: the calendar stands)."""
         if self._since is None:
             return None
-        per = self._per_second()
-        before = max(self._count, 1) - 1             # cycles of the current second before _since
-        k = math.floor(((now - self._since) * CLOCK_HZ + before) / per + 1e-9) + 1
-        return self._since + (k * per - before) / CLOCK_HZ
+        return self._second_start(self._second_after(now))
 
     # --- interrupts ------------------------------------------------------------------------------------
 
@@ -171,27 +187,29 @@ class Rtc(Peripheral):
                 return True
         return False
 
-    def next_event_time(self, now: float) -> float | None:
+    def next_event_time(self, now: Time) -> Time | None:
         if self._since is None or not self.values[INTERRUPT_CTRL] & (TICK_ENABLE | ALARM_ENABLE):
             return None
         return self._second_starts(now)
 
-    def advance(self, now: float) -> None:
+    def advance(self, now: Time) -> None:
         """Interrupt pulses at the seconds that begin up to `now`, each raised at its own time."""
         if self._since is None or not self.values[INTERRUPT_CTRL] & (TICK_ENABLE | ALARM_ENABLE):
             return
         while True:
-            start = self._second_starts(self._since)
-            if start > now + 1e-12:
+            # the second after the last told, or (none told yet) the first to begin after _since
+            k = self._told + 1 if self._told else self._second_after(self._since)
+            start = self._second_start(k)
+            if start > now:
                 return
             self.calendar = self.calendar.plus(1)
-            self._since, self._count = start, 1
+            self._told = k
             if self._interrupting(self.calendar):
                 self.pulse(start)
 
     # --- registers -------------------------------------------------------------------------------------
 
-    def read_register(self, offset: int, reg: Register, now: float) -> int:
+    def read_register(self, offset: int, reg: Register, now: Time) -> int:
         self.advance(now)
         moment = self.calendar.plus(self._position(now)[0]) if self._since is not None else self.calendar
         if offset == DATE:
@@ -204,13 +222,16 @@ class Rtc(Peripheral):
             return moment.century | (0x20 if moment.leap() else 0)
         return self.values[offset]
 
-    def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
+    def write_register(self, offset: int, reg: Register, value: int, now: Time) -> None:
         self.advance(now)
         self._settle(now)
         control = self.values[REGISTER_CTRL]
         if offset == REGISTER_CTRL:
             self.values[offset] = value
-            self._since = now if self._running() else None
+            if self._running():
+                self._run(now)
+            else:
+                self._since = None
             return
         if not control & WRITE_ENABLE:
             return                               # not in setting mode: the write is ignored

@@ -9,7 +9,7 @@ Layer Simplified Specification describes SPI mode:
   evidently take CMD0 without them (issue 10: firmware that ran on Docks sends none), so
   by default CMD0 is answered, with a warning; `strict` enforces the rule: CMD0 is ignored;
 - CMD0 (enter SPI mode, idle), CMD8 (interface condition, R7), CMD55 + ACMD41
-  (initialisation: the card stays idle until ACMD41 comes INIT_TIME_S after the
+  (initialisation: the card stays idle until ACMD41 comes INIT_TIME after the
   first one), CMD58 (OCR, R3: powered up, CCS = 1), CMD59 (CRC on/off), CMD9/CMD10
   (CSD/CID as 16-byte data blocks), CMD13 (R2), CMD16 (block length; fixed 512 on
   SDHC), CMD17/CMD18 (single/multiple block read, until CMD12), CMD24/CMD25
@@ -52,14 +52,15 @@ from typing import Callable
 import numpy as np
 
 from ..errors import BadInput, write_failed
+from ..vtime import PS_PER_MS, PS_PER_US, Time
 
 BLOCK = 512
 NCR_BYTES = 1            # bytes of 0xFF between a command and its response (spec: 1..8)
 NAC_BYTES = 8            # bytes of 0xFF between a read command's response and its data token
 VARYING_NAC_MAX = 24     # the "varying-nac" fault's longest gap: 1 .. 24 bytes, every value in 24 blocks
 STOP_BUSY_BYTES = 4      # busy (0x00) bytes after CMD12
-WRITE_BUSY_S = 250e-6    # programming time after a written block
-INIT_TIME_S = 10e-3      # initialisation time after the first ACMD41
+WRITE_BUSY: Time = 250 * PS_PER_US     # programming time after a written block
+INIT_TIME: Time = 10 * PS_PER_MS       # initialisation time after the first ACMD41
 POWER_UP_CLOCKS = 74
 RULE_POWER_UP_CLOCKS = "SD card CMD0 before 74 clocks with CS high"   # the board counts it by this kind
 
@@ -221,7 +222,7 @@ class SdCard:
     """The card's SPI-mode state machine. `exchange` takes MOSI bytes and returns MISO bytes."""
 
     def __init__(self, image: SdImage, warn=None, faults: frozenset[str] = frozenset(), strict: bool = False,
-                 on_rule: Callable[[str, float, str], None] | None = None) -> None:
+                 on_rule: Callable[[str, Time, str], None] | None = None) -> None:
         """warn(text) hears the card's warnings; on_rule(kind, now, text), instead, a broken timing
         rule (RULE_POWER_UP_CLOCKS), enforced when `strict` (see the module comment)."""
         unknown = set(faults) - set(FAULTS)
@@ -237,7 +238,7 @@ class SdCard:
         self.selected = False
         self.spi_mode = False
         self.initialised = False
-        self.init_started: float | None = None
+        self.init_started: Time | None = None
         self.crc_checking = False
         self.app_command = False
         self.powerup_clocks = 0
@@ -247,12 +248,12 @@ class SdCard:
         self._reading: int | None = None      # next block of a CMD18 stream
         self._write_mode: str | None = None   # "single" or "multi" while a write command is active
         self._write_buffer: bytearray | None = None
-        self._busy_until = 0.0
+        self._busy_until: Time = 0
         self.commands_seen: list[int] = []
 
     # --- chip select ---------------------------------------------------------------
 
-    def set_selected(self, selected: bool, now: float) -> None:
+    def set_selected(self, selected: bool, now: Time) -> None:
         if selected == self.selected:
             return
         self.selected = selected
@@ -262,7 +263,7 @@ class SdCard:
 
     # --- byte exchange -------------------------------------------------------------------
 
-    def exchange(self, mosi: np.ndarray, now: float) -> np.ndarray:
+    def exchange(self, mosi: np.ndarray, now: Time) -> np.ndarray:
         """The card's answer to a run of bytes clocked while it is selected. (Worked on as bytes:
         most runs are one byte long, where numpy's per-call cost would dominate.)"""
         n = len(mosi)
@@ -293,7 +294,7 @@ class SdCard:
             i += 1
         return np.frombuffer(out, dtype=np.uint8)
 
-    def _next_out_byte(self, now: float) -> int:
+    def _next_out_byte(self, now: Time) -> int:
         if self._out_pos < len(self._out):
             byte = self._out[self._out_pos]
             self._out_pos += 1
@@ -342,7 +343,7 @@ class SdCard:
 
     # --- commands ------------------------------------------------------------------------
 
-    def _command_byte(self, byte: int, now: float) -> None:
+    def _command_byte(self, byte: int, now: Time) -> None:
         if not self._command:
             if byte & 0xC0 != 0x40:
                 return   # not a command start: 0xFF while the host waits, or noise
@@ -355,7 +356,7 @@ class SdCard:
     def _r1(self) -> int:
         return 0 if self.initialised else R1_IDLE
 
-    def _execute(self, frame: bytes, now: float) -> None:
+    def _execute(self, frame: bytes, now: Time) -> None:
         index = frame[0] & 0x3F
         self.commands[index] = self.commands.get(index, 0) + 1
         argument = int.from_bytes(frame[1:5], "big")
@@ -404,7 +405,7 @@ class SdCard:
             if not argument & (1 << 30):
                 self._respond(self._r1())   # without HCS an SDHC card never leaves idle
                 return
-            if now - self.init_started >= INIT_TIME_S and "no-init" not in self.faults:
+            if now - self.init_started >= INIT_TIME and "no-init" not in self.faults:
                 self.initialised = True
             self._respond(self._r1())
         elif index == 58:
@@ -449,7 +450,7 @@ class SdCard:
 
     # --- writes ----------------------------------------------------------------------------
 
-    def _write_byte(self, byte: int, now: float) -> int:
+    def _write_byte(self, byte: int, now: Time) -> int:
         busy = now < self._busy_until
         reply = self._next_out_byte(now)
         if self._write_buffer is None:
@@ -459,7 +460,7 @@ class SdCard:
                 self._write_buffer = bytearray()
             elif byte == TOKEN_STOP_TRAN and self._write_mode == "multi":
                 self._write_mode = None
-                self._busy_until = now + WRITE_BUSY_S
+                self._busy_until = now + WRITE_BUSY
             elif byte & 0xC0 == 0x40 and self._write_mode:
                 self._write_mode = None
                 self._command_byte(byte, now)
@@ -477,7 +478,7 @@ class SdCard:
         self.image.write(self._write_block, data)
         self._write_block += 1
         self._say(bytes([DATA_ACCEPTED]))
-        self._busy_until = now + WRITE_BUSY_S
+        self._busy_until = now + WRITE_BUSY
         if self._write_mode == "single":
             self._write_mode = None
         return reply

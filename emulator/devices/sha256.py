@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING
 
 from ..errors import UnmodelledAccess
 from ..memory_map import K210_BLOCKS
+from ..vtime import Time
 from .mmio import Peripheral, Register
 from .ports import Ports
 
@@ -89,7 +90,7 @@ class Sha256(Peripheral):
         self._started = False             # sha_en written: the blocks sha_num_reg counts are taken
         self._overflow = False
 
-    def reset(self, now: float) -> None:
+    def reset(self, now: Time) -> None:
         if self.tx_dma is not None:
             self.tx_dma.peripheral_gone()
             self.tx_dma = None
@@ -101,21 +102,21 @@ class Sha256(Peripheral):
     def is_data_register(self, address: int) -> bool:
         return address == self.BASE + DATA_IN
 
-    def attach_tx_dma(self, channel: "DmaChannel", now: float) -> None:
+    def attach_tx_dma(self, channel: "DmaChannel", now: Time) -> None:
         if channel.transfer.dst_width != 4:
             raise UnmodelledAccess(f"SHA256: DMAC channel {channel.index} writes {8 * channel.transfer.dst_width}-bit "
                                    f"items to sha_data_in1 (the SDK writes 32-bit items, one message word each)")
         self.tx_dma = channel
         self._dma_take(now)
 
-    def attach_rx_dma(self, channel: "DmaChannel", now: float) -> None:
+    def attach_rx_dma(self, channel: "DmaChannel", now: Time) -> None:
         raise AssertionError("the SHA request is a transmit request: the DMAC checks the direction first")
 
     def detach_dma(self, channel: "DmaChannel") -> None:
         if self.tx_dma is channel:
             self.tx_dma = None
 
-    def _dma_take(self, now: float) -> None:
+    def _dma_take(self, now: Time) -> None:
         """While the DMA handshake is on, the channel's items are the message's words."""
         channel = self.tx_dma
         if channel is None or not self.values[FUNCTION1] & DMA_ENABLE or not channel.remaining():
@@ -131,7 +132,7 @@ class Sha256(Peripheral):
     def _running(self) -> bool:
         return self._started and self._blocks < self.values[NUM] & 0xFFFF
 
-    def read_register(self, offset: int, reg: Register, now: float) -> int:
+    def read_register(self, offset: int, reg: Register, now: Time) -> int:
         if offset < DATA_IN:
             if self._running():
                 return 0
@@ -146,7 +147,7 @@ class Sha256(Peripheral):
             return self.values[FUNCTION1] & 1              # the FIFO is never full
         return self.values[offset]
 
-    def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
+    def write_register(self, offset: int, reg: Register, value: int, now: Time) -> None:
         if offset == FUNCTION0:
             self.values[offset] = value & (BIG_ENDIAN | ENABLE)
             if value & ENABLE:

@@ -4,13 +4,16 @@ is the newer DWC_ssi: its ctrlr0 fields sit elsewhere, Ctrlr0Layout).
 Frames written to the data register go through a 32-entry transmit FIFO and
 out on the wire at the serial clock the firmware programmed: a frame of `dfs`
 bits takes dfs / lanes serial clock periods (lanes: 1 standard, 2 dual, 4 quad,
-8 octal). A frame reaches the selected device when its last bit is out, so the
-device sees pins such as the LCD's D/C as they are at that moment. In
-transmit-and-receive mode the device's answer goes into the 32-entry receive
-FIFO; in receive-only mode writing one dummy frame clocks ctrlr1 + 1 frames in. In EEPROM-read
-mode (tmod 3) the frames written (a command and an address) go out with their replies dropped, and
-once the transmit FIFO has run empty the controller clocks ctrlr1 + 1 frames in, sending 0xFF: the
-SDK's spi_receive_data_standard reads a flash's ID or status this way whenever it has a command.
+8 octal), each baudr cycles of the controller's source clock; frames sent back to
+back are timed from the first one's start, in whole picoseconds (_Train). A frame
+reaches the selected device when its last bit is out, so the device sees pins such
+as the LCD's D/C as they are at that moment. In transmit-and-receive mode the
+device's answer goes into the 32-entry receive FIFO; in receive-only mode writing one
+dummy frame clocks ctrlr1 + 1 frames in. In EEPROM-read mode (tmod 3) the frames
+written (a command and an address) go out with their replies dropped, and once the
+transmit FIFO has run empty the controller clocks ctrlr1 + 1 frames in, sending 0xFF:
+the SDK's spi_receive_data_standard reads a flash's ID or status this way whenever it
+has a command.
 
 DMA: with dmacr.tdmae set and a DMAC channel handshaking to this controller's
 TX request, the channel keeps the FIFO full, so a DMA transfer is one unbroken
@@ -34,6 +37,7 @@ import numpy as np
 
 from ..errors import UnmodelledAccess
 from ..memory_map import K210_BLOCKS
+from ..vtime import NEVER, Time, cycles_in, cycles_time
 from .mmio import Peripheral, Register
 from .ports import Ports
 
@@ -60,14 +64,8 @@ INT_TXE, INT_TXO, INT_RXU, INT_RXO, INT_RXF = 1, 2, 4, 8, 16
 DMACR_RDMAE, DMACR_TDMAE = 1, 2
 
 CONFIG_REGISTERS = {CTRLR0, CTRLR1, BAUDR, SPI_CTRLR0, ENDIAN}
-EPSILON = 1e-12
-# Frame counts come from (time - start) / period in floating point; a time that lands on a
-# frame boundary may come out a hair short of the whole number. A millionth of a frame is
-# far below anything the wire could resolve.
-FRAME_EPSILON = 1e-6
 # Registers whose reads have no side effect and whose values only frames on the wire change
 STATUS_REGISTERS = {TXFLR, RXFLR, SR, RISR, ISR}
-STABLE_MARGIN = 1e-5       # frames: stable_until's bounds keep this far from a frame's edge
 
 
 @dataclass(frozen=True)
@@ -92,37 +90,57 @@ TRANS_ALL_STANDARD, TRANS_ADDRESS_WIDE, TRANS_ALL_WIDE = 0, 1, 2
 class SpiDevice(Protocol):
     """A device on an SPI bus: what the board wires behind a chip select."""
 
-    def spi_select(self, selected: bool, now: float) -> None: ...
+    def spi_select(self, selected: bool, now: Time) -> None: ...
 
-    def spi_transfer(self, data: np.ndarray, lanes: int, now: float) -> np.ndarray: ...
+    def spi_transfer(self, data: np.ndarray, lanes: int, now: Time) -> np.ndarray: ...
 
-    def spi_dummy(self, clocks: int, now: float) -> None:
+    def spi_dummy(self, clocks: int, now: Time) -> None:
         """Clock cycles with no data (the wait cycles of a dual/quad/octal read)."""
+
+
+@dataclass(frozen=True)
+class FrameClock:
+    """How long a frame takes on the wire: `ticks` ticks of a clock at `hz` (whole numbers, so that a
+    train's edges are exact: a frame of b bits on n lanes at baudr d from a source at f Hz takes
+    b / n x d / f s, that is b x d ticks at n x f Hz)."""
+
+    ticks: int
+    hz: int
 
 
 @dataclass
 class _Train:
-    """Frames going out back to back: frame i starts at start + i * period."""
+    """Frames going out back to back: frame i starts at edge(i), i frames' time after the train's
+    start (each edge reckoned from the start, so that it does not depend on how often advance() ran)."""
 
-    start: float
-    period: float
+    start: Time
+    clock: FrameClock
     bits: int
     frames: list = dc_field(default_factory=list)  # numpy chunks of uint32 frames, in order
     count: int = 0          # frames queued in this train
     delivered: int = 0      # frames already handed to the device
 
-    def end(self) -> float:
-        return self.start + self.count * self.period
+    def edge(self, i: int) -> Time:
+        """When frame i starts (frame i - 1 has arrived): rounded up to a whole picosecond."""
+        return self.start + cycles_time(i * self.clock.ticks, self.clock.hz)
 
-    def started(self, now: float) -> int:
-        if now < self.start - EPSILON:
-            return 0
-        return min(self.count, int((now - self.start) / self.period + FRAME_EPSILON) + 1)
+    def edges_passed(self, now: Time) -> int:
+        """How many frames' time has wholly passed since the start by `now` (>= start), however many
+        frames the train has: the last i with edge(i) <= now."""
+        return cycles_in(now - self.start, self.clock.hz) // self.clock.ticks
 
-    def finished(self, now: float) -> int:
+    def end(self) -> Time:
+        return self.edge(self.count)
+
+    def started(self, now: Time) -> int:
         if now < self.start:
             return 0
-        return min(self.count, int((now - self.start) / self.period + FRAME_EPSILON))
+        return min(self.count, self.edges_passed(now) + 1)
+
+    def finished(self, now: Time) -> int:
+        if now < self.start:
+            return 0
+        return min(self.count, self.edges_passed(now))
 
     def take(self, n: int) -> np.ndarray:
         """Removes and returns the next n undelivered frames."""
@@ -162,9 +180,9 @@ class SpiController(Peripheral):
         XIP_MODE_BITS: Register("xip_mode_bits"), ENDIAN: Register("endian"),
     }
 
-    def __init__(self, index: int, ports: Ports, source_hz: Callable[[], float],
+    def __init__(self, index: int, ports: Ports, source_hz: Callable[[], int],
                  layout: Ctrlr0Layout = APB_SSI) -> None:
-        """source_hz: the clock SYSCTL gives the controller (its baud rate is that / baudr).
+        """source_hz: the clock SYSCTL gives the controller, in whole hertz (its baud rate is that / baudr).
         layout: APB_SSI for SPI0/1, DWC_SSI for SPI3 (which also has the XIP registers)."""
         self.index = index
         self.source_hz = source_hz
@@ -189,7 +207,7 @@ class SpiController(Peripheral):
         self._ss_low = False                    # the slave select as the pins show it (--vcd)
         self.tx_dma: "DmaChannel | None" = None
         self.rx_dma: "DmaChannel | None" = None
-        self._dma_started = 0.0
+        self._dma_started: Time = 0
         # EEPROM-read mode: frames at the train's end that clock the reply in (not transmit data);
         # the frames before them are the command, whose replies are dropped
         self._eeprom_fill = 0
@@ -200,7 +218,7 @@ class SpiController(Peripheral):
         self._phases_sent = False
         self._phased_since_select = False     # the selected device has seen a phased transfer
 
-    def reset(self, now: float) -> None:
+    def reset(self, now: Time) -> None:
         """peri_reset: FIFOs, transfers and registers back to reset; devices deselected."""
         if self._selected is not None:
             self._selected.spi_select(False, now)
@@ -247,17 +265,36 @@ class SpiController(Peripheral):
     def enabled(self) -> bool:
         return bool(self.values[SSIENR] & 1)
 
-    def sclk_hz(self) -> float:
-        divider = self.values[BAUDR] & 0xFFFE   # SCKDV is even; bit 0 reads as written but is ignored
-        if divider == 0:
-            return 0.0
-        return self.source_hz() / divider
+    def _divider(self) -> int:
+        """SCKDV: source clock cycles per serial clock cycle (0: no serial clock)."""
+        return self.values[BAUDR] & 0xFFFE   # SCKDV is even; bit 0 reads as written but is ignored
 
-    def frame_period(self) -> float:
-        hz = self.sclk_hz()
-        if hz == 0:
-            return float("inf")
-        return self.frame_bits / FORMAT_LANES[self.frame_format] / hz
+    def sclk_hz(self) -> int:
+        """The serial clock in whole hertz, rounded down (0: none), for checks and messages: the
+        wire's times come from the source clock and the divider exactly (frame_clock, _sclk_time)."""
+        divider = self._divider()
+        if divider == 0:
+            return 0
+        return self.source_hz() // divider
+
+    def frame_clock(self) -> FrameClock | None:
+        """How long a frame takes in the frame format now (None: no serial clock, nothing moves)."""
+        divider, source = self._divider(), self.source_hz()
+        if divider == 0 or source == 0:
+            return None
+        return FrameClock(self.frame_bits * divider, FORMAT_LANES[self.frame_format] * source)
+
+    def frame_period(self) -> Time:
+        """One frame's time on the wire, rounded up to a whole picosecond (NEVER: no serial clock).
+        For reports: a train times its frames from its start (_Train.edge), not by adding this."""
+        clock = self.frame_clock()
+        if clock is None:
+            return NEVER
+        return cycles_time(clock.ticks, clock.hz)
+
+    def _sclk_time(self, clocks: int) -> Time:
+        """How long `clocks` serial clock cycles take (a clock is running: frame_clock is not None)."""
+        return cycles_time(clocks * self._divider(), self.source_hz())
 
     def _phases(self) -> tuple[int, int, int, int, int]:
         """spi_ctrlr0 decoded: (instruction bits, its lanes, address bits, its lanes, wait cycles)."""
@@ -316,14 +353,14 @@ class SpiController(Peripheral):
                     return device
         return None
 
-    def _end_train(self, at: float) -> None:
+    def _end_train(self, at: Time) -> None:
         if self._train is not None:
             self.ports.signal(min(at, self._train.end()), f"spi{self.index}_sclk", 0)
         self._train = None
         self._eeprom_fill = 0
         self._phases_sent = False
 
-    def _update_selection(self, now: float) -> None:
+    def _update_selection(self, now: Time) -> None:
         low = bool(self.enabled and self.values[SER])
         if low != self._ss_low:
             self._ss_low = low
@@ -340,13 +377,13 @@ class SpiController(Peripheral):
     def is_data_register(self, address: int) -> bool:
         return self.BASE + DR_FIRST <= address <= self.BASE + DR_LAST
 
-    def wiring_changed(self, now: float) -> None:
+    def wiring_changed(self, now: Time) -> None:
         self.advance(now)
         self._update_selection(now)
 
     # --- time -------------------------------------------------------------------------
 
-    def advance(self, now: float) -> None:
+    def advance(self, now: Time) -> None:
         """Moves frames along the wire up to `now`: DMA refills, deliveries, received frames.
         (Called on every register access and every scheduler turn: the idle cases return early.)"""
         if self.tx_dma is not None:
@@ -357,15 +394,18 @@ class SpiController(Peripheral):
         done = train.finished(now)
         if done > train.delivered:
             self._deliver(train.take(done - train.delivered), now)
-        if train.delivered == train.count and now >= train.end() - EPSILON:
+        if train.delivered == train.count and now >= train.end():
             self._end_train(now)
             if self._phase_entries and self.frame_format and self.tmod == TMOD_RX and self.values[SER]:
                 # instruction and address written during the receive that ended begin the next
-                self._start_phased(self.frame_period(), train.end())
+                # (unless the source clock has stopped meanwhile: then they wait in the FIFO)
+                clock = self.frame_clock()
+                if clock is not None:
+                    self._start_phased(clock, train.end())
                 if self._train is not None:
                     self.advance(now)
 
-    def _deliver(self, frames: np.ndarray, now: float) -> None:
+    def _deliver(self, frames: np.ndarray, now: Time) -> None:
         nbytes = self.frame_bits // 8
         if nbytes == 1:
             data = frames.astype(np.uint8)     # an 8-bit frame is its low byte
@@ -393,7 +433,7 @@ class SpiController(Peripheral):
                 values = (values << 8) | words[:, i]
             self._receive(values, now)
 
-    def _receive(self, values: np.ndarray, now: float) -> None:
+    def _receive(self, values: np.ndarray, now: Time) -> None:
         if self.rx_dma is not None and self.values[DMACR] & DMACR_RDMAE:
             self.rx_dma.accept_from_peripheral(values, now)
             return
@@ -405,28 +445,28 @@ class SpiController(Peripheral):
             self.ports.warn(f"{self.NAME}: receive FIFO overflow: received frames lost "
                             f"(the {FIFO_DEPTH}-frame FIFO was full)", now)
 
-    def _push(self, values: np.ndarray, now: float) -> None:
+    def _push(self, values: np.ndarray, now: Time) -> None:
         """Queues frames for the wire as written at `now` (by the CPU or the DMA)."""
         if not self.enabled:
             return
-        period = self.frame_period() if self.values[SER] else float("inf")
-        if period == float("inf"):
+        clock = self.frame_clock() if self.values[SER] else None
+        if clock is None:
             self._held.extend(int(v) for v in values)
             return
         if self.frame_format and self._phased():
-            self._push_phased(values, period, now)
+            self._push_phased(values, clock, now)
             return
         train = self._train
-        if train is None or train.end() < now - EPSILON:
+        if train is None or train.end() < now:
             if train is not None:
                 self.advance(now)
             self._check_wire_format()
-            train = self._train = _Train(start=now, period=period, bits=self.frame_bits)
+            train = self._train = _Train(start=now, clock=clock, bits=self.frame_bits)
             self.ports.signal(now, f"spi{self.index}_sclk", 1)
         train.frames.append(values.astype(np.uint32))
         train.count += len(values)
 
-    def _push_phased(self, values: np.ndarray, period: float, now: float) -> None:
+    def _push_phased(self, values: np.ndarray, clock: FrameClock, now: Time) -> None:
         """A dual/quad/octal transfer with instruction and address phases (_phased). Its first FIFO
         entries are the instruction (when spi_ctrlr0's inst_l is not 0) and the address (when addr_l
         is not 0); once they are in, both go out (each on one lane or on the format's, as trans_type
@@ -442,9 +482,9 @@ class SpiController(Peripheral):
                 train.count += len(values)
             return
         self._phase_entries.extend(int(v) for v in values)
-        self._start_phased(period, now)
+        self._start_phased(clock, now)
 
-    def _start_phased(self, period: float, now: float) -> None:
+    def _start_phased(self, clock: FrameClock, now: Time) -> None:
         """Sends the phases of a transfer once its entries are in, and puts its frames on the wire."""
         inst_bits, inst_lanes, addr_bits, addr_lanes, wait = self._phases()
         phases = [(bits, lanes) for bits, lanes in ((inst_bits, inst_lanes), (addr_bits, addr_lanes)) if bits]
@@ -470,7 +510,7 @@ class SpiController(Peripheral):
             if device is not None:
                 device.spi_dummy(wait, now)
             clocks += wait
-        train = self._train = _Train(start=now + clocks / self.sclk_hz(), period=period, bits=self.frame_bits)
+        train = self._train = _Train(start=now + self._sclk_time(clocks), clock=clock, bits=self.frame_bits)
         self.ports.signal(now, f"spi{self.index}_sclk", 1)
         self._phases_sent = True
         rest = entries[max(len(phases), 1 if receiving else 0):]
@@ -485,7 +525,7 @@ class SpiController(Peripheral):
                 train.frames.append(np.array(rest, dtype=np.uint32))
                 train.count = len(rest)
 
-    def tx_level(self, now: float) -> int:
+    def tx_level(self, now: Time) -> int:
         """txflr: frames in the FIFO that have not started shifting out."""
         held = len(self._held) + len(self._phase_entries)
         if self.tmod == TMOD_RX and self.frame_format:
@@ -501,11 +541,11 @@ class SpiController(Peripheral):
         # (EEPROM-read mode: the frames clocking the reply in are not in the FIFO)
         return min(FIFO_DEPTH, max(0, train.count - self._eeprom_fill - train.started(now)) + held)
 
-    def busy(self, now: float) -> bool:
+    def busy(self, now: Time) -> bool:
         train = self._train
-        return train is not None and now < train.end() - EPSILON
+        return train is not None and now < train.end()
 
-    def next_event_time(self, now: float) -> float | None:
+    def next_event_time(self, now: Time) -> Time | None:
         """The next moment software can see a change: the TX DMA block completing, a slot
         freeing in a full FIFO, a received frame changing the receive FIFO's status, the
         wire going idle."""
@@ -514,11 +554,11 @@ class SpiController(Peripheral):
             return None
         dma_left = self.tx_dma.remaining() if self.tx_dma is not None else 0
         # under DMA the train runs on until the block's last frame is out
-        times = [train.end() + dma_left * train.period]
+        times = [train.edge(train.count + dma_left)]
         if self.tx_dma is None and self.tmod != TMOD_RX and train.count - train.started(now) >= FIFO_DEPTH:
             # a CPU waiting for room in a full FIFO can go on when the next frame starts
             # (under DMA the slots are the DMA's business and nobody waits on them)
-            times.append(train.start + (train.count - FIFO_DEPTH) * train.period)
+            times.append(train.edge(train.count - FIFO_DEPTH))
         if self.tx_dma is not None and self.tx_dma.remaining():
             times.append(self._dma_push_time(train.count + self.tx_dma.remaining() - 1))
         if self.tmod in (TMOD_TX_RX, TMOD_RX, TMOD_EEPROM) and not (
@@ -536,43 +576,43 @@ class SpiController(Peripheral):
                 wanted.append(threshold + 1 - level)
             arrival = done + min(wanted)
             if arrival <= train.count:
-                times.append(train.start + arrival * train.period)
-        later = [t for t in times if t > now + EPSILON]
+                times.append(train.edge(arrival))
+        later = [t for t in times if t > now]
         return min(later) if later else None
 
-    def earliest_delivery(self, frames: int, now: float) -> float:
+    def earliest_delivery(self, frames: int, now: Time) -> Time:
         """The earliest time by which `frames` more frames than delivered so far can have reached the
-        selected device (a frame early, for safety); inf when the frames on the wire and those the TX
-        DMA still has to give are fewer (the train's end is a device event, next_event_time). Without
-        a train: now, unless nothing could start one but a register access."""
+        selected device (a frame early, for safety); NEVER when the frames on the wire and those the
+        TX DMA still has to give are fewer (the train's end is a device event, next_event_time).
+        Without a train: now, unless nothing could start one but a register access."""
         train = self._train
         if train is None:
-            return now if self.tx_dma is not None and self.tx_dma.remaining() else float("inf")
+            return now if self.tx_dma is not None and self.tx_dma.remaining() else NEVER
         index = train.delivered + frames
         available = train.count + (self.tx_dma.remaining() if self.tx_dma is not None else 0)
         if index > available:
-            return float("inf")
-        return train.start + (index - 1) * train.period
+            return NEVER
+        return train.edge(index - 1)
 
-    def stable_until(self, offset: int, now: float) -> float:
+    def stable_until(self, offset: int, now: Time) -> Time:
         """The status registers (sr, txflr, rxflr, risr, isr: reading them changes nothing) stay
         as they are until the next frame starts or ends on the wire, which is also when advance()
         next has something to do; sr until the next frame edge that changes one of its bits
         (_next_sr_change). Without a DMA transmit channel only (it refills the FIFO as time
-        goes). Bounds are kept a hundred-thousandth of a frame early: the frame counts carry a
-        millionth of a frame's slack (FRAME_EPSILON)."""
+        goes). The bound is that edge itself: the frame counts are exact, and at one picosecond
+        before the edge the frame before it has not yet arrived."""
         if offset not in STATUS_REGISTERS or self.tx_dma is not None or self.tmod == TMOD_EEPROM:
             return now
         train = self._train
         if train is None:
-            return float("inf")         # nothing on the wire: only an access changes anything
+            return NEVER                # nothing on the wire: only an access changes anything
         if now < train.start:
             return now
-        frames = int((now - train.start) / train.period + FRAME_EPSILON)
+        frames = train.edges_passed(now)
         if frames >= train.count:
             return now                  # the train is over but not yet ended
         edge = self._next_sr_change(train, frames) if offset == SR else frames + 1
-        return train.start + (edge - STABLE_MARGIN) * train.period
+        return train.edge(edge)
 
     def _next_sr_change(self, train: _Train, frames: int) -> int:
         """The first frame edge after edge `frames` at which sr can read otherwise (edge i: frame i
@@ -592,7 +632,7 @@ class SpiController(Peripheral):
 
     # --- DMA handshakes -------------------------------------------------------------------
 
-    def attach_tx_dma(self, channel: "DmaChannel", now: float) -> None:
+    def attach_tx_dma(self, channel: "DmaChannel", now: Time) -> None:
         self.advance(now)
         self.tx_dma = channel
         item_bits = 8 * channel.transfer.dst_width
@@ -604,7 +644,7 @@ class SpiController(Peripheral):
         self._dma_started = now
         self._dma_refill(now)
 
-    def attach_rx_dma(self, channel: "DmaChannel", now: float) -> None:
+    def attach_rx_dma(self, channel: "DmaChannel", now: Time) -> None:
         self.advance(now)
         self.rx_dma = channel
         if self._rx and self.values[DMACR] & DMACR_RDMAE:
@@ -618,13 +658,12 @@ class SpiController(Peripheral):
         if self.rx_dma is channel:
             self.rx_dma = None
 
-    def _dma_push_time(self, index: int) -> float:
+    def _dma_push_time(self, index: int) -> Time:
         """When train frame `index` enters the FIFO under DMA: as soon as frame index - 32
         has started shifting and freed a slot (never before the channel was enabled)."""
-        train = self._train
-        return max(self._dma_started, train.start + (index - FIFO_DEPTH) * train.period)
+        return max(self._dma_started, self._train.edge(index - FIFO_DEPTH))
 
-    def _dma_refill(self, now: float) -> None:
+    def _dma_refill(self, now: Time) -> None:
         """The TX DMA keeps the FIFO full: push every word whose slot has freed by `now`."""
         channel = self.tx_dma
         if channel is None or not channel.remaining():
@@ -649,7 +688,7 @@ class SpiController(Peripheral):
                 return
         train = self._train
         # frames started by now if the train had never run dry (the DMA keeps it going)
-        started = int((now - train.start) / train.period + FRAME_EPSILON) + 1 if now >= train.start else 0
+        started = train.edges_passed(now) + 1 if now >= train.start else 0
         n = min(channel.remaining(), started + FIFO_DEPTH - train.count)
         if n > 0:
             last_index = train.count + n - 1
@@ -665,7 +704,7 @@ class SpiController(Peripheral):
             return False        # every source masked (the PLIC samples this on every wake check)
         return bool(self._interrupts(self.ports.clock.now()) & self.values[IMR])
 
-    def _interrupts(self, now: float) -> int:
+    def _interrupts(self, now: Time) -> int:
         raw = self._raw_int
         if self.tx_level(now) <= (self.values[TXFTLR] & 0x1F):
             raw |= INT_TXE
@@ -673,7 +712,7 @@ class SpiController(Peripheral):
             raw |= INT_RXF
         return raw
 
-    def read_register(self, offset: int, reg: Register, now: float) -> int:
+    def read_register(self, offset: int, reg: Register, now: Time) -> int:
         self.advance(now)
         if DR_FIRST <= offset <= DR_LAST:
             if not self._rx:
@@ -710,7 +749,7 @@ class SpiController(Peripheral):
             return 0
         return self.values[offset]
 
-    def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
+    def write_register(self, offset: int, reg: Register, value: int, now: Time) -> None:
         self.advance(now)
         if DR_FIRST <= offset <= DR_LAST:
             self._write_data(value, now)
@@ -744,7 +783,7 @@ class SpiController(Peripheral):
         if offset == DMACR:
             self._dma_refill(now)
 
-    def _write_data(self, value: int, now: float) -> None:
+    def _write_data(self, value: int, now: Time) -> None:
         if not self.enabled:
             return
         if self.tx_level(now) >= FIFO_DEPTH:
@@ -770,13 +809,13 @@ class SpiController(Peripheral):
             return
         self._push(frame, now)
 
-    def _push_eeprom(self, frames: np.ndarray, now: float) -> None:
+    def _push_eeprom(self, frames: np.ndarray, now: Time) -> None:
         """EEPROM-read mode: the command frames go out, and behind them, once the transmit FIFO runs
         empty, ctrlr1 + 1 frames clock the reply in. A frame written before the filler has started
         joins the command (the FIFO had not run empty yet); the filler moves behind it."""
         self._check_wire_format()
         train = self._train
-        if train is not None and self._eeprom_fill and now < train.end() - EPSILON:
+        if train is not None and self._eeprom_fill and now < train.end():
             if train.started(now) > train.count - self._eeprom_fill:
                 raise UnmodelledAccess(f"{self.NAME}: a frame written in EEPROM-read mode while the reply is "
                                        f"being clocked in (what the controller does with it is not modelled)")

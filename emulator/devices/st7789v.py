@@ -59,6 +59,8 @@ import functools
 
 import numpy as np
 
+from ..vtime import NEVER, PS_PER_MS, PS_PER_US, Time, ms
+
 # --- command codes (datasheet "System Function Command Table 1") ---------------------
 
 NOP = 0x00
@@ -118,10 +120,13 @@ SUPPORTED_COLMOD_FORMATS = (COLMOD_12BIT, COLMOD_16BIT, COLMOD_18BIT)
 
 # --- timing (datasheet AC characteristics and command descriptions) ------------------
 
-RESET_BUSY_S = 5e-3          # after SWRESET or RESX release: commands are not accepted
-SLEEP_SETTLE_S = 5e-3        # after SLPIN/SLPOUT: supplies and clocks still settling
-SLEEP_TOGGLE_S = 120e-3      # SLPIN<->SLPOUT minimum spacing
-RESET_PULSE_MIN_S = 10e-6    # tRW: shorter RESX pulses are not guaranteed to reset
+RESET_BUSY: Time = 5 * PS_PER_MS         # after SWRESET or RESX release: commands are not accepted
+SLEEP_SETTLE: Time = 5 * PS_PER_MS       # after SLPIN/SLPOUT: supplies and clocks still settling
+SLEEP_TOGGLE: Time = 120 * PS_PER_MS     # SLPIN<->SLPOUT minimum spacing
+RESET_PULSE_MIN: Time = 10 * PS_PER_US   # tRW: shorter RESX pulses are not guaranteed to reset
+# "long ago": what the waits are measured from before anything happened (no wait is pending then,
+# and a first SLPIN/SLPOUT comes more than 120 ms after it)
+LONG_AGO: Time = -NEVER
 
 # The datasheet's waits, by the kind the board counts them under (run.json's timing_warnings).
 # Sitronix ST7789V datasheet (version 1.3, 2014/03): "Reset Timing" (tRW, the RESX low pulse,
@@ -181,9 +186,9 @@ class ST7789V:
     HEIGHT = 320  # physical GRAM rows
 
     def __init__(self, on_frame: Callable[[np.ndarray], None] | None = None,
-                 on_warning: Callable[[float, str], None] | None = None, strict: bool = False,
-                 on_rule: Callable[[str, float, str], None] | None = None) -> None:
-        """on_warning(now_s, message) hears every warning as it is given; on_rule(kind, now_s,
+                 on_warning: Callable[[Time, str], None] | None = None, strict: bool = False,
+                 on_rule: Callable[[str, Time, str], None] | None = None) -> None:
+        """on_warning(now, message) hears every warning as it is given; on_rule(kind, now,
         message) hears, instead, each broken timing rule (kind: one of TIMING_RULES). strict:
         enforce the timing rules (see the module comment) instead of warning only."""
         self.on_frame = on_frame
@@ -202,17 +207,17 @@ class ST7789V:
         self._deferred_bytes = 0
 
         self._resx_high = True
-        self._resx_low_since = 0.0
+        self._resx_low_since: Time = 0
         self._before_reset: tuple | None = None   # (registers, last sleep change) when RESX fell
         # The board owns CSX; until it drives the pin the bus is assumed selected.
         self._selected = True
 
         # No constraint at power-up: the chip is ready when the board starts.
-        self._busy_until = float("-inf")
+        self._busy_until = LONG_AGO
         self._busy_reason = ""
-        self._settle_until = float("-inf")
+        self._settle_until = LONG_AGO
         self._settle_reason = ""
-        self._last_sleep_change = float("-inf")
+        self._last_sleep_change = LONG_AGO
 
         self._command: int | None = None      # command whose parameters are being received
         self._params: list[int] = []
@@ -275,7 +280,7 @@ class ST7789V:
 
     # --- pins ----------------------------------------------------------------------------
 
-    def set_reset_pin(self, level: int, now_s: float) -> None:
+    def set_reset_pin(self, level: int, now: Time) -> None:
         """RESX, active low. The falling edge resets the registers (GRAM keeps its
         content); commands are refused until 5 ms after the rising edge."""
         high = bool(level)
@@ -284,24 +289,24 @@ class ST7789V:
         self._store_deferred_pixels()
         self._resx_high = high
         if not high:
-            self._resx_low_since = now_s
+            self._resx_low_since = now
             self._before_reset = (replace(self._regs), self._last_sleep_change)
-            self._reset_registers(now_s)
+            self._reset_registers(now)
             return
-        pulse = now_s - self._resx_low_since
-        if pulse < RESET_PULSE_MIN_S:
-            text = (f"RESX low pulse of {pulse * 1e6:.2f} us is shorter than "
-                    f"the {RESET_PULSE_MIN_S * 1e6:.0f} us the datasheet requires")
+        pulse = now - self._resx_low_since
+        if pulse < RESET_PULSE_MIN:
+            text = (f"RESX low pulse of {pulse / PS_PER_US:.2f} us is shorter than "
+                    f"the {RESET_PULSE_MIN // PS_PER_US} us the datasheet requires")
             if self.strict and self._before_reset is not None:
                 # not a valid reset: the chip keeps the state it had before the pulse
                 self._regs, self._last_sleep_change = self._before_reset
-                self._rule(RULE_RESET_PULSE, now_s, f"{text}: not taken as a reset (--strict)")
+                self._rule(RULE_RESET_PULSE, now, f"{text}: not taken as a reset (--strict)")
                 return
-            self._rule(RULE_RESET_PULSE, now_s, f"{text}; taken as a reset (--strict would not)")
-        self._busy_until = now_s + RESET_BUSY_S
-        self._busy_reason = f"RESX release at {_ms(now_s)}"
+            self._rule(RULE_RESET_PULSE, now, f"{text}; taken as a reset (--strict would not)")
+        self._busy_until = now + RESET_BUSY
+        self._busy_reason = f"RESX release at {_ms(now)}"
 
-    def set_chip_select(self, selected: bool, now_s: float) -> None:
+    def set_chip_select(self, selected: bool, now: Time) -> None:
         """CSX. Deselecting pauses the transfer: a RAMWR and a half-received
         parameter list carry on after re-selection, but the bits of a pixel that
         was not complete are lost."""
@@ -312,7 +317,7 @@ class ST7789V:
 
     # --- the bus ---------------------------------------------------------------------------
 
-    def write(self, data: np.ndarray, dc: int, now_s: float) -> None:
+    def write(self, data: np.ndarray, dc: int, now: Time) -> None:
         """Bytes clocked in with one D/C level: dc=0 commands, dc=1 parameters or pixels."""
         if isinstance(data, (bytes, bytearray, memoryview)):
             data = np.frombuffer(data, dtype=np.uint8)
@@ -320,17 +325,17 @@ class ST7789V:
         if data.size == 0:
             return
         if not self._resx_high:
-            self._warn(now_s, f"{data.size} byte(s) sent while RESX is low: ignored")
+            self._warn(now, f"{data.size} byte(s) sent while RESX is low: ignored")
             return
         if not self._selected:
-            self._warn(now_s, f"{data.size} byte(s) sent while CSX is high: ignored")
+            self._warn(now, f"{data.size} byte(s) sent while CSX is high: ignored")
             return
         if dc == 0:
             self._store_deferred_pixels()
             for code in data.tolist():
-                self._receive_command(code, now_s)
+                self._receive_command(code, now)
         else:
-            self._receive_data(data, now_s)
+            self._receive_data(data, now)
 
     # --- what the panel shows ---------------------------------------------------------------
 
@@ -348,10 +353,10 @@ class ST7789V:
 
     # --- commands ------------------------------------------------------------------------
 
-    def _receive_command(self, code: int, now_s: float) -> None:
+    def _receive_command(self, code: int, now: Time) -> None:
         name = _command_name(code)
         if self._command in PARAMETER_COUNT and len(self._params) < PARAMETER_COUNT[self._command]:
-            self._warn(now_s, f"{_command_name(self._command)} got {len(self._params)} of "
+            self._warn(now, f"{_command_name(self._command)} got {len(self._params)} of "
                               f"{PARAMETER_COUNT[self._command]} parameters before {name}: ignored")
         # A new command always ends the previous one, RAMWR included.
         self._command = None
@@ -360,24 +365,24 @@ class ST7789V:
         self._ram_write = False
         self._pending = self._pending[:0]
 
-        if now_s < self._busy_until:
+        if now < self._busy_until:
             if self.strict:
-                self._rule(RULE_AFTER_RESET, now_s, f"{name} ignored: chip busy for 5 ms after {self._busy_reason}")
+                self._rule(RULE_AFTER_RESET, now, f"{name} ignored: chip busy for 5 ms after {self._busy_reason}")
                 return
-            self._rule(RULE_AFTER_RESET, now_s, f"{name} sent within 5 ms after {self._busy_reason}: "
+            self._rule(RULE_AFTER_RESET, now, f"{name} sent within 5 ms after {self._busy_reason}: "
                                                 f"carried out (--strict ignores it, as the chip may)")
-        elif now_s < self._settle_until:
+        elif now < self._settle_until:
             if self.strict:
-                self._rule(RULE_AFTER_SLEEP, now_s, f"{name} ignored: sent within 5 ms after {self._settle_reason}")
+                self._rule(RULE_AFTER_SLEEP, now, f"{name} ignored: sent within 5 ms after {self._settle_reason}")
                 return
-            self._rule(RULE_AFTER_SLEEP, now_s, f"{name} sent within 5 ms after {self._settle_reason}: "
+            self._rule(RULE_AFTER_SLEEP, now, f"{name} sent within 5 ms after {self._settle_reason}: "
                                                 f"carried out (--strict ignores it, as the chip may)")
 
         self._command = code
         if code not in PARAMETER_COUNT:
-            self._execute(code, [], now_s)
+            self._execute(code, [], now)
 
-    def _receive_data(self, data: np.ndarray, now_s: float) -> None:
+    def _receive_data(self, data: np.ndarray, now: Time) -> None:
         if self._ram_write:
             self._receive_pixel_bytes(data)
             return
@@ -388,22 +393,22 @@ class ST7789V:
         if needed > 0:
             self._params.extend(data[:needed].tolist())
             if len(self._params) == PARAMETER_COUNT[code]:
-                self._execute(code, self._params, now_s)
+                self._execute(code, self._params, now)
         if data.size > max(needed, 0) and not self._surplus_warned:
             self._surplus_warned = True
-            self._warn(now_s, f"{_command_name(code)} takes {PARAMETER_COUNT.get(code, 0)} "
+            self._warn(now, f"{_command_name(code)} takes {PARAMETER_COUNT.get(code, 0)} "
                               f"parameter(s); extra data bytes ignored")
 
-    def _execute(self, code: int, params: list[int], now_s: float) -> None:
+    def _execute(self, code: int, params: list[int], now: Time) -> None:
         regs = self._regs
         if code == NOP:
             pass
         elif code == SWRESET:
-            self._software_reset(now_s)
+            self._software_reset(now)
         elif code == SLPIN:
-            self._sleep(True, now_s)
+            self._sleep(True, now)
         elif code == SLPOUT:
-            self._sleep(False, now_s)
+            self._sleep(False, now)
         elif code == PTLON:
             regs.normal_mode = False
         elif code == NORON:
@@ -429,40 +434,40 @@ class ST7789V:
             if params[0] & 0x07 in SUPPORTED_COLMOD_FORMATS:
                 regs.colmod = params[0]
             else:
-                self._warn(now_s, f"COLMOD 0x{params[0]:02X} selects no supported SPI pixel "
+                self._warn(now, f"COLMOD 0x{params[0]:02X} selects no supported SPI pixel "
                                   f"format; keeping 0x{regs.colmod:02X}")
 
-    def _software_reset(self, now_s: float) -> None:
-        self._reset_registers(now_s)
-        self._busy_until = now_s + RESET_BUSY_S
-        self._busy_reason = f"SWRESET at {_ms(now_s)}"
+    def _software_reset(self, now: Time) -> None:
+        self._reset_registers(now)
+        self._busy_until = now + RESET_BUSY
+        self._busy_reason = f"SWRESET at {_ms(now)}"
 
-    def _reset_registers(self, now_s: float) -> None:
+    def _reset_registers(self, now: Time) -> None:
         """Shared by RESX and SWRESET: defaults, sleep in, display off; GRAM kept."""
         if not self._regs.sleeping:
             # Reset from sleep-out is a sleep-in as far as the 120 ms SLPOUT rule goes.
-            self._last_sleep_change = now_s
+            self._last_sleep_change = now
         self._regs = Registers()
         self._command = None
         self._params = []
         self._ram_write = False
         self._pending = self._pending[:0]
-        self._settle_until = float("-inf")
+        self._settle_until = LONG_AGO
 
-    def _sleep(self, enter: bool, now_s: float) -> None:
+    def _sleep(self, enter: bool, now: Time) -> None:
         name = "SLPIN" if enter else "SLPOUT"
         if enter != self._regs.sleeping:
-            since = now_s - self._last_sleep_change
-            if since < SLEEP_TOGGLE_S:
-                text = f"{name} only {since * 1e3:.3f} ms after the last sleep change; the datasheet asks for 120 ms"
+            since = now - self._last_sleep_change
+            if since < SLEEP_TOGGLE:
+                text = f"{name} only {ms(since)} after the last sleep change; the datasheet asks for 120 ms"
                 if self.strict:
-                    self._rule(RULE_SLEEP_TOGGLE, now_s, f"{text}: ignored (--strict)")
+                    self._rule(RULE_SLEEP_TOGGLE, now, f"{text}: ignored (--strict)")
                     return
-                self._rule(RULE_SLEEP_TOGGLE, now_s, f"{text}: carried out (--strict ignores it)")
-            self._last_sleep_change = now_s
+                self._rule(RULE_SLEEP_TOGGLE, now, f"{text}: carried out (--strict ignores it)")
+            self._last_sleep_change = now
         self._regs.sleeping = enter
-        self._settle_until = now_s + SLEEP_SETTLE_S
-        self._settle_reason = f"{name} at {_ms(now_s)}"
+        self._settle_until = now + SLEEP_SETTLE
+        self._settle_reason = f"{name} at {_ms(now)}"
 
     # --- pixels ---------------------------------------------------------------------------
 
@@ -609,18 +614,18 @@ class ST7789V:
 
     # --- bookkeeping --------------------------------------------------------------------
 
-    def _warn(self, now_s: float, message: str) -> None:
-        self.warnings.append(f"ST7789V at {_ms(now_s)}: {message}")
+    def _warn(self, now: Time, message: str) -> None:
+        self.warnings.append(f"ST7789V at {_ms(now)}: {message}")
         if self.on_warning is not None:
-            self.on_warning(now_s, message)
+            self.on_warning(now, message)
 
-    def _rule(self, kind: str, now_s: float, message: str) -> None:
+    def _rule(self, kind: str, now: Time, message: str) -> None:
         """A timing rule broken (kind: one of TIMING_RULES): a warning, heard by on_rule when given."""
-        self.warnings.append(f"ST7789V at {_ms(now_s)}: {message}")
+        self.warnings.append(f"ST7789V at {_ms(now)}: {message}")
         if self.on_rule is not None:
-            self.on_rule(kind, now_s, message)
+            self.on_rule(kind, now, message)
         elif self.on_warning is not None:
-            self.on_warning(now_s, message)
+            self.on_warning(now, message)
 
 
 # --- helpers --------------------------------------------------------------------------
@@ -718,5 +723,5 @@ def _command_name(code: int) -> str:
     return f"{COMMAND_NAMES.get(code, 'command')} (0x{code:02X})"
 
 
-def _ms(now_s: float) -> str:
-    return f"t={now_s * 1e3:.3f} ms"
+def _ms(now: Time) -> str:
+    return f"t={ms(now)}"

@@ -15,13 +15,14 @@ from typing import Callable
 
 from ..errors import HardwareMisuse
 from ..memory_map import K210_BLOCKS
+from ..vtime import PS_PER_US, Time
 from .mmio import Peripheral, Register, field
 from .ports import Ports
 
 OSC_HZ = 26_000_000
 # The PLL datasheet figure is not public; the SDK polls the lock bits. 50 us is
 # well inside what such PLLs need and short enough not to distort start-up time.
-PLL_LOCK_TIME_S = 50e-6
+PLL_LOCK_TIME: Time = 50 * PS_PER_US
 
 PLL0, PLL1, PLL2 = 0x08, 0x0C, 0x10
 PLL_LOCK = 0x18
@@ -86,7 +87,7 @@ DMA_REQUESTS = {0: ("spi0", "rx"), 1: ("spi0", "tx"), 2: ("spi1", "rx"), 3: ("sp
 class PllState:
     """Time the PLL's reset was last released while powered (None: not running)."""
 
-    running_since: float | None = None
+    running_since: Time | None = None
 
 
 # the registers `usable` follows (gate_open, in_reset): a write to any other leaves it as it is
@@ -128,8 +129,8 @@ class Sysctl(Peripheral):
         0x6C: Register("power_sel"),
     }
 
-    def __init__(self, ports: Ports, clock_changed: Callable[[float], None],
-                 reset_block: Callable[[str, float], None], reset_chip: Callable[[str, float], None]) -> None:
+    def __init__(self, ports: Ports, clock_changed: Callable[[Time], None],
+                 reset_block: Callable[[str, Time], None], reset_chip: Callable[[str, Time], None]) -> None:
         """clock_changed: the CPU clock changed at this time (the board's clock follows it).
         reset_block: peri_reset released the block of this name (PERI_BITS) at this time.
         reset_chip: soft_reset resets the whole chip (cause "soft") at this time."""
@@ -140,16 +141,16 @@ class Sysctl(Peripheral):
         self.usable: set[str] = set()   # gates open and not in reset, kept current on writes
         # PLL0 comes out of reset powered and running (at 26 MHz: all dividers 0), so it
         # reads as locked; PLL1/PLL2 are off until firmware powers them.
-        self.plls = {PLL0: PllState(-PLL_LOCK_TIME_S), PLL1: PllState(), PLL2: PllState()}
+        self.plls = {PLL0: PllState(-PLL_LOCK_TIME), PLL1: PllState(), PLL2: PllState()}
         self.slip_sticky = {PLL0: False, PLL1: False, PLL2: False}
 
-    def reset(self, now: float) -> None:
+    def reset(self, now: Time) -> None:
         """A chip reset: every register as at power-on (PLL0 running at reset, the others off); the
         reset status keeps its cause bits (reset_status), which the board sets after this."""
         status = self.values[RESET_STATUS]
         super().reset(now)
         self.values[RESET_STATUS] = status
-        self.plls = {PLL0: PllState(now - PLL_LOCK_TIME_S), PLL1: PllState(), PLL2: PllState()}
+        self.plls = {PLL0: PllState(now - PLL_LOCK_TIME), PLL1: PllState(), PLL2: PllState()}
         self.slip_sticky = {PLL0: False, PLL1: False, PLL2: False}
         self._update_usable()
 
@@ -160,47 +161,53 @@ class Sysctl(Peripheral):
 
     # --- clocks the rest of the board asks for -------------------------------------------
 
-    def pll_locked(self, reg: int, now: float) -> bool:
+    def pll_locked(self, reg: int, now: Time) -> bool:
         since = self.plls[reg].running_since
-        return since is not None and now - since >= PLL_LOCK_TIME_S
+        return since is not None and now - since >= PLL_LOCK_TIME
 
-    def pll_hz(self, reg: int) -> float:
+    # Every clock is a whole number of hertz (the SDK's sysctl_clock_get_freq answers in uint32_t
+    # too): a PLL's output and each divider's are rounded down, so that times computed from them
+    # (vtime.cycles_time) are exact integer arithmetic.
+
+    def pll_hz(self, reg: int) -> int:
+        """The PLL's output: OSC x NF / (NR x OD) (NR = clkr + 1, NF = clkf + 1, OD = clkod + 1),
+        or the oscillator when bypassed."""
         value = self.values[reg]
         if value & (1 << PLL_BYPASS_BIT):
-            return float(OSC_HZ)
+            return OSC_HZ
         clkr, clkf, clkod = field(value, *PLL_CLKR), field(value, *PLL_CLKF), field(value, *PLL_CLKOD)
-        return OSC_HZ * (clkf + 1) / ((clkr + 1) * (clkod + 1))
+        return OSC_HZ * (clkf + 1) // ((clkr + 1) * (clkod + 1))
 
-    def cpu_hz(self) -> float:
+    def cpu_hz(self) -> int:
         sel = self.values[CLK_SEL0]
         if not sel & 1:
-            return float(OSC_HZ)
-        return self.pll_hz(PLL0) / (2 << field(sel, 1, 2))
+            return OSC_HZ
+        return self.pll_hz(PLL0) // (2 << field(sel, 1, 2))
 
-    def apb0_hz(self) -> float:
+    def apb0_hz(self) -> int:
         """APB0's clock: ACLK / (clk_sel0.apb0_clk_sel + 1) (the SDK's sysctl_clock_get_freq,
         SYSCTL_CLOCK_APB0; apb0_clk_sel is clk_sel0[5:3]). UART1-3 count their bit times in it."""
-        return self.cpu_hz() / (field(self.values[CLK_SEL0], 3, 3) + 1)
+        return self.cpu_hz() // (field(self.values[CLK_SEL0], 3, 3) + 1)
 
-    def wdt_hz(self, index: int) -> float:
+    def wdt_hz(self, index: int) -> int:
         """WDTn's clock: IN0 / ((clk_th6 byte n + 1) x 2) (sysctl_clock_get_freq, SYSCTL_CLOCK_WDTn)."""
-        return OSC_HZ / ((field(self.values[CLK_TH6], 8 * index, 8) + 1) * 2)
+        return OSC_HZ // ((field(self.values[CLK_TH6], 8 * index, 8) + 1) * 2)
 
-    def timer_hz(self, index: int) -> float:
+    def timer_hz(self, index: int) -> int:
         """TIMERn's clock: IN0 or PLL0 (clk_sel0 bit 13 + n) / ((clk_th2 byte n + 1) x 2) (the SDK's
         sysctl_clock_get_freq, SYSCTL_CLOCK_TIMERn)."""
-        source = self.pll_hz(PLL0) if self.values[CLK_SEL0] >> (TIMER0_CLK_SEL_BIT + index) & 1 else float(OSC_HZ)
-        return source / ((field(self.values[CLK_TH2], 8 * index, 8) + 1) * 2)
+        source = self.pll_hz(PLL0) if self.values[CLK_SEL0] >> (TIMER0_CLK_SEL_BIT + index) & 1 else OSC_HZ
+        return source // ((field(self.values[CLK_TH2], 8 * index, 8) + 1) * 2)
 
-    def spi_source_hz(self, index: int) -> float:
+    def spi_source_hz(self, index: int) -> int:
         """SPIn source clock = source / ((clk_th1 byte n + 1) * 2), the source PLL0, or for SPI3
         IN0 or PLL0 as clk_sel0.spi3_clk_sel says (the SDK's sysctl_clock_get_freq; its spi_init
         selects PLL0 for SPI3)."""
         threshold = field(self.values[CLK_TH1], 8 * index, 8)
         source = self.pll_hz(PLL0)
         if index == 3 and not self.values[CLK_SEL0] >> SPI3_CLK_SEL_BIT & 1:
-            source = float(OSC_HZ)
-        return source / ((threshold + 1) * 2)
+            source = OSC_HZ
+        return source // ((threshold + 1) * 2)
 
     def gate_open(self, name: str) -> bool:
         """Whether the named peripheral's clock gate and its bus gate are both on."""
@@ -234,7 +241,7 @@ class Sysctl(Peripheral):
 
     # --- register behaviour ----------------------------------------------------------------
 
-    def read_register(self, offset: int, reg: Register, now: float) -> int:
+    def read_register(self, offset: int, reg: Register, now: Time) -> int:
         if offset == PLL_LOCK:
             value = 0
             for pll, lock_shift in ((PLL0, 0), (PLL1, 8), (PLL2, 16)):
@@ -245,12 +252,12 @@ class Sysctl(Peripheral):
             return value
         return self.values[offset]
 
-    def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
+    def write_register(self, offset: int, reg: Register, value: int, now: Time) -> None:
         self._write_register(offset, reg, value, now)
         if offset in _GATE_REGISTERS:
             self._update_usable()
 
-    def _write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
+    def _write_register(self, offset: int, reg: Register, value: int, now: Time) -> None:
         if offset in self.plls:
             if offset == PLL0 and self.values[CLK_SEL0] & 1 and value != self.values[PLL0]:
                 raise HardwareMisuse(
@@ -301,7 +308,7 @@ class Sysctl(Peripheral):
             return
         self.values[offset] = value
 
-    def next_event_time(self, now: float) -> float | None:
-        times = [s.running_since + PLL_LOCK_TIME_S for s in self.plls.values()
-                 if s.running_since is not None and now < s.running_since + PLL_LOCK_TIME_S]
+    def next_event_time(self, now: Time) -> Time | None:
+        times = [s.running_since + PLL_LOCK_TIME for s in self.plls.values()
+                 if s.running_since is not None and now < s.running_since + PLL_LOCK_TIME]
         return min(times) if times else None

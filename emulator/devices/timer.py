@@ -21,11 +21,11 @@ comp_version reads 0 (its value on the K210 is not published).
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Callable
 
 from ..memory_map import K210_BLOCKS
+from ..vtime import NEVER, Time, cycles_in, cycles_time
 from .mmio import Peripheral, Register
 from .ports import Ports
 
@@ -35,7 +35,6 @@ LOAD_COUNT, CURRENT_VALUE, CONTROL, EOI, INTR_STAT = 0x00, 0x04, 0x08, 0x0C, 0x1
 BLOCK_INTR_STAT, BLOCK_EOI, RAW_INTR_STAT, COMP_VERSION, LOAD_COUNT2 = 0xA0, 0xA4, 0xA8, 0xAC, 0xB0
 CR_ENABLE, CR_USER_MODE, CR_INTERRUPT_MASK, CR_PWM = 1, 2, 4, 8
 FREE_RUNNING_RELOAD = 0xFFFF_FFFF
-EPS = 1e-15                 # float slack when a time is exactly an expiry
 # Toggles told at one advance at most: beyond, a PWM far faster than anything looks at is not
 # logged edge by edge (the scheduler stops at each toggle, so this is only a bound)
 MAX_TOGGLES_HEARD = 10_000
@@ -47,36 +46,39 @@ def channel_register(channel: int, offset: int) -> int:
 
 @dataclass
 class _Count:
-    """A running channel's plan: a count of `first` ticks from `start`, then the counts of `cycle`
-    over and over; `levels` are the toggle output's during `first` and each of `cycle`. (A count
-    of 0 is taken as 1: the counter reloads on the next clock.)"""
-    start: float
-    tick: float
+    """A running channel's plan: a count of `first` ticks of a clock at `hz` from `start`, then the
+    counts of `cycle` over and over; `levels` are the toggle output's during `first` and each of
+    `cycle`. (A count of 0 is taken as 1: the counter reloads on the next clock.) Every count's end
+    is a number of ticks from `start` (time_of), so none depends on the rounding of those before."""
+    start: Time
+    hz: int
     first: int
     first_level: int
     cycle: tuple[int, ...]
     cycle_levels: tuple[int, ...]
 
-    def position(self, now: float) -> tuple[int, float, int, float | None]:
-        """At `now`: (the toggle level, when the current count began, its length in ticks, when the
-        last count ended or None)."""
-        first_end = self.start + self.first * self.tick
-        if now + EPS < first_end:
-            return self.first_level, self.start, self.first, None
-        cycle = tuple(max(length, 1) for length in self.cycle)
-        period = sum(cycle) * self.tick
-        cycles = math.floor((now - first_end) / period + EPS)
-        began = last_end = first_end + cycles * period
-        for length, level in zip(cycle, self.cycle_levels):
-            end = began + length * self.tick
-            if now + EPS < end:
-                return level, began, length, last_end
-            began = last_end = end
-        return self.cycle_levels[0], began, cycle[0], last_end
+    def time_of(self, ticks: int) -> Time:
+        """When `ticks` ticks from `start` have passed."""
+        return self.start + cycles_time(ticks, self.hz)
 
-    def next_end(self, now: float) -> float:
+    def position(self, now: Time) -> tuple[int, int, int, Time | None]:
+        """At `now`: (the toggle level, the tick the current count began at (from `start`), its
+        length in ticks, when the last count ended or None)."""
+        # the ticks wholly passed by `now`: a count of n from tick b has ended iff passed >= b + n
+        passed = cycles_in(now - self.start, self.hz)
+        if passed < self.first:
+            return self.first_level, 0, self.first, None
+        cycle = tuple(max(length, 1) for length in self.cycle)
+        began = self.first + (passed - self.first) // sum(cycle) * sum(cycle)
+        for length, level in zip(cycle, self.cycle_levels):
+            if passed < began + length:
+                return level, began, length, self.time_of(began)
+            began += length
+        return self.cycle_levels[0], began, cycle[0], self.time_of(began)
+
+    def next_end(self, now: Time) -> Time:
         _, began, length, _ = self.position(now)
-        return began + length * self.tick
+        return self.time_of(began + length)
 
 
 class DwTimer(Peripheral):
@@ -94,7 +96,7 @@ class DwTimer(Peripheral):
         **{LOAD_COUNT2 + 4 * n: Register(f"load_count2_{n}") for n in range(CHANNELS)},
     }
 
-    def __init__(self, index: int, ports: Ports, clock_hz: Callable[[], float]) -> None:
+    def __init__(self, index: int, ports: Ports, clock_hz: Callable[[], int]) -> None:
         """index: 0, 1 or 2. clock_hz: the timer clock SYSCTL gives this block."""
         self.index = index
         self.NAME = f"TIMER{index}"
@@ -103,17 +105,18 @@ class DwTimer(Peripheral):
         self.clock_hz = clock_hz
         super().__init__(ports)
         self._counts: list[_Count | None] = [None] * CHANNELS
-        self._cleared = [-math.inf] * CHANNELS      # when each channel's interrupt was last cleared
-        self._ended_before = [-math.inf] * CHANNELS  # the last count's end under an earlier plan
+        # -NEVER: earlier than any time
+        self._cleared = [-NEVER] * CHANNELS          # when each channel's interrupt was last cleared
+        self._ended_before = [-NEVER] * CHANNELS     # the last count's end under an earlier plan
         # hears each change of a PWM channel's toggle output: (channel, time, level); set by the wiring
-        self.on_toggle: Callable[[int, float, int], None] = lambda channel, at, level: None
-        self._toggles_heard = [-math.inf] * CHANNELS  # the time up to which on_toggle has heard them
+        self.on_toggle: Callable[[int, Time, int], None] = lambda channel, at, level: None
+        self._toggles_heard = [-NEVER] * CHANNELS    # the time up to which on_toggle has heard them
 
-    def reset(self, now: float) -> None:
+    def reset(self, now: Time) -> None:
         super().reset(now)
         self._counts = [None] * CHANNELS
-        self._cleared = [-math.inf] * CHANNELS
-        self._ended_before = [-math.inf] * CHANNELS
+        self._cleared = [-NEVER] * CHANNELS
+        self._ended_before = [-NEVER] * CHANNELS
 
     # --- counting ----------------------------------------------------------------------------------
 
@@ -123,7 +126,7 @@ class DwTimer(Peripheral):
     def _loads(self, channel: int) -> tuple[int, int]:
         return self.values[channel_register(channel, LOAD_COUNT)], self.values[LOAD_COUNT2 + 4 * channel]
 
-    def _plan(self, channel: int, now: float, first: int, first_level: int) -> None:
+    def _plan(self, channel: int, now: Time, first: int, first_level: int) -> None:
         """The channel counts `first` ticks from `now` at `first_level`, then as its registers say."""
         control = self._control(channel)
         load, load2 = self._loads(channel)
@@ -137,31 +140,31 @@ class DwTimer(Peripheral):
             cycle, levels = (load,), (0,)
         else:
             cycle, levels = (FREE_RUNNING_RELOAD,), (0,)
-        self._counts[channel] = _Count(now, 1 / hz, max(first, 0), first_level, cycle, levels)
+        self._counts[channel] = _Count(now, hz, max(first, 0), first_level, cycle, levels)
 
-    def _state(self, channel: int, now: float) -> tuple[int, int, int]:
+    def _state(self, channel: int, now: Time) -> tuple[int, int, int]:
         """(the counter's value, the toggle output, whether its raw interrupt is set) at `now`."""
         count = self._counts[channel]
         if count is None:
             return 0, 0, self._raw_of(channel, None)
         level, began, length, last_end = count.position(now)
-        elapsed = int((now - began) / count.tick + EPS)
+        elapsed = cycles_in(now - count.start, count.hz) - began
         return max(length - elapsed, 0), level, self._raw_of(channel, last_end)
 
-    def _raw_of(self, channel: int, last_end: float | None) -> int:
-        ended = max(self._ended_before[channel], -math.inf if last_end is None else last_end)
+    def _raw_of(self, channel: int, last_end: Time | None) -> int:
+        ended = max(self._ended_before[channel], -NEVER if last_end is None else last_end)
         return 1 if ended > self._cleared[channel] else 0
 
-    def toggle_level(self, channel: int, now: float) -> int:
+    def toggle_level(self, channel: int, now: Time) -> int:
         """The channel's toggle output (FPIOA TIMERn_TOGGLE1 + channel)."""
         if not self._control(channel) & CR_PWM:
             return 0
         return self._state(channel, now)[1]
 
-    def _raw(self, now: float) -> int:
+    def _raw(self, now: Time) -> int:
         return sum(self._state(n, now)[2] << n for n in range(CHANNELS))
 
-    def _status(self, now: float) -> int:
+    def _status(self, now: Time) -> int:
         return sum(1 << n for n in range(CHANNELS)
                    if not self._control(n) & CR_INTERRUPT_MASK and self._state(n, now)[2])
 
@@ -176,7 +179,7 @@ class DwTimer(Peripheral):
         status = self._status(self.ports.clock.now())
         return (1 if status & 3 else 0) | (2 if status & 12 else 0)
 
-    def next_event_time(self, now: float) -> float | None:
+    def next_event_time(self, now: Time) -> Time | None:
         """The next count's end of a channel whose end matters outside a read: an unmasked interrupt.
         (A PWM output's edges are told with their own times whenever the timer is advanced, every
         turn of the harts: they need no turn of their own.)"""
@@ -186,12 +189,10 @@ class DwTimer(Peripheral):
         for channel, count in enumerate(self._counts):
             control = self._control(channel)
             if count is not None and not control & CR_INTERRUPT_MASK:
-                end = count.next_end(now)
-                if end < math.inf:
-                    times.append(end)
+                times.append(count.next_end(now))
         return min(times) if times else None
 
-    def advance(self, now: float) -> None:
+    def advance(self, now: Time) -> None:
         """Tells on_toggle each change of a PWM output up to `now`, with its own time."""
         if not any(self._counts):
             return
@@ -201,7 +202,7 @@ class DwTimer(Peripheral):
             at = max(self._toggles_heard[channel], count.start)
             for _ in range(MAX_TOGGLES_HEARD):
                 end = count.next_end(at)
-                if end > now + EPS:
+                if end > now:
                     break
                 self.on_toggle(channel, end, count.position(end)[0])
                 at = end
@@ -209,7 +210,7 @@ class DwTimer(Peripheral):
 
     # --- registers ---------------------------------------------------------------------------------
 
-    def read_register(self, offset: int, reg: Register, now: float) -> int:
+    def read_register(self, offset: int, reg: Register, now: Time) -> int:
         if offset < CHANNELS * CHANNEL_STRIDE:
             channel, field = divmod(offset, CHANNEL_STRIDE)
             if field == CURRENT_VALUE:
@@ -230,12 +231,12 @@ class DwTimer(Peripheral):
             return 0
         return self.values[offset]
 
-    def _clear(self, channel: int, now: float) -> None:
+    def _clear(self, channel: int, now: Time) -> None:
         self.took_on_read = True
         self._cleared[channel] = now
         self.ports.irq_changed(now)
 
-    def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
+    def write_register(self, offset: int, reg: Register, value: int, now: Time) -> None:
         channel = offset // CHANNEL_STRIDE if offset < CHANNELS * CHANNEL_STRIDE else (offset - LOAD_COUNT2) // 4
         was_enabled = bool(self._control(channel) & CR_ENABLE)
         remaining, level, _ = self._state(channel, now)

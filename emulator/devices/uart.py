@@ -24,13 +24,14 @@ parameters are not configured (CPR 0), UCV 0; CTR is the DesignWare peripheral i
 """
 from __future__ import annotations
 
-import math
 from collections import deque
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 
 from ..memory_map import K210_BLOCKS
+from ..vtime import NEVER, PS_PER_MS, Time, cycles_time
 from .mmio import Peripheral, Register
 from .ports import Ports, SerialInput
 
@@ -59,7 +60,34 @@ SRR_UR, SRR_RFR, SRR_XFR = 1, 2, 4
 RX_TRIGGER = (1, FIFO_DEPTH // 4, FIFO_DEPTH // 2, FIFO_DEPTH - 2)     # FCR[7:6], SRT
 TX_THRESHOLD = (0, 2, FIFO_DEPTH // 4, FIFO_DEPTH // 2)                # FCR[5:4], STET
 TIMEOUT_CHARACTERS = 4          # a character timeout: no byte in or out of the FIFO for 4 byte times
-INTERACTIVE_POLL_S = 0.05       # virtual time between looks at a terminal while nothing was typed
+INTERACTIVE_POLL: Time = 50 * PS_PER_MS   # virtual time between looks at a terminal while nothing was typed
+
+
+@dataclass
+class ByteTrain:
+    """Bytes on a serial line back to back at one rate, each `cycles` cycles of a clock at `hz`:
+    the k-th ends at start + cycles_time(k x cycles, hz), counted from the train's start, so that
+    no byte's end depends on the rounding of those before it (nor on how often the line was
+    advanced meanwhile)."""
+
+    start: Time
+    cycles: int
+    hz: int
+    count: int = 0                                # bytes begun
+
+    def end(self, k: int) -> Time:
+        """When the k-th byte ends."""
+        return self.start + cycles_time(k * self.cycles, self.hz)
+
+
+def next_byte(train: ByteTrain | None, start: Time, cycles: int, hz: int) -> ByteTrain:
+    """A byte begins at `start`, `cycles` cycles of a clock at `hz` long: the train it belongs to
+    (`train`, if it follows that train's last byte at its rate; else a new one), with it counted.
+    Its end is the train's end(count)."""
+    if train is None or (train.cycles, train.hz) != (cycles, hz) or train.end(train.count) != start:
+        train = ByteTrain(start, cycles, hz)
+    train.count += 1
+    return train
 
 
 class DwUart(Peripheral):
@@ -82,7 +110,7 @@ class DwUart(Peripheral):
         CTR: Register("ctr", writable=False, reset=PERIPHERAL_ID),
     }
 
-    def __init__(self, index: int, ports: Ports, source_hz: Callable[[], float], on_byte: Callable[[int], None]) -> None:
+    def __init__(self, index: int, ports: Ports, source_hz: Callable[[], int], on_byte: Callable[[int], None]) -> None:
         """index: 1, 2 or 3. source_hz: the APB0 clock the UART counts its bit times in.
         on_byte: hears each byte as its stop bit leaves the TX pin."""
         self.index = index
@@ -102,18 +130,20 @@ class DwUart(Peripheral):
         self._fcr = 0                             # FCR is write-only: its fields live here
         self._tx: deque[int] = deque()
         self._rx: deque[int] = deque()
-        self._shifting_until: float | None = None
+        self._shifting_until: Time | None = None
+        self._tx_train: ByteTrain | None = None   # the bytes sent back to back, the one shifting the last
         self._pending_byte = 0
-        self._receiving_until: float | None = None
+        self._receiving_until: Time | None = None
+        self._rx_train: ByteTrain | None = None   # the bytes received back to back, likewise
         self._receiving_byte = 0
         self._thre_pending = False                # the 16550 THR-empty interrupt, until IIR reads it
         self._errors = 0                          # LSR's error bits since it was last read
-        self._rx_activity = 0.0                   # when a byte last went into or out of the receive FIFO
-        self.last_byte_time = 0.0
+        self._rx_activity: Time = 0               # when a byte last went into or out of the receive FIFO
+        self.last_byte_time: Time = 0
         self.tx_dma: DmaChannel | None = None      # a DMAC channel feeding THR (its handshake)
         self.rx_dma: DmaChannel | None = None      # a DMAC channel taking what is received
 
-    def reset(self, now: float) -> None:
+    def reset(self, now: Time) -> None:
         """peri_reset or a chip reset: registers and FIFOs as at power-on. A byte coming in is cut
         off, and the host's bridge sends it again (it hands a receiver a byte only when it can take
         one: the SDK's start-up sets UART3 up and its uart_init resets it again, and a test's input
@@ -132,7 +162,7 @@ class DwUart(Peripheral):
     def is_data_register(self, address: int) -> bool:
         return address == self.BASE + RBR
 
-    def attach_tx_dma(self, channel: DmaChannel, now: float) -> None:
+    def attach_tx_dma(self, channel: DmaChannel, now: Time) -> None:
         """The channel answers the transmitter's requests: the FIFO is kept full from memory, each
         32-bit item one byte (its low 8 bits, as the SDK's uart_send_data_dma writes them)."""
         self.advance(now)
@@ -140,7 +170,7 @@ class DwUart(Peripheral):
         self._dma_refill(now)
         self.advance(now)
 
-    def attach_rx_dma(self, channel: DmaChannel, now: float) -> None:
+    def attach_rx_dma(self, channel: DmaChannel, now: Time) -> None:
         """The channel takes each received byte as an item, the FIFO's first."""
         self.advance(now)
         self.rx_dma = channel
@@ -155,7 +185,7 @@ class DwUart(Peripheral):
         if self.rx_dma is channel:
             self.rx_dma = None
 
-    def _dma_refill(self, at: float) -> None:
+    def _dma_refill(self, at: Time) -> None:
         channel = self.tx_dma
         if channel is None or not channel.remaining():
             return
@@ -176,22 +206,30 @@ class DwUart(Peripheral):
     def _depth(self) -> int:
         return FIFO_DEPTH if self._fifo_enabled() else 1
 
-    def bit_time(self) -> float | None:
-        """Seconds a bit lasts; None while the divisor is 0 (the baud clock stopped)."""
-        divisor = self._divisor_latch + (self.values[DLF] & 0xF) / 16
-        hz = self.source_hz()
-        if divisor == 0 or hz <= 0:
-            return None
-        return 16 * divisor / hz
+    def _bit_clocks(self) -> int:
+        """APB0 clocks a bit lasts: 16 x (DLH:DLL + DLF / 16); 0 while the divisor is 0."""
+        return 16 * self._divisor_latch + (self.values[DLF] & 0xF)
 
-    def _byte_time(self) -> float | None:
-        bit = self.bit_time()
-        if bit is None:
+    def bit_time(self) -> Time | None:
+        """How long a bit lasts (rounded up to a picosecond); None while the divisor is 0 (the baud
+        clock stopped)."""
+        clocks, hz = self._bit_clocks(), self.source_hz()
+        if clocks == 0 or hz <= 0:
+            return None
+        return cycles_time(clocks, hz)
+
+    def _frame(self) -> tuple[int, int] | None:
+        """A byte's length on the line as (cycles, hz): start, data, parity and stop bits, counted
+        in half cycles of APB0 (cycles of a clock at twice its rate) so that 1.5 stop bits are
+        whole. None while the divisor is 0."""
+        clocks, hz = self._bit_clocks(), self.source_hz()
+        if clocks == 0 or hz <= 0:
             return None
         lcr = self.values[LCR]
         data_bits = 5 + (lcr & 3)
-        stop_bits = 1.0 if not lcr & LCR_STOP else (1.5 if data_bits == 5 else 2.0)
-        return bit * (1 + data_bits + (1 if lcr & LCR_PEN else 0) + stop_bits)
+        half_stop_bits = 2 if not lcr & LCR_STOP else (3 if data_bits == 5 else 4)
+        half_bits = 2 * (1 + data_bits + (1 if lcr & LCR_PEN else 0)) + half_stop_bits
+        return half_bits * clocks, 2 * hz
 
     def _idle(self) -> bool:
         """Nothing on the wire, nothing to send or to be sent: time changes nothing here (the board
@@ -199,13 +237,13 @@ class DwUart(Peripheral):
         return self._shifting_until is None and not self._tx and self._receiving_until is None and \
             self.input is None and not self._rx
 
-    def advance(self, now: float) -> None:
+    def advance(self, now: Time) -> None:
         if self._idle():
             return
         self._advance_tx(now)
         self._advance_rx(now)
 
-    def _advance_tx(self, now: float) -> None:
+    def _advance_tx(self, now: Time) -> None:
         while True:
             if self._shifting_until is not None:
                 if self._shifting_until > now:
@@ -217,23 +255,24 @@ class DwUart(Peripheral):
                 start = end
             else:
                 start = now
-            byte_time = self._byte_time()
-            if not self._tx or byte_time is None or self.values[HTX] & 1:
+            frame = self._frame()
+            if not self._tx or frame is None or self.values[HTX] & 1:
                 return
             self._pending_byte = self._tx.popleft()
-            self._shifting_until = start + byte_time
+            self._tx_train = next_byte(self._tx_train, start, *frame)
+            self._shifting_until = self._tx_train.end(self._tx_train.count)
             self._dma_refill(start)
             if not self._tx:
                 self._thre_pending = True         # THR (the FIFO) empty: the 16550's THRE interrupt
 
-    def _sent(self, byte: int, at: float) -> None:
+    def _sent(self, byte: int, at: Time) -> None:
         if self.values[MCR] & MCR_LOOPBACK:
             self._take(byte, at)
             return
         self.bytes_sent += 1
         self.on_byte(byte)
 
-    def _take(self, byte: int, at: float) -> None:
+    def _take(self, byte: int, at: Time) -> None:
         """A byte has come in whole: to the DMA channel taking them, into the receive FIFO, or lost
         (overrun) when it is full."""
         self._rx_activity = at
@@ -248,7 +287,7 @@ class DwUart(Peripheral):
             self._errors |= LSR_OE
         self._rx_activity = at
 
-    def _advance_rx(self, now: float) -> None:
+    def _advance_rx(self, now: Time) -> None:
         source = self.input
         while True:
             if self._receiving_until is not None:
@@ -261,13 +300,14 @@ class DwUart(Peripheral):
                 start = now
             if source is None or self.values[MCR] & MCR_LOOPBACK or len(self._rx) >= self._depth():
                 return
-            byte_time = self._byte_time()
-            if byte_time is None or not source.has_byte(start):
+            frame = self._frame()
+            if frame is None or not source.has_byte(start):
                 return
             self._receiving_byte = source.pop()
-            self._receiving_until = start + byte_time
+            self._rx_train = next_byte(self._rx_train, start, *frame)
+            self._receiving_until = self._rx_train.end(self._rx_train.count)
 
-    def next_event_time(self, now: float) -> float | None:
+    def next_event_time(self, now: Time) -> Time | None:
         if self._idle():
             return None
         events = [t for t in (self._shifting_until, self._receiving_until, self._timeout_time()) if t is not None
@@ -278,15 +318,18 @@ class DwUart(Peripheral):
             if source.has_byte(now):
                 events.append(now)
             elif source.may_grow:
-                events.append(now + INTERACTIVE_POLL_S)
+                events.append(now + INTERACTIVE_POLL)
         return min(events) if events else None
 
-    def _timeout_time(self) -> float | None:
+    def _timeout_time(self) -> Time | None:
         """When the character timeout interrupt comes, for bytes waiting in the receive FIFO."""
         if not self._rx or not self._fifo_enabled():
             return None
-        byte_time = self._byte_time()
-        return None if byte_time is None else self._rx_activity + TIMEOUT_CHARACTERS * byte_time
+        frame = self._frame()
+        if frame is None:
+            return None
+        cycles, hz = frame
+        return self._rx_activity + cycles_time(TIMEOUT_CHARACTERS * cycles, hz)
 
     # --- interrupts -------------------------------------------------------------------------------
 
@@ -300,7 +343,7 @@ class DwUart(Peripheral):
     def _ptime(self) -> bool:
         return bool(self.values[IER] & IER_PTIME) and self._fifo_enabled()
 
-    def interrupt_id(self, now: float) -> int:
+    def interrupt_id(self, now: Time) -> int:
         """IIR[3:0]: the highest-priority pending interrupt (databook: line status, received data
         or character timeout, THR empty, modem status), or 1: none."""
         ier = self.values[IER]
@@ -347,19 +390,19 @@ class DwUart(Peripheral):
             value |= USR_RFF
         return value
 
-    def stable_until(self, offset: int, now: float) -> float:
+    def stable_until(self, offset: int, now: Time) -> Time:
         """LSR, USR, TFL and RFL (reading them changes nothing while no error is latched) stay as
         they are until the UART's next event, a byte's start or end or the host's next byte: the
-        SDK's getchar polls LSR for data, its putchar for room. Kept a millionth of a byte early."""
+        SDK's getchar polls LSR for data, its putchar for room. The bound is the event itself (every
+        read before it reads the same; event times are exact, so no margin before it is needed)."""
         if offset not in (LSR, USR, TFL, RFL) or self._errors:
             return now
         event = self.next_event_time(now)
         if event is None:
-            return math.inf
-        byte_time = self._byte_time() or 0.0
-        return max(now, event - 1e-6 * byte_time)
+            return NEVER
+        return max(now, event)
 
-    def _pop(self, now: float) -> int:
+    def _pop(self, now: Time) -> int:
         if not self._rx:
             return 0
         self.took_on_read = True
@@ -368,7 +411,7 @@ class DwUart(Peripheral):
         self.advance(now)                         # room in the FIFO: the host's next byte may start
         return byte
 
-    def read_register(self, offset: int, reg: Register, now: float) -> int:
+    def read_register(self, offset: int, reg: Register, now: Time) -> int:
         self.advance(now)
         dlab = self.values[LCR] & LCR_DLAB
         if offset == RBR:
@@ -409,7 +452,7 @@ class DwUart(Peripheral):
             return self.values[LCR] >> 6 & 1
         return self.values[offset]
 
-    def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
+    def write_register(self, offset: int, reg: Register, value: int, now: Time) -> None:
         self.advance(now)
         dlab = self.values[LCR] & LCR_DLAB
         if offset == RBR and dlab:
@@ -459,7 +502,7 @@ class DwUart(Peripheral):
             self._tx.clear()
         self._fcr = value & 0xF9                  # the reset bits clear themselves
 
-    def _transmit(self, byte: int, now: float) -> None:
+    def _transmit(self, byte: int, now: Time) -> None:
         if len(self._tx) >= self._depth():
             # one counted warning for a firmware that never waits, not one per byte
             self.ports.warn(f"{self.NAME}: a byte written to THR while the transmit FIFO was full was lost: "

@@ -18,12 +18,15 @@ should not depend on how fast a firmware boots.
 """
 from __future__ import annotations
 
+import itertools
 from collections import deque
-from typing import Callable
+from typing import Callable, Iterator
 
 from ..memory_map import K210_BLOCKS
+from ..vtime import NEVER, PS_PER_MS, Time
 from .mmio import BUS_TILELINK, Peripheral, Register
 from .ports import Ports, SerialInput
+from .uart import ByteTrain, next_byte
 
 TXDATA, RXDATA, TXCTRL, RXCTRL, IE, IP, DIV = 0x00, 0x04, 0x08, 0x0C, 0x10, 0x14, 0x18
 TX_FIFO_DEPTH = 8
@@ -33,7 +36,7 @@ EMPTY = 1 << 31
 IP_TXWM, IP_RXWM = 1, 2
 NEWLINE = 0x0A
 RXCTRL_RXEN = 1
-INTERACTIVE_POLL_S = 0.05     # virtual time between looks at a terminal while nothing was typed
+INTERACTIVE_POLL: Time = 50 * PS_PER_MS   # virtual time between looks at a terminal while nothing was typed
 
 
 class Uarths(Peripheral):
@@ -55,18 +58,20 @@ class Uarths(Peripheral):
         super().__init__(ports)
         self.on_byte = on_byte
         self._fifo: deque[int] = deque()
-        self._shifting_until: float | None = None   # end time of the byte on the wire
-        self.last_byte_time = 0.0                    # when the last byte's stop bit went out
+        self._shifting_until: Time | None = None    # end time of the byte on the wire
+        self._tx_train: ByteTrain | None = None      # the bytes sent back to back, that one the last
+        self.last_byte_time: Time = 0                # when the last byte's stop bit went out
         self.input: SerialInput | None = None          # what the host sends (--uart-input)
         self._rx_fifo: deque[int] = deque()
-        self._receiving_until: float | None = None   # end time of the byte coming in
+        self._receiving_until: Time | None = None   # end time of the byte coming in
+        self._rx_train: ByteTrain | None = None      # the bytes received back to back, likewise
         self._receiving_byte = 0
         self.bytes_received = 0
         # whoever hears the console acts on each byte the moment it is out (a console watch that
         # ends the run): then no byte's end is quiet (quiet_ticks)
         self.every_byte_heard = False
 
-    def reset(self, now: float) -> None:
+    def reset(self, now: Time) -> None:
         """A chip reset: registers and FIFOs as at power-on; a byte on the wire is cut off (one
         coming in is sent again by the host's bridge, as DwUart.reset says)."""
         self.advance(now)
@@ -77,18 +82,19 @@ class Uarths(Peripheral):
         self._rx_fifo.clear()
         self._shifting_until = None
         self._receiving_until = None
+        self._tx_train = self._rx_train = None
 
-    def _byte_time(self) -> float:
-        hz = self.ports.clock.cpu_hz()
+    def _frame(self) -> tuple[int, int]:
+        """A byte's length on the line: (cycles, hz), bits x (div + 1) cycles of the core clock."""
         bits = 10 + (1 if self.values[TXCTRL] >> 1 & 1 else 0)
-        return bits * (self.values[DIV] + 1) / hz
+        return bits * (self.values[DIV] + 1), self.ports.clock.cpu_hz()
 
-    def advance(self, now: float) -> None:
+    def advance(self, now: Time) -> None:
         self._advance_tx(now)
         if self.input is not None:
             self._advance_rx(now)
 
-    def _advance_rx(self, now: float) -> None:
+    def _advance_rx(self, now: Time) -> None:
         while True:
             if self._receiving_until is not None:
                 if self._receiving_until > now:
@@ -102,12 +108,13 @@ class Uarths(Peripheral):
             if not self._receiver_ready() or not self.input.has_byte(start):
                 return
             self._receiving_byte = self.input.pop()
-            self._receiving_until = start + self._byte_time()
+            self._rx_train = next_byte(self._rx_train, start, *self._frame())
+            self._receiving_until = self._rx_train.end(self._rx_train.count)
 
     def _receiver_ready(self) -> bool:
         return bool(self.values[RXCTRL] & RXCTRL_RXEN) and len(self._rx_fifo) < RX_FIFO_DEPTH
 
-    def _advance_tx(self, now: float) -> None:
+    def _advance_tx(self, now: Time) -> None:
         while True:
             if self._shifting_until is not None:
                 if self._shifting_until > now:
@@ -121,13 +128,14 @@ class Uarths(Peripheral):
             if not self._fifo or not self.values[TXCTRL] & 1:
                 return
             self._pending_byte = self._fifo.popleft()
-            self._shifting_until = start + self._byte_time()
+            self._tx_train = next_byte(self._tx_train, start, *self._frame())
+            self._shifting_until = self._tx_train.end(self._tx_train.count)
 
-    def next_event_time(self, now: float) -> float | None:
+    def next_event_time(self, now: Time) -> Time | None:
         events = [t for t in (self._shifting_until, self._receiver_event(now)) if t is not None]
         return min(events) if events else None
 
-    def _receiver_event(self, now: float) -> float | None:
+    def _receiver_event(self, now: Time) -> Time | None:
         if self._receiving_until is not None:
             return self._receiving_until
         source = self.input
@@ -135,40 +143,74 @@ class Uarths(Peripheral):
             if source.has_byte(now):
                 return now                              # the next byte starts coming in now
             if source.may_grow:
-                return now + INTERACTIVE_POLL_S         # look at the terminal again then
+                return now + INTERACTIVE_POLL           # look at the terminal again then
         return None
 
-    def quiet_ticks(self) -> tuple[float, float, int]:
+    def quiet_byte_ends(self) -> tuple[Time, ...]:
         """The ends of the bytes about to leave that change nothing but the FIFO's level and the
         console's record of them (each is heard with its own time, last_byte_time, whenever the
         UART is advanced past it): not a line's end (the board reads each whole line, and an error
         report, at its end), no transmit-watermark interrupt enabled, nobody acting on each byte
         (every_byte_heard), no terminal typed into meanwhile (whose next look depends on when it is
-        asked). (first end, byte time, how many): the ends in a row, as advance works them out, up
-        to the first byte that is not quiet; the board's turns may run past them without stopping
-        (Scheduler._go_on_alone)."""
-        first, period, count, _ = self._quiet_chain()
-        return first, period, count
+        asked). The ends in a row, as advance works them out, up to the first byte that is not
+        quiet; the board's turns may run past them without stopping (Scheduler._go_on_alone)."""
+        return self._quiet_chain()[0]
 
-    def next_loud_event_time(self, now: float) -> float | None:
-        """next_event_time, with the quiet byte ends (quiet_ticks) left out."""
-        events = [t for t in (self._quiet_chain()[3], self._receiver_event(now)) if t is not None]
+    def quiet_ticks(self) -> tuple[Time, Time, int]:
+        """quiet_byte_ends as (first end, byte time, how many), the ends first + k x byte time: only
+        as many of them as are that exactly (the ends are counted from their train's start, so
+        rounded byte times differ by a picosecond here and there); the others count as loud
+        (next_loud_event_time)."""
+        ends = self._quiet_run()
+        if not ends:
+            return 0, 0, 0
+        period = ends[1] - ends[0] if len(ends) > 1 else 0
+        return ends[0], period, len(ends)
+
+    def _quiet_run(self) -> tuple[Time, ...]:
+        """The quiet byte ends that quiet_ticks gives: those evenly spaced from the first."""
+        ends = self.quiet_byte_ends()
+        count = len(ends)
+        if count > 2:
+            period = ends[1] - ends[0]
+            count = next((k for k in range(2, count) if ends[k] != ends[0] + k * period), count)
+        return ends[:count]
+
+    def next_loud_event_time(self, now: Time) -> Time | None:
+        """next_event_time, with the quiet byte ends that quiet_ticks gives left out."""
+        ends, loud = self._quiet_chain()
+        told = len(self._quiet_run())
+        if told < len(ends):
+            loud = ends[told]
+        events = [t for t in (loud, self._receiver_event(now)) if t is not None]
         return min(events) if events else None
 
-    def _quiet_chain(self) -> tuple[float, float, int, float | None]:
-        """quiet_ticks, and the end of the first byte about to leave that is not quiet (None: none
-        is), in one walk along the bytes."""
+    def _quiet_chain(self) -> tuple[tuple[Time, ...], Time | None]:
+        """(quiet_byte_ends, the end of the first byte about to leave that is not quiet (None: none
+        is)), in one walk along the bytes."""
         if self._shifting_until is None:
-            return 0.0, 0.0, 0, None
+            return (), None
         if self.every_byte_heard or self.values[IE] & IP_TXWM or (self.input is not None and self.input.may_grow):
-            return 0.0, 0.0, 0, self._shifting_until
-        period = self._byte_time()
-        end, count = self._shifting_until, 0
-        for byte in self._leaving():
+            return (), self._shifting_until
+        ends: list[Time] = []
+        for end, byte in zip(self._leaving_ends(), self._leaving()):
             if byte == NEWLINE:
-                return self._shifting_until, period, count, end
-            end, count = end + period, count + 1
-        return self._shifting_until, period, count, None
+                return tuple(ends), end
+            ends.append(end)
+        return tuple(ends), None
+
+    def _leaving_ends(self) -> Iterator[Time]:
+        """The ends of the bytes that leave back to back from now on (_leaving), as advance will work
+        them out: the one on the wire's, then those of the train the next bytes join (the running
+        one, or a new one from that end if the byte's length has changed since it began)."""
+        end = self._shifting_until
+        yield end
+        cycles, hz = self._frame()
+        train = self._tx_train
+        if train is None or (train.cycles, train.hz) != (cycles, hz):
+            train = ByteTrain(end, cycles, hz)
+        for k in itertools.count(train.count + 1):
+            yield train.end(k)
 
     def _leaving(self) -> tuple[int, ...]:
         """The bytes that leave back to back from now on: the one on the wire, and the FIFO's while
@@ -191,7 +233,7 @@ class Uarths(Peripheral):
         return (IP_TXWM if len(self._fifo) < tx_watermark else 0) | \
             (IP_RXWM if len(self._rx_fifo) > rx_watermark else 0)
 
-    def read_register(self, offset: int, reg: Register, now: float) -> int:
+    def read_register(self, offset: int, reg: Register, now: Time) -> int:
         self.advance(now)
         if offset == TXDATA:
             return FULL if len(self._fifo) >= TX_FIFO_DEPTH else 0
@@ -206,20 +248,20 @@ class Uarths(Peripheral):
             return self.read_ip()
         return self.values[offset]
 
-    def stable_until(self, offset: int, now: float) -> float:
+    def stable_until(self, offset: int, now: Time) -> Time:
         """txdata (reading it changes nothing) reads full until the byte on the wire has gone and the
         next leaves the FIFO for the wire; not full, until a write fills it. A writer waiting for
         room is answered once a byte, not once a read."""
         if offset != TXDATA:
             return now
         if len(self._fifo) < TX_FIFO_DEPTH:
-            return float("inf")
+            return NEVER
         if self._shifting_until is None:
             # the transmitter is off (txen = 0): only a write to txctrl lets the FIFO drain
-            return float("inf") if not self.values[TXCTRL] & 1 else now
+            return NEVER if not self.values[TXCTRL] & 1 else now
         return self._shifting_until
 
-    def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
+    def write_register(self, offset: int, reg: Register, value: int, now: Time) -> None:
         self.advance(now)
         if offset == TXDATA:
             if len(self._fifo) < TX_FIFO_DEPTH:

@@ -49,6 +49,7 @@ from typing import Callable
 import numpy as np
 
 from ..errors import UnmodelledAccess
+from ..vtime import PS_PER_MS, PS_PER_S, PS_PER_US, Time
 
 SIZE = 16 * 1024 * 1024
 PAGE = 256
@@ -65,8 +66,10 @@ SR1_WRITABLE, SR2_WRITABLE, SR3_WRITABLE = 0xFC, 0x7B, 0xE4   # bits a status wr
 SR2_LOCK_BITS = 0x38             # LB1-3: one-time programmable, set and never cleared
 
 # typical times (datasheet section 9.6)
-T_PAGE_PROGRAM, T_WRITE_STATUS = 0.7e-3, 10e-3
-T_ERASE = {0x20: 45e-3, 0x52: 120e-3, 0xD8: 150e-3, 0xC7: 40.0, 0x60: 40.0}
+T_PAGE_PROGRAM: Time = 700 * PS_PER_US
+T_WRITE_STATUS: Time = 10 * PS_PER_MS
+T_ERASE: dict[int, Time] = {0x20: 45 * PS_PER_MS, 0x52: 120 * PS_PER_MS, 0xD8: 150 * PS_PER_MS,
+                            0xC7: 40 * PS_PER_S, 0x60: 40 * PS_PER_S}
 ERASE_SIZE = {0x20: 4096, 0x52: 32 * 1024, 0xD8: 64 * 1024}
 
 READ, PROGRAM, ERASE, STATUS_READ, STATUS_WRITE, ID, CONTROL = ("read", "program", "erase", "status read",
@@ -128,7 +131,7 @@ class W25Q128:
     """The flash's storage and its command state machine, driven by an SPI controller (devices/spi.py's
     SpiDevice). `data` is the flash's 16 MiB (a FlashImage's bytearray): programs and erases change it."""
 
-    def __init__(self, data: bytearray, warn: Callable[[str, float], None]) -> None:
+    def __init__(self, data: bytearray, warn: Callable[[str, Time], None]) -> None:
         if len(data) != SIZE:
             raise ValueError(f"the W25Q128 holds {SIZE} bytes, not {len(data)}")
         self.memory = np.frombuffer(data, dtype=np.uint8)
@@ -136,22 +139,22 @@ class W25Q128:
         self.status = [0, SR2_QE, 0]     # status registers 1-3, BUSY and WEL kept apart
         self.write_enabled = False       # WEL
         self.volatile_write = False      # after 50h: the next status write is volatile
-        self.busy_until = 0.0
+        self.busy_until: Time = 0
         self.powered_down = False
         self.reset_enabled = False
         self.changed = False             # a program or erase has happened
-        self._wel_clears_at: float | None = None   # WEL clears when the program or erase under way ends
+        self._wel_clears_at: Time | None = None   # WEL clears when the program or erase under way ends
         self._reset_armed = False        # this command is 99h right after 66h
         self._begin()
 
     # --- the SpiDevice port ---------------------------------------------------------------------
 
-    def spi_select(self, selected: bool, now: float) -> None:
+    def spi_select(self, selected: bool, now: Time) -> None:
         if not selected:
             self._finish(now)
         self._begin()
 
-    def spi_transfer(self, data: np.ndarray, lanes: int, now: float) -> np.ndarray:
+    def spi_transfer(self, data: np.ndarray, lanes: int, now: Time) -> np.ndarray:
         reply = np.full(len(data), ERASED, dtype=np.uint8)
         i = 0
         while i < len(data):
@@ -162,7 +165,7 @@ class W25Q128:
             i += 1
         return reply
 
-    def spi_dummy(self, clocks: int, now: float) -> None:
+    def spi_dummy(self, clocks: int, now: Time) -> None:
         if self._stage == MODE:
             # a controller set up for the address alone clocks the mode bits as wait cycles: its lines
             # are not driven then and read high, M7-0 = FFh, which is not the continuous read mode
@@ -180,17 +183,17 @@ class W25Q128:
 
     # --- state --------------------------------------------------------------------------------
 
-    def busy(self, now: float) -> bool:
+    def busy(self, now: Time) -> bool:
         return now < self.busy_until
 
-    def status_register(self, n: int, now: float) -> int:
+    def status_register(self, n: int, now: Time) -> int:
         """Status register n (1-3) as a read shows it at `now`."""
         self._settle(now)
         if n != 1:
             return self.status[n - 1]
         return self.status[0] | (SR1_BUSY if self.busy(now) else 0) | (SR1_WEL if self.write_enabled else 0)
 
-    def _settle(self, now: float) -> None:
+    def _settle(self, now: Time) -> None:
         """A program, erase or status write that has ended clears the write enable latch."""
         if self._wel_clears_at is not None and now >= self._wel_clears_at:
             self.write_enabled = False
@@ -206,13 +209,13 @@ class W25Q128:
         self._out_index = 0
         self._written: list[np.ndarray] = []
 
-    def _refuse(self, what: str, now: float) -> None:
+    def _refuse(self, what: str, now: Time) -> None:
         name = f"{self._command.code:02X}h ({self._command.name})" if self._command else "a command"
         self.warn(f"W25Q128: {what} during {name}, which the chip does not expect there: the rest of the "
                   f"command is ignored (on the chip its effect is undefined)", now)
         self._stage = IGNORE
 
-    def _byte(self, value: int, lanes: int, now: float) -> None:
+    def _byte(self, value: int, lanes: int, now: Time) -> None:
         """One byte of a command, address, mode or dummy phase (lanes: the lines it came on)."""
         stage = self._stage
         if stage == COMMAND:
@@ -240,7 +243,7 @@ class W25Q128:
         elif stage == DONE:
             self._refuse("a byte after the command's end", now)
 
-    def _start(self, code: int, lanes: int, now: float) -> None:
+    def _start(self, code: int, lanes: int, now: Time) -> None:
         self._settle(now)
         reset_enabled, self.reset_enabled = self.reset_enabled, False    # 66h arms only the next command
         command = COMMANDS.get(code)
@@ -279,7 +282,7 @@ class W25Q128:
         else:
             self._after_address(now)
 
-    def _after_address(self, now: float) -> None:
+    def _after_address(self, now: Time) -> None:
         command = self._command
         if command.mode_byte:
             self._stage = MODE
@@ -289,7 +292,7 @@ class W25Q128:
             self._stage = DUMMY
             self._after_dummy(now)
 
-    def _after_dummy(self, now: float) -> None:
+    def _after_dummy(self, now: Time) -> None:
         needed = self._command.dummy_clocks
         if self._clocks < needed:
             return
@@ -302,7 +305,7 @@ class W25Q128:
         else:
             self._stage = DATA
 
-    def _control(self, now: float) -> None:
+    def _control(self, now: Time) -> None:
         code = self._command.code
         if code == 0x06:
             self.write_enabled, self.volatile_write = True, False
@@ -319,7 +322,7 @@ class W25Q128:
 
     # --- data phases --------------------------------------------------------------------------
 
-    def _data(self, data: np.ndarray, lanes: int, now: float) -> np.ndarray:
+    def _data(self, data: np.ndarray, lanes: int, now: Time) -> np.ndarray:
         command = self._command
         n = len(data)
         if command.kind in (READ, PROGRAM) and lanes != command.data_lines:
@@ -353,7 +356,7 @@ class W25Q128:
 
     # --- /CS high: what the command does -------------------------------------------------------------
 
-    def _finish(self, now: float) -> None:
+    def _finish(self, now: Time) -> None:
         command = self._command
         if command is None or self._stage == IGNORE:
             return
@@ -368,7 +371,7 @@ class W25Q128:
         elif command.kind == STATUS_WRITE and self._stage == DATA and self._written:
             self._write_status(np.concatenate(self._written), now)
 
-    def _write_allowed(self, now: float) -> bool:
+    def _write_allowed(self, now: Time) -> bool:
         command = self._command
         if not self.write_enabled:
             self.warn(f"W25Q128: {command.name} ({command.code:02X}h) without write enable (06h) first: the chip "
@@ -380,8 +383,8 @@ class W25Q128:
                                    f"protects is not modelled")
         return True
 
-    def _busy_for(self, seconds: float, now: float) -> None:
-        self.busy_until = now + seconds
+    def _busy_for(self, duration: Time, now: Time) -> None:
+        self.busy_until = now + duration
         self._wel_clears_at = self.busy_until
         self.changed = True
 
@@ -401,7 +404,7 @@ class W25Q128:
         first = self._address - self._address % size
         self.memory[first:first + size] = ERASED
 
-    def _write_status(self, data: np.ndarray, now: float) -> None:
+    def _write_status(self, data: np.ndarray, now: Time) -> None:
         code = self._command.code
         if not (self.write_enabled or self.volatile_write):
             self.warn(f"W25Q128: {self._command.name} ({code:02X}h) without write enable (06h or 50h) first: the "

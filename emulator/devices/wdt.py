@@ -19,10 +19,10 @@ watchdog did it. PLIC sources 21 and 22.
 """
 from __future__ import annotations
 
-import math
 from typing import Callable
 
 from ..memory_map import K210_BLOCKS
+from ..vtime import Time, cycles_in, cycles_time
 from .mmio import Peripheral, Register
 from .ports import Ports
 
@@ -32,7 +32,6 @@ COMP_VERSION, COMP_TYPE = 0xF8, 0xFC
 CR_ENABLE, CR_INTERRUPT_FIRST = 1, 2
 RESTART = 0x76
 WDT_TYPE = 0x4457_0120
-EPS = 1e-15
 
 
 class DwWatchdog(Peripheral):
@@ -47,8 +46,8 @@ class DwWatchdog(Peripheral):
         COMP_TYPE: Register("comp_type", writable=False, reset=WDT_TYPE),
     }
 
-    def __init__(self, index: int, ports: Ports, clock_hz: Callable[[], float],
-                 reset_chip: Callable[[str, float], None]) -> None:
+    def __init__(self, index: int, ports: Ports, clock_hz: Callable[[], int],
+                 reset_chip: Callable[[str, Time], None]) -> None:
         """index: 0 or 1. clock_hz: the watchdog clock SYSCTL gives it. reset_chip: the chip
         resets, because of this watchdog (its name), at this time."""
         self.index = index
@@ -61,50 +60,67 @@ class DwWatchdog(Peripheral):
         self._clear()
 
     def _clear(self) -> None:
-        self._started: float | None = None       # when the current timeout began (None: not enabled)
-        self._period = 0.0                         # its length in seconds
+        # The timeouts since the counter was last restarted (enabled, crr) follow one another at
+        # the watchdog clock: the end of each is counted in that clock's cycles from the restart,
+        # never by adding rounded timeout lengths. None: not enabled.
+        self._origin: Time | None = None           # when they began
+        self._hz = 0                               # the clock they are counted in
+        self._before = 0                           # clocks from _origin to the current timeout's start
+        self._clocks = 0                           # the current timeout's length in clocks
         self._interrupt = False
 
-    def reset(self, now: float) -> None:
+    def reset(self, now: Time) -> None:
         super().reset(now)
         self._clear()
 
-    def _timeout_seconds(self, first: bool) -> float:
+    def _timeout_clocks(self, first: bool) -> int:
         top = self.values[TORR] >> (4 if first else 0) & 0xF
-        hz = self.clock_hz()
-        return (1 << (16 + top)) / hz if hz > 0 else math.inf
+        return 1 << (16 + top)
 
-    def _restart(self, now: float, first: bool = False) -> None:
-        self._started = now
-        self._period = self._timeout_seconds(first)
+    def _restart(self, now: Time, first: bool = False) -> None:
+        """The counter starts a timeout at `now`: a new run of timeouts begins there."""
+        self._origin, self._hz, self._before = now, self.clock_hz(), 0
+        self._clocks = self._timeout_clocks(first)
 
-    def advance(self, now: float) -> None:
-        while self._started is not None and self._started + self._period <= now + EPS:
-            at = self._started + self._period
+    def _next_timeout(self, at: Time) -> None:
+        """The current timeout ended at `at` and the counter goes on with the next: in the same run
+        while the clock is unchanged, else a new run from `at`."""
+        if self.clock_hz() != self._hz:
+            self._restart(at)
+            return
+        self._before += self._clocks
+        self._clocks = self._timeout_clocks(False)
+
+    def _timeout_end(self) -> Time | None:
+        """When the current timeout ends (None: not enabled)."""
+        if self._origin is None or self._hz <= 0:
+            return None                            # not enabled, or no clock: no timeout ever ends
+        return self._origin + cycles_time(self._before + self._clocks, self._hz)
+
+    def advance(self, now: Time) -> None:
+        while (at := self._timeout_end()) is not None and at <= now:
             if self.values[CR] & CR_INTERRUPT_FIRST and not self._interrupt:
                 self._interrupt = True
-                self._restart(at)
+                self._next_timeout(at)
                 self.ports.irq_changed(at)
                 continue
-            self._started = None
+            self._origin = None
             self.reset_chip(self.NAME, at)          # resets this watchdog too
             return
 
-    def next_event_time(self, now: float) -> float | None:
-        if self._started is None:
-            return None
-        return self._started + self._period
+    def next_event_time(self, now: Time) -> Time | None:
+        return self._timeout_end()
 
     def irq_line(self) -> bool:
         return self._interrupt
 
-    def read_register(self, offset: int, reg: Register, now: float) -> int:
+    def read_register(self, offset: int, reg: Register, now: Time) -> int:
         self.advance(now)
         if offset == CCVR:
-            if self._started is None:
+            end = self._timeout_end()
+            if end is None:
                 return 0
-            left = self._started + self._period - now
-            return max(0, min(0xFFFF_FFFF, int(left * self.clock_hz())))
+            return max(0, min(0xFFFF_FFFF, cycles_in(end - now, self.clock_hz())))
         if offset == STAT:
             return 1 if self._interrupt else 0
         if offset == EOI:
@@ -115,10 +131,10 @@ class DwWatchdog(Peripheral):
             return 0
         return self.values[offset]
 
-    def write_register(self, offset: int, reg: Register, value: int, now: float) -> None:
+    def write_register(self, offset: int, reg: Register, value: int, now: Time) -> None:
         self.advance(now)
         if offset == CRR:
-            if value & 0xFF == RESTART and self._started is not None:
+            if value & 0xFF == RESTART and self._origin is not None:
                 self._restart(now)
                 if self._interrupt:
                     self._interrupt = False

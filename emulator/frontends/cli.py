@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import argparse
 import gc
-import math
 import os
 import signal
 import sys
@@ -14,6 +13,7 @@ from typing import TextIO
 from k210_common.exit_status import (BY_CODE, EXIT_BAD_INPUT, EXIT_GOLDEN_MISMATCH, EXIT_INTERNAL, EXIT_OK,
                                      EXIT_USAGE, EXIT_WRITE_FAILED)
 from ..errors import BadInput, BoardStop, Interrupted
+from ..vtime import NEVER, PS_PER_MS, PS_PER_S, Time, from_seconds, ms, to_seconds
 from .options import (DEFAULT_FRAMES, MAX_PAD_CHANGES_IN_RUN_JSON, PROG, build_parser, golden_count, grab_problem,
                       option_problem)
 
@@ -22,14 +22,14 @@ def pad_changes_summary(board) -> dict:
     MAX_PAD_CHANGES_IN_RUN_JSON) with its virtual time, and how many there were."""
     if board is None:
         return {"pad_changes": [], "pad_changes_total": 0}
-    changes = [{"virtual_time_s": at, "pad": pad, "level": level}
+    changes = [{"virtual_time_s": to_seconds(at), "pad": pad, "level": level}
                for at, pad, level in board.pad_changes[:MAX_PAD_CHANGES_IN_RUN_JSON]]
     return {"pad_changes": changes, "pad_changes_total": board.wiring.pad_change_count}
 
 
 # --expect without --until: how far the run may go in virtual time at most (the --budget
 # deadline after each expected text ends it long before)
-EXPECT_HORIZON_S = 1e6
+EXPECT_HORIZON = 10 ** 6 * PS_PER_S
 
 
 def read_otp(source: str) -> bytes:
@@ -49,7 +49,7 @@ def run_script(board, script, until_s: float | None, progress):
     """--uart-script: runs until the script ends the run (done: ConsoleExpectationsMet; an expect not
     met in its time: ConsoleExpectationUnmet), or fails at --until's time."""
     from ..errors import ConsoleExpectationUnmet
-    result = board.run_until(until_s if until_s is not None else EXPECT_HORIZON_S, progress=progress)
+    result = board.run_until(from_seconds(until_s) if until_s is not None else EXPECT_HORIZON, progress=progress)
     if board.scheduler.pending_stop is not None:
         raise board.scheduler.pending_stop          # the script ended (or failed) as the run did
     step = script.step
@@ -57,7 +57,7 @@ def run_script(board, script, until_s: float | None, progress):
         return result
     bound = "--until" if until_s is not None else "the longest run"
     raise ConsoleExpectationUnmet(f"--uart-script {script.path}:{step.line}: {step.describe()}: not done by "
-                                  f"{board.time:g} s of virtual time ({bound})")
+                                  f"{to_seconds(board.time):g} s of virtual time ({bound})")
 
 
 def run_expecting(board, watch, until_s: float | None, budget_s: float, progress):
@@ -66,24 +66,26 @@ def run_expecting(board, watch, until_s: float | None, budget_s: float, progress
     budget_s of virtual time without the next expected text."""
     from ..errors import ConsoleExpectationUnmet
     if until_s is not None:
-        board.run_until(until_s, progress=progress)
+        board.run_until(from_seconds(until_s), progress=progress)
         raise ConsoleExpectationUnmet(watch.unmet_message(f"by --until's {until_s:g} s of virtual time"))
 
-    def arm(at_s: float) -> None:
+    budget = from_seconds(budget_s)
+
+    def arm(at: Time) -> None:
         count = len(watch.matches)
 
         def deadline(board) -> None:
             if len(watch.matches) != count:          # an expected text came meanwhile
-                arm(watch.matches[-1].virtual_time_s + budget_s)
+                arm(watch.matches[-1].virtual_time + budget)
                 return
             since = "the previous expected text" if count else "reset"
             raise ConsoleExpectationUnmet(watch.unmet_message(
                 f"in {budget_s:g} s of virtual time after {since} (--budget)"))
-        board.grab_at(at_s, deadline)
+        board.grab_at(at, deadline)
 
-    arm(budget_s)
-    board.run_until(EXPECT_HORIZON_S, progress=progress)
-    raise ConsoleExpectationUnmet(watch.unmet_message(f"by {EXPECT_HORIZON_S:g} s of virtual time"))
+    arm(budget)
+    board.run_until(EXPECT_HORIZON, progress=progress)
+    raise ConsoleExpectationUnmet(watch.unmet_message(f"by {to_seconds(EXPECT_HORIZON):g} s of virtual time"))
 
 
 def run_under_gdb(board, args: argparse.Namespace, terminal):
@@ -94,32 +96,33 @@ def run_under_gdb(board, args: argparse.Namespace, terminal):
     from ..board.scheduler import RunResult
     server = GdbServer(board, args.gdb, terminal.message)
     scheduler = board.scheduler
+    until = None if args.until is None else from_seconds(args.until)
     terminal.message(f"[gdb] listening on 127.0.0.1:{server.port}; attach with: gdb-multiarch {args.firmware or ''} "
                      f"-ex 'target remote 127.0.0.1:{server.port}'")
     try:
         if not args.gdb_wait:
             scheduler.frames_wanted = args.frames if args.frames is not None else 1 << 62
             while not select_module.select([server.listener], [], [], 0)[0]:
-                if args.until is not None and scheduler.time >= args.until:
-                    return board.run_until(args.until)
+                if until is not None and scheduler.time >= until:
+                    return board.run_until(until)
                 if args.frames is not None and len(board.frames) >= args.frames:
                     return board.run(args.frames)
                 scheduler.step()
         server.accept()
-        budget, scheduler.hang_budget_s = scheduler.hang_budget_s, math.inf   # GDB decides when it is stuck
+        budget, scheduler.hang_budget = scheduler.hang_budget, NEVER   # GDB decides when it is stuck
         outcome = server.serve()
-        scheduler.hang_budget_s = budget
+        scheduler.hang_budget = budget
     finally:
         server.close()
     if outcome == "killed":
         terminal.message("[gdb] GDB killed the run")
-        return RunResult("ok", f"ended by GDB (kill) at {board.time * 1e3:.3f} ms of virtual time; "
-                               f"{len(board.frames)} frames shown", board.frames, board.time,
+        return RunResult("ok", f"ended by GDB (kill) at {ms(board.time)} of virtual time; "
+                               f"{len(board.frames)} frames shown", board.frames, to_seconds(board.time),
                          [h.instret for h in board.harts], 0.0, board.warnings)
     terminal.message(f"[gdb] GDB {outcome}; the run goes on to its end")
     scheduler._last_frame_time = board.time       # the frame budget counts from here, not from before GDB
-    if args.until is not None:
-        return board.run_until(max(args.until, board.time))
+    if until is not None:
+        return board.run_until(max(until, board.time))
     return board.run(max(args.frames, len(board.frames)))
 
 
@@ -167,7 +170,7 @@ class Terminal:
         total = sum(h.instret for h in board.harts)
         self.out.flush()
         self.err.write(f"{self.CLEAR_LINE}[board] frame {frames}/{board._frames_wanted}  virtual "
-                       f"{board.time * 1e3:9.2f} ms  {total / 1e6:9.2f} M instructions")
+                       f"{board.time / PS_PER_MS:9.2f} ms  {total / 1e6:9.2f} M instructions")
         self.err.flush()
         self._progress_shown = True
 
@@ -325,7 +328,7 @@ def run_command(args: argparse.Namespace, signals: SignalStop, opened: list) -> 
             profiler.frame(record)
 
     try:
-        board = Board(None if args.firmware is None else str(args.firmware), flash=flash, quantum=args.quantum, hang_budget_s=args.budget, console=console,
+        board = Board(None if args.firmware is None else str(args.firmware), flash=flash, quantum=args.quantum, hang_budget=from_seconds(args.budget), console=console,
                       on_frame=on_frame, on_warning=terminal.warning, permissive=args.permissive,
                       sd_image=args.sd, sd_writable=args.sd_writable, sd_faults=frozenset(args.sd_fault),
                       check_writes=args.check_writes, strict=args.strict, lcd_interface=args.lcd_interface,
@@ -340,7 +343,8 @@ def run_command(args: argparse.Namespace, signals: SignalStop, opened: list) -> 
             from .profile import Profiler
             profiler = Profiler(board, args.firmware)
         if trace_file is not None:
-            trace = InstructionTrace(board, trace_file, args.trace_from or 0.0, args.trace_to)
+            trace = InstructionTrace(board, trace_file, from_seconds(args.trace_from or 0.0),
+                                     None if args.trace_to is None else from_seconds(args.trace_to))
         watch.attach(board.stop_run)
         # it may end the run (or answer) the moment a byte is out
         board.uarths.every_byte_heard = watch.active or script is not None
@@ -352,7 +356,7 @@ def run_command(args: argparse.Namespace, signals: SignalStop, opened: list) -> 
         # every few virtual ms (each took milliseconds of host time).
         gc.freeze()
         for index, request in enumerate(grabs):
-            board.grab_at(request.at_s, grab_action(index, request))
+            board.grab_at(from_seconds(request.at_s), grab_action(index, request))
         progress = terminal.progress if terminal.shows_progress else None
         signals.board = board
         if uart_input is not None:
@@ -364,7 +368,7 @@ def run_command(args: argparse.Namespace, signals: SignalStop, opened: list) -> 
         elif script is not None:
             result = run_script(board, script, args.until, progress)
         elif args.until is not None:
-            result = board.run_until(args.until, progress=progress)
+            result = board.run_until(from_seconds(args.until), progress=progress)
         else:
             result = board.run(args.frames, progress=progress)
             board.finish_console_line()
@@ -405,7 +409,7 @@ def run_command(args: argparse.Namespace, signals: SignalStop, opened: list) -> 
         for text in board.repeated_warnings:
             terminal.warning(f"repeated: {text}")
     frames = board.frames if board is not None else []
-    summary = summary_dict(kind, message, frames, board.time if board else 0.0,
+    summary = summary_dict(kind, message, frames, to_seconds(board.time) if board else 0.0,
                            [h.instret for h in board.harts] if board else [0, 0],
                            time.perf_counter() - started, board.warnings if board else [],
                            str(args.firmware) if args.firmware is not None else f"{args.flash} (booted from flash)",
@@ -426,10 +430,10 @@ def run_command(args: argparse.Namespace, signals: SignalStop, opened: list) -> 
     if board is not None:
         missed = [request for index, request in enumerate(grabs) if index not in taken]
         for request in missed:
-            output.missed_grab(request, board.time)
+            output.missed_grab(request, to_seconds(board.time))
         if missed and status == EXIT_OK:
             status, kind = EXIT_USAGE, "grab-missed"
-            message = (f"--grab {', '.join(r.label for r in missed)}: the run ended at {board.time:.6f} s of "
+            message = (f"--grab {', '.join(r.label for r in missed)}: the run ended at {to_seconds(board.time):.6f} s of "
                        f"virtual time, before the grab's time, so nothing was written (ask for more --frames "
                        f"or an earlier time)")
     summary["exit"], summary["message"] = kind, message
@@ -437,7 +441,7 @@ def run_command(args: argparse.Namespace, signals: SignalStop, opened: list) -> 
     summary["writes_checked"] = args.check_writes
     summary["strict"] = args.strict
     summary["stop_on_trap"] = args.stop_on_trap
-    summary["resets"] = ([{"virtual_time_s": at, "cause": cause} for at, cause in board.scheduler.resets]
+    summary["resets"] = ([{"virtual_time_s": to_seconds(at), "cause": cause} for at, cause in board.scheduler.resets]
                          if board is not None else [])
     summary["pins"] = [change.describe() for change in board.pins.played] if board is not None else []
     summary["exceptions"] = dict(board.scheduler.traps.taken) if board is not None else {}
@@ -493,7 +497,7 @@ def run_command(args: argparse.Namespace, signals: SignalStop, opened: list) -> 
         if status == EXIT_OK:
             status, kind, message = EXIT_WRITE_FAILED, BY_CODE[EXIT_WRITE_FAILED].name, f"cannot write {unwritten}"
     if status == EXIT_OK:
-        terminal.message(f"[board] {message}; {board.time * 1e3:.2f} ms virtual; output in {args.out}")
+        terminal.message(f"[board] {message}; {board.time / PS_PER_MS:.2f} ms virtual; output in {args.out}")
     else:
         terminal.message(f"[board] stopped ({kind}): {message}")
     return status

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 from ..errors import BoardStop, ConsoleExpectationsMet, ConsoleFailText
+from ..vtime import Time, ms, to_seconds
 
 
 @dataclass(frozen=True)
@@ -43,7 +44,7 @@ class ConsolePattern:
 @dataclass
 class Match:
     pattern: ConsolePattern
-    virtual_time_s: float
+    virtual_time: Time
     line: str            # the console line it was found in (as far as it had been printed)
 
 
@@ -78,18 +79,18 @@ class ConsoleWatch:
         """`stop(error)` ends the run after the current instruction (Board.stop_run)."""
         self._stop = stop
 
-    def byte(self, byte: int, at_s: float) -> None:
-        """A byte the console received (its stop bit out at `at_s` of virtual time)."""
+    def byte(self, byte: int, at: Time) -> None:
+        """A byte the console received (its stop bit out at virtual time `at`)."""
         if not self.active or self.failure is not None:
             return
         self._text.append(chr(byte) if byte != 13 else "")
         end = len(self._text)
         if byte == 10:
             line = "".join(self._text[self._line_start:end - 1])
-            self._check_line(line, self._line_start, at_s)
+            self._check_line(line, self._line_start, at)
             self._line_start = end
         else:
-            self._check_tail(at_s)
+            self._check_tail(at)
 
     def _current_line(self) -> str:
         return "".join(self._text[self._line_start:])
@@ -98,40 +99,40 @@ class ConsoleWatch:
         start = len(self._text) - len(text)
         return start >= start_min and "".join(self._text[start:]) == text
 
-    def _check_tail(self, at_s: float) -> None:
+    def _check_tail(self, at: Time) -> None:
         for pattern in self.failures:
             if pattern.regex is None and self._ends_with(pattern.text, 0):
-                return self._failed(pattern, at_s, self._current_line())
+                return self._failed(pattern, at, self._current_line())
         pattern = self.next_expected
         if pattern is not None and pattern.regex is None and self._ends_with(pattern.text, self._after):
             self._after = len(self._text)
-            self._met(pattern, at_s, self._current_line())
+            self._met(pattern, at, self._current_line())
 
-    def _check_line(self, line: str, line_start: int, at_s: float) -> None:
-        self._check_tail(at_s)        # a literal text that ends with the line ending
+    def _check_line(self, line: str, line_start: int, at: Time) -> None:
+        self._check_tail(at)        # a literal text that ends with the line ending
         if self.failure is not None:
             return
         for pattern in self.failures:
             if pattern.regex is not None and pattern.regex.search(line):
-                return self._failed(pattern, at_s, line)
+                return self._failed(pattern, at, line)
         pattern = self.next_expected
         if pattern is not None and pattern.regex is not None:
             # within the line, only after the previous expected pattern's match
             skip = max(0, self._after - line_start)
             if skip <= len(line) and pattern.regex.search(line, skip):
                 self._after = len(self._text)
-                self._met(pattern, at_s, line)
+                self._met(pattern, at, line)
 
-    def _met(self, pattern: ConsolePattern, at_s: float, line: str) -> None:
-        self.matches.append(Match(pattern, at_s, line))
+    def _met(self, pattern: ConsolePattern, at: Time, line: str) -> None:
+        self.matches.append(Match(pattern, at, line))
         if self.all_met and self.expected:
             labels = ", ".join(p.label for p in self.expected)
             self._stop(ConsoleExpectationsMet(f"the console printed every expected text ({labels}); the last "
-                                              f"at {at_s * 1e3:.3f} ms of virtual time"))
+                                              f"at {ms(at)} of virtual time"))
 
-    def _failed(self, pattern: ConsolePattern, at_s: float, line: str) -> None:
-        self.failure = Match(pattern, at_s, line)
-        self._stop(ConsoleFailText(f"--fail-on {pattern.label}: the console printed it at {at_s * 1e3:.3f} ms "
+    def _failed(self, pattern: ConsolePattern, at: Time, line: str) -> None:
+        self.failure = Match(pattern, at, line)
+        self._stop(ConsoleFailText(f"--fail-on {pattern.label}: the console printed it at {ms(at)} "
                                    f"of virtual time, in the line {line!r}"))
 
     def unmet_message(self, ended: str) -> str:
@@ -144,7 +145,7 @@ class ConsoleWatch:
     def summary(self) -> dict:
         """run.json's record of the patterns and where each matched."""
         def entry(match: Match) -> dict:
-            return {"pattern": match.pattern.label, "virtual_time_s": match.virtual_time_s, "line": match.line}
+            return {"pattern": match.pattern.label, "virtual_time_s": to_seconds(match.virtual_time), "line": match.line}
         return {"expect": [p.label for p in self.expected], "fail_on": [p.label for p in self.failures],
                 "expect_matched": [entry(m) for m in self.matches],
                 "fail_on_matched": entry(self.failure) if self.failure else None}

@@ -13,6 +13,7 @@ from PIL import Image
 
 from ..board import FrameRecord
 from ..errors import BadInput, write_failed
+from ..vtime import Time, to_seconds
 from .apng import ApngWriter
 
 ANIMATION_NAME = "animation.png"
@@ -105,7 +106,7 @@ class RunOutput:
         except OSError as error:
             (self.folder / name).unlink(missing_ok=True)
             raise write_failed(self.folder / name, error) from None
-        self.grabs.append({"request": request.label, "virtual_time_s": board.time, "file": name})
+        self.grabs.append({"request": request.label, "virtual_time_s": to_seconds(board.time), "file": name})
 
     def missed_grab(self, request, end_s: float) -> None:
         self.grabs.append({"request": request.label,
@@ -148,7 +149,7 @@ class RunOutput:
 
 def summary_dict(exit_kind: str, message: str, frames: list[FrameRecord], virtual_time_s: float,
                  instructions: list[int], host_time_s: float, warnings: list[str], firmware: str,
-                 device_writes: dict[str, list[int]], console_lines: list[tuple[float, str]]) -> dict:
+                 device_writes: dict[str, list[int]], console_lines: list[tuple[Time, str]]) -> dict:
     return {
         "exit": exit_kind,
         "message": message,
@@ -157,7 +158,7 @@ def summary_dict(exit_kind: str, message: str, frames: list[FrameRecord], virtua
         "instructions": instructions,
         "host_time_s": host_time_s,
         "device_writes": device_writes,
-        "console": [{"virtual_time_s": t, "line": line} for t, line in console_lines],
+        "console": [{"virtual_time_s": to_seconds(t), "line": line} for t, line in console_lines],
         "frames": [asdict(f) for f in frames],
         "warnings": warnings,
     }

@@ -18,6 +18,7 @@ from unicorn import riscv_const as rv
 
 from ..cpu.riscv import FPR_NAMES, GPR_NAMES
 from ..errors import BadInput, write_failed
+from ..vtime import Time, to_seconds
 
 if TYPE_CHECKING:
     from ..board import Board
@@ -40,14 +41,14 @@ class _Pending:
     """An instruction started but not yet seen finished: what its registers held before."""
     __slots__ = ("pc", "text", "time", "gprs", "fprs")
 
-    def __init__(self, pc: int, text: str, time: float, gprs: list[int], fprs: list[int] | None) -> None:
+    def __init__(self, pc: int, text: str, time: Time, gprs: list[int], fprs: list[int] | None) -> None:
         self.pc, self.text, self.time, self.gprs, self.fprs = pc, text, time, gprs, fprs
 
 
 class InstructionTrace:
     """Writes the trace of [t_from, t_to) of virtual time (t_to None: to the end of the run)."""
 
-    def __init__(self, board: "Board", out: IO[str], t_from: float = 0.0, t_to: float | None = None) -> None:
+    def __init__(self, board: "Board", out: IO[str], t_from: Time = 0, t_to: Time | None = None) -> None:
         self.board = board
         self.out = out
         self.lines = 0
@@ -106,7 +107,7 @@ class InstructionTrace:
             written += [f"{FPR_NAMES[n]}=0x{value:x}" for n, (old, value)
                         in enumerate(zip(pending.fprs, (hart.reg(r) for r in FPRS))) if value != old]
         try:
-            self.out.write(f"{hart.hart_id} {pending.time:.9f} 0x{pending.pc:08x} {pending.text}"
+            self.out.write(f"{hart.hart_id} {to_seconds(pending.time):.12f} 0x{pending.pc:08x} {pending.text}"
                            f"{'  ; ' + ' '.join(written) if written else ''}\n")
         except OSError as error:
             raise write_failed(getattr(self.out, "name", "--trace-insn"), error) from None

@@ -19,6 +19,7 @@ import time
 from typing import Callable
 
 from ..errors import BadInput
+from ..vtime import Time, to_seconds
 
 STDIN = "-"
 POLL_S = 0.05              # longest single host wait while the board waits for a key
@@ -80,7 +81,7 @@ class UartInput:
         """More bytes may still come (a pipe, FIFO or terminal that has not reached its end)."""
         return not self._eof and not self._regular
 
-    def has_byte(self, virtual_now: float) -> bool:
+    def has_byte(self, virtual_now: Time) -> bool:
         if self._next < len(self._buffer):
             return True
         if not self._eof:
@@ -120,10 +121,10 @@ class UartInput:
         if not self._regular:
             self.total += len(chunk)
 
-    def _pace(self, virtual_now: float) -> None:
+    def _pace(self, virtual_now: Time) -> None:
         """Takes what the user has typed; waits (for a key at most) while virtual time is
         ahead of the host's clock."""
-        ahead = virtual_now - (time.monotonic() - self._host_start)
+        ahead = to_seconds(virtual_now) - (time.monotonic() - self._host_start)
         timeout = min(max(ahead, 0.0), POLL_S)
         ready, _, _ = select.select([self._fd], [], [], timeout)
         if ready:

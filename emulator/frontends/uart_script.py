@@ -27,6 +27,7 @@ from pathlib import Path
 from typing import Callable
 
 from ..errors import BadInput, BoardStop, ConsoleExpectationsMet, ConsoleExpectationUnmet
+from ..vtime import Time, from_seconds, ms, to_seconds
 
 DEFAULT_TIMEOUT_S = 10.0
 MAX_KEPT = 1 << 16          # console characters and lines kept while a step waits (the oldest go)
@@ -109,11 +110,11 @@ class UartScript:
     def __init__(self, path: Path, steps: list[Step]) -> None:
         self.path = path
         self.steps = steps
-        self.done: list[tuple[Step, float]] = []       # each step and when it was done
+        self.done: list[tuple[Step, Time]] = []       # each step and when it was done
         self.total = 0                                  # bytes sent
         self._queue: deque[int] = deque()
         self._index = 0
-        self._started = 0.0                             # when the step under way began
+        self._started = 0                               # when the step under way began
         self._text = ""                                 # the console since the last match
         self._lines: list[str] = []                     # the lines completed since the last match
         self._line: list[str] = []                      # the console line under way
@@ -133,7 +134,7 @@ class UartScript:
         """Starts the script at the board's time 0; the run ends through board.stop_run."""
         self._board = board
         self._stop = board.stop_run
-        self._advance(0.0)
+        self._advance(0)
 
     @property
     def step(self) -> Step | None:
@@ -145,7 +146,7 @@ class UartScript:
     # the UARTs look at again afterwards: nothing comes from outside in between.
     may_grow = False
 
-    def has_byte(self, virtual_now: float) -> bool:
+    def has_byte(self, virtual_now: Time) -> bool:
         return bool(self._queue)
 
     def pop(self) -> int:
@@ -156,7 +157,7 @@ class UartScript:
 
     # --- the console's side -----------------------------------------------------------------------
 
-    def console_byte(self, byte: int, at_s: float) -> None:
+    def console_byte(self, byte: int, at: Time) -> None:
         if self.step is None:
             return
         char = chr(byte)
@@ -167,9 +168,9 @@ class UartScript:
         else:
             self._line.append(char)
         if self._index < len(self.steps) and self.steps[self._index].keyword.startswith("expect"):
-            self._look(at_s)
+            self._look(at)
 
-    def _look(self, at_s: float) -> None:
+    def _look(self, at: Time) -> None:
         """The expect under way is met if what the console printed since the last match holds it:
         the text and lines after the match are kept for the next expect."""
         step = self.step
@@ -188,23 +189,23 @@ class UartScript:
             # the text after the matched line's end
             ends = [n for n, char in enumerate(self._text) if char == "\n"]
             self._text = self._text[ends[-1 - len(self._lines)] + 1:] if len(ends) > len(self._lines) else self._text
-        self._finish(at_s)
+        self._finish(at)
 
     # --- stepping ---------------------------------------------------------------------------------
 
-    def _finish(self, at_s: float) -> None:
-        self.done.append((self.steps[self._index], at_s))
+    def _finish(self, at: Time) -> None:
+        self.done.append((self.steps[self._index], at))
         self._index += 1
-        self._advance(at_s)
+        self._advance(at)
 
-    def _advance(self, now: float) -> None:
+    def _advance(self, now: Time) -> None:
         """Starts the steps that can start at `now`: sends go out at once, a sleep or an expect asks
         the board to call back when its time is up."""
         while True:
             step = self.step
             if step is None:
                 self._stop(ConsoleExpectationsMet(f"the --uart-script {self.path} ran to its end ({len(self.steps)} "
-                                                  f"steps, the last done at {now * 1e3:.3f} ms of virtual time)"))
+                                                  f"steps, the last done at {ms(now)} of virtual time)"))
                 return
             self._started = now
             if step.keyword == "send":
@@ -213,7 +214,7 @@ class UartScript:
                 self.done.append((step, now))
                 self._index += 1
                 continue
-            index, end = self._index, now + step.seconds
+            index, end = self._index, now + from_seconds(step.seconds)
             if step.keyword == "sleep":
                 self._board.grab_at(end, lambda board: self._slept(index, end))
                 return
@@ -221,13 +222,13 @@ class UartScript:
             self._look(now)          # printed already, during a sleep or a send
             return
 
-    def _slept(self, index: int, at_s: float) -> None:
+    def _slept(self, index: int, at: Time) -> None:
         if self._index == index:
-            self._finish(at_s)
+            self._finish(at)
             if self._queue:
                 # (called between turns) the receiver takes the first byte a send queued now, as it
                 # would at a turn's start: with every hart asleep no turn would come to start it
-                self._board.advance_devices(at_s)
+                self._board.advance_devices(at)
 
     def _expired(self, index: int) -> None:
         if self._index != index:
@@ -241,5 +242,5 @@ class UartScript:
         """run.json's record: each step done and when; the step the run ended in."""
         step = self.step
         return {"file": str(self.path), "steps": len(self.steps), "sent": self.total,
-                "done": [{"line": s.line, "step": s.describe(), "virtual_time_s": at} for s, at in self.done],
+                "done": [{"line": s.line, "step": s.describe(), "virtual_time_s": to_seconds(at)} for s, at in self.done],
                 "waiting_at": None if step is None else {"line": step.line, "step": step.describe()}}

@@ -20,8 +20,10 @@ from pathlib import Path
 from typing import IO
 
 from ..errors import BadInput
+from ..vtime import Time
 
-TIMESCALE_S = 1e-9
+# the model's own unit (vtime.py): every change is dumped at its exact time
+TIMESCALE = "1ps"
 
 
 def open_vcd(path: Path) -> IO[str]:
@@ -36,36 +38,34 @@ class SignalLog:
     """Value changes of named one-bit signals (0, 1, or None for undriven)."""
 
     def __init__(self) -> None:
-        self.events: list[tuple[float, int, str, int | None]] = []   # (time, order, signal, value)
+        self.events: list[tuple[Time, int, str, int | None]] = []   # (time, order, signal, value)
         self._last: dict[str, int | None] = {}
 
-    def record(self, at: float, signal: str, value: int | None) -> None:
+    def record(self, at: Time, signal: str, value: int | None) -> None:
         if self._last.get(signal, "unset") == value:
             return
         self._last[signal] = value
         self.events.append((at, len(self.events), signal, value))
 
-    def write(self, out: IO[str], end_s: float) -> int:
+    def write(self, out: IO[str], end: Time) -> int:
         """Writes the dump (and closes `out`); returns the number of value changes written."""
         names = sorted({signal for _, _, signal, _ in self.events})
         codes = {name: _identifier(n) for n, name in enumerate(names)}
         out.write("$comment Sipeed Maix Dock board model (python -m emulator run --vcd) $end\n")
-        out.write("$timescale 1ns $end\n$scope module dock $end\n")
+        out.write(f"$timescale {TIMESCALE} $end\n$scope module dock $end\n")
         for name in names:
             out.write(f"$var wire 1 {codes[name]} {name} $end\n")
         out.write("$upscope $end\n$enddefinitions $end\n")
         current = None
         written = 0
         for at, _, signal, value in sorted(self.events):
-            tick = round(at / TIMESCALE_S)
-            if tick != current:
-                out.write(f"#{tick}\n")
-                current = tick
+            if at != current:
+                out.write(f"#{at}\n")
+                current = at
             out.write(f"{'z' if value is None else value}{codes[signal]}\n")
             written += 1
-        end_tick = round(end_s / TIMESCALE_S)
-        if current is None or end_tick > current:
-            out.write(f"#{end_tick}\n")
+        if current is None or end > current:
+            out.write(f"#{end}\n")
         out.close()
         return written
 
