@@ -710,7 +710,7 @@ AFTER_THE_LOOP = {
 @pytest.mark.parametrize("case", AFTER_THE_LOOP)
 def test_the_turns_alone_run_past_the_consoles_quiet_bytes_changing_nothing_else(case):
     """A byte leaving the UART is a device event that ends a turn; when nothing but the console's
-    record of it depends on its moment (Uarths.quiet_ticks), the turns alone run on past it, each
+    record of it depends on its moment (Uarths.quiet_byte_ends), the turns alone run on past it, each
     still ending where it did, and the UART hears it later with its own time: the hart's
     registers and counts, the board's time, the console's bytes and their times and how the run
     ends are those of a run without turns alone (every turn through the scheduler)."""

@@ -182,27 +182,22 @@ def test_txwm_interrupt_pending_below_the_watermark(console_board):
     assert uart.irq_line()
 
 
-def test_quiet_ticks_are_the_byte_ends_up_to_a_line_end(console_board):
-    """The ends of bytes that change nothing but the console's record (Uarths.quiet_ticks): those
-    in a row from the byte on the wire up to a newline (the board reads each line at its end), each
-    a byte time after the one before, as advance works them out; the next loud event is the
-    newline's end."""
+def test_quiet_byte_ends_are_the_byte_ends_up_to_a_line_end(console_board):
+    """The ends of bytes that change nothing but the console's record (Uarths.quiet_byte_ends):
+    those in a row from the byte on the wire up to a newline (the board reads each line at its
+    end), as advance works them out; the next loud event is the newline's end."""
     board, out = console_board
     uart = board.uarths
-    assert uart.quiet_ticks() == (0, 0, 0)                           # nothing on the wire
+    assert uart.quiet_byte_ends() == ()                              # nothing on the wire
     uart.write(u.TXCTRL, 4, 1, 0)
     for ch in b"ab\ncd":
         uart.write(u.TXDATA, 4, ch, 0)
-    first, period, count = uart.quiet_ticks()
-    assert (first, count) == (uart.next_event_time(0), 2) and first == BYTE
-    assert period == BYTE
-    assert uart.quiet_byte_ends() == (BYTE, 2 * BYTE)
-    newline_end = first + period + period
+    assert uart.quiet_byte_ends() == (BYTE, 2 * BYTE) and uart.next_event_time(0) == BYTE
+    newline_end = 3 * BYTE
     assert uart.next_loud_event_time(0) == newline_end
     uart.advance(newline_end)                                        # the line is out: "cd" is quiet
     assert bytes(out) == b"ab\n"
-    first, period, count = uart.quiet_ticks()
-    assert count == 2 and first == uart.next_event_time(newline_end)
+    assert uart.quiet_byte_ends() == (4 * BYTE, 5 * BYTE) and uart.next_event_time(newline_end) == 4 * BYTE
     assert uart.next_loud_event_time(newline_end) is None             # nothing but quiet bytes left
 
 
@@ -214,16 +209,15 @@ def test_with_the_transmitter_off_only_the_byte_on_the_wire_ends(console_board):
     for ch in b"abc":
         uart.write(u.TXDATA, 4, ch, 0)
     uart.write(u.TXCTRL, 4, 0, BYTE // 2)
-    first, _, count = uart.quiet_ticks()
-    assert (first, count) == (BYTE, 1)
+    assert uart.quiet_byte_ends() == (BYTE,)
     assert uart.next_loud_event_time(BYTE // 2) is None
 
 
-def test_quiet_ticks_are_only_the_evenly_spaced_ends(console_board):
-    """At 115200 baud from 26 MHz a byte is no whole number of picoseconds: its train's ends (each
-    counted from the train's start, rounded up once) are not a first end plus multiples of one
-    byte time. quiet_ticks gives as many as are (the fast engine steps through them so); the next
-    loud event is the first end after them."""
+def test_quiet_byte_ends_are_exact_where_a_byte_is_no_whole_number_of_picoseconds(console_board):
+    """At 115200 baud from 26 MHz a byte is no whole number of picoseconds: each end is counted
+    from the train's start and rounded up once, so the ends are not a first end plus multiples of
+    one byte time; quiet_byte_ends gives them as the UART will hear them (the fast engine's turns
+    alone stop at each, as _turn would), and the UART hears each at that time."""
     board, out = console_board
     uart = board.uarths
     uart.write(u.DIV, 4, 225 - 1, 0)
@@ -232,10 +226,8 @@ def test_quiet_ticks_are_only_the_evenly_spaced_ends(console_board):
         uart.write(u.TXDATA, 4, ch, 0)
     ends = uart.quiet_byte_ends()
     assert ends == tuple(cycles_time(k * 10 * 225, CPU_HZ) for k in range(1, 9))
-    first, period, count = uart.quiet_ticks()
-    assert first == ends[0] and period == ends[1] - ends[0] and 2 <= count < len(ends)
-    assert all(ends[k] == first + k * period for k in range(count)) and ends[count] != first + count * period
-    assert uart.next_loud_event_time(0) == ends[count]
+    assert len({b - a for a, b in zip(ends, ends[1:])}) == 2          # (not evenly spaced)
+    assert uart.next_loud_event_time(0) is None
     heard = []
     uart.on_byte = lambda byte: heard.append(uart.last_byte_time)
     uart.advance(ends[-1])
@@ -255,7 +247,7 @@ def test_no_byte_is_quiet_when_its_end_may_matter(console_board, why):
     uart.write(u.TXCTRL, 4, 1, 0)
     for ch in b"abc":
         uart.write(u.TXDATA, 4, ch, 0)
-    assert uart.quiet_ticks()[2] == 0
+    assert uart.quiet_byte_ends() == ()
     assert uart.next_loud_event_time(0) == uart.next_event_time(0) == BYTE
 
 

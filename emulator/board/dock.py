@@ -562,7 +562,7 @@ class Board:
 
     def next_device_event(self, now: Time, past_quiet_console: bool = False) -> Time | None:
         """The first moment after `now` a device changes state by itself; with past_quiet_console,
-        the console's quiet bytes (Uarths.quiet_ticks) do not count."""
+        the console's quiet bytes (Uarths.quiet_byte_ends) do not count."""
         # (a plain loop: the scheduler asks this several times a turn)
         earliest = None
         for device in self.timed_devices:

@@ -29,7 +29,7 @@ import unicorn
 from unicorn import riscv_const as rv
 
 from ..cpu import shared_memory
-from ..cpu.native import AlonePlan
+from ..cpu.native import QUIET_ENDS_MAX, AlonePlan
 from .deadlines import Deadlines
 from .sram_waits import SramWaits
 from .traps import Traps
@@ -617,7 +617,11 @@ class Scheduler(SramWaits, Deadlines):
         # the console's quiet bytes bound the turns as any device event does, but their ends need no
         # board: the turns run on past them (each still ends at one it reaches, as _turn would end it),
         # and the UART hears them all, each at its own time, when the board next moves the devices on
-        plan.tick, plan.tick_period, plan.ticks = self.board.uarths.quiet_ticks()
+        quiet = self.board.uarths.quiet_byte_ends()
+        if len(quiet) > QUIET_ENDS_MAX:
+            quiet = ()              # (more than the plan holds: they bound the turns as other events do)
+        plan.ticks = len(quiet)
+        plan.tick_ends[:plan.ticks] = quiet
         if plan.ticks:
             outer = self._outer_bound(t0, self.board.next_device_event(t0, past_quiet_console=True))
         stop_at = min(outer, self.board.earliest_frame_capture(hart.time))

@@ -1524,6 +1524,8 @@ void fast_abandon(fast_state_t *f, void *uc)
     end_run(f, uc);
 }
 
+#define QUIET_ENDS_MAX 16    /* native.py's */
+
 /* The scheduler's turns of a hart running alone (scheduler.py, _go_on_alone), as fast_run_alone runs
  * them: in, the hart's clock and what bounds the turns; out, where the last one began and how it ended.
  * Times are whole picoseconds (vtime.py), the arithmetic the scheduler's, exact in both. */
@@ -1544,10 +1546,9 @@ typedef struct {
                                engine, or a poll loop came round): the scheduler finishes it */
     int64_t end_time;   /* out, handed_over 0: when the last turn ended */
     /* Device events that bound the turns as `outer` does but need no board between them (the console's
-     * bytes leaving the UART while nothing else hears them: Uarths.quiet_ticks): `ticks` of them, the
-     * first at `tick`, each `tick_period` after the one before (the UART's own sums). */
-    int64_t tick;
-    int64_t tick_period;
+     * bytes leaving the UART while nothing else hears them: Uarths.quiet_byte_ends): the first `ticks`
+     * of tick_ends, in order. */
+    int64_t tick_ends[QUIET_ENDS_MAX];
     uint64_t ticks;
 } alone_plan_t;
 
@@ -1602,21 +1603,18 @@ uint64_t fast_run_alone(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t f
     begin_run(f, uc, from);
     f->devices_here = 0;   /* a device access ends the turns here: the scheduler finishes that turn */
     int64_t t0 = plan_time_at(plan, c->cycles);
-    int64_t tick = plan->tick;
-    uint64_t ticks = plan->ticks;
+    uint64_t tick = 0;     /* the first of tick_ends not yet passed */
     plan->turns = 0;
     plan->handed_over = 0;
     for (;;) {
         /* the board's next event after t0, as the scheduler would find it: ticks up to t0 have passed */
-        while (ticks != 0 && tick <= t0) {
-            tick = tick + plan->tick_period;
-            ticks--;
-        }
+        while (tick < plan->ticks && plan->tick_ends[tick] <= t0)
+            tick++;
         int64_t horizon = plan_time_at(plan, c->cycles + plan->quantum);
         if (plan->outer < horizon)
             horizon = plan->outer;
-        if (ticks != 0 && tick < horizon)
-            horizon = tick;
+        if (tick < plan->ticks && plan->tick_ends[tick] < horizon)
+            horizon = plan->tick_ends[tick];
         uint64_t until = plan_cycles_until(plan, horizon);
         uint64_t budget = until > c->cycles + 1 ? until - c->cycles : 1;
         plan->t0 = t0;

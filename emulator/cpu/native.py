@@ -83,6 +83,11 @@ class FastHead(ctypes.Structure):
                 ("dev", DeviceStop), ("rep", RepeatRecord)]
 
 
+# the most device events a plan of turns alone runs past (UARTHS's quiet byte ends: its FIFO's
+# 8 bytes and the one on the wire); _fast_engine.c's QUIET_ENDS_MAX
+QUIET_ENDS_MAX = 16
+
+
 class AlonePlan(ctypes.Structure):
     """_fast_engine.c's alone_plan_t: the turns of a hart running alone (Scheduler._go_on_alone)."""
     _fields_ = [("anchor_time", ctypes.c_int64), ("anchor_cycles", ctypes.c_uint64), ("hz", ctypes.c_uint64),
@@ -90,7 +95,7 @@ class AlonePlan(ctypes.Structure):
                 ("max_turns", ctypes.c_uint64), ("t0", ctypes.c_int64), ("horizon", ctypes.c_int64),
                 ("budget", ctypes.c_uint64), ("start_cycles", ctypes.c_uint64),
                 ("start_executed", ctypes.c_uint64), ("turns", ctypes.c_uint64), ("handed_over", ctypes.c_uint64),
-                ("end_time", ctypes.c_int64), ("tick", ctypes.c_int64), ("tick_period", ctypes.c_int64),
+                ("end_time", ctypes.c_int64), ("tick_ends", ctypes.c_int64 * QUIET_ENDS_MAX),
                 ("ticks", ctypes.c_uint64)]
 
 

@@ -68,7 +68,7 @@ class Uarths(Peripheral):
         self._receiving_byte = 0
         self.bytes_received = 0
         # whoever hears the console acts on each byte the moment it is out (a console watch that
-        # ends the run): then no byte's end is quiet (quiet_ticks)
+        # ends the run): then no byte's end is quiet (quiet_byte_ends)
         self.every_byte_heard = False
 
     def reset(self, now: Time) -> None:
@@ -153,35 +153,13 @@ class Uarths(Peripheral):
         report, at its end), no transmit-watermark interrupt enabled, nobody acting on each byte
         (every_byte_heard), no terminal typed into meanwhile (whose next look depends on when it is
         asked). The ends in a row, as advance works them out, up to the first byte that is not
-        quiet; the board's turns may run past them without stopping (Scheduler._go_on_alone)."""
+        quiet; the board's turns may run past them without stopping (Scheduler._go_on_alone). At most
+        the FIFO's bytes and the one on the wire."""
         return self._quiet_chain()[0]
 
-    def quiet_ticks(self) -> tuple[Time, Time, int]:
-        """quiet_byte_ends as (first end, byte time, how many), the ends first + k x byte time: only
-        as many of them as are that exactly (the ends are counted from their train's start, so
-        rounded byte times differ by a picosecond here and there); the others count as loud
-        (next_loud_event_time)."""
-        ends = self._quiet_run()
-        if not ends:
-            return 0, 0, 0
-        period = ends[1] - ends[0] if len(ends) > 1 else 0
-        return ends[0], period, len(ends)
-
-    def _quiet_run(self) -> tuple[Time, ...]:
-        """The quiet byte ends that quiet_ticks gives: those evenly spaced from the first."""
-        ends = self.quiet_byte_ends()
-        count = len(ends)
-        if count > 2:
-            period = ends[1] - ends[0]
-            count = next((k for k in range(2, count) if ends[k] != ends[0] + k * period), count)
-        return ends[:count]
-
     def next_loud_event_time(self, now: Time) -> Time | None:
-        """next_event_time, with the quiet byte ends that quiet_ticks gives left out."""
-        ends, loud = self._quiet_chain()
-        told = len(self._quiet_run())
-        if told < len(ends):
-            loud = ends[told]
+        """next_event_time, with the quiet byte ends (quiet_byte_ends) left out."""
+        _, loud = self._quiet_chain()
         events = [t for t in (loud, self._receiver_event(now)) if t is not None]
         return min(events) if events else None
 
