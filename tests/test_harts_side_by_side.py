@@ -266,3 +266,52 @@ def test_harts_taking_turns_at_a_spinlock_never_lose_a_wake_up(work):
     run_until(board, lambda b: b.harts[0].pc == symbol(b, "done") and b.harts[1].pc == symbol(b, "hart1_done"),
               max_time_s=0.2, max_steps=400_000)
     assert reg(board, "s3", hart=0) == ROUNDS and reg(board, "s3", hart=1) == ROUNDS
+
+
+WOKEN_MID_TURN = """
+    .option norelax
+    .globl _start
+_start:
+    csrr    t0, mhartid
+    bnez    t0, hart1
+    li      t3, 50000                   # past the harts' lockstep at reset
+2:  addi    t3, t3, -1
+    bnez    t3, 2b
+    li      t1, 0x02000004              # CLINT msip[1]: wake hart 1 ...
+    li      t2, 1
+    sw      t2, 0(t1)
+    li      t3, 2000000                 # ... and compute on for many turns
+1:  addi    t3, t3, -1
+    bnez    t3, 1b
+done:
+    j       done
+hart1:
+    li      t0, 8                       # MSIE
+    csrw    mie, t0
+    wfi
+    li      t1, 0x02000004
+    sw      zero, 0(t1)
+    li      t2, 0x0200BFF8              # mtime
+    ld      t3, 0(t2)
+    addi    t3, t3, 6                   # 6 ticks: 300 cycles
+    li      t4, 0x02004008              # mtimecmp[1]
+    sd      t3, 0(t4)
+    li      t0, 0x80                    # MTIE
+    csrw    mie, t0
+    csrr    s0, mcycle
+    wfi
+    csrr    s1, mcycle
+    sub     s2, s1, s0
+hart1_done:
+    j       hart1_done
+"""
+
+
+def test_a_hart_woken_mid_turn_wakes_at_its_timer_not_at_the_others_turn_end():
+    """Hart 0 wakes hart 1 early in a turn of 20,000 cycles and computes on; hart 1 sets a timer
+    300 cycles ahead and sleeps. It wakes when mtime reaches mtimecmp, though hart 0's turn runs on
+    far past that (Scheduler._catch_up_to): the firmware's 10 us LCD reset pulse lasted 48 us
+    when the sleeper woke at the board's time, the end of the other hart's turn."""
+    board = make_board(build_elf(WOKEN_MID_TURN))
+    run_until(board, lambda b: b.harts[1].pc == symbol(b, "hart1_done"), max_time_s=0.2)
+    assert 250 <= reg(board, "s2", hart=1) <= 320      # 6 ticks from within the tick mtime read

@@ -564,7 +564,7 @@ class Scheduler(SramWaits, Deadlines):
             return
         running = [h.time for h in self.harts if h.state is HartState.RUNNING]
         if running:
-            self._set_time(min(running))
+            self._catch_up_to(min(running))
         self._check_deadlines()
 
     def _outer_bound(self, t0: Time, event: Time | None) -> Time:
@@ -651,6 +651,21 @@ class Scheduler(SramWaits, Deadlines):
             raise self.pending_stop
         hart.time = self.time_at_cycles(hart, hart.cycles)
         return plan.horizon
+
+    def _catch_up_to(self, target: Time) -> None:
+        """Moves the board's time on to `target` (the earliest time a running hart has reached), one
+        device event at a time while a hart sleeps: a sleeper an event wakes on the way wakes at
+        that event's time and the board's time stays there, so that it runs from its own wake-up,
+        not from where the others have got to (a hart woken by another's store in the middle of
+        the other's turn, gone back to sleep with a timer due before the other's turn ends)."""
+        while any(h.state is not HartState.RUNNING for h in self.harts):
+            event = self.board.next_device_event(self.time)
+            if event is None or event >= target:
+                break
+            self._set_time(event)
+            if any(h.state is HartState.RUNNING and h.time < target for h in self.harts):
+                return
+        self._set_time(target)
 
     def _set_time(self, now: Time) -> None:
         """Moves the board's time (the earliest time a running hart has reached) forward:
