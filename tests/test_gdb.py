@@ -13,7 +13,7 @@ import time
 
 import pytest
 
-from conftest import ROOT, run_emulator
+from conftest import GOLDEN_FRAMES, ROOT, run_emulator
 from unicorn import riscv_const as rv
 
 from emulator.frontends.gdbstub import checksum
@@ -122,6 +122,40 @@ detach
     assert "$1 = 0x" in out and "$2 = 0" in out and "$3 = 1" in out and "$4 = 1" in out
     assert status == 0, errors
     assert "[gdb] GDB detached; the run goes on to its end" in errors and "3 frames shown" in errors
+
+
+@needs_gdb
+def test_a_breakpoint_session_leaves_the_run_as_without_gdb(firmware, card, firmware_run, tmp_path):
+    """Stopped at a breakpoint, continued and detached, the run shows the same frames at the same
+    virtual times with the same instruction and cycle counts as without GDB, and its console ends
+    with the same line (issue 32, item 5: the board used to run under GDB with a frame count of 0,
+    which ended every turn early, and the console's last line was cut after a detach)."""
+    import json
+    out = tmp_path / "out"
+    process, port = start_board(str(firmware), "--sd", str(card), "--frames", str(GOLDEN_FRAMES), "--out", str(out),
+                                "--quiet")
+    script = tmp_path / "session.gdb"
+    script.write_text(f"""set pagination off
+set confirm off
+target remote 127.0.0.1:{port}
+break *render_band
+continue
+delete
+detach
+""")
+    session = subprocess.run([GDB, "-batch", "-nx", "-x", str(script), str(firmware)], capture_output=True, text=True,
+                             timeout=300)
+    status, errors = finish(process)
+    assert session.returncode == 0 and "hit Breakpoint 1, " in session.stdout, session.stderr + session.stdout
+    assert status == 0, errors
+    with_gdb = json.loads((out / "run.json").read_text())
+    _, _, plain = firmware_run
+
+    def frames(summary: dict) -> list:
+        return [(f["virtual_time_s"], f["instructions"], f["cycles"]) for f in summary["frames"]]
+    assert frames(with_gdb) == frames(plain)
+    assert with_gdb["console"] == plain["console"]
+
 
 
 def test_ctrl_c_stops_a_running_board_and_time_stands_still(firmware, card, tmp_path):

@@ -14,6 +14,7 @@ from k210_common.exit_status import (BY_CODE, EXIT_BAD_INPUT, EXIT_GOLDEN_MISMAT
                                      EXIT_USAGE, EXIT_WRITE_FAILED)
 from ..errors import BadInput, BoardStop, Interrupted
 from ..vtime import NEVER, PS_PER_MS, PS_PER_S, Time, from_seconds, ms, to_seconds
+from ..board.scheduler import UNLIMITED_FRAMES
 from .options import (DEFAULT_FRAMES, MAX_PAD_CHANGES_IN_RUN_JSON, PROG, build_parser, golden_count, grab_problem,
                       option_problem)
 
@@ -101,15 +102,19 @@ def run_under_gdb(board, args: argparse.Namespace, terminal):
                      f"-ex 'target remote 127.0.0.1:{server.port}'")
     try:
         if not args.gdb_wait:
-            scheduler.frames_wanted = args.frames if args.frames is not None else 1 << 62
+            scheduler.frames_wanted = args.frames if args.frames is not None else UNLIMITED_FRAMES
             while not select_module.select([server.listener], [], [], 0)[0]:
                 if until is not None and scheduler.time >= until:
                     return board.run_until(until)
                 if args.frames is not None and len(board.frames) >= args.frames:
-                    return board.run(args.frames)
+                    return finish_frames(board, args.frames)
                 scheduler.step()
         server.accept()
-        budget, scheduler.hang_budget = scheduler.hang_budget, NEVER   # GDB decides when it is stuck
+        # GDB decides when the board stops: no frame count ends a turn early and no hang budget runs
+        # out meanwhile, as a run without GDB goes on until its own end (counts stay those of a run
+        # without GDB)
+        scheduler.frames_wanted = UNLIMITED_FRAMES
+        budget, scheduler.hang_budget = scheduler.hang_budget, NEVER
         outcome = server.serve()
         scheduler.hang_budget = budget
     finally:
@@ -123,7 +128,15 @@ def run_under_gdb(board, args: argparse.Namespace, terminal):
     scheduler._last_frame_time = board.time       # the frame budget counts from here, not from before GDB
     if until is not None:
         return board.run_until(max(until, board.time))
-    return board.run(max(args.frames, len(board.frames)))
+    return finish_frames(board, max(args.frames, len(board.frames)))
+
+
+def finish_frames(board, frames: int):
+    """Runs until `frames` frames have been shown and lets the console line begun after the last one
+    end, as a run of frames does (Board.finish_console_line)."""
+    result = board.run(frames)
+    board.finish_console_line()
+    return result
 
 
 class Terminal:
