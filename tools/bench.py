@@ -873,6 +873,65 @@ def output_memory_figures(counts: tuple[int, ...] = (1_000, 10_000)) -> dict:
     return figures
 
 
+# A firmware feeding SPI0's transmit FIFO from the CPU, a byte a store, waiting on TXFLR for room: each
+# store and each poll is a device access the board carries out in Python (issue 32, item 9).
+CPU_FED_SPI_SOURCE = """
+    .option norelax
+    .globl _start
+_start:
+    csrr    t0, mhartid
+    bnez    t0, park
+    li      s0, 0x52000000              # SPI0
+    sw      zero, 0x08(s0)              # ssienr = 0
+    li      t0, (7 << 16) | (1 << 8)    # 8-bit frames, transmit only
+    sw      t0, 0x00(s0)
+    li      t0, 4
+    sw      t0, 0x14(s0)                # baudr
+    li      t0, 1
+    sw      t0, 0x10(s0)                # ser
+    sw      t0, 0x08(s0)                # ssienr = 1
+    li      s1, {stores}
+1:  lw      t1, 0x20(s0)                # txflr
+    li      t2, 32
+    bgeu    t1, t2, 1b
+    sw      s1, 0x60(s0)                # dr0
+    addi    s1, s1, -1
+    bnez    s1, 1b
+done:
+    j       done
+park:
+    csrw    mie, zero
+2:  wfi
+    j       2b
+"""
+
+
+def cpu_fed_spi_figures(stores: int = 20_000, rounds: int = 3) -> dict:
+    """Host time of a firmware that feeds SPI0 from the CPU (CPU_FED_SPI_SOURCE): per FIFO store and
+    per device access (the stores and the TXFLR polls the bus carried out), best of `rounds`."""
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        (folder / "feed.S").write_text(CPU_FED_SPI_SOURCE.format(stores=stores))
+        subprocess.run(["riscv64-unknown-elf-as", "-march=rv64gc", "-o", str(folder / "feed.o"),
+                        str(folder / "feed.S")], check=True)
+        subprocess.run(["riscv64-unknown-elf-ld", "-N", "--no-warn-rwx-segments", "-Ttext=0x80000000", "-o", str(folder / "feed.elf"),
+                        str(folder / "feed.o")], check=True)
+        best_cpu = best_wall = math.inf
+        for _ in range(rounds):
+            board = Board(str(folder / "feed.elf"))
+            done = next(address for address, name in board.image.symbols.items() if name == "done")
+            cpu, wall = time.process_time(), time.perf_counter()
+            while board.harts[0].pc != done:
+                board.scheduler.step()
+            best_cpu = min(best_cpu, time.process_time() - cpu)
+            best_wall = min(best_wall, time.perf_counter() - wall)
+            accesses = board.harts[0].device_accesses
+            virtual_ms = board.harts[0].time / 1e9      # (picoseconds to ms)
+    return {"stores": stores, "device_accesses": accesses, "virtual_ms": virtual_ms,
+            "host_cpu_us_per_store": best_cpu / stores * 1e6, "host_wall_us_per_store": best_wall / stores * 1e6,
+            "rounds": rounds}
+
+
 def speed_figures(args: argparse.Namespace) -> None:
     """Raw Unicorn, a board hart and the board model running the firmware; SD timings. Printed and
     written to build/bench.json."""
@@ -893,6 +952,7 @@ def speed_figures(args: argparse.Namespace) -> None:
         sd_ipc1 = sd_figures(Path(args.firmware), Path(tmp), timing=TIMING_IPC1)
         loads = load_figures(Path(args.firmware), Path(tmp))
     output_memory = output_memory_figures()
+    cpu_fed_spi = cpu_fed_spi_figures()
     results = {
         "raw_unicorn_mips": raw,
         "hart_with_counter_mips": counted,
@@ -909,7 +969,11 @@ def speed_figures(args: argparse.Namespace) -> None:
         "drawing": drawing,
         "firmware_precise_engine": precise,
         "output_memory": output_memory,
+        "cpu_fed_spi": cpu_fed_spi,
     }
+    print(f"SPI0 fed by the CPU, {cpu_fed_spi['stores']:,} FIFO stores ({cpu_fed_spi['device_accesses']:,} device "
+          f"accesses, {cpu_fed_spi['virtual_ms']:.2f} ms virtual): {cpu_fed_spi['host_cpu_us_per_store']:.1f} us of host "
+          f"CPU time a store (best of {cpu_fed_spi['rounds']})")
     for count, figure in output_memory.items():
         print(f"run output, {int(count):6,} frames: resident memory {figure['rss_before_mb']:.0f} -> "
               f"{figure['rss_after_mb']:.0f} MB ({figure['host_s']:.0f} s)")
