@@ -33,7 +33,8 @@ endif
 FW_OBJS := $(patsubst %,$(BUILD)/fw/%.o,$(FW_ORDER))
 FW_INCS := $(wildcard firmware/include/*.inc)
 
-.PHONY: all toolchain venv firmware c-firmware card flash-to-emulator flash debug test bench goldens golden-check clean riscv-tests
+.PHONY: all toolchain venv firmware c-firmware card flash-to-emulator flash debug test test-unit test-routines \
+        test-end-to-end test-slow bench goldens golden-check clean riscv-tests
 
 all: firmware
 
@@ -116,6 +117,14 @@ flash-to-emulator: firmware venv $(CARD)
 test: firmware c-firmware venv $(CARD)
 	$(PYTHON) -m compileall -q emulator reference sdcard_image tools tests
 	$(PYTHON) -m pytest -q -n 2
+
+# One tier of the suite (tests/README.md): make test-unit, test-routines, test-end-to-end, test-slow
+TIER_test-unit       := unit
+TIER_test-routines   := firmware_routines
+TIER_test-end-to-end := end_to_end
+TIER_test-slow       := slow
+test-unit test-routines test-end-to-end test-slow: firmware c-firmware venv $(CARD)
+	$(PYTHON) -m pytest -q -n 2 tests/$(TIER_$@)
 
 # riscv-tests' isa/ suites on both engines (README, "The ISA the K210 has"):
 # make riscv-tests RISCV_TESTS=DIR [RISCV_TESTS_ENV=DIR] [RISCV_TESTS_SUITE=early-2017|current]

@@ -5,7 +5,7 @@ tools/regen_goldens.py share these numbers: a status means the same whichever co
 it, so a script or CI can read it without knowing which command ran. Each command says which
 rows it returns, and when, in a mapping code -> its own words (`details`); its `--help`
 epilog (`help_epilog`) and its table in the README (`markdown_table`, checked by
-tests/test_exit_status.py) are generated from that mapping and this table.
+tests/unit/shared/test_exit_status.py) are generated from that mapping and this table.
 
 New statuses are appended (13 on): the board model's 0-12 are in use in scripts and CI. A run
 ended by a signal returns 128 + its number, as shells report it (130 for SIGINT, 143 for SIGTERM).

@@ -19,7 +19,7 @@ from .image import DEFAULT_SIZE_MIB, build_image, extract_all, list_image, read_
 PROG = "python -m sdcard_image"
 
 # When this command returns each status (k210_common/exit_status.py holds the numbers and
-# names); --help and sdcard_image/README.md's table are made from it (tests/test_exit_status.py)
+# names); --help and sdcard_image/README.md's table are made from it (tests/unit/shared/test_exit_status.py)
 EXIT_STATUS_DETAILS: dict[int, str] = {
     EXIT_OK: "done",
     EXIT_INTERNAL: "an internal error of this tool (a bug: please report it with the command line)",

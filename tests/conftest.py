@@ -3,42 +3,22 @@ first) and one board-model run of it is shared by every test that looks at its o
 
 Under pytest-xdist each worker has its own session; what is costly and the same for all of them
 (the shared run, the generated assets) is made once, by the first worker that asks, in a folder
-the workers share (`shared_by_workers`)."""
+the workers share (`shared_by_workers`). Those helpers, and everything else the tests share but
+pytest's fixtures, are in tests/support (suite.py and the modules beside it)."""
 from __future__ import annotations
 
 import fcntl
 import json
 import os
-import pickle
-import shutil
 import subprocess
 import sys
-from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
-from typing import Callable, TypeVar
+from typing import Callable
 
 import pytest
 
-from emulator_runs import run_emulator  # noqa: F401  (re-exported for the tests)
-from golden_scenes import GOLDEN  # noqa: F401  (re-exported for the tests)
-
-ROOT = Path(__file__).resolve().parent.parent
-FIRMWARE = ROOT / "build" / "firmware.elf"
-CARD = ROOT / "build" / "card.img"
-GOLDEN_FRAMES = 4   # frames of the default scene the shared run shows
-T = TypeVar("T")
-K = TypeVar("K")
-
-
-
-
-def _session_root(tmp_path_factory) -> Path:
-    """The temporary folder of the whole session: under xdist each worker's folder, popen-gwN,
-    lies in it. (The worker id alone does not say it: a pytest that a test starts inherits the
-    PYTEST_XDIST_WORKER variable, but has a session and a folder of its own.)"""
-    root = tmp_path_factory.getbasetemp()
-    worker = os.environ.get("PYTEST_XDIST_WORKER")
-    return root.parent if worker and root.name == f"popen-{worker}" else root
+from golden_scenes import GOLDEN
+from suite import CARD, FIRMWARE, GOLDEN_FRAMES, ROOT, run_emulator, session_root, shared_by_workers, shared_value
 
 
 @pytest.fixture(scope="session", autouse=True)
@@ -46,7 +26,7 @@ def model_cache(tmp_path_factory) -> Path:
     """The board model's cache of cycle tables (emulator/cpu/timing.py) for this session: shared by
     the workers and the commands the tests run, kept out of the user's own cache folder."""
     from emulator.cpu.timing import CACHE_ENVIRONMENT
-    folder = _session_root(tmp_path_factory) / "model-cache"
+    folder = session_root(tmp_path_factory) / "model-cache"
     os.environ[CACHE_ENVIRONMENT] = str(folder)
     return folder
 
@@ -54,7 +34,7 @@ def model_cache(tmp_path_factory) -> Path:
 def _make(tmp_path_factory, target: str) -> None:
     """`make -s target`, one worker at a time (two makes rebuilding the same files at once would
     write them over each other)."""
-    with open(_session_root(tmp_path_factory) / "make.lock", "w") as lock:
+    with open(session_root(tmp_path_factory) / "make.lock", "w") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)
         subprocess.run(["make", "-s", target], cwd=ROOT, check=True)
 
@@ -77,41 +57,6 @@ def card(tmp_path_factory) -> Path:
     """The default card `make flash-to-emulator` uses (generated models and textures)."""
     _make(tmp_path_factory, "build/card.img")
     return CARD
-
-
-def shared_by_workers(tmp_path_factory, name: str, make: Callable[[Path], None]) -> Path:
-    """A folder made once for the whole test session: `make` fills it, in the first pytest-xdist
-    worker that asks; the others wait for it (a lock) and take it as it is. It lies beside the
-    workers' own temporary folders (pytest removes it with them)."""
-    root = _session_root(tmp_path_factory)
-    folder = root / f"shared-{name}"
-    with open(root / f"shared-{name}.lock", "w") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        if not (folder / ".made").exists():
-            shutil.rmtree(folder, ignore_errors=True)
-            folder.mkdir()
-            make(folder)
-            (folder / ".made").touch()
-    return folder
-
-
-def shared_value(tmp_path_factory, name: str, compute: Callable[[Path], T]) -> T:
-    """compute(folder), computed once for the whole test session (shared_by_workers) and handed
-    to every worker that asks as it was returned (pickled beside what compute wrote in `folder`):
-    for the module fixtures whose tests pytest-xdist may share out between its workers."""
-    def make(folder: Path) -> None:
-        (folder / "value.pickle").write_bytes(pickle.dumps(compute(folder)))
-    folder = shared_by_workers(tmp_path_factory, name, make)
-    return pickle.loads((folder / "value.pickle").read_bytes())
-
-
-def run_together(jobs: dict[K, Callable[[], T]]) -> dict[K, T]:
-    """Each job's result, the jobs run two at a time: they are board-model runs, each a process
-    of its own that the test only waits for, so a fixture that makes several keeps both cores
-    busy while the other xdist worker waits for it (shared_value)."""
-    with ThreadPoolExecutor(max_workers=2) as pool:
-        futures = {key: pool.submit(job) for key, job in jobs.items()}
-        return {key: future.result() for key, future in futures.items()}
 
 
 @pytest.fixture(scope="session")
@@ -151,42 +96,6 @@ def golden_card(tmp_path_factory, assets) -> Callable[[str], Path]:
                                    lambda folder: scene_card(name, folder, assets))
         return scene_card_path(name, folder)
     return card
-
-
-def make_card(folder: Path, files: dict[str, bytes]) -> Path:
-    """A card holding exactly these files (card path -> bytes), written without the card
-    builder's checks, so that malformed files reach the firmware as they are."""
-    from sdcard_image.fat32 import CardWriter
-    folder.mkdir(parents=True, exist_ok=True)
-    card = folder / "card.img"
-    with CardWriter.create(card, 64) as writer:
-        for path, data in files.items():
-            parent = path.rpartition("/")[0]
-            if parent:
-                writer.makedirs(parent)
-            writer.write(path, data)
-    return card
-
-
-def copy_card(source: Path, target: Path) -> Path:
-    """A copy of a card image that keeps its holes: only the parts holding data are copied
-    (shutil.copyfile would write all 64 MiB of a card that holds a few). The copy reads back
-    byte for byte as the source."""
-    with open(source, "rb") as src, open(target, "wb") as dst:
-        size = os.fstat(src.fileno()).st_size
-        offset = 0
-        while offset < size:
-            try:
-                start = os.lseek(src.fileno(), offset, os.SEEK_DATA)
-            except OSError:             # ENXIO: nothing but a hole up to the end
-                break
-            end = os.lseek(src.fileno(), start, os.SEEK_HOLE)
-            src.seek(start)
-            dst.seek(start)
-            dst.write(src.read(end - start))
-            offset = end
-        dst.truncate(size)
-    return target
 
 
 @pytest.fixture(scope="session")

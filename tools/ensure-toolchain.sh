@@ -8,7 +8,7 @@
 #   - dosfstools and mtools, with which the tests check SD card images independently;
 #   - gdb-multiarch, which the tests drive against the board model's GDB stub (make debug);
 #   - gcc-aarch64-linux-gnu and qemu-user, with which the tests build the fast engine for AArch64
-#     and check its host floating-point probe there (tests/test_host_fp.py).
+#     and check its host floating-point probe there (tests/slow/test_host_fp.py).
 set -euo pipefail
 missing=""
 for tool in riscv64-unknown-elf-as riscv64-unknown-elf-ld riscv64-unknown-elf-objcopy; do

@@ -6,7 +6,7 @@ EXIT_STATUS_DETAILS, so that they cannot drift from the commands' --help.
 
 A table is the lines after a marker line `<!-- exit statuses: COMMAND -->` up to the first
 line that is not a table row; COMMAND is `all` for the shared table (every status and the
-commands that return it) or one of COMMANDS. tests/test_exit_status.py runs the check.
+commands that return it) or one of COMMANDS. tests/unit/shared/test_exit_status.py runs the check.
 """
 from __future__ import annotations
 

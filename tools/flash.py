@@ -27,7 +27,7 @@ DEFAULT_BAUD = 1_500_000      # what the Dock's bridge takes for uploads (kflash
 CONSOLE_BAUD = 115_200        # the firmware's console (firmware/include/k210.inc UARTHS_BAUD)
 
 # When this command returns each status; --help and the README's table are made from it
-# (tests/test_exit_status.py)
+# (tests/unit/shared/test_exit_status.py)
 EXIT_STATUS_DETAILS: dict[int, str] = {
     EXIT_OK: "the firmware was written to the board",
     EXIT_USAGE: "bad command line: no port, a port that does not exist, no image",

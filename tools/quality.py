@@ -3,7 +3,7 @@ on the Pareto front of cycles per frame against PSNR, a table (CSV and Markdown)
 plot (hand-written SVG, small multiples, one panel per scene and mode).
 
 Pure functions over records (dicts) with no emulator in sight, so they are tested quickly
-(tests/test_bench_quality.py). A record has at least `scene`, `scale`, `mode`, `setting`,
+(tests/unit/tools/test_bench_quality.py). A record has at least `scene`, `scale`, `mode`, `setting`,
 `instructions_hart0`, `psnr_db`, `max_error` and `pixels_differ` (a share, 0 to 1): the distance
 from the reference renderer's pixel-centre image. Its cost is `cycles_hart0`, hart 0's CPU cycles
 per frame under the board model's Rocket timing (emulator/cpu/timing.py), or `instructions_hart0` in a

@@ -4,7 +4,7 @@ Run it (`make goldens`) only after a deliberate change to what the firmware draw
 new images, and commit them with the change that explains them. It reports, per frame, whether
 it is new, unchanged, or how many pixels changed, before replacing it.
 
-    python tools/regen_goldens.py [SCENE ...]      (default: every scene in tests/golden_scenes.py)
+    python tools/regen_goldens.py [SCENE ...]      (default: every scene in tests/support/golden_scenes.py)
     python tools/regen_goldens.py --folder DIR [--folder DIR ...] [--frames N] [--check]
 
 The project's scenes' goldens live in tests/golden/<scene>/. A scene folder of one's own holds a
@@ -24,7 +24,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tests"))
+sys.path.insert(0, str(ROOT / "tests" / "support"))
 from emulator.frontends.golden import compare_frame  # noqa: E402
 from k210_common.exit_status import EXIT_GOLDEN_MISMATCH, EXIT_OK, EXIT_USAGE, help_epilog  # noqa: E402
 from golden_scenes import GOLDEN, SCENES, scene_card  # noqa: E402

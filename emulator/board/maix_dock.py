@@ -1,7 +1,7 @@
 """The Sipeed Maix Dock as data: the K210 pad each part of the board is wired to. The one home of
 these numbers in the model (wiring.py and the boot ROM's hand-over take them from here); the
 firmware's copies (firmware/include/k210.inc, tests/firmware/k210.h) are checked against it
-(tests/test_memory_map.py). Sources: the Dock's schematic (Sipeed, "Maix Dock" v1.1), the SDK's and
+(tests/unit/shared/test_memory_map.py). Sources: the Dock's schematic (Sipeed, "Maix Dock" v1.1), the SDK's and
 MaixPy's pin settings for it (the LCD on pads 36-39, the SD card on 26-29, the console on 4-5)."""
 from __future__ import annotations
 

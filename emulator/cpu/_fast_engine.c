@@ -32,7 +32,7 @@
  * the precise engine (host_tiny_before_rounding). Results follow Unicorn 2.1.4
  * (QEMU 5.0) where it departs from the RISC-V spec of today: single-precision results other
  * than loads are not NaN-boxed, and single-precision operands are the low 32 bits whatever the
- * upper half holds. tests/test_fast_engine.py compares this engine with the precise one.
+ * upper half holds. tests/unit/cpu/test_fast_engine.py compares this engine with the precise one.
  */
 #include <math.h>
 #include <stddef.h>
@@ -1577,7 +1577,7 @@ static uint64_t plan_cycles_until(const alone_plan_t *plan, int64_t time)
     return plan->anchor_cycles + (uint64_t)whole + 1;
 }
 
-/* The sizes of the structures native.py mirrors for ctypes (tests/test_native_layout.py checks the
+/* The sizes of the structures native.py mirrors for ctypes (tests/unit/cpu/test_native_layout.py checks the
  * mirrors against them and against the field names here): predictor_t, insn_counter_t,
  * device_access_t, repeat_t, fast_state_t up to `windows` (the head Python reads), alone_plan_t. */
 __attribute__((visibility("default")))

@@ -68,7 +68,7 @@ static int misaligned(insn_counter_t *c, void *uc, uint64_t address, uint32_t si
     return 1;
 }
 
-/* memory_access_of for the tests (tests/test_hart.py checks it against cpu/decode.py): out[0] the
+/* memory_access_of for the tests (tests/unit/cpu/test_hart.py checks it against cpu/decode.py): out[0] the
  * width (0: no access), out[1] the base register, out[2] the offset, out[3] whether it writes. */
 __attribute__((visibility("default")))
 void decode_access_for_tests(uint32_t word, uint32_t size, int64_t out[4])

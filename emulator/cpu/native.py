@@ -1,6 +1,6 @@
 """The C extension (_insn_counter.c with _fast_engine.c) as Python sees it: ctypes mirrors of the
 structures it shares with hart.py, and its functions' signatures. A field added on one side must be
-added on the other in the same place; tests/test_native_layout.py checks names, order and sizes."""
+added on the other in the same place; tests/unit/cpu/test_native_layout.py checks names, order and sizes."""
 from __future__ import annotations
 
 import ctypes

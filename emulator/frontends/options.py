@@ -26,7 +26,7 @@ DEFAULT_FRAMES = 8
 MAX_PAD_CHANGES_IN_RUN_JSON = 10_000    # a pin toggled for ever must not bloat run.json
 
 # When this command returns each status (k210_common/exit_status.py holds the numbers and
-# names); --help and the README's table are made from it (tests/test_exit_status.py)
+# names); --help and the README's table are made from it (tests/unit/shared/test_exit_status.py)
 EXIT_STATUS_DETAILS: dict[int, str] = {
     EXIT_OK: "the requested frames were shown, or `--until`'s time was reached, or (with `--expect`) the console "
              "printed every expected text (with `--golden`: all match; every `--grab` was taken)",

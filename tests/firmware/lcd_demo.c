@@ -3,7 +3,7 @@
  *   frame 1: a landscape picture as 32-bit pixel pairs (upright: MADCTL MY|MV);
  *   frame 2: the same picture as 16-bit pixels with MADCTL MX|MV (shown turned 180 degrees);
  *   frame 3: a portrait picture as bytes with MADCTL BGR (portrait, red and blue exchanged).
- * tests/test_c_firmware.py computes what each frame must look like. */
+ * tests/end_to_end/test_c_firmware.py computes what each frame must look like. */
 #include <stdio.h>
 
 #include "drivers.h"

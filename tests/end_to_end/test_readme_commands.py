@@ -1,0 +1,203 @@
+"""Every command README.md shows is run here, as written (from the repository's root, `python`
+being the project's virtual environment), or, where running it inside the suite is not
+possible, checked as far as it can be, for a reason stated next to it:
+
+- `make test` is what CI runs (.ci/run), so the suite cannot run itself;
+- `make bench` takes minutes and `make goldens` rewrites tests/golden: `make -n` checks that the
+  target exists and what it would run;
+- the environment variables of the long test runs must be read by the tests they name.
+
+A command added to the README without an entry here fails `test_every_command_is_known`.
+"""
+from __future__ import annotations
+
+import json
+import os
+import re
+import shlex
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from suite import ROOT
+
+README = ROOT / "README.md"
+VENV_BIN = Path(sys.executable).parent
+
+
+def readme_commands(text: str) -> list[str]:
+    """The commands of the README: each line of a ```sh block (without its # comment) and each
+    inline `...` span that starts with `make `, `python -m `, `.venv/bin/python ` or an
+    environment assignment followed by one of those."""
+    commands: list[str] = []
+    for block in re.findall(r"```sh\n(.*?)```", text, flags=re.S):
+        for line in block.splitlines():
+            line = line.split(" #", 1)[0].strip()
+            if line:
+                commands.append(line)
+    starts = r"(?:[A-Z_]+=\S+ )*(?:make |python -m |\.venv/bin/python )"
+    for span in re.findall(r"`([^`\n]+)`", re.sub(r"```.*?```", "", text, flags=re.S)):
+        if re.match(starts, span):
+            commands.append(span.strip())
+    return list(dict.fromkeys(commands))
+
+
+def run(command: str, timeout: float = 300) -> subprocess.CompletedProcess:
+    """Runs a README command in the repository root with the venv's python first on PATH."""
+    env = {**os.environ, "PATH": f"{VENV_BIN}{os.pathsep}{os.environ['PATH']}"}
+    return subprocess.run(command, shell=True, cwd=ROOT, env=env, capture_output=True, text=True,
+                          timeout=timeout)
+
+
+def _ran_frames(folder: str, frames: int):
+    def check(result: subprocess.CompletedProcess) -> None:
+        summary = json.loads((ROOT / folder / "run.json").read_text())
+        assert summary["exit"] == "ok" and len(summary["frames"]) == frames, summary["message"]
+    return check
+
+
+def _golden_matched(result: subprocess.CompletedProcess) -> None:
+    assert "[golden] all 4 frames match tests/golden/default" in result.stderr
+
+
+def _frames_written(folder: str, frames: int):
+    def check(result: subprocess.CompletedProcess) -> None:
+        assert sorted(p.name for p in (ROOT / folder).glob("frame_*.png")) == \
+            [f"frame_{n:04d}.png" for n in range(frames)]
+    return check
+
+
+def _dry_run(command: str) -> str:
+    """`make X` -> `make -n X`: the target exists and its recipe expands."""
+    words = shlex.split(command)
+    index = words.index("make")
+    return shlex.join(words[:index + 1] + ["-n"] + words[index + 1:])
+
+
+def _env_read_by_tests(*names: str):
+    def check(result: subprocess.CompletedProcess) -> None:
+        sources = "".join(p.read_text() for p in (ROOT / "tests").rglob("test_*.py"))
+        for name in names:
+            assert f'environ.get("{name}"' in sources, f"no test reads {name}"
+    return check
+
+
+def _ci_runs(command: str):
+    def check(result: subprocess.CompletedProcess) -> None:
+        assert command in (ROOT / ".ci" / "run").read_text().splitlines()
+    return check
+
+
+def _lists_exit_statuses(result: subprocess.CompletedProcess) -> None:
+    assert "exit status:" in result.stdout
+
+
+def _tables_match(result: subprocess.CompletedProcess) -> None:
+    assert "(differ)" not in result.stdout and "tables all, emulator, reference" in result.stdout
+
+
+def _prints_agreement(result: subprocess.CompletedProcess) -> None:
+    from golden_scenes import SCENES            # one line per golden scene with triangles
+    assert result.stdout.count("lit per face: identical") == len(SCENES)
+
+
+def _console_says(folder: str, *lines: str):
+    def check(result: subprocess.CompletedProcess) -> None:
+        assert result.returncode == 0, result.stderr
+        console = (ROOT / folder / "console.log").read_text()
+        for line in lines:
+            assert line in console, console
+    return check
+
+
+def _c_golden_matched(result: subprocess.CompletedProcess) -> None:
+    assert result.returncode == 0, result.stderr
+    assert "[golden] all 4 frames match tests/golden/c-lcd-demo" in result.stderr
+
+
+#: README command -> (how it is checked: "run" or "dry-run", what must hold afterwards).
+#: "dry-run" commands go through `make -n` (see the module's docstring for why).
+COMMANDS = {
+    "make firmware": ("run", lambda r: None),
+    "make test": ("ci", _ci_runs("make test")),
+    "make bench": ("dry-run", lambda r: None),
+    "make goldens": ("dry-run", lambda r: None),
+    "make goldens SCENES=gem-flat": ("dry-run", lambda r: None),
+    "make debug": ("dry-run", lambda r: None),
+    "make flash PORT=/dev/ttyUSB0": ("dry-run", lambda r: None),
+    'make goldens SCENE_DIRS="my-scene other-scene"': ("dry-run", lambda r: None),
+    "make golden-check SCENE_DIRS=my-scene": ("dry-run", lambda r: None),
+    "EXTREMES_FULL=1 make test": ("dry-run", _env_read_by_tests("EXTREMES_FULL")),
+    "FUZZ_EXAMPLES=5000 FUZZ_BOOTS=100 make test": ("dry-run",
+                                                   _env_read_by_tests("FUZZ_EXAMPLES", "FUZZ_BOOTS")),
+    "python -m emulator run build/firmware.elf --sd build/card.img --frames 4 --out build/golden-check "
+    "--golden tests/golden/default": ("run", _golden_matched),
+    "python -m reference render-card build/card.img --frames 2 --out build/reference":
+        ("run", _frames_written("build/reference", 2)),
+    "python -m reference render-card build/card.img --frames 2 --out build/reference-ideal --ideal":
+        ("run", _frames_written("build/reference-ideal", 2)),
+    "python -m emulator run --help": ("run", _lists_exit_statuses),
+    "make c-firmware": ("run", lambda r: None),
+    "python -m emulator run build/cfw/hello.elf --until 0.05 --out build/hello":
+        ("run", _console_says("build/hello", "hello from C on the K210")),
+    "python -m emulator run build/cfw/blink.elf --until 0.6 --out build/blink":
+        ("run", _console_says("build/blink", "tick 10: blue off, green on", "blink: done")),
+    "python -m emulator run build/cfw/lcd_demo.elf --frames 4 --out build/lcd-demo --golden tests/golden/c-lcd-demo":
+        ("run", _c_golden_matched),
+    "python -m emulator run build/cfw/lcd_demo_serial.elf --lcd-interface spi --frames 4 --out build/lcd-serial "
+    "--golden tests/golden/c-lcd-demo": ("run", _c_golden_matched),
+    "printf 'Ada\\nhello world\\nquit\\n' | python -m emulator run build/cfw/echo.elf --uart-input - "
+    '--expect "hello, Ada!" --expect bye --out build/echo': ("run", _console_says("build/echo", "hello, Ada!", "bye")),
+    ".venv/bin/python -m pytest tests/unit/tools/test_reference.py -k first_golden -s":
+        ("run", _prints_agreement),
+    "python -m tools.exit_status_tables --check": ("run", _tables_match),
+}
+#: Each needs the one before (assemble, link, run), so they run in this order in one test.
+OWN_FIRMWARE_COMMANDS = {
+    "riscv64-unknown-elf-as -march=rv64gc -o build/hello-asm.o tests/firmware/hello.S": lambda r: None,
+    "riscv64-unknown-elf-ld -N -Ttext=0x80000000 --no-warn-rwx-segments -o build/hello-asm.elf build/hello-asm.o":
+        lambda r: None,
+    'python -m emulator run build/hello-asm.elf --expect "hello from my own firmware" --fail-on "error" '
+    "--out build/hello-asm": _console_says("build/hello-asm", "hello from my own firmware"),
+}
+#: Both write build/frames, so they run one after the other in one test.
+FLASH_COMMANDS = {
+    "make flash-to-emulator": _ran_frames("build/frames", 8),
+    "make flash-to-emulator FRAMES=30": _ran_frames("build/frames", 30),
+}
+
+
+def test_every_command_is_known():
+    found = readme_commands(README.read_text())
+    known = set(COMMANDS) | set(FLASH_COMMANDS) | set(OWN_FIRMWARE_COMMANDS)
+    assert set(found) == known, (
+        f"README commands without a check here: {sorted(set(found) - known)}; "
+        f"checks of commands the README no longer shows: {sorted(known - set(found))}")
+
+
+def _run_and_check(command: str, how: str, check) -> None:
+    if how == "ci":
+        check(None)
+        return
+    result = run(_dry_run(command) if how == "dry-run" else command)
+    assert result.returncode == 0, f"{command}: exit {result.returncode}\n{result.stderr[-2000:]}"
+    check(result)
+
+
+@pytest.mark.parametrize("command", sorted(COMMANDS))
+def test_readme_command(command, firmware, card, request):
+    if "build/cfw/" in command:
+        request.getfixturevalue("c_firmware")     # the C programs exist before they are run
+    _run_and_check(command, *COMMANDS[command])
+
+
+def test_readme_flash_commands(firmware, card):
+    for command, check in FLASH_COMMANDS.items():
+        _run_and_check(command, "run", check)
+
+
+def test_readme_own_firmware_commands(firmware):
+    for command, check in OWN_FIRMWARE_COMMANDS.items():
+        _run_and_check(command, "run", check)

@@ -1,0 +1,109 @@
+"""A run stopped by a signal ends as any other end does (issue 35): Ctrl-C's SIGINT and SIGTERM stop
+it after the instruction under way, and run.json (with the reason), console.log, the frames shown
+so far and the animation are all written; the exit status is 128 + the signal's number, as shells
+report it. Real signals, sent to the board model's process while it draws."""
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+from suite import ROOT
+
+
+@pytest.mark.parametrize("number, status, kind", [(signal.SIGINT, 130, "interrupted"), (signal.SIGTERM, 143, "terminated")])
+def test_a_signal_ends_the_run_with_everything_written(firmware, card, tmp_path, number, status, kind):
+    out = tmp_path / "out"
+    process = subprocess.Popen([sys.executable, "-m", "emulator", "run", str(firmware), "--sd", str(card),
+                                "--frames", "100000", "--out", str(out), "--quiet"],
+                               cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 120
+        while not (out / "frame_0002.png").exists():
+            assert process.poll() is None, process.communicate()
+            assert time.monotonic() < deadline, "no third frame in 120 s"
+            time.sleep(0.05)
+        process.send_signal(number)
+        _, stderr = process.communicate(timeout=60)
+    finally:
+        if process.poll() is None:
+            process.kill()
+    assert process.returncode == status, stderr
+    assert "Traceback" not in stderr
+    run = json.loads((out / "run.json").read_text())
+    assert run["exit"] == kind and signal.Signals(number).name in run["message"]
+    shown = sorted(p.name for p in out.glob("frame_*.png"))
+    assert len(shown) == len(run["frames"]) >= 3
+    assert (out / "animation.png").exists()
+    console = (out / "console.log").read_text()
+    # every byte the UART sent is there: the lines run.json times, then what was on the wire
+    lines = [entry["line"] for entry in run["console"]]
+    assert console.splitlines()[:len(lines)] == lines and f"frame {len(shown) - 2}" in lines
+
+
+
+def start(*args: str) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "emulator", "run", *args], cwd=ROOT,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def test_a_signal_while_waiting_for_gdb_ends_the_run(c_firmware, tmp_path):
+    """The wait for GDB to attach used to take the signal in, and go on waiting."""
+    out = tmp_path / "out"
+    process = start(str(c_firmware / "hello.elf"), "--gdb", "0", "--gdb-wait", "--out", str(out))
+    assert "listening on 127.0.0.1" in process.stderr.readline()
+    process.send_signal(signal.SIGINT)
+    _, stderr = process.communicate(timeout=30)
+    assert process.returncode == 130 and "Traceback" not in stderr, stderr
+    assert json.loads((out / "run.json").read_text())["exit"] == "interrupted"
+
+
+def test_a_signal_while_a_fifo_s_writer_is_quiet_ends_the_run(c_firmware, tmp_path):
+    """The run waits for the FIFO's writer (its bytes count as there from the start); a signal
+    ends that wait too."""
+    fifo, out = tmp_path / "input.fifo", tmp_path / "out"
+    os.mkfifo(fifo)
+    process = start(str(c_firmware / "echo.elf"), "--uart-input", str(fifo), "--until", "10", "--out", str(out),
+                    "--quiet")
+    writer = os.open(fifo, os.O_WRONLY)              # there, and silent
+    try:
+        deadline = time.monotonic() + 120
+        while not (out / "console.log").exists():    # the run's output is there: the board follows
+            assert time.monotonic() < deadline and process.poll() is None
+            time.sleep(0.05)
+        time.sleep(2)                                 # the firmware waits for a line meanwhile
+        process.send_signal(signal.SIGTERM)
+        _, stderr = process.communicate(timeout=30)
+    finally:
+        os.close(writer)
+    assert process.returncode == 143 and "Traceback" not in stderr, stderr
+    assert json.loads((out / "run.json").read_text())["exit"] == "terminated"
+
+
+def test_a_signal_before_the_board_exists_is_no_traceback(c_firmware, tmp_path):
+    """Opening a FIFO waits for a writer, before the board is built: Ctrl-C there ends the command
+    with its status and words."""
+    fifo = tmp_path / "input.fifo"
+    os.mkfifo(fifo)
+    process = start(str(c_firmware / "echo.elf"), "--uart-input", str(fifo), "--out", str(tmp_path / "out"))
+    time.sleep(2)
+    process.send_signal(signal.SIGINT)
+    _, stderr = process.communicate(timeout=30)
+    assert process.returncode == 130 and "Traceback" not in stderr and "interrupted" in stderr, stderr
+
+
+def test_signals_while_the_outputs_are_written_are_ignored():
+    from emulator.frontends.cli import SignalStop
+    stop = SignalStop()
+    try:
+        stop.writing = True
+        os.kill(os.getpid(), signal.SIGINT)             # would raise KeyboardInterrupt or Interrupted
+        time.sleep(0.05)
+    finally:
+        stop.restore()
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
