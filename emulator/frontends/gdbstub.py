@@ -130,6 +130,9 @@ class Connection:
         self.acks = True
         self._buffer = bytearray()
         self.interrupted = False
+        # a packet refused for its length whose end has not come yet: every byte up to its '#' and
+        # checksum is the packet's (a 0x03 in it is data, not Ctrl-C)
+        self._refusing = False
 
     def _fill(self, timeout: float | None) -> bool:
         ready, _, _ = select.select([self.sock], [], [], timeout)
@@ -158,6 +161,18 @@ class Connection:
         escapes counted) is refused whole: its bytes are dropped and GDB is told to send again."""
         scanned = 0                          # how far the search for the packet's end has looked
         while True:
+            if self._refusing:
+                end = self._buffer.find(b"#")
+                if end < 0:
+                    del self._buffer[:]
+                    self._wait()
+                    continue
+                if len(self._buffer) < end + 3:
+                    del self._buffer[:end]       # the checksum's digits are still to come
+                    self._wait()
+                    continue
+                del self._buffer[:end + 3]
+                self._refusing = False
             start = self._buffer.find(b"$")
             if self.interrupted or (start < 0 and INTERRUPT_BYTE in self._buffer):
                 self.interrupted = False
@@ -179,7 +194,8 @@ class Connection:
                 if end < 0:
                     scanned = len(self._buffer)
                     if scanned - start > MAX_PACKET_BYTES:
-                        del self._buffer[:]          # too long: refused, and whatever follows in it
+                        del self._buffer[:]          # too long: refused, and the rest of it as it comes
+                        self._refusing = True
                         scanned = 0
                         if self.acks:
                             self.sock.sendall(b"-")

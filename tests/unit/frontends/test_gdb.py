@@ -309,7 +309,7 @@ def test_malformed_packets_get_an_error_reply_and_the_run_goes_on(c_firmware, tm
     assert client.ask("p20") == pc                                 # nothing ran meanwhile
     client.send_raw(b"$" + b"m" * 70_000)                          # longer than PacketSize, no end yet
     assert client.ack() == b"-"                                    # refused at once
-    client.send_raw(b"#00")                                        # its tail: noise between packets
+    client.send_raw(b"m\x03m" * 100 + b"#00")                      # its tail: a 0x03 in it is data, not Ctrl-C
     assert client.ask("p20") == pc
     client.send("vKill;1")
     assert client.ack() == b"+" and client.reply() == "OK"
