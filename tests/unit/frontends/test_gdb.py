@@ -4,6 +4,7 @@ a small client of our own (Ctrl-C, a firmware trap shown as a signal, bad packet
 goes away)."""
 from __future__ import annotations
 
+import os
 import re
 import shutil
 import socket
@@ -332,7 +333,7 @@ def test_any_packet_gets_a_reply_without_running_the_board():
     verbs = st.sampled_from(["m", "M", "X", "g", "G", "p", "P", "H", "T", "z", "Z", "q", "qXfer:features:read:",
                              "qThreadExtraInfo,", "vCont;", "?", ""])
     try:
-        @settings(max_examples=400, deadline=None, derandomize=True)
+        @settings(max_examples=int(os.environ.get("FUZZ_EXAMPLES", "400")), deadline=None, derandomize=True)
         @given(verbs, st.binary(max_size=40))
         def check(verb: str, rest: bytes) -> None:
             packet = verb.encode() + rest

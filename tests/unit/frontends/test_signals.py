@@ -99,6 +99,7 @@ def test_a_signal_before_the_board_exists_is_no_traceback(c_firmware, tmp_path):
 
 def test_signals_while_the_outputs_are_written_are_ignored():
     from emulator.frontends.cli import SignalStop
+    before = signal.getsignal(signal.SIGINT)            # (a test worker's own may not be Python's default)
     stop = SignalStop()
     try:
         stop.writing = True
@@ -106,4 +107,41 @@ def test_signals_while_the_outputs_are_written_are_ignored():
         time.sleep(0.05)
     finally:
         stop.restore()
-    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    assert signal.getsignal(signal.SIGINT) is before
+
+
+# the fuzz stage's signals: a few examples by default, each a run of the command line
+SIGNAL_EXAMPLES = max(3, int(os.environ.get("FUZZ_EXAMPLES", "150")) // 30)
+
+
+def test_a_signal_at_any_moment_ends_the_command_with_its_status(c_firmware, tmp_path_factory):
+    """Hypothesis (the fuzz stage, issue 35): SIGINT or SIGTERM at any moment of a short run, from
+    the command's first line (its modules being imported, the board being built) through the run to
+    the outputs being written: the command ends with 128 + the signal's number, or 0 when the run
+    had ended first, never a traceback; run.json, when written, says how the run ended. (Not
+    before 0.2 s: until the interpreter has started and reached emulator/__main__.py a signal is
+    CPython's own business.)"""
+    from hypothesis import given, settings
+    from hypothesis import strategies as st
+
+    @settings(max_examples=SIGNAL_EXAMPLES, deadline=None, derandomize=True)
+    @given(number=st.sampled_from([signal.SIGINT, signal.SIGTERM]), delay=st.floats(0.2, 2.5))
+    def check(number, delay):
+        out = tmp_path_factory.mktemp("signal") / "out"
+        process = start(str(c_firmware / "hello.elf"), "--until", "0.5", "--out", str(out), "--quiet")
+        time.sleep(delay)
+        process.send_signal(number)
+        _, stderr = process.communicate(timeout=60)
+        status = {signal.SIGINT: 130, signal.SIGTERM: 143}[number]
+        assert "Traceback" not in stderr, stderr
+        if process.returncode == -number:
+            # the signal came as the interpreter exited, everything written (Python puts the default
+            # handlers back then): the run's own end is what run.json says
+            assert json.loads((out / "run.json").read_text())["exit"] == "ok", stderr
+            return
+        assert process.returncode in (0, status), stderr
+        if (out / "run.json").exists():
+            run = json.loads((out / "run.json").read_text())
+            assert run["exit"] == ("ok" if process.returncode == 0 else
+                                   {130: "interrupted", 143: "terminated"}[process.returncode])
+    check()
