@@ -108,8 +108,10 @@ $(CARD): tools/make_assets.py $(wildcard sdcard_image/*.py) Makefile | venv
 
 card: $(CARD)
 
+# FRAMES_DIR: where the run's frames, animation, run.json and console.log go
+FRAMES_DIR := $(BUILD)/frames
 flash-to-emulator: firmware venv $(CARD)
-	$(PYTHON) -m emulator run $(BUILD)/firmware.elf --sd $(CARD) --frames $(FRAMES) --out $(BUILD)/frames
+	$(PYTHON) -m emulator run $(BUILD)/firmware.elf --sd $(CARD) --frames $(FRAMES) --out $(FRAMES_DIR)
 
 # compileall first: each test starts `python -m emulator` a few hundred times, and where
 # PYTHONDONTWRITEBYTECODE is set no import would otherwise leave the compiled modules behind.
