@@ -147,14 +147,19 @@ bench: firmware venv $(DEFAULT_CARD)
 	$(PYTHON) tools/bench.py
 
 # Goldens of one's own scene folders: make goldens SCENE_DIRS="dir ..." [GOLDEN_FRAMES=N] writes
-# each DIR/golden; make golden-check SCENE_DIRS="dir ..." checks against them (status 9: mismatch)
+# each DIR/golden; make golden-check SCENE_DIRS="dir ..." checks against them. Each run's output
+# (frames, diff images, run.json) stays in GOLDENS_OUT or GOLDEN_CHECK_OUT, a folder a scene.
+# On a mismatch the check ends with status 9 (golden-mismatch), which make reports as "Error 9"
+# and, as for any failed recipe, returns as its own status 2 (tools/regen_goldens.py returns 9).
 SCENE_DIR_ARGS = $(foreach d,$(SCENE_DIRS),--folder $(d)) $(if $(GOLDEN_FRAMES),--frames $(GOLDEN_FRAMES))
+GOLDENS_OUT      := $(BUILD)/goldens
+GOLDEN_CHECK_OUT := $(BUILD)/golden-check
 
 goldens: firmware venv $(DEFAULT_CARD)
-	$(PYTHON) tools/regen_goldens.py $(SCENES) $(SCENE_DIR_ARGS)
+	$(PYTHON) tools/regen_goldens.py $(SCENES) $(SCENE_DIR_ARGS) --out $(GOLDENS_OUT)
 
 golden-check: firmware venv
-	$(PYTHON) tools/regen_goldens.py --check $(SCENE_DIR_ARGS)
+	$(PYTHON) tools/regen_goldens.py --check $(SCENE_DIR_ARGS) --out $(GOLDEN_CHECK_OUT)
 
 clean:
 	rm -rf $(BUILD)
