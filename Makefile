@@ -97,24 +97,30 @@ $(BUILD)/cfw/lcd_demo_serial.elf: $(BUILD)/cfw/lcd_demo.o $(filter-out %/lcd.o,$
 c-firmware: toolchain $(CFW_ELFS) $(BUILD)/cfw/lcd_demo_serial.elf
 
 # The default card: the generated test models and textures, and a scene naming one of them.
-CARD        := $(BUILD)/card.img
+# It is the only card make builds. CARD=my.img runs one's own card instead: make only reads it,
+# and never rebuilds or overwrites it, however old it is (it is no target of make's).
+DEFAULT_CARD := $(BUILD)/card.img
+CARD        := $(DEFAULT_CARD)
+CARD_PREREQ  = $(if $(filter $(DEFAULT_CARD),$(CARD)),$(DEFAULT_CARD))
 CARD_SCENE  := --scene model=models/torus.obj --scene texture=textures/torus.ppm --scene mode=textured \
                --scene "translate=0 0 -2.6" --scene "axis=1 0.6 0.2" --scene angle=40 --scene step=4 \
                --scene "light=0.3 0.5 1" --scene ambient=0.25
 
-$(CARD): tools/make_assets.py $(wildcard sdcard_image/*.py) Makefile | venv
+$(DEFAULT_CARD): tools/make_assets.py $(wildcard sdcard_image/*.py) Makefile | venv
 	rm -rf $(BUILD)/assets
 	$(PYTHON) tools/make_assets.py $(BUILD)/assets
 	$(PYTHON) -m sdcard_image build $@ --force -q $(CARD_SCENE) $(BUILD)/assets/models $(BUILD)/assets/textures
 
-card: $(CARD)
+card: $(DEFAULT_CARD)
 
-flash-to-emulator: firmware venv $(CARD)
-	$(PYTHON) -m emulator run $(BUILD)/firmware.elf --sd $(CARD) --frames $(FRAMES) --out $(BUILD)/frames
+# FRAMES_DIR: where the run's frames, animation, run.json and console.log go
+FRAMES_DIR := $(BUILD)/frames
+flash-to-emulator: firmware venv $(CARD_PREREQ)
+	$(PYTHON) -m emulator run $(BUILD)/firmware.elf --sd $(CARD) --frames $(FRAMES) --out $(FRAMES_DIR)
 
 # compileall first: each test starts `python -m emulator` a few hundred times, and where
 # PYTHONDONTWRITEBYTECODE is set no import would otherwise leave the compiled modules behind.
-test: firmware c-firmware venv $(CARD)
+test: firmware c-firmware venv $(DEFAULT_CARD)
 	$(PYTHON) -m compileall -q emulator reference sdcard_image tools tests
 	$(PYTHON) -m pytest -q -n 2
 
@@ -142,22 +148,27 @@ flash: firmware venv
 # The default card under GDB: the board waits on 127.0.0.1:$(GDB_PORT) and prints the
 # gdb-multiarch command that attaches to it
 GDB_PORT ?= 3333
-debug: firmware venv $(CARD)
+debug: firmware venv $(CARD_PREREQ)
 	$(PYTHON) -m emulator run $(BUILD)/firmware.elf --sd $(CARD) --frames $(FRAMES) --out $(BUILD)/debug \
 		--gdb $(GDB_PORT) --gdb-wait
 
-bench: firmware venv $(CARD)
+bench: firmware venv $(DEFAULT_CARD)
 	$(PYTHON) tools/bench.py
 
 # Goldens of one's own scene folders: make goldens SCENE_DIRS="dir ..." [GOLDEN_FRAMES=N] writes
-# each DIR/golden; make golden-check SCENE_DIRS="dir ..." checks against them (status 9: mismatch)
+# each DIR/golden; make golden-check SCENE_DIRS="dir ..." checks against them. Each run's output
+# (frames, diff images, run.json) stays in GOLDENS_OUT or GOLDEN_CHECK_OUT, a folder a scene.
+# On a mismatch the check ends with status 9 (golden-mismatch), which make reports as "Error 9"
+# and, as for any failed recipe, returns as its own status 2 (tools/regen_goldens.py returns 9).
 SCENE_DIR_ARGS = $(foreach d,$(SCENE_DIRS),--folder $(d)) $(if $(GOLDEN_FRAMES),--frames $(GOLDEN_FRAMES))
+GOLDENS_OUT      := $(BUILD)/goldens
+GOLDEN_CHECK_OUT := $(BUILD)/golden-check
 
-goldens: firmware venv $(CARD)
-	$(PYTHON) tools/regen_goldens.py $(SCENES) $(SCENE_DIR_ARGS)
+goldens: firmware venv $(DEFAULT_CARD)
+	$(PYTHON) tools/regen_goldens.py $(SCENES) $(SCENE_DIR_ARGS) --out $(GOLDENS_OUT)
 
 golden-check: firmware venv
-	$(PYTHON) tools/regen_goldens.py --check $(SCENE_DIR_ARGS)
+	$(PYTHON) tools/regen_goldens.py --check $(SCENE_DIR_ARGS) --out $(GOLDEN_CHECK_OUT)
 
 clean:
 	rm -rf $(BUILD)

@@ -24,9 +24,11 @@ EXIT_STATUS_DETAILS: dict[int, str] = {
     EXIT_OK: "done",
     EXIT_INTERNAL: "an internal error of this tool (a bug: please report it with the command line)",
     EXIT_USAGE: "bad command line: an unknown option or bad value, a missing or unreadable input, names that "
-                "collide on the card, the output among the inputs, a `--scene` value the firmware would refuse, "
-                "no such file on the card",
-    EXIT_BAD_INPUT: "build: a bad input file (`.obj`, `.ppm`, image, `scene.ini`), named with its line",
+                "collide on the card, the output among the inputs, a `--scene` value the firmware would refuse "
+                "(build: a model or texture the scene names, or the firmware's default model, that is not on "
+                "the card, named with its key), no such file on the card",
+    EXIT_BAD_INPUT: "build: a bad input file (`.obj`, `.ppm`, image, `scene.ini`), named with its line; a "
+                    "`scene.ini` naming a model or texture that is not on the card (with its key and line)",
     EXIT_OUTPUT_EXISTS: "the output exists: add `--force` to replace it",
     EXIT_CARD_TOO_SMALL: "build: the content does not fit in the `--size` given (or in the largest card)",
     EXIT_CORRUPT_CARD: "list, extract: the image is not an MBR-partitioned FAT32 card, or is damaged (the message "

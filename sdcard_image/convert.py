@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from k210_common.firmware_errors import firmware_error
 from reference.scene import Scene, SceneError, parse_scene
 
 from . import objcheck, ppm
@@ -197,28 +198,46 @@ def check_scene_ini(data: bytes, path: Path | str) -> Scene:
                             exc.line) from None
 
 
-def scene_warnings(scene: Scene, card_files: dict[str, str], origin: str) -> list[str]:
-    """Notes on files the scene names that the card lacks (the firmware's ERR_NOT_FOUND): the model,
-    and the texture in textured mode (flat and wireframe scenes read none). When the card holds
-    a file of that name in a folder, says so: an input folder lands as a folder on the card.
-    `card_files`: each file's card path folded as FAT compares names -> the path itself."""
-    notes = []
+def missing_scene_files(scene: Scene, card_files: dict[str, str]) -> list[tuple[str, str]]:
+    """The files the scene names that the card lacks, each as (key, what to say of it): the
+    model, and the texture in textured mode (flat and wireframe scenes read none). The firmware
+    would stop at boot with ERR_NOT_FOUND. When the card holds a file of that name in a folder,
+    says so: an input folder lands as a folder on the card. `card_files`: each file's card path
+    folded as FAT compares names -> the path itself."""
+    not_found = firmware_error("NOT_FOUND")
+    missing = []
     wanted = [("model", scene.model)] + ([("texture", scene.texture)]
                                          if scene.mode == "textured" else [])
     for key, value in wanted:
         folded = "/" + fat_fold(value.replace("\\", "/").lstrip("/"))
         if folded in card_files:
             continue
-        note = f"{origin}: {key} = {value}: no such file on the card"
+        note = f"{key} = {value}"
         if key not in scene.lines:
-            note += " (the firmware's default)"
+            note += f" (the firmware's default: the scene names no {key})"
+        note += f": no such file on the card (firmware error {not_found.code}, {not_found.words[0]})"
         elsewhere = sorted(path for key_, path in card_files.items()
                            if key_.endswith(folded) and key_ != folded)
         if elsewhere:
             note += (f"; the card has {elsewhere[0]}: a folder given as input lands on the card as "
                      f"a folder (give the path from the card's root, or the folder's contents)")
-        notes.append(note)
-    return notes
+        missing.append((key, note))
+    return missing
+
+
+def refuse_missing_scene_files(scene: Scene, card_files: dict[str, str], origin: str | None) -> None:
+    """Refuses a card whose scene names a file the card lacks (issue 32: the card was built, with
+    a warning, and the firmware stopped with error 6): `UsageError` for `--scene` (origin None),
+    `BadInputError` naming the scene.ini given as input, and the line of each key, otherwise."""
+    missing = missing_scene_files(scene, card_files)
+    if not missing:
+        return
+    if origin is None:
+        raise UsageError("\n".join(f"--scene: {note}" for _, note in missing))
+    first_key, first = missing[0]
+    rest = "".join(f"\n{origin}" + (f":{scene.lines[key]}" if key in scene.lines else "") + f": {note}"
+                   for key, note in missing[1:])
+    raise BadInputError(origin, first + rest, scene.lines.get(first_key))
 
 
 def _display(path: Path) -> str:
@@ -324,8 +343,8 @@ def plan_card(inputs: list[Path], scene: dict[str, str] | None = None,
                                               detail="written from --scene"), data))
     on_card = {fat_fold(p.card_path): p.card_path for p, _ in planner.plan.files}
     if scene:
-        planner.plan.warnings += scene_warnings(scene_read, on_card, "--scene")
+        refuse_missing_scene_files(scene_read, on_card, None)
     elif planner.scene_input:
         settings, origin = planner.scene_input
-        planner.plan.warnings += scene_warnings(settings, on_card, origin)
+        refuse_missing_scene_files(settings, on_card, origin)
     return planner.plan

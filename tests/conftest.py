@@ -22,6 +22,17 @@ from suite import CARD, FIRMWARE, GOLDEN_FRAMES, ROOT, run_emulator, session_roo
 
 
 @pytest.fixture(scope="session", autouse=True)
+def build_outputs_untouched():
+    """A test run leaves build/ as it found it, but for the prerequisites the Makefile builds
+    there (build_outputs.py): the user's build/frames and other outputs are theirs (issue 32)."""
+    from build_outputs import build_outputs, changed_outputs
+    before = build_outputs()
+    yield
+    changed = changed_outputs(before)
+    assert not changed, f"the tests wrote into build/, the user's outputs: {changed[:10]}"
+
+
+@pytest.fixture(scope="session", autouse=True)
 def model_cache(tmp_path_factory) -> Path:
     """The board model's cache of cycle tables (emulator/cpu/timing.py) for this session: shared by
     the workers and the commands the tests run, kept out of the user's own cache folder."""

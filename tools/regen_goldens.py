@@ -4,13 +4,17 @@ Run it (`make goldens`) only after a deliberate change to what the firmware draw
 new images, and commit them with the change that explains them. It reports, per frame, whether
 it is new, unchanged, or how many pixels changed, before replacing it.
 
-    python tools/regen_goldens.py [SCENE ...]      (default: every scene in tests/support/golden_scenes.py)
-    python tools/regen_goldens.py --folder DIR [--folder DIR ...] [--frames N] [--check]
+    python tools/regen_goldens.py [SCENE ...] [--out OUT]   (default: every scene in tests/support/golden_scenes.py)
+    python tools/regen_goldens.py --folder DIR [--folder DIR ...] [--frames N] [--check] [--out OUT]
 
 The project's scenes' goldens live in tests/golden/<scene>/. A scene folder of one's own holds a
 scene.ini and the files it names, laid out as they are to be on the card (its files and folders
 go to the card's root); its goldens go to DIR/golden/. --check runs the firmware on the folder's
 card against them instead of writing them (the board model's --golden: status 9 on a mismatch).
+
+Each run's output (frames, run.json, console.log, and the diff image of every frame that changed
+or differs) stays in OUT/<scene> (OUT/<the folder's name> for a scene folder), where the messages
+say it is: OUT is build/goldens by default, build/golden-check with --check.
 
 Exit statuses: EXIT_STATUS_DETAILS (the numbers are k210_common/exit_status.py's).
 """
@@ -31,18 +35,21 @@ from golden_scenes import GOLDEN, SCENES, scene_card  # noqa: E402
 
 FOLDER_GOLDEN = "golden"        # a scene folder's goldens: DIR/golden/frame_NNNN.png
 DEFAULT_FOLDER_FRAMES = 4
+DEFAULT_OUT = ROOT / "build" / "goldens"                # the runs' output, one folder a scene
+DEFAULT_CHECK_OUT = ROOT / "build" / "golden-check"     # the same with --check
 # When this command returns each status; --help is made from it. A failed run of the board
 # model passes its own status on (`python -m emulator run --help` lists them).
 EXIT_STATUS_DETAILS: dict[int, str] = {
     EXIT_OK: "the goldens were written (or, with `--check`, every frame matches its golden)",
     EXIT_USAGE: "bad command line, an unknown scene, or a scene folder whose card cannot be built",
-    EXIT_GOLDEN_MISMATCH: "`--check`: a frame differs from its golden (diff images in the board model's output)",
+    EXIT_GOLDEN_MISMATCH: "`--check`: a frame differs from its golden (its diff image in `OUT/<folder name>`, "
+                          "build/golden-check/... by default, kept after the command and named by its messages)",
 }
 
 
-def regenerate(name: str, firmware: Path, work: Path) -> int:
+def regenerate(name: str, firmware: Path, work: Path, out: Path) -> int:
     _, frames = SCENES[name]
-    return write_goldens(name, firmware, scene_card(name, work), frames, GOLDEN / name, work / f"out-{name}")
+    return write_goldens(name, firmware, scene_card(name, work), frames, GOLDEN / name, out)
 
 
 def folder_card(folder: Path, work: Path) -> Path:
@@ -59,7 +66,8 @@ def folder_card(folder: Path, work: Path) -> Path:
     return card
 
 
-def folder_goldens(folder: Path, firmware: Path, frames: int, work: Path, check: bool) -> int:
+def folder_goldens(folder: Path, firmware: Path, frames: int, work: Path, check: bool, out: Path) -> int:
+    """Writes (or, `check`, checks) a scene folder's goldens; the run's output goes to `out`."""
     try:
         card = folder_card(folder, work)
     except Exception as error:          # the card builder's own errors name file and line
@@ -68,10 +76,30 @@ def folder_goldens(folder: Path, firmware: Path, frames: int, work: Path, check:
     golden = folder / FOLDER_GOLDEN
     if check:
         result = subprocess.run([sys.executable, "-m", "emulator", "run", str(firmware), "--sd", str(card),
-                                 "--frames", str(frames), "--out", str(work / "check"), "--quiet",
+                                 "--frames", str(frames), "--out", str(out), "--quiet",
                                  "--golden", str(golden)], cwd=ROOT)
+        if result.returncode == EXIT_GOLDEN_MISMATCH:
+            print(f"{folder}: frames differ from {golden} (status {EXIT_GOLDEN_MISMATCH}, golden-mismatch): "
+                  f"the run's frames and diff images are in {out}", file=sys.stderr)
+        elif result.returncode == EXIT_OK:
+            print(f"{folder}: every frame matches {golden} (the run's output in {out})")
         return result.returncode
-    return write_goldens(str(folder), firmware, card, frames, golden, work / "out")
+    return write_goldens(str(folder), firmware, card, frames, golden, out)
+
+
+def out_folders(out: Path, names: list[str]) -> list[Path]:
+    """One output folder in `out` per scene or scene folder, named after it (a name taken twice
+    gets -2, -3, ...)."""
+    taken: set[str] = set()
+    folders = []
+    for name in names:
+        unique, n = name, 1
+        while unique in taken:
+            n += 1
+            unique = f"{name}-{n}"
+        taken.add(unique)
+        folders.append(out / unique)
+    return folders
 
 
 def write_goldens(name: str, firmware: Path, card: Path, frames: int, folder: Path, out: Path) -> int:
@@ -87,8 +115,10 @@ def write_goldens(name: str, firmware: Path, card: Path, frames: int, folder: Pa
         frame = f"frame_{n:04d}.png"
         new, old = out / frame, folder / frame
         if old.exists():
-            comparison = compare_frame(n, new, old, out / f"diff_{n:04d}.png")
-            state = "unchanged" if comparison.matches else f"{comparison.differing_pixels} pixels changed"
+            diff = out / f"diff_{n:04d}.png"
+            comparison = compare_frame(n, new, old, diff)
+            state = "unchanged" if comparison.matches else f"{comparison.differing_pixels} pixels changed" + \
+                (f" (diff image {diff})" if diff.exists() else "")
         else:
             state = "new"
         shutil.copyfile(new, old)
@@ -109,29 +139,37 @@ def main(argv: list[str]) -> int:
                         help=f"frames per scene folder (default {DEFAULT_FOLDER_FRAMES})")
     parser.add_argument("--check", action="store_true",
                         help="with --folder: compare against DIR/golden instead of writing it")
+    parser.add_argument("--out", type=Path, metavar="OUT",
+                        help="where each run's output (frames, diff images, run.json) is kept, one folder a scene "
+                             f"(default {DEFAULT_OUT.relative_to(ROOT)}, with --check "
+                             f"{DEFAULT_CHECK_OUT.relative_to(ROOT)})")
     args = parser.parse_args(argv)
     if args.frames < 1:
         parser.error(f"--frames must be at least 1, not {args.frames}")
     if args.check and (args.scenes or not args.folder):
         parser.error("--check takes scene folders (--folder); the project's scenes are checked by make test")
     firmware = ROOT / "build" / "firmware.elf"
+    out = (args.out or (DEFAULT_CHECK_OUT if args.check else DEFAULT_OUT)).resolve()
+    names = args.scenes or ([] if args.folder else list(SCENES))
+    outs = out_folders(out, [folder.resolve().name for folder in args.folder] + names)
+    folder_outs, scene_outs = outs[:len(args.folder)], outs[len(args.folder):]
     folder_status = 0
-    for folder in args.folder:
+    for folder, folder_out in zip(args.folder, folder_outs):
         with tempfile.TemporaryDirectory() as tmp:
-            folder_status = folder_goldens(folder, firmware, args.frames, Path(tmp), args.check) or folder_status
+            folder_status = folder_goldens(folder, firmware, args.frames, Path(tmp), args.check,
+                                           folder_out) or folder_status
     if args.folder and not args.scenes:
         if not args.check:
             print("review the images, then commit them together with the change that explains them")
         return folder_status
-    names = args.scenes or list(SCENES)
     unknown = [n for n in names if n not in SCENES]
     if unknown:
         print(f"unknown scene(s): {', '.join(unknown)}; known: {', '.join(SCENES)}", file=sys.stderr)
         return EXIT_USAGE
     status = folder_status
     with tempfile.TemporaryDirectory() as tmp:
-        for name in names:
-            status = regenerate(name, firmware, Path(tmp)) or status
+        for name, scene_out in zip(names, scene_outs):
+            status = regenerate(name, firmware, Path(tmp), scene_out) or status
     print("review the images, then commit them together with the change that explains them")
     return status
 

@@ -20,7 +20,7 @@ def _from_the_shell(*args: str, module: str = "emulator", cwd=ROOT, text: bool =
 @pytest.mark.parametrize("args", [
     ("run", "build/firmware.elf", "--sd", "build/card.img", "--frames", "1", "--out", "{tmp}"),
     ("run", "build/firmware.elf", "--frames", "0"),
-    ("run", "build/no-such-firmware.elf"),
+    ("run", "build/no-such-firmware.elf", "--out", "{tmp}"),     # its run.json: not into build/frames
 ], ids=["a-run", "usage-error", "missing-firmware"])
 def test_a_run_gives_what_the_shell_gives(firmware, card, args, tmp_path):
     args = tuple(arg.replace("{tmp}", str(tmp_path)) for arg in args)
@@ -29,9 +29,10 @@ def test_a_run_gives_what_the_shell_gives(firmware, card, args, tmp_path):
     assert forked.args == spawned.args
 
 
-def test_a_run_past_its_timeout_is_killed_and_the_next_run_works(firmware, card):
+def test_a_run_past_its_timeout_is_killed_and_the_next_run_works(firmware, card, tmp_path):
     with pytest.raises(subprocess.TimeoutExpired):
-        run_emulator("run", "build/firmware.elf", "--sd", "build/card.img", "--frames", "100000", timeout=0.3)
+        run_emulator("run", "build/firmware.elf", "--sd", "build/card.img", "--frames", "100000", "--out",
+                     str(tmp_path), timeout=0.3)
     assert run_emulator("run", "build/firmware.elf", "--frames", "0").returncode == 2
 
 

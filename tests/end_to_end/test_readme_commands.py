@@ -7,6 +7,12 @@ possible, checked as far as it can be, for a reason stated next to it:
   target exists and what it would run;
 - the environment variables of the long test runs must be read by the tests they name.
 
+What the commands write goes to the test's temporary folder, never into build/, whose outputs
+are the user's (`make flash-to-emulator`'s build/frames, ...): `as_run` moves every `build/NAME`
+that is not a prerequisite the Makefile builds (the firmware, the C programs, the default card)
+into it, and gives `make` its output folder's variable; each test checks that build/ holds,
+besides those prerequisites, what it held before (`build_outputs_untouched`).
+
 A command added to the README without an entry here fails `test_every_command_is_known`.
 """
 from __future__ import annotations
@@ -21,10 +27,13 @@ from pathlib import Path
 
 import pytest
 
+from build_outputs import PREREQUISITES, build_outputs, changed_outputs
 from suite import ROOT
 
 README = ROOT / "README.md"
 VENV_BIN = Path(sys.executable).parent
+#: The make targets the tests run that write an output, and the variable naming its folder.
+MAKE_OUTPUTS = {"flash-to-emulator": ("FRAMES_DIR", "build/frames")}
 
 
 def readme_commands(text: str) -> list[str]:
@@ -44,6 +53,35 @@ def readme_commands(text: str) -> list[str]:
     return list(dict.fromkeys(commands))
 
 
+def as_run(command: str, tmp: Path) -> str:
+    """The README command as the tests run it: every output it names in build/ moved into `tmp`
+    (the prerequisites it reads stay), and a make target's output folder given as its variable."""
+    def moved(match: re.Match) -> str:
+        return match.group(0) if PREREQUISITES.match(match.group(1)) else shlex.quote(str(tmp / match.group(1)))
+    command = re.sub(r"(?<![\w./-])build/([\w.-]+)", moved, command)
+    words = shlex.split(command)
+    if "make" in words:
+        for target, (variable, folder) in MAKE_OUTPUTS.items():
+            if target in words[words.index("make") + 1:]:
+                command += f" {variable}={shlex.quote(str(tmp / Path(folder).name))}"
+    return command
+
+
+def where(folder: str, tmp: Path) -> Path:
+    """Where a folder a README command names in build/ is when the test runs it (as_run)."""
+    name = Path(folder).relative_to("build")
+    return ROOT / folder if PREREQUISITES.match(name.parts[0]) else tmp / name
+
+
+@pytest.fixture(autouse=True)
+def build_outputs_untouched():
+    """Issue 32: `make test` overwrote build/frames (and wrote build/hello, build/blink, ...)."""
+    before = build_outputs()
+    yield
+    changed = changed_outputs(before)
+    assert not changed, f"the test wrote into build/, the user's outputs: {changed[:10]}"
+
+
 def run(command: str, timeout: float = 300) -> subprocess.CompletedProcess:
     """Runs a README command in the repository root with the venv's python first on PATH."""
     env = {**os.environ, "PATH": f"{VENV_BIN}{os.pathsep}{os.environ['PATH']}"}
@@ -52,19 +90,19 @@ def run(command: str, timeout: float = 300) -> subprocess.CompletedProcess:
 
 
 def _ran_frames(folder: str, frames: int):
-    def check(result: subprocess.CompletedProcess) -> None:
-        summary = json.loads((ROOT / folder / "run.json").read_text())
+    def check(result: subprocess.CompletedProcess, tmp: Path) -> None:
+        summary = json.loads((where(folder, tmp) / "run.json").read_text())
         assert summary["exit"] == "ok" and len(summary["frames"]) == frames, summary["message"]
     return check
 
 
-def _golden_matched(result: subprocess.CompletedProcess) -> None:
+def _golden_matched(result: subprocess.CompletedProcess, tmp: Path) -> None:
     assert "[golden] all 4 frames match tests/golden/default" in result.stderr
 
 
 def _frames_written(folder: str, frames: int):
-    def check(result: subprocess.CompletedProcess) -> None:
-        assert sorted(p.name for p in (ROOT / folder).glob("frame_*.png")) == \
+    def check(result: subprocess.CompletedProcess, tmp: Path) -> None:
+        assert sorted(p.name for p in where(folder, tmp).glob("frame_*.png")) == \
             [f"frame_{n:04d}.png" for n in range(frames)]
     return check
 
@@ -77,7 +115,7 @@ def _dry_run(command: str) -> str:
 
 
 def _env_read_by_tests(*names: str):
-    def check(result: subprocess.CompletedProcess) -> None:
+    def check(result: subprocess.CompletedProcess, tmp: Path) -> None:
         sources = "".join(p.read_text() for p in (ROOT / "tests").rglob("test_*.py"))
         for name in names:
             assert f'environ.get("{name}"' in sources, f"no test reads {name}"
@@ -85,34 +123,34 @@ def _env_read_by_tests(*names: str):
 
 
 def _ci_runs(command: str):
-    def check(result: subprocess.CompletedProcess) -> None:
+    def check(result: subprocess.CompletedProcess, tmp: Path) -> None:
         assert command in (ROOT / ".ci" / "run").read_text().splitlines()
     return check
 
 
-def _lists_exit_statuses(result: subprocess.CompletedProcess) -> None:
+def _lists_exit_statuses(result: subprocess.CompletedProcess, tmp: Path) -> None:
     assert "exit status:" in result.stdout
 
 
-def _tables_match(result: subprocess.CompletedProcess) -> None:
+def _tables_match(result: subprocess.CompletedProcess, tmp: Path) -> None:
     assert "(differ)" not in result.stdout and "tables all, emulator, reference" in result.stdout
 
 
-def _prints_agreement(result: subprocess.CompletedProcess) -> None:
+def _prints_agreement(result: subprocess.CompletedProcess, tmp: Path) -> None:
     from golden_scenes import SCENES            # one line per golden scene with triangles
     assert result.stdout.count("lit per face: identical") == len(SCENES)
 
 
 def _console_says(folder: str, *lines: str):
-    def check(result: subprocess.CompletedProcess) -> None:
+    def check(result: subprocess.CompletedProcess, tmp: Path) -> None:
         assert result.returncode == 0, result.stderr
-        console = (ROOT / folder / "console.log").read_text()
+        console = (where(folder, tmp) / "console.log").read_text()
         for line in lines:
             assert line in console, console
     return check
 
 
-def _c_golden_matched(result: subprocess.CompletedProcess) -> None:
+def _c_golden_matched(result: subprocess.CompletedProcess, tmp: Path) -> None:
     assert result.returncode == 0, result.stderr
     assert "[golden] all 4 frames match tests/golden/c-lcd-demo" in result.stderr
 
@@ -120,15 +158,15 @@ def _c_golden_matched(result: subprocess.CompletedProcess) -> None:
 #: README command -> (how it is checked: "run" or "dry-run", what must hold afterwards).
 #: "dry-run" commands go through `make -n` (see the module's docstring for why).
 COMMANDS = {
-    "make firmware": ("run", lambda r: None),
+    "make firmware": ("run", lambda r, tmp: None),
     "make test": ("ci", _ci_runs("make test")),
-    "make bench": ("dry-run", lambda r: None),
-    "make goldens": ("dry-run", lambda r: None),
-    "make goldens SCENES=gem-flat": ("dry-run", lambda r: None),
-    "make debug": ("dry-run", lambda r: None),
-    "make flash PORT=/dev/ttyUSB0": ("dry-run", lambda r: None),
-    'make goldens SCENE_DIRS="my-scene other-scene"': ("dry-run", lambda r: None),
-    "make golden-check SCENE_DIRS=my-scene": ("dry-run", lambda r: None),
+    "make bench": ("dry-run", lambda r, tmp: None),
+    "make goldens": ("dry-run", lambda r, tmp: None),
+    "make goldens SCENES=gem-flat": ("dry-run", lambda r, tmp: None),
+    "make debug": ("dry-run", lambda r, tmp: None),
+    "make flash PORT=/dev/ttyUSB0": ("dry-run", lambda r, tmp: None),
+    'make goldens SCENE_DIRS="my-scene other-scene"': ("dry-run", lambda r, tmp: None),
+    "make golden-check SCENE_DIRS=my-scene": ("dry-run", lambda r, tmp: None),
     "EXTREMES_FULL=1 make test": ("dry-run", _env_read_by_tests("EXTREMES_FULL")),
     "FUZZ_EXAMPLES=5000 FUZZ_BOOTS=100 make test": ("dry-run",
                                                    _env_read_by_tests("FUZZ_EXAMPLES", "FUZZ_BOOTS")),
@@ -139,7 +177,7 @@ COMMANDS = {
     "python -m reference render-card build/card.img --frames 2 --out build/reference-ideal --ideal":
         ("run", _frames_written("build/reference-ideal", 2)),
     "python -m emulator run --help": ("run", _lists_exit_statuses),
-    "make c-firmware": ("run", lambda r: None),
+    "make c-firmware": ("run", lambda r, tmp: None),
     "python -m emulator run build/cfw/hello.elf --until 0.05 --out build/hello":
         ("run", _console_says("build/hello", "hello from C on the K210")),
     "python -m emulator run build/cfw/blink.elf --until 0.6 --out build/blink":
@@ -153,17 +191,18 @@ COMMANDS = {
     ".venv/bin/python -m pytest tests/unit/tools/test_reference.py -k first_golden -s":
         ("run", _prints_agreement),
     "python -m tools.exit_status_tables --check": ("run", _tables_match),
-    "python -m tools.memory_limits --check": ("run", lambda result: None),
+    "python -m tools.memory_limits --check": ("run", lambda result, tmp: None),
 }
 #: Each needs the one before (assemble, link, run), so they run in this order in one test.
 OWN_FIRMWARE_COMMANDS = {
-    "riscv64-unknown-elf-as -march=rv64gc -o build/hello-asm.o tests/firmware/hello.S": lambda r: None,
+    "riscv64-unknown-elf-as -march=rv64gc -o build/hello-asm.o tests/firmware/hello.S": lambda r, tmp: None,
     "riscv64-unknown-elf-ld -N -Ttext=0x80000000 --no-warn-rwx-segments -o build/hello-asm.elf build/hello-asm.o":
-        lambda r: None,
+        lambda r, tmp: None,
     'python -m emulator run build/hello-asm.elf --expect "hello from my own firmware" --fail-on "error" '
     "--out build/hello-asm": _console_says("build/hello-asm", "hello from my own firmware"),
 }
-#: Both write build/frames, so they run one after the other in one test.
+#: Both write the same folder (build/frames as the README runs them), so they run one after the
+#: other in one test.
 FLASH_COMMANDS = {
     "make flash-to-emulator": _ran_frames("build/frames", 8),
     "make flash-to-emulator FRAMES=30": _ran_frames("build/frames", 30),
@@ -178,27 +217,40 @@ def test_every_command_is_known():
         f"checks of commands the README no longer shows: {sorted(known - set(found))}")
 
 
-def _run_and_check(command: str, how: str, check) -> None:
+def _run_and_check(command: str, how: str, check, tmp: Path) -> None:
     if how == "ci":
-        check(None)
+        check(None, tmp)
         return
-    result = run(_dry_run(command) if how == "dry-run" else command)
+    result = run(_dry_run(command) if how == "dry-run" else as_run(command, tmp))
     assert result.returncode == 0, f"{command}: exit {result.returncode}\n{result.stderr[-2000:]}"
-    check(result)
+    check(result, tmp)
 
 
 @pytest.mark.parametrize("command", sorted(COMMANDS))
-def test_readme_command(command, firmware, card, request):
+def test_readme_command(command, firmware, card, request, tmp_path):
     if "build/cfw/" in command:
         request.getfixturevalue("c_firmware")     # the C programs exist before they are run
-    _run_and_check(command, *COMMANDS[command])
+    _run_and_check(command, *COMMANDS[command], tmp_path)
 
 
-def test_readme_flash_commands(firmware, card):
+def test_readme_flash_commands(firmware, card, tmp_path):
     for command, check in FLASH_COMMANDS.items():
-        _run_and_check(command, "run", check)
+        _run_and_check(command, "run", check, tmp_path)
 
 
-def test_readme_own_firmware_commands(firmware):
+def test_readme_own_firmware_commands(firmware, tmp_path):
     for command, check in OWN_FIRMWARE_COMMANDS.items():
-        _run_and_check(command, "run", check)
+        _run_and_check(command, "run", check, tmp_path)
+
+
+def test_outputs_move_to_the_temporary_folder_and_prerequisites_stay(tmp_path):
+    assert as_run("python -m emulator run build/cfw/hello.elf --until 0.05 --out build/hello", tmp_path) == \
+        f"python -m emulator run build/cfw/hello.elf --until 0.05 --out {tmp_path}/hello"
+    assert as_run("riscv64-unknown-elf-ld -o build/hello-asm.elf build/hello-asm.o", tmp_path) == \
+        f"riscv64-unknown-elf-ld -o {tmp_path}/hello-asm.elf {tmp_path}/hello-asm.o"
+    assert as_run("python -m reference render-card build/card.img --out build/reference", tmp_path) == \
+        f"python -m reference render-card build/card.img --out {tmp_path}/reference"
+    assert as_run("make flash-to-emulator FRAMES=30", tmp_path) == \
+        f"make flash-to-emulator FRAMES=30 FRAMES_DIR={tmp_path}/frames"
+    assert where("build/frames", tmp_path) == tmp_path / "frames"
+    assert where("build/cfw", tmp_path) == ROOT / "build" / "cfw"

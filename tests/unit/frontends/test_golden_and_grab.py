@@ -219,17 +219,18 @@ def test_a_scene_folder_of_ones_own_gets_goldens_and_is_checked_against_them(fir
     shutil.copy(assets / "textures" / "cube.png", scene / "textures")
     (scene / "scene.ini").write_text("model = models/cube.obj\ntexture = textures/cube.ppm\nmode = textured\n"
                                      "translate = 0 0 -3\naxis = 1 1 0\nangle = 20\nstep = 5\n")
-    made = _regen("--folder", str(scene), "--frames", "2")
+    out = ["--out", str(tmp_path / "out")]         # the runs' output: not build/goldens, the user's
+    made = _regen("--folder", str(scene), "--frames", "2", *out)
     assert made.returncode == 0, made.stderr
     assert sorted(p.name for p in (scene / "golden").iterdir()) == ["frame_0000.png", "frame_0001.png"]
     assert f"{scene / 'golden' / 'frame_0001.png'}: new" in made.stdout
-    checked = _regen("--check", "--folder", str(scene), "--frames", "2")
+    checked = _regen("--check", "--folder", str(scene), "--frames", "2", *out)
     assert checked.returncode == 0 and "[golden] all 2 frames match" in checked.stderr
     _nudge(scene / "golden" / "frame_0001.png", (10, 10, 12, 12), 9)
-    checked = _regen("--check", "--folder", str(scene), "--frames", "2")
+    checked = _regen("--check", "--folder", str(scene), "--frames", "2", *out)
     assert checked.returncode == 9 and "frame 1" in checked.stderr
     (scene / "scene.ini").unlink()
-    refused = _regen("--check", "--folder", str(scene))
+    refused = _regen("--check", "--folder", str(scene), *out)
     assert refused.returncode == 2 and "no scene.ini in it" in refused.stderr
 
 

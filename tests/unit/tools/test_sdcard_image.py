@@ -454,16 +454,16 @@ def test_extract_single_file_all_and_stdout(sample_img, inputs, tmp_path):
 def test_api_build_list_read(tmp_path, inputs):
     out = tmp_path / "api.img"
     placed = build_image(out, [inputs / "models", inputs / "one.bin"], size_mib=40,
-                         scene={"model": "models/cube.obj"})
+                         scene={"model": "models/cube.obj", "mode": "flat"})
     assert [p.card_path for p in placed] == ["/models/cube.obj", "/one.bin", "/scene.ini"]
     assert placed[0].source == inputs / "models" / "cube.obj" and "OBJ checked" in placed[0].detail
     assert out.stat().st_size == 40 * MIB
     entries = list_image(out)
     assert [(e.path, e.size, e.is_dir) for e in entries] == [
         ("/models", 0, True), ("/models/cube.obj", len(CUBE_OBJ), False),
-        ("/one.bin", 1, False), ("/scene.ini", 24, False)]
+        ("/one.bin", 1, False), ("/scene.ini", 36, False)]
     assert read_file(out, "/Models/CUBE.OBJ") == CUBE_OBJ
-    assert read_file(out, "scene.ini") == b"model = models/cube.obj\n"
+    assert read_file(out, "scene.ini") == b"model = models/cube.obj\nmode = flat\n"
     with pytest.raises(UsageError):
         read_file(out, "/models/missing.obj")
     assert not list(tmp_path.glob(".*tmp"))
@@ -634,10 +634,11 @@ def test_scene_from_options_and_from_input(tmp_path, sample_img):
     assert read_file(sample_img, "/scene.ini") == \
         b"model = models/cube.obj\ntexture = tex/cube.ppm\n"
     ini = tmp_path / "scene.ini"
-    ini.write_bytes(b"# mine\nmodel = a.obj\n")
+    ini.write_bytes(b"# mine\nmodel = a.obj\nmode = wireframe\n")
+    (tmp_path / "a.obj").write_bytes(CUBE_OBJ)
     out = tmp_path / "c.img"
-    assert run_cli("build", out, ini, "--size", "34").returncode == 0
-    assert read_file(out, "/scene.ini") == b"# mine\nmodel = a.obj\n"
+    assert run_cli("build", out, ini, tmp_path / "a.obj", "--size", "34").returncode == 0
+    assert read_file(out, "/scene.ini") == b"# mine\nmodel = a.obj\nmode = wireframe\n"
     both = run_cli("build", tmp_path / "d.img", ini, "--scene", "model=b.obj")
     assert both.returncode == EXIT_USAGE and "scene.ini" in both.stderr
     ini.write_bytes(b"model = a.obj\nthis line is wrong\n")
@@ -682,8 +683,9 @@ def test_scene_ini_accepts_bom_crlf_and_comments_and_refuses_what_the_firmware_r
     twice = run_cli("build", tmp_path / "e.img", "--scene", "model=a", "--scene", "Model=b")
     assert twice.returncode == EXIT_USAGE and "twice" in twice.stderr
     missing = run_cli("build", tmp_path / "f.img", "--scene", "texture=t.ppm", "--size", "34")
-    assert missing.returncode == 0 and "texture = t.ppm: no such file on the card" in missing.stderr
-    assert "model = model.obj: no such file on the card (the firmware's default)" in missing.stderr
+    assert missing.returncode == EXIT_USAGE and "--scene: texture = t.ppm: no such file on the card" in missing.stderr
+    assert ("--scene: model = model.obj (the firmware's default: the scene names no model): no such file on the "
+            "card") in missing.stderr
 
 
 @pytest.mark.parametrize("option,message", [
@@ -707,9 +709,52 @@ def test_a_scene_naming_a_file_inside_an_input_folder_says_where_it_landed(tmp_p
     (card_folder / "x.obj").write_bytes(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
     result = run_cli("build", tmp_path / "c.img", card_folder, "--scene", "model=x.obj",
                      "--scene", "mode=flat", "--size", "34")
-    assert result.returncode == 0, result.stderr
-    assert ("--scene: model = x.obj: no such file on the card; the card has /card/x.obj: a folder "
-            "given as input lands on the card as a folder") in result.stderr
+    assert result.returncode == EXIT_USAGE, result.stderr
+    assert ("--scene: model = x.obj: no such file on the card (firmware error 6, file not found); the card has "
+            "/card/x.obj: a folder given as input lands on the card as a folder") in result.stderr
+    assert not (tmp_path / "c.img").exists()
+
+
+OBJ = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"
+
+
+@pytest.mark.parametrize("options,message", [
+    (["--scene", "model=models/gem.obj", "--scene", "mode=flat"],
+     "--scene: model = models/gem.obj: no such file on the card (firmware error 6, file not found)"),
+    (["--scene", "model=m.obj", "--scene", "texture=textures/t.ppm"],
+     "--scene: texture = textures/t.ppm: no such file on the card (firmware error 6, file not found)"),
+    (["--scene", "mode=flat"],
+     "--scene: model = model.obj (the firmware's default: the scene names no model): no such file on the card"),
+])
+def test_a_scene_option_naming_a_file_not_on_the_card_is_refused(tmp_path, options, message):
+    """Issue 32: the card was built (status 0, with a warning) and the firmware stopped at boot with
+    its error 6 (file not found). The key and the file are named; status 2, as for any --scene
+    value the firmware would refuse; nothing is written."""
+    (tmp_path / "m.obj").write_bytes(OBJ)
+    result = run_cli("build", tmp_path / "c.img", tmp_path / "m.obj", *options, "--size", "34")
+    assert result.returncode == EXIT_USAGE, result.stderr
+    assert message in result.stderr
+    assert not (tmp_path / "c.img").exists()
+
+
+def test_an_input_scene_ini_naming_a_file_not_on_the_card_is_refused(tmp_path):
+    """Issue 32, as above for a scene.ini given as input: bad input (status 6), naming the file,
+    the line and key of each missing file; an existing image is left as it was."""
+    (tmp_path / "m.obj").write_bytes(OBJ)
+    ini = tmp_path / "scene.ini"
+    ini.write_text("# mine\nmodel = models/m.obj\nmode = textured\ntexture = t.ppm\n")
+    out = tmp_path / "c.img"
+    out.write_bytes(b"precious")
+    result = run_cli("build", out, ini, tmp_path / "m.obj", "--force", "--size", "34")
+    assert result.returncode == EXIT_BAD_INPUT, result.stderr
+    assert f"{ini}:2: model = models/m.obj: no such file on the card (firmware error 6, file not found)" \
+        in result.stderr
+    assert f"{ini}:4: texture = t.ppm: no such file on the card" in result.stderr
+    assert out.read_bytes() == b"precious"
+    with pytest.raises(BadInputError, match="model = models/m.obj: no such file on the card"):
+        build_image(tmp_path / "d.img", [ini, tmp_path / "m.obj"])
+    ini.write_text("model = m.obj\nmode = flat\ntexture = t.ppm\n")      # flat: reads no texture
+    assert run_cli("build", out, ini, tmp_path / "m.obj", "--force", "--size", "34").returncode == 0
 
 
 # --- failures -------------------------------------------------------------------------------------
