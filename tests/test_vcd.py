@@ -8,8 +8,9 @@ from conftest import run_emulator
 from emulator.vtime import PS_PER_MS, PS_PER_S
 
 
-def read_vcd(text: str) -> tuple[str, dict[str, list[tuple[int, str]]]]:
-    """(timescale, signal -> [(time, value)]) of a VCD's one-bit wires."""
+def parse_vcd(text: str) -> tuple[str, dict[str, str], dict[str, list[tuple[int, str]]]]:
+    """(timescale, signal -> its value in the initial $dumpvars, signal -> [(time, value)] of the
+    changes after it) of a VCD's one-bit wires."""
     header, _, body = text.partition("$enddefinitions $end\n")
     timescale = header.split("$timescale", 1)[1].split("$end", 1)[0].strip()
     names = {}
@@ -18,15 +19,33 @@ def read_vcd(text: str) -> tuple[str, dict[str, list[tuple[int, str]]]]:
             _, kind, width, code, name, _ = line.split()
             assert (kind, width) == ("wire", "1")
             names[code] = name
+    initial: dict[str, str] = {}
     changes: dict[str, list[tuple[int, str]]] = {name: [] for name in names.values()}
     now = None
+    dumping = False
     for line in body.splitlines():
-        if line.startswith("#"):
+        if line == "$dumpvars":
+            assert now is not None and not initial and not any(changes.values()), "$dumpvars comes first"
+            dumping = True
+        elif line == "$end":
+            assert dumping
+            dumping = False
+        elif line.startswith("#"):
+            assert not dumping
             tick = int(line[1:])
             assert now is None or tick >= now, "time goes backwards"
             now = tick
+        elif dumping:
+            initial[names[line[1:]]] = line[0]
         else:
             changes[names[line[1:]]].append((now, line[0]))
+    return timescale, initial, changes
+
+
+def read_vcd(text: str) -> tuple[str, dict[str, list[tuple[int, str]]]]:
+    """(timescale, signal -> [(time, value)]) of a VCD's one-bit wires: the changes after the
+    initial values."""
+    timescale, _, changes = parse_vcd(text)
     return timescale, changes
 
 
@@ -54,8 +73,10 @@ def test_the_lcd_s_select_clock_bursts_and_pins(c_firmware, tmp_path):
     reset = [v for _, v in changes["pad37"]]
     assert reset[:3] == ["1", "0", "1"]                         # the reset pulse on its GPIO line
     assert len(changes["pad38"]) > 10                           # D/C between commands and data
-    selects = changes["spi0_ss_n"]
-    assert selects[0] == (0, "1") and any(v == "0" for _, v in selects)
+    _, initial, _ = parse_vcd((tmp_path / "lcd.vcd").read_text())
+    assert initial["spi0_ss_n"] == "1" and initial["spi0_sclk"] == "0"
+    selects = [(0, "1")] + changes["spi0_ss_n"]
+    assert any(v == "0" for _, v in selects)
     lows = [(t, next(t2 for t2, v2 in selects if t2 > t and v2 == "1")) for t, v in selects if v == "0"
             if any(t2 > t and v2 == "1" for t2, v2 in selects)]
     bursts = changes["spi0_sclk"]
@@ -69,3 +90,22 @@ def test_a_vcd_that_cannot_be_written_is_bad_input(c_firmware, tmp_path):
     run = run_emulator("run", str(c_firmware / "hello.elf"), "--until", "0.01", "--out", str(tmp_path / "o"),
                        "--vcd", "/nonexistent-folder/x.vcd")
     assert run.returncode == 6 and "--vcd /nonexistent-folder/x.vcd: cannot write it" in run.stderr
+
+
+def test_every_signal_starts_with_its_level_at_time_0(c_firmware, tmp_path):
+    """issue 32, item 10: a $dumpvars at #0 gives every signal its value (IEEE 1364-2005, 18.2):
+    the pads the program drives later are undriven (z) until then, not unknown (x) to a viewer."""
+    run = run_emulator("run", str(c_firmware / "blink.elf"), "--until", "0.2", "--quiet", "--out",
+                       str(tmp_path / "out"), "--vcd", str(tmp_path / "blink.vcd"))
+    assert run.returncode == 0, run.stderr
+    text = (tmp_path / "blink.vcd").read_text()
+    body = text.partition("$enddefinitions $end\n")[2]
+    assert body.startswith("#0\n$dumpvars\n")
+    _, initial, changes = parse_vcd(text)
+    assert set(initial) == set(changes)                      # every signal declared has its value at 0
+    assert initial["pad12"] == initial["pad13"] == "z"        # the LEDs, before blink.c routes lines to them
+    assert initial["spi0_ss_n"] == initial["spi1_ss_n"] == "1"
+    assert changes["pad12"][0][0] > 0 and changes["pad12"][0][1] in "01"
+    for name, values in changes.items():                      # no change repeats the value before it
+        levels = [initial[name]] + [v for _, v in values]
+        assert all(a != b for a, b in zip(levels, levels[1:])), name
