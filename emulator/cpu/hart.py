@@ -361,7 +361,7 @@ class Hart(PrivilegedArchitecture):
         slots, mask = shared_memory.loop_table(loops)
         self._loop_slots = slots
         for loop in loops:
-            self.poll_loops[loop.head] = (loop, slots[(loop.head >> 1) & mask])
+            self.poll_loops[loop.head] = (loop, slots[(shared_memory.table_key(loop.head) >> 1) & mask])
         self._idle_spans = [(loop.head, loop.branch) for loop, _ in self.poll_loops.values() if not loop.loads]
         self._counter.loop_mask = mask
         self._counter.loops = ctypes.addressof(slots)
