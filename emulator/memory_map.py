@@ -18,6 +18,18 @@ def is_sram(address: int) -> bool:
     return SRAM_BASE <= address < SRAM_BASE + SRAM_SIZE or SRAM_UNCACHED_BASE <= address < SRAM_UNCACHED_BASE + SRAM_SIZE
 
 
+def sram_views(address: int, length: int) -> list[int]:
+    """Where the `length` bytes at `address` can be reached: `address` itself and, when they lie in
+    one view of SRAM, the same offset in the other (the K210 maps its SRAM at 0x8000_0000 through
+    the cache and at 0x4000_0000 around it: the Kendryte SDK's lds/kendryte.ld, `ram` and
+    `ram_nocache`). Code linked in one view runs in the other too: both harts start at
+    0x8000_0000 whatever the link address, and a jump may cross."""
+    for view, other in ((SRAM_BASE, SRAM_UNCACHED_BASE), (SRAM_UNCACHED_BASE, SRAM_BASE)):
+        if view <= address and address + length <= view + SRAM_SIZE:
+            return [address, address - view + other]
+    return [address]
+
+
 @dataclass(frozen=True)
 class Block:
     """One block of the K210 the model builds: where it sits, the PLIC sources its interrupt lines

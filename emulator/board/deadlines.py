@@ -86,9 +86,11 @@ class Deadlines:
             state = hart.state.value
             if hart.wait is not None:
                 state += f" ({hart.wait.describe()})"
+            spins = hart.state is HartState.RUNNING and hart.in_idle_loop()
             lines.append(f"hart {hart.hart_id}: {state} at pc 0x{hart.pc:08x}"
                          f"{f' <{where}>' if where else ''} ({board.disassemble_at(hart.pc)}), "
-                         f"mie 0x{hart.csr(rv.UC_RISCV_REG_MIE):x}, mip 0x{board.mip(hart.hart_id, self.time):x}")
+                         f"mie 0x{hart.csr(rv.UC_RISCV_REG_MIE):x}, mip 0x{board.mip(hart.hart_id, self.time):x}"
+                         f"{'; it spins in a loop that changes nothing (only an interrupt can end it)' if spins else ''}")
         for peripheral in board.peripherals:
             text = peripheral.describe_wait()
             if text:

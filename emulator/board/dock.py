@@ -32,7 +32,7 @@ from ..devices.gpio import Gpio
 from ..devices.gpiohs import Gpiohs
 from ..cpu.hart import ENGINE_FAST, ENGINES, Hart
 from .memory import Sram
-from ..memory_map import K210_BLOCKS, RESET_PC, SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE, is_sram
+from ..memory_map import K210_BLOCKS, RESET_PC, SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE, is_sram, sram_views
 from ..devices.mmio import Peripheral
 from ..devices.ports import Ports
 from ..devices.plic import Plic
@@ -238,12 +238,18 @@ class Board:
                          for segment in self.image.segments]
         if self.image.entry != RESET_PC:
             self.warn(f"ELF entry is 0x{self.image.entry:x}, but the K210 starts both harts at 0x{RESET_PC:x}")
-        sites, loops, time_loops = [], [], []
+        # The code is scanned where it is linked and in the other view of SRAM as well: the CSR
+        # instructions the board answers (mhartid above all) and the loops it skips are found by
+        # address, and code linked at the uncached alias 0x4000_0000 starts at 0x8000_0000
+        # (memory_map.sram_views)
+        sites, loops, time_loops = [], {}, []
         for address, code in self.image.code_ranges:
-            sites.extend(find_csr_sites(code, address))
-            loops.extend(find_poll_loops(code, address))
-            loops.extend(find_idle_loops(code, address))
-            time_loops.extend(find_time_loops(code, address))
+            for view in sram_views(address, len(code)):
+                sites.extend(find_csr_sites(code, view))
+                for loop in [*find_poll_loops(code, view), *find_idle_loops(code, view)]:
+                    loops.setdefault(loop.head, loop)
+                time_loops.extend(find_time_loops(code, view))
+        loops = list(loops.values())
         self.cycle_table = build_table(self.image.code_ranges) if timing == TIMING_ROCKET else None
         for hart in self.harts:
             self.bus.attach(hart)

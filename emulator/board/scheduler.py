@@ -533,7 +533,7 @@ class Scheduler(SramWaits, Deadlines):
             for other in running:
                 if other is not hart:
                     horizon = min(horizon, other.time + cycles_time(self.quantum, self._hz))
-            alone = go_on_alone and len(running) == 1
+            alone = go_on_alone and all(other is hart or self._inert(other) for other in running)
         budget = max(1, self.cycles_until(hart, horizon) - start)
         self.turn_horizon = self.time_at_cycles(hart, start + budget)
         precise_runs, device_accesses = hart.precise_runs, hart.device_accesses
@@ -580,15 +580,17 @@ class Scheduler(SramWaits, Deadlines):
         return outer
 
     def _alone_until(self, hart: Hart, t0: Time, outer: Time) -> int | None:
-        """The cycle count up to which a time loop (usleep, msleep) may be skipped past the turn's end:
+        """The cycle count up to which a time loop (usleep, msleep) or a loop that only spins (`j .`)
+        may be skipped past the turn's end:
         where a turn from t0 would end at the first thing that can happen (`outer`: a device event,
         a grab, run_until's end; a frame capture; the hang budget), while the other harts sleep in
-        wfi or wait on SRAM (a time loop stores nothing that could wake them) and nothing else holds
-        the turns short. The turns in between would each begin with the board as it is and end with
+        wfi, wait on SRAM or spin in a loop that changes nothing (_inert; neither loop stores
+        anything that could wake them) and nothing else holds the turns short. The turns in between would each begin with the board as it is and end with
         only time moved on; the skip ends the turn, and the next one goes on from the loop's exit.
         None: the skip stops at the turn's end."""
         if self._trap_deadline is not None or self._draining or hart.polling or \
-                any(other.state is HartState.RUNNING for other in self.harts if other is not hart):
+                any(other.state is HartState.RUNNING and not self._inert(other) for other in self.harts
+                    if other is not hart):
             return None
         stop_at = min(outer, self.board.earliest_frame_capture(t0))
         if self.until is None:
@@ -596,6 +598,20 @@ class Scheduler(SramWaits, Deadlines):
         if stop_at >= NEVER or stop_at <= t0:
             return None
         return max(hart.cycles + 1, self.cycles_until(hart, stop_at))
+
+    def _inert(self, hart: Hart) -> bool:
+        """Whether a running hart that is not the one whose turn it is can do nothing another hart
+        or a device would see before the next device event: it spins in a loop that changes nothing
+        (Hart.in_idle_loop: no load, store or CSR access, no way out but a trap) and no interrupt
+        it would take is pending (privileged spec, 3.1.9: an M-mode interrupt is taken when its mip
+        and mie bits are set and mstatus.MIE is, or the hart is below M-mode; what
+        takeable_interrupts gives). Only a device event (or a store by a hart that is not inert)
+        can then change what it does, and those bound the turns past whose end a hart may skip
+        (_alone_until): for the skip it is as good as asleep."""
+        if not hart.in_idle_loop():
+            return False
+        takeable = hart.takeable_interrupts()
+        return not (takeable and self.board.mip(hart.hart_id, hart.time, takeable))
 
     def _go_on_alone(self, hart: Hart, t0: Time, outer: Time, horizon: Time) -> Time:
         """The hart ran a turn alone on the fast engine, the others asleep in wfi, and nothing in it

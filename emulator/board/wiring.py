@@ -222,6 +222,10 @@ class DockWiring:
         self.pad_changes: list[tuple[Time, int, int | None]] = []   # (virtual time, pad, level or None)
         self.pad_change_count = 0
 
+    def logged_pad_level(self, pad: int) -> int | None:
+        """The level the pad log (pad_changes, --vcd) last gave the pad (None: undriven)."""
+        return self._pad_levels[pad]
+
     def spi0_device(self, ss: int) -> LcdPort | None:
         """The LCD answers on SPI0 when pad 36 carries SPI0's slave select ss."""
         if self.chip.fpioa.function_of_pad(PAD_LCD_CS) == FUNC_SPI0_SS0 + ss:

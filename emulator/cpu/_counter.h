@@ -52,7 +52,7 @@ typedef struct {
     uint64_t executed;   /* instructions started since the hart's reset */
     uint64_t limit;      /* stop before executing instruction number limit+1 */
     uc_stop_fn stop;     /* uc_emu_stop from the loaded libunicorn */
-    poll_loop_t *loops;  /* the poll loops, a table indexed by (address >> 1) & loop_mask; or NULL */
+    poll_loop_t *loops;  /* the poll loops, a table indexed by (table_key(address) >> 1) & loop_mask; or NULL */
     uint64_t loop_mask;
     uint64_t poll_report; /* head of the loop the hart came round again (0: none since Python looked) */
     /* --- cycles (timing.py) --- */
@@ -71,7 +71,7 @@ typedef struct {
     uint64_t stall_cycles;
     predictor_t predictor;
     /* --- CSR instructions the board answers itself (hart.py) --- */
-    const uint64_t *csr_sites; /* their addresses, a table indexed by (address >> 1) & csr_mask; or NULL */
+    const uint64_t *csr_sites; /* their table_keys, a table indexed by (key >> 1) & csr_mask; or NULL */
     uint64_t csr_mask;
     uint64_t csr_report;  /* the site the run stopped at, counted but not executed (0: none) */
     uint64_t last_pc;     /* the precise engine's last counted instruction */
@@ -104,15 +104,34 @@ enum { KIND_PLAIN = 0, KIND_BRANCH = 1, KIND_JAL = 2, KIND_JALR = 3, KIND_MUL = 
 #define MISPREDICT_PENALTY 3   /* redirect from the memory stage (Rocket.scala take_pc_mem) */
 
 
-/* The counter's tables, as both counters look them up. */
-static inline int is_csr_site(const insn_counter_t *c, uint64_t address)
+/* The counter's tables, as both counters look them up, by table_key: an address in SRAM's
+ * uncached view (0x4000_0000, 8 MiB: memory_map.py) as the same bytes' address in the cached one
+ * (0x8000_0000), so that code runs alike in both views, whichever it was linked for
+ * (shared_memory.py's table_key: the two must agree). */
+#define TABLE_SRAM_CACHED 0x80000000ull
+#define TABLE_SRAM_UNCACHED 0x40000000ull
+#define TABLE_SRAM_SIZE (8ull << 20)
+
+static inline uint64_t table_key(uint64_t address)
 {
-    return c->csr_sites != NULL && c->csr_sites[(address >> 1) & c->csr_mask] == address;
+    return address - TABLE_SRAM_UNCACHED < TABLE_SRAM_SIZE ? address - TABLE_SRAM_UNCACHED + TABLE_SRAM_CACHED
+                                                           : address;
 }
 
-static inline poll_loop_t *loop_slot(const insn_counter_t *c, uint64_t address)
+static inline int is_csr_site(const insn_counter_t *c, uint64_t address)
 {
-    return c->loops != NULL ? &c->loops[(address >> 1) & c->loop_mask] : NULL;
+    uint64_t key = table_key(address);
+    return c->csr_sites != NULL && c->csr_sites[(key >> 1) & c->csr_mask] == key;
+}
+
+/* The poll loop whose head is at `address` (NULL: none) */
+static inline poll_loop_t *loop_at(const insn_counter_t *c, uint64_t address)
+{
+    if (c->loops == NULL)
+        return NULL;
+    uint64_t key = table_key(address);
+    poll_loop_t *loop = &c->loops[(key >> 1) & c->loop_mask];
+    return loop->head == key ? loop : NULL;
 }
 
 static inline uint32_t table_entry(const insn_counter_t *c, uint64_t address)

@@ -556,8 +556,7 @@ static void decode(const insn_counter_t *c, insn_t *in, uint64_t pc, uint32_t fe
         in->timing |= T_MULDIV;
     else if (kind != KIND_PLAIN)
         in->timing |= T_TRANSFER;
-    poll_loop_t *loop = loop_slot(c, pc);
-    if (loop != NULL && loop->head == pc)
+    if (loop_at(c, pc) != NULL)
         in->timing |= T_LOOP_HEAD;
     in->op = OP_HANDOFF;
     if (w == 0)
@@ -1040,7 +1039,7 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
                 pending_entry = e; \
             } \
             if (in->timing & T_LOOP_HEAD) { \
-                poll_loop_t *loop = loop_slot(c, in->pc); \
+                poll_loop_t *loop = loop_at(c, in->pc); \
                 if (!loop->ignore && executed - loop->last == loop->body && c->poll_report == 0) { \
                     c->poll_report = in->pc; \
                     c->limit = limit = executed; \

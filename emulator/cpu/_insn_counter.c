@@ -127,15 +127,13 @@ void count_instruction(void *uc, uint64_t address, uint32_t size, insn_counter_t
         }
         counter->cycles += cost;
     }
-    poll_loop_t *loop = loop_slot(counter, address);
+    poll_loop_t *loop = loop_at(counter, address);
     if (loop != NULL) {
-        if (loop->head == address) {
-            if (!loop->ignore && counter->executed - loop->last == loop->body && counter->poll_report == 0) {
-                counter->poll_report = address;
-                counter->limit = counter->executed;
-            }
-            loop->last = counter->executed;
+        if (!loop->ignore && counter->executed - loop->last == loop->body && counter->poll_report == 0) {
+            counter->poll_report = address;
+            counter->limit = counter->executed;
         }
+        loop->last = counter->executed;
     }
     /* A CSR the board answers (mhartid, mcycle, ...): the instruction is counted and timed like
      * any other, then the engine stops before executing it, and Python carries it out. One look-up

@@ -137,6 +137,7 @@ class Hart(PrivilegedArchitecture):
         self.csr_listeners: list[Callable[["Hart", int], None]] = []   # called before a CSR site is carried out
         self.poll_loops: dict[int, tuple[shared_memory.PollLoop, shared_memory.LoopSlot]] = {}
         self._loop_slots: ctypes.Array | None = None   # the counter's table of poll loops, kept alive here
+        self._idle_spans: list[tuple[int, int]] = []   # [head, branch] of each loop that only spins
         self.wait: shared_memory.Wait | None = None   # what the hart polls while WAITING
         self.uc.hook_add(unicorn.UC_HOOK_INTR, self._on_exception)
         self._reg_value = ctypes.c_uint64()
@@ -360,7 +361,8 @@ class Hart(PrivilegedArchitecture):
         slots, mask = shared_memory.loop_table(loops)
         self._loop_slots = slots
         for loop in loops:
-            self.poll_loops[loop.head] = (loop, slots[(loop.head >> 1) & mask])
+            self.poll_loops[loop.head] = (loop, slots[(shared_memory.table_key(loop.head) >> 1) & mask])
+        self._idle_spans = [(loop.head, loop.branch) for loop, _ in self.poll_loops.values() if not loop.loads]
         self._counter.loop_mask = mask
         self._counter.loops = ctypes.addressof(slots)
         self.forget_decodings()
@@ -371,8 +373,19 @@ class Hart(PrivilegedArchitecture):
         self.time_loops.update((loop.site, loop) for loop in loops)
 
     def skip_idle(self, loop: shared_memory.PollLoop) -> None:
-        """The hart came round a loop that only spins again (time_loops.find_idle_loops)."""
-        self.skipper.at_idle(loop, self._turn_limit)
+        """The hart came round a loop that only spins again (time_loops.find_idle_loops): its
+        iterations are counted without being run, up to the turn's end, or past it up to
+        time_skip_limit (the scheduler's: the hart runs alone and nothing happens before then)
+        unless a debug trigger is armed (skipped iterations would not be watched)."""
+        beyond = None if self.triggers.armed else self.time_skip_limit
+        self.skipper.at_idle(loop, self._turn_limit, beyond)
+
+    def in_idle_loop(self) -> bool:
+        """Whether the hart's pc is inside a loop that only spins (time_loops.find_idle_loops): a
+        straight run of register arithmetic closed by a jump back, with no way out but an interrupt
+        (or a reset), and no load, store or CSR access on the way."""
+        pc = self.pc
+        return any(head <= pc <= branch for head, branch in self._idle_spans)
 
     @property
     def iterations_skipped(self) -> int:

@@ -111,10 +111,12 @@ def add_native_hook(uc: unicorn.Uc, kind: int, callback: int, user_data: ctypes.
 
 
 def address_table(addresses: list[int]) -> tuple[ctypes.Array, int]:
-    """The native counter's table of CSR sites: u64 slots (shared_memory.collision_free_size; an
-    empty slot holds 0, which is no instruction's address). Returns (table, mask)."""
-    size = shared_memory.collision_free_size(addresses)
+    """The native counter's table of CSR sites: u64 slots holding shared_memory.table_key of each
+    (collision_free_size; an empty slot holds 0, which is no instruction's address). Returns
+    (table, mask)."""
+    keys = {shared_memory.table_key(address) for address in addresses}
+    size = shared_memory.collision_free_size(list(keys))
     table = (ctypes.c_uint64 * size)()
-    for address in addresses:
-        table[(address >> 1) & (size - 1)] = address
+    for key in keys:
+        table[(key >> 1) & (size - 1)] = key
     return table, size - 1

@@ -217,10 +217,21 @@ def _backward_branches(code: bytes) -> list[int]:
     return [2 * int(i) for i in np.flatnonzero(long_branch | short_branch)]
 
 
+def table_key(address: int) -> int:
+    """An instruction address as a native counter's tables hold it (_counter.h's table_key: the two
+    must agree): in SRAM's uncached view (0x4000_0000), the same bytes' address in the cached one
+    (0x8000_0000), so that code runs alike in both views, whichever it was linked for, with one
+    entry for both (a poll loop's state is the code's, whichever view the hart runs it in)."""
+    if SRAM_UNCACHED_BASE <= address < SRAM_UNCACHED_BASE + SRAM_SIZE:
+        return address - SRAM_UNCACHED_BASE + SRAM_BASE
+    return address
+
+
 def collision_free_size(addresses: list[int]) -> int:
-    """The size of a native counter's table of instruction addresses (poll-loop heads, CSR sites)
-    indexed by (address >> 1) & (size - 1): the smallest power of two at least twice their number
-    in which no two share a slot, so that a look-up is one compare."""
+    """The size of a native counter's table of instruction addresses (poll-loop heads, CSR sites,
+    as table_key gives them) indexed by (address >> 1) & (size - 1): the smallest power of two at
+    least twice their number in which no two share a slot, so that a look-up is one compare."""
+    addresses = list(set(addresses))
     size = 1
     while size < 2 * len(addresses):
         size *= 2
@@ -230,12 +241,14 @@ def collision_free_size(addresses: list[int]) -> int:
 
 
 def loop_table(loops: list[PollLoop]) -> tuple[ctypes.Array, int]:
-    """The native counter's table of poll loops (collision_free_size). Returns (slots, mask)."""
-    size = collision_free_size([loop.head for loop in loops])
+    """The native counter's table of poll loops (collision_free_size), by table_key (a loop found in
+    both views of SRAM has one slot). Returns (slots, mask)."""
+    size = collision_free_size([table_key(loop.head) for loop in loops])
     slots = (LoopSlot * size)()
     for loop in loops:
-        slot = slots[(loop.head >> 1) & (size - 1)]
-        slot.head, slot.body = loop.head, loop.body
+        head = table_key(loop.head)
+        slot = slots[(head >> 1) & (size - 1)]
+        slot.head, slot.body = head, loop.body
     return slots, size - 1
 
 

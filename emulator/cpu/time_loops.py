@@ -401,14 +401,17 @@ class LoopSkipper:
         self.iterations += skip
         self.seen[loop.site] = (last, self._state() + (time + skip * cycles_per,))
 
-    def at_idle(self, loop: PollLoop, turn_limit: int) -> None:
+    def at_idle(self, loop: PollLoop, turn_limit: int, beyond_turn: int | None = None) -> None:
         """At a spinning loop's head, come round again: its iterations up to the end of the turn are
-        counted without being run."""
+        counted without being run. `beyond_turn`: as _room's, the cycle count up to which the
+        scheduler lets the hart go past its turn's end (Scheduler._alone_until: it runs alone and
+        nothing can happen before then, no interrupt either, so nothing can take it out of the loop;
+        a `j .` at the end of a program then costs a turn per device event, not one per quantum)."""
         steady = self._steady(loop.head, self._state(), loop.body)
         if steady is None:
             return
         last, step = steady
-        skip = self._room(loop.body, step[1], turn_limit)
+        skip = self._room(loop.body, step[1], turn_limit, beyond_turn)
         if skip <= 0:
             return
         self._count(skip, step)

@@ -17,6 +17,7 @@ from emulator.cpu.hart import ENGINE_FAST, ENGINE_PRECISE, CsrContext, Hart, Har
 from emulator.cpu.native import counter_lib
 from emulator.cpu.riscv import CAUSE_INTERRUPT, IRQ_MEI, IRQ_MSI, IRQ_MTI, IRQ_SEI, IRQ_SSI, IRQ_STI
 from emulator.errors import BadInput, FirmwareTrap, HangDetected, UnmodelledAccess
+from emulator.vtime import PS_PER_MS
 from k210_fixtures import at_done, build_elf, make_board, program, reg, run_to_done, run_until, symbol
 
 CPU_HZ = 26e6
@@ -74,6 +75,60 @@ def test_mhartid_differs_per_hart():
     ids = board.memory.read(symbol(board, "ids"), 16)
     assert int.from_bytes(ids[:8], "little") == 100
     assert int.from_bytes(ids[8:], "little") == 101
+
+
+# Each hart reads mhartid in SRAM's cached view (0x8000_0000, where both start) and again in the
+# uncached one (0x4000_0000: the same bytes), storing 100 + the first and 200 + the second at its
+# own slots of `ids`, chosen by what it read.
+BOTH_VIEWS = """
+    .globl _start
+_start:
+    csrr    a0, mhartid
+    la      t0, ids
+    slli    t1, a0, 4
+    add     t0, t0, t1
+    addi    t2, a0, 100
+    sd      t2, 0(t0)
+    la      t3, uncached
+    li      t4, -0x40000000
+    add     t3, t3, t4
+    jr      t3                        # on in the uncached view
+uncached:
+    csrr    a1, mhartid
+    la      t0, ids
+    slli    t1, a1, 4
+    add     t0, t0, t1
+    addi    t2, a1, 200
+    sd      t2, 8(t0)
+    bnez    a1, park
+done:
+    j       done
+park:
+    wfi
+    j       park
+    .data
+    .balign 8
+ids: .dword 0, 0, 0, 0
+"""
+
+
+@pytest.mark.parametrize("engine", [ENGINE_FAST, ENGINE_PRECISE])
+@pytest.mark.parametrize("link", [0x8000_0000, 0x4000_0000])
+def test_mhartid_reads_right_in_both_views_of_sram(engine, link, tmp_path):
+    """issue 32, item 7: code linked at the uncached alias 0x4000_0000 runs from 0x8000_0000 first
+    (the harts' reset pc) and code linked at 0x8000_0000 may jump into the alias: the CSR
+    instructions the board answers are found at the link address, and are answered in both views
+    of SRAM (the K210 maps the same SRAM at both: Kendryte SDK lds/kendryte.ld, `ram` at
+    0x80000000 and `ram_nocache` at 0x40000000). Before, mhartid read 0 on both harts outside the
+    link view (Unicorn's own answer)."""
+    script = tmp_path / "link.ld"
+    script.write_text(f"SECTIONS {{ . = 0x{link:x}; .text : {{ *(.text*) }} .data : {{ *(.data*) }} }}\n")
+    board = make_board(build_elf(BOTH_VIEWS, script), engine=engine)
+    ids = symbol(board, "ids")
+    assert ids >> 28 == link >> 28
+    board.run_until(PS_PER_MS)
+    values = [int.from_bytes(board.memory.read(ids + 8 * n, 8), "little") for n in range(4)]
+    assert values == [100, 200, 101, 201]
 
 
 def test_writing_mhartid_is_an_illegal_instruction():

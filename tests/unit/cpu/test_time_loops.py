@@ -186,3 +186,118 @@ def test_an_interrupt_a_store_set_off_is_not_skipped_past(monkeypatch):
     assert taken[0] == taken[1]
     assert 0 < taken[0][0] < 100_000
     assert 40_000_000 <= taken[1][1]
+
+
+# --- loops that only spin (time_loops.find_idle_loops): `1: j 1b` -----------------------------------
+
+# A timer interrupt every 100 ms (mtime ticks at 26 MHz / 50) taken out of a `j .` spin: the handler
+# counts them in s5 and keeps the mcycle and minstret of the last one, then the hart spins again.
+TIMER_OUT_OF_A_SPIN = """
+    la      t0, handler
+    csrw    mtvec, t0
+    li      s5, 0
+    li      a0, 0x02004000              # CLINT mtimecmp (hart 0)
+    li      a1, 0x0200BFF8              # CLINT mtime
+    li      a2, 52000                   # 100 ms of mtime
+    ld      t0, 0(a1)
+    add     t0, t0, a2
+    sd      t0, 0(a0)
+    li      t0, 0x80                    # MTIE
+    csrw    mie, t0
+    csrsi   mstatus, 8
+spin:
+    j       spin
+    .balign 4
+handler:
+    addi    s5, s5, 1
+    csrr    s6, mcycle
+    csrr    s7, minstret
+    csrr    s8, mepc
+    ld      t0, 0(a0)
+    add     t0, t0, a2
+    sd      t0, 0(a0)
+    mret
+"""
+
+# Both harts end in a spin that nothing can end (MIE clear): neither is ever alone, both inert.
+BOTH_HARTS_SPIN = """
+    .globl _start
+_start:
+    csrr    t0, mhartid
+    bnez    t0, 2f
+1:  j       1b
+2:  li      t1, 5                       # register arithmetic that carries nothing over
+    j       2b
+"""
+
+
+def spin_state(board) -> tuple:
+    return tuple((hart.executed, hart.cycles, hart.mispredicts, hart.stall_cycles, hart.pc, hart.time,
+                  [reg(board, name, hart.hart_id) for name in ("s5", "s6", "s7", "s8", "t1")])
+                 for hart in board.harts) + (board.time,)
+
+
+def count_turns(monkeypatch) -> list:
+    """The scheduler's turns from the end of the lockstep at reset on (512 turns of 2 cycles while
+    both harts run: shared_memory.RACE_WINDOW_CYCLES)."""
+    from emulator.board import scheduler as schedmod
+    turns = []
+    original = schedmod.Scheduler._turn
+
+    def turn(self, *args, **kwargs):
+        if self.time >= self._race_until:
+            turns.append(1)
+        return original(self, *args, **kwargs)
+    monkeypatch.setattr(schedmod.Scheduler, "_turn", turn)
+    return turns
+
+
+@pytest.mark.parametrize("engine", [ENGINE_FAST, ENGINE_PRECISE])
+@pytest.mark.parametrize("source", ["timer", "both"])
+def test_a_spin_that_changes_nothing_is_skipped_to_the_next_event_with_exact_counts(engine, source, monkeypatch):
+    """issue 32, item 8: a hart in `1: j 1b` that nothing but an interrupt can take out of it skips
+    its iterations past its turns' ends up to the next thing that can happen (a device event, here
+    the timer's interrupt, or run_until's end), with the other hart asleep or spinning too, counting
+    every one: instructions, cycles, the interrupts' mcycle, minstret and mepc, the times, as turn
+    by turn (before, 1,300 turns a second of virtual time at 26 MHz)."""
+    from emulator.board import scheduler as schedmod
+    from k210_fixtures import build_elf
+    elf = program(TIMER_OUT_OF_A_SPIN) if source == "timer" else build_elf(BOTH_HARTS_SPIN)
+    results = []
+    for beyond in (True, False):
+        board = make_board(elf, engine=engine)
+        turns = count_turns(monkeypatch)
+        if not beyond:
+            monkeypatch.setattr(schedmod.Scheduler, "_alone_until", lambda self, *a: None)
+        board.run_until(1050 * PS_PER_MS)
+        monkeypatch.undo()
+        results.append((spin_state(board), len(turns), board.harts[0].iterations_skipped))
+    (skipped, few, iterations), (turn_by_turn, many, _) = results
+    assert skipped == turn_by_turn
+    assert few < 100 < 500 < many
+    assert iterations > 20_000_000
+    if source == "timer":
+        assert skipped[0][6][0] == 10                         # ten interrupts in 1.05 s
+        assert skipped[0][6][3] == symbol_of(board, "spin")  # each taken out of the spin
+
+
+def symbol_of(board, name: str) -> int:
+    from k210_fixtures import symbol
+    return symbol(board, name)
+
+
+@pytest.mark.parametrize("both", [False, True])
+def test_a_program_ending_in_a_spin_ends_promptly_with_the_hang_report(both, monkeypatch):
+    """With nothing left to happen, a program whose last word is `j .` ends with the hang report
+    (after the hang budget of virtual time) in a handful of turns, not 25,000 a virtual second."""
+    from emulator.errors import HangDetected
+    from emulator.vtime import PS_PER_S
+    from k210_fixtures import build_elf
+    board = make_board(build_elf(BOTH_HARTS_SPIN) if both else program(""))
+    board.hang_budget = 5 * PS_PER_S
+    turns = count_turns(monkeypatch)
+    with pytest.raises(HangDetected) as stop:
+        board.run(1)
+    assert len(turns) < 50
+    assert "hart 0: running" in str(stop.value) and "spins in a loop that changes nothing" in str(stop.value)
+    assert board.harts[0].executed > 5 * 26_000_000 // 4      # its iterations counted (c.j: a few cycles each)
