@@ -91,3 +91,42 @@ def test_a_regular_file_counts_whole_and_does_not_grow(tmp_path):
     assert source.total == 3 * CHUNK + 7 and not source.may_grow
     assert len(drain(source)) == 3 * CHUNK + 7 and source.total == 3 * CHUNK + 7
     source.close()
+
+
+@pytest.mark.parametrize("end", ["the run's end", "SIGINT", "SIGTERM"])
+def test_the_terminal_is_given_back_however_the_run_ends(c_firmware, tmp_path, end):
+    """--uart-input - on a terminal puts it in cbreak mode with echo off while the run lasts (each
+    key goes at once; the firmware echoes); however the run ends, the terminal is given back as it
+    was (issue 35: a Ctrl-C used to leave it in cbreak mode, echo off). A pseudo-terminal stands
+    for the user's."""
+    import pty
+    import signal
+    import subprocess
+    import sys
+    import termios
+    import time
+
+    from suite import ROOT
+    master, slave = pty.openpty()
+    try:
+        before = termios.tcgetattr(slave)
+        assert before[3] & termios.ICANON and before[3] & termios.ECHO
+        out = tmp_path / "out"
+        until = "0.3" if end == "the run's end" else "1000"
+        process = subprocess.Popen([sys.executable, "-m", "emulator", "run", str(c_firmware / "echo.elf"),
+                                    "--uart-input", "-", "--until", until, "--out", str(out), "--quiet"],
+                                   cwd=ROOT, stdin=slave, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        if end != "the run's end":
+            deadline = time.monotonic() + 60
+            while termios.tcgetattr(slave)[3] & termios.ICANON:     # until the board model has it
+                assert process.poll() is None and time.monotonic() < deadline, process.communicate()
+                time.sleep(0.02)
+            time.sleep(0.3)                                          # and the run is under way
+            process.send_signal(signal.SIGINT if end == "SIGINT" else signal.SIGTERM)
+        _, stderr = process.communicate(timeout=120)
+        assert process.returncode == {"the run's end": 0, "SIGINT": 130, "SIGTERM": 143}[end], stderr
+        assert "Traceback" not in stderr, stderr
+        assert termios.tcgetattr(slave) == before
+    finally:
+        os.close(master)
+        os.close(slave)
