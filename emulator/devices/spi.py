@@ -5,7 +5,7 @@ Frames written to the data register go through a 32-entry transmit FIFO and
 out on the wire at the serial clock the firmware programmed: a frame of `dfs`
 bits takes dfs / lanes serial clock periods (lanes: 1 standard, 2 dual, 4 quad,
 8 octal), each baudr cycles of the controller's source clock; frames sent back to
-back are timed from the first one's start, in whole picoseconds (_Train). A frame
+back are timed from the first one's start, in whole picoseconds (spi_frames.py). A frame
 reaches the selected device when its last bit is out, so the device sees pins such
 as the LCD's D/C as they are at that moment. In transmit-and-receive mode the
 device's answer goes into the 32-entry receive FIFO; in receive-only mode writing one
@@ -30,16 +30,17 @@ Configuration registers can only be written while the controller is disabled
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field as dc_field
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Callable, Protocol
 
 import numpy as np
 
 from ..errors import UnmodelledAccess
 from ..memory_map import K210_BLOCKS
-from ..vtime import NEVER, Time, cycles_in, cycles_time
+from ..vtime import NEVER, Time, cycles_time
 from .mmio import Peripheral, Register
 from .ports import Ports
+from .spi_frames import FrameClock, FrameTrain
 
 if TYPE_CHECKING:
     from .dmac import DmaChannel
@@ -98,67 +99,6 @@ class SpiDevice(Protocol):
         """Clock cycles with no data (the wait cycles of a dual/quad/octal read)."""
 
 
-@dataclass(frozen=True)
-class FrameClock:
-    """How long a frame takes on the wire: `ticks` ticks of a clock at `hz` (whole numbers, so that a
-    train's edges are exact: a frame of b bits on n lanes at baudr d from a source at f Hz takes
-    b / n x d / f s, that is b x d ticks at n x f Hz)."""
-
-    ticks: int
-    hz: int
-
-
-@dataclass
-class _Train:
-    """Frames going out back to back: frame i starts at edge(i), i frames' time after the train's
-    start (each edge reckoned from the start, so that it does not depend on how often advance() ran)."""
-
-    start: Time
-    clock: FrameClock
-    bits: int
-    frames: list = dc_field(default_factory=list)  # numpy chunks of uint32 frames, in order
-    count: int = 0          # frames queued in this train
-    delivered: int = 0      # frames already handed to the device
-
-    def edge(self, i: int) -> Time:
-        """When frame i starts (frame i - 1 has arrived): rounded up to a whole picosecond."""
-        return self.start + cycles_time(i * self.clock.ticks, self.clock.hz)
-
-    def edges_passed(self, now: Time) -> int:
-        """How many frames' time has wholly passed since the start by `now` (>= start), however many
-        frames the train has: the last i with edge(i) <= now."""
-        return cycles_in(now - self.start, self.clock.hz) // self.clock.ticks
-
-    def end(self) -> Time:
-        return self.edge(self.count)
-
-    def started(self, now: Time) -> int:
-        if now < self.start:
-            return 0
-        return min(self.count, self.edges_passed(now) + 1)
-
-    def finished(self, now: Time) -> int:
-        if now < self.start:
-            return 0
-        return min(self.count, self.edges_passed(now))
-
-    def take(self, n: int) -> np.ndarray:
-        """Removes and returns the next n undelivered frames."""
-        out, need = [], n
-        while need:
-            chunk = self.frames[0]
-            if len(chunk) <= need:
-                out.append(chunk)
-                need -= len(chunk)
-                self.frames.pop(0)
-            else:
-                out.append(chunk[:need])
-                self.frames[0] = chunk[need:]
-                need = 0
-        self.delivered += n
-        return np.concatenate(out) if len(out) > 1 else out[0]
-
-
 class SpiController(Peripheral):
     """One DW SSI controller (index 0 = SPI0, 1 = SPI1)."""
 
@@ -199,7 +139,7 @@ class SpiController(Peripheral):
                 XRXOICR: Register("xrxoicr", writable=False), XIP_CNT_TIME_OUT: Register("xip_cnt_time_out")})
         super().__init__(ports)
         self.device_for_ss = lambda ss: None   # set by the board's wiring
-        self._train: _Train | None = None
+        self._train: FrameTrain | None = None
         self._held: list[int] = []               # frames written while no slave is selected
         self._rx: list[int] = []
         self._raw_int = 0
@@ -286,7 +226,7 @@ class SpiController(Peripheral):
 
     def frame_period(self) -> Time:
         """One frame's time on the wire, rounded up to a whole picosecond (NEVER: no serial clock).
-        For reports: a train times its frames from its start (_Train.edge), not by adding this."""
+        For reports: a train times its frames from its start (FrameTrain.edge), not by adding this."""
         clock = self.frame_clock()
         if clock is None:
             return NEVER
@@ -461,7 +401,7 @@ class SpiController(Peripheral):
             if train is not None:
                 self.advance(now)
             self._check_wire_format()
-            train = self._train = _Train(start=now, clock=clock, bits=self.frame_bits)
+            train = self._train = FrameTrain(start=now, clock=clock, bits=self.frame_bits)
             self.ports.signal(now, f"spi{self.index}_sclk", 1)
         train.frames.append(values.astype(np.uint32))
         train.count += len(values)
@@ -510,7 +450,7 @@ class SpiController(Peripheral):
             if device is not None:
                 device.spi_dummy(wait, now)
             clocks += wait
-        train = self._train = _Train(start=now + self._sclk_time(clocks), clock=clock, bits=self.frame_bits)
+        train = self._train = FrameTrain(start=now + self._sclk_time(clocks), clock=clock, bits=self.frame_bits)
         self.ports.signal(now, f"spi{self.index}_sclk", 1)
         self._phases_sent = True
         rest = entries[max(len(phases), 1 if receiving else 0):]
@@ -614,7 +554,7 @@ class SpiController(Peripheral):
         edge = self._next_sr_change(train, frames) if offset == SR else frames + 1
         return train.edge(edge)
 
-    def _next_sr_change(self, train: _Train, frames: int) -> int:
+    def _next_sr_change(self, train: FrameTrain, frames: int) -> int:
         """The first frame edge after edge `frames` at which sr can read otherwise (edge i: frame i
         starts, frame i - 1 has arrived; the FIFOs as they are at edge `frames`): the wire going idle,
         the last frame leaving the transmit FIFO (TFE), a slot freeing in a full one (TFNF), a
