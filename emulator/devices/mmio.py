@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from ..errors import RegisterRuleViolation
-from ..vtime import Time
+from ..vtime import NEVER, Time
 from .ports import Ports
 
 
@@ -35,6 +35,11 @@ class Register:
     # TileLink devices only: the register's writable fields as (lowest bit, width in bits), as the
     # RTL's register map declares them; None: one field spanning the whole register
     fields: tuple[tuple[int, int], ...] | None = None
+    # a status register whose reading changes nothing and whose value changes only at the device's
+    # own events (next_event_time) or through an access to the device: a read of it may be answered
+    # again from the last one until the next event (Peripheral.stable_until). A read that takes
+    # something after all (a latched error it clears) says so with took_on_read.
+    steady: bool = False
 
 
 # The buses a peripheral can sit on (see bus.py for what each does with a narrow store)
@@ -161,9 +166,14 @@ class Peripheral:
         reading it again would return the same value and change nothing, in the device or
         elsewhere (advancing the device to then included), provided no other access reaches the
         device meanwhile; `now` or earlier: no such promise. The bus answers a hart polling the
-        register from this (bus.py); a device with a status register polled while time alone
-        changes it says so here."""
-        return now
+        register from this (bus.py). A register declared `steady` is stable until the device's next
+        event; a device whose registers change between its events (SPI's FIFO levels, at every
+        frame edge) works the bound out itself."""
+        reg = self.REGISTERS.get(offset)
+        if reg is None or not reg.steady:
+            return now
+        event = self.next_event_time(now)
+        return NEVER if event is None else max(now, event)
 
     def advance(self, now: Time) -> None:
         """Brings the device's time-driven state up to `now`."""

@@ -535,7 +535,9 @@ class SpiController(Peripheral):
         return train.edge(index - 1)
 
     def stable_until(self, offset: int, now: Time) -> Time:
-        """The status registers (sr, txflr, rxflr, risr, isr: reading them changes nothing) stay
+        """Not declared `steady` (mmio.Register): the FIFO levels change at every frame edge, of which
+        only some are device events (next_event_time), so the controller works the bound out.
+        The status registers (sr, txflr, rxflr, risr, isr: reading them changes nothing) stay
         as they are until the next frame starts or ends on the wire, which is also when advance()
         next has something to do; sr until the next frame edge that changes one of its bits
         (_next_sr_change). Without a DMA transmit channel only (it refills the FIFO as time

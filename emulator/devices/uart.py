@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING, Callable
 import numpy as np
 
 from ..memory_map import K210_BLOCKS
-from ..vtime import NEVER, PS_PER_MS, Time, cycles_time
+from ..vtime import PS_PER_MS, Time, cycles_time
 from .mmio import Peripheral, Register
 from .ports import Ports, SerialInput
 
@@ -95,12 +95,12 @@ class DwUart(Peripheral):
 
     REGISTERS = {
         RBR: Register("rbr_thr_dll"), IER: Register("ier_dlh"), IIR: Register("iir_fcr"),
-        LCR: Register("lcr"), MCR: Register("mcr"), LSR: Register("lsr", writable=False, reset=LSR_THRE | LSR_TEMT),
+        LCR: Register("lcr"), MCR: Register("mcr"), LSR: Register("lsr", writable=False, reset=LSR_THRE | LSR_TEMT, steady=True),
         MSR: Register("msr", writable=False), SCR: Register("scr"), LPDLL: Register("lpdll"), LPDLH: Register("lpdlh"),
         **{offset: Register(f"srbr_sthr{(offset - SHADOW_FIRST) // 4}")
            for offset in range(SHADOW_FIRST, SHADOW_LAST + 4, 4)},
-        FAR: Register("far"), USR: Register("usr", writable=False, reset=USR_TFNF | USR_TFE),
-        TFL: Register("tfl", writable=False), RFL: Register("rfl", writable=False),
+        FAR: Register("far"), USR: Register("usr", writable=False, reset=USR_TFNF | USR_TFE, steady=True),
+        TFL: Register("tfl", writable=False, steady=True), RFL: Register("rfl", writable=False, steady=True),
         SRR: Register("srr", readable=False), SRTS: Register("srts"), SBCR: Register("sbcr"), SDMAM: Register("sdmam"),
         SFE: Register("sfe"), SRT: Register("srt"), STET: Register("stet"), HTX: Register("htx"),
         DMASA: Register("dmasa", readable=False), TCR: Register("tcr"), DE_EN: Register("de_en"),
@@ -390,18 +390,6 @@ class DwUart(Peripheral):
             value |= USR_RFF
         return value
 
-    def stable_until(self, offset: int, now: Time) -> Time:
-        """LSR, USR, TFL and RFL (reading them changes nothing while no error is latched) stay as
-        they are until the UART's next event, a byte's start or end or the host's next byte: the
-        SDK's getchar polls LSR for data, its putchar for room. The bound is the event itself (every
-        read before it reads the same; event times are exact, so no margin before it is needed)."""
-        if offset not in (LSR, USR, TFL, RFL) or self._errors:
-            return now
-        event = self.next_event_time(now)
-        if event is None:
-            return NEVER
-        return max(now, event)
-
     def _pop(self, now: Time) -> int:
         if not self._rx:
             return 0
@@ -430,6 +418,7 @@ class DwUart(Peripheral):
             value = self._lsr()
             if self._errors:
                 self._errors = 0
+                self.took_on_read = True          # the errors: the next read is not the same
                 self.ports.irq_changed(now)
             return value
         if offset == USR:

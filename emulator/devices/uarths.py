@@ -23,7 +23,7 @@ from collections import deque
 from typing import Callable, Iterator
 
 from ..memory_map import K210_BLOCKS
-from ..vtime import NEVER, PS_PER_MS, Time
+from ..vtime import PS_PER_MS, Time
 from .mmio import BUS_TILELINK, Peripheral, Register
 from .ports import Ports, SerialInput
 from .uart import ByteTrain, next_byte
@@ -47,7 +47,7 @@ class Uarths(Peripheral):
     # fields as sifive-blocks' UART declares them: an 8-bit txdata byte (a store that covers it
     # queues it), txen and nstop, the 3-bit watermarks at bit 16, a 16-bit divisor
     REGISTERS = {
-        TXDATA: Register("txdata", fields=((0, 8),)), RXDATA: Register("rxdata", writable=False),
+        TXDATA: Register("txdata", fields=((0, 8),), steady=True), RXDATA: Register("rxdata", writable=False),
         TXCTRL: Register("txctrl", fields=((0, 1), (1, 1), (16, 3))), RXCTRL: Register("rxctrl", fields=((0, 1), (16, 3))),
         IE: Register("ie", fields=((0, 1), (1, 1))), IP: Register("ip", writable=False),
         DIV: Register("div", reset=0x0D8D, fields=((0, 16),)),  # 115200 baud from the 26 MHz oscillator... about
@@ -225,19 +225,6 @@ class Uarths(Peripheral):
         if offset == IP:
             return self.read_ip()
         return self.values[offset]
-
-    def stable_until(self, offset: int, now: Time) -> Time:
-        """txdata (reading it changes nothing) reads full until the byte on the wire has gone and the
-        next leaves the FIFO for the wire; not full, until a write fills it. A writer waiting for
-        room is answered once a byte, not once a read."""
-        if offset != TXDATA:
-            return now
-        if len(self._fifo) < TX_FIFO_DEPTH:
-            return NEVER
-        if self._shifting_until is None:
-            # the transmitter is off (txen = 0): only a write to txctrl lets the FIFO drain
-            return NEVER if not self.values[TXCTRL] & 1 else now
-        return self._shifting_until
 
     def write_register(self, offset: int, reg: Register, value: int, now: Time) -> None:
         self.advance(now)

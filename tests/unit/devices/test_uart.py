@@ -337,3 +337,18 @@ def test_dma_keeps_the_transmit_fifo_full_and_takes_what_is_received(board):
         uart.write(u.RBR, 4, c, t_end)
     run_devices(board, t_end, lambda t: not board.dmac.values[d.CHEN] & 2)
     assert board.memory.read(DST, 12) == b"a\0\0\0b\0\0\0c\0\0\0"
+
+
+def test_a_read_of_lsr_that_clears_an_error_is_not_a_repeatable_read(board):
+    """LSR is declared steady (the bus may answer a poll of it from the last read until the UART's
+    next event), but a read that clears a latched error takes something: it says so (took_on_read),
+    and the bus does not answer the next read from it, which reads without the error."""
+    uart = board.uarts[2]
+    configure(uart, 1_000_000)
+    uart._errors = u.LSR_OE                                      # (latched: an overrun, loopback's way)
+    uart.took_on_read = False
+    assert uart.read(u.LSR, 4, 0) & u.LSR_OE
+    assert uart.took_on_read
+    uart.took_on_read = False
+    assert not uart.read(u.LSR, 4, 0) & u.LSR_OE and not uart.took_on_read
+    assert uart.stable_until(u.LSR, 0) > 0                       # a plain read again: steady
