@@ -146,6 +146,22 @@ def test_a_closed_stream_leaves_the_server_serving(server):
     assert read_events(server, "status")[-1] == ("status", {"frames": 1})
 
 
+def test_a_page_gone_in_the_middle_of_a_frame_is_no_error(server, capfd):
+    """A page closed (or navigated away) while its frame was on the way: no traceback on the
+    terminal, whose lines are the console's."""
+    server.state.frame(0, np.random.default_rng(1).integers(0, 255, (240, 320, 3), dtype=np.uint8))
+    for _ in range(10):
+        sock = socket.create_connection(("127.0.0.1", server.port), timeout=5)
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, b"\x01\x00\x00\x00\x00\x00\x00\x00")  # reset
+        sock.sendall(f"GET /frame HTTP/1.1\r\nHost: 127.0.0.1:{server.port}\r\n\r\n".encode())
+        sock.recv(10)
+        sock.close()
+    response, data = request(server, "GET", "/frame")      # and the server goes on
+    assert response.status == 200 and len(data) == 240 * 320 * 3
+    time.sleep(0.2)
+    assert "Traceback" not in capfd.readouterr().err
+
+
 # --- the run loop on real boards ----------------------------------------------------------------
 
 def live_board(elf, frames: list | None = None, console: bytearray | None = None) -> tuple[Board, ViewState]:

@@ -45,6 +45,7 @@ from __future__ import annotations
 
 import codecs
 import json
+import sys
 import threading
 import time
 from collections import deque
@@ -233,6 +234,11 @@ class _HttpServer(ThreadingHTTPServer):
     allow_reuse_address = True
     state: ViewState
     page: bytes
+
+    def handle_error(self, request, client_address) -> None:
+        if isinstance(sys.exc_info()[1], (ConnectionError, TimeoutError)):
+            return                     # a page closed in the middle of an answer: nothing to tell
+        super().handle_error(request, client_address)
 
 
 class _Handler(BaseHTTPRequestHandler):
