@@ -64,7 +64,7 @@ firmware: toolchain $(BUILD)/firmware.elf
 # The C test firmware (tests/firmware/): a small driver layer in the SDK's manner and the
 # programs built on it, with Debian's gcc-riscv64-unknown-elf and picolibc.
 CFW_DIR      := tests/firmware
-CFW_PROGRAMS := hello blink lcd_demo echo syscalls timers watchdog flash maixpy_boot
+CFW_PROGRAMS := hello blink lcd_demo echo syscalls timers watchdog flash maixpy_boot boot_key
 CFW_LIB      := start sysctl fpioa gpio uarths uart clint dmac spi spi3 lcd plic timer trap
 CFW_CFLAGS   := -march=rv64imafdc -mabi=lp64d -mcmodel=medany -Os -g -std=gnu11 -Wall -Wextra -Werror \
                 -ffunction-sections -fdata-sections -fstrict-volatile-bitfields --specs=picolibc.specs
@@ -115,14 +115,24 @@ card: $(DEFAULT_CARD)
 
 # FRAMES_DIR: where the run's frames, animation, run.json and console.log go
 FRAMES_DIR := $(BUILD)/frames
+# VIEW=1: with the live view on 127.0.0.1:$(VIEW_PORT) (it prints the URL), running until Ctrl-C
+# unless FRAMES is given as well
+VIEW      ?=
+VIEW_PORT ?= 8210
+ifeq ($(VIEW),1)
+RUN_LENGTH := --view $(VIEW_PORT) $(if $(filter command line environment,$(origin FRAMES)),--frames $(FRAMES))
+else
+RUN_LENGTH := --frames $(FRAMES)
+endif
+
 flash-to-emulator: firmware venv $(CARD_PREREQ)
-	$(PYTHON) -m emulator run $(BUILD)/firmware.elf --sd $(CARD) --frames $(FRAMES) --out $(FRAMES_DIR)
+	$(PYTHON) -m emulator run $(BUILD)/firmware.elf --sd $(CARD) $(RUN_LENGTH) --out $(FRAMES_DIR)
 
 # compileall first: each test starts `python -m emulator` a few hundred times, and where
 # PYTHONDONTWRITEBYTECODE is set no import would otherwise leave the compiled modules behind.
 test: firmware c-firmware venv $(DEFAULT_CARD)
 	$(PYTHON) -m compileall -q emulator reference sdcard_image tools tests
-	$(PYTHON) -m pytest -q -n 2
+	$(PYTHON) -m pytest -q -rs -n 2
 
 # One tier of the suite (tests/README.md): make test-unit, test-routines, test-end-to-end, test-slow
 TIER_test-unit       := unit

@@ -25,7 +25,7 @@ from .elf import LoadedImage
 from .flash_image import FlashImage
 from .raw_image import load_firmware, load_program
 from ..errors import BadInput, BoardStop, UnmodelledAccess
-from ..devices.fpioa import FUNC_UART1_RX, FUNC_UART1_TX, FUNC_UARTHS_RX, FUNC_UARTHS_TX, Fpioa
+from ..devices.fpioa import FUNC_UART1_RX, FUNC_UART1_TX, FUNC_UARTHS_RX, FUNC_UARTHS_TX, PAD_COUNT, Fpioa
 from ..devices.fft import Fft
 from ..devices.otp import Otp
 from ..devices.gpio import Gpio
@@ -372,6 +372,24 @@ class Board:
         self.scheduler.grab_at(at, action)
 
     # --- wiring -----------------------------------------------------------------------
+
+    def drive_pad(self, pad: int, level: int | None, at: Time | None = None) -> PinChange:
+        """Drives a pad from outside from now on, as a --pin change would (a key pressed in the live
+        view, frontends/view.py): `level` 0 or 1, or None to let go of it. Called between turns. It
+        takes effect at the board's time, or at `at` if that is later, and never before a time a hart
+        has already run to, so that no hart has read the pad's old level after the change; a change
+        at the board's time takes effect at once. Returns the change (its time), which run.json's
+        `pins` lists with the --pin changes once played."""
+        if not 0 <= pad < PAD_COUNT:
+            raise ValueError(f"pad {pad} does not exist")
+        if level not in (0, 1, None):
+            raise ValueError(f"level {level!r} is not 0, 1 or None")
+        now = max(self.time, *(hart.time for hart in self.harts))
+        change = PinChange(now if at is None else max(at, now), pad, level)
+        self.pins.add(change)
+        if change.at <= self.time:
+            self.pins.advance(self.time)
+        return change
 
     @property
     def pad_changes(self) -> list[tuple[Time, int, int | None]]:

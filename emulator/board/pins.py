@@ -8,6 +8,7 @@ or pull-down, or GPIOHS's own), else 0.
 """
 from __future__ import annotations
 
+import bisect
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -88,6 +89,11 @@ class ExternalPins:
         self.version = 0                          # changes whenever `levels` does
         self.on_change = on_change
         self.played: list[PinChange] = []
+
+    def add(self, change: PinChange) -> None:
+        """A change more, driven from outside while the board runs (Board.drive_pad): after the
+        changes already due at its time or before."""
+        bisect.insort_right(self._pending, change, key=lambda pending: pending.at)
 
     def next_event_time(self, now: Time) -> Time | None:
         return self._pending[0].at if self._pending else None

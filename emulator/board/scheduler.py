@@ -416,6 +416,44 @@ class Scheduler(SramWaits, Deadlines):
                          host_time.perf_counter() - self._host_start, self.board.warnings,
                          [h.cycles for h in self.harts])
 
+    def waits_for_outside(self) -> bool:
+        """No hart runs and no device will do anything by itself: only something from outside (a pad
+        driven, a byte sent to a UART) can set the board going again."""
+        return not any(h.state is HartState.RUNNING for h in self.harts) and \
+            self.board.next_device_event(self.time) is None
+
+    def run_slice(self, until: Time, frames: int = UNLIMITED_FRAMES, last: bool = False) -> bool:
+        """Runs until virtual time `until`, or until `frames` frames have been shown in all, for a
+        caller that runs the board a piece at a time and looks at other things in between (the live
+        view, frontends/view.py: its page's controls, its pacing to the host's clock). As in
+        run_until no frame budget applies (the board is watched), and a board on which nothing can
+        happen any more moves straight on to `until`; as in run(), a trap handler's grace period is
+        run out before `frames` end the run. `last`: `until` is the run's end, which, as in
+        run_until, an error report waiting out its grace period goes past. A trap, an error report
+        or a stop ends the run as in run(). Returns whether the run may end here: `frames` shown, or
+        with `last`, `until` reached."""
+        self.frames_wanted = frames
+        before, self.until = self.until, until
+        try:
+            while self.time < until or (last and self._report_pending()):
+                if len(self.frames) >= frames and self._trap_deadline is None:
+                    return True
+                if not self._report_pending() and self.waits_for_outside():
+                    if self._grabs and self._grabs[0][0] < until:
+                        self._set_time(max(self.time, self._grabs[0][0]))
+                        self._run_grabs()
+                        continue
+                    self._set_time(until)
+                    if self._grabs:
+                        self._run_grabs()
+                    break
+                self.step(go_on_alone=True)
+                if self._grabs:
+                    self._run_grabs()
+        finally:
+            self.until = before
+        return (len(self.frames) >= frames and self._trap_deadline is None) or last
+
     def finish_console_line(self, limit: Time = CONSOLE_DRAIN) -> None:
         """After run(): runs on until the first console line begun after the last frame was
         shown has ended (this firmware's hart 1 reports "frame N" once frame N is sent, after

@@ -292,6 +292,18 @@ class DockWiring:
             return self.chip.timers[timer].toggle_level(channel, self.ports.clock.now() if now is None else now)
         return None
 
+    def driven_levels(self) -> dict[int, int]:
+        """The pads a GPIOHS or GPIO line or a PWM output drives now, with their levels (as the pad
+        log last saw them)."""
+        return {pad: self._pad_levels[pad] for pad in sorted(self._driven_pads)}
+
+    def input_pads(self) -> list[int]:
+        """The pads FPIOA routes to a GPIOHS or GPIO line that the chip does not drive: where a
+        level driven from outside reaches the firmware (a key, a switch)."""
+        fpioa = self.chip.fpioa
+        return [pad for pad in range(PAD_COUNT)
+                if is_gpio_line(fpioa.function_of_pad(pad)) and self.pad_level(pad) is None]
+
     def timer_toggled(self, timer: int, channel: int, at: Time, level: int) -> None:
         """A PWM output changed at `at` (the timer tells each change with its own time): the pads
         FPIOA routes it to follow, in the pad log and --vcd."""

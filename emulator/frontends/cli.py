@@ -261,13 +261,15 @@ def main(argv: list[str] | None = None) -> int:
         print(f"[board] stopped ({stop.kind}): {stop}", file=sys.stderr)
         return stop.exit_status
     finally:
-        signals.restore()
+        signals.writing = True         # a signal now would cut short what is being given back
         for thing in opened:
             thing.close()
+        signals.restore()
 
 
 def run_command(args: argparse.Namespace, signals: SignalStop, opened: list) -> int:
-    if args.until is None and args.frames is None and not args.expected and args.uart_script is None:
+    if args.until is None and args.frames is None and not args.expected and args.uart_script is None and \
+            args.view is None:
         args.frames = DEFAULT_FRAMES
     from ..board import Board
     from .console_watch import ConsoleWatch
@@ -305,6 +307,12 @@ def run_command(args: argparse.Namespace, signals: SignalStop, opened: list) -> 
         prepare_output_folder(args.out)
         trace_file = open_trace(args.trace_insn) if args.trace_insn is not None else None
         vcd_file = open_vcd(args.vcd) if args.vcd is not None else None
+        view = None
+        if args.view is not None:
+            from .view import ViewServer, ViewState, page_info
+            view = ViewServer(args.view, ViewState(page_info(
+                str(args.firmware) if args.firmware is not None else f"{args.flash} (booted from flash)")))
+            opened.append(view)
     except BadInput as error:
         print(f"[board] stopped (bad-input): {error}", file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -312,6 +320,8 @@ def run_command(args: argparse.Namespace, signals: SignalStop, opened: list) -> 
     output = RunOutput(args.out)
     terminal = Terminal(args.quiet, immediate=uart_input is not None and uart_input.interactive)
     watch = ConsoleWatch(args.expected, args.failures)
+    if view is not None:
+        terminal.message(f"[view] the live view is at {view.url} (Ctrl-C ends the run)")
     board = None
     flash_saved = None                 # where --flash-save wrote the flash, once it has
 
@@ -319,6 +329,8 @@ def run_command(args: argparse.Namespace, signals: SignalStop, opened: list) -> 
         output.console_byte(byte)
         terminal.console_byte(byte)
         watch.byte(byte, board.console_byte_time)
+        if view is not None:
+            view.state.console_byte(byte)
         if script is not None:
             script.console_byte(byte, board.console_byte_time)
 
@@ -337,6 +349,8 @@ def run_command(args: argparse.Namespace, signals: SignalStop, opened: list) -> 
 
     def on_frame(record, image) -> None:
         output.frame(record, image)
+        if view is not None:
+            view.state.frame(record.index, image)
         if profiler is not None:
             profiler.frame(record)
 
@@ -376,6 +390,12 @@ def run_command(args: argparse.Namespace, signals: SignalStop, opened: list) -> 
             uart_input.stop_check = signals.check
         if args.gdb is not None:
             result = run_under_gdb(board, args, terminal)
+        elif view is not None:
+            from .view import LiveRun
+            result = LiveRun(board, view.state, frames=args.frames, paused=args.view_paused, progress=progress,
+                             until=None if args.until is None else from_seconds(args.until)).run()
+            if args.frames is not None:
+                board.finish_console_line()
         elif args.expected:
             result = run_expecting(board, watch, args.until, args.budget, progress)
         elif script is not None:
@@ -513,4 +533,6 @@ def run_command(args: argparse.Namespace, signals: SignalStop, opened: list) -> 
         terminal.message(f"[board] {message}; {board.time / PS_PER_MS:.2f} ms virtual; output in {args.out}")
     else:
         terminal.message(f"[board] stopped ({kind}): {message}")
+    if view is not None:
+        view.state.end(message if status == EXIT_OK else f"stopped ({kind}): {message}")
     return status

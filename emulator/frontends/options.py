@@ -23,6 +23,7 @@ PROG = "python -m emulator"
 MAX_QUANTUM = 1_000_000_000    # instructions per turn; the native counter's limit is 64-bit, runs need far less
 MAX_TOLERANCE = 255            # a channel of an RGB888 pixel differs by at most 255
 DEFAULT_FRAMES = 8
+VIEW_PORT = 8210               # --view without a port
 MAX_PAD_CHANGES_IN_RUN_JSON = 10_000    # a pin toggled for ever must not bloat run.json
 
 # When this command returns each status (k210_common/exit_status.py holds the numbers and
@@ -37,7 +38,8 @@ EXIT_STATUS_DETAILS: dict[int, str] = {
                 "with a pad 0..47), `--out` equal to or inside `--golden` or the folder of the `--sd` image, "
                 "an option without the one it needs (`--tolerance` without `--golden`, "
                 "`--sd-writable` or `--sd-fault` without `--sd`), `--until` or `--expect` with `--frames`, "
-                "`--gdb-wait` without `--gdb`, `--gdb` with `--expect`/`--fail-on`, a `--gdb` port above 65535, "
+                "`--gdb-wait` without `--gdb`, `--gdb` with `--expect`/`--fail-on`, a `--gdb` or `--view` port above "
+                "65535, `--view-paused` without `--view`, `--view` with `--gdb`, `--expect` or `--uart-script`, "
                 "`--trace-from`/`--trace-to` without `--trace-insn` or in the wrong order, a `--grab` of a symbol "
                 "the firmware does not define or of a buffer outside SRAM, an empty `--expect`/`--fail-on` text or "
                 "a regular expression that does not compile; or, after a run that ended well, a `--grab` whose "
@@ -55,7 +57,7 @@ EXIT_STATUS_DETAILS: dict[int, str] = {
                     "unreadable, not a RISC-V ELF, a raw `.bin` that is empty or larger than SRAM), the "
                     "`--uart-input` or `--pin-file` file (missing or unreadable; a `--pin-file` line that is not "
                     "`SECONDS PAD LEVEL`), the `--trace-insn` or `--vcd` file (cannot be written), the `--gdb` "
-                    "port (in use), the card image (missing, empty, or not a whole number of 512-byte blocks), "
+                    "or `--view` port (in use), the card image (missing, empty, or not a whole number of 512-byte blocks), "
                     "the `--golden` folder (missing or a file) or one of its frames (not a readable PNG), the "
                     "`--out` folder (a file of that name exists, or it cannot be created or written in)",
     EXIT_MISUSE: "something the real K210 does not do, such as running the CPU from PLL0 "
@@ -245,6 +247,17 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--gdb-wait", action="store_true",
                      help="with --gdb: wait for GDB before the first instruction (else the board runs until it "
                           "attaches)")
+    run.add_argument("--view", metavar="PORT", nargs="?", const=VIEW_PORT, type=port_number, default=None,
+                     help=f"serve a live view of the run on http://127.0.0.1:PORT/ (default {VIEW_PORT}; 0: any free "
+                          "port; printed), on 127.0.0.1 only: the LCD, the console, the LEDs and the pads the "
+                          "firmware drives, virtual time, frame rates and the real-time factor; a BOOT key and "
+                          "buttons for the input pads; pause, continue, step one frame, real time (the default: "
+                          "virtual time never runs ahead of the host's clock) or as fast as possible. Without "
+                          "--frames or --until the run goes on until it is stopped (Ctrl-C); no run is ended as "
+                          "hung while viewed. Give it after the firmware (else PORT would take its name)")
+    run.add_argument("--view-paused", action="store_true",
+                     help="with --view: start paused, before the first instruction (the page's continue or step "
+                          "starts the run)")
     run.add_argument("--out", default="build/frames", type=Path, help="output folder (default build/frames)")
     run.add_argument("--budget", type=budget_seconds, default=5.0,
                      help="virtual seconds allowed between frames before the run counts as hung "
@@ -329,6 +342,11 @@ def option_problem(args: argparse.Namespace) -> str | None:
         return f"--trace-to ({args.trace_to:g} s) must come after --trace-from ({args.trace_from:g} s)"
     if args.gdb_wait and args.gdb is None:
         return "--gdb-wait needs --gdb (the port GDB attaches to)"
+    if args.view_paused and args.view is None:
+        return "--view-paused needs --view (the page whose continue starts the run)"
+    if args.view is not None and (args.gdb is not None or args.expected or args.uart_script is not None):
+        return ("--view excludes --gdb, --expect and --uart-script (each of them runs the board its own way; "
+                "the view's page pauses and steps it)")
     if args.gdb is not None and (args.expected or args.failures):
         return "--gdb excludes --expect and --fail-on (under GDB, GDB decides when the run stops)"
     if args.uart_script is not None and (args.uart_input is not None or args.expected or args.frames is not None

@@ -283,6 +283,21 @@ def test_timers_tick_pwm_alarm_and_a_key_through_the_plic(c_firmware, tmp_path):
     assert lows == {750} and highs == {250}                 # microseconds
 
 
+def test_boot_key_tells_each_press_and_release_and_lights_the_green_led(c_firmware, tmp_path):
+    """boot_key.c (the live view's browser test presses its key from the page): both edges of the
+    BOOT key through the PLIC, the green LED (pad 13) low while the key is down."""
+    out = tmp_path / "out"
+    run = run_emulator("run", str(c_firmware / "boot_key.elf"), "--until", "0.1", "--quiet", "--out", str(out),
+                       "--pin", "16=0@0.03", "--pin", "16=z@0.05", "--pin", "16=0@0.06", "--pin", "16=z@0.07")
+    assert run.returncode == 0, run.stderr
+    summary = json.loads((out / "run.json").read_text())
+    assert console_of(summary) == ["boot_key: press the BOOT key", "BOOT key pressed (1)", "BOOT key released (1)",
+                                   "BOOT key pressed (2)", "BOOT key released (2)"]
+    led = [(round(change["virtual_time_s"], 3), change["level"]) for change in summary["pad_changes"]
+           if change["pad"] == 13]
+    assert led == [(0.0, 1), (0.03, 0), (0.05, 1), (0.06, 0), (0.07, 1)]
+
+
 def test_an_unfed_watchdog_interrupts_then_resets_and_the_program_finds_out(c_firmware, tmp_path):
     out = tmp_path / "out"
     run = run_emulator("run", str(c_firmware / "watchdog.elf"), "--until", "0.1", "--quiet", "--out", str(out))

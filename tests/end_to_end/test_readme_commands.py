@@ -3,8 +3,9 @@ being the project's virtual environment), or, where running it inside the suite 
 possible, checked as far as it can be, for a reason stated next to it:
 
 - `make test` is what CI runs (.ci/run), so the suite cannot run itself;
-- `make bench` takes minutes and `make goldens` rewrites tests/golden: `make -n` checks that the
-  target exists and what it would run;
+- `make bench` takes minutes, `make goldens` rewrites tests/golden and `make flash-to-emulator
+  VIEW=1` serves its page until Ctrl-C (tests/test_view_browser.py runs that command line with a
+  browser): `make -n` checks that the target exists and what it would run;
 - the environment variables of the long test runs must be read by the tests they name.
 
 What the commands write goes to the test's temporary folder, never into build/, whose outputs
@@ -155,6 +156,11 @@ def _c_golden_matched(result: subprocess.CompletedProcess, tmp: Path) -> None:
     assert "[golden] all 4 frames match tests/golden/c-lcd-demo" in result.stderr
 
 
+def _serves_the_view(result: subprocess.CompletedProcess, tmp: Path) -> None:
+    run_line = next(line for line in result.stdout.splitlines() if "-m emulator run" in line)
+    assert "--view 8210" in run_line and "--frames" not in run_line      # until Ctrl-C (test_view_browser.py)
+
+
 #: README command -> (how it is checked: "run" or "dry-run", what must hold afterwards).
 #: "dry-run" commands go through `make -n` (see the module's docstring for why).
 COMMANDS = {
@@ -164,6 +170,7 @@ COMMANDS = {
     "make goldens": ("dry-run", lambda r, tmp: None),
     "make goldens SCENES=gem-flat": ("dry-run", lambda r, tmp: None),
     "make debug": ("dry-run", lambda r, tmp: None),
+    "make flash-to-emulator VIEW=1": ("dry-run", _serves_the_view),
     "make flash PORT=/dev/ttyUSB0": ("dry-run", lambda r, tmp: None),
     'make goldens SCENE_DIRS="my-scene other-scene"': ("dry-run", lambda r, tmp: None),
     "make golden-check SCENE_DIRS=my-scene": ("dry-run", lambda r, tmp: None),

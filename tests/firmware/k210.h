@@ -107,6 +107,7 @@ static inline void mmio_write64(uintptr_t address, uint64_t value) { *(volatile 
 #define PAD_UARTHS_TX           5
 #define PAD_LED_BLUE            12         /* LEDs light when their pad is low */
 #define PAD_LED_GREEN           13
+#define PAD_BOOT                16         /* the BOOT key: pulled up, pressed pulls it low */
 #define PAD_LCD_CS              36
 #define PAD_LCD_RST             37
 #define PAD_LCD_DC              38
@@ -195,6 +196,8 @@ static inline void mmio_write64(uintptr_t address, uint64_t value) { *(volatile 
 
 /* --- GPIOHS interrupts (gpiohs.h) --------------------------------------------------------- */
 #define GPIOHS_INPUT_VAL        0x00
+#define GPIOHS_RISE_IE          0x18
+#define GPIOHS_RISE_IP          0x1C
 #define GPIOHS_FALL_IE          0x20
 #define GPIOHS_FALL_IP          0x24
 

@@ -118,3 +118,23 @@ _start:
     schedule.write_text("soon 17 1\n")
     result = run_emulator("run", str(elf), "--out", str(tmp_path / "bad"), "--quiet", "--pin-file", str(schedule))
     assert result.returncode == 6 and "pins.txt:1:" in result.stderr
+
+
+def test_a_pad_driven_from_outside_while_the_board_runs(c_firmware):
+    """Board.drive_pad (the live view's keys): at the board's time, at once when every hart is
+    there; a later time waits for it; never before the board's time."""
+    from emulator.board import Board
+    from emulator.vtime import from_seconds
+    console = bytearray()
+    board = Board(str(c_firmware / "boot_key.elf"), console=console.append)
+    board.run_until(from_seconds(0.01))
+    pressed = board.drive_pad(PAD_BOOT, 0)
+    assert pressed.at == board.time and board.pins.levels == {PAD_BOOT: 0}       # at once
+    released = board.drive_pad(PAD_BOOT, None, at=board.time + 5 * PS_PER_MS)
+    early = board.drive_pad(20, 1, at=0)
+    assert early.at == board.time and board.pins.levels == {PAD_BOOT: 0, 20: 1}
+    board.run_until(from_seconds(0.02))
+    assert board.pins.levels == {20: 1} and board.pins.played == [pressed, early, released]
+    assert console.decode().splitlines()[1:] == ["BOOT key pressed (1)", "BOOT key released (1)"]
+    with pytest.raises(ValueError, match="pad 48"):
+        board.drive_pad(48, 0)
