@@ -4,7 +4,7 @@ possible, checked as far as it can be, for a reason stated next to it:
 
 - `make test` is what CI runs (.ci/run), so the suite cannot run itself;
 - `make bench` takes minutes, `make goldens` rewrites tests/golden and `make flash-to-emulator
-  VIEW=1` serves its page until Ctrl-C (tests/test_view_browser.py runs that command line with a
+  VIEW=1` serves its page until Ctrl-C (tests/end_to_end/test_view_browser.py runs that command line with a
   browser): `make -n` checks that the target exists and what it would run;
 - the environment variables of the long test runs must be read by the tests they name.
 

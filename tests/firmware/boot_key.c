@@ -1,7 +1,7 @@
 /* boot_key.c: the Dock's BOOT key (pad 16, GPIOHS line 5, the pad pulled up) through the PLIC,
  * both edges interrupting: each press and release is told on the console, and the green LED
  * (pad 13, GPIOHS line 6, lit when low) is lit while the key is down. Runs until the run ends;
- * the live view's test (tests/test_view_browser.py) presses the key from the page. */
+ * the live view's test (tests/end_to_end/test_view_browser.py) presses the key from the page. */
 #include <stdio.h>
 
 #include "drivers.h"
