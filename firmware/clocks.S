@@ -9,6 +9,7 @@
 
     .option norelax
     .include "k210.inc"
+    .include "frame.inc"
 
     .text
     .globl clocks_init
@@ -23,9 +24,7 @@
 #         from what the registers hold, not from the constants).
 #   Clobbers: only ABI temporaries.
 clocks_init:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
-    sd      s0, 0(sp)
+    FRAME_SAVE 16, ra, s0
     li      s0, SYSCTL_BASE
 
     # 1. CPU onto the 26 MHz oscillator while PLL0 is down.
@@ -146,9 +145,7 @@ clocks_init:
     la      t1, cpu_hz
     sw      a0, 0(t1)
 
-    ld      s0, 0(sp)
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+    FRAME_RESTORE 16, ra, s0
     ret
 
 # ---------------------------------------------------------------------------

@@ -23,6 +23,7 @@
 
     .option norelax
     .include "k210.inc"
+    .include "frame.inc"
 
     .text
     .globl console_init
@@ -68,13 +69,11 @@ console_putc:
     bltz    t1, 1b                      # bit 31 (sign) = FIFO full
     sw      a0, UARTHS_TXDATA(t0)
     ret
-4:  addi    sp, sp, -16
-    sd      ra, 8(sp)
+4:  FRAME_SAVE 16, ra
     sd      a0, 0(sp)
     call    console_drain
     ld      a0, 0(sp)
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+    FRAME_RESTORE 16, ra
     j       3b
 
     # Relayed: append at head (indices run freely; full at RING_BYTES apart).
@@ -85,13 +84,11 @@ console_putc:
     subw    t5, t1, t2                  # t5 = bytes held (the indices wrap at 2^32)
     li      t4, CONSOLE_RING_BYTES
     bltu    t5, t4, 6f
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
+    FRAME_SAVE 16, ra
     sd      a0, 0(sp)
     call    console_send_oldest
     ld      a0, 0(sp)
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+    FRAME_RESTORE 16, ra
     j       5b
 6:  andi    t3, t1, CONSOLE_RING_MASK
     la      t2, console_ring
@@ -119,18 +116,14 @@ console_putc:
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 console_puts:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
-    sd      s0, 0(sp)
+    FRAME_SAVE 16, ra, s0
     mv      s0, a0
 1:  lbu     a0, 0(s0)
     beqz    a0, 2f
     call    console_putc
     addi    s0, s0, 1
     j       1b
-2:  ld      s0, 0(sp)
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+2:  FRAME_RESTORE 16, ra, s0
     ret
 
 # console_send_oldest (file-local)
@@ -160,8 +153,7 @@ console_send_oldest:
 #   Arguments: none. Results: none.
 #   Clobbers: only ABI temporaries.
 console_drain:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
+    FRAME_SAVE 16, ra
 1:  la      t0, console_ring_head
     lw      t1, 0(t0)
     la      t0, console_ring_tail
@@ -169,8 +161,7 @@ console_drain:
     beq     t1, t2, 2f
     call    console_send_oldest
     j       1b
-2:  ld      ra, 8(sp)
-    addi    sp, sp, 16
+2:  FRAME_RESTORE 16, ra
     ret
 
 # console_pump (file-local)
@@ -205,15 +196,13 @@ console_pump:
 #   Arguments: none. Results: none.
 #   Clobbers: only ABI temporaries.
 console_relay_start:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
+    FRAME_SAVE 16, ra
     call    console_lock
     la      t0, console_relay
     li      t1, 1
     sw      t1, 0(t0)
     call    console_unlock
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+    FRAME_RESTORE 16, ra
     ret
 
     .globl console_relay_stop
@@ -242,11 +231,7 @@ console_relay_stop:
 #   Clobbers: only ABI temporaries. Leaves this hart's msip clear and its
 #         timer off.
 console_wait_us:
-    addi    sp, sp, -32
-    sd      ra, 24(sp)
-    sd      s0, 16(sp)
-    sd      s1, 8(sp)
-    sd      s2, 0(sp)
+    FRAME_SAVE 32, ra, s0, s1, s2
     call    timer_deadline
     mv      s0, a0                      # s0 = the wait's end (mtime)
     call    console_relay_sleep_begin
@@ -260,11 +245,7 @@ console_wait_us:
     beqz    a0, 1b
     mv      a0, s2
     call    console_relay_sleep_end
-    ld      s2, 0(sp)
-    ld      s1, 8(sp)
-    ld      s0, 16(sp)
-    ld      ra, 24(sp)
-    addi    sp, sp, 32
+    FRAME_RESTORE 32, ra, s0, s1, s2
     ret
 
     .globl console_relay_until
@@ -282,12 +263,7 @@ console_wait_us:
 #   Clobbers: only ABI temporaries. Leaves this hart's msip clear and its
 #         timer off.
 console_relay_until:
-    addi    sp, sp, -48
-    sd      ra, 40(sp)
-    sd      s0, 32(sp)
-    sd      s1, 24(sp)
-    sd      s2, 16(sp)
-    sd      s3, 8(sp)
+    FRAME_SAVE 48, ra, s0, s1, s2, s3
     mv      s0, a0
     mv      s1, a1
     call    console_relay_sleep_begin
@@ -311,12 +287,7 @@ console_relay_until:
     call    console_relay_sleep_end
     fence   r, rw                       # acquire: what was written before the word
     mv      a0, s1
-    ld      s3, 8(sp)
-    ld      s2, 16(sp)
-    ld      s1, 24(sp)
-    ld      s0, 32(sp)
-    ld      ra, 40(sp)
-    addi    sp, sp, 48
+    FRAME_RESTORE 48, ra, s0, s1, s2, s3
     ret
 
 # console_relay_sleep_begin (file-local)
@@ -364,10 +335,7 @@ console_relay_sleep_end:
 #   Results: a0 = 1 when mtime had reached a0 (no sleep), else 0.
 #   Clobbers: only ABI temporaries.
 console_relay_nap:
-    addi    sp, sp, -32
-    sd      ra, 24(sp)
-    sd      s0, 16(sp)
-    sd      s1, 8(sp)
+    FRAME_SAVE 32, ra, s0, s1
     mv      s0, a0
     mv      s1, a1
     call    console_lock
@@ -389,10 +357,7 @@ console_relay_nap:
 1:  sd      a0, 0(s1)                   # (also drops an earlier MTIP)
     wfi
     li      a0, 0
-2:  ld      s1, 8(sp)
-    ld      s0, 16(sp)
-    ld      ra, 24(sp)
-    addi    sp, sp, 32
+2:  FRAME_RESTORE 32, ra, s0, s1
     ret
 
     .globl console_put_hex64
@@ -425,10 +390,7 @@ console_put_hex32:
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 console_put_hex:
-    addi    sp, sp, -32
-    sd      ra, 24(sp)
-    sd      s0, 16(sp)
-    sd      s1, 8(sp)
+    FRAME_SAVE 32, ra, s0, s1
     mv      s0, a0
     slli    s1, a1, 2                   # s1 = bit position above the next digit
 1:  addi    s1, s1, -4
@@ -439,10 +401,7 @@ console_put_hex:
     lbu     a0, 0(t1)
     call    console_putc
     bnez    s1, 1b
-    ld      s1, 8(sp)
-    ld      s0, 16(sp)
-    ld      ra, 24(sp)
-    addi    sp, sp, 32
+    FRAME_RESTORE 32, ra, s0, s1
     ret
 
     .globl console_put_dec
@@ -453,9 +412,7 @@ console_put_hex:
 #   Clobbers: only ABI temporaries.
     .equ DEC_DIGITS_MAX, 20             # 2^64 - 1 has 20 digits
 console_put_dec:
-    addi    sp, sp, -48
-    sd      ra, 40(sp)
-    sd      s0, 32(sp)
+    FRAME_SAVE 48, ra, s0
     # Digits come out least significant first: build them backwards in a
     # buffer on the stack, then print the buffer forwards.
     addi    s0, sp, DEC_DIGITS_MAX
@@ -469,9 +426,7 @@ console_put_dec:
     bnez    a0, 1b
     mv      a0, s0
     call    console_puts
-    ld      s0, 32(sp)
-    ld      ra, 40(sp)
-    addi    sp, sp, 48
+    FRAME_RESTORE 48, ra, s0
     ret
 
     .globl console_lock
@@ -506,10 +461,7 @@ console_unlock:
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 console_line_dec:
-    addi    sp, sp, -32
-    sd      ra, 24(sp)
-    sd      s0, 16(sp)
-    sd      s1, 8(sp)
+    FRAME_SAVE 32, ra, s0, s1
     mv      s0, a0
     mv      s1, a1
     call    console_lock
@@ -520,10 +472,7 @@ console_line_dec:
     li      a0, '\n'
     call    console_putc
     call    console_unlock
-    ld      s1, 8(sp)
-    ld      s0, 16(sp)
-    ld      ra, 24(sp)
-    addi    sp, sp, 32
+    FRAME_RESTORE 32, ra, s0, s1
     ret
 
     .globl console_line
@@ -532,17 +481,13 @@ console_line_dec:
 #   Arguments: a0 = string. Results: none.
 #   Clobbers: only ABI temporaries.
 console_line:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
-    sd      s0, 0(sp)
+    FRAME_SAVE 16, ra, s0
     mv      s0, a0
     call    console_lock
     mv      a0, s0
     call    console_puts
     call    console_unlock
-    ld      s0, 0(sp)
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+    FRAME_RESTORE 16, ra, s0
     ret
 
 # ---------------------------------------------------------------------------

@@ -18,6 +18,7 @@
     .option norelax
     .include "k210.inc"
     .include "errors.inc"
+    .include "frame.inc"
 
     .section .rodata
     .balign 2
@@ -46,9 +47,7 @@ msg_hex_prefix: .asciz "0x"
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 error_begin:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
-    sd      s0, 0(sp)
+    FRAME_SAVE 16, ra, s0
     mv      s0, a0
     la      t0, error_code
     sw      a0, 0(t0)
@@ -67,9 +66,7 @@ error_begin:
     call    console_put_dec
     li      a0, ' '
     call    console_putc
-    ld      s0, 0(sp)
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+    FRAME_RESTORE 16, ra, s0
     ret
 
     .globl error_end

@@ -34,6 +34,7 @@
     .include "k210.inc"
     .include "fat32.inc"
     .include "errors.inc"
+    .include "frame.inc"
 
 # Little-endian loads at any alignment (BPB and MBR fields are unaligned).
 .macro LE16 rd, off, base, tmp
@@ -143,19 +144,7 @@ msg_root_path:      .asciz "/"
 #   Arguments: none. Results: none (returns only with a usable volume).
 #   Clobbers: only ABI temporaries.
 fat32_mount:
-    addi    sp, sp, -96
-    sd      ra, 88(sp)
-    sd      s0, 80(sp)
-    sd      s1, 72(sp)
-    sd      s2, 64(sp)
-    sd      s3, 56(sp)
-    sd      s4, 48(sp)
-    sd      s5, 40(sp)
-    sd      s6, 32(sp)
-    sd      s7, 24(sp)
-    sd      s8, 16(sp)
-    sd      s9, 8(sp)
-    sd      s10, 0(sp)
+    FRAME_SAVE 96, ra, s0, s1, s2, s3, s4, s5, s6, s7, s8, s9, s10
     la      s0, fat_volume
     la      s1, fat_sector
     li      t0, -1
@@ -292,19 +281,7 @@ fat32_mount:
     call    console_puts
     call    console_unlock
 
-    ld      s10, 0(sp)
-    ld      s9, 8(sp)
-    ld      s8, 16(sp)
-    ld      s7, 24(sp)
-    ld      s6, 32(sp)
-    ld      s5, 40(sp)
-    ld      s4, 48(sp)
-    ld      s3, 56(sp)
-    ld      s2, 64(sp)
-    ld      s1, 72(sp)
-    ld      s0, 80(sp)
-    ld      ra, 88(sp)
-    addi    sp, sp, 96
+    FRAME_RESTORE 96, ra, s0, s1, s2, s3, s4, s5, s6, s7, s8, s9, s10
     ret
 
 # fat_check_on_card (file-local)

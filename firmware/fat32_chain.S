@@ -12,6 +12,7 @@
     .include "k210.inc"
     .include "fat32.inc"
     .include "errors.inc"
+    .include "frame.inc"
 
     .text
     .globl fat_cluster_lba
@@ -54,9 +55,7 @@ fat_check_cluster:
 #   Results: a0 = next cluster, or 0 at the end of the chain.
 #   Clobbers: only ABI temporaries.
 fat_chain_next:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
-    sd      s0, 0(sp)
+    FRAME_SAVE 16, ra, s0
     mv      s0, a0
     la      t0, fat_volume
     srli    a0, s0, FAT_ENTRIES_PER_SECTOR_SHIFT
@@ -85,9 +84,7 @@ fat_chain_next:
     la      a0, msg_chain_bad
     call    fat_chain_error
 21: call    fat_check_cluster
-3:  ld      s0, 0(sp)
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+3:  FRAME_RESTORE 16, ra, s0
     ret
 
     .globl fat_walk_start
@@ -99,8 +96,7 @@ fat_chain_next:
 #   Errors: 8 if the cluster is out of range.
 #   Clobbers: only ABI temporaries.
 fat_walk_start:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
+    FRAME_SAVE 16, ra
     sd      a0, 0(sp)
     call    fat_check_cluster
     ld      a0, 0(sp)
@@ -110,8 +106,7 @@ fat_walk_start:
     sd      t1, WALK_POWER(t0)
     sd      zero, WALK_COUNT(t0)
     sd      t1, WALK_STEPS(t0)
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+    FRAME_RESTORE 16, ra
     ret
 
     .globl fat_walk_next
@@ -127,8 +122,7 @@ fat_walk_start:
 #   Errors: 8 out of range, bad cluster, loop, longer than the volume.
 #   Clobbers: only ABI temporaries.
 fat_walk_next:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
+    FRAME_SAVE 16, ra
     call    fat_chain_next
     beqz    a0, 2f
     la      t0, fat_walk
@@ -153,8 +147,7 @@ fat_walk_next:
     sd      t2, WALK_POWER(t0)
     li      t1, 0
 12: sd      t1, WALK_COUNT(t0)
-2:  ld      ra, 8(sp)
-    addi    sp, sp, 16
+2:  FRAME_RESTORE 16, ra
     ret
 
     .globl fat_dir_check_length
@@ -171,10 +164,7 @@ fat_walk_next:
 #   Errors: 8 corrupt chain, or a directory longer than the limit.
 #   Clobbers: only ABI temporaries.
 fat_dir_check_length:
-    addi    sp, sp, -32
-    sd      ra, 24(sp)
-    sd      s0, 16(sp)
-    sd      s1, 8(sp)
+    FRAME_SAVE 32, ra, s0, s1
     mv      s0, a0                      # s0 = cluster reached
     call    fat_walk_start
     la      t0, fat_volume
@@ -188,10 +178,7 @@ fat_dir_check_length:
     mv      s0, a0
     bnez    s1, 1b
     call    fat_dir_error
-2:  ld      s1, 8(sp)
-    ld      s0, 16(sp)
-    ld      ra, 24(sp)
-    addi    sp, sp, 32
+2:  FRAME_RESTORE 32, ra, s0, s1
     ret
 
 # fat_dir_error (file-local)

@@ -21,6 +21,7 @@
     .include "k210.inc"
     .include "fat32.inc"
     .include "errors.inc"
+    .include "frame.inc"
 
     .text
     .globl fat32_load
@@ -34,12 +35,7 @@
 #   Errors: 6 not found, 7 does not fit in the heap, 8 corrupt chain.
 #   Clobbers: only ABI temporaries.
 fat32_load:
-    addi    sp, sp, -64
-    sd      ra, 56(sp)
-    sd      s0, 48(sp)
-    sd      s1, 40(sp)
-    sd      s2, 32(sp)
-    sd      s3, 24(sp)
+    FRAME_SAVE 64, ra, s0, s1, s2, s3
     # 0(sp): the CRC context (CRC_CTX_BYTES)
     mv      s0, a0
     call    fat32_open
@@ -83,12 +79,7 @@ fat32_load:
     mv      a0, s3
     mv      a1, s2
     ld      a2, CRC_CTX_CRC(sp)
-    ld      s3, 24(sp)
-    ld      s2, 32(sp)
-    ld      s1, 40(sp)
-    ld      s0, 48(sp)
-    ld      ra, 56(sp)
-    addi    sp, sp, 64
+    FRAME_RESTORE 64, ra, s0, s1, s2, s3
     ret
 
     .globl fat32_open
@@ -99,12 +90,10 @@ fat32_load:
 #   Errors: 6 not found, 8 corrupt chain or directory.
 #   Clobbers: only ABI temporaries.
 fat32_open:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
+    FRAME_SAVE 16, ra
     call    fat32_lookup
     beqz    a2, 1f
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+    FRAME_RESTORE 16, ra
     ret
 1:  la      t0, fat_path
     ld      a2, 0(t0)
@@ -125,12 +114,7 @@ fat32_open:
 #         FAT_DIR_MAX_ENTRIES entries.
 #   Clobbers: only ABI temporaries.
 fat32_lookup:
-    addi    sp, sp, -48
-    sd      ra, 40(sp)
-    sd      s0, 32(sp)
-    sd      s1, 24(sp)
-    sd      s2, 16(sp)
-    sd      s3, 8(sp)
+    FRAME_SAVE 48, ra, s0, s1, s2, s3
     la      t0, fat_path
     sd      a0, 0(t0)
     mv      s0, a0                      # s0 = next component
@@ -172,12 +156,7 @@ fat32_lookup:
     li      a2, 1
     j       10f
 9:  li      a2, 0
-10: ld      s3, 8(sp)
-    ld      s2, 16(sp)
-    ld      s1, 24(sp)
-    ld      s0, 32(sp)
-    ld      ra, 40(sp)
-    addi    sp, sp, 48
+10: FRAME_RESTORE 48, ra, s0, s1, s2, s3
     ret
 
 # fat32_find (file-local)
@@ -192,20 +171,7 @@ fat32_lookup:
 #         entries (the folder is named from fat_path up to fat_dir_end).
 #   Clobbers: only ABI temporaries.
 fat32_find:
-    addi    sp, sp, -112
-    sd      ra, 104(sp)
-    sd      s0, 96(sp)
-    sd      s1, 88(sp)
-    sd      s2, 80(sp)
-    sd      s3, 72(sp)
-    sd      s4, 64(sp)
-    sd      s5, 56(sp)
-    sd      s6, 48(sp)
-    sd      s7, 40(sp)
-    sd      s8, 32(sp)
-    sd      s9, 24(sp)
-    sd      s10, 16(sp)
-    sd      s11, 8(sp)
+    FRAME_SAVE 112, ra, s0, s1, s2, s3, s4, s5, s6, s7, s8, s9, s10, s11
     mv      s0, a0                      # s0 = cluster being read
     mv      s8, a1                      # s8 = name
     mv      s9, a2                      # s9 = name length (bytes)
@@ -322,19 +288,6 @@ fat32_find:
     lwu     a2, DIR_FILE_SIZE(s2)
     lbu     a3, DIR_ATTR(s2)
     li      a0, 1
-31: ld      s11, 8(sp)
-    ld      s10, 16(sp)
-    ld      s9, 24(sp)
-    ld      s8, 32(sp)
-    ld      s7, 40(sp)
-    ld      s6, 48(sp)
-    ld      s5, 56(sp)
-    ld      s4, 64(sp)
-    ld      s3, 72(sp)
-    ld      s2, 80(sp)
-    ld      s1, 88(sp)
-    ld      s0, 96(sp)
-    ld      ra, 104(sp)
-    addi    sp, sp, 112
+31: FRAME_RESTORE 112, ra, s0, s1, s2, s3, s4, s5, s6, s7, s8, s9, s10, s11
     ret
 

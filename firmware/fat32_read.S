@@ -11,6 +11,7 @@
     .include "k210.inc"
     .include "fat32.inc"
     .include "errors.inc"
+    .include "frame.inc"
 
     .text
     .globl fat32_read
@@ -28,18 +29,7 @@
 #   Clobbers: only ABI temporaries.
 fat32_read:
     beqz    a1, 9f
-    addi    sp, sp, -96
-    sd      ra, 88(sp)
-    sd      s0, 80(sp)
-    sd      s1, 72(sp)
-    sd      s2, 64(sp)
-    sd      s3, 56(sp)
-    sd      s4, 48(sp)
-    sd      s5, 40(sp)
-    sd      s6, 32(sp)
-    sd      s7, 24(sp)
-    sd      s8, 16(sp)
-    sd      s9, 8(sp)
+    FRAME_SAVE 96, ra, s0, s1, s2, s3, s4, s5, s6, s7, s8, s9
     mv      s0, a0                      # s0 = current cluster
     addi    s1, a1, FAT_SECTOR_BYTES - 1
     srli    s1, s1, FAT_SECTOR_SHIFT    # s1 = sectors still to read
@@ -94,18 +84,7 @@ fat32_read:
     call    sd_read_blocks
     j       1b                          # s0 = the next run's first cluster
 
-8:  ld      s9, 8(sp)
-    ld      s8, 16(sp)
-    ld      s7, 24(sp)
-    ld      s6, 32(sp)
-    ld      s5, 40(sp)
-    ld      s4, 48(sp)
-    ld      s3, 56(sp)
-    ld      s2, 64(sp)
-    ld      s1, 72(sp)
-    ld      s0, 80(sp)
-    ld      ra, 88(sp)
-    addi    sp, sp, 96
+8:  FRAME_RESTORE 96, ra, s0, s1, s2, s3, s4, s5, s6, s7, s8, s9
 9:  ret
 
     .if STREAM_CRC != CRC_CTX_CRC || STREAM_CRC_LEFT != CRC_CTX_LEFT
@@ -123,10 +102,7 @@ fat32_read:
 #   Errors: 6 not found, 8 corrupt chain (a first cluster out of range).
 #   Clobbers: only ABI temporaries.
 fat32_stream_open:
-    addi    sp, sp, -32
-    sd      ra, 24(sp)
-    sd      s0, 16(sp)
-    sd      s1, 8(sp)
+    FRAME_SAVE 32, ra, s0, s1
     mv      s0, a0                      # s0 = stream
     sd      a1, STREAM_PATH(s0)
     mv      a0, a1
@@ -142,10 +118,7 @@ fat32_stream_open:
     beqz    s1, 1f                      # an empty file: no chain to follow
     call    fat_walk_start
 1:  mv      a0, s1
-    ld      s1, 8(sp)
-    ld      s0, 16(sp)
-    ld      ra, 24(sp)
-    addi    sp, sp, 32
+    FRAME_RESTORE 32, ra, s0, s1
     ret
 
     .globl fat32_stream_read
@@ -164,16 +137,7 @@ fat32_stream_open:
 #         the volume, ending before or after the file's size).
 #   Clobbers: only ABI temporaries.
 fat32_stream_read:
-    addi    sp, sp, -80
-    sd      ra, 72(sp)
-    sd      s0, 64(sp)
-    sd      s1, 56(sp)
-    sd      s2, 48(sp)
-    sd      s3, 40(sp)
-    sd      s4, 32(sp)
-    sd      s5, 24(sp)
-    sd      s6, 16(sp)
-    sd      s7, 8(sp)
+    FRAME_SAVE 80, ra, s0, s1, s2, s3, s4, s5, s6, s7
     mv      s0, a0                      # s0 = stream
     mv      s1, a1                      # s1 = destination
     ld      t0, STREAM_LEFT(s0)
@@ -252,16 +216,7 @@ fat32_stream_read:
     call    fat_chain_error
 
 90: mv      a0, s7
-    ld      s7, 8(sp)
-    ld      s6, 16(sp)
-    ld      s5, 24(sp)
-    ld      s4, 32(sp)
-    ld      s3, 40(sp)
-    ld      s2, 48(sp)
-    ld      s1, 56(sp)
-    ld      s0, 64(sp)
-    ld      ra, 72(sp)
-    addi    sp, sp, 80
+    FRAME_RESTORE 80, ra, s0, s1, s2, s3, s4, s5, s6, s7
     ret
 
     .globl fat_crc_sector
@@ -281,8 +236,7 @@ fat_crc_sector:
 1:  ld      t1, CRC_CTX_LEFT(a1)
     sub     t1, t1, a2
     sd      t1, CRC_CTX_LEFT(a1)
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
+    FRAME_SAVE 16, ra
     sd      a1, 0(sp)                   # the context
     mv      t0, a1
     mv      a1, a0
@@ -290,7 +244,6 @@ fat_crc_sector:
     call    crc32_update                # (CRC so far, sector, bytes)
     ld      t0, 0(sp)
     sd      a0, CRC_CTX_CRC(t0)
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+    FRAME_RESTORE 16, ra
 2:  ret
 

@@ -11,6 +11,7 @@
     .include "k210.inc"
     .include "errors.inc"
     .include "heap.inc"
+    .include "frame.inc"
 
     .text
     .globl heap_init
@@ -72,18 +73,12 @@ heap_release:
 #   Results: a0 = address (never 0).
 #   Clobbers: only ABI temporaries.
 heap_alloc_or_fail:
-    addi    sp, sp, -32
-    sd      ra, 24(sp)
-    sd      s0, 16(sp)
-    sd      s1, 8(sp)
+    FRAME_SAVE 32, ra, s0, s1
     mv      s0, a0                      # s0 = bytes
     mv      s1, a1                      # s1 = name
     call    heap_alloc
     beqz    a0, 1f
-    ld      s1, 8(sp)
-    ld      s0, 16(sp)
-    ld      ra, 24(sp)
-    addi    sp, sp, 32
+    FRAME_RESTORE 32, ra, s0, s1
     ret
 1:  li      a0, ERR_MODEL_TOO_LARGE
     call    error_begin

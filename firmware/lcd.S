@@ -12,6 +12,7 @@
     .option norelax
     .include "k210.inc"
     .include "st7789v.inc"
+    .include "frame.inc"
 
     .text
     .globl lcd_init
@@ -29,9 +30,7 @@
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 lcd_init:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
-    sd      s0, 0(sp)
+    FRAME_SAVE 16, ra, s0
     mv      s0, a0
 
     call    spi0_init
@@ -76,9 +75,7 @@ lcd_init:
     li      t1, 1
     sw      t1, 0(t0)
 
-    ld      s0, 0(sp)
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+    FRAME_RESTORE 16, ra, s0
     ret
 
     .globl lcd_command
@@ -88,16 +85,14 @@ lcd_init:
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 lcd_command:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
+    FRAME_SAVE 16, ra
     sb      a0, 0(sp)
     li      a0, GPIOHS_LCD_DC_BIT
     call    gpiohs_clear
     mv      a0, sp
     li      a1, 1
     call    spi0_send_bytes
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+    FRAME_RESTORE 16, ra
     ret
 
     .globl lcd_command_params
@@ -108,10 +103,7 @@ lcd_command:
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 lcd_command_params:
-    addi    sp, sp, -32
-    sd      ra, 24(sp)
-    sd      s0, 16(sp)
-    sd      s1, 8(sp)
+    FRAME_SAVE 32, ra, s0, s1
     mv      s0, a1
     mv      s1, a2
     call    lcd_command
@@ -120,10 +112,7 @@ lcd_command_params:
     mv      a0, s0
     mv      a1, s1
     call    spi0_send_bytes
-    ld      s1, 8(sp)
-    ld      s0, 16(sp)
-    ld      ra, 24(sp)
-    addi    sp, sp, 32
+    FRAME_RESTORE 32, ra, s0, s1
     ret
 
 # lcd_command_byte (file-local)
@@ -132,14 +121,12 @@ lcd_command_params:
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 lcd_command_byte:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
+    FRAME_SAVE 16, ra
     sb      a1, 0(sp)
     mv      a1, sp
     li      a2, 1
     call    lcd_command_params
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+    FRAME_RESTORE 16, ra
     ret
 
 # lcd_command_range (file-local)
@@ -148,8 +135,7 @@ lcd_command_byte:
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 lcd_command_range:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
+    FRAME_SAVE 16, ra
     srli    t0, a1, 8
     sb      t0, 0(sp)
     sb      a1, 1(sp)
@@ -159,8 +145,7 @@ lcd_command_range:
     mv      a1, sp
     li      a2, LCD_WINDOW_BYTES
     call    lcd_command_params
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+    FRAME_RESTORE 16, ra
     ret
 
     .globl lcd_set_window
@@ -171,10 +156,7 @@ lcd_command_range:
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 lcd_set_window:
-    addi    sp, sp, -32
-    sd      ra, 24(sp)
-    sd      s0, 16(sp)
-    sd      s1, 8(sp)
+    FRAME_SAVE 32, ra, s0, s1
     mv      s0, a1
     mv      s1, a3
     mv      a1, a0
@@ -184,10 +166,7 @@ lcd_set_window:
     mv      a1, s0
     mv      a2, s1
     call    lcd_command_range
-    ld      s1, 8(sp)
-    ld      s0, 16(sp)
-    ld      ra, 24(sp)
-    addi    sp, sp, 32
+    FRAME_RESTORE 32, ra, s0, s1
     ret
 
 # lcd_begin_full_frame (file-local)
@@ -199,14 +178,12 @@ lcd_set_window:
 #   Arguments: none. Results: none.
 #   Clobbers: only ABI temporaries.
 lcd_begin_full_frame:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
+    FRAME_SAVE 16, ra
     li      a0, LCD_CMD_RAMWR
     call    lcd_command
     li      a0, GPIOHS_LCD_DC_BIT
     call    gpiohs_set
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+    FRAME_RESTORE 16, ra
     ret
 
     .globl lcd_send_frame
@@ -219,12 +196,10 @@ lcd_begin_full_frame:
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 lcd_send_frame:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
+    FRAME_SAVE 16, ra
     call    lcd_frame_start
     call    lcd_frame_finish
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+    FRAME_RESTORE 16, ra
     ret
 
     .globl lcd_frame_start
@@ -237,17 +212,13 @@ lcd_send_frame:
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 lcd_frame_start:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
-    sd      s0, 0(sp)
+    FRAME_SAVE 16, ra, s0
     mv      s0, a0
     call    lcd_begin_full_frame
     mv      a0, s0
     li      a1, LCD_FB_WORDS
     call    spi0_dma_send_start
-    ld      s0, 0(sp)
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+    FRAME_RESTORE 16, ra, s0
     ret
 
     .globl lcd_frame_finish
@@ -272,8 +243,7 @@ lcd_error_screen:
     la      t0, lcd_ready
     lw      t0, 0(t0)
     beqz    t0, 2f
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
+    FRAME_SAVE 16, ra
     call    dma_quiesce
     call    lcd_begin_full_frame
     la      t0, lcd_error_colour
@@ -290,8 +260,7 @@ lcd_error_screen:
     call    spi0_dma_fill_words
     j       3f
 1:  call    spi0_fill_words
-3:  ld      ra, 8(sp)
-    addi    sp, sp, 16
+3:  FRAME_RESTORE 16, ra
 2:  ret
 
 # ---------------------------------------------------------------------------

@@ -20,6 +20,7 @@
     .include "st7789v.inc"
     .include "scene.inc"
     .include "render.inc"
+    .include "frame.inc"
 
     .text
     .globl sincos_deg
@@ -95,10 +96,7 @@ sincos_deg:
 #   Arguments: none. Results: none.
 #   Clobbers: only ABI temporaries.
 angle_table_build:
-    addi    sp, sp, -32
-    sd      ra, 24(sp)
-    sd      s0, 16(sp)
-    sd      s1, 8(sp)
+    FRAME_SAVE 32, ra, s0, s1
     la      s0, angle_table
     li      s1, 0                       # s1 = n
 1:  fcvt.d.w fa0, s1
@@ -108,10 +106,7 @@ angle_table_build:
     addi    s1, s1, 1
     li      t0, ANGLE_TABLE_ENTRIES
     bne     s1, t0, 1b
-    ld      s1, 8(sp)
-    ld      s0, 16(sp)
-    ld      ra, 24(sp)
-    addi    sp, sp, 32
+    FRAME_RESTORE 32, ra, s0, s1
     ret
 
     .globl sincos_deg_table
@@ -153,10 +148,7 @@ sincos_deg_table:
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 quat_from_axis_angle:
-    addi    sp, sp, -32
-    sd      ra, 24(sp)
-    sd      s0, 16(sp)
-    sd      s1, 8(sp)
+    FRAME_SAVE 32, ra, s0, s1
     mv      s0, a0
     mv      s1, a1
     li      t0, F64_HALF
@@ -176,10 +168,7 @@ quat_from_axis_angle:
     flw     ft0, 8(s1)
     fmul.s  ft0, ft0, fa0
     fsw     ft0, QUAT_Z(s0)
-    ld      s1, 8(sp)
-    ld      s0, 16(sp)
-    ld      ra, 24(sp)
-    addi    sp, sp, 32
+    FRAME_RESTORE 32, ra, s0, s1
     ret
 
     .globl quat_to_mat3
@@ -299,12 +288,7 @@ mat4_model:
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 mat4_perspective:
-    addi    sp, sp, -48
-    sd      ra, 40(sp)
-    sd      s0, 32(sp)
-    fsd     fs0, 24(sp)
-    fsd     fs1, 16(sp)
-    fsd     fs2, 8(sp)
+    FRAME_SAVE 48, ra, s0, fs0, fs1, fs2
     mv      s0, a0
     fmv.s   fs0, fa1
     fmv.s   fs1, fa2
@@ -333,12 +317,7 @@ mat4_perspective:
     fmv.w.x ft4, t0
     fneg.s  ft4, ft4
     fsw     ft4, 56(s0)                 # (3, 2) = -1
-    fld     fs2, 8(sp)
-    fld     fs1, 16(sp)
-    fld     fs0, 24(sp)
-    ld      s0, 32(sp)
-    ld      ra, 40(sp)
-    addi    sp, sp, 48
+    FRAME_RESTORE 48, ra, s0, fs0, fs1, fs2
     ret
 
     .globl mat4_mul

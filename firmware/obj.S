@@ -65,6 +65,7 @@
     .include "heap.inc"
     .include "scene.inc"
     .include "text.inc"
+    .include "frame.inc"
 
 # obj_state (.bss): the pass in progress
     .equ OBJ_STORE,             0           # 0 first pass (count), 1 second (store)
@@ -209,14 +210,7 @@ msg_normals_flat:   .asciz " normals (not stored: shading flat)\n"
 #   Arguments: none. Results: none (errors are fatal).
 #   Clobbers: only ABI temporaries.
 obj_parse_model:
-    addi    sp, sp, -64
-    sd      ra, 56(sp)
-    sd      s0, 48(sp)
-    sd      s1, 40(sp)
-    sd      s2, 32(sp)
-    sd      s3, 24(sp)
-    sd      s4, 16(sp)
-    sd      s5, 8(sp)
+    FRAME_SAVE 64, ra, s0, s1, s2, s3, s4, s5
     la      s2, obj_state               # s2 = state
     la      s3, scene                   # s3 = scene
     # Normals only where they are drawn: Gouraud shading in a lit mode.
@@ -320,14 +314,7 @@ obj_parse_model:
     la      a0, msg_normals_wireframe
 2:  call    console_puts
     call    console_unlock
-    ld      s5, 8(sp)
-    ld      s4, 16(sp)
-    ld      s3, 24(sp)
-    ld      s2, 32(sp)
-    ld      s1, 40(sp)
-    ld      s0, 48(sp)
-    ld      ra, 56(sp)
-    addi    sp, sp, 64
+    FRAME_RESTORE 64, ra, s0, s1, s2, s3, s4, s5
     ret
 
 80: li      a0, ERR_BAD_MODEL
@@ -382,9 +369,7 @@ obj_parse_model:
 #   Results: a0 = 1 when this or an earlier array did not fit, else 0.
 #   Clobbers: only ABI temporaries.
 obj_alloc:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
-    sd      s0, 0(sp)
+    FRAME_SAVE 16, ra, s0
     la      s0, scene
     add     s0, s0, a2                  # s0 = the pointer field
     sd      zero, 0(s0)
@@ -398,9 +383,7 @@ obj_alloc:
     sd      t1, 0(t0)
 1:  la      t0, obj_alloc_failed
     ld      a0, 0(t0)
-    ld      s0, 0(sp)
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+    FRAME_RESTORE 16, ra, s0
     ret
 
 # obj_pass (file-local)
@@ -414,9 +397,7 @@ obj_alloc:
 #   Results: none (errors are fatal).
 #   Clobbers: only ABI temporaries.
 obj_pass:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
-    sd      s0, 0(sp)
+    FRAME_SAVE 16, ra, s0
     la      s0, obj_state
     sd      zero, OBJ_LINE(s0)
     sd      zero, OBJ_COUNTS + (OBJ_KIND_V << OBJ_COUNT_SHIFT)(s0)
@@ -441,9 +422,7 @@ obj_pass:
 80: la      a0, msg_unknown
     j       obj_error
 
-90: ld      s0, 0(sp)
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+90: FRAME_RESTORE 16, ra, s0
     ret
 
 # obj_reader_open (file-local)
@@ -456,9 +435,7 @@ obj_pass:
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 obj_reader_open:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
-    sd      s0, 0(sp)
+    FRAME_SAVE 16, ra, s0
     la      s0, obj_reader
     sd      a0, RD_CRC_ON(s0)
     li      a0, OBJ_WINDOW_BYTES
@@ -480,9 +457,7 @@ obj_reader_open:
     ld      a1, FILE_RECORD_PATH(t0)
     call    fat32_stream_open
     sd      a0, RD_LEFT(s0)
-2:  ld      s0, 0(sp)
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+2:  FRAME_RESTORE 16, ra, s0
     ret
 
 # obj_reader_close (file-local)
@@ -508,11 +483,7 @@ obj_reader_close:
 #         end (the window is left as it was).
 #   Clobbers: only ABI temporaries.
 obj_refill:
-    addi    sp, sp, -32
-    sd      ra, 24(sp)
-    sd      s0, 16(sp)
-    sd      s1, 8(sp)
-    sd      s2, 0(sp)
+    FRAME_SAVE 32, ra, s0, s1, s2
     la      s0, obj_reader
     li      a0, 0
     ld      t0, RD_LEFT(s0)
@@ -574,11 +545,7 @@ obj_refill:
     sub     t0, t0, s2
     sd      t0, RD_LEFT(s0)
     li      a0, 1
-90: ld      s2, 0(sp)
-    ld      s1, 8(sp)
-    ld      s0, 16(sp)
-    ld      ra, 24(sp)
-    addi    sp, sp, 32
+90: FRAME_RESTORE 32, ra, s0, s1, s2
     ret
 
 # obj_more (file-local)
@@ -600,8 +567,7 @@ obj_more:
 #   Arguments: none. Results: none.
 #   Clobbers: only ABI temporaries.
 obj_next_line:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
+    FRAME_SAVE 16, ra
 1:  la      t0, obj_reader
     ld      t1, RD_CURSOR(t0)
     ld      t2, RD_END(t0)
@@ -615,8 +581,7 @@ obj_next_line:
 3:  sd      t1, RD_CURSOR(t0)
     call    obj_refill
     bnez    a0, 1b
-9:  ld      ra, 8(sp)
-    addi    sp, sp, 16
+9:  FRAME_RESTORE 16, ra
     ret
 
 # obj_token (file-local)
@@ -631,10 +596,7 @@ obj_next_line:
 #         ends (the cursor stays on what ends it).
 #   Clobbers: only ABI temporaries.
 obj_token:
-    addi    sp, sp, -32
-    sd      ra, 24(sp)
-    sd      s0, 16(sp)
-    sd      s1, 8(sp)
+    FRAME_SAVE 32, ra, s0, s1
     la      s0, obj_reader
 1:  ld      t0, RD_CURSOR(s0)           # spaces and tabs
     ld      t1, RD_END(s0)
@@ -684,10 +646,7 @@ obj_token:
 80: ld      a0, RD_CURSOR(s0)
     mv      a1, t3
     sd      a1, RD_CURSOR(s0)
-    ld      s1, 8(sp)
-    ld      s0, 16(sp)
-    ld      ra, 24(sp)
-    addi    sp, sp, 32
+    FRAME_RESTORE 32, ra, s0, s1
     ret
 
 # obj_find_statement (file-local)
@@ -733,10 +692,7 @@ obj_stmt_ignore:
 #   Results: none (errors are fatal).
 #   Clobbers: only ABI temporaries.
 obj_stmt_vector:
-    addi    sp, sp, -96
-    sd      ra, 88(sp)
-    sd      s0, 80(sp)
-    sd      s1, 72(sp)
+    FRAME_SAVE 96, ra, s0, s1
     # 0(sp): OBJ_NUMBERS_MAX doubles
     mv      s0, a2                      # s0 = row
     li      s1, 0                       # s1 = numbers
@@ -798,10 +754,7 @@ obj_stmt_vector:
     addi    t1, t1, OBJ_F32_BYTES
     addi    t2, t2, OBJ_DOUBLE_BYTES
     bltu    t2, s1, 3b
-9:  ld      s1, 72(sp)
-    ld      s0, 80(sp)
-    ld      ra, 88(sp)
-    addi    sp, sp, 96
+9:  FRAME_RESTORE 96, ra, s0, s1
     ret
 81: la      a0, msg_number
     j       obj_error
@@ -818,10 +771,7 @@ obj_stmt_vector:
 #   Results: none (errors are fatal).
 #   Clobbers: only ABI temporaries.
 obj_stmt_face:
-    addi    sp, sp, -48
-    sd      ra, 40(sp)
-    sd      s2, 16(sp)
-    sd      s3, 8(sp)
+    FRAME_SAVE 48, ra, _, _, s2, s3
     li      s2, 0                       # s2 = corners so far
     la      s3, obj_state
 1:  call    obj_token
@@ -862,10 +812,7 @@ obj_stmt_face:
     j       1b
 8:  li      t0, OBJ_FACE_MIN_CORNERS
     bltu    s2, t0, 80f
-    ld      s3, 8(sp)
-    ld      s2, 16(sp)
-    ld      ra, 40(sp)
-    addi    sp, sp, 48
+    FRAME_RESTORE 48, ra, _, _, s2, s3
     ret
 80: la      a0, msg_short_face
     j       obj_error
@@ -911,10 +858,7 @@ obj_store_corner:
 #   Results: a0 = the byte after it.
 #   Clobbers: only ABI temporaries.
 obj_corner:
-    addi    sp, sp, -32
-    sd      ra, 24(sp)
-    sd      s0, 16(sp)
-    sd      s1, 8(sp)
+    FRAME_SAVE 32, ra, s0, s1
     mv      s1, a1                      # s1 = end
     la      s0, obj_state
     li      t0, MESH_NO_INDEX
@@ -952,10 +896,7 @@ obj_corner:
     beq     t0, t1, 9f
     li      t1, CHAR_TAB
     bne     t0, t1, 80f
-9:  ld      s1, 8(sp)
-    ld      s0, 16(sp)
-    ld      ra, 24(sp)
-    addi    sp, sp, 32
+9:  FRAME_RESTORE 32, ra, s0, s1
     ret
 80: la      a0, msg_corner
     j       obj_error

@@ -18,6 +18,7 @@
 
     .option norelax
     .include "text.inc"
+    .include "frame.inc"
 
     .equ PARSE_MANTISSA_LIMIT,  1000000000000000000    # 10^18: one more digit still fits 64 bits
     .equ PARSE_EXPONENT_CAP,    100000      # |exponent| saturates here (the result is 0 or inf)
@@ -199,13 +200,7 @@ parse_number:
 #         something there is not a number (a0 undefined).
 #   Clobbers: only ABI temporaries.
 parse_numbers:
-    addi    sp, sp, -64
-    sd      ra, 56(sp)
-    sd      s0, 48(sp)
-    sd      s1, 40(sp)
-    sd      s2, 32(sp)
-    sd      s3, 24(sp)
-    sd      s4, 16(sp)
+    FRAME_SAVE 64, ra, s0, s1, s2, s3, s4
     mv      s0, a0                      # s0 = cursor
     mv      s1, a1                      # s1 = end
     mv      s2, a2                      # s2 = next slot
@@ -230,11 +225,5 @@ parse_numbers:
     li      a1, 0
     j       10f
 9:  li      a1, 1
-10: ld      s4, 16(sp)
-    ld      s3, 24(sp)
-    ld      s2, 32(sp)
-    ld      s1, 40(sp)
-    ld      s0, 48(sp)
-    ld      ra, 56(sp)
-    addi    sp, sp, 64
+10: FRAME_RESTORE 64, ra, s0, s1, s2, s3, s4
     ret

@@ -16,6 +16,7 @@
 
     .option norelax
     .include "k210.inc"
+    .include "frame.inc"
 
     .section .rodata
     .balign 4
@@ -77,8 +78,7 @@ pins_init:
 #   Arguments: a0 = mask of GPIOHS lines. Results: none.
 #   Clobbers: only ABI temporaries.
 gpiohs_set:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
+    FRAME_SAVE 16, ra
     sd      a0, 0(sp)
     call    shared_io_lock
     ld      a0, 0(sp)
@@ -88,8 +88,7 @@ gpiohs_set:
     sw      t1, GPIOHS_OUTPUT_VAL(t0)
     fence   o, o                        # the level is out before later device writes
     call    shared_io_unlock
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+    FRAME_RESTORE 16, ra
     ret
 
     .globl gpiohs_clear
@@ -98,8 +97,7 @@ gpiohs_set:
 #   Arguments: a0 = mask of GPIOHS lines. Results: none.
 #   Clobbers: only ABI temporaries.
 gpiohs_clear:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
+    FRAME_SAVE 16, ra
     sd      a0, 0(sp)
     call    shared_io_lock
     ld      a0, 0(sp)
@@ -110,8 +108,7 @@ gpiohs_clear:
     sw      t1, GPIOHS_OUTPUT_VAL(t0)
     fence   o, o
     call    shared_io_unlock
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+    FRAME_RESTORE 16, ra
     ret
 
     .globl shared_io_lock

@@ -35,6 +35,7 @@
     .include "errors.inc"
     .include "scene.inc"
     .include "text.inc"
+    .include "frame.inc"
 
     .equ PPM_MAGIC_P,           'P'
     .equ PPM_MAGIC_P6,          '6'
@@ -76,18 +77,7 @@ msg_times:          .asciz "x"
 #   Arguments: none. Results: none (errors are fatal).
 #   Clobbers: only ABI temporaries.
 ppm_parse_texture:
-    addi    sp, sp, -96
-    sd      ra, 88(sp)
-    sd      s0, 80(sp)
-    sd      s1, 72(sp)
-    sd      s2, 64(sp)
-    sd      s3, 56(sp)
-    sd      s4, 48(sp)
-    sd      s5, 40(sp)
-    sd      s6, 32(sp)
-    sd      s7, 24(sp)
-    sd      s8, 16(sp)
-    sd      s9, 8(sp)
+    FRAME_SAVE 96, ra, s0, s1, s2, s3, s4, s5, s6, s7, s8, s9
     la      t0, scene_texture
     ld      s0, 0(t0)                   # s0 = file (and pixels)
     ld      s1, 8(t0)
@@ -238,18 +228,7 @@ ppm_parse_texture:
     call    console_putc
     call    console_unlock
 
-90: ld      s9, 8(sp)
-    ld      s8, 16(sp)
-    ld      s7, 24(sp)
-    ld      s6, 32(sp)
-    ld      s5, 40(sp)
-    ld      s4, 48(sp)
-    ld      s3, 56(sp)
-    ld      s2, 64(sp)
-    ld      s1, 72(sp)
-    ld      s0, 80(sp)
-    ld      ra, 88(sp)
-    addi    sp, sp, 96
+90: FRAME_RESTORE 96, ra, s0, s1, s2, s3, s4, s5, s6, s7, s8, s9
     ret
 
 80: la      a0, msg_bad_magic
@@ -297,11 +276,7 @@ ppm_is_space:
 #         whitespace characters and comments were skipped (0 = none).
 #   Clobbers: only ABI temporaries.
 ppm_skip_space:
-    addi    sp, sp, -32
-    sd      ra, 24(sp)
-    sd      s0, 16(sp)
-    sd      s1, 8(sp)
-    sd      s2, 0(sp)
+    FRAME_SAVE 32, ra, s0, s1, s2
     mv      s0, a0
     mv      s1, a1
     li      s2, 0
@@ -325,11 +300,7 @@ ppm_skip_space:
     j       4b
 9:  mv      a0, s0
     mv      a1, s2
-    ld      s2, 0(sp)
-    ld      s1, 8(sp)
-    ld      s0, 16(sp)
-    ld      ra, 24(sp)
-    addi    sp, sp, 32
+    FRAME_RESTORE 32, ra, s0, s1, s2
     ret
 
 # ppm_decimal (file-local)
@@ -367,9 +338,7 @@ ppm_decimal:
 #   Errors: 11 truncated header, bad header.
 #   Clobbers: only ABI temporaries.
 ppm_header_number:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
-    sd      s0, 0(sp)
+    FRAME_SAVE 16, ra, s0
     mv      s0, a1                      # s0 = end
     call    ppm_skip_space
     bgeu    a0, s0, 81f
@@ -390,9 +359,7 @@ ppm_header_number:
     mv      t0, a0
     mv      a0, s0
     beqz    t0, 82f
-1:  ld      s0, 0(sp)
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+1:  FRAME_RESTORE 16, ra, s0
     ret
 81: la      a0, msg_short_header
     j       ppm_error
@@ -408,10 +375,7 @@ ppm_header_number:
 #   Errors: 11 truncated raster, bad sample.
 #   Clobbers: only ABI temporaries.
 ppm_plain_sample:
-    addi    sp, sp, -32
-    sd      ra, 24(sp)
-    sd      s0, 16(sp)
-    sd      s1, 8(sp)
+    FRAME_SAVE 32, ra, s0, s1
     mv      s0, a1                      # s0 = end
     call    ppm_skip_space
     bgeu    a0, s0, 85f
@@ -430,10 +394,7 @@ ppm_plain_sample:
     beqz    a0, 86f
     mv      a0, s0
 1:  mv      a1, s1
-    ld      s1, 8(sp)
-    ld      s0, 16(sp)
-    ld      ra, 24(sp)
-    addi    sp, sp, 32
+    FRAME_RESTORE 32, ra, s0, s1
     ret
 85: la      a0, msg_short_raster
     j       ppm_error

@@ -15,6 +15,7 @@
     .include "st7789v.inc"
     .include "scene.inc"
     .include "render.inc"
+    .include "frame.inc"
 
     .text
     .globl raster_segment
@@ -395,9 +396,7 @@ raster_set_union:
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 raster_union_line:
-    addi    sp, sp, -16
-    sd      s0, 8(sp)
-    sd      s1, 0(sp)
+    FRAME_SAVE 16, s0, s1
     li      s0, 1                       # s0 .. s1 = the middle sub-rows (none)
     li      s1, 0
     li      t0, F32_WIRE_FAR
@@ -580,9 +579,7 @@ raster_union_line:
 8:  fadd.s  fa4, fa4, ft9
     addi    a0, a0, 1
     ble     a0, a1, 4b
-9:  ld      s1, 0(sp)
-    ld      s0, 8(sp)
-    addi    sp, sp, 16
+9:  FRAME_RESTORE 16, s0, s1
     ret
 
     .globl raster_union_resolve

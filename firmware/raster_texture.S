@@ -8,6 +8,7 @@
     .include "st7789v.inc"
     .include "scene.inc"
     .include "render.inc"
+    .include "frame.inc"
 
     .text
     .globl raster_set_texture
@@ -45,20 +46,7 @@ raster_set_texture:
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 raster_build_mips:
-    addi    sp, sp, -112
-    sd      ra, 104(sp)
-    sd      s0, 96(sp)
-    sd      s1, 88(sp)
-    sd      s2, 80(sp)
-    sd      s3, 72(sp)
-    sd      s4, 64(sp)
-    sd      s5, 56(sp)
-    sd      s6, 48(sp)
-    sd      s7, 40(sp)
-    sd      s8, 32(sp)
-    sd      s9, 24(sp)
-    sd      s10, 16(sp)
-    sd      s11, 8(sp)
+    FRAME_SAVE 112, ra, s0, s1, s2, s3, s4, s5, s6, s7, s8, s9, s10, s11
     mv      s0, a0                      # s0, s1, s2 = the texture
     mv      s1, a1
     mv      s2, a2
@@ -163,20 +151,7 @@ raster_build_mips:
     addi    t4, t4, 1
     li      t0, MIP_TABLE_ENTRIES
     bltu    t4, t0, 21b
-    ld      s11, 8(sp)
-    ld      s10, 16(sp)
-    ld      s9, 24(sp)
-    ld      s8, 32(sp)
-    ld      s7, 40(sp)
-    ld      s6, 48(sp)
-    ld      s5, 56(sp)
-    ld      s4, 64(sp)
-    ld      s3, 72(sp)
-    ld      s2, 80(sp)
-    ld      s1, 88(sp)
-    ld      s0, 96(sp)
-    ld      ra, 104(sp)
-    addi    sp, sp, 112
+    FRAME_RESTORE 112, ra, s0, s1, s2, s3, s4, s5, s6, s7, s8, s9, s10, s11
     ret
 
 # mip_halve (file-local)
@@ -190,11 +165,7 @@ raster_build_mips:
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 mip_halve:
-    addi    sp, sp, -32
-    sd      s0, 24(sp)
-    sd      s1, 16(sp)
-    sd      s2, 8(sp)
-    sd      s3, 0(sp)
+    FRAME_SAVE 32, s0, s1, s2, s3
     li      s2, BLEND_SPREAD_MUL
     li      s3, BLEND_SPREAD_MASK
     li      s0, 0                       # s0 = j
@@ -259,11 +230,7 @@ mip_halve:
     bltu    s1, a4, 4b
     addi    s0, s0, 1
     bltu    s0, a5, 1b
-    ld      s3, 0(sp)
-    ld      s2, 8(sp)
-    ld      s1, 16(sp)
-    ld      s0, 24(sp)
-    addi    sp, sp, 32
+    FRAME_RESTORE 32, s0, s1, s2, s3
     ret
 
 # ---------------------------------------------------------------------------

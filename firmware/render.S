@@ -28,6 +28,7 @@
     .include "st7789v.inc"
     .include "scene.inc"
     .include "render.inc"
+    .include "frame.inc"
 
     .text
     .globl render_init
@@ -41,9 +42,7 @@
 #   Arguments: none. Results: none.
 #   Clobbers: only ABI temporaries.
 render_init:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
-    sd      s0, 0(sp)
+    FRAME_SAVE 16, ra, s0
     la      s0, scene
     call    vertex_init
     lwu     t1, SCENE_ANGLES(s0)
@@ -168,9 +167,7 @@ render_init:
     lwu     a1, TEX_W(s0)
     lwu     a2, TEX_H(s0)
     call    raster_build_mips
-9:  ld      s0, 0(sp)
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+9:  FRAME_RESTORE 16, ra, s0
     ret
 
     .globl render_frame
@@ -183,8 +180,7 @@ render_init:
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 render_frame:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
+    FRAME_SAVE 16, ra
     call    render_prepare
     li      a0, 0
     li      a1, 1
@@ -192,8 +188,7 @@ render_frame:
     li      a0, 0
     li      a1, LCD_HEIGHT
     call    render_band
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+    FRAME_RESTORE 16, ra
     ret
 
     .globl render_prepare
@@ -211,9 +206,7 @@ render_frame:
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 render_prepare:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
-    sd      s0, 0(sp)
+    FRAME_SAVE 16, ra, s0
     mv      s0, a0                      # s0 = framebuffer
     mv      a0, a1
     call    vertex_setup
@@ -221,9 +214,7 @@ render_prepare:
     sd      a0, 0(t0)
     mv      a0, s0
     call    raster_begin
-    ld      s0, 0(sp)
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+    FRAME_RESTORE 16, ra, s0
     ret
 
     .globl render_vertex_share
@@ -242,10 +233,7 @@ render_prepare:
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 render_vertex_share:
-    addi    sp, sp, -32
-    sd      ra, 24(sp)
-    sd      s0, 16(sp)
-    sd      s1, 8(sp)
+    FRAME_SAVE 32, ra, s0, s1
     mv      s0, a0                      # s0 = the share
     mv      s1, a1                      # s1 = the number of shares
     la      t0, scene
@@ -264,10 +252,7 @@ render_vertex_share:
     mv      a2, s1
     call    share_range
     call    normals_light
-9:  ld      s1, 8(sp)
-    ld      s0, 16(sp)
-    ld      ra, 24(sp)
-    addi    sp, sp, 32
+9:  FRAME_RESTORE 32, ra, s0, s1
     ret
 
 # share_range (file-local)
@@ -303,20 +288,7 @@ share_range:
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 render_band:
-    addi    sp, sp, -112
-    sd      ra, 104(sp)
-    sd      s0, 96(sp)
-    sd      s1, 88(sp)
-    sd      s2, 80(sp)
-    sd      s3, 72(sp)
-    sd      s4, 64(sp)
-    sd      s5, 56(sp)
-    sd      s6, 48(sp)
-    sd      s7, 40(sp)
-    sd      s8, 32(sp)
-    sd      s9, 24(sp)
-    sd      s10, 16(sp)
-    sd      s11, 8(sp)
+    FRAME_SAVE 112, ra, s0, s1, s2, s3, s4, s5, s6, s7, s8, s9, s10, s11
     mv      s0, a0                      # s0 = the band's first row
     mv      s2, a1                      # s2 = the row past its last
     call    raster_set_band
@@ -375,20 +347,7 @@ render_band:
     li      a0, 0
     li      a1, 0
     call    raster_set_sample
-9:  ld      s11, 8(sp)
-    ld      s10, 16(sp)
-    ld      s9, 24(sp)
-    ld      s8, 32(sp)
-    ld      s7, 40(sp)
-    ld      s6, 48(sp)
-    ld      s5, 56(sp)
-    ld      s4, 64(sp)
-    ld      s3, 72(sp)
-    ld      s2, 80(sp)
-    ld      s1, 88(sp)
-    ld      s0, 96(sp)
-    ld      ra, 104(sp)
-    addi    sp, sp, 112
+9:  FRAME_RESTORE 112, ra, s0, s1, s2, s3, s4, s5, s6, s7, s8, s9, s10, s11
     ret
 
 # ---------------------------------------------------------------------------

@@ -20,6 +20,7 @@
     .include "st7789v.inc"
     .include "scene.inc"
     .include "render.inc"
+    .include "frame.inc"
 
     .text
     .globl clip_and_draw
@@ -35,16 +36,7 @@
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 clip_and_draw:
-    addi    sp, sp, -80
-    sd      ra, 72(sp)
-    sd      s0, 64(sp)
-    sd      s1, 56(sp)
-    sd      s2, 48(sp)
-    sd      s3, 40(sp)
-    sd      s4, 32(sp)
-    sd      s5, 24(sp)
-    sd      s6, 16(sp)
-    sd      s7, 8(sp)
+    FRAME_SAVE 80, ra, s0, s1, s2, s3, s4, s5, s6, s7
     mv      s3, a3
     mv      s4, a4
     mv      s5, a5
@@ -157,16 +149,7 @@ clip_and_draw:
     call    raster_triangle
     addi    s7, s7, 1
     j       6b
-9:  ld      s7, 8(sp)
-    ld      s6, 16(sp)
-    ld      s5, 24(sp)
-    ld      s4, 32(sp)
-    ld      s3, 40(sp)
-    ld      s2, 48(sp)
-    ld      s1, 56(sp)
-    ld      s0, 64(sp)
-    ld      ra, 72(sp)
-    addi    sp, sp, 80
+9:  FRAME_RESTORE 80, ra, s0, s1, s2, s3, s4, s5, s6, s7
     ret
 
 # clip_polygon (file-local)
@@ -184,19 +167,7 @@ clip_and_draw:
 #   Results: a0 = the output's corner count.
 #   Clobbers: only ABI temporaries.
 clip_polygon:
-    addi    sp, sp, -96
-    sd      ra, 88(sp)
-    sd      s0, 80(sp)
-    sd      s1, 72(sp)
-    sd      s2, 64(sp)
-    sd      s3, 56(sp)
-    sd      s4, 48(sp)
-    sd      s5, 40(sp)
-    sd      s6, 32(sp)
-    sd      s7, 24(sp)
-    sd      s8, 16(sp)
-    fsd     fs0, 8(sp)
-    fsd     fs1, 0(sp)
+    FRAME_SAVE 96, ra, s0, s1, s2, s3, s4, s5, s6, s7, s8, fs0, fs1
     mv      s0, a0                      # s0 = a
     mv      s1, a2                      # s1 = next output
     mv      s2, a2                      # s2 = output start
@@ -246,19 +217,7 @@ clip_polygon:
     sub     a0, s1, s2
     li      t0, CV_BYTES
     divu    a0, a0, t0
-    fld     fs1, 0(sp)
-    fld     fs0, 8(sp)
-    ld      s8, 16(sp)
-    ld      s7, 24(sp)
-    ld      s6, 32(sp)
-    ld      s5, 40(sp)
-    ld      s4, 48(sp)
-    ld      s3, 56(sp)
-    ld      s2, 64(sp)
-    ld      s1, 72(sp)
-    ld      s0, 80(sp)
-    ld      ra, 88(sp)
-    addi    sp, sp, 96
+    FRAME_RESTORE 96, ra, s0, s1, s2, s3, s4, s5, s6, s7, s8, fs0, fs1
     ret
 
     .globl clip_plane

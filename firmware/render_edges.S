@@ -12,6 +12,7 @@
     .include "st7789v.inc"
     .include "scene.inc"
     .include "render.inc"
+    .include "frame.inc"
 
     .text
     .globl aa_neighbours
@@ -85,12 +86,7 @@ aa_neighbours:
 #   Results: a0 = the indices (a heap block, u32 each; the last block).
 #   Clobbers: only ABI temporaries.
 vertex_canon:
-    addi    sp, sp, -48
-    sd      ra, 40(sp)
-    sd      s0, 32(sp)
-    sd      s1, 24(sp)
-    sd      s2, 16(sp)
-    sd      s3, 8(sp)
+    FRAME_SAVE 48, ra, s0, s1, s2, s3
     la      t0, scene
     lwu     s0, MESH_VCOUNT(t0)         # s0 = vertices
     ld      s3, MESH_V(t0)              # s3 = their positions
@@ -177,12 +173,7 @@ vertex_canon:
 9:  mv      a0, s2
     call    heap_release
     mv      a0, s1
-    ld      s3, 8(sp)
-    ld      s2, 16(sp)
-    ld      s1, 24(sp)
-    ld      s0, 32(sp)
-    ld      ra, 40(sp)
-    addi    sp, sp, 48
+    FRAME_RESTORE 48, ra, s0, s1, s2, s3
     ret
 
     .globl adjacency_build
@@ -200,14 +191,7 @@ vertex_canon:
 #   Arguments: none. Results: none.
 #   Clobbers: only ABI temporaries.
 adjacency_build:
-    addi    sp, sp, -64
-    sd      ra, 56(sp)
-    sd      s0, 48(sp)
-    sd      s1, 40(sp)
-    sd      s2, 32(sp)
-    sd      s3, 24(sp)
-    sd      s4, 16(sp)
-    sd      s5, 8(sp)
+    FRAME_SAVE 64, ra, s0, s1, s2, s3, s4, s5
     la      t0, scene
     lwu     s0, MESH_FCOUNT(t0)         # s0 = triangles
     ld      s3, MESH_F(t0)              # s3 = the triangles' corners
@@ -345,14 +329,7 @@ adjacency_build:
     jr      t2
 9:  ld      a0, 0(sp)                   # the canonical indices and the keys
     call    heap_release                # are not needed any more
-    ld      s5, 8(sp)
-    ld      s4, 16(sp)
-    ld      s3, 24(sp)
-    ld      s2, 32(sp)
-    ld      s1, 40(sp)
-    ld      s0, 48(sp)
-    ld      ra, 56(sp)
-    addi    sp, sp, 64
+    FRAME_RESTORE 64, ra, s0, s1, s2, s3, s4, s5
     ret
 
     .globl edges_build
@@ -364,10 +341,7 @@ adjacency_build:
 #   Arguments: none. Results: none.
 #   Clobbers: only ABI temporaries.
 edges_build:
-    addi    sp, sp, -32
-    sd      ra, 24(sp)
-    sd      s0, 16(sp)
-    sd      s1, 8(sp)
+    FRAME_SAVE 32, ra, s0, s1
     la      t0, scene
     lwu     s0, MESH_FCOUNT(t0)
     li      t1, EDGES_PER_TRIANGLE
@@ -436,10 +410,7 @@ edges_build:
     j       6b
 7:  la      t1, edge_count
     sd      t0, 0(t1)
-    ld      s1, 8(sp)
-    ld      s0, 16(sp)
-    ld      ra, 24(sp)
-    addi    sp, sp, 32
+    FRAME_RESTORE 32, ra, s0, s1
     ret
 
 # sort_u64 (file-local)

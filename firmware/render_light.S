@@ -13,6 +13,7 @@
     .include "st7789v.inc"
     .include "scene.inc"
     .include "render.inc"
+    .include "frame.inc"
 
     .text
     .globl shade_rgb565
@@ -59,8 +60,7 @@ shade_rgb565:
     .error "face_light's stack frame is too small"
 .endif
 face_light:
-    addi    sp, sp, -FACE_LIGHT_FRAME
-    sd      ra, FACE_LIGHT_FRAME - 8(sp)
+    FRAME_SAVE FACE_LIGHT_FRAME, ra
     la      t0, vertex_world_array
     ld      t0, 0(t0)
     beqz    t0, 2f
@@ -111,8 +111,7 @@ face_light:
     flw     ft0, 12(sp)
     fdiv.s  fa0, fa0, ft0               # cos; NaN when |N| = 0
     call    light_level
-    ld      ra, FACE_LIGHT_FRAME - 8(sp)
-    addi    sp, sp, FACE_LIGHT_FRAME
+    FRAME_RESTORE FACE_LIGHT_FRAME, ra
     ret
 
 # light_level (file-local)
@@ -184,16 +183,14 @@ corner_light:
     lw      t4, 0(t4)
     sw      t4, 2 * RV_BYTES + RV_K(t1)
     ret
-2:  addi    sp, sp, -16
-    sd      ra, 8(sp)
+2:  FRAME_SAVE 16, ra
     call    face_light                  # (a0 is still the face)
     la      t1, render_rv
     add     t1, t1, tp
     fsw     fa0, RV_K(t1)
     fsw     fa0, RV_BYTES + RV_K(t1)
     fsw     fa0, 2 * RV_BYTES + RV_K(t1)
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+    FRAME_RESTORE 16, ra
     ret
 
     .globl normals_light
@@ -210,11 +207,7 @@ corner_light:
 #   Clobbers: only ABI temporaries. The loop keeps M = R C in ft3..ft11
 #         and L in fa4..fa6.
 normals_light:
-    addi    sp, sp, -32
-    sd      ra, 24(sp)
-    sd      s0, 16(sp)
-    sd      s1, 8(sp)
-    sd      s2, 0(sp)
+    FRAME_SAVE 32, ra, s0, s1, s2
     sub     s1, a1, a0                  # s1 = normals left
     beqz    s1, 9f
     la      t0, scene
@@ -280,9 +273,5 @@ normals_light:
     addi    s2, s2, NORMAL_LIGHT_BYTES
     addi    s1, s1, -1
     bnez    s1, 1b
-9:  ld      s2, 0(sp)
-    ld      s1, 8(sp)
-    ld      s0, 16(sp)
-    ld      ra, 24(sp)
-    addi    sp, sp, 32
+9:  FRAME_RESTORE 32, ra, s0, s1, s2
     ret

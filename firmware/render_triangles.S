@@ -25,6 +25,7 @@
     .include "st7789v.inc"
     .include "scene.inc"
     .include "render.inc"
+    .include "frame.inc"
 
     .text
     .globl draw_triangles
@@ -37,20 +38,7 @@
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 draw_triangles:
-    addi    sp, sp, -112
-    sd      ra, 104(sp)
-    sd      s0, 96(sp)
-    sd      s1, 88(sp)
-    sd      s2, 80(sp)
-    sd      s3, 72(sp)
-    sd      s4, 64(sp)
-    sd      s5, 56(sp)
-    sd      s6, 48(sp)
-    sd      s7, 40(sp)
-    sd      s8, 32(sp)
-    sd      s9, 24(sp)
-    sd      s10, 16(sp)
-    sd      s11, 8(sp)
+    FRAME_SAVE 112, ra, s0, s1, s2, s3, s4, s5, s6, s7, s8, s9, s10, s11
     mv      s0, a0                      # s0 = the band's first row
     mv      s2, a1                      # s2 = the row past its last
     mv      s1, a2                      # s1 = vertex records
@@ -202,18 +190,5 @@ draw_triangles:
     addi    s4, s4, -1
     bnez    s4, 2b
 
-9:  ld      s11, 8(sp)
-    ld      s10, 16(sp)
-    ld      s9, 24(sp)
-    ld      s8, 32(sp)
-    ld      s7, 40(sp)
-    ld      s6, 48(sp)
-    ld      s5, 56(sp)
-    ld      s4, 64(sp)
-    ld      s3, 72(sp)
-    ld      s2, 80(sp)
-    ld      s1, 88(sp)
-    ld      s0, 96(sp)
-    ld      ra, 104(sp)
-    addi    sp, sp, 112
+9:  FRAME_RESTORE 112, ra, s0, s1, s2, s3, s4, s5, s6, s7, s8, s9, s10, s11
     ret

@@ -13,6 +13,7 @@
     .include "st7789v.inc"
     .include "scene.inc"
     .include "render.inc"
+    .include "frame.inc"
 
     .text
     .globl render_wireframe
@@ -22,13 +23,7 @@
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 render_wireframe:
-    addi    sp, sp, -64
-    sd      ra, 56(sp)
-    sd      s0, 48(sp)
-    sd      s1, 40(sp)
-    sd      s2, 32(sp)
-    sd      s3, 24(sp)
-    sd      s4, 16(sp)
+    FRAME_SAVE 64, ra, s0, s1, s2, s3, s4
     mv      s0, a0                      # s0 = vertex records
     la      t0, edge_list
     ld      s1, 0(t0)                   # s1 = edge
@@ -121,13 +116,7 @@ render_wireframe:
     li      a0, WIRE_COLOUR
     lwu     a1, SCENE_BACKGROUND(t1)
     call    raster_union_resolve
-10: ld      s4, 16(sp)
-    ld      s3, 24(sp)
-    ld      s2, 32(sp)
-    ld      s1, 40(sp)
-    ld      s0, 48(sp)
-    ld      ra, 56(sp)
-    addi    sp, sp, 64
+10: FRAME_RESTORE 64, ra, s0, s1, s2, s3, s4
     ret
 
 # clip_segment (file-local)
@@ -142,16 +131,7 @@ render_wireframe:
 #            towards a (screen x, y in Q4), a3, a4 = its end towards b.
 #   Clobbers: only ABI temporaries.
 clip_segment:
-    addi    sp, sp, -80
-    sd      ra, 72(sp)
-    sd      s0, 64(sp)
-    sd      s1, 56(sp)
-    sd      s2, 48(sp)
-    sd      s3, 40(sp)
-    sd      s4, 32(sp)
-    fsd     fs0, 24(sp)
-    fsd     fs1, 16(sp)
-    fsd     fs2, 8(sp)
+    FRAME_SAVE 80, ra, s0, s1, s2, s3, s4, fs0, fs1, fs2
     mv      s0, a0                      # s0 = a
     mv      s1, a1                      # s1 = b
     mv      s2, a2                      # s2 = outcodes
@@ -210,16 +190,7 @@ clip_segment:
     li      a0, 1
     j       9f
 8:  li      a0, 0
-9:  fld     fs2, 8(sp)
-    fld     fs1, 16(sp)
-    fld     fs0, 24(sp)
-    ld      s4, 32(sp)
-    ld      s3, 40(sp)
-    ld      s2, 48(sp)
-    ld      s1, 56(sp)
-    ld      s0, 64(sp)
-    ld      ra, 72(sp)
-    addi    sp, sp, 80
+9:  FRAME_RESTORE 80, ra, s0, s1, s2, s3, s4, fs0, fs1, fs2
     ret
 
 # segment_point (file-local)

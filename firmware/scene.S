@@ -84,6 +84,7 @@
     .include "errors.inc"
     .include "scene.inc"
     .include "text.inc"
+    .include "frame.inc"
 
     .equ SCENE_VALUE_MAX,       256         # path bytes, NUL included
 # Kinds of value (SCENE_KEY_KIND)
@@ -345,10 +346,7 @@ msg_levels:         .asciz "bad value (must be a whole number from 2 to 65)"
 #   Arguments: none. Results: none (errors are fatal).
 #   Clobbers: only ABI temporaries.
 scene_load:
-    addi    sp, sp, -32
-    sd      ra, 24(sp)
-    sd      s0, 16(sp)
-    sd      s1, 8(sp)
+    FRAME_SAVE 32, ra, s0, s1
     call    scene_defaults
     la      a0, path_scene_ini
     call    fat32_lookup
@@ -391,10 +389,7 @@ scene_load:
     sd      t1, FILE_RECORD_PATH(t0)
 4:  addi    s0, s0, SCENE_KEY_BYTES
     bltu    s0, s1, 3b
-    ld      s1, 8(sp)
-    ld      s0, 16(sp)
-    ld      ra, 24(sp)
-    addi    sp, sp, 32
+    FRAME_RESTORE 32, ra, s0, s1
     ret
 
 # scene_defaults (file-local)
@@ -460,11 +455,7 @@ scene_check_planes:
 #   Results: a0 = address of the bytes, a1 = size.
 #   Clobbers: only ABI temporaries.
 scene_load_file:
-    addi    sp, sp, -32
-    sd      ra, 24(sp)
-    sd      s0, 16(sp)
-    sd      s1, 8(sp)
-    sd      s2, 0(sp)
+    FRAME_SAVE 32, ra, s0, s1, s2
     mv      s0, a0                      # s0 = path
     call    fat32_load
     mv      s1, a0                      # s1 = address
@@ -474,11 +465,7 @@ scene_load_file:
     call    scene_print_load
     mv      a0, s1
     mv      a1, s2
-    ld      s2, 0(sp)
-    ld      s1, 8(sp)
-    ld      s0, 16(sp)
-    ld      ra, 24(sp)
-    addi    sp, sp, 32
+    FRAME_RESTORE 32, ra, s0, s1, s2
     ret
 
     .globl scene_print_load
@@ -489,11 +476,7 @@ scene_load_file:
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 scene_print_load:
-    addi    sp, sp, -32
-    sd      ra, 24(sp)
-    sd      s0, 16(sp)
-    sd      s1, 8(sp)
-    sd      s2, 0(sp)
+    FRAME_SAVE 32, ra, s0, s1, s2
     mv      s0, a0                      # s0 = path
     mv      s1, a1                      # s1 = size
     mv      s2, a2                      # s2 = CRC-32
@@ -513,11 +496,7 @@ scene_print_load:
     li      a0, CHAR_LF
     call    console_putc
     call    console_unlock
-    ld      s2, 0(sp)
-    ld      s1, 8(sp)
-    ld      s0, 16(sp)
-    ld      ra, 24(sp)
-    addi    sp, sp, 32
+    FRAME_RESTORE 32, ra, s0, s1, s2
     ret
 
 # scene_parse (file-local)
@@ -527,16 +506,7 @@ scene_print_load:
 #   Results: none (errors are fatal).
 #   Clobbers: only ABI temporaries.
 scene_parse:
-    addi    sp, sp, -80
-    sd      ra, 72(sp)
-    sd      s0, 64(sp)
-    sd      s1, 56(sp)
-    sd      s2, 48(sp)
-    sd      s3, 40(sp)
-    sd      s4, 32(sp)
-    sd      s5, 24(sp)
-    sd      s6, 16(sp)
-    sd      s7, 8(sp)
+    FRAME_SAVE 80, ra, s0, s1, s2, s3, s4, s5, s6, s7
     mv      s0, a0                      # s0 = start of the line
     add     s1, a0, a1                  # s1 = end of the text
     li      s2, 1                       # s2 = line number
@@ -656,16 +626,7 @@ scene_parse:
 89: mv      a0, s2
     j       scene_error
 
-90: ld      s7, 8(sp)
-    ld      s6, 16(sp)
-    ld      s5, 24(sp)
-    ld      s4, 32(sp)
-    ld      s3, 40(sp)
-    ld      s2, 48(sp)
-    ld      s1, 56(sp)
-    ld      s0, 64(sp)
-    ld      ra, 72(sp)
-    addi    sp, sp, 80
+90: FRAME_RESTORE 80, ra, s0, s1, s2, s3, s4, s5, s6, s7
     ret
 
 # scene_set_value (file-local)
@@ -677,14 +638,7 @@ scene_parse:
 #   Results: none (a bad value is error 9).
 #   Clobbers: only ABI temporaries.
 scene_set_value:
-    addi    sp, sp, -96
-    sd      ra, 88(sp)
-    sd      s0, 80(sp)
-    sd      s1, 72(sp)
-    sd      s2, 64(sp)
-    sd      s3, 56(sp)
-    sd      s4, 48(sp)
-    sd      s5, 40(sp)
+    FRAME_SAVE 96, ra, s0, s1, s2, s3, s4, s5
     # 0(sp): SCENE_NUMBERS_MAX doubles
     mv      s0, a0                      # s0 = row
     mv      s1, a1                      # s1 = value start
@@ -917,14 +871,7 @@ scene_set_value:
 89: mv      a0, s3
     j       scene_error
 
-90: ld      s5, 40(sp)
-    ld      s4, 48(sp)
-    ld      s3, 56(sp)
-    ld      s2, 64(sp)
-    ld      s1, 72(sp)
-    ld      s0, 80(sp)
-    ld      ra, 88(sp)
-    addi    sp, sp, 96
+90: FRAME_RESTORE 96, ra, s0, s1, s2, s3, s4, s5
     ret
 
 # scene_error (file-local)
@@ -975,11 +922,7 @@ trim_blanks:
 #   Results: a0 = row address, or 0 when no key has that name.
 #   Clobbers: only ABI temporaries.
 scene_find_key:
-    addi    sp, sp, -32
-    sd      ra, 24(sp)
-    sd      s0, 16(sp)
-    sd      s1, 8(sp)
-    sd      s2, 0(sp)
+    FRAME_SAVE 32, ra, s0, s1, s2
     mv      s1, a0
     mv      s2, a1
     la      s0, scene_keys
@@ -994,11 +937,7 @@ scene_find_key:
     li      a0, 0
     j       3f
 2:  mv      a0, s0
-3:  ld      s2, 0(sp)
-    ld      s1, 8(sp)
-    ld      s0, 16(sp)
-    ld      ra, 24(sp)
-    addi    sp, sp, 32
+3:  FRAME_RESTORE 32, ra, s0, s1, s2
     ret
 
 # scene_name_equals (file-local)

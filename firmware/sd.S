@@ -46,6 +46,7 @@
     .include "k210.inc"
     .include "sd.inc"
     .include "errors.inc"
+    .include "frame.inc"
 
     .if SD_DMA_CHANNEL != 1
     .error "SD_DMA_SEL_SHIFT / SD_DMA_SEL_MASK assume DMAC channel 1"
@@ -66,11 +67,7 @@
 #   Arguments: none. Results: none (returns only with a ready card).
 #   Clobbers: only ABI temporaries.
 sd_init:
-    addi    sp, sp, -48
-    sd      ra, 40(sp)
-    sd      s0, 32(sp)
-    sd      s1, 24(sp)
-    sd      s2, 16(sp)
+    FRAME_SAVE 48, ra, s0, s1, s2
 
     li      a0, SD_BAUDR_INIT
     call    sd_spi_setup
@@ -253,11 +250,7 @@ sd_init:
     call    console_puts
     call    console_unlock
 
-    ld      s2, 16(sp)
-    ld      s1, 24(sp)
-    ld      s0, 32(sp)
-    ld      ra, 40(sp)
-    addi    sp, sp, 48
+    FRAME_RESTORE 48, ra, s0, s1, s2
     ret
 
 # sd_read_csd (file-local)
@@ -269,12 +262,7 @@ sd_init:
 #   Results: none (returns only with an intact CSD).
 #   Clobbers: only ABI temporaries.
 sd_read_csd:
-    addi    sp, sp, -48
-    sd      ra, 40(sp)
-    sd      s0, 32(sp)
-    sd      s1, 24(sp)
-    sd      s2, 16(sp)
-    sd      s3, 8(sp)
+    FRAME_SAVE 48, ra, s0, s1, s2, s3
     mv      s0, a0                      # s0 = destination
     li      s1, SD_READ_RETRIES + 1     # s1 = tries left
 1:  call    sd_select
@@ -319,12 +307,7 @@ sd_read_csd:
     li      a2, 0
     call    error_fatal
 
-9:  ld      s3, 8(sp)
-    ld      s2, 16(sp)
-    ld      s1, 24(sp)
-    ld      s0, 32(sp)
-    ld      ra, 40(sp)
-    addi    sp, sp, 48
+9:  FRAME_RESTORE 48, ra, s0, s1, s2, s3
     ret
 
     .globl sd_csd_blocks

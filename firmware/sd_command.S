@@ -10,6 +10,7 @@
     .include "k210.inc"
     .include "sd.inc"
     .include "errors.inc"
+    .include "frame.inc"
 
     .text
     .globl sd_cmd
@@ -23,14 +24,7 @@
 #         (big-endian, as sent) or 0.
 #   Clobbers: only ABI temporaries.
 sd_cmd:
-    addi    sp, sp, -64
-    sd      ra, 56(sp)
-    sd      s0, 48(sp)
-    sd      s1, 40(sp)
-    sd      s2, 32(sp)
-    sd      s3, 24(sp)
-    sd      s4, 16(sp)
-    sd      s5, 8(sp)
+    FRAME_SAVE 64, ra, s0, s1, s2, s3, s4, s5
     mv      s0, a0                      # s0 = command
     mv      s1, a1                      # s1 = argument
     mv      s2, a2                      # s2 = read R3/R7 payload
@@ -60,14 +54,7 @@ sd_cmd:
     call    error_fatal_dec
 3:  mv      a0, s3
     mv      a1, s5
-    ld      s5, 8(sp)
-    ld      s4, 16(sp)
-    ld      s3, 24(sp)
-    ld      s2, 32(sp)
-    ld      s1, 40(sp)
-    ld      s0, 48(sp)
-    ld      ra, 56(sp)
-    addi    sp, sp, 64
+    FRAME_RESTORE 64, ra, s0, s1, s2, s3, s4, s5
     ret
 
     .globl sd_cmd_ok
@@ -78,9 +65,7 @@ sd_cmd:
 #   Results: a0 = the 4 bytes after R1 (when a2 = 1), else 0.
 #   Clobbers: only ABI temporaries.
 sd_cmd_ok:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
-    sd      s0, 0(sp)
+    FRAME_SAVE 16, ra, s0
     mv      s0, a0
     call    sd_cmd
     beqz    a0, 1f
@@ -88,9 +73,7 @@ sd_cmd_ok:
     mv      a0, s0
     call    sd_fail_r1
 1:  mv      a0, a1
-    ld      s0, 0(sp)
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+    FRAME_RESTORE 16, ra, s0
     ret
 
     .globl sd_fail_r1
@@ -140,11 +123,7 @@ sd_fail_r1:
 #   Results: a0 = R1, or SD_R1_NONE when no response started.
 #   Clobbers: only ABI temporaries.
 sd_command:
-    addi    sp, sp, -32
-    sd      ra, 24(sp)
-    sd      s0, 16(sp)
-    sd      s1, 8(sp)
-    sd      s2, 0(sp)
+    FRAME_SAVE 32, ra, s0, s1, s2
     mv      s2, a0
     la      s1, sd_ahead
     li      t0, SD_IDLE_BYTE
@@ -189,11 +168,7 @@ sd_command:
     addi    s0, s0, -1
     bnez    s0, 3b
     li      a0, SD_R1_NONE
-4:  ld      s2, 0(sp)
-    ld      s1, 8(sp)
-    ld      s0, 16(sp)
-    ld      ra, 24(sp)
-    addi    sp, sp, 32
+4:  FRAME_RESTORE 32, ra, s0, s1, s2
     ret
 
 # sd_read_u32 (file-local)
@@ -203,8 +178,7 @@ sd_command:
 #   Results: a0 = the 32-bit value.
 #   Clobbers: only ABI temporaries.
 sd_read_u32:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
+    FRAME_SAVE 16, ra
     mv      a0, sp
     li      a1, SD_R3_PAYLOAD_BYTES
     call    sd_receive_bytes
@@ -216,6 +190,5 @@ sd_read_u32:
     or      a0, a0, t2
     addi    t0, t0, 1
     bltu    t0, t1, 1b
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+    FRAME_RESTORE 16, ra
     ret

@@ -23,6 +23,7 @@
     .include "k210.inc"
     .include "sd.inc"
     .include "errors.inc"
+    .include "frame.inc"
 
 # C_J target
 #   A 2-byte c.j to a symbol in another file (sd_transfer_mode's tail jump to
@@ -59,20 +60,7 @@
 #   Results: none (returns only when every block arrived intact).
 #   Clobbers: only ABI temporaries.
 sd_read_blocks:
-    addi    sp, sp, -112
-    sd      ra, 104(sp)
-    sd      s0, 96(sp)
-    sd      s1, 88(sp)
-    sd      s2, 80(sp)
-    sd      s3, 72(sp)
-    sd      s4, 64(sp)
-    sd      s5, 56(sp)
-    sd      s6, 48(sp)
-    sd      s7, 40(sp)
-    sd      s8, 32(sp)
-    sd      s9, 24(sp)
-    sd      s10, 16(sp)
-    sd      s11, 8(sp)
+    FRAME_SAVE 112, ra, s0, s1, s2, s3, s4, s5, s6, s7, s8, s9, s10, s11
     mv      s0, a0                      # s0 = next block to receive
     mv      s1, a1                      # s1 = blocks left to receive
     mv      s2, a2                      # s2 = where block s0 goes
@@ -231,20 +219,7 @@ sd_read_blocks:
 
 90: li      t0, MIE_MEIE
     csrc    mie, t0
-91: ld      s11, 8(sp)
-    ld      s10, 16(sp)
-    ld      s9, 24(sp)
-    ld      s8, 32(sp)
-    ld      s7, 40(sp)
-    ld      s6, 48(sp)
-    ld      s5, 56(sp)
-    ld      s4, 64(sp)
-    ld      s3, 72(sp)
-    ld      s2, 80(sp)
-    ld      s1, 88(sp)
-    ld      s0, 96(sp)
-    ld      ra, 104(sp)
-    addi    sp, sp, 112
+91: FRAME_RESTORE 112, ra, s0, s1, s2, s3, s4, s5, s6, s7, s8, s9, s10, s11
     ret
 
 # sd_stage_other (file-local)
@@ -269,12 +244,7 @@ sd_stage_other:
 #   Results: a0 = 1 good, 0 bad.
 #   Clobbers: only ABI temporaries.
 sd_check_block:
-    addi    sp, sp, -48
-    sd      ra, 40(sp)
-    sd      s0, 32(sp)
-    sd      s1, 24(sp)
-    sd      s2, 16(sp)
-    sd      s3, 8(sp)
+    FRAME_SAVE 48, ra, s0, s1, s2, s3
     mv      s0, a0
     mv      s1, a1
     mv      s2, a2
@@ -296,12 +266,7 @@ sd_check_block:
 1:  li      a0, 1
     j       3f
 2:  li      a0, 0
-3:  ld      s3, 8(sp)
-    ld      s2, 16(sp)
-    ld      s1, 24(sp)
-    ld      s0, 32(sp)
-    ld      ra, 40(sp)
-    addi    sp, sp, 48
+3:  FRAME_RESTORE 48, ra, s0, s1, s2, s3
     ret
 
 # sd_copy_block (file-local)
@@ -337,9 +302,7 @@ sd_copy_block:
 #   Results: a0 = the token byte.
 #   Clobbers: only ABI temporaries.
 sd_wait_token:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
-    sd      s0, 0(sp)
+    FRAME_SAVE 16, ra, s0
     li      a0, SD_READ_TIMEOUT_US
     call    timer_deadline
     mv      s0, a0
@@ -359,9 +322,7 @@ sd_wait_token:
     la      a1, msg_token_timeout
     li      a2, 0
     call    error_fatal
-2:  ld      s0, 0(sp)
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+2:  FRAME_RESTORE 16, ra, s0
     ret
 
 # sd_receive_setup (file-local)
@@ -403,10 +364,7 @@ sd_receive_setup:
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 sd_receive_start:
-    addi    sp, sp, -32
-    sd      ra, 24(sp)
-    sd      s0, 16(sp)
-    sd      s1, 8(sp)
+    FRAME_SAVE 32, ra, s0, s1
     mv      s0, a0
     mv      s1, a1
     la      t0, sd_rx_frames
@@ -431,10 +389,7 @@ sd_receive_start:
     li      t1, SD_IDLE_BYTE
     sw      t1, SPI_DR(t0)
 
-    ld      s1, 8(sp)
-    ld      s0, 16(sp)
-    ld      ra, 24(sp)
-    addi    sp, sp, 32
+    FRAME_RESTORE 32, ra, s0, s1
     ret
 
 # sd_transfer_mode (file-local)
@@ -458,9 +413,7 @@ sd_transfer_mode:
 #   Arguments: none. Results: none.
 #   Clobbers: only ABI temporaries.
 sd_stop_transmission:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
-    sd      s0, 0(sp)
+    FRAME_SAVE 16, ra, s0
     li      a0, SD_CMD12_STOP
     li      a1, 0
     call    sd_command                  # skips the stuff byte for CMD12
@@ -488,7 +441,5 @@ sd_stop_transmission:
     la      a1, msg_busy_timeout
     li      a2, 0
     call    error_fatal
-3:  ld      s0, 0(sp)
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+3:  FRAME_RESTORE 16, ra, s0
     ret

@@ -8,6 +8,7 @@
     .option norelax
     .include "k210.inc"
     .include "sd.inc"
+    .include "frame.inc"
 
     .text
     .globl sd_select
@@ -29,15 +30,13 @@ sd_select:
 #   Arguments: none. Results: none.
 #   Clobbers: only ABI temporaries.
 sd_deselect:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
+    FRAME_SAVE 16, ra
     call    sd_drop_ahead
     li      a0, GPIOHS_SD_CS_BIT
     call    gpiohs_set
     li      a0, SD_IDLE_BYTE
     call    sd_xchg
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+    FRAME_RESTORE 16, ra
     ret
 
 # sd_xchg (file-local)
@@ -182,10 +181,7 @@ sd_take_ahead:
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 sd_receive_bytes:
-    addi    sp, sp, -32
-    sd      ra, 24(sp)
-    sd      s0, 16(sp)
-    sd      s1, 8(sp)
+    FRAME_SAVE 32, ra, s0, s1
     add     s1, a0, a1                  # s1 = end
     mv      s0, a0                      # s0 = next byte out
 1:  bgeu    s0, s1, 3f
@@ -200,10 +196,7 @@ sd_receive_bytes:
     sb      a0, 0(s0)
     addi    s0, s0, 1
     j       1b
-3:  ld      s1, 8(sp)
-    ld      s0, 16(sp)
-    ld      ra, 24(sp)
-    addi    sp, sp, 32
+3:  FRAME_RESTORE 32, ra, s0, s1
     ret
 
     .globl sd_spi_setup

@@ -13,6 +13,7 @@
 
     .option norelax
     .include "k210.inc"
+    .include "frame.inc"
 
     .text
     .globl spi0_init
@@ -74,10 +75,7 @@ spi0_finish:
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 spi0_send_bytes:
-    addi    sp, sp, -32
-    sd      ra, 24(sp)
-    sd      s0, 16(sp)
-    sd      s1, 8(sp)
+    FRAME_SAVE 32, ra, s0, s1
     mv      s0, a0
     mv      s1, a1
     li      a0, SPI_CTRLR0_OCTAL_TX_8
@@ -95,10 +93,7 @@ spi0_send_bytes:
     addi    s0, s0, 1
     bltu    s0, s1, 1b
     call    spi0_finish
-    ld      s1, 8(sp)
-    ld      s0, 16(sp)
-    ld      ra, 24(sp)
-    addi    sp, sp, 32
+    FRAME_RESTORE 32, ra, s0, s1
     ret
 
     .globl spi0_fill_words
@@ -110,10 +105,7 @@ spi0_send_bytes:
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 spi0_fill_words:
-    addi    sp, sp, -32
-    sd      ra, 24(sp)
-    sd      s0, 16(sp)
-    sd      s1, 8(sp)
+    FRAME_SAVE 32, ra, s0, s1
     mv      s0, a0
     mv      s1, a1
     li      a0, SPI_CTRLR0_OCTAL_TX_32
@@ -129,10 +121,7 @@ spi0_fill_words:
     addi    s1, s1, -1
     bnez    s1, 1b
     call    spi0_finish
-    ld      s1, 8(sp)
-    ld      s0, 16(sp)
-    ld      ra, 24(sp)
-    addi    sp, sp, 32
+    FRAME_RESTORE 32, ra, s0, s1
     ret
 
     .globl dma_init
@@ -277,12 +266,10 @@ dma_sleep_channel:
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 spi0_dma_send_words:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
+    FRAME_SAVE 16, ra
     call    spi0_dma_send_start
     call    spi0_dma_send_finish
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+    FRAME_RESTORE 16, ra
     ret
 
     .globl spi0_dma_send_start
@@ -309,15 +296,13 @@ spi0_dma_send_start:
 #   Arguments: none. Results: none.
 #   Clobbers: only ABI temporaries.
 spi0_dma_send_finish:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
+    FRAME_SAVE 16, ra
     li      a0, 0
     call    dma_wait_channel
     call    spi0_finish
     li      t0, SPI0_BASE
     sw      zero, SPI_DMACR(t0)
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+    FRAME_RESTORE 16, ra
     ret
 
     .globl spi0_dma_fill_words
@@ -331,8 +316,7 @@ spi0_dma_send_finish:
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 spi0_dma_fill_words:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
+    FRAME_SAVE 16, ra
     li      a2, DMAC_CTL_FILL_SPI32
     call    spi0_dma_start
     li      t0, DMAC_BASE
@@ -347,8 +331,7 @@ spi0_dma_fill_words:
     call    spi0_finish
     li      t0, SPI0_BASE
     sw      zero, SPI_DMACR(t0)
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+    FRAME_RESTORE 16, ra
     ret
 
 # spi0_dma_start (file-local)
@@ -360,11 +343,7 @@ spi0_dma_fill_words:
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 spi0_dma_start:
-    addi    sp, sp, -32
-    sd      ra, 24(sp)
-    sd      s0, 16(sp)
-    sd      s1, 8(sp)
-    sd      s2, 0(sp)
+    FRAME_SAVE 32, ra, s0, s1, s2
     mv      s0, a0
     mv      s1, a1
     mv      s2, a2
@@ -420,11 +399,7 @@ spi0_dma_start:
     li      t1, SPI_SER_LCD
     sw      t1, SPI_SER(t2)
 
-    ld      s2, 0(sp)
-    ld      s1, 8(sp)
-    ld      s0, 16(sp)
-    ld      ra, 24(sp)
-    addi    sp, sp, 32
+    FRAME_RESTORE 32, ra, s0, s1, s2
     ret
 
     .globl dma_quiesce

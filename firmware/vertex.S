@@ -24,6 +24,7 @@
     .include "st7789v.inc"
     .include "scene.inc"
     .include "render.inc"
+    .include "frame.inc"
 
     .text
     .globl vertex_init
@@ -38,9 +39,7 @@
 #   Arguments: none. Results: none.
 #   Clobbers: only ABI temporaries.
 vertex_init:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
-    sd      s0, 0(sp)
+    FRAME_SAVE 16, ra, s0
     la      s0, scene
     lwu     a0, MESH_VCOUNT(s0)
     li      t1, VTX_BYTES
@@ -64,9 +63,7 @@ vertex_init:
     call    heap_alloc_or_fail
     la      t0, vertex_world_array
     sd      a0, 0(t0)
-9:  ld      s0, 0(sp)
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+9:  FRAME_RESTORE 16, ra, s0
     ret
 
     .globl vertex_setup
@@ -79,9 +76,7 @@ vertex_init:
 #   Results: a0 = the vertex records (VTX_BYTES each, in mesh order).
 #   Clobbers: only ABI temporaries.
 vertex_setup:
-    addi    sp, sp, -16
-    sd      ra, 8(sp)
-    sd      s0, 0(sp)
+    FRAME_SAVE 16, ra, s0
     la      s0, scene
 
     # angle = start + frame * step, in double so that long runs keep it exact
@@ -119,9 +114,7 @@ vertex_setup:
     call    mat4_mul
     la      t0, vertex_records
     ld      a0, 0(t0)
-    ld      s0, 0(sp)
-    ld      ra, 8(sp)
-    addi    sp, sp, 16
+    FRAME_RESTORE 16, ra, s0
     ret
 
     .globl vertex_range
@@ -137,14 +130,7 @@ vertex_setup:
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 vertex_range:
-    addi    sp, sp, -64
-    sd      ra, 56(sp)
-    sd      s0, 48(sp)
-    sd      s1, 40(sp)
-    sd      s2, 32(sp)
-    sd      s3, 24(sp)
-    sd      s4, 16(sp)
-    sd      s5, 8(sp)
+    FRAME_SAVE 64, ra, s0, s1, s2, s3, s4, s5
     la      s0, scene
     mv      s4, a0                      # s4 = first vertex
     sub     s5, a1, a0                  # s5 = vertices in the range
@@ -310,14 +296,7 @@ vertex_range:
     fld     fs10, 80(sp)
     fld     fs11, 88(sp)
     addi    sp, sp, 96
-9:  ld      s5, 8(sp)
-    ld      s4, 16(sp)
-    ld      s3, 24(sp)
-    ld      s2, 32(sp)
-    ld      s1, 40(sp)
-    ld      s0, 48(sp)
-    ld      ra, 56(sp)
-    addi    sp, sp, 64
+9:  FRAME_RESTORE 64, ra, s0, s1, s2, s3, s4, s5
     ret
 
     .globl vertex_clip
