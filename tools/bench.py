@@ -285,7 +285,7 @@ def sd_figures(firmware: Path, folder: Path, timing: str = TIMING_ROCKET) -> dic
     for t, line in board.console_lines:
         for key in ("pins:", "fat32:", "load scene.ini", "load a/texture.ppm", "load a/model.obj", "model:"):
             if line.startswith(key):
-                times[key] = t
+                times[key] = to_seconds(t)
     board.close()
     return {
         "timing": timing, "reset_to_first_frame_ms": board.frames[0].virtual_time_s * 1e3,
@@ -360,7 +360,7 @@ def load_figures(firmware: Path, folder: Path) -> dict:
         finally:
             board.close()
         (host0, virtual0), (host1, virtual1) = marks["load scene.ini"], marks[f"load {name}/texture.ppm"]
-        figures[label] = {"bytes": size, "host_s": host1 - host0, "virtual_ms": (virtual1 - virtual0) * 1e3,
+        figures[label] = {"bytes": size, "host_s": host1 - host0, "virtual_ms": to_seconds(virtual1 - virtual0) * 1e3,
                           "host_s_per_mib": (host1 - host0) / (size / 2**20)}
     return figures
 
