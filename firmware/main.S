@@ -53,7 +53,7 @@
 #
 # Both harts draw: frame n >= 1 is split in two bands of rows, hart 0's
 # rows 0 .. s - 1 and hart 1's s .. LCD_HEIGHT - 1 (s = LCD_HEIGHT: hart 0
-# draws it all; draw_split decides, README "Rendering"), each hart's rows of
+# draws it all; draw_split decides, docs/design/firmware.md "Rendering"), each hart's rows of
 # the colour and depth buffers its own (render_band, raster_set_band), so
 # no pixel is written by both and the frame is the one hart 0 draws alone.
 # The vertex stage before it is split too when hart 1 has rows: each hart

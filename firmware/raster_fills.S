@@ -10,7 +10,7 @@
 #     (nearest, repeating), lit by the triangle's intensity k / 64 (or the
 #     Gouraud one); affine fills read the texel column and row directly.
 #     With filter = bilinear or mipmap the FILTERED fills blend four texels
-#     (of the mip level the footprint picks), README "Texture filtering".
+#     (of the mip level the footprint picks), docs/reference/scene-keys.md "Texture filtering".
 # Every loop ends in raster_triangle's epilogue, raster_triangle_return,
 # which lies after them here.
 

@@ -1,7 +1,7 @@
 # raster_texture.S: the texture the textured fills read (raster_set_texture)
 # and, with filter = mipmap, its mip chain: the levels, each half the size of
 # the one above, and the level table the FILTERED fills index per pixel
-# (raster_build_mips; render.inc MIP_*, README "Texture filtering").
+# (raster_build_mips; render.inc MIP_*, docs/reference/scene-keys.md "Texture filtering").
 
     .option norelax
     .include "k210.inc"

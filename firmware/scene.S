@@ -32,7 +32,7 @@
 # background  R G B (integers 0..255) or #RRGGBB      #101410       SCENE_BACKGROUND
 #                                                     (RGB565 0x10A2)
 #
-# Precision settings (what the renderer approximates; README "Precision
+# Precision settings (what the renderer approximates; docs/reference/scene-keys.md "Precision
 # settings" has what each costs and loses):
 # interpolation  perspective | affine                 perspective   SCENE_INTERPOLATION
 # shading     flat | gouraud                          flat          SCENE_SHADING

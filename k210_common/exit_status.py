@@ -4,7 +4,7 @@
 tools/regen_goldens.py share these numbers: a status means the same whichever command returns
 it, so a script or CI can read it without knowing which command ran. Each command says which
 rows it returns, and when, in a mapping code -> its own words (`details`); its `--help`
-epilog (`help_epilog`) and its table in the README (`markdown_table`, checked by
+epilog (`help_epilog`) and its table in docs/reference/ (`markdown_table`, checked by
 tests/unit/shared/test_exit_status.py) are generated from that mapping and this table.
 
 New statuses are appended (13 on): the board model's 0-12 are in use in scripts and CI. A run
@@ -84,7 +84,7 @@ def _checked(details: Mapping[int, str]) -> list[int]:
 
 def help_epilog(details: Mapping[int, str]) -> str:
     """The "exit status:" epilog of a command's --help: one row per status it returns, its
-    number, name and the command's own words for when it returns it (written for the README:
+    number, name and the command's own words for when it returns it (written for docs/reference/:
     its `code` quotes are dropped here)."""
     lines = ["exit status:"]
     for code in _checked(details):
@@ -95,14 +95,14 @@ def help_epilog(details: Mapping[int, str]) -> str:
 
 
 def markdown_table(details: Mapping[int, str]) -> str:
-    """A command's exit statuses as the README's table (the same rows as its --help)."""
+    """A command's exit statuses as docs/reference/'s table (the same rows as its --help)."""
     rows = ["| status | name | when |", "|---|---|---|"]
     rows += [f"| {code} | {BY_CODE[code].name} | {details[code]} |" for code in _checked(details)]
     return "\n".join(rows) + "\n"
 
 
 def shared_markdown_table(commands: Mapping[str, Mapping[int, str]]) -> str:
-    """The whole table as the README shows it, with the commands that return each status."""
+    """The whole table as docs/reference/exit-statuses.md shows it, with the commands that return each status."""
     for details in commands.values():
         _checked(details)
     rows = ["| status | name | meaning | returned by |", "|---|---|---|---|"]

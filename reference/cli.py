@@ -28,7 +28,7 @@ from .render import render_image
 from .scene import Scene, SceneError
 
 # When this command returns each status (k210_common/exit_status.py holds the numbers and
-# names); --help and the README's table are made from it (tests/unit/shared/test_exit_status.py)
+# names); --help and docs/reference/reference-renderer.md's table are made from it (tests/unit/shared/test_exit_status.py)
 EXIT_STATUS_DETAILS: dict[int, str] = {
     EXIT_OK: "the frames were written",
     EXIT_INTERNAL: "an internal error of the reference renderer (a bug: please report it with the command line)",

@@ -19,7 +19,7 @@ render.frame_triangles and render.frame_segments) is integrated over each pixel'
 - channels are the RGB565 stored values (red and blue 0-31, green 0-63) as floats, times the
   sample's light intensity (as render.py, lit per pixel where the corners have normals), not
   rounded per sample; the averaging is of stored values, the scale the renderer lights in, not
-  of linear light (see README "The reference renderer");
+  of linear light (see docs/reference/reference-renderer.md);
 - the pixel is the average of its samples, each channel rounded to nearest into RGB565: the
   closest image the LCD can show;
 - wireframe: each edge is a line 1 pixel wide, the points within half a pixel of the segment (a
@@ -42,7 +42,7 @@ from .render import (FLAT_COLOUR, HEIGHT, WIDTH, WIRE_COLOUR, FrameTriangle, edg
                      frame_triangles, is_textured, owns_ties, rgb565_to_rgb888)
 from .scene import Scene
 
-DEFAULT_DENSITY = 8              # samples per pixel along each axis (README: the convergence measured)
+DEFAULT_DENSITY = 8              # samples per pixel along each axis (docs/reference/reference-renderer.md: the convergence measured)
 DENSITY_MAX = 64
 BAND_SAMPLES = 1 << 20           # samples held at once (about 32 MB of buffers)
 CHANNEL_MAX = np.array([31.0, 63.0, 31.0])

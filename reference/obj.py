@@ -1,4 +1,4 @@
-"""Wavefront .obj models, the subset firmware/obj.S reads (README "Models and textures").
+"""Wavefront .obj models, the subset firmware/obj.S reads (docs/guide/cards-and-scenes.md "Models and textures").
 
 Statements (keywords case-sensitive): ``v x y z [w] [r g b]`` (3, 4, 6 or 7 numbers, x y z
 kept), ``vt u [v [w]]`` (1 to 3 numbers, u v kept, v = 0 when absent), ``vn x y z``, and

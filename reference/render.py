@@ -2,7 +2,7 @@
 
 Written for clarity, not speed: it is the yardstick for the firmware's trade-offs.
 
-Conventions (README "Rendering", firmware/vertex.S, render.S, raster.S, maths.S):
+Conventions (docs/design/firmware.md "Rendering", firmware/vertex.S, render.S, raster.S, maths.S):
 - right-handed; the camera at the origin looking down -z; no view matrix (world = eye space);
 - model matrix M = T R S, R the rotation by the unit quaternion about the (normalised) axis by
   angle + n * step degrees (right-hand rule);

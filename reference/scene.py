@@ -1,4 +1,4 @@
-"""scene.ini, read as the firmware reads it (firmware/scene.S, README "scene.ini").
+"""scene.ini, read as the firmware reads it (firmware/scene.S, docs/reference/scene-keys.md).
 
 One `key = value` per line; `#` starts a comment except as the first character of a value
 (`background = #203040`); blank lines, CRLF and a UTF-8 byte-order mark are fine; keys and the

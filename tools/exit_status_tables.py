@@ -1,5 +1,5 @@
-"""Writes the README's exit-status tables from k210_common/exit_status.py and each command's
-EXIT_STATUS_DETAILS, so that they cannot drift from the commands' --help.
+"""Writes the exit-status tables of docs/reference/ and sdcard_image/README.md from
+k210_common/exit_status.py and each command's EXIT_STATUS_DETAILS, so that they cannot drift from the commands' --help.
 
     python -m tools.exit_status_tables            (from the project's root: rewrites the tables)
     python -m tools.exit_status_tables --check    (exit 1, naming each table that differs)
@@ -19,7 +19,10 @@ from pathlib import Path
 from k210_common.exit_status import markdown_table, shared_markdown_table
 
 ROOT = Path(__file__).resolve().parent.parent
-READMES = (ROOT / "README.md", ROOT / "sdcard_image" / "README.md")
+#: The files that hold marked tables (docs/reference/exit-statuses.md the shared one, docs/reference/options.md
+#: the board model's, docs/reference/reference-renderer.md the reference's, sdcard_image/README.md the card tool's).
+READMES = (ROOT / "docs" / "reference" / "exit-statuses.md", ROOT / "docs" / "reference" / "options.md",
+           ROOT / "docs" / "reference" / "reference-renderer.md", ROOT / "sdcard_image" / "README.md")
 MARKER = re.compile(r"^<!-- exit statuses: (\S+) -->$")
 
 

@@ -26,7 +26,7 @@ BOARD = "dan"                 # kflash's name for the Maix Dock (CH552 serial br
 DEFAULT_BAUD = 1_500_000      # what the Dock's bridge takes for uploads (kflash's README for `dan`)
 CONSOLE_BAUD = 115_200        # the firmware's console (firmware/include/k210.inc UARTHS_BAUD)
 
-# When this command returns each status; --help and the README's table are made from it
+# When this command returns each status; --help and docs/reference/'s table are made from it
 # (tests/unit/shared/test_exit_status.py)
 EXIT_STATUS_DETAILS: dict[int, str] = {
     EXIT_OK: "the firmware was written to the board",

@@ -10,7 +10,7 @@ CHECKOUT is a riscv-tests tree (its isa/ folder); ENV the riscv-test-env tree (d
 the submodule). The K210's Rocket is of early 2017 (privileged spec 1.9.1), so the suite of that time
 (riscv-tests a5f84ee of 2017-03-03 with riscv-test-env 9e219c9, `--suite early-2017`, the default) is
 the one it would pass; today's suite (`--suite current`) checks later decisions of the ISA too
-(README, "RISC-V architectural tests").
+(docs/design/engines.md, "The ISA the K210 has: riscv-tests on both engines").
 
 Exit status: 0 when every outcome is the expected one, 1 when one differs, 2 for a usage error.
 """

@@ -11,7 +11,7 @@ SRAM) and then resets the board, so a flashed program meets the ROM's state, not
 loader's; `kflash --sram` has the ROM's ISP jump to the program directly, with UARTHS as
 the ISP left it.
 
-What is documented, and what the model chose where nothing is (README, "The state the
+What is documented, and what the model chose where nothing is (docs/design/board-model.md, "The state the
 firmware is handed", lists the same with sources):
 
 - CPU clock: PLL0 at 780 MHz (26 MHz x 30), ACLK = PLL0 / 2 = 390 MHz. Documented: U-Boot's

@@ -9,7 +9,7 @@ device's register table. With --check-writes the stray-write checker watches sto
 into SRAM here too.
 
 Accesses a register table does not take as they are get what the K210's buses do with
-them (README, "What the bus does"), with a warning naming hart, pc, instruction and
+them (docs/design/board-model.md, "What the bus does"), with a warning naming hart, pc, instruction and
 address, or, with --strict, stop the run (exit status 5):
 
 - TileLink devices (CLINT, PLIC, UARTHS, GPIOHS: Rocket's register router) answer any

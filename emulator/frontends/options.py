@@ -1,6 +1,6 @@
 """The command line of `python -m emulator run`: its options, what each takes, the checks made of
 them before a run (a refusal there is status 2 and writes nothing), and when each exit status is
-returned (--help's epilog and the README's table are made from EXIT_STATUS_DETAILS). cli.py runs
+returned (--help's epilog and docs/reference/options.md's table are made from EXIT_STATUS_DETAILS). cli.py runs
 what this accepts."""
 from __future__ import annotations
 
@@ -27,7 +27,7 @@ VIEW_PORT = 8210               # --view without a port
 MAX_PAD_CHANGES_IN_RUN_JSON = 10_000    # a pin toggled for ever must not bloat run.json
 
 # When this command returns each status (k210_common/exit_status.py holds the numbers and
-# names); --help and the README's table are made from it (tests/unit/shared/test_exit_status.py)
+# names); --help and docs/reference/options.md's table are made from it (tests/unit/shared/test_exit_status.py)
 EXIT_STATUS_DETAILS: dict[int, str] = {
     EXIT_OK: "the requested frames were shown, or `--until`'s time was reached, or (with `--expect`) the console "
              "printed every expected text (with `--golden`: all match; every `--grab` was taken)",

@@ -405,7 +405,7 @@ def test_an_unusable_output_folder_is_bad_input(firmware, tmp_path, where, expec
 
 def test_help_lists_every_exit_status():
     # every status the board model returns (its EXIT_STATUS_DETAILS; the numbers are
-    # k210_common/exit_status.py's) is in --help; tests/unit/shared/test_exit_status.py checks the README
+    # k210_common/exit_status.py's) is in --help; tests/unit/shared/test_exit_status.py checks docs/reference/
     codes = sorted(EXIT_STATUS_DETAILS)
     assert codes == list(range(13)) + [16, 130, 143]    # write-failed; 128 + the signal for SIGINT, SIGTERM
     result = run_emulator("run", "--help")

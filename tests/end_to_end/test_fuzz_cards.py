@@ -10,7 +10,7 @@ What must hold for every corrupt card:
   exit 8); it never traps, hangs, touches unmodelled hardware or stores outside its buffers.
 
 FUZZ_EXAMPLES=N runs N examples of each Hypothesis test instead of the default, and
-FUZZ_BOOTS=N boots N corrupt cards (nightly use: see README "Fuzzing").
+FUZZ_BOOTS=N boots N corrupt cards (nightly use: see docs/guide/running-and-testing.md "Fuzzing").
 """
 from __future__ import annotations
 

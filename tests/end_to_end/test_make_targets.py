@@ -56,7 +56,7 @@ def test_golden_check_keeps_its_diff_images_and_says_its_status(firmware, card, 
     deleted, and exited 2 (make's) where the README said 9; `make goldens` named a deleted output
     folder too. The runs' output now stays in GOLDEN_CHECK_OUT/GOLDENS_OUT (build/golden-check,
     build/goldens), whose paths the messages name; the check's status 9 is make's "Error 9", and
-    make returns 2 as the README says; tools/regen_goldens.py --check returns 9 itself."""
+    make returns 2 as docs/guide/running-and-testing.md says; tools/regen_goldens.py --check returns 9 itself."""
     scene = _scene_folder(tmp_path / "my-scene", assets, 30)
     made = make("goldens", f"SCENE_DIRS={scene}", "GOLDEN_FRAMES=1", f"GOLDENS_OUT={tmp_path / 'goldens'}")
     assert made.returncode == 0, made.stderr[-2000:]
@@ -83,6 +83,6 @@ def test_golden_check_keeps_its_diff_images_and_says_its_status(firmware, card, 
 
 
 def test_the_readme_says_what_make_golden_check_returns():
-    text = " ".join((ROOT / "README.md").read_text().split())
+    text = " ".join((ROOT / "docs" / "guide" / "running-and-testing.md").read_text().split())
     assert "make golden-check SCENE_DIRS=my-scene" in text
     assert "build/golden-check/my-scene/" in text and "`Error 9`" in text and "exits 2" in text

@@ -1,4 +1,4 @@
-"""Every command README.md shows is run here, as written (from the repository's root, `python`
+"""Every command README.md and docs/**/*.md show is run here, as written (from the repository's root, `python`
 being the project's virtual environment), or, where running it inside the suite is not
 possible, checked as far as it can be, for a reason stated next to it:
 
@@ -14,7 +14,7 @@ that is not a prerequisite the Makefile builds (the firmware, the C programs, th
 into it, and gives `make` its output folder's variable; each test checks that build/ holds,
 besides those prerequisites, what it held before (`build_outputs_untouched`).
 
-A command added to the README without an entry here fails `test_every_command_is_known`.
+A command added to the README or docs/ without an entry here fails `test_every_command_is_known`.
 """
 from __future__ import annotations
 
@@ -32,6 +32,8 @@ from build_outputs import PREREQUISITES, build_outputs, changed_outputs
 from suite import ROOT
 
 README = ROOT / "README.md"
+#: The documents whose commands are checked: the front page and every page of docs/.
+DOCUMENTS = [README, *sorted((ROOT / "docs").rglob("*.md"))]
 VENV_BIN = Path(sys.executable).parent
 #: The make targets the tests run that write an output, and the variable naming its folder.
 MAKE_OUTPUTS = {"flash-to-emulator": ("FRAMES_DIR", "build/frames")}
@@ -134,7 +136,10 @@ def _lists_exit_statuses(result: subprocess.CompletedProcess, tmp: Path) -> None
 
 
 def _tables_match(result: subprocess.CompletedProcess, tmp: Path) -> None:
-    assert "(differ)" not in result.stdout and "tables all, emulator, reference" in result.stdout
+    assert "(differ)" not in result.stdout
+    for path, key in [("docs/reference/exit-statuses.md", "all"), ("docs/reference/options.md", "emulator"),
+                      ("docs/reference/reference-renderer.md", "reference")]:
+        assert f"{path}: tables {key}" in result.stdout, result.stdout
 
 
 def _prints_agreement(result: subprocess.CompletedProcess, tmp: Path) -> None:
@@ -171,6 +176,7 @@ COMMANDS = {
     "make goldens SCENES=gem-flat": ("dry-run", lambda r, tmp: None),
     "make debug": ("dry-run", lambda r, tmp: None),
     "make flash-to-emulator VIEW=1": ("dry-run", _serves_the_view),
+    "make flash-to-emulator CARD=build/my-card.img VIEW=1": ("dry-run", _serves_the_view),
     "make flash PORT=/dev/ttyUSB0": ("dry-run", lambda r, tmp: None),
     'make goldens SCENE_DIRS="my-scene other-scene"': ("dry-run", lambda r, tmp: None),
     "make golden-check SCENE_DIRS=my-scene": ("dry-run", lambda r, tmp: None),
@@ -208,6 +214,14 @@ OWN_FIRMWARE_COMMANDS = {
     'python -m emulator run build/hello-asm.elf --expect "hello from my own firmware" --fail-on "error" '
     "--out build/hello-asm": _console_says("build/hello-asm", "hello from my own firmware"),
 }
+#: The README's five-minute walk-through, in its order: write a model, build a card of it, run it.
+WALKTHROUGH_COMMANDS = {
+    "mkdir -p build/my-scene": lambda r, tmp: None,
+    "printf 'v -1 -1 0\\nv 1 -1 0\\nv 0 1 0\\nf 1 2 3\\n' > build/my-scene/model.obj": lambda r, tmp: None,
+    "python -m sdcard_image build build/my-card.img --scene mode=flat build/my-scene/model.obj":
+        lambda r, tmp: None,
+    "make flash-to-emulator CARD=build/my-card.img": _ran_frames("build/frames", 8),
+}
 #: Both write the same folder (build/frames as the README runs them), so they run one after the
 #: other in one test.
 FLASH_COMMANDS = {
@@ -217,8 +231,8 @@ FLASH_COMMANDS = {
 
 
 def test_every_command_is_known():
-    found = readme_commands(README.read_text())
-    known = set(COMMANDS) | set(FLASH_COMMANDS) | set(OWN_FIRMWARE_COMMANDS)
+    found = [command for document in DOCUMENTS for command in readme_commands(document.read_text())]
+    known = set(COMMANDS) | set(FLASH_COMMANDS) | set(OWN_FIRMWARE_COMMANDS) | set(WALKTHROUGH_COMMANDS)
     assert set(found) == known, (
         f"README commands without a check here: {sorted(set(found) - known)}; "
         f"checks of commands the README no longer shows: {sorted(known - set(found))}")
@@ -247,6 +261,11 @@ def test_readme_flash_commands(firmware, card, tmp_path):
 
 def test_readme_own_firmware_commands(firmware, tmp_path):
     for command, check in OWN_FIRMWARE_COMMANDS.items():
+        _run_and_check(command, "run", check, tmp_path)
+
+
+def test_readme_walkthrough_commands(firmware, tmp_path):
+    for command, check in WALKTHROUGH_COMMANDS.items():
         _run_and_check(command, "run", check, tmp_path)
 
 

@@ -124,7 +124,7 @@ def test_minified_checkerboard_against_the_reference_and_the_ideal(far_runs):
     """Far away a checkerboard of single texels should average to grey. Against the ideal image
     (area-averaged pixels, area-filtered texture) nearest texels alias, bilinear blends 2 x 2
     texels of the 4 to 12 a pixel covers, and the mip chain averages the footprint: each nearer
-    the ideal than the one before (figures printed, README "Texture filtering"). Against the
+    the ideal than the one before (figures printed, docs/reference/scene-keys.md "Texture filtering"). Against the
     reference's pixel-centre image with the same filter, the mip chain agrees to within its
     rounding; nearest and bilinear pick or blend texels from positions that 1/16-pixel
     snapping moves by up to half a texel here, so only their PSNR is held."""

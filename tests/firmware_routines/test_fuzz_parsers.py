@@ -15,7 +15,7 @@ the same double, bit for bit.
 
 The firmware's console output is captured by making the UART take each byte at once, and a
 fatal error is caught where errors.S ends its report (`error_end`), before it paints the screen.
-FUZZ_EXAMPLES=N runs N examples of each (nightly use: see README "Fuzzing").
+FUZZ_EXAMPLES=N runs N examples of each (nightly use: see docs/guide/running-and-testing.md "Fuzzing").
 """
 from __future__ import annotations
 

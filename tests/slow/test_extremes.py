@@ -351,7 +351,7 @@ def test_largest_texture_with_a_mip_chain(firmware, layout, tmp_path, case):
     without it, and one texel more is error 12 naming the mip chain with its size, as the replay
     (extremes_support.mip_chain_bytes) predicts. The model fills the heap as in
     test_largest_texture_beside_a_model; a texture of n x 1 texels needs a chain of about its
-    own size (only one side halves), a square one about a third (README, memory limits)."""
+    own size (only one side halves), a square one about a third (docs/reference/memory-limits.md)."""
     filler, _ = limits(lambda n: mipmap_outcomes(layout, n, TEXTURE_TARGET), 1,
                        layout.size // layout.MESH_F_BYTES + 1)
     most, beyond = limits(lambda n: mipmap_outcomes(layout, filler, n), TEXTURE_TARGET // 2, 63_000)

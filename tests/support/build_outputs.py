@@ -4,7 +4,7 @@ and wrote build/hello, build/blink, ...).
 build/ holds the prerequisites the Makefile builds for the tests (the firmware, the C test
 programs, the default card) and, besides them, the user's own outputs: `make
 flash-to-emulator`'s build/frames, `make golden-check`'s build/golden-check, the folders the
-README's commands write. A test writes its outputs into its temporary folder; `changed_outputs`
+commands of the README and docs/ write. A test writes its outputs into its temporary folder; `changed_outputs`
 says which of the user's it touched."""
 from __future__ import annotations
 

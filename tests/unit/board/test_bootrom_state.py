@@ -1,5 +1,5 @@
 """The state the mask ROM hands a program (the board model's default) against --cold, the reset
-value of every register (emulator/board/bootrom.py; README, "The state the firmware is handed")."""
+value of every register (emulator/board/bootrom.py; docs/design/board-model.md, "The state the firmware is handed")."""
 from __future__ import annotations
 
 import json

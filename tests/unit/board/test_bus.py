@@ -1,8 +1,8 @@
 """What the K210's buses do with accesses a register table does not take as they are (bus.py,
-README "What the bus does"): by default the model answers them as the chip does and warns,
+docs/design/board-model.md "What the bus does"): by default the model answers them as the chip does and warns,
 naming hart, pc, instruction and address; with --strict the run stops at the first one.
 
-Each idiom has a small program; the facts and their sources are in the README's table."""
+Each idiom has a small program; the facts and their sources are in its table there."""
 from __future__ import annotations
 
 import json
@@ -381,7 +381,7 @@ def test_a_return_through_an_address_with_a_clobbered_upper_half_runs_on_at_its_
     run_to_done(board)
     assert reg(board, "s1") == 1 and reg(board, "s8") == 0        # back reached, no trap
     target = UPPER_HALF | symbol(board, "back")
-    assert reg(board, "s2") == target + 2          # the model keeps the pc's upper half (README)
+    assert reg(board, "s2") == target + 2          # the model keeps the pc's upper half (docs/design/board-model.md)
     assert board.bus.questionable == {"upper address bits": 1}
     assert f"reaches 0x{symbol(board, 'back'):08x}" in warning_about(board, target)
 

@@ -3,7 +3,7 @@ are refused as bad input naming what is wrong (BadInput: status 6), and one that
 a documented end (a frame, a trap, a hang, an unmodelled access: a BoardStop) or the time asked;
 never another exception, which the command line would report as an internal error.
 
-FUZZ_EXAMPLES=N runs N examples of each instead of the default (README: "Fuzzing")."""
+FUZZ_EXAMPLES=N runs N examples of each instead of the default (docs/guide/running-and-testing.md: "Fuzzing")."""
 from __future__ import annotations
 
 import os

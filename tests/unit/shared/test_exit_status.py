@@ -1,5 +1,5 @@
 """One table of exit statuses for every command (k210_common/exit_status.py): the commands
-return its numbers, their --help lists what they return, and the README's tables are the ones
+return its numbers, their --help lists what they return, and the tables of docs/reference/ are the ones
 the code makes (tools/exit_status_tables.py)."""
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""README.md's memory limits are what the firmware gives (tools/memory_limits.py: the replay of its
+"""docs/reference/memory-limits.md's memory limits are what the firmware gives (tools/memory_limits.py: the replay of its
 heap allocations that tests/slow/test_extremes.py holds against the firmware on the board model)."""
 from __future__ import annotations
 

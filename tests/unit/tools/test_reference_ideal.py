@@ -362,7 +362,7 @@ def test_the_ideal_image_has_converged_at_the_default_density(assets, cards):
     """The bench's gem (tools/bench.py: scale 0.9, translate 0 0 -3, angle 17, step 3), textured,
     frame 0, over the gem's bounding box: 8 x 8 samples against 16 x 16 differ by an RMS below
     1 / 316 of full scale (PSNR above 50 dB; over the whole frame one run measured 60.3 dB,
-    README), at least 10 dB closer than the pixel-centre image is to either."""
+    docs/reference/reference-renderer.md), at least 10 dB closer than the pixel-centre image is to either."""
     scene, mesh, texture = _card(assets, cards, model="models/gem.obj", texture="textures/gem.ppm", mode="textured",
                                  scale="0.9", translate="0 0 -3", angle="17", step="3")
     box = (100, 62, 219, 178)                  # the gem's pixels in frame 0, and a pixel more
