@@ -391,18 +391,12 @@ class Scheduler(SramWaits, Deadlines):
         last_progress = 0.0
         idle_since: Time | None = None
         while self.time < until or self._report_pending():
-            if not self._report_pending() and not any(h.state is HartState.RUNNING for h in self.harts) and \
-                    self.board.next_device_event(self.time) is None:
-                if self._grabs and self._grabs[0][0] < until:
-                    # nothing moves before the grab, which may set something going (a script's send)
-                    self._set_time(max(self.time, self._grabs[0][0]))
-                    self._run_grabs()
-                    continue
-                idle_since = self.time
-                self._set_time(until)
-                if self._grabs:
-                    self._run_grabs()
-                break
+            if not self._report_pending() and self.waits_for_outside():
+                since = self.time
+                if self._idle_to(until):
+                    idle_since = since
+                    break
+                continue
             self.step(go_on_alone=True)
             if self._grabs:
                 self._run_grabs()
@@ -415,6 +409,19 @@ class Scheduler(SramWaits, Deadlines):
         return RunResult("ok", message, self.frames, self.time / PS_PER_S, [h.instret for h in self.harts],
                          host_time.perf_counter() - self._host_start, self.board.warnings,
                          [h.cycles for h in self.harts])
+
+    def _idle_to(self, until: Time) -> bool:
+        """Nothing moves by itself (waits_for_outside): time moves on to the next grab before `until`,
+        which may set something going (a script's send; False: the caller looks again), or else
+        straight to `until` (True)."""
+        if self._grabs and self._grabs[0][0] < until:
+            self._set_time(max(self.time, self._grabs[0][0]))
+            self._run_grabs()
+            return False
+        self._set_time(until)
+        if self._grabs:
+            self._run_grabs()
+        return True
 
     def waits_for_outside(self) -> bool:
         """No hart runs and no device will do anything by itself: only something from outside (a pad
@@ -439,14 +446,9 @@ class Scheduler(SramWaits, Deadlines):
                 if len(self.frames) >= frames and self._trap_deadline is None:
                     return True
                 if not self._report_pending() and self.waits_for_outside():
-                    if self._grabs and self._grabs[0][0] < until:
-                        self._set_time(max(self.time, self._grabs[0][0]))
-                        self._run_grabs()
-                        continue
-                    self._set_time(until)
-                    if self._grabs:
-                        self._run_grabs()
-                    break
+                    if self._idle_to(until):
+                        break
+                    continue
                 self.step(go_on_alone=True)
                 if self._grabs:
                     self._run_grabs()
