@@ -1026,6 +1026,9 @@ def speed_figures(args: argparse.Namespace) -> None:
     out.parent.mkdir(exist_ok=True)
     out.write_text(json.dumps(results, indent=2) + "\n")
     print(f"written to {out.relative_to(ROOT)}")
+    from tools import bench_history
+    bench_history.append(results)
+    print(f"recorded in {bench_history.HISTORY.relative_to(ROOT)}; the table in {bench_history.PAGE.relative_to(ROOT)}")
 
 
 if __name__ == "__main__":

@@ -205,6 +205,7 @@ COMMANDS = {
         ("run", _prints_agreement),
     "python -m tools.exit_status_tables --check": ("run", _tables_match),
     "python -m tools.memory_limits --check": ("run", lambda result, tmp: None),
+    "python -m tools.bench_history --check": ("run", lambda result, tmp: None),
 }
 #: Each needs the one before (assemble, link, run), so they run in this order in one test.
 OWN_FIRMWARE_COMMANDS = {

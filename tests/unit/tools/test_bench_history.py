@@ -1,0 +1,35 @@
+"""make bench's record (tools/bench_history.py): a line of JSON a run in docs/bench-history.jsonl, and
+docs/measurements.md's table generated from the latest line."""
+from __future__ import annotations
+
+import json
+
+from tools import bench_history
+
+
+def test_the_pages_table_is_the_latest_runs(capsys):
+    assert bench_history.main(["--check"]) == 0, capsys.readouterr().out
+
+
+def test_a_run_is_appended_and_the_table_follows_it(tmp_path, monkeypatch, capsys):
+    history, page = tmp_path / "history.jsonl", tmp_path / "page.md"
+    page.write_text(f"# page\n\n{bench_history.BEGIN}\nold\n{bench_history.END}\n\nafter\n")
+    history.write_text("")
+    monkeypatch.setattr(bench_history, "HISTORY", history)
+    monkeypatch.setattr(bench_history, "PAGE", page)
+    results = {"firmware": {"real_time_factor": 1.25, "host_ms_per_frame": 6.1}, "raw_unicorn_mips": 2600.0,
+               "output_memory": {"10000": {"rss_after_mb": 69.4}}}
+    line = bench_history.append(results)
+    assert json.loads(history.read_text().splitlines()[-1]) == line
+    assert line["figures"]["real-time factor after loading (virtual s per host s)"] == 1.25
+    assert line["figures"]["SPI0 fed by the CPU, host CPU per FIFO store"] is None     # not measured
+    text = page.read_text()
+    assert "| real-time factor after loading (virtual s per host s) | 1.250 |  |" in text
+    assert "| run output, resident memory after 10,000 frames | 69 | MB |" in text
+    assert "| SPI0 fed by the CPU, host CPU per FIFO store | - | us |" in text
+    assert text.startswith("# page\n") and text.endswith("\n\nafter\n") and "old" not in text
+    assert bench_history.main(["--check"]) == 0
+    bench_history.append({"firmware": {"real_time_factor": 0.9}})       # a later run: the table is its
+    assert "| 0.900 |" in page.read_text() and len(history.read_text().splitlines()) == 2
+    page.write_text(page.read_text().replace("0.900", "9.999"))
+    assert bench_history.main(["--check"]) == 1 and "not the latest run's" in capsys.readouterr().out
