@@ -32,3 +32,11 @@ def test_every_reference_renderer_option_is_in_its_reference():
     missing = sorted(name for name in options_of(_parser()) if f"`{name}" not in text and f"{name} " not in text
                      and f"[{name}" not in text)
     assert missing == []
+
+
+def test_every_card_tool_option_is_in_its_reference():
+    from sdcard_image.cli import _parser
+    text = (ROOT / "sdcard_image" / "README.md").read_text() + (ROOT / "docs" / "guide" / "cards-and-scenes.md").read_text()
+    missing = sorted(name for name in options_of(_parser()) if f"`{name}" not in text and f"{name} " not in text
+                     and f"[{name}" not in text)
+    assert missing == []
