@@ -89,3 +89,10 @@ def test_the_firmware_headers_pads_are_the_dock_s():
             assert int(value) == DOCK_PADS[key].number, f"{file}: PAD_{name}"
             checked += 1
     assert checked >= 18
+
+
+def test_the_firmware_headers_map_is_generated_from_the_map(capsys):
+    """The block addresses and PLIC sources in k210.inc and k210.h are tools/k210_map.py's output
+    from K210_BLOCKS, as it would write them now."""
+    from tools import k210_map
+    assert k210_map.main(["--check"]) == 0, capsys.readouterr().out
