@@ -33,3 +33,15 @@ def test_a_run_is_appended_and_the_table_follows_it(tmp_path, monkeypatch, capsy
     assert "| 0.900 |" in page.read_text() and len(history.read_text().splitlines()) == 2
     page.write_text(page.read_text().replace("0.900", "9.999"))
     assert bench_history.main(["--check"]) == 1 and "not the latest run's" in capsys.readouterr().out
+
+
+def test_the_host_cost_of_a_cpu_fed_spi_fifo_is_stated():
+    """Issue 32, item 9: feeding SPI0 from the CPU costs tens of microseconds of host time a store,
+    and nothing said so. The latest bench run's figure is in the page's table, and the page says what
+    it means against DMA, where a firmware engineer reads (docs/guide/your-own-firmware.md)."""
+    label = "SPI0 fed by the CPU, host CPU per FIFO store"
+    figure = bench_history.latest()["figures"][label]
+    assert figure is not None and figure > 0
+    assert f"| {label} | {figure:.1f} | us |" in bench_history.PAGE.read_text()
+    guide = (bench_history.ROOT / "docs" / "guide" / "your-own-firmware.md").read_text()
+    assert "feeds an SPI FIFO from the CPU" in guide and "DMA" in guide
