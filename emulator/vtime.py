@@ -38,6 +38,12 @@ def cycles_in(duration: Time, hz: int) -> int:
     return (duration * hz) // PS_PER_S
 
 
+def cycles_reaching(duration: Time, hz: int) -> int:
+    """The fewest whole cycles of a clock at `hz` whose time (cycles_time) is `duration` or more
+    (0 for a duration of 0 or less): where a count must stop to have reached a moment."""
+    return max(0, cycles_in(duration - 1, hz) + 1)
+
+
 def from_seconds(seconds: float) -> Time:
     """A time the user gave in seconds, to the nearest picosecond."""
     return round(seconds * PS_PER_S)

@@ -36,7 +36,7 @@ from .traps import Traps
 from ..errors import BoardStop, FirmwareTrap
 from ..cpu.hart import CsrContext, Hart, HartState, RunEnd
 from ..memory_map import RESET_PC
-from ..vtime import NEVER, PS_PER_MS, PS_PER_S, Time, cycles_in, cycles_time, ms
+from ..vtime import NEVER, PS_PER_MS, PS_PER_S, Time, cycles_in, cycles_reaching, cycles_time, ms
 
 if TYPE_CHECKING:
     from ..devices.mmio import Peripheral
@@ -210,7 +210,7 @@ class Scheduler(SramWaits, Deadlines):
     def cycles_until(self, hart: Hart, time: Time) -> int:
         """The least cycle count at which the hart's time (time_at_cycles) is `time` or later."""
         anchor, start = self._anchor[hart.hart_id]
-        return start + max(0, cycles_in(time - anchor - 1, self._hz) + 1)
+        return start + cycles_reaching(time - anchor, self._hz)
 
     def turn_clock(self, hart: Hart) -> tuple[Time, int, int]:
         """The running hart's time is t + cycles_time(cycles - start, hz) (time_at_cycles): (t, start, hz)."""
@@ -514,8 +514,8 @@ class Scheduler(SramWaits, Deadlines):
         self.clock_changed(at)
         for hart in self.harts:
             hart.reset(RESET_PC)
-            self.move_hart(hart, max(hart.time, at))
-            self._anchor[hart.hart_id] = (hart.time, hart.cycles)
+            hart.time = max(hart.time, at)
+            self._anchor[hart.hart_id] = (hart.time, hart.cycles)   # (whether or not its time moved)
         self.traps.chip_reset()
         self._trap_deadline = None
         self._poll = [NO_POLL] * HARTS
@@ -713,7 +713,10 @@ class Scheduler(SramWaits, Deadlines):
         device event at a time while a hart sleeps: a sleeper an event wakes on the way wakes at
         that event's time and the board's time stays there, so that it runs from its own wake-up,
         not from where the others have got to (a hart woken by another's store in the middle of
-        the other's turn, gone back to sleep with a timer due before the other's turn ends)."""
+        the other's turn, gone back to sleep with a timer due before the other's turn ends). On the
+        chip a hart in wfi resumes as soon as an enabled interrupt is pending (privileged spec
+        1.9.1, 3.2.3), and the CLINT raises MTIP once mtime >= mtimecmp (SiFive's CLINT, which the
+        K210's is; the SDK's clint.c relies on it): at the timer's own moment."""
         while any(h.state is not HartState.RUNNING for h in self.harts):
             event = self.board.next_device_event(self.time)
             if event is None or event >= target:
@@ -733,9 +736,9 @@ class Scheduler(SramWaits, Deadlines):
         self._wake_sleepers(self.time)
 
     def _run_hart(self, hart: Hart, budget: int, instruction_limit: int | None = None,
-                  since: tuple[int, int] | None = None) -> int:
-        """Runs one turn of a hart, `budget` CPU cycles and at most `instruction_limit` instructions;
-        returns how many cycles it used. `since`: the turn began earlier, with the hart's executed
+                  since: tuple[int, int] | None = None) -> None:
+        """Runs one turn of a hart, `budget` CPU cycles and at most `instruction_limit` instructions
+        (its time is then time_at_cycles of its cycle count). `since`: the turn began earlier, with the hart's executed
         instructions and cycles at these counts (_go_on_alone ran its start)."""
         bus = self.board.bus
         self.current = hart
@@ -780,10 +783,8 @@ class Scheduler(SramWaits, Deadlines):
         stray = bus.turn_ended(hart)
         if stray is not None:
             self.pending_stop = stray
-        ran = hart.cycles - cycles_before
         if self.pending_stop is None:
             if end is RunEnd.WFI:
                 hart.state = HartState.ASLEEP
             elif end is RunEnd.EXCEPTION:
                 self.traps.deliver_exception(hart, self._open_grace)
-        return ran

@@ -32,7 +32,7 @@ from unicorn import riscv_const as rv
 from unicorn.unicorn_py3 import unicorn as _ucpy
 
 from . import shared_memory, timing
-from ..vtime import NEVER, Time, cycles_in
+from ..vtime import NEVER, Time, cycles_reaching
 from .native import (COUNT_HOOK, NO_LIMIT, AlonePlan, Counter, FastHead, add_native_hook, address_table,
                      counter_lib, fast_step)
 from .privileged import COUNTER_BITS, MSTATUS_RESET, PendingException, PrivilegedArchitecture
@@ -742,4 +742,4 @@ def _first_cycle_at(until: Time, anchor: Time, start: int, hz: int) -> int:
     (Scheduler.time_at_cycles) is `until` or later; NO_LIMIT if never."""
     if until >= NEVER:
         return NO_LIMIT
-    return min(start + max(0, cycles_in(until - anchor - 1, hz) + 1), NO_LIMIT)
+    return min(start + cycles_reaching(until - anchor, hz), NO_LIMIT)

@@ -5,7 +5,7 @@ from __future__ import annotations
 from hypothesis import given
 from hypothesis import strategies as st
 
-from emulator.vtime import NEVER, PS_PER_MS, PS_PER_S, cycles_in, cycles_time
+from emulator.vtime import NEVER, PS_PER_MS, PS_PER_S, cycles_in, cycles_reaching, cycles_time
 from k210_fixtures import make_board, program, reg
 
 # every clock the K210 can make is below 1 GHz; the oscillator's 26 MHz and odd PLL rates included
@@ -26,6 +26,14 @@ def test_a_split_duration_is_never_shorter_and_at_most_a_picosecond_longer(a, b,
     anchor (time_at_cycles), never summed turn by turn."""
     whole, parts = cycles_time(a + b, hz), cycles_time(a, hz) + cycles_time(b, hz)
     assert whole <= parts <= whole + 1
+
+
+@given(st.integers(min_value=-10, max_value=1 << 50), RATES)
+def test_the_fewest_cycles_that_reach_a_moment(duration, hz):
+    """cycles_reaching: where a turn's cycle budget must end for the hart to have reached a time."""
+    n = cycles_reaching(duration, hz)
+    assert cycles_time(n, hz) >= duration
+    assert n == 0 or cycles_time(n - 1, hz) < duration
 
 
 def test_never_is_later_than_any_run_and_fits_a_c_int64():
