@@ -746,15 +746,20 @@ def main() -> int:
     sweep = not args.no_renderer and not args.no_quality
     if args.harts_only:
         return harts_main(Path(args.firmware), Path(args.out))
+    speed = None
     if not args.quality_only and not args.no_speed:
-        speed_figures(args)
+        speed = speed_figures(args)
     failures: list[str] = []
+    swept: list[dict] = []
     if renderer or sweep:
         runs = planned_runs(scenes, modes, settings, renderer, sweep)
         with tempfile.TemporaryDirectory() as tmp:
             records, failures = scene_figures(Path(args.firmware), Path(tmp), runs)
         out = Path(args.out)
         printed = write_results(records, out, renderer, sweep)
+        if sweep and not failures and settings is None and scenes == [scene_id(m) for _, m, _, _ in BENCH_SCENES] \
+                and modes == list(MODES):
+            swept = [strict_json_record(r) for r in records if in_sweep(r)]
         if renderer:
             harts_main(Path(args.firmware), out)
             macro_zbuffer_main(out)
@@ -763,6 +768,13 @@ def main() -> int:
               + (", quality.csv, quality.md, quality.svg" if sweep else ""))
     for failure in failures:
         print(f"FAILED: {failure}")
+    if speed is not None or swept:
+        # a partial sweep (--settings, --scenes, --modes) is not recorded: the page's table compares
+        # every setting on every scene, from one run
+        from tools import bench_history
+        bench_history.append(speed, swept)
+        print(f"recorded in {bench_history.HISTORY.relative_to(ROOT)}; the tables in "
+              f"{bench_history.PAGE.relative_to(ROOT)}")
     return 1 if failures else 0
 
 
@@ -932,9 +944,9 @@ def cpu_fed_spi_figures(stores: int = 20_000, rounds: int = 3) -> dict:
             "rounds": rounds}
 
 
-def speed_figures(args: argparse.Namespace) -> None:
-    """Raw Unicorn, a board hart and the board model running the firmware; SD timings. Printed and
-    written to build/bench.json."""
+def speed_figures(args: argparse.Namespace) -> dict:
+    """Raw Unicorn, a board hart and the board model running the firmware; SD timings. Printed,
+    written to build/bench.json and returned."""
     iterations = args.loop_instructions // 4
     with tempfile.TemporaryDirectory() as tmp:
         code = assemble_loop(iterations, Path(tmp))
@@ -1026,9 +1038,7 @@ def speed_figures(args: argparse.Namespace) -> None:
     out.parent.mkdir(exist_ok=True)
     out.write_text(json.dumps(results, indent=2) + "\n")
     print(f"written to {out.relative_to(ROOT)}")
-    from tools import bench_history
-    bench_history.append(results)
-    print(f"recorded in {bench_history.HISTORY.relative_to(ROOT)}; the table in {bench_history.PAGE.relative_to(ROOT)}")
+    return results
 
 
 if __name__ == "__main__":

@@ -1,7 +1,8 @@
-"""The bench as a record (issue 31, item 5; issue 32, item 2): each `make bench` run's speed figures,
-one line of JSON a run, appended to docs/bench-history.jsonl (in the repository, so that runs on
-other days and machines can be compared), and the table docs/measurements.md shows, generated from
-the latest line between two markers.
+"""The bench as a record (issue 31, item 5; issue 32, item 2): each `make bench` run's figures, one
+line of JSON a run, appended to docs/bench-history.jsonl (in the repository, so that runs on other
+days and machines can be compared), and the tables docs/measurements.md shows, generated between two
+markers: the speed figures and the thesis's measurements beside ours from the latest run that took
+them, and what each precision setting costs and buys from the latest run that swept them.
 
     python -m tools.bench_history [--check]
 
@@ -43,9 +44,27 @@ FIGURES = [
     ("reset to first frame (virtual)", ("firmware", "reset_to_first_frame_ms"), "ms", "{:.1f}"),
     ("SD: card set-up to root directory (virtual)", ("sd", "card_setup_to_root_ms"), "ms", "{:.2f}"),
     ("SD: 183 KiB texture read (virtual)", ("sd", "texture_read_ms"), "ms", "{:.2f}"),
+    ("SD: 38.8 KiB model read and checked (virtual)", ("sd", "model_read_ms"), "ms", "{:.2f}"),
+    ("reset to first frame, files of the thesis's model A (virtual)", ("sd", "reset_to_first_frame_ms"), "ms",
+     "{:.1f}"),
     ("SPI0 fed by the CPU, host CPU per FIFO store", ("cpu_fed_spi", "host_cpu_us_per_store"), "us", "{:.1f}"),
     ("run output, resident memory after 10,000 frames", ("output_memory", "10000", "rss_after_mb"), "MB", "{:.0f}"),
 ]
+
+
+# The thesis's own measurements on a Dock (../shared/seeds: its tables of start-up and SD read times)
+# beside the figure of ours that measures the same span: (what, thesis ms, our figure's label)
+THESIS = [
+    ("start-up to the main loop, model A's files", 344.3, "reset to first frame, files of the thesis's model A (virtual)"),
+    ("SD: card set-up to the root directory", 32.35, "SD: card set-up to root directory (virtual)"),
+    ("SD: 183.2 KiB texture", 200.75, "SD: 183 KiB texture read (virtual)"),
+    ("SD: 38.8 KiB model", 43.05, "SD: 38.8 KiB model read and checked (virtual)"),
+]
+
+# The fields of a precision-sweep record (tools/bench.py's measure) a history line keeps
+SETTING_FIELDS = ("scene", "scale", "mode", "setting", "instructions_hart0", "cycles_hart0", "psnr_db",
+                  "psnr_ideal_db")
+MODES = ("textured", "flat", "wireframe")
 
 
 def _pick(results: dict, path: tuple) -> float | None:
@@ -68,42 +87,116 @@ def _commit() -> str:
     return head + ("+changes" if dirty else "")
 
 
-def record(results: dict) -> dict:
-    """One history line: when, on what, and the figures (None where a run did not measure one)."""
-    return {
+def record(results: dict | None, settings: list[dict] | None = None) -> dict:
+    """One history line: when, on what, the speed figures (None where a run did not measure one; no
+    `figures` when the run measured no speed) and the precision sweep's records (`settings`)."""
+    line: dict = {
         "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
         "commit": _commit(),
         "host": {"machine": platform.machine(), "processors": os.cpu_count(), "python": platform.python_version()},
-        "figures": {label: _pick(results, path) for label, path, _, _ in FIGURES},
     }
+    if results is not None:
+        line["figures"] = {label: _pick(results, path) for label, path, _, _ in FIGURES}
+    if settings:
+        line["settings"] = [{key: r.get(key) for key in SETTING_FIELDS} for r in settings]
+    return line
 
 
-def append(results: dict) -> dict:
-    """Appends the run's line to the history and writes the table from it; returns the line."""
-    line = record(results)
+def append(results: dict | None, settings: list[dict] | None = None) -> dict:
+    """Appends the run's line to the history and writes the tables from it; returns the line."""
+    line = record(results, settings)
     with HISTORY.open("a") as handle:
         handle.write(json.dumps(line, sort_keys=True) + "\n")
     write_table()
     return line
 
 
-def latest() -> dict:
-    lines = [line for line in HISTORY.read_text().splitlines() if line.strip()]
-    if not lines:
-        raise SystemExit(f"{HISTORY}: no run recorded yet (make bench)")
-    return json.loads(lines[-1])
+def lines() -> list[dict]:
+    return [json.loads(line) for line in HISTORY.read_text().splitlines() if line.strip()]
 
 
-def table(line: dict) -> str:
-    rows = [BEGIN,
-            f"The latest `make bench` run ({line['date']}, commit {line['commit']}, {line['host']['machine']}, "
-            f"{line['host']['processors']} processors; every run is a line of docs/bench-history.jsonl):",
+def latest(part: str = "figures") -> dict:
+    """The latest line that holds `part` (figures: the speed figures; settings: a precision sweep)."""
+    for line in reversed(lines()):
+        if part in line:
+            return line
+    raise SystemExit(f"{HISTORY}: no run with {part} recorded yet (make bench)")
+
+
+def _run(line: dict) -> str:
+    return f"{line['date']}, commit {line['commit']}, {line['host']['machine']}, {line['host']['processors']} processors"
+
+
+def _value(value: float | None, form: str) -> str:
+    return "-" if value is None else form.format(value)
+
+
+def speed_table(line: dict) -> list[str]:
+    rows = [f"The latest `make bench` run ({_run(line)}; every run is a line of docs/bench-history.jsonl):",
             "",
             "| figure | value | unit |",
             "|---|---|---|"]
     for label, _, unit, form in FIGURES:
-        value = line["figures"].get(label)
-        rows.append(f"| {label} | {'-' if value is None else form.format(value)} | {unit} |")
+        rows.append(f"| {label} | {_value(line['figures'].get(label), form)} | {unit} |")
+    return rows
+
+
+def thesis_table(line: dict) -> list[str]:
+    rows = ["The thesis's firmware measured on a Dock beside our firmware's virtual time on the board model for "
+            "the same span (Rocket timing; same run). The two firmwares differ: the thesis's reads the card one "
+            "CMD17 a block with every byte a polled SPI transfer, ours streams blocks by DMA (docs/design/firmware.md), "
+            "so this compares the renderers, not the model against the chip:",
+            "",
+            "| span | thesis's firmware, on a Dock | our firmware, board model | ours / thesis |",
+            "|---|---|---|---|"]
+    for what, thesis_ms, label in THESIS:
+        ours = line["figures"].get(label)
+        rows.append(f"| {what} | {thesis_ms:g} ms | {_value(ours, '{:.2f} ms')} | "
+                    f"{_value(None if ours is None else ours / thesis_ms, '{:.2f}')} |")
+    return rows
+
+
+def _ranges(values: list[float]) -> str:
+    low, high = min(values), max(values)
+    return f"{low:.2f}" if f"{low:.2f}" == f"{high:.2f}" else f"{low:.2f}-{high:.2f}"
+
+
+def _db(value: float | None) -> str:
+    return "exact" if value is None else f"{value:.1f}"
+
+
+def settings_table(line: dict) -> list[str]:
+    """Per mode and setting: hart 0's cycles a frame as a multiple of the default's (the range over the
+    scenes), and PSNR against the ideal image per scene, in the sweep's scene order."""
+    records = line["settings"]
+    scenes = list(dict.fromkeys(r["scene"] for r in records))
+    rows = [f"What each precision setting costs and buys, from the latest precision sweep ({_run(line)}): hart "
+            "0's cycles a frame as a multiple of the default's (lowest-highest over the scenes), and PSNR in "
+            "dB against the reference renderer's ideal image, per scene (" + " / ".join(scenes) + ")."]
+    for mode in MODES:
+        in_mode = [r for r in records if r["mode"] == mode]
+        if not in_mode:
+            continue
+        default = {r["scene"]: r for r in in_mode if r["setting"] == "default"}
+        rows += ["", f"{mode}:", "", "| setting | cycles (x default) | dB vs ideal |", "|---|---|---|"]
+        for setting in dict.fromkeys(r["setting"] for r in in_mode):
+            mine = {r["scene"]: r for r in in_mode if r["setting"] == setting}
+            ratios = [mine[s]["cycles_hart0"] / default[s]["cycles_hart0"] for s in scenes
+                      if s in mine and s in default and mine[s]["cycles_hart0"] and default[s]["cycles_hart0"]]
+            rows.append(f"| {setting} | {_ranges(ratios) if ratios else '-'} | "
+                        + " / ".join(_db(mine[s]["psnr_ideal_db"]) if s in mine else "-" for s in scenes) + " |")
+    return rows
+
+
+def table() -> str:
+    """The generated block: each table from the latest run that measured it."""
+    rows = [BEGIN]
+    history = lines()
+    if any("figures" in line for line in history):
+        speed = latest("figures")
+        rows += speed_table(speed) + [""] + thesis_table(speed)
+    if any("settings" in line for line in history):
+        rows += ["", *settings_table(latest("settings"))]
     rows.append(END)
     return "\n".join(rows)
 
@@ -118,7 +211,7 @@ def _block(text: str) -> tuple[int, int]:
 def write_table() -> None:
     text = PAGE.read_text()
     start, end = _block(text)
-    PAGE.write_text(text[:start] + table(latest()) + text[end:])
+    PAGE.write_text(text[:start] + table() + text[end:])
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -128,7 +221,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.check:
         text = PAGE.read_text()
         start, end = _block(text)
-        expected = table(latest())
+        expected = table()
         if text[start:end] != expected:
             print(f"{PAGE}: the bench table is not the latest run's; run python -m tools.bench_history:\n{expected}")
             return 1

@@ -45,3 +45,31 @@ def test_the_host_cost_of_a_cpu_fed_spi_fifo_is_stated():
     assert f"| {label} | {figure:.1f} | us |" in bench_history.PAGE.read_text()
     guide = (bench_history.ROOT / "docs" / "guide" / "your-own-firmware.md").read_text()
     assert "feeds an SPI FIFO from the CPU" in guide and "DMA" in guide
+
+
+def test_the_thesis_and_the_settings_tables_come_from_their_latest_runs(tmp_path, monkeypatch):
+    """The page's other tables are data too (issue 32: no narrated runs): the thesis's spans beside the
+    speed run's, and each precision setting's cost and PSNR from the latest full sweep, even when a
+    later run measured speed only."""
+    history, page = tmp_path / "history.jsonl", tmp_path / "page.md"
+    page.write_text(f"{bench_history.BEGIN}\n{bench_history.END}\n")
+    history.write_text("")
+    monkeypatch.setattr(bench_history, "HISTORY", history)
+    monkeypatch.setattr(bench_history, "PAGE", page)
+
+    def sweep(setting, mode, scene, cycles, ideal):
+        return {"scene": scene, "scale": 0.9, "mode": mode, "setting": setting, "instructions_hart0": cycles // 2,
+                "cycles_hart0": cycles, "psnr_db": 50.0, "psnr_ideal_db": ideal, "host_time_s": 1.0}
+    settings = [sweep("default", "textured", "torus", 1000, 42.7), sweep("default", "textured", "cube", 2000, 35.8),
+                sweep("affine", "textured", "torus", 700, 42.6), sweep("affine", "textured", "cube", 1800, None),
+                sweep("default", "wireframe", "torus", 100, 33.9)]
+    line = bench_history.append({"sd": {"texture_read_ms": 60.2, "reset_to_first_frame_ms": 144.1}}, settings)
+    assert "host_time_s" not in line["settings"][0]
+    bench_history.append({"firmware": {"real_time_factor": 1.5}, "sd": {"texture_read_ms": 50.0}})  # speed only
+    text = page.read_text()
+    assert "| SD: 183.2 KiB texture | 200.75 ms | 50.00 ms | 0.25 |" in text       # the latest speed run's
+    assert "| start-up to the main loop, model A's files | 344.3 ms | - | - |" in text
+    assert "(torus / cube)" in text
+    assert "| affine | 0.70-0.90 | 42.6 / exact |" in text                          # the sweep's, one run back
+    assert "| default | 1.00 | 42.7 / 35.8 |" in text and "wireframe:" in text and "| default | 1.00 | 33.9 / - |" in text
+    assert bench_history.main(["--check"]) == 0
