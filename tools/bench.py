@@ -58,7 +58,7 @@ from emulator.board import Board  # noqa: E402
 from emulator.cpu.hart import ENGINE_FAST, ENGINE_PRECISE, INSN_WFI, CsrContext, Hart, HartState  # noqa: E402
 from emulator.memory_map import SRAM_BASE  # noqa: E402
 from emulator.vtime import to_seconds  # noqa: E402
-from emulator.cpu.timing import TIMING_IPC1, TIMING_ROCKET  # noqa: E402
+from emulator.cpu.timing import TIMING_IPC1, TIMING_ROCKET, TIMING_ROCKET_NOCACHE  # noqa: E402
 from tools import quality  # noqa: E402
 
 LOOP_SOURCE = """
@@ -830,13 +830,13 @@ def write_check_figures(firmware: Path, card: Path, frames: int, unchecked: dict
             "ratio_while_executing": best["mips_while_executing"] / max(p["mips_while_executing"] for p in plain)}
 
 
-def timing_figures(firmware: Path, card: Path, frames: int, rocket: dict, rounds: int = 2) -> dict:
-    """The firmware under --timing ipc1 against the Rocket cycle timing: `rounds` runs of each,
-    alternating (the first Rocket one is `rocket`), compared fastest to fastest. Instructions
-    must be the same frame for frame in steady state: the timing changes cycles, not the work."""
+def timing_figures(firmware: Path, card: Path, frames: int, rocket: dict, rounds: int = 2,
+                   other: str = TIMING_IPC1) -> dict:
+    """The firmware under --timing `other` (ipc1, or rocket-nocache) against the default timing: `rounds`
+    runs of each, alternating (the first default one is `rocket`), compared fastest to fastest."""
     timed, flat = [rocket], []
     for n in range(rounds):
-        flat.append(firmware_figures(firmware, card, frames, timing=TIMING_IPC1))
+        flat.append(firmware_figures(firmware, card, frames, timing=other))
         if n + 1 < rounds:
             timed.append(firmware_figures(firmware, card, frames))
     best_timed = min(timed, key=lambda figures: figures["host_time_s"])
@@ -957,6 +957,7 @@ def speed_figures(args: argparse.Namespace) -> dict:
     precise = firmware_figures(Path(args.firmware), Path(args.card), args.frames, engine=ENGINE_PRECISE)
     checked = write_check_figures(Path(args.firmware), Path(args.card), args.frames, board)
     ipc1 = timing_figures(Path(args.firmware), Path(args.card), args.frames, board)
+    nocache = timing_figures(Path(args.firmware), Path(args.card), args.frames, board, other=TIMING_ROCKET_NOCACHE)
     profile = profile_figures(Path(args.firmware), Path(args.card))
     drawing = drawing_figures(Path(args.firmware), Path(args.card))
     with tempfile.TemporaryDirectory() as tmp:
@@ -973,6 +974,7 @@ def speed_figures(args: argparse.Namespace) -> dict:
         "ratio_board_to_raw": board["effective_mips"] / raw,
         "firmware_check_writes": checked,
         "firmware_ipc1": ipc1,
+        "firmware_nocache": nocache,
         "sd": sd,
         "sd_ipc1": sd_ipc1,
         "texture_loads": loads,
@@ -1021,6 +1023,8 @@ def speed_figures(args: argparse.Namespace) -> dict:
           f"{' / '.join(f'{v:g}' for v in THESIS_START_UP_MS.values())} ms)")
     print(f"  host time of the cycle model: {ipc1['host_cost_of_cycle_model']:.3f} x ipc1's "
           f"(fastest of {ipc1['rounds']} alternating runs each, {args.frames} frames)")
+    print(f"  the L1 caches: {board['cycles_per_frame'][0]:,} cycles a frame against {nocache['cycles_per_frame'][0]:,} "
+          f"without (--timing rocket-nocache); host time {nocache['host_cost_of_cycle_model']:.3f} x")
     for label, figures in (("Rocket", sd), ("ipc1", sd_ipc1)):
         print(f"SD, {label} timing (virtual time; thesis in brackets): card set-up to root directory "
               f"{figures['card_setup_to_root_ms']:.2f} ms [32.35], model {figures['model_bytes']} bytes "

@@ -41,6 +41,11 @@ FIGURES = [
      "{:.3f}"),
     ("host cost of the Rocket cycle model against ipc1", ("firmware_ipc1", "host_cost_of_cycle_model"), "x",
      "{:.3f}"),
+    ("host cost of the L1 caches against rocket-nocache", ("firmware_nocache", "host_cost_of_cycle_model"), "x",
+     "{:.3f}"),
+    ("hart 0's cycles a frame, default card", ("firmware", "cycles_per_frame", 0), "cycles", "{:,.0f}"),
+    ("hart 0's cycles a frame, default card, --timing rocket-nocache", ("firmware_nocache", "cycles_per_frame", 0),
+     "cycles", "{:,.0f}"),
     ("reset to first frame (virtual)", ("firmware", "reset_to_first_frame_ms"), "ms", "{:.1f}"),
     ("SD: card set-up to root directory (virtual)", ("sd", "card_setup_to_root_ms"), "ms", "{:.2f}"),
     ("SD: 183 KiB texture read (virtual)", ("sd", "texture_read_ms"), "ms", "{:.2f}"),
@@ -70,9 +75,12 @@ MODES = ("textured", "flat", "wireframe")
 def _pick(results: dict, path: tuple) -> float | None:
     value = results
     for key in path:
-        if not isinstance(value, dict) or key not in value:
+        if isinstance(value, list) and isinstance(key, int) and key < len(value):
+            value = value[key]
+        elif isinstance(value, dict) and key in value:
+            value = value[key]
+        else:
             return None
-        value = value[key]
     return value
 
 

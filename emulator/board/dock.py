@@ -47,6 +47,7 @@ from ..cpu.time_loops import find_idle_loops, find_time_loops
 from ..devices.spi import DWC_SSI, SpiController
 from ..devices.w25q128 import W25Q128
 from ..devices.st7789v import ST7789V
+from ..cpu.caches import HartCaches
 from ..cpu.timing import MISPREDICT_PENALTY, TIMING_IPC1, TIMING_MODELS, TIMING_ROCKET, build_table
 from ..devices.sysctl import Sysctl
 from ..devices.timer import DwTimer
@@ -134,7 +135,7 @@ class Board:
         (wiring.py, LCD_INTERFACES).
         cold: start from the reset value of every register, instead of the state the mask ROM
         leaves when it jumps to the program (bootrom.py).
-        timing: what an instruction costs, "rocket" (the K210's Rocket core, timing.py) or "ipc1"
+        timing: what an instruction costs: "rocket" (the K210's Rocket core, timing.py, with its L1 caches, caches.py), "rocket-nocache" (every access a hit) or "ipc1"
         (one cycle each).
         pins: levels driven on pads from outside at given times (pins.py, --pin).
         otp: the OTP's content (--otp; None: blank), `otp_source` naming where it came from.
@@ -250,10 +251,14 @@ class Board:
                     loops.setdefault(loop.head, loop)
                 time_loops.extend(find_time_loops(code, view))
         loops = list(loops.values())
-        self.cycle_table = build_table(self.image.code_ranges) if timing == TIMING_ROCKET else None
-        for hart in self.harts:
+        self.cycle_table = build_table(self.image.code_ranges) if timing != TIMING_IPC1 else None
+        self.caches = [HartCaches() for _ in self.harts] if timing == TIMING_ROCKET else None
+        if self.caches is not None:
+            self.caches[0].pair_with(self.caches[1])
+        for index, hart in enumerate(self.harts):
             self.bus.attach(hart)
             hart.install_cycle_table(self.cycle_table)
+            hart.install_caches(None if self.caches is None else self.caches[index])
             hart.intercept_csr_sites(sites)
             hart.install_poll_loops(loops)
             hart.install_time_loops(time_loops)
@@ -290,11 +295,12 @@ class Board:
     def loop_cycles_bound(self, instructions: int) -> int:
         """Cycles within which `instructions` instructions of a loop surely run (a hart woken
         from a poll loop gets one iteration before the storer goes on): one each under ipc1; under
-        the Rocket model each may stall up to 3 cycles on a load, and the loop's branch may be
-        mispredicted."""
+        the Rocket model each may stall up to 3 cycles on a load, and miss in the caches (the loop's
+        own line moves to the hart that stored to it), and the loop's branch may be mispredicted."""
         if self.timing == TIMING_IPC1:
             return instructions
-        return 3 * instructions + MISPREDICT_PENALTY
+        misses = 0 if self.caches is None else self.caches[0].figures.worst_instruction
+        return (3 + misses) * instructions + MISPREDICT_PENALTY
 
     @property
     def quantum(self) -> int:
@@ -413,6 +419,8 @@ class Board:
         keep their state."""
         for peripheral in self.peripherals:
             peripheral.reset(at)
+        for caches in self.caches or ():
+            caches.reset()
         if not self.cold:
             bootrom.hand_over(self.sysctl, self.fpioa, self.uarths)
         self.sysctl.record_reset(cause)

@@ -9,6 +9,8 @@
 #define K210_COUNTER_H
 #include <stdint.h>
 
+#include "_caches.h"
+
 typedef int (*uc_stop_fn)(void *uc);
 
 /* A loop that can only be polling memory (shared_memory.py finds them in the firmware). */
@@ -83,6 +85,8 @@ typedef struct {
     uint64_t misaligned_pc;      /* the access the run stopped before, counted, not executed (0: none) */
     uint64_t misaligned_address;
     uint64_t misaligned_store;   /* 1: a store or AMO (mcause 6), 0: a load or LR (mcause 4) */
+    /* --- the L1 caches (_caches.h; NULL: none, as under --timing ipc1 and rocket-nocache) --- */
+    l1_caches_t *caches;
 } insn_counter_t;
 
 /* A table entry (timing.py writes them; keep the two in step). */

@@ -107,6 +107,8 @@ typedef struct {
 #define T_TRANSFER 1
 #define T_MULDIV 2
 #define T_LOOP_HEAD 4
+#define T_FETCH 8       /* with the caches, a block's first instruction or the first in a new line: the
+                           instruction cache looks (none without: no time spent on it) */
 
 /* A straight run of decoded instructions from `pc` up to a jump (a conditional branch taken leaves
  * it in the middle), an instruction for
@@ -701,6 +703,8 @@ static block_t *build_block(fast_state_t *f, const insn_counter_t *c, uint64_t p
         memcpy(&fetched, code + offset, 4);
         insn_t *in = &b->insns[n++];
         decode(c, in, pc + offset, fetched);
+        if (c->caches != NULL && (n == 1 || ((pc + offset) >> L1_LINE_SHIFT) != ((in[-1].pc) >> L1_LINE_SHIFT)))
+            in->timing |= T_FETCH;   /* (Hart.install_caches has the blocks decoded again) */
         offset += in->len;
         if (ends_block(in->op))
             break;
@@ -998,6 +1002,7 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
     int pending_kind = c->pending_kind;
     uint64_t pending_pc = c->pending_pc;
     uint32_t pending_entry = c->pending_entry;
+    l1_caches_t *const kc = c->caches;
     int why;
 
 #define HAND_OVER() do { pc = in->pc; why = STOP_HANDOFF; goto out; } while (0)
@@ -1029,6 +1034,8 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
         cycles += in->cost; \
         if (in->timing) { \
             uint32_t e = in->entry; \
+            if (in->timing & T_FETCH) \
+                cycles += l1_fetch(kc, table_key(in->pc)); \
             if (in->timing & T_MULDIV) { \
                 uint64_t latency = muldiv_latency(e, x[E_RS1(e)], x[E_RS2(e)], E_KIND(e) == KIND_DIV); \
                 uint64_t distance = E_DIST(e); \
@@ -1049,6 +1056,8 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
             } \
         } \
     } while (0)
+/* an SRAM access through the data cache (_caches.h) */
+#define CACHED(a, storing) do { if (kc != NULL) cycles += l1_data(kc, a, storing); } while (0)
 /* a store into decoded code: its blocks are compared with their code again at their next entry */
 #define WROTE(h, width) do { if ((h) < f->code_hi && (h) + (width) > f->code_lo) f->epoch++; } while (0)
 /* --check-writes: the first store outside the hart's buffers is recorded (it has landed, as with the precise
@@ -1107,6 +1116,7 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
             HAND_OVER(); \
         } \
         COUNT(); \
+        CACHED(a, 0); \
         type v; \
         memcpy(&v, h, width); \
         x[in->rd] = (uint64_t)v; \
@@ -1120,6 +1130,7 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
             HAND_OVER(); \
         } \
         COUNT(); \
+        CACHED(a, 1); \
         uint64_t v = x[in->rs2]; \
         memcpy(h, &v, width); \
         WROTE(h, width); \
@@ -1131,6 +1142,7 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
         uint8_t *h = sram_at(sram, size, base, alias, a, width); \
         if (h == NULL || (a & (width - 1))) HAND_OVER(); \
         COUNT(); \
+        CACHED(a, 0); \
         type v; \
         memcpy(&v, h, width); \
         dest; \
@@ -1141,6 +1153,7 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
         uint8_t *h = sram_at(sram, size, base, alias, a, width); \
         if (h == NULL || (a & (width - 1))) HAND_OVER(); \
         COUNT(); \
+        CACHED(a, 1); \
         uint64_t v = (value); \
         memcpy(h, &v, width); \
         WROTE(h, width); \
@@ -1414,6 +1427,7 @@ out:
 #undef NEED_RNE
 #undef NEED_VALID_RM
 #undef COUNT
+#undef CACHED
 #undef LOAD
 #undef STORE
 #undef DEVICE
@@ -1580,8 +1594,10 @@ static uint64_t plan_cycles_until(const alone_plan_t *plan, int64_t time)
  * mirrors against them and against the field names here): predictor_t, insn_counter_t,
  * device_access_t, repeat_t, fast_state_t up to `windows` (the head Python reads), alone_plan_t. */
 __attribute__((visibility("default")))
-void struct_sizes_for_tests(uint64_t out[6])
+void struct_sizes_for_tests(uint64_t out[8])
 {
+    out[6] = sizeof(l1_cache_t);
+    out[7] = sizeof(l1_caches_t);
     out[0] = sizeof(predictor_t);
     out[1] = sizeof(insn_counter_t);
     out[2] = sizeof(device_access_t);

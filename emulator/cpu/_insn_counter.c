@@ -38,7 +38,7 @@ static uint64_t reg(insn_counter_t *c, void *uc, uint32_t r)
  * base register; a misaligned one is reported and the run stops before it (hart.py raises the
  * exception: mcause 4 or 6, mtval the address).
  */
-static int misaligned(insn_counter_t *c, void *uc, uint64_t address, uint32_t size)
+static int misaligned(insn_counter_t *c, void *uc, uint64_t address, uint32_t size, uint64_t *cache_cost)
 {
     uint64_t offset_in_sram;
     if (address - c->sram_base < c->sram_size)
@@ -57,11 +57,15 @@ static int misaligned(insn_counter_t *c, void *uc, uint64_t address, uint32_t si
     int64_t offset;
     int is_store;
     uint32_t width = (uint32_t)memory_access_of(word, size, &rs1, &offset, &is_store);
-    if (width <= 1)
+    if (width == 0 || (width == 1 && c->caches == NULL))
         return 0;
     uint64_t target = reg(c, uc, rs1) + (uint64_t)offset;
-    if ((target & (width - 1)) == 0)
+    if ((target & (width - 1)) == 0) {
+        /* the data cache is charged where the access is carried out: a misaligned one traps first */
+        if (c->caches != NULL)
+            *cache_cost = l1_data(c->caches, target, is_store);
         return 0;
+    }
     c->misaligned_pc = address;
     c->misaligned_address = target;
     c->misaligned_store = (uint64_t)is_store;
@@ -103,6 +107,11 @@ void count_instruction(void *uc, uint64_t address, uint32_t size, insn_counter_t
         counter->cycles++;
     } else {
         uint64_t cost = 1;
+        if (counter->caches != NULL) {
+            uint64_t fetch = l1_fetch(counter->caches, table_key(address));
+            counter->stall_cycles += fetch;
+            cost += fetch;
+        }
         if (counter->pending_kind) {
             cost += resolve_transfer(counter, counter->pending_pc, counter->pending_entry,
                                      counter->pending_kind, address);
@@ -143,8 +152,11 @@ void count_instruction(void *uc, uint64_t address, uint32_t size, insn_counter_t
         counter->stop(uc);
         return;
     }
-    if (counter->sram != NULL && misaligned(counter, uc, address, size))
+    uint64_t cache_cost = 0;
+    if (counter->sram != NULL && misaligned(counter, uc, address, size, &cache_cost))
         counter->stop(uc);
+    counter->cycles += cache_cost;
+    counter->stall_cycles += cache_cost;
 }
 
 /*

@@ -38,6 +38,7 @@ from .native import (COUNT_HOOK, NO_LIMIT, AlonePlan, Counter, FastHead, add_nat
 from .privileged import COUNTER_BITS, MSTATUS_RESET, PendingException, PrivilegedArchitecture
 from .riscv import (CAUSE_BREAKPOINT, CAUSE_ECALL_U, CAUSE_ILLEGAL_INSTRUCTION, CAUSE_LOAD_MISALIGNED,
                     CAUSE_STORE_MISALIGNED, INSN_WFI, PRIV_M, PRIV_S, PRIV_U)
+from .caches import HartCaches
 from .time_loops import LoopSkipper, TimeLoop
 from .triggers import TriggerUnit
 from ..memory_map import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE
@@ -124,6 +125,7 @@ class Hart(PrivilegedArchitecture):
         self._counter = Counter(0, 0, _UC_EMU_STOP, None, 0, 0, 0, NO_LIMIT, None, 0, 0, _UC_REG_READ,
                                  rv.UC_RISCV_REG_X0)
         self._cycle_table: timing.CycleTable | None = None   # kept alive while the counter reads it
+        self.caches: HartCaches | None = None        # the L1 caches the counters charge (caches.py)
         self.skipper = LoopSkipper(self._counter)
         self._counter_hook = self.add_native_hook(unicorn.UC_HOOK_CODE, COUNT_HOOK, self._counter, 1, 0,
                                                   "the instruction counter")
@@ -403,6 +405,13 @@ class Hart(PrivilegedArchitecture):
         self._counter.table = table.entries.ctypes.data
         self._counter.table_base = table.base
         self._counter.table_end = table.end
+
+    def install_caches(self, caches: HartCaches | None) -> None:
+        """Has both engines' counters charge the L1 caches' misses (caches.py); None: every access
+        hits (--timing rocket-nocache and ipc1)."""
+        self.caches = caches
+        self._counter.caches = None if caches is None else ctypes.pointer(caches.state)
+        self.forget_decodings()     # the fast engine marks the fetches the caches look at as it decodes
 
     def reset(self, pc: int) -> None:
         """A chip reset: the hart in M-mode at `pc` with its registers and the trap CSRs at 0,

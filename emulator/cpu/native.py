@@ -25,6 +25,29 @@ class Predictor(ctypes.Structure):
                 ("index", ctypes.c_uint8 * BTB_INDEX_BUCKETS)]
 
 
+L1_SETS, L1_WAYS, L1_LINE_SHIFT, L1_HOT = 64, 8, 6, 512     # _caches.h's geometry, its hot lines' table
+
+
+class L1Cache(ctypes.Structure):
+    """_caches.h's l1_cache_t: one cache's tags (line address + 1, 0: invalid), by set then way."""
+    _fields_ = [("line", ctypes.c_uint64 * (L1_SETS * L1_WAYS)), ("writable", ctypes.c_uint8 * (L1_SETS * L1_WAYS)),
+                ("hot", ctypes.c_uint64 * L1_HOT), ("hot_writable", ctypes.c_uint64 * L1_HOT),
+                ("lfsr", ctypes.c_uint32), ("pad", ctypes.c_uint32),
+                ("lookups", ctypes.c_uint64), ("misses", ctypes.c_uint64), ("write_backs", ctypes.c_uint64)]
+
+
+class L1Caches(ctypes.Structure):
+    """_caches.h's l1_caches_t: a hart's two caches and what their misses cost."""
+
+
+L1Caches._fields_ = [("icache", L1Cache), ("dcache", L1Cache), ("fetch_line", ctypes.c_uint64),
+                     ("peer", ctypes.POINTER(L1Caches)), ("cached_base", ctypes.c_uint64),
+                     ("cached_size", ctypes.c_uint64), ("uncached_base", ctypes.c_uint64),
+                     ("uncached_size", ctypes.c_uint64), ("data_fill", ctypes.c_uint32),
+                     ("write_back", ctypes.c_uint32), ("fetch_fill", ctypes.c_uint32), ("uncached", ctypes.c_uint32),
+                     ("uncached_accesses", ctypes.c_uint64)]
+
+
 class Counter(ctypes.Structure):
     """_insn_counter.c's insn_counter_t."""
     _fields_ = [("executed", ctypes.c_uint64), ("limit", ctypes.c_uint64), ("stop", ctypes.c_void_p),
@@ -37,7 +60,8 @@ class Counter(ctypes.Structure):
                 ("csr_mask", ctypes.c_uint64), ("csr_report", ctypes.c_uint64), ("last_pc", ctypes.c_uint64),
                 ("sram", ctypes.c_void_p), ("sram_base", ctypes.c_uint64), ("sram_alias", ctypes.c_uint64),
                 ("sram_size", ctypes.c_uint64), ("misaligned_pc", ctypes.c_uint64),
-                ("misaligned_address", ctypes.c_uint64), ("misaligned_store", ctypes.c_uint64)]
+                ("misaligned_address", ctypes.c_uint64), ("misaligned_store", ctypes.c_uint64),
+                ("caches", ctypes.POINTER(L1Caches))]
 
 
 counter_lib = ctypes.CDLL(_insn_counter.__file__)

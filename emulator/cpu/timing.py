@@ -74,9 +74,10 @@ import numpy as np
 
 from .riscv import bits
 
-TIMING_ROCKET = "rocket"
+TIMING_ROCKET = "rocket"                    # Rocket's pipeline and its L1 caches (caches.py)
+TIMING_ROCKET_NOCACHE = "rocket-nocache"    # Rocket's pipeline, every access a cache hit
 TIMING_IPC1 = "ipc1"
-TIMING_MODELS = (TIMING_ROCKET, TIMING_IPC1)
+TIMING_MODELS = (TIMING_ROCKET, TIMING_ROCKET_NOCACHE, TIMING_IPC1)
 
 WINDOW = 31                  # instructions looked at after a producer (the entry's 5-bit distance)
 MISPREDICT_PENALTY = 3       # _insn_counter.c's MISPREDICT_PENALTY

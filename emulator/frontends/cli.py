@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import gc
 import os
 import signal
@@ -491,6 +492,8 @@ def run_command(args: argparse.Namespace, signals: SignalStop, opened: list) -> 
     summary["cold"] = args.cold
     summary["timing"] = args.timing
     summary["cycles"] = [h.cycles for h in board.harts] if board is not None else [0, 0]
+    summary["caches"] = ([dataclasses.asdict(caches.statistics()) for caches in board.caches]
+                         if board is not None and board.caches is not None else None)
     summary["timing_warnings"] = dict(board.timing_warnings) if board is not None else {}
     summary.update(watch.summary())
     if vcd_file is not None:

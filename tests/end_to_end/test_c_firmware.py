@@ -269,7 +269,9 @@ def test_timers_tick_pwm_alarm_and_a_key_through_the_plic(c_firmware, tmp_path):
     lines = console_of(summary)
     assert lines[0] == "timers started: 13000000 Hz timer clock"
     ticks = [int(re.fullmatch(r"tick (\d) at (\d+) us", line).group(2)) for line in lines[1:6]]
-    assert [b - a for a, b in zip(ticks, ticks[1:])] == [10000] * 4
+    # each handler reads mtime some cycles after its tick, fewer once its code is in the instruction
+    # cache (the first handler fetches it from SRAM): 10 ms apart, to the microsecond
+    assert all(abs(b - a - 10000) <= 1 for a, b in zip(ticks, ticks[1:])), ticks
     assert lines[6:] == ["alarm at 12:34:58", "key pressed", "done: 5 ticks, 1 alarm, 1 key"]
     alarm = next(c["virtual_time_s"] for c in summary["console"] if c["line"] == "alarm at 12:34:58")
     assert 2.0 < alarm < 2.01                               # set at 12:34:56 just after start
@@ -278,9 +280,11 @@ def test_timers_tick_pwm_alarm_and_a_key_through_the_plic(c_firmware, tmp_path):
     _, changes = read_vcd((tmp_path / "t.vcd").read_text())
     edges = [t for t, v in changes["pad24"]]                # low from the start, then high, ...
     assert [v for t, v in changes["pad24"][:3]] == ["0", "1", "0"]
-    lows = {round((b - a) / PS_PER_US) for a, b in zip(edges[0::2], edges[1::2])}
+    lows = [round((b - a) / PS_PER_US) for a, b in zip(edges[0::2], edges[1::2])]
     highs = {round((b - a) / PS_PER_US) for a, b in zip(edges[1::2], edges[2::2])}
-    assert lows == {750} and highs == {250}                 # microseconds
+    # (the first low begins when the pad is routed to the timer, some instructions before the PWM
+    # starts: a little longer, by as many cycles as those instructions take)
+    assert set(lows[1:]) == {750} and 750 <= lows[0] <= 751 and highs == {250}     # microseconds
 
 
 def test_boot_key_tells_each_press_and_release_and_lights_the_green_led(c_firmware, tmp_path):

@@ -1,0 +1,118 @@
+"""Each hart's L1 caches for timing (_caches.h carries them out in both engines): their geometry, what a
+miss costs and where each figure comes from.
+
+Geometry (facts): 32 KiB instruction and 32 KiB data cache per core (the K210 datasheet's CPU table),
+64-byte lines (Linux's and U-Boot's k210.dtsi: `d-cache-block-size = <64>`). Inferred: 64 sets of 8
+ways. Rocket indexes its L1 within a 4 KiB page when the core has virtual memory (rocket-chip 2017,
+HellaCache.scala and ICache.scala: `require(untagBits <= pgIdxBits)`), and the K210 has Sv39, so
+32 KiB needs 8 ways. Replacement is random, a 16-bit LFSR advanced per miss (RandomReplacement). The
+data cache is write-back and write-allocate and blocks on a miss (DCache.scala, the blocking cache
+of rocket-chip's DefaultConfig). A load acquires its line read-only, so a store to a line only read
+so far misses once more for write permission (TileLink's BtoT, as rocket-chip of early 2017 does
+it); the coherence hub probes the other hart's cache at each acquire. docs/design/timing.md has the
+table with sources.
+
+What a miss costs is not published for the K210 (no miss latency, memory bandwidth or uncached-access
+figure was found). The figures below are built from the bus's known widths and two estimated
+latencies, and the calibration (issue 31) compares whole programs against measurements:
+
+- a line is 8 beats of 8 bytes: rocket-chip's TileLink to memory is XLen/8 = 8 bytes wide
+  (Configs.scala, L1toL2 beatBytes), and the SDK's platform.h puts SRAM on the 64-bit AXI;
+- BUS_ROUND_TRIP, from a request leaving the cache to the first beat coming back (the TileLink to
+  AXI4 bridge each way and SRAM's read): estimated at 6 cycles, SRAM's clock being the CPU's;
+- REPLAY: the blocking data cache nacks the access that missed and Rocket replays it from the
+  write-back stage, refetching it through the 2-cycle instruction cache: a mispredict's 3 cycles
+  (redirect from memory, timing.py) and one more.
+"""
+from __future__ import annotations
+
+import ctypes
+from dataclasses import dataclass
+
+from ..memory_map import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE
+from .native import L1_LINE_SHIFT, L1_SETS, L1_WAYS, L1Caches
+
+LINE_BYTES = 1 << L1_LINE_SHIFT
+BEAT_BYTES = 8
+LINE_BEATS = LINE_BYTES // BEAT_BYTES
+BUS_ROUND_TRIP = 6        # estimated: see the module's docstring
+REPLAY = 4                # Rocket's replay of the access that missed
+ICACHE_LATENCY = 2        # Frontend.scala: ICache(latency = 2): the fetch read again once the line is in
+LFSR_RESET = 1            # Chisel's LFSR16 starts at 1
+
+
+@dataclass(frozen=True)
+class L1Timing:
+    """Cycles beyond a hit: a data miss (the line's refill, the replay), a dirty victim's write-back
+    before it, an instruction miss, one access to SRAM's uncached view."""
+    data_fill: int = BUS_ROUND_TRIP + LINE_BEATS + REPLAY
+    write_back: int = BUS_ROUND_TRIP + LINE_BEATS
+    fetch_fill: int = BUS_ROUND_TRIP + LINE_BEATS + ICACHE_LATENCY
+    uncached: int = BUS_ROUND_TRIP + 1 + REPLAY
+
+    @property
+    def worst_instruction(self) -> int:
+        """The most an instruction's caches can add: a fetch miss, and a data miss whose victim and
+        whose copy in the other hart's cache are both written back first (or an uncached access)."""
+        return self.fetch_fill + max(self.data_fill + 2 * self.write_back, self.uncached)
+
+
+ROCKET_L1 = L1Timing()
+
+
+@dataclass(frozen=True)
+class CacheStatistics:
+    fetch_lookups: int    # fetches from a new line of the cached view
+    fetch_misses: int
+    data_lookups: int     # loads and stores looked up in a set (not those the engines' hot lines answer)
+    data_misses: int      # a store's upgrade to write permission included
+    write_backs: int      # dirty lines written back (evicted, or read by the other hart)
+    uncached_accesses: int
+
+
+class HartCaches:
+    """One hart's caches: the structure both engines' counters point at."""
+
+    def __init__(self, figures: L1Timing = ROCKET_L1) -> None:
+        self.figures = figures
+        self.state = L1Caches()
+        state = self.state
+        state.cached_base, state.cached_size = SRAM_BASE, SRAM_SIZE
+        state.uncached_base, state.uncached_size = SRAM_UNCACHED_BASE, SRAM_SIZE
+        state.data_fill, state.write_back = figures.data_fill, figures.write_back
+        state.fetch_fill, state.uncached = figures.fetch_fill, figures.uncached
+        self.reset()
+
+    def pair_with(self, other: "HartCaches") -> None:
+        """The other hart's caches, which this hart's stores and misses keep coherent with."""
+        self.state.peer = ctypes.pointer(other.state)
+        other.state.peer = ctypes.pointer(self.state)
+
+    def reset(self) -> None:
+        """Every line invalid, as Rocket's caches come out of reset (their metadata is cleared by a
+        reset walk); the statistics from zero."""
+        for cache in (self.state.icache, self.state.dcache):
+            ctypes.memset(ctypes.addressof(cache), 0, ctypes.sizeof(cache))
+            cache.lfsr = LFSR_RESET
+        self.state.fetch_line = 0
+        self.state.uncached_accesses = 0
+
+    def statistics(self) -> CacheStatistics:
+        i, d = self.state.icache, self.state.dcache
+        return CacheStatistics(i.lookups, i.misses, d.lookups, d.misses, d.write_backs,
+                               self.state.uncached_accesses)
+
+    def holds(self, address: int, data: bool = True) -> bool:
+        """Whether the data (or instruction) cache holds the line of `address` (SRAM's cached view)."""
+        cache = self.state.dcache if data else self.state.icache
+        line = (address >> L1_LINE_SHIFT) + 1
+        first = ((address >> L1_LINE_SHIFT) & (L1_SETS - 1)) * L1_WAYS
+        return any(cache.line[first + way] == line for way in range(L1_WAYS))
+
+    def dirty(self, address: int) -> bool:
+        """Whether the data cache holds the line of `address` writable, so written and not yet written
+        back (a store's grant is followed by its write at once)."""
+        cache = self.state.dcache
+        line = (address >> L1_LINE_SHIFT) + 1
+        first = ((address >> L1_LINE_SHIFT) & (L1_SETS - 1)) * L1_WAYS
+        return any(cache.line[first + way] == line and cache.writable[first + way] for way in range(L1_WAYS))
