@@ -27,6 +27,7 @@
 #ifndef K210_CACHES_H
 #define K210_CACHES_H
 #include <stdint.h>
+#include <string.h>
 
 #define L1_SETS 64
 #define L1_WAYS 8
@@ -48,6 +49,23 @@ typedef struct {
                                                 upgrade included); dirty lines written back */
 } l1_cache_t;
 
+/*
+ * SRAM as the bus sees it, where it differs from what the harts see (Unicorn's memory, `view`): the
+ * DMA is not coherent with the data caches. A line a hart holds writable has SRAM's bytes from before
+ * its stores until it is written back; a line the DMA writes while a data cache holds it keeps the
+ * hart's bytes in the cache, and SRAM gets the DMA's. Per line of SRAM, `shadowed` says that `sram`
+ * holds SRAM's bytes for it (it may differ from the view); else the view is SRAM.
+ */
+typedef struct l1_memory {
+    uint8_t *view;        /* SRAM's host buffer: what the harts see */
+    uint8_t *sram;        /* SRAM's bytes of the shadowed lines (same size and offsets) */
+    uint8_t *shadowed;    /* one byte a line */
+    uint64_t size;        /* bytes of SRAM */
+    uint64_t cached_base; /* SRAM's cached view (line numbers are its addresses >> 6, plus 1) */
+    struct l1_caches *harts[2];
+    uint64_t stale_reads, stale_writes;   /* statistics: lines the DMA read or wrote with a hart's copy different */
+} l1_memory_t;
+
 typedef struct l1_caches {
     l1_cache_t icache;
     l1_cache_t dcache;
@@ -60,7 +78,41 @@ typedef struct l1_caches {
     uint32_t fetch_fill;          /* cycles an instruction-cache miss stalls fetch */
     uint32_t uncached;            /* cycles an access to the uncached view takes beyond a hit */
     uint64_t uncached_accesses;   /* statistics */
+    l1_memory_t *memory;          /* SRAM as the DMA sees it (NULL: the caches time accesses only) */
+    uint32_t flush_per_way;       /* FENCE.I's walk: cycles per way of every set */
+    uint32_t acquired;            /* a line came into the data cache since its last flush (Rocket's !flushed) */
+    uint64_t flushes;             /* statistics: FENCE.I flushes that walked the data cache */
 } l1_caches_t;
+
+/* The line's offset in SRAM (line: the cached view's address >> 6, plus 1). */
+static inline uint64_t l1_line_offset(const l1_caches_t *c, uint64_t line)
+{
+    return ((line - 1) << L1_LINE_SHIFT) - c->cached_base;
+}
+
+/* A dirty line written back: SRAM now holds what the harts see. */
+static inline void l1_wrote_back(l1_caches_t *c, uint64_t line)
+{
+    if (c->memory != NULL)
+        c->memory->shadowed[l1_line_offset(c, line) >> L1_LINE_SHIFT] = 0;
+}
+
+/* A grant of `line` (a miss or an upgrade), after the other hart's copy was probed: its data is SRAM's,
+ * so the hart sees SRAM's bytes from here on; with write permission, SRAM keeps them while the hart's
+ * stores stay in the cache. */
+static inline void l1_granted(l1_caches_t *c, uint64_t line, int store)
+{
+    l1_memory_t *m = c->memory;
+    if (m == NULL)
+        return;
+    uint64_t offset = l1_line_offset(c, line);
+    uint8_t *shadowed = &m->shadowed[offset >> L1_LINE_SHIFT];
+    if (*shadowed)
+        memcpy(m->view + offset, m->sram + offset, 1u << L1_LINE_SHIFT);
+    if (store)
+        memcpy(m->sram + offset, m->view + offset, 1u << L1_LINE_SHIFT);
+    *shadowed = (uint8_t)(store != 0);
+}
 
 /* The way of `set` holding `line`, or -1. */
 static inline int l1_find(const l1_cache_t *k, uint32_t set, uint64_t line)
@@ -111,6 +163,7 @@ static inline uint64_t l1_probe_peer(l1_caches_t *c, uint64_t line, uint32_t set
         cost = c->write_back;
         p->write_backs++;
         p->writable[slot] = 0;
+        l1_wrote_back(c, line);
     }
     if (store) {
         p->line[slot] = 0;
@@ -123,7 +176,7 @@ static inline uint64_t l1_probe_peer(l1_caches_t *c, uint64_t line, uint32_t set
 
 /* The cycles a data-cache miss on `line` costs, the line brought in: a load's with read permission
  * (NtoB), a store's with write permission (NtoT). The victim is the way the LFSR names. */
-static __attribute__((noinline)) uint64_t l1_data_miss(l1_caches_t *c, uint64_t line, uint32_t set, int store)
+static __attribute__((noinline, unused)) uint64_t l1_data_miss(l1_caches_t *c, uint64_t line, uint32_t set, int store)
 {
     l1_cache_t *d = &c->dcache;
     uint64_t cost = c->data_fill;
@@ -134,10 +187,13 @@ static __attribute__((noinline)) uint64_t l1_data_miss(l1_caches_t *c, uint64_t 
         if (d->writable[slot]) {
             cost += c->write_back;
             d->write_backs++;
+            l1_wrote_back(c, d->line[slot]);
         }
         l1_forget(d, d->line[slot]);
     }
     cost += l1_probe_peer(c, line, set, store);
+    l1_granted(c, line, store);
+    c->acquired = 1;
     d->line[slot] = line;
     d->writable[slot] = (uint8_t)(store != 0);
     d->hot[L1_HOT_SLOT(line)] = line;
@@ -148,12 +204,14 @@ static __attribute__((noinline)) uint64_t l1_data_miss(l1_caches_t *c, uint64_t 
 
 /* A store to a line held read-only: Rocket's cache misses (ClientMetadata.onAccess: a write on Branch
  * needs BtoT) and acquires write permission, which the hub grants with the line's data again. */
-static __attribute__((noinline)) uint64_t l1_upgrade(l1_caches_t *c, uint64_t line, uint32_t set, int way)
+static __attribute__((noinline, unused)) uint64_t l1_upgrade(l1_caches_t *c, uint64_t line, uint32_t set, int way)
 {
     l1_cache_t *d = &c->dcache;
     d->misses++;
     l1_lfsr_step(d);
     uint64_t cost = c->data_fill + l1_probe_peer(c, line, set, 1);
+    l1_granted(c, line, 1);
+    c->acquired = 1;
     d->writable[set * L1_WAYS + (uint32_t)way] = 1;
     d->hot[L1_HOT_SLOT(line)] = line;
     d->hot_writable[L1_HOT_SLOT(line)] = line;
@@ -161,7 +219,7 @@ static __attribute__((noinline)) uint64_t l1_upgrade(l1_caches_t *c, uint64_t li
 }
 
 /* l1_data past the hot lines: the set's look-up, a miss, or the uncached view. */
-static __attribute__((noinline)) uint64_t l1_data_lookup(l1_caches_t *c, uint64_t address, int store)
+static __attribute__((noinline, unused)) uint64_t l1_data_lookup(l1_caches_t *c, uint64_t address, int store)
 {
     if (address - c->cached_base < c->cached_size) {
         l1_cache_t *d = &c->dcache;
@@ -199,7 +257,7 @@ static inline __attribute__((always_inline)) uint64_t l1_data(l1_caches_t *c, ui
 /* The cycles fetching the instruction at `pc` stalls beyond a hit (0 unless its line is a new one
  * and misses). Code in SRAM's uncached view is timed as in its cached one (table_key): which of
  * Rocket's fetch paths the K210 takes there is not documented. */
-static __attribute__((noinline)) uint64_t l1_fetch_lookup(l1_caches_t *c, uint64_t key, uint64_t line, uint32_t set)
+static __attribute__((noinline, unused)) uint64_t l1_fetch_lookup(l1_caches_t *c, uint64_t key, uint64_t line, uint32_t set)
 {
     if (key - c->cached_base >= c->cached_size)
         return 0;
@@ -228,6 +286,37 @@ static inline __attribute__((always_inline)) uint64_t l1_fetch(l1_caches_t *c, u
     if (line == c->icache.hot[L1_HOT_SLOT(line)])
         return 0;
     return l1_fetch_lookup(c, key, line, (uint32_t)(key >> L1_LINE_SHIFT) & (L1_SETS - 1));
+}
+
+/*
+ * FENCE.I: Rocket's instruction cache drops every line, and its data cache (rocket-chip 2017: IDecode
+ * gives FENCE.I the memory command M_FLUSH_ALL; DCache.scala's flush walk) visits every way of every
+ * set, writing dirty lines back and dropping all, unless no line came in since its last flush. Returns
+ * the cycles the walk and the write-backs take.
+ */
+static __attribute__((noinline, unused)) uint64_t l1_fence_i(l1_caches_t *c)
+{
+    l1_cache_t *i = &c->icache, *d = &c->dcache;
+    memset(i->line, 0, sizeof i->line);
+    memset(i->hot, 0, sizeof i->hot);
+    c->fetch_line = 0;
+    if (!c->acquired)
+        return 0;
+    uint64_t cost = (uint64_t)c->flush_per_way * L1_SETS * L1_WAYS;
+    for (uint32_t slot = 0; slot < L1_SETS * L1_WAYS; slot++) {
+        if (d->line[slot] != 0 && d->writable[slot]) {
+            cost += c->write_back;
+            d->write_backs++;
+            l1_wrote_back(c, d->line[slot]);
+        }
+    }
+    memset(d->line, 0, sizeof d->line);
+    memset(d->writable, 0, sizeof d->writable);
+    memset(d->hot, 0, sizeof d->hot);
+    memset(d->hot_writable, 0, sizeof d->hot_writable);
+    c->acquired = 0;
+    c->flushes++;
+    return cost;
 }
 
 #endif

@@ -38,6 +38,11 @@ static uint64_t reg(insn_counter_t *c, void *uc, uint32_t r)
  * base register; a misaligned one is reported and the run stops before it (hart.py raises the
  * exception: mcause 4 or 6, mtval the address).
  */
+#define FENCE_I_MASK 0x707Fu    /* opcode MISC-MEM, funct3 1 */
+#define FENCE_I_MATCH 0x100Fu
+
+/* Also charges the caches: a load's or store's data-cache access, FENCE.I's flush (the fast engine
+ * hands FENCE.I over, so this hook sees every one). */
 static int misaligned(insn_counter_t *c, void *uc, uint64_t address, uint32_t size, uint64_t *cache_cost)
 {
     uint64_t offset_in_sram;
@@ -57,7 +62,12 @@ static int misaligned(insn_counter_t *c, void *uc, uint64_t address, uint32_t si
     int64_t offset;
     int is_store;
     uint32_t width = (uint32_t)memory_access_of(word, size, &rs1, &offset, &is_store);
-    if (width == 0 || (width == 1 && c->caches == NULL))
+    if (width == 0) {
+        if (c->caches != NULL && size == 4 && (word & FENCE_I_MASK) == FENCE_I_MATCH)
+            *cache_cost = l1_fence_i(c->caches);
+        return 0;
+    }
+    if (width == 1 && c->caches == NULL)
         return 0;
     uint64_t target = reg(c, uc, rs1) + (uint64_t)offset;
     if ((target & (width - 1)) == 0) {

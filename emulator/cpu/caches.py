@@ -38,6 +38,9 @@ LINE_BEATS = LINE_BYTES // BEAT_BYTES
 BUS_ROUND_TRIP = 6        # estimated: see the module's docstring
 REPLAY = 4                # Rocket's replay of the access that missed
 ICACHE_LATENCY = 2        # Frontend.scala: ICache(latency = 2): the fetch read again once the line is in
+# FENCE.I's flush walk reads one way's metadata at most every third cycle (DCache.scala: s1_flush_valid
+# only when neither s1 nor s2 holds one)
+FLUSH_PER_WAY = 3
 LFSR_RESET = 1            # Chisel's LFSR16 starts at 1
 
 
@@ -49,6 +52,7 @@ class L1Timing:
     write_back: int = BUS_ROUND_TRIP + LINE_BEATS
     fetch_fill: int = BUS_ROUND_TRIP + LINE_BEATS + ICACHE_LATENCY
     uncached: int = BUS_ROUND_TRIP + 1 + REPLAY
+    flush_per_way: int = FLUSH_PER_WAY
 
     @property
     def worst_instruction(self) -> int:
@@ -66,8 +70,9 @@ class CacheStatistics:
     fetch_misses: int
     data_lookups: int     # loads and stores looked up in a set (not those the engines' hot lines answer)
     data_misses: int      # a store's upgrade to write permission included
-    write_backs: int      # dirty lines written back (evicted, or read by the other hart)
+    write_backs: int      # dirty lines written back (evicted, read by the other hart, flushed)
     uncached_accesses: int
+    flushes: int          # FENCE.I's walks of the data cache
 
 
 class HartCaches:
@@ -81,6 +86,7 @@ class HartCaches:
         state.uncached_base, state.uncached_size = SRAM_UNCACHED_BASE, SRAM_SIZE
         state.data_fill, state.write_back = figures.data_fill, figures.write_back
         state.fetch_fill, state.uncached = figures.fetch_fill, figures.uncached
+        state.flush_per_way = figures.flush_per_way
         self.reset()
 
     def pair_with(self, other: "HartCaches") -> None:
@@ -96,11 +102,13 @@ class HartCaches:
             cache.lfsr = LFSR_RESET
         self.state.fetch_line = 0
         self.state.uncached_accesses = 0
+        self.state.acquired = 0
+        self.state.flushes = 0
 
     def statistics(self) -> CacheStatistics:
         i, d = self.state.icache, self.state.dcache
         return CacheStatistics(i.lookups, i.misses, d.lookups, d.misses, d.write_backs,
-                               self.state.uncached_accesses)
+                               self.state.uncached_accesses, self.state.flushes)
 
     def holds(self, address: int, data: bool = True) -> bool:
         """Whether the data (or instruction) cache holds the line of `address` (SRAM's cached view)."""
