@@ -34,7 +34,7 @@ FW_OBJS := $(patsubst %,$(BUILD)/fw/%.o,$(FW_ORDER))
 FW_INCS := $(wildcard firmware/include/*.inc)
 
 .PHONY: all toolchain venv firmware c-firmware card flash-to-emulator flash debug test test-unit test-routines \
-        test-end-to-end test-slow bench goldens golden-check clean riscv-tests
+        test-end-to-end test-slow bench goldens golden-check clean riscv-tests coremark
 
 all: firmware
 
@@ -148,6 +148,12 @@ RISCV_TESTS_SUITE ?= early-2017
 riscv-tests: venv
 	$(PYTHON) tools/riscv_tests.py "$(RISCV_TESTS)" $(if $(RISCV_TESTS_ENV),--env "$(RISCV_TESTS_ENV)") \
 	    --suite $(RISCV_TESTS_SUITE) --out $(BUILD)/riscv-tests
+
+# EEMBC's CoreMark on the model under each timing (docs/measurements.md, calibration), from a
+# checkout of github.com/eembc/coremark: make coremark COREMARK=DIR [COREMARK_ITERATIONS=N]
+COREMARK_ITERATIONS ?= 10000
+coremark: c-firmware venv
+	$(PYTHON) tools/coremark.py "$(COREMARK)" --iterations $(COREMARK_ITERATIONS) --out $(BUILD)/coremark
 
 # A real Dock: make flash PORT=/dev/ttyUSB0 [FLASH_BAUD=N] (tools/flash.py runs kflash)
 PORT ?=

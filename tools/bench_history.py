@@ -70,6 +70,12 @@ THESIS = [
 SETTING_FIELDS = ("scene", "scale", "mode", "setting", "instructions_hart0", "cycles_hart0", "psnr_db",
                   "psnr_ideal_db")
 MODES = ("textured", "flat", "wireframe")
+# What a history line keeps of each CoreMark run (tools/coremark.py)
+COREMARK_FIELDS = ("timing", "cpu_hz", "iterations", "iterations_per_second", "coremark_per_mhz", "instructions",
+                   "virtual_s", "host_wall_s")
+# the published K210 CoreMark runs: 695.5 and 697.8 iterations/s at a nominal 400 MHz, GCC 8.2, flags
+# unknown (github.com/PaulStoffregen/CoreMark issue 1); the boot ROM leaves the CPU at 390 MHz
+PUBLISHED_COREMARK = (695.5 / 400, 697.8 / 390)
 
 
 def _pick(results: dict, path: tuple) -> float | None:
@@ -95,7 +101,7 @@ def _commit() -> str:
     return head + ("+changes" if dirty else "")
 
 
-def record(results: dict | None, settings: list[dict] | None = None) -> dict:
+def record(results: dict | None, settings: list[dict] | None = None, coremark: list[dict] | None = None) -> dict:
     """One history line: when, on what, the speed figures (None where a run did not measure one; no
     `figures` when the run measured no speed) and the precision sweep's records (`settings`)."""
     line: dict = {
@@ -107,12 +113,14 @@ def record(results: dict | None, settings: list[dict] | None = None) -> dict:
         line["figures"] = {label: _pick(results, path) for label, path, _, _ in FIGURES}
     if settings:
         line["settings"] = [{key: r.get(key) for key in SETTING_FIELDS} for r in settings]
+    if coremark:
+        line["coremark"] = coremark
     return line
 
 
-def append(results: dict | None, settings: list[dict] | None = None) -> dict:
+def append(results: dict | None, settings: list[dict] | None = None, coremark: list[dict] | None = None) -> dict:
     """Appends the run's line to the history and writes the tables from it; returns the line."""
-    line = record(results, settings)
+    line = record(results, settings, coremark)
     with HISTORY.open("a") as handle:
         handle.write(json.dumps(line, sort_keys=True) + "\n")
     write_table()
@@ -196,6 +204,25 @@ def settings_table(line: dict) -> list[str]:
     return rows
 
 
+def coremark_table(line: dict) -> list[str]:
+    low, high = PUBLISHED_COREMARK
+    rows = [f"EEMBC's CoreMark on hart 0 (`make coremark COREMARK=DIR`, {_run(line)}), against the published "
+            f"K210 runs, {low:.2f}-{high:.2f} CoreMark/MHz (695.5 and 697.8 iterations/s at a nominal 400 MHz, "
+            "which may have been the 390 MHz the boot ROM leaves; GCC 8.2, flags unknown; ours: Debian's GCC 12, "
+            "-Os):",
+            "",
+            "| timing | CoreMark/MHz | against published | iterations/s | instructions per host second | real-time factor |",
+            "|---|---|---|---|---|---|"]
+    for run in line["coremark"]:
+        score = run.get("coremark_per_mhz")
+        rows.append(f"| {run['timing']} | {_value(score, '{:.3f}')} | "
+                    f"{'-' if score is None else f'{score / high:.2f}-{score / low:.2f}'} | "
+                    f"{_value(run.get('iterations_per_second'), '{:.1f}')} | "
+                    f"{run['instructions'] / run['host_wall_s'] / 1e6:.0f} million | "
+                    f"{run['virtual_s'] / run['host_wall_s']:.2f} |")
+    return rows
+
+
 def table() -> str:
     """The generated block: each table from the latest run that measured it."""
     rows = [BEGIN]
@@ -203,6 +230,8 @@ def table() -> str:
     if any("figures" in line for line in history):
         speed = latest("figures")
         rows += speed_table(speed) + [""] + thesis_table(speed)
+    if any("coremark" in line for line in history):
+        rows += ["", *coremark_table(latest("coremark"))]
     if any("settings" in line for line in history):
         rows += ["", *settings_table(latest("settings"))]
     rows.append(END)

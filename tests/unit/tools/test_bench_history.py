@@ -73,3 +73,17 @@ def test_the_thesis_and_the_settings_tables_come_from_their_latest_runs(tmp_path
     assert "| affine | 0.70-0.90 | 42.6 / exact |" in text                          # the sweep's, one run back
     assert "| default | 1.00 | 42.7 / 35.8 |" in text and "wireframe:" in text and "| default | 1.00 | 33.9 / - |" in text
     assert bench_history.main(["--check"]) == 0
+
+
+def test_the_coremark_table_comes_from_the_latest_coremark_run(tmp_path, monkeypatch):
+    history, page = tmp_path / "history.jsonl", tmp_path / "page.md"
+    page.write_text(f"{bench_history.BEGIN}\n{bench_history.END}\n")
+    history.write_text("")
+    monkeypatch.setattr(bench_history, "HISTORY", history)
+    monkeypatch.setattr(bench_history, "PAGE", page)
+    run = {"timing": "rocket", "cpu_hz": 390_000_000, "iterations": 10000, "iterations_per_second": 832.0,
+           "coremark_per_mhz": 2.1333, "instructions": 3_000_000_000, "virtual_s": 12.0, "host_wall_s": 10.0}
+    bench_history.append(None, coremark=[run])
+    bench_history.append({"firmware": {"real_time_factor": 1.5}})     # a later speed run keeps it
+    text = page.read_text()
+    assert "| rocket | 2.133 | 1.19-1.23 | 832.0 | 300 million | 1.20 |" in text
