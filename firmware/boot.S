@@ -63,10 +63,7 @@ _start:
     sd      zero, 56(t0)
     addi    t0, t0, 64
     bltu    t0, t1, 1b
-    # The zeros still in the data cache go to SRAM now: a dirty line of a
-    # DMA's buffer written back later would overwrite what the DMA brought
-    # (cache.S).
-2:  call    dcache_write_back
+2:
     j       main_hart0
 
 # --- hart 1: wait for the release word. Only the CLINT and .data are touched

@@ -224,7 +224,6 @@ main_hart0:
     la      t1, fb_frame
     add     t1, t1, t0
     sd      s2, 0(t1)
-    call    dcache_write_back           # the frame in SRAM for hart 1's DMA (cache.S)
     mv      a0, s3
     li      a1, FB_FULL
     li      a2, 1                       # tell hart 1 (the display hart)

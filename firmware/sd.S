@@ -437,11 +437,9 @@ sd_ahead:
 # sd_init; blocks 0 .. sd_capacity - 1 exist.
 sd_capacity:
     .space  8
-    .balign CACHE_LINE_BYTES
+    .balign 8
     .globl sd_stage
 # sd_stage: two staging buffers of SD_STAGE_BYTES (sd_read.S): one block
-# arrives in one while the other's is checked and copied out. Whole cache
-# lines of their own: the DMA writes them (cache.S).
+# arrives in one while the other's is checked and copied out.
 sd_stage:
     .space  2 * SD_STAGE_BYTES
-    .balign CACHE_LINE_BYTES

@@ -68,8 +68,7 @@ sd_read_blocks:
     mv      s10, a4                     # s10 = hook context
     li      s3, 0                       # s3 = failures of block s4 so far
     li      s4, -1                      # s4 = block that failed last
-    call    sd_stage_first
-    mv      s8, a0                      # s8 = staging buffer of block s0
+    la      s8, sd_stage                # s8 = staging buffer of block s0
     beqz    s1, 91f
     li      t0, MIE_MEIE                # WFI wakes for the DMA's interrupt
     csrs    mie, t0                     # throughout (dma_sleep_channel)
@@ -229,26 +228,11 @@ sd_read_blocks:
 #   Results: a0 = the other one.
 #   Clobbers: only ABI temporaries.
 sd_stage_other:
-    mv      t1, a0
-    la      a0, sd_stage
-    li      t0, SRAM_UNCACHED_BASE - SRAM_BASE
-    add     a0, a0, t0                  # the first, uncached (sd_stage_first)
-    bne     t1, a0, 1f
-    addi    a0, a0, SD_STAGE_BYTES
-1:  ret
-
-# sd_stage_first (file-local)
-#   What: the first staging buffer as this code reaches both: through SRAM's
-#         uncached view. The DMA writes them around the data cache (cache.S):
-#         a cached copy would be stale, and a dirty one, written back later,
-#         would overwrite what the DMA brought.
-#   Arguments: none.
-#   Results: a0 = the first staging buffer's uncached address.
-#   Clobbers: only ABI temporaries.
-sd_stage_first:
-    la      a0, sd_stage
-    li      t0, SRAM_UNCACHED_BASE - SRAM_BASE
-    add     a0, a0, t0
+    la      t0, sd_stage
+    bne     a0, t0, 1f
+    addi    a0, t0, SD_STAGE_BYTES
+    ret
+1:  mv      a0, t0
     ret
 
 # sd_check_block (file-local)

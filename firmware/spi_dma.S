@@ -347,7 +347,6 @@ spi0_dma_start:
     mv      s0, a0
     mv      s1, a1
     mv      s2, a2
-    call    dcache_write_back           # what this hart stored there, in SRAM for the DMA (cache.S)
 
     # SPI0: 32-bit frames, TX DMA requests when the FIFO is at or below dmatdlr.
     li      a0, SPI_CTRLR0_OCTAL_TX_32

@@ -1,5 +1,5 @@
 """The K210's map in the other languages (issue 33: one home per vocabulary): the block addresses and
-PLIC sources of emulator/memory_map.py's K210_BLOCKS, and SRAM's two views, generated into our assembly firmware's
+PLIC sources of emulator/memory_map.py's K210_BLOCKS, generated into our assembly firmware's
 include file (firmware/include/k210.inc) and the C test firmware's header (tests/firmware/k210.h),
 each between two markers. What the files add by hand (a register's offset, a channel's source
 reckoned from its block's first) is written in terms of these names.
@@ -14,7 +14,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from emulator.memory_map import K210_BLOCKS, SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE
+from emulator.memory_map import K210_BLOCKS
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -22,13 +22,8 @@ ASSEMBLY = ROOT / "firmware" / "include" / "k210.inc"
 C_HEADER = ROOT / "tests" / "firmware" / "k210.h"
 
 
-# SRAM's two views: the cached one and the same bytes around the data caches
-SRAM = {"SRAM_BASE": SRAM_BASE, "SRAM_UNCACHED_BASE": SRAM_UNCACHED_BASE, "SRAM_SIZE": SRAM_SIZE}
-
-
 def _assembly() -> list[str]:
-    lines = [f"    .equ {name + ',':<24}0x{value:08X}" for name, value in SRAM.items()]
-    lines += [f"    .equ {name + '_BASE,':<24}0x{block.base:08X}" for name, block in K210_BLOCKS.items()]
+    lines = [f"    .equ {name + '_BASE,':<24}0x{block.base:08X}" for name, block in K210_BLOCKS.items()]
     lines += [f"    .equ {'PLIC_SRC_' + name + ',':<24}{block.irqs[0]:<12}# its first interrupt line's PLIC source"
               if len(block.irqs) > 1 else f"    .equ {'PLIC_SRC_' + name + ',':<24}{block.irqs[0]}"
               for name, block in K210_BLOCKS.items() if block.irqs]
@@ -36,8 +31,7 @@ def _assembly() -> list[str]:
 
 
 def _c() -> list[str]:
-    lines = [f"#define {name:<23} 0x{value:08X}u" for name, value in SRAM.items()]
-    lines += [f"#define {name + '_BASE':<23} 0x{block.base:08X}u" for name, block in K210_BLOCKS.items()]
+    lines = [f"#define {name + '_BASE':<23} 0x{block.base:08X}u" for name, block in K210_BLOCKS.items()]
     lines += [f"#define {'IRQ_' + name:<23} {block.irqs[0]}" + ("  /* its first line's PLIC source */"
                                                                if len(block.irqs) > 1 else "")
               for name, block in K210_BLOCKS.items() if block.irqs]

@@ -48,7 +48,7 @@ from ..devices.spi import DWC_SSI, SpiController
 from ..devices.w25q128 import W25Q128
 from ..devices.st7789v import ST7789V
 from ..cpu.caches import HartCaches
-from .dma_view import SramBehindCaches
+from .dma_view import CoherentDma
 from ..cpu.timing import MISPREDICT_PENALTY, TIMING_IPC1, TIMING_MODELS, TIMING_ROCKET, build_table
 from ..devices.sysctl import Sysctl
 from ..devices.timer import DwTimer
@@ -194,10 +194,9 @@ class Board:
         self.flash = flash if flash is not None else FlashImage.erased()
         self.flash_chip = W25Q128(self.flash.data, warn=self.warn)
         self.spi3.device_for_ss = lambda ss: self.flash_chip if ss == 0 else None
-        # the harts' L1 caches (caches.py), and SRAM as the DMA sees it behind them (dma_view.py)
+        # the harts' L1 caches (caches.py), which the DMA's accesses probe (dma_view.py)
         self.caches = [HartCaches() for _ in range(HARTS)] if timing == TIMING_ROCKET else None
-        self.dma_memory = (None if self.caches is None else
-                           SramBehindCaches(self.memory, self.caches, warn=lambda text: self.warn(text, None)))
+        self.dma_memory = None if self.caches is None else CoherentDma(self.memory, self.caches)
         if self.caches is not None:
             self.caches[0].pair_with(self.caches[1])
         self.dmac = Dmac(ports, self.memory if self.dma_memory is None else self.dma_memory,
@@ -424,8 +423,6 @@ class Board:
         keep their state."""
         for peripheral in self.peripherals:
             peripheral.reset(at)
-        if self.dma_memory is not None:
-            self.dma_memory.reset()
         for caches in self.caches or ():
             caches.reset()
         if not self.cold:

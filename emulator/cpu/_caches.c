@@ -1,7 +1,11 @@
 /*
- * The DMA's side of SRAM with the harts' data caches in front of it (_caches.h's l1_memory_t): what a
- * DMA read finds and where a DMA write lands, a line at a time. The DMAC's model calls these through
- * dma_view.py for every transfer it carries out while the caches are modelled.
+ * The DMA and the harts' data caches (_caches.h's l1_memory_t). The K210's DMAC reaches SRAM through
+ * the cores' coherence hub, which probes the caches for it as for a hart's acquire (rocket-chip 2017's
+ * TLBroadcast: a Get probes every cache to Branch, a Put to Nothing): what a DMA reads is what the
+ * harts last stored, even in a dirty line, and a DMA's write drops every cached copy of the line, so
+ * the harts read the DMA's bytes. docs/design/timing.md ("DMA and the caches") gives the programs that
+ * ran on Docks which show it. Only the caches' state changes here (SRAM is one copy in the model):
+ * the hart's next access to such a line misses, or a store to it asks for write permission again.
  */
 #include <stdint.h>
 #include <string.h>
@@ -10,72 +14,51 @@
 
 #define LINE (1u << L1_LINE_SHIFT)
 
-/* Whether a hart's data cache holds the line at SRAM offset `offset`. */
-static int l1_held(const l1_memory_t *m, uint64_t offset)
+/* Each line of [offset, offset + length) of SRAM, probed in every hart's data cache. */
+static void l1_dma_probe(l1_memory_t *m, uint64_t offset, uint64_t length, int write)
 {
-    uint64_t line = ((m->cached_base + offset) >> L1_LINE_SHIFT) + 1;
-    uint32_t set = (uint32_t)(line - 1) & (L1_SETS - 1);
-    for (int h = 0; h < 2; h++)
-        if (m->harts[h] != NULL && l1_find(&m->harts[h]->dcache, set, line) >= 0)
-            return 1;
-    return 0;
-}
-
-/*
- * A DMA read of `length` bytes at SRAM offset `offset` into `out`: SRAM's bytes, which for a line a
- * hart holds written are those from before its stores (the DMA does not see into the caches).
- */
-__attribute__((visibility("default")))
-void l1_dma_read(l1_memory_t *m, uint64_t offset, uint64_t length, uint8_t *out)
-{
-    while (length > 0) {
-        uint64_t index = offset >> L1_LINE_SHIFT;
-        uint64_t n = LINE - (offset & (LINE - 1));
-        if (n > length)
-            n = length;
-        if (m->shadowed[index]) {
-            if (memcmp(m->sram + offset, m->view + offset, n) != 0)
-                m->stale_reads++;
-            memcpy(out, m->sram + offset, n);
-        } else {
-            memcpy(out, m->view + offset, n);
+    if (length == 0)
+        return;
+    uint64_t first = (m->cached_base + offset) >> L1_LINE_SHIFT;
+    uint64_t last = (m->cached_base + offset + length - 1) >> L1_LINE_SHIFT;
+    for (uint64_t number = first; number <= last; number++) {
+        uint64_t line = number + 1;
+        uint32_t set = (uint32_t)number & (L1_SETS - 1);
+        for (int h = 0; h < 2; h++) {
+            l1_caches_t *c = m->harts[h];
+            if (c == NULL)
+                continue;
+            l1_cache_t *d = &c->dcache;
+            int way = l1_find(d, set, line);
+            if (way < 0)
+                continue;
+            uint32_t slot = set * L1_WAYS + (uint32_t)way;
+            if (d->writable[slot]) {
+                d->writable[slot] = 0;      /* written back: the DMA reads, or overwrites, SRAM's bytes */
+                d->write_backs++;
+                m->write_backs++;
+                if (d->hot_writable[L1_HOT_SLOT(line)] == line)
+                    d->hot_writable[L1_HOT_SLOT(line)] = 0;
+            }
+            if (write) {
+                d->line[slot] = 0;
+                l1_forget(d, line);
+                m->invalidations++;
+            }
         }
-        out += n;
-        offset += n;
-        length -= n;
     }
 }
 
-/*
- * A DMA write of `length` bytes from `data` at SRAM offset `offset`: to SRAM. Where a hart's data cache
- * holds the line, the hart goes on seeing its copy (until the line leaves the cache and is fetched
- * again), and a dirty copy written back later replaces what the DMA wrote, as on the chip.
- */
+/* A DMA read of `length` bytes at SRAM offset `offset`: dirty copies are written back first. */
 __attribute__((visibility("default")))
-void l1_dma_write(l1_memory_t *m, uint64_t offset, const uint8_t *data, uint64_t length)
+void l1_dma_read(l1_memory_t *m, uint64_t offset, uint64_t length)
 {
-    while (length > 0) {
-        uint64_t index = offset >> L1_LINE_SHIFT, start = index << L1_LINE_SHIFT;
-        uint64_t n = LINE - (offset & (LINE - 1));
-        if (n > length)
-            n = length;
-        if (l1_held(m, offset)) {
-            if (!m->shadowed[index]) {
-                memcpy(m->sram + start, m->view + start, LINE);
-                m->shadowed[index] = 1;
-            }
-            if (memcmp(m->view + offset, data, n) != 0)
-                m->stale_writes++;
-            memcpy(m->sram + offset, data, n);
-        } else {
-            if (m->shadowed[index]) {    /* a line that left the caches since: SRAM's bytes are the view's now */
-                memcpy(m->view + start, m->sram + start, LINE);
-                m->shadowed[index] = 0;
-            }
-            memcpy(m->view + offset, data, n);
-        }
-        data += n;
-        offset += n;
-        length -= n;
-    }
+    l1_dma_probe(m, offset, length, 0);
+}
+
+/* A DMA write of `length` bytes at SRAM offset `offset`: every cached copy of its lines goes. */
+__attribute__((visibility("default")))
+void l1_dma_write(l1_memory_t *m, uint64_t offset, uint64_t length)
+{
+    l1_dma_probe(m, offset, length, 1);
 }

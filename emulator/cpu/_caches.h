@@ -18,8 +18,8 @@
  * access to the uncached view (0x4000_0000) is a single bus round trip each. Device accesses are
  * the bus's (not timed here). The two harts' data caches are kept coherent as the coherence hub
  * (TLBroadcast) keeps them: each acquire probes the other cache, to Branch for a load and to Nothing
- * for a store, and a dirty copy probed is written back first. DMA goes to SRAM around the caches
- * (nothing here sees it), as on the chip.
+ * for a store, and a dirty copy probed is written back first. The DMA's accesses are probed likewise
+ * (_caches.c), as on the chip.
  *
  * Both counters charge the same cycles at the same instructions: the precise engine's hook
  * (_insn_counter.c) and the fast engine's interpreter (_fast_engine.c), which keeps the same state.
@@ -49,21 +49,12 @@ typedef struct {
                                                 upgrade included); dirty lines written back */
 } l1_cache_t;
 
-/*
- * SRAM as the bus sees it, where it differs from what the harts see (Unicorn's memory, `view`): the
- * DMA is not coherent with the data caches. A line a hart holds writable has SRAM's bytes from before
- * its stores until it is written back; a line the DMA writes while a data cache holds it keeps the
- * hart's bytes in the cache, and SRAM gets the DMA's. Per line of SRAM, `shadowed` says that `sram`
- * holds SRAM's bytes for it (it may differ from the view); else the view is SRAM.
- */
+/* What the DMA's accesses do to the harts' data caches (_caches.c): the DMAC reaches SRAM through the
+ * coherence hub, which probes the caches as it does for a hart's acquire (see _caches.c). */
 typedef struct l1_memory {
-    uint8_t *view;        /* SRAM's host buffer: what the harts see */
-    uint8_t *sram;        /* SRAM's bytes of the shadowed lines (same size and offsets) */
-    uint8_t *shadowed;    /* one byte a line */
-    uint64_t size;        /* bytes of SRAM */
-    uint64_t cached_base; /* SRAM's cached view (line numbers are its addresses >> 6, plus 1) */
+    uint64_t cached_base;   /* SRAM's cached view (line numbers are its addresses >> 6, plus 1) */
     struct l1_caches *harts[2];
-    uint64_t stale_reads, stale_writes;   /* statistics: lines the DMA read or wrote with a hart's copy different */
+    uint64_t write_backs, invalidations;   /* statistics: lines the DMA's probes wrote back, dropped */
 } l1_memory_t;
 
 typedef struct l1_caches {
@@ -78,41 +69,10 @@ typedef struct l1_caches {
     uint32_t fetch_fill;          /* cycles an instruction-cache miss stalls fetch */
     uint32_t uncached;            /* cycles an access to the uncached view takes beyond a hit */
     uint64_t uncached_accesses;   /* statistics */
-    l1_memory_t *memory;          /* SRAM as the DMA sees it (NULL: the caches time accesses only) */
     uint32_t flush_per_way;       /* FENCE.I's walk: cycles per way of every set */
     uint32_t acquired;            /* a line came into the data cache since its last flush (Rocket's !flushed) */
     uint64_t flushes;             /* statistics: FENCE.I flushes that walked the data cache */
 } l1_caches_t;
-
-/* The line's offset in SRAM (line: the cached view's address >> 6, plus 1). */
-static inline uint64_t l1_line_offset(const l1_caches_t *c, uint64_t line)
-{
-    return ((line - 1) << L1_LINE_SHIFT) - c->cached_base;
-}
-
-/* A dirty line written back: SRAM now holds what the harts see. */
-static inline void l1_wrote_back(l1_caches_t *c, uint64_t line)
-{
-    if (c->memory != NULL)
-        c->memory->shadowed[l1_line_offset(c, line) >> L1_LINE_SHIFT] = 0;
-}
-
-/* A grant of `line` (a miss or an upgrade), after the other hart's copy was probed: its data is SRAM's,
- * so the hart sees SRAM's bytes from here on; with write permission, SRAM keeps them while the hart's
- * stores stay in the cache. */
-static inline void l1_granted(l1_caches_t *c, uint64_t line, int store)
-{
-    l1_memory_t *m = c->memory;
-    if (m == NULL)
-        return;
-    uint64_t offset = l1_line_offset(c, line);
-    uint8_t *shadowed = &m->shadowed[offset >> L1_LINE_SHIFT];
-    if (*shadowed)
-        memcpy(m->view + offset, m->sram + offset, 1u << L1_LINE_SHIFT);
-    if (store)
-        memcpy(m->sram + offset, m->view + offset, 1u << L1_LINE_SHIFT);
-    *shadowed = (uint8_t)(store != 0);
-}
 
 /* The way of `set` holding `line`, or -1. */
 static inline int l1_find(const l1_cache_t *k, uint32_t set, uint64_t line)
@@ -163,7 +123,6 @@ static inline uint64_t l1_probe_peer(l1_caches_t *c, uint64_t line, uint32_t set
         cost = c->write_back;
         p->write_backs++;
         p->writable[slot] = 0;
-        l1_wrote_back(c, line);
     }
     if (store) {
         p->line[slot] = 0;
@@ -187,12 +146,10 @@ static __attribute__((noinline, unused)) uint64_t l1_data_miss(l1_caches_t *c, u
         if (d->writable[slot]) {
             cost += c->write_back;
             d->write_backs++;
-            l1_wrote_back(c, d->line[slot]);
         }
         l1_forget(d, d->line[slot]);
     }
     cost += l1_probe_peer(c, line, set, store);
-    l1_granted(c, line, store);
     c->acquired = 1;
     d->line[slot] = line;
     d->writable[slot] = (uint8_t)(store != 0);
@@ -210,7 +167,6 @@ static __attribute__((noinline, unused)) uint64_t l1_upgrade(l1_caches_t *c, uin
     d->misses++;
     l1_lfsr_step(d);
     uint64_t cost = c->data_fill + l1_probe_peer(c, line, set, 1);
-    l1_granted(c, line, 1);
     c->acquired = 1;
     d->writable[set * L1_WAYS + (uint32_t)way] = 1;
     d->hot[L1_HOT_SLOT(line)] = line;
@@ -307,7 +263,6 @@ static __attribute__((noinline, unused)) uint64_t l1_fence_i(l1_caches_t *c)
         if (d->line[slot] != 0 && d->writable[slot]) {
             cost += c->write_back;
             d->write_backs++;
-            l1_wrote_back(c, d->line[slot]);
         }
     }
     memset(d->line, 0, sizeof d->line);

@@ -32,7 +32,6 @@ static void start(int channel, uint64_t cfg_bits, uint64_t source, uint64_t dest
 {
     uint32_t ch = DMAC_CH(channel);
     uint64_t enable_bit = 1ull << channel;
-    dcache_write_back();     /* the DMA is not coherent with the data cache (drivers.h) */
     dmac_write(ch + DMAC_CH_INTCLEAR, 0xFFFFFFFFu);
     dmac_write(DMAC_CHEN, (dmac_read(DMAC_CHEN) & ~enable_bit) | enable_bit << DMAC_CHEN_WE_SHIFT);
     while (channel_busy(channel))

@@ -71,11 +71,7 @@ uint64_t mtime_per_second(void);
 void mtimecmp_set(uint64_t when);
 void delay_us(uint32_t us);
 
-/* dmac.c. The DMAC reaches SRAM around the harts' data caches (it is not coherent with them),
- * so each transfer first writes this hart's dirty lines back and drops its cached copies
- * (dcache_write_back): a buffer the DMA reads is in SRAM, and one it writes is read afresh
- * afterwards. A receiving buffer must not share a cache line with anything the hart writes while
- * the transfer runs. */
+/* dmac.c */
 enum dma_width { DMA_WIDTH_8 = 0, DMA_WIDTH_16 = 1, DMA_WIDTH_32 = 2 };
 void dmac_init(void);
 void dmac_start(int channel, const void *source, volatile void *destination, int source_fixed,

@@ -16,7 +16,7 @@ import os
 import pytest
 
 from suite import run_emulator
-from emulator.cpu.timing import LATENCY, MISPREDICT_PENALTY, TIMING_IPC1, TIMING_ROCKET_NOCACHE, decode
+from emulator.cpu.timing import LATENCY, MISPREDICT_PENALTY, TIMING_IPC1, TIMING_ROCKET, TIMING_ROCKET_NOCACHE, decode
 from k210_fixtures import make_board, program, reg, run_to_done
 
 LOOPS = 200
@@ -255,13 +255,8 @@ def test_an_unknown_timing_model_is_refused():
 # (Scheduler._catch_up_to; the LCD's 10 us reset pulse had lasted a whole turn, 48 us). (A change to the firmware or to the card changes
 # them on purpose: take them again by running commit 53f433e's emulator with that fix, `python -m
 # emulator run build/firmware.elf --sd build/card.img --frames 4`, on the new firmware and card.)
-# Taken again with this model's own --timing ipc1 when the firmware learned the caches (cache.S:
-# FENCE.I to write its lines back before a DMA reads them and after clearing .bss, the SD staging
-# buffers in whole lines read through the uncached view): ipc1 gave the figures before exactly on
-# the firmware before (commit 4b62927), and this firmware runs 4 more instructions a frame on each
-# hart (the write-back's call), 2,662 more on hart 0 by the first frame.
-BEFORE_CYCLES = [(0.133702626594, [12045469, 14610]), (0.144971951658, [1022980, 3176]),
-                 (0.15259620228, [1022186, 722]), (0.160220452902, [1039468, 722])]
+BEFORE_CYCLES = [(0.13369905351530048, [12042807, 14606]), (0.14496836865177634, [1022976, 3172]),
+                 (0.15259260934656543, [1022182, 718]), (0.16021685004135452, [1039464, 718])]
 
 
 def test_ipc1_reproduces_the_model_before_cycle_timing(firmware, card, firmware_run, tmp_path):

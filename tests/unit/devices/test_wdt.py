@@ -68,8 +68,7 @@ BOOTS = """
 _start:
     csrr    a0, mhartid
     bnez    a0, park
-    li      s0, 0x40600000               # AI SRAM: the program is not there, so a reset keeps it;
-                                         # uncached: a line still in the data cache is lost at a reset
+    li      s0, 0x80600000               # AI SRAM: the program is not there, so a reset keeps it
     la      t1, data_word
     lw      s2, 0(t1)                    # the program's own data as loaded (42)
     li      t2, 7
