@@ -39,6 +39,14 @@ static uint64_t reg(insn_counter_t *c, void *uc, uint32_t r)
  * exception: mcause 4 or 6, mtval the address).
  */
 #define FENCE_I_MASK 0x707Fu    /* opcode MISC-MEM, funct3 1 */
+#define LR_MASK 0xF800707Fu     /* opcode AMO, funct5 00010 (LR.W, LR.D) */
+#define LR_MATCH 0x1000202Fu
+
+static inline int is_load_reserved(uint32_t word, uint32_t size)
+{
+    return size == 4 && ((word & LR_MASK) == LR_MATCH || (word & LR_MASK) == (LR_MATCH | 0x1000u));
+}
+
 #define FENCE_I_MATCH 0x100Fu
 
 /* Also charges the caches: a load's or store's data-cache access, FENCE.I's flush (the fast engine
@@ -71,9 +79,11 @@ static int misaligned(insn_counter_t *c, void *uc, uint64_t address, uint32_t si
         return 0;
     uint64_t target = reg(c, uc, rs1) + (uint64_t)offset;
     if ((target & (width - 1)) == 0) {
-        /* the data cache is charged where the access is carried out: a misaligned one traps first */
+        /* the data cache is charged where the access is carried out: a misaligned one traps first. LR
+         * acquires its line with write permission, as a store does (rocket-chip's isWriteIntent
+         * includes M_XLR), so that its SC hits. */
         if (c->caches != NULL)
-            *cache_cost = l1_data(c->caches, target, is_store);
+            *cache_cost = l1_data(c->caches, target, is_store || is_load_reserved(word, size));
         return 0;
     }
     c->misaligned_pc = address;

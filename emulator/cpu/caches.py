@@ -56,8 +56,9 @@ class L1Timing:
 
     @property
     def worst_instruction(self) -> int:
-        """The most an instruction's caches can add: a fetch miss, and a data miss whose victim and
-        whose copy in the other hart's cache are both written back first (or an uncached access)."""
+        """The most a load's, store's or fetch's caches can add: a fetch miss, and a data miss whose
+        victim and whose copy in the other hart's cache are both written back first (or an uncached
+        access). FENCE.I's flush is not counted: no poll loop holds one."""
         return self.fetch_fill + max(self.data_fill + 2 * self.write_back, self.uncached)
 
 

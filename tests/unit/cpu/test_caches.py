@@ -14,6 +14,7 @@ from emulator.cpu.caches import LINE_BYTES, ROCKET_L1
 from emulator.cpu.hart import ENGINE_FAST, ENGINE_PRECISE
 from emulator.cpu.timing import TIMING_ROCKET, TIMING_ROCKET_NOCACHE
 from emulator.memory_map import SRAM_BASE, SRAM_UNCACHED_BASE
+from both_engines import run_on_both, state
 from k210_fixtures import build_elf, make_board, program, reg, run_to_done, run_until, symbol
 
 SETS, WAYS = 64, 8
@@ -253,3 +254,53 @@ def test_the_harts_caches_are_coherent():
             assert board.caches[1].dirty(shared) and not board.caches[0].holds(shared)
     added = [cached - plain for cached, plain in zip(spans[TIMING_ROCKET], spans[TIMING_ROCKET_NOCACHE])]
     assert added == [ROCKET_L1.data_fill + ROCKET_L1.write_back, 0, ROCKET_L1.data_fill, 0]
+
+
+MIXED = """
+    la      s0, array
+    li      t0, 5
+    amoadd.w t1, t0, (s0)               # an AMO: write permission
+    addi    s1, s0, 64
+1:  lr.w    t2, (s1)                    # LR takes its line writable, so that SC hits
+    addi    t2, t2, 1
+    sc.w    t3, t2, (s1)
+    bnez    t3, 1b
+    c.ld    a0, 128(s0)                 # compressed
+    c.sd    a0, 136(s0)
+    .insn   i 0x0F, 1, x0, x0, 0        # FENCE.I: written back, both caches emptied
+    li      t4, 0x40000000 - 0x80000000
+    add     t4, s0, t4
+    ld      a1, 64(t4)                  # the uncached view
+    sd      a1, 200(t4)
+    ld      a2, 64(s0)                  # fetched again after the flush
+"""
+
+
+def test_both_engines_charge_atomics_lr_sc_fence_i_and_the_uncached_view_alike():
+    precise, fast = run_on_both(MIXED, data=ARRAY)
+    assert state(precise) == state(fast)
+    assert precise.harts[0].cycles == fast.harts[0].cycles
+    assert [c.statistics() for c in precise.caches] == [c.statistics() for c in fast.caches]
+    stats = fast.caches[0].statistics()
+    assert stats.flushes == 1 and stats.uncached_accesses == 2
+
+
+LR_SC = """
+    la      s0, array
+    csrr    s2, mcycle
+1:  lr.d    t2, (s0)
+    addi    t2, t2, 1
+    sc.d    t3, t2, (s0)
+    bnez    t3, 1b
+    csrr    s3, mcycle
+"""
+
+
+def test_lr_acquires_its_line_writable_so_that_sc_hits():
+    """rocket-chip's isWriteIntent counts LR: one miss for the pair, not a second for write permission."""
+    cycles = {}
+    for timing in (TIMING_ROCKET, TIMING_ROCKET_NOCACHE):
+        board = make_board(program(LR_SC, data=ARRAY), timing=timing)
+        run_to_done(board)
+        cycles[timing] = reg(board, "s3") - reg(board, "s2")
+    assert cycles[TIMING_ROCKET] - cycles[TIMING_ROCKET_NOCACHE] == ROCKET_L1.data_fill
