@@ -48,7 +48,6 @@ from ..devices.spi import DWC_SSI, SpiController
 from ..devices.w25q128 import W25Q128
 from ..devices.st7789v import ST7789V
 from ..cpu.caches import HartCaches
-from .dma_view import CoherentDma
 from ..cpu.timing import MISPREDICT_PENALTY, TIMING_IPC1, TIMING_MODELS, TIMING_ROCKET, build_table
 from ..devices.sysctl import Sysctl
 from ..devices.timer import DwTimer
@@ -194,13 +193,11 @@ class Board:
         self.flash = flash if flash is not None else FlashImage.erased()
         self.flash_chip = W25Q128(self.flash.data, warn=self.warn)
         self.spi3.device_for_ss = lambda ss: self.flash_chip if ss == 0 else None
-        # the harts' L1 caches (caches.py), which the DMA's accesses probe (dma_view.py)
+        # the harts' L1 caches (caches.py)
         self.caches = [HartCaches() for _ in range(HARTS)] if timing == TIMING_ROCKET else None
-        self.dma_memory = None if self.caches is None else CoherentDma(self.memory, self.caches)
         if self.caches is not None:
             self.caches[0].pair_with(self.caches[1])
-        self.dmac = Dmac(ports, self.memory if self.dma_memory is None else self.dma_memory,
-                         requests=self.sysctl.dma_request,
+        self.dmac = Dmac(ports, self.memory, requests=self.sysctl.dma_request,
                          peripherals={"spi0": self.spi0, "spi1": self.spi1, "spi3": self.spi3, "sha": self.sha256,
                                       **{uart.GATE: uart for uart in self.uarts}})
         self.peripherals: list[Peripheral] = [self.sysctl, self.fpioa, self.gpiohs, self.gpio, self.uarths, *self.uarts, *self.timers, *self.watchdogs, self.rtc, self.sha256, self.fft,

@@ -18,8 +18,8 @@
  * access to the uncached view (0x4000_0000) is a single bus round trip each. Device accesses are
  * the bus's (not timed here). The two harts' data caches are kept coherent as the coherence hub
  * (TLBroadcast) keeps them: each acquire probes the other cache, to Branch for a load and to Nothing
- * for a store, and a dirty copy probed is written back first. The DMA's accesses are probed likewise
- * (_caches.c), as on the chip.
+ * for a store, and a dirty copy probed is written back first. The DMA is coherent with the caches
+ * and leaves their state as it is (docs/design/timing.md, "DMA and the caches").
  *
  * Both counters charge the same cycles at the same instructions: the precise engine's hook
  * (_insn_counter.c) and the fast engine's interpreter (_fast_engine.c), which keeps the same state.
@@ -48,14 +48,6 @@ typedef struct {
     uint64_t lookups, misses, write_backs;   /* statistics: look-ups past the hot lines; misses (a store's
                                                 upgrade included); dirty lines written back */
 } l1_cache_t;
-
-/* What the DMA's accesses do to the harts' data caches (_caches.c): the DMAC reaches SRAM through the
- * coherence hub, which probes the caches as it does for a hart's acquire (see _caches.c). */
-typedef struct l1_memory {
-    uint64_t cached_base;   /* SRAM's cached view (line numbers are its addresses >> 6, plus 1) */
-    struct l1_caches *harts[2];
-    uint64_t write_backs, invalidations;   /* statistics: lines the DMA's probes wrote back, dropped */
-} l1_memory_t;
 
 typedef struct l1_caches {
     l1_cache_t icache;

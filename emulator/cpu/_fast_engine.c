@@ -1594,9 +1594,8 @@ static uint64_t plan_cycles_until(const alone_plan_t *plan, int64_t time)
  * mirrors against them and against the field names here): predictor_t, insn_counter_t,
  * device_access_t, repeat_t, fast_state_t up to `windows` (the head Python reads), alone_plan_t. */
 __attribute__((visibility("default")))
-void struct_sizes_for_tests(uint64_t out[9])
+void struct_sizes_for_tests(uint64_t out[8])
 {
-    out[8] = sizeof(l1_memory_t);
     out[6] = sizeof(l1_cache_t);
     out[7] = sizeof(l1_caches_t);
     out[0] = sizeof(predictor_t);

@@ -40,12 +40,6 @@ class L1Caches(ctypes.Structure):
     """_caches.h's l1_caches_t: a hart's two caches and what their misses cost."""
 
 
-class L1Memory(ctypes.Structure):
-    """_caches.h's l1_memory_t: the harts' data caches as the DMA's accesses probe them."""
-    _fields_ = [("cached_base", ctypes.c_uint64), ("harts", ctypes.POINTER(L1Caches) * 2),
-                ("write_backs", ctypes.c_uint64), ("invalidations", ctypes.c_uint64)]
-
-
 L1Caches._fields_ = [("icache", L1Cache), ("dcache", L1Cache), ("fetch_line", ctypes.c_uint64),
                      ("peer", ctypes.POINTER(L1Caches)), ("cached_base", ctypes.c_uint64),
                      ("cached_size", ctypes.c_uint64), ("uncached_base", ctypes.c_uint64),
@@ -85,8 +79,6 @@ counter_lib.decode_access_for_tests.argtypes = [ctypes.c_uint32, ctypes.c_uint32
 counter_lib.struct_sizes_for_tests.argtypes = [ctypes.POINTER(ctypes.c_uint64)]
 counter_lib.fast_set_write_watch.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
 fast_step = _insn_counter.fast_step   # runs the fast engine, CPython's way of calling (see _insn_counter.c)
-counter_lib.l1_dma_read.argtypes = [ctypes.POINTER(L1Memory), ctypes.c_uint64, ctypes.c_uint64]
-counter_lib.l1_dma_write.argtypes = [ctypes.POINTER(L1Memory), ctypes.c_uint64, ctypes.c_uint64]
 counter_lib.fast_run_alone.restype = ctypes.c_uint64
 counter_lib.fast_run_alone.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_uint64,
                                         ctypes.c_void_p]
