@@ -34,7 +34,7 @@ FW_OBJS := $(patsubst %,$(BUILD)/fw/%.o,$(FW_ORDER))
 FW_INCS := $(wildcard firmware/include/*.inc)
 
 .PHONY: all toolchain venv firmware c-firmware card flash-to-emulator flash debug test test-unit test-routines \
-        test-end-to-end test-slow bench goldens golden-check clean riscv-tests coremark
+        test-end-to-end test-slow bench goldens golden-check clean riscv-tests coremark thesis-firmware
 
 all: firmware
 
@@ -154,6 +154,11 @@ riscv-tests: venv
 COREMARK_ITERATIONS ?= 10000
 coremark: c-firmware venv
 	$(PYTHON) tools/coremark.py "$(COREMARK)" --iterations $(COREMARK_ITERATIONS) --out $(BUILD)/coremark
+
+# The thesis's own firmware on the model, timed from reset to its main loop for its models A, B, C
+# (docs/measurements.md, calibration), from a checkout of its repository: make thesis-firmware THESIS=DIR
+thesis-firmware: venv
+	$(PYTHON) tools/thesis_firmware.py "$(THESIS)" --out $(BUILD)/thesis-firmware
 
 # A real Dock: make flash PORT=/dev/ttyUSB0 [FLASH_BAUD=N] (tools/flash.py runs kflash)
 PORT ?=

@@ -101,7 +101,8 @@ def _commit() -> str:
     return head + ("+changes" if dirty else "")
 
 
-def record(results: dict | None, settings: list[dict] | None = None, coremark: list[dict] | None = None) -> dict:
+def record(results: dict | None, settings: list[dict] | None = None, coremark: list[dict] | None = None,
+           thesis_firmware: list[dict] | None = None) -> dict:
     """One history line: when, on what, the speed figures (None where a run did not measure one; no
     `figures` when the run measured no speed) and the precision sweep's records (`settings`)."""
     line: dict = {
@@ -115,12 +116,15 @@ def record(results: dict | None, settings: list[dict] | None = None, coremark: l
         line["settings"] = [{key: r.get(key) for key in SETTING_FIELDS} for r in settings]
     if coremark:
         line["coremark"] = coremark
+    if thesis_firmware:
+        line["thesis_firmware"] = thesis_firmware
     return line
 
 
-def append(results: dict | None, settings: list[dict] | None = None, coremark: list[dict] | None = None) -> dict:
+def append(results: dict | None, settings: list[dict] | None = None, coremark: list[dict] | None = None,
+           thesis_firmware: list[dict] | None = None) -> dict:
     """Appends the run's line to the history and writes the tables from it; returns the line."""
-    line = record(results, settings, coremark)
+    line = record(results, settings, coremark, thesis_firmware)
     with HISTORY.open("a") as handle:
         handle.write(json.dumps(line, sort_keys=True) + "\n")
     write_table()
@@ -229,6 +233,25 @@ def coremark_table(line: dict) -> list[str]:
     return rows
 
 
+def thesis_firmware_table(line: dict) -> list[str]:
+    runs = line["thesis_firmware"]
+    timings = list(dict.fromkeys(run["timing"] for run in runs))
+    rows = [f"The thesis's own firmware on the board model (`make thesis-firmware THESIS=DIR`, {_run(line)}): "
+            "reset to its main loop with files of its models' sizes, against its measurements on a Dock:",
+            "",
+            "| model | on a Dock | " + " | ".join(f"{timing} (x Dock)" for timing in timings) + " |",
+            "|---|---|" + "---|" * len(timings)]
+    for model in dict.fromkeys(run["model"] for run in runs):
+        mine = {run["timing"]: run for run in runs if run["model"] == model}
+        dock = next(iter(mine.values()))["thesis_ms"]
+        cells = []
+        for timing in timings:
+            ms = mine.get(timing, {}).get("start_up_ms")
+            cells.append("-" if ms is None else f"{ms:.1f} ms ({ms / dock:.2f})")
+        rows.append(f"| {model} | {dock:g} ms | " + " | ".join(cells) + " |")
+    return rows
+
+
 def table() -> str:
     """The generated block: each table from the latest run that measured it."""
     rows = [BEGIN]
@@ -236,6 +259,8 @@ def table() -> str:
     if any("figures" in line for line in history):
         speed = latest("figures")
         rows += speed_table(speed) + [""] + thesis_table(speed)
+    if any("thesis_firmware" in line for line in history):
+        rows += ["", *thesis_firmware_table(latest("thesis_firmware"))]
     if any("coremark" in line for line in history):
         rows += ["", *coremark_table(latest("coremark"))]
     if any("settings" in line for line in history):

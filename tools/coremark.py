@@ -128,8 +128,8 @@ def main(argv: list[str] | None = None) -> int:
         from tools import bench_history
         bench_history.append(None, coremark=[{key: record.get(key) for key in bench_history.COREMARK_FIELDS}
                                              for record in records])
-        print(f"recorded in {bench_history.HISTORY.relative_to(ROOT)}; the table in "
-              f"{bench_history.PAGE.relative_to(ROOT)}")
+        print(f"recorded in {bench_history.HISTORY}; the table in "
+              f"{bench_history.PAGE}")
     return 0 if all(record["validated"] for record in records) else 1
 
 

@@ -175,6 +175,8 @@ COMMANDS = {
     # (CoreMark's sources are not in the repository: tests/unit/tools/test_coremark.py runs it where a
     # checkout is at hand)
     "make coremark COREMARK=DIR": ("dry-run", lambda r, tmp: None),
+    # (likewise the thesis's firmware: tests/unit/tools/test_thesis_firmware.py)
+    "make thesis-firmware THESIS=DIR": ("dry-run", lambda r, tmp: None),
     "make goldens": ("dry-run", lambda r, tmp: None),
     "make goldens SCENES=gem-flat": ("dry-run", lambda r, tmp: None),
     "make debug": ("dry-run", lambda r, tmp: None),

@@ -87,3 +87,15 @@ def test_the_coremark_table_comes_from_the_latest_coremark_run(tmp_path, monkeyp
     bench_history.append({"firmware": {"real_time_factor": 1.5}})     # a later speed run keeps it
     text = page.read_text()
     assert "| rocket | 2.133 | 1.19-1.23 | 832.0 | 300 million | 1.20 |" in text
+
+
+def test_the_thesis_firmware_table_comes_from_its_latest_run(tmp_path, monkeypatch):
+    history, page = tmp_path / "history.jsonl", tmp_path / "page.md"
+    page.write_text(f"{bench_history.BEGIN}\n{bench_history.END}\n")
+    history.write_text("")
+    monkeypatch.setattr(bench_history, "HISTORY", history)
+    monkeypatch.setattr(bench_history, "PAGE", page)
+    runs = [{"model": "A", "thesis_ms": 344.3, "timing": "rocket", "start_up_ms": 254.37},
+            {"model": "A", "thesis_ms": 344.3, "timing": "ipc1", "start_up_ms": 231.84}]
+    bench_history.append(None, thesis_firmware=runs)
+    assert "| A | 344.3 ms | 254.4 ms (0.74) | 231.8 ms (0.67) |" in page.read_text()

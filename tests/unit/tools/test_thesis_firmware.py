@@ -1,0 +1,43 @@
+"""tools/thesis_firmware.py: the thesis's own firmware on the model, timed to its main loop. Its source is
+not in this repository and CI cannot fetch it: the run is tested where a checkout is at hand
+(THESIS=DIR), the rest always."""
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import pytest
+
+from tools import bench_history
+
+from tools import thesis_firmware
+
+
+def test_a_folder_that_is_no_checkout_is_refused_by_name(tmp_path):
+    with pytest.raises(SystemExit, match=f"{tmp_path} is not a checkout of the thesis's firmware"):
+        thesis_firmware.main([str(tmp_path), "--timing", "rocket"])
+
+
+def test_the_files_have_the_thesis_s_sizes():
+    for model, (_, width, height, model_bytes, texture_bytes, _) in thesis_firmware.MODELS.items():
+        obj, texture = thesis_firmware.files(model)
+        assert len(texture) == texture_bytes and texture.startswith(b"P6\n#")
+        assert texture.endswith(bytes((i * 7) & 0xFF for i in range(width * height * 3)))
+        assert len(obj) == max(model_bytes, len(obj)) and obj.count(b"\nf ") > 0
+
+
+def history(monkeypatch, folder: Path) -> None:
+    """The run's record goes to a history of the test's own, not the repository's."""
+    (folder / "page.md").write_text(f"{bench_history.BEGIN}\n{bench_history.END}\n")
+    monkeypatch.setattr(bench_history, "HISTORY", folder / "history.jsonl")
+    monkeypatch.setattr(bench_history, "PAGE", folder / "page.md")
+
+
+@pytest.mark.skipif(not os.environ.get("THESIS"), reason="no checkout of the thesis's firmware (THESIS)")
+def test_the_thesis_firmware_reaches_its_main_loop(tmp_path, monkeypatch):
+    history(monkeypatch, tmp_path)
+    assert thesis_firmware.main([os.environ["THESIS"], "--timing", "rocket", "--out", str(tmp_path)]) == 0
+    records = json.loads((Path(tmp_path) / "thesis-firmware.json").read_text())
+    assert [r["model"] for r in records] == ["A", "B", "C"]
+    assert all(0.5 < r["start_up_ms"] / r["thesis_ms"] < 1.5 for r in records)
