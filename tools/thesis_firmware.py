@@ -61,8 +61,7 @@ def build(checkout: Path, out: Path) -> Path:
 
 def files(model: str) -> tuple[bytes, bytes]:
     """The model and its texture, padded to the thesis's byte counts."""
-    sys.path.insert(0, str(ROOT / "tools"))
-    import make_assets
+    from tools import make_assets
     name, width, height, model_bytes, texture_bytes, _ = MODELS[model]
     obj = getattr(make_assets, name)().encode()
     if len(obj) < model_bytes:

@@ -111,17 +111,19 @@ class HartCaches:
         return CacheStatistics(i.lookups, i.misses, d.lookups, d.misses, d.write_backs,
                                self.state.uncached_accesses, self.state.flushes)
 
-    def holds(self, address: int, data: bool = True) -> bool:
-        """Whether the data (or instruction) cache holds the line of `address` (SRAM's cached view)."""
+    def _slot(self, address: int, data: bool) -> int | None:
+        """The slot (set x ways + way) of the cache holding the line of `address`, or None."""
         cache = self.state.dcache if data else self.state.icache
         line = (address >> L1_LINE_SHIFT) + 1
         first = ((address >> L1_LINE_SHIFT) & (L1_SETS - 1)) * L1_WAYS
-        return any(cache.line[first + way] == line for way in range(L1_WAYS))
+        return next((first + way for way in range(L1_WAYS) if cache.line[first + way] == line), None)
+
+    def holds(self, address: int, data: bool = True) -> bool:
+        """Whether the data (or instruction) cache holds the line of `address` (SRAM's cached view)."""
+        return self._slot(address, data) is not None
 
     def dirty(self, address: int) -> bool:
         """Whether the data cache holds the line of `address` writable, so written and not yet written
         back (a store's grant is followed by its write at once)."""
-        cache = self.state.dcache
-        line = (address >> L1_LINE_SHIFT) + 1
-        first = ((address >> L1_LINE_SHIFT) & (L1_SETS - 1)) * L1_WAYS
-        return any(cache.line[first + way] == line and cache.writable[first + way] for way in range(L1_WAYS))
+        slot = self._slot(address, True)
+        return slot is not None and bool(self.state.dcache.writable[slot])

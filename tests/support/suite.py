@@ -100,3 +100,12 @@ def copy_card(source: Path, target: Path) -> Path:
             offset = end
         dst.truncate(size)
     return target
+
+
+def private_bench_history(monkeypatch, folder: Path) -> None:
+    """A tool's record of its run (tools/bench_history.py) goes to a history and a page in `folder`,
+    not the repository's docs (for the tests that run make coremark's and make thesis-firmware's tools)."""
+    from tools import bench_history
+    (folder / "page.md").write_text(f"{bench_history.BEGIN}\n{bench_history.END}\n")
+    monkeypatch.setattr(bench_history, "HISTORY", folder / "history.jsonl")
+    monkeypatch.setattr(bench_history, "PAGE", folder / "page.md")

@@ -9,7 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from tools import bench_history
+from suite import private_bench_history
+
 
 from tools import coremark
 
@@ -27,16 +28,9 @@ def test_bad_arguments_are_usage_errors(tmp_path, capsys):
     assert "unknown timing fast" in capsys.readouterr().err
 
 
-def history(monkeypatch, folder: Path) -> None:
-    """The run's record goes to a history of the test's own, not the repository's."""
-    (folder / "page.md").write_text(f"{bench_history.BEGIN}\n{bench_history.END}\n")
-    monkeypatch.setattr(bench_history, "HISTORY", folder / "history.jsonl")
-    monkeypatch.setattr(bench_history, "PAGE", folder / "page.md")
-
-
 @pytest.mark.skipif(not os.environ.get("COREMARK"), reason="no CoreMark checkout (COREMARK)")
 def test_coremark_validates_and_scores_per_mhz(tmp_path, monkeypatch):
-    history(monkeypatch, tmp_path)
+    private_bench_history(monkeypatch, tmp_path)
     assert coremark.main([os.environ["COREMARK"], "--timing", "rocket", "--out", str(tmp_path)]) == 0
     record, = json.loads((Path(tmp_path) / "coremark.json").read_text())
     assert record["validated"] and record["cpu_hz"] == 390_000_000

@@ -9,7 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from tools import bench_history
+from suite import private_bench_history
+
 
 from tools import thesis_firmware
 
@@ -27,16 +28,9 @@ def test_the_files_have_the_thesis_s_sizes():
         assert len(obj) == max(model_bytes, len(obj)) and obj.count(b"\nf ") > 0
 
 
-def history(monkeypatch, folder: Path) -> None:
-    """The run's record goes to a history of the test's own, not the repository's."""
-    (folder / "page.md").write_text(f"{bench_history.BEGIN}\n{bench_history.END}\n")
-    monkeypatch.setattr(bench_history, "HISTORY", folder / "history.jsonl")
-    monkeypatch.setattr(bench_history, "PAGE", folder / "page.md")
-
-
 @pytest.mark.skipif(not os.environ.get("THESIS"), reason="no checkout of the thesis's firmware (THESIS)")
 def test_the_thesis_firmware_reaches_its_main_loop(tmp_path, monkeypatch):
-    history(monkeypatch, tmp_path)
+    private_bench_history(monkeypatch, tmp_path)
     assert thesis_firmware.main([os.environ["THESIS"], "--timing", "rocket", "--out", str(tmp_path)]) == 0
     records = json.loads((Path(tmp_path) / "thesis-firmware.json").read_text())
     assert [r["model"] for r in records] == ["A", "B", "C"]
