@@ -30,38 +30,47 @@ def sram_views(address: int, length: int) -> list[int]:
     return [address]
 
 
+# The buses blocks' registers sit on, as the Kendryte SDK's platform.h groups them: "Under Coreplex"
+# and "Under TileLink" (Rocket's own TileLink), "Under AXI 64 bit", "Under AHB 32 bit", "Under APB1/2/3
+# 32 bit". SYSCTL's apb0/1/2 clock dividers clock platform.h's APB1/2/3 (its PERI_BUS: WDT on apb1,
+# SPI0/SPI1 on apb2), so they are named here by their SYSCTL clock.
+TILELINK, AXI, AHB, APB0, APB1, APB2 = "TileLink", "AXI", "AHB", "APB0", "APB1", "APB2"
+APBS = (APB0, APB1, APB2)
+
+
 @dataclass(frozen=True)
 class Block:
     """One block of the K210 the model builds: where it sits, the PLIC sources its interrupt lines
-    drive (line n on irqs[n]), and the SYSCTL clock gate it sits behind (devices/sysctl.py
-    PERI_BITS; None: always clocked)."""
+    drive (line n on irqs[n]), the SYSCTL clock gate it sits behind (devices/sysctl.py
+    PERI_BITS; None: always clocked), and the bus its registers are on."""
     base: int
     size: int
     irqs: tuple[int, ...] = ()
     gate: str | None = None
+    bus: str = APB0
 
 
 # The K210 as the model builds it, by the name each block has in messages: addresses from the
 # Kendryte SDK's platform.h, interrupt sources from plic.h, gates from sysctl.h/sysctl.c.
 K210_BLOCKS: dict[str, Block] = {
-    "CLINT": Block(0x0200_0000, 0x1_0000),
-    "PLIC": Block(0x0C00_0000, 0x0400_0000),
-    "UARTHS": Block(0x3800_0000, 0x1000, (33,)),
-    "GPIOHS": Block(0x3800_1000, 0x1000, tuple(range(34, 66))),
-    "DMAC": Block(0x5000_0000, 0x1000, tuple(range(27, 33)), "dma"),
+    "CLINT": Block(0x0200_0000, 0x1_0000, bus=TILELINK),
+    "PLIC": Block(0x0C00_0000, 0x0400_0000, bus=TILELINK),
+    "UARTHS": Block(0x3800_0000, 0x1000, (33,), bus=TILELINK),
+    "GPIOHS": Block(0x3800_1000, 0x1000, tuple(range(34, 66)), bus=TILELINK),
+    "DMAC": Block(0x5000_0000, 0x1000, tuple(range(27, 33)), "dma", bus=AHB),
     "GPIO": Block(0x5020_0000, 0x1000, (23,), "gpio"),
     **{f"UART{n}": Block(0x5020_0000 + 0x1_0000 * n, 0x1_0000, (10 + n,), f"uart{n}") for n in (1, 2, 3)},
     "FPIOA": Block(0x502B_0000, 0x1000, (), "fpioa"),
     "SHA256": Block(0x502C_0000, 0x1_0000, (), "sha"),
     **{f"TIMER{n}": Block(0x502D_0000 + 0x1_0000 * n, 0x1_0000, (14 + 2 * n, 15 + 2 * n), f"timer{n}")
        for n in (0, 1, 2)},
-    **{f"WDT{n}": Block(0x5040_0000 + 0x1_0000 * n, 0x1_0000, (21 + n,), f"wdt{n}") for n in (0, 1)},
-    "SYSCTL": Block(0x5044_0000, 0x1000),
-    "RTC": Block(0x5046_0000, 0x1_0000, (20,), "rtc"),
-    **{f"SPI{n}": Block(0x5200_0000 + 0x0100_0000 * n, 0x1000, (1 + n,), f"spi{n}") for n in (0, 1)},
-    "SPI3": Block(0x5400_0000, 0x1000, (4,), "spi3"),
-    "FFT": Block(0x4200_0000, 0x1000, (26,), "fft"),
-    "OTP": Block(0x5042_0000, 0x1000, (), "otp"),
+    **{f"WDT{n}": Block(0x5040_0000 + 0x1_0000 * n, 0x1_0000, (21 + n,), f"wdt{n}", APB1) for n in (0, 1)},
+    "SYSCTL": Block(0x5044_0000, 0x1000, bus=APB1),
+    "RTC": Block(0x5046_0000, 0x1_0000, (20,), "rtc", APB1),
+    **{f"SPI{n}": Block(0x5200_0000 + 0x0100_0000 * n, 0x1000, (1 + n,), f"spi{n}", APB2) for n in (0, 1)},
+    "SPI3": Block(0x5400_0000, 0x1000, (4,), "spi3", APB2),
+    "FFT": Block(0x4200_0000, 0x1000, (26,), "fft", AXI),
+    "OTP": Block(0x5042_0000, 0x1000, (), "otp", APB1),
 }
 
 # Blocks the model knows by name but does not build: an access there stops the run naming them

@@ -3,7 +3,9 @@ measurements on a Dock), from a checkout of github.com/luczis/Renderizacao-3D-RI
 part of this repository): built with Debian's riscv64-unknown-elf-gcc as its CMake files build it
 (every `src/*.S` and `lib/crt.S`, linked with its `lds/kendryte.ld`), run on cards holding files of
 the sizes the thesis gives for its models A, B and C, and timed from reset to its main loop, the span
-the thesis measured (344.3, 122.2 and 87.8 ms on a Dock).
+the thesis measured (344.3, 122.2 and 87.8 ms on a Dock), and through its three SD phases, which it
+measured on model A from the card's chip select (32.35, 200.75 and 43.05 ms): the card's set-up to the
+root directory (sdInitialize and openFAT), the texture's read and the model's read (each a readFile).
 
     make thesis-firmware THESIS=DIR
     python tools/thesis_firmware.py DIR [--timing rocket,rocket-nocache,ipc1] [--out DIR]
@@ -37,8 +39,17 @@ MODELS = {
     "B": ("gem", 100, 78, 7373, 23450, 122.2),
     "C": ("cube", 8, 8, 466, 249, 87.8),
 }
+# the SD phases the thesis measured on model A from the card's chip select (section 5, Figure 39): the card's
+# set-up to the root directory and the FAT, the texture's read, the model's read, in ms
+THESIS_SD_PHASES_MS = {"A": {"set_up": 32.35, "texture": 200.75, "model": 43.05}}
 TIMINGS = ("rocket", "rocket-nocache", "ipc1")
 MAIN_LOOP = "loop0"          # hart 0's main loop (src/main.S), which the thesis timed start-up to
+# where each phase begins and ends in src/main.S: (symbol, its n-th entry) -- the card's set-up begins at
+# sdInitialize and ends where the first readFile (the texture's) begins; the texture's read ends at
+# openPPMTex, which parses it; the model's read is the second readFile, ending at openOBJModel
+PHASE_MARKS = {"set_up": (("sdInitialize", 1), ("readFile", 1)),
+               "texture": (("readFile", 1), ("openPPMTex", 1)),
+               "model": (("readFile", 2), ("openOBJModel", 1))}
 CARD_MIB = 600               # FAT32 needs 65,525 clusters: at 8 KiB clusters, over 512 MiB
 PARTITION_START = 2048
 
@@ -92,27 +103,33 @@ def card(folder: Path, obj: bytes, texture: bytes) -> Path:
 
 
 def start_up(elf: Path, image: Path, timing: str, budget_ms: float = 2000.0) -> dict:
-    """Reset to hart 0's first instruction of its main loop, in virtual time, and host time."""
+    """Reset to hart 0's first instruction of its main loop, in virtual time, the SD phases on the way
+    (PHASE_MARKS), and host time."""
     import unicorn
     from emulator.board import Board
     from emulator.vtime import PS_PER_MS, to_seconds
     board = Board(str(elf), sd_image=str(image), timing=timing)
-    loop = next(address for address, name in board.image.symbols.items() if name == MAIN_LOOP)
     hart = board.harts[0]
-    reached: list[float] = []
+    wanted = {MAIN_LOOP} | {name for marks in PHASE_MARKS.values() for name, _ in marks}
+    entries: dict[str, list[float]] = {name: [] for name in wanted}
 
-    def at_loop(uc, address, size, data) -> None:
-        if not reached:
-            reached.append(to_seconds(board.scheduler.time_at_cycles(hart, hart.cycles)))
-    hart.add_hook(unicorn.UC_HOOK_CODE, at_loop, None, loop, loop)
+    def at_symbol(uc, address, size, name) -> None:
+        entries[name].append(to_seconds(board.scheduler.time_at_cycles(hart, hart.cycles)) * 1e3)
+    for address, name in board.image.symbols.items():
+        if name in wanted:
+            hart.add_hook(unicorn.UC_HOOK_CODE, at_symbol, name, address, address)
     started = time.process_time()
     try:
-        while not reached and board.time < budget_ms * PS_PER_MS:
+        while not entries[MAIN_LOOP] and board.time < budget_ms * PS_PER_MS:
             board._step()
     finally:
         board.close()
-    return {"timing": timing, "start_up_ms": reached[0] * 1e3 if reached else None,
-            "host_cpu_s": time.process_time() - started}
+    phases = {}
+    for phase, ((first, nth), (last, mth)) in PHASE_MARKS.items():
+        if len(entries[first]) >= nth and len(entries[last]) >= mth:
+            phases[phase] = entries[last][mth - 1] - entries[first][nth - 1]
+    return {"timing": timing, "start_up_ms": entries[MAIN_LOOP][0] if entries[MAIN_LOOP] else None,
+            "sd_phases_ms": phases, "host_cpu_s": time.process_time() - started}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -138,6 +155,12 @@ def main(argv: list[str] | None = None) -> int:
                 print(f"model {model}, {timing:15} start-up to the main loop "
                       + (f"{ours:8.2f} ms against {thesis_ms} ms on a Dock ({ours / thesis_ms:.2f} x)"
                          if ours is not None else "NOT REACHED"))
+                dock_phases = THESIS_SD_PHASES_MS.get(model, {})
+                record["thesis_sd_phases_ms"] = dock_phases
+                print("    SD phases: " + ", ".join(
+                    f"{phase} {ms:.2f} ms" + (f" against {dock_phases[phase]} ({ms / dock_phases[phase]:.2f} x)"
+                                              if phase in dock_phases else "")
+                    for phase, ms in record["sd_phases_ms"].items()))
     (out / "thesis-firmware.json").write_text(json.dumps(records, indent=2) + "\n")
     if all(record["start_up_ms"] is not None for record in records):
         from tools import bench_history

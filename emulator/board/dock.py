@@ -41,7 +41,7 @@ from ..devices.plic import m_context as plic_m_context
 from ..devices.plic import s_context as plic_s_context
 from .scheduler import (DEFAULT_HANG_BUDGET, DEFAULT_QUANTUM, HARTS, FrameRecord, RunResult,  # noqa: F401
                         Scheduler)  # FrameRecord and RunResult: the board's results, imported from here
-from ..devices.sdcard import SdCard, SdImage
+from ..devices.sdcard import READ_ACCESS_TIME, SdCard, SdImage
 from ..cpu.shared_memory import find_poll_loops
 from ..cpu.time_loops import find_idle_loops, find_time_loops
 from ..devices.spi import DWC_SSI, SpiController
@@ -119,7 +119,8 @@ class Board:
                  on_frame: Callable[[FrameRecord, np.ndarray], None] | None = None,
                  on_warning: Callable[[str], None] | None = None, permissive: bool = False,
                  sd_image: str | None = None, sd_writable: bool = False,
-                 sd_faults: frozenset[str] = frozenset(), check_writes: bool = False, strict: bool = False,
+                 sd_faults: frozenset[str] = frozenset(), sd_access_time: Time = READ_ACCESS_TIME,
+                 check_writes: bool = False, strict: bool = False,
                  lcd_interface: str = LCD_8080, cold: bool = False, timing: str = TIMING_ROCKET,
                  engine: str = ENGINE_FAST, pins: list[PinChange] = (), otp: bytes | None = None,
                  otp_source: str = "") -> None:
@@ -202,6 +203,9 @@ class Board:
                                       **{uart.GATE: uart for uart in self.uarts}})
         self.peripherals: list[Peripheral] = [self.sysctl, self.fpioa, self.gpiohs, self.gpio, self.uarths, *self.uarts, *self.timers, *self.watchdogs, self.rtc, self.sha256, self.fft,
                                               self.otp, self.clint, self.plic, self.dmac, self.spi0, self.spi1, self.spi3]
+        if self.caches is not None:
+            self.sysctl.apb_changed = self._time_devices
+            self._time_devices()
         self._interrupting = [(p, K210_BLOCKS[p.NAME].irqs) for p in self.peripherals if K210_BLOCKS[p.NAME].irqs]
         self.signals = None                    # a vcd.SignalLog with --vcd
         # the blocks a DMA channel serves advance before the DMAC, which completes what they finished
@@ -217,7 +221,7 @@ class Board:
                            on_warning=lambda now, text: self.warn(f"ST7789V: {text}", now), strict=strict,
                            on_rule=lambda kind, now, text: self.timing_rule_broken(kind, f"ST7789V: {text}", now))
         self.sd_image = SdImage(sd_image, writable=sd_writable, warn=self.warn) if sd_image else None
-        sd_card = SdCard(self.sd_image, warn=self.warn, faults=sd_faults, strict=strict,
+        sd_card = SdCard(self.sd_image, warn=self.warn, faults=sd_faults, strict=strict, access_time=sd_access_time,
                          on_rule=lambda kind, now, text: self.timing_rule_broken(kind, text, now)
                          ) if self.sd_image else None
         chip = ChipPins(self.sysctl, self.fpioa, self.gpiohs, self.gpio, self.spi0, self.spi1, tuple(self.timers))
@@ -292,6 +296,14 @@ class Board:
     @property
     def frames(self) -> list[FrameRecord]:
         return self.scheduler.frames
+
+    def _time_devices(self) -> None:
+        """What an access to each device's registers costs the harts (caches.py), from its bus and the
+        APB clocks SYSCTL sets."""
+        dividers = self.sysctl.apb_dividers()
+        for caches in self.caches or ():
+            caches.time_devices([(p.BASE, p.SIZE, caches.figures.device(K210_BLOCKS[p.NAME].bus, dividers))
+                                 for p in self.peripherals])
 
     def loop_cycles_bound(self, instructions: int) -> int:
         """Cycles within which `instructions` instructions of a loop surely run (a hart woken
@@ -424,6 +436,8 @@ class Board:
             caches.reset()
         if not self.cold:
             bootrom.hand_over(self.sysctl, self.fpioa, self.uarths)
+        if self.caches is not None:
+            self._time_devices()       # SYSCTL's APB dividers as reset left them
         self.sysctl.record_reset(cause)
         if self.booted_from_flash:
             # the ROM boots what the flash holds now; the model's code analyses (poll loops, cycle

@@ -159,7 +159,8 @@ class SdSlot:
         if lanes != 1:
             raise HardwareMisuse(f"SPI1 talks to the SD card in a {lanes}-line format; SPI mode uses one data line")
         self._check_clock()
-        reply = self.card.exchange(data, now)
+        spi1 = self.chip.spi1
+        reply = self.card.exchange(data, now, lambda i: spi1.byte_clocked_at(i, now))
         if fpioa.function_of_pad(PAD_SD_MISO) != FUNC_SPI1_D1:
             return np.full(len(data), 0xFF, dtype=np.uint8)   # nothing routes the card's answer back
         return reply

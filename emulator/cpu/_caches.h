@@ -15,8 +15,8 @@
  * and a store miss acquires it writable at once (NtoT).
  *
  * Only SRAM's cached view (0x8000_0000, the 6 MiB and the AI SRAM's 2 MiB) goes through them; an
- * access to the uncached view (0x4000_0000) is a single bus round trip each. Device accesses are
- * the bus's (not timed here). The two harts' data caches are kept coherent as the coherence hub
+ * access to the uncached view (0x4000_0000) is a single bus round trip each, and so is an access to a
+ * device's registers, each device window with the cost of its bus's path (caches.py). The two harts' data caches are kept coherent as the coherence hub
  * (TLBroadcast) keeps them: each acquire probes the other cache, to Branch for a load and to Nothing
  * for a store, and a dirty copy probed is written back first. The DMA is coherent with the caches
  * and leaves their state as it is (docs/design/timing.md, "DMA and the caches").
@@ -33,6 +33,7 @@
 #define L1_WAYS 8
 #define L1_LINE_SHIFT 6
 #define L1_HOT 512      /* the hot lines' table: a line's slot is its number's low 9 bits */
+#define L1_DEVICE_WINDOWS 32   /* device windows timed: the Dock has 28 */
 
 typedef struct {
     uint64_t line[L1_SETS * L1_WAYS];   /* (address >> 6) + 1 of the line each way holds; 0: invalid */
@@ -64,6 +65,11 @@ typedef struct l1_caches {
     uint32_t flush_per_way;       /* FENCE.I's walk: cycles per way of every set */
     uint32_t acquired;            /* a line came into the data cache since its last flush (Rocket's !flushed) */
     uint64_t flushes;             /* statistics: FENCE.I flushes that walked the data cache */
+    uint32_t device_windows;      /* device windows below in use */
+    uint32_t pad2;
+    uint64_t device_base[L1_DEVICE_WINDOWS], device_size[L1_DEVICE_WINDOWS];
+    uint32_t device_cost[L1_DEVICE_WINDOWS];   /* cycles an access to the window's registers takes beyond a hit */
+    uint64_t device_accesses;     /* statistics */
 } l1_caches_t;
 
 /* The way of `set` holding `line`, or -1. */
@@ -189,10 +195,15 @@ static __attribute__((noinline, unused)) uint64_t l1_data_lookup(l1_caches_t *c,
         c->uncached_accesses++;
         return c->uncached;
     }
+    for (uint32_t w = 0; w < c->device_windows; w++)
+        if (address - c->device_base[w] < c->device_size[w]) {
+            c->device_accesses++;
+            return c->device_cost[w];
+        }
     return 0;
 }
 
-/* The cycles a load or store at `address` takes beyond a cache hit (0 outside SRAM's two views). A hot
+/* The cycles a load or store at `address` takes beyond a cache hit (0 outside SRAM and devices). A hot
  * line is in the cached view, so an address elsewhere never matches one. */
 static inline __attribute__((always_inline)) uint64_t l1_data(l1_caches_t *c, uint64_t address, int store)
 {

@@ -1079,6 +1079,7 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
             int w = device_window(f, a, nbytes); \
             if (w >= 0) { \
                 COUNT(); \
+                CACHED(a, storing); \
                 if (!(storing) && f->rep.armed && in->pc == f->rep.pc && a == f->rep.address \
                         && nbytes == f->rep.width && cycles < f->rep.until) { \
                     f->rep.answered++; \

@@ -23,14 +23,31 @@ latencies, and the calibration (issue 31) compares whole programs against measur
 - REPLAY: the blocking data cache nacks the access that missed and Rocket replays it from the
   write-back stage, refetching it through the 2-cycle instruction cache: a mispredict's 3 cycles
   (redirect from memory, timing.py) and one more.
+
+A device register access leaves the core as the uncached view's does (a TileLink Get or Put, one in
+flight: DCache.scala's nMMIOs = 1, a second access nacked and replayed until the first is answered),
+and costs that round trip plus the path to the bus its registers sit on (memory_map.py, from the SDK's
+platform.h). No latency is published for any of them; estimated, each crossing a cycle each way:
+
+- TileLink (CLINT, PLIC, UARTHS, GPIOHS): Rocket's own bus, without the TileLink-to-AXI crossing the
+  uncached view pays: TILELINK_SAVING cycles less;
+- AXI (the FFT's registers): as the uncached view;
+- AHB (the DMAC): the AXI-to-AHB bridge, AHB_BRIDGE cycles more;
+- APB0/1/2 (every other block): the AXI-to-APB bridge, APB_BRIDGE cycles more, and the APB transfer's
+  setup and access phases, two cycles of the APB's clock (AMBA APB Protocol Specification; the
+  DesignWare blocks add no wait states), so 2 x SYSCTL's divider of that APB (1 at reset).
+
+The flat charge is what a driver's register accesses see: Rocket does not wait for a lone device
+store, nor for a load until its value is used, but drivers use a status at once and make the next
+access to the device at once, which waits for the one before it.
 """
 from __future__ import annotations
 
 import ctypes
 from dataclasses import dataclass
 
-from ..memory_map import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE
-from .native import L1_LINE_SHIFT, L1_SETS, L1_WAYS, L1Caches
+from ..memory_map import AHB, APBS, AXI, SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE, TILELINK
+from .native import L1_DEVICE_WINDOWS, L1_LINE_SHIFT, L1_SETS, L1_WAYS, L1Caches
 
 LINE_BYTES = 1 << L1_LINE_SHIFT
 BEAT_BYTES = 8
@@ -42,6 +59,11 @@ ICACHE_LATENCY = 2        # Frontend.scala: ICache(latency = 2): the fetch read 
 # only when neither s1 nor s2 holds one)
 FLUSH_PER_WAY = 3
 LFSR_RESET = 1            # Chisel's LFSR16 starts at 1
+TILELINK_SAVING = 2       # estimated: see the module's docstring
+AHB_BRIDGE = 2            # estimated
+APB_BRIDGE = 2            # estimated
+APB_TRANSFER = 2          # AMBA APB: setup and access phases, in the APB's clock cycles
+APB_DIVIDER_MAX = 8       # SYSCTL's apbN_clk_sel is 3 bits: ACLK / 1 .. 8
 
 
 @dataclass(frozen=True)
@@ -53,13 +75,27 @@ class L1Timing:
     fetch_fill: int = BUS_ROUND_TRIP + LINE_BEATS + ICACHE_LATENCY
     uncached: int = BUS_ROUND_TRIP + 1 + REPLAY
     flush_per_way: int = FLUSH_PER_WAY
+    tilelink: int = BUS_ROUND_TRIP + 1 + REPLAY - TILELINK_SAVING
+    axi: int = BUS_ROUND_TRIP + 1 + REPLAY
+    ahb: int = BUS_ROUND_TRIP + 1 + REPLAY + AHB_BRIDGE
+
+    def apb(self, divider: int) -> int:
+        """An APB register access with the APB clocked at ACLK / divider."""
+        return self.axi + APB_BRIDGE + APB_TRANSFER * divider
+
+    def device(self, bus: str, apb_dividers: tuple[int, int, int]) -> int:
+        """Cycles a register access on `bus` (memory_map's names) takes beyond a cache hit."""
+        if bus in APBS:
+            return self.apb(apb_dividers[APBS.index(bus)])
+        return {TILELINK: self.tilelink, AXI: self.axi, AHB: self.ahb}[bus]
 
     @property
     def worst_instruction(self) -> int:
         """The most a load's, store's or fetch's caches can add: a fetch miss, and a data miss whose
         victim and whose copy in the other hart's cache are both written back first (or an uncached
-        access). FENCE.I's flush is not counted: no poll loop holds one."""
-        return self.fetch_fill + max(self.data_fill + 2 * self.write_back, self.uncached)
+        or device access). FENCE.I's flush is not counted: no poll loop holds one."""
+        return self.fetch_fill + max(self.data_fill + 2 * self.write_back, self.uncached, self.ahb,
+                                     self.apb(APB_DIVIDER_MAX))
 
 
 ROCKET_L1 = L1Timing()
@@ -74,6 +110,7 @@ class CacheStatistics:
     write_backs: int      # dirty lines written back (evicted, read by the other hart, flushed)
     uncached_accesses: int
     flushes: int          # FENCE.I's walks of the data cache
+    device_accesses: int  # loads and stores of device registers
 
 
 class HartCaches:
@@ -90,6 +127,15 @@ class HartCaches:
         state.flush_per_way = figures.flush_per_way
         self.reset()
 
+    def time_devices(self, windows: list[tuple[int, int, int]]) -> None:
+        """The device windows (base, size, cycles an access takes beyond a hit) accesses are charged in."""
+        if len(windows) > L1_DEVICE_WINDOWS:
+            raise ValueError(f"{len(windows)} device windows: the caches time at most {L1_DEVICE_WINDOWS}")
+        state = self.state
+        for n, (base, size, cost) in enumerate(windows):
+            state.device_base[n], state.device_size[n], state.device_cost[n] = base, size, cost
+        state.device_windows = len(windows)
+
     def pair_with(self, other: "HartCaches") -> None:
         """The other hart's caches, which this hart's stores and misses keep coherent with."""
         self.state.peer = ctypes.pointer(other.state)
@@ -103,13 +149,14 @@ class HartCaches:
             cache.lfsr = LFSR_RESET
         self.state.fetch_line = 0
         self.state.uncached_accesses = 0
+        self.state.device_accesses = 0
         self.state.acquired = 0
         self.state.flushes = 0
 
     def statistics(self) -> CacheStatistics:
         i, d = self.state.icache, self.state.dcache
         return CacheStatistics(i.lookups, i.misses, d.lookups, d.misses, d.write_backs,
-                               self.state.uncached_accesses, self.state.flushes)
+                               self.state.uncached_accesses, self.state.flushes, self.state.device_accesses)
 
     def _slot(self, address: int, data: bool) -> int | None:
         """The slot (set x ways + way) of the cache holding the line of `address`, or None."""

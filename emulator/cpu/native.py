@@ -26,6 +26,7 @@ class Predictor(ctypes.Structure):
 
 
 L1_SETS, L1_WAYS, L1_LINE_SHIFT, L1_HOT = 64, 8, 6, 512     # _caches.h's geometry, its hot lines' table
+L1_DEVICE_WINDOWS = 32    # _caches.h: device windows timed
 
 
 class L1Cache(ctypes.Structure):
@@ -45,7 +46,11 @@ L1Caches._fields_ = [("icache", L1Cache), ("dcache", L1Cache), ("fetch_line", ct
                      ("cached_size", ctypes.c_uint64), ("uncached_base", ctypes.c_uint64),
                      ("uncached_size", ctypes.c_uint64), ("data_fill", ctypes.c_uint32),
                      ("write_back", ctypes.c_uint32), ("fetch_fill", ctypes.c_uint32), ("uncached", ctypes.c_uint32),
-                     ("uncached_accesses", ctypes.c_uint64), ("flush_per_way", ctypes.c_uint32), ("acquired", ctypes.c_uint32), ("flushes", ctypes.c_uint64)]
+                     ("uncached_accesses", ctypes.c_uint64), ("flush_per_way", ctypes.c_uint32), ("acquired", ctypes.c_uint32), ("flushes", ctypes.c_uint64),
+                     ("device_windows", ctypes.c_uint32), ("pad2", ctypes.c_uint32),
+                     ("device_base", ctypes.c_uint64 * L1_DEVICE_WINDOWS),
+                     ("device_size", ctypes.c_uint64 * L1_DEVICE_WINDOWS),
+                     ("device_cost", ctypes.c_uint32 * L1_DEVICE_WINDOWS), ("device_accesses", ctypes.c_uint64)]
 
 
 class Counter(ctypes.Structure):

@@ -14,9 +14,14 @@ Layer Simplified Specification describes SPI mode:
   (CSD/CID as 16-byte data blocks), CMD13 (R2), CMD16 (block length; fixed 512 on
   SDHC), CMD17/CMD18 (single/multiple block read, until CMD12), CMD24/CMD25
   (single/multiple block write), CMD12 (stop: a stuff byte, R1, then busy);
-- Ncr: responses come NCR_BYTES bytes after the command; read data come NAC_BYTES
-  bytes after the response (and after the previous block in a CMD18 stream), as a
-  0xFE token, 512 bytes and their CRC16 (the "varying-nac" fault varies the gap);
+- Ncr: responses come NCR_BYTES bytes after the command;
+- Nac: a read's first data block comes once the card has read it from its flash: the
+  card answers 0xFF until `access_time` after the command's last bit (the read access
+  time, READ_ACCESS_TIME by default, --sd-access-time), then NAC_BYTES more bytes of
+  0xFF, a 0xFE token, 512 bytes and their CRC16. Further blocks of a CMD18 stream follow
+  NAC_BYTES after the previous one (a card reads the next block while it sends one: a
+  measured 4 GB card waits only before the first, cqr113.github.io 2018); the
+  "varying-nac" fault varies that gap. The CSD and CID come after NAC_BYTES;
 - CRC7 is checked on CMD0 and CMD8 always, and on every command after CMD59(1);
   a bad CRC answers R1 with the CRC-error bit and the command is not executed.
   CRC16 of written blocks is checked while CRC checking is on;
@@ -56,7 +61,15 @@ from ..vtime import PS_PER_MS, PS_PER_US, Time
 
 BLOCK = 512
 NCR_BYTES = 1            # bytes of 0xFF between a command and its response (spec: 1..8)
-NAC_BYTES = 8            # bytes of 0xFF between a read command's response and its data token
+NAC_BYTES = 8            # bytes of 0xFF before a data token once the data are ready
+# A read's access time, from the command to its first block ready to send. Real cards differ: the SD
+# specification bounds it at 100 ms for SDHC (Physical Layer Simplified Specification, "Read" timeouts)
+# and CSD 2.0 states 1 ms (TAAC 0x0E) whatever the card; a Toshiba 4 GB card was measured at about
+# 0.6 ms (cqr113.github.io, 2018, CMD17); the card of the thesis's Dock took 0.547 ms a block for its
+# 367-block texture and 0.552 ms for its 78-block model, each about 0.2 ms more than this model with
+# no access time takes for the same reads (docs/measurements.md), so that card's access time was about
+# 0.2 ms. That card, the only one measured on a Dock, sets the default.
+READ_ACCESS_TIME: Time = 200 * PS_PER_US
 VARYING_NAC_MAX = 24     # the "varying-nac" fault's longest gap: 1 .. 24 bytes, every value in 24 blocks
 STOP_BUSY_BYTES = 4      # busy (0x00) bytes after CMD12
 WRITE_BUSY: Time = 250 * PS_PER_US     # programming time after a written block
@@ -222,9 +235,14 @@ class SdCard:
     """The card's SPI-mode state machine. `exchange` takes MOSI bytes and returns MISO bytes."""
 
     def __init__(self, image: SdImage, warn=None, faults: frozenset[str] = frozenset(), strict: bool = False,
-                 on_rule: Callable[[str, Time, str], None] | None = None) -> None:
+                 on_rule: Callable[[str, Time, str], None] | None = None,
+                 access_time: Time = READ_ACCESS_TIME) -> None:
         """warn(text) hears the card's warnings; on_rule(kind, now, text), instead, a broken timing
-        rule (RULE_POWER_UP_CLOCKS), enforced when `strict` (see the module comment)."""
+        rule (RULE_POWER_UP_CLOCKS), enforced when `strict` (see the module comment); `access_time`
+        is the read access time (Nac) before a read's first block."""
+        if access_time < 0:
+            raise BadInput(f"SD card read access time {access_time} ps is negative")
+        self.access_time = access_time
         unknown = set(faults) - set(FAULTS)
         if unknown:
             raise BadInput(f"unknown SD card fault(s): {', '.join(sorted(unknown))} (known: {', '.join(FAULTS)})")
@@ -249,6 +267,9 @@ class SdCard:
         self._write_mode: str | None = None   # "single" or "multi" while a write command is active
         self._write_buffer: bytearray | None = None
         self._busy_until: Time = 0
+        # a read's first block is held until its access time has passed: where it begins in _out, and when
+        self._hold_at: int | None = None
+        self._hold_until: Time = 0
         self.commands_seen: list[int] = []
 
     # --- chip select ---------------------------------------------------------------
@@ -263,22 +284,26 @@ class SdCard:
 
     # --- byte exchange -------------------------------------------------------------------
 
-    def exchange(self, mosi: np.ndarray, now: Time) -> np.ndarray:
-        """The card's answer to a run of bytes clocked while it is selected. (Worked on as bytes:
-        most runs are one byte long, where numpy's per-call cost would dominate.)"""
+    def exchange(self, mosi: np.ndarray, now: Time, clocked_at: Callable[[int], Time] | None = None) -> np.ndarray:
+        """The card's answer to a run of bytes clocked while it is selected, handed over at `now`;
+        clocked_at(i) says when byte i was clocked (else: all at `now`). (Worked on as bytes: most
+        runs are one byte long, where numpy's per-call cost would dominate.)"""
         n = len(mosi)
         if not self.selected:
             self.powerup_clocks += 8 * n
             return np.full(n, 0xFF, dtype=np.uint8)
         data = mosi.tobytes()
         out = bytearray(b"\xff" * n)
+        at = clocked_at or (lambda i: now)
         i = 0
         while i < n:
             if self._write_buffer is not None or (self._write_mode and not self._command):
-                out[i] = self._write_byte(data[i], now)
+                out[i] = self._write_byte(data[i], at(i))
                 i += 1
                 continue
             pending = len(self._out) - self._out_pos
+            if self._hold_at is not None:
+                pending = min(pending, self._hold_at - self._out_pos)
             if pending and not self._command:
                 # bulk path: while the host only clocks 0xFF, stream what the card has to say
                 run = data[i:i + pending]
@@ -289,12 +314,16 @@ class SdCard:
                     i += take
                     self._refill_stream()
                     continue
-            out[i] = self._next_out_byte(now)
-            self._command_byte(data[i], now)
+            out[i] = self._next_out_byte(at(i))
+            self._command_byte(data[i], at(i))
             i += 1
         return np.frombuffer(out, dtype=np.uint8)
 
     def _next_out_byte(self, now: Time) -> int:
+        if self._hold_at is not None and self._out_pos >= self._hold_at:
+            if now < self._hold_until:
+                return 0xFF    # still reading the block from its flash
+            self._hold_at = None
         if self._out_pos < len(self._out):
             byte = self._out[self._out_pos]
             self._out_pos += 1
@@ -303,10 +332,16 @@ class SdCard:
         return 0x00 if now < self._busy_until else 0xFF   # busy while programming a block
 
     def _say(self, data: bytes) -> None:
-        if self._out_pos >= len(self._out):
+        if self._out_pos >= len(self._out) and self._hold_at is None:
             self._out = bytearray()
             self._out_pos = 0
         self._out += data
+
+    def _hold_next(self, now: Time) -> None:
+        """What is said next waits for the read access time from `now` (a read command's last bit)."""
+        if self.access_time:
+            self._hold_at = len(self._out)
+            self._hold_until = now + self.access_time
 
     def _refill_stream(self) -> None:
         """A CMD18 stream keeps producing blocks as the host reads them."""
@@ -370,6 +405,7 @@ class SdCard:
             self._reading = None
             self._out = bytearray()
             self._out_pos = 0
+            self._hold_at = None
             self._say(b"\xff" + bytes([self._r1()]) + b"\x00" * STOP_BUSY_BYTES)
             return
         crc_ok = (crc7(frame[:5]) << 1 | 1) == frame[5]
@@ -430,6 +466,7 @@ class SdCard:
                 self._respond(R1_PARAMETER)
                 return
             self._respond(0)
+            self._hold_next(now)
             self._queue_block(argument)
             if index == 18:
                 self._reading = argument + 1

@@ -140,6 +140,8 @@ class SpiController(Peripheral):
         super().__init__(ports)
         self.device_for_ss = lambda ss: None   # set by the board's wiring
         self._train: FrameTrain | None = None
+        # while received frames are handed to the device: their train, the first one's index, bytes a frame
+        self._delivering: tuple[FrameTrain, int, int] | None = None
         self._held: list[int] = []               # frames written while no slave is selected
         self._rx: list[int] = []
         self._raw_int = 0
@@ -314,6 +316,16 @@ class SpiController(Peripheral):
             if device is not None:
                 device.spi_select(True, now)
 
+    def byte_clocked_at(self, i: int, now: Time) -> Time:
+        """While frames are handed to the selected device (its spi_transfer): when byte i of them had
+        been clocked (its frame's last edge), which can be before `now`, the moment they are handed
+        over; `now` outside a hand-over. A device whose answer depends on time (the SD card's read
+        access time) reckons it from this."""
+        if self._delivering is None:
+            return now
+        train, first, nbytes = self._delivering
+        return train.edge(first + i // nbytes + 1)
+
     def is_data_register(self, address: int) -> bool:
         return self.BASE + DR_FIRST <= address <= self.BASE + DR_LAST
 
@@ -353,7 +365,12 @@ class SpiController(Peripheral):
             data = frames.astype(">u4").view(np.uint8).reshape(-1, 4)[:, 4 - nbytes:].reshape(-1)
         device = self._selected
         if device is not None:
-            reply = device.spi_transfer(data, FORMAT_LANES[self.frame_format], now)
+            train = self._train
+            self._delivering = (train, train.delivered - len(frames), nbytes) if train is not None else None
+            try:
+                reply = device.spi_transfer(data, FORMAT_LANES[self.frame_format], now)
+            finally:
+                self._delivering = None
         else:
             reply = np.full(len(data), 0xFF, dtype=np.uint8)  # MISO pulled up: nothing answers
         train = self._train

@@ -136,6 +136,7 @@ class Sysctl(Peripheral):
         reset_chip: soft_reset resets the whole chip (cause "soft") at this time."""
         super().__init__(ports)
         self.clock_changed = clock_changed
+        self.apb_changed: Callable[[], None] | None = None   # an APB clock divider changed (the bus's timing)
         self.reset_block = reset_block
         self.reset_chip = reset_chip
         self.usable: set[str] = set()   # gates open and not in reset, kept current on writes
@@ -188,6 +189,12 @@ class Sysctl(Peripheral):
         """APB0's clock: ACLK / (clk_sel0.apb0_clk_sel + 1) (the SDK's sysctl_clock_get_freq,
         SYSCTL_CLOCK_APB0; apb0_clk_sel is clk_sel0[5:3]). UART1-3 count their bit times in it."""
         return self.cpu_hz() // (field(self.values[CLK_SEL0], 3, 3) + 1)
+
+    def apb_dividers(self) -> tuple[int, int, int]:
+        """What ACLK is divided by for APB0, APB1 and APB2: clk_sel0's apb0/1/2_clk_sel ([5:3], [8:6],
+        [11:9]) + 1 (sysctl_clock_get_freq, SYSCTL_CLOCK_APBn)."""
+        sel = self.values[CLK_SEL0]
+        return (field(sel, 3, 3) + 1, field(sel, 6, 3) + 1, field(sel, 9, 3) + 1)
 
     def wdt_hz(self, index: int) -> int:
         """WDTn's clock: IN0 / ((clk_th6 byte n + 1) x 2) (sysctl_clock_get_freq, SYSCTL_CLOCK_WDTn)."""
@@ -285,10 +292,12 @@ class Sysctl(Peripheral):
                     raise HardwareMisuse("SYSCTL.clk_sel0: ACLK switched to PLL0 before PLL0 locked (pll_lock[1:0] != 3)")
                 if not self.values[PLL0] >> PLL_OUT_EN_BIT & 1:
                     raise HardwareMisuse("SYSCTL.clk_sel0: ACLK switched to PLL0 while PLL0's output is disabled (out_en = 0)")
-            old_hz = self.cpu_hz()
+            old_hz, old_apb = self.cpu_hz(), self.apb_dividers()
             self.values[CLK_SEL0] = value
             if self.cpu_hz() != old_hz:
                 self.clock_changed(now)
+            if self.apb_dividers() != old_apb and self.apb_changed is not None:
+                self.apb_changed()
             return
         if offset == SOFT_RESET:
             self.values[offset] = value & 1

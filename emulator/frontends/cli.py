@@ -14,8 +14,9 @@ from typing import TextIO
 from k210_common.exit_status import (BY_CODE, EXIT_BAD_INPUT, EXIT_GOLDEN_MISMATCH, EXIT_INTERNAL, EXIT_OK,
                                      EXIT_USAGE, EXIT_WRITE_FAILED)
 from ..errors import BadInput, BoardStop, Interrupted
-from ..vtime import NEVER, PS_PER_MS, PS_PER_S, Time, from_seconds, ms, to_seconds
+from ..vtime import NEVER, PS_PER_MS, PS_PER_S, PS_PER_US, Time, from_seconds, ms, to_seconds
 from ..board.scheduler import UNLIMITED_FRAMES
+from ..devices.sdcard import READ_ACCESS_TIME
 from .options import (DEFAULT_FRAMES, MAX_PAD_CHANGES_IN_RUN_JSON, PROG, build_parser, golden_count, grab_problem,
                       option_problem)
 
@@ -359,6 +360,8 @@ def run_command(args: argparse.Namespace, signals: SignalStop, opened: list) -> 
         board = Board(None if args.firmware is None else str(args.firmware), flash=flash, quantum=args.quantum, hang_budget=from_seconds(args.budget), console=console,
                       on_frame=on_frame, on_warning=terminal.warning, permissive=args.permissive,
                       sd_image=args.sd, sd_writable=args.sd_writable, sd_faults=frozenset(args.sd_fault),
+                      sd_access_time=(READ_ACCESS_TIME if args.sd_access_time is None
+                                      else round(args.sd_access_time * PS_PER_US)),
                       check_writes=args.check_writes, strict=args.strict, lcd_interface=args.lcd_interface,
                       cold=args.cold, timing=args.timing, engine=args.engine, pins=pins,
                       otp=otp, otp_source=f"--otp {args.otp}" if args.otp is not None else "")

@@ -14,7 +14,8 @@ from k210_common.exit_status import (EXIT_BAD_INPUT, EXIT_EXPECT_UNMET, EXIT_FAI
                                      EXIT_OK, EXIT_STRAY_WRITE, EXIT_TERMINATED, EXIT_TRAP, EXIT_UNMODELLED,
                                      EXIT_USAGE, EXIT_WRITE_FAILED, help_epilog)
 from ..errors import BadInput
-from ..devices.sdcard import FAULTS
+from ..devices.sdcard import FAULTS, READ_ACCESS_TIME
+from ..vtime import PS_PER_US
 from ..cpu.timing import TIMING_MODELS, TIMING_ROCKET
 from ..cpu.hart import ENGINE_FAST, ENGINES
 from ..board.wiring import LCD_8080, LCD_INTERFACES
@@ -22,6 +23,7 @@ from ..board.wiring import LCD_8080, LCD_INTERFACES
 PROG = "python -m emulator"
 MAX_QUANTUM = 1_000_000_000    # instructions per turn; the native counter's limit is 64-bit, runs need far less
 MAX_TOLERANCE = 255            # a channel of an RGB888 pixel differs by at most 255
+MAX_SD_ACCESS_US = 100_000     # the SD specification's read timeout for SDHC cards: 100 ms
 DEFAULT_FRAMES = 8
 VIEW_PORT = 8210               # --view without a port
 MAX_PAD_CHANGES_IN_RUN_JSON = 10_000    # a pin toggled for ever must not bloat run.json
@@ -34,10 +36,11 @@ EXIT_STATUS_DETAILS: dict[int, str] = {
     EXIT_INTERNAL: "an internal error of the board model",
     EXIT_USAGE: f"bad command line: an unknown option or a value out of range (`--frames`, `--quantum` 1..{MAX_QUANTUM}, "
                 f"`--budget` and `--until` above 0 and finite, `--tolerance` 0..{MAX_TOLERANCE}, `--sd-fault`, "
+                f"`--sd-access-time` 0..{MAX_SD_ACCESS_US:,} microseconds, "
                 "`--lcd-interface`, `--timing`, a `--grab`'s syntax or time, a `--pin` that is not `PAD=LEVEL@SECONDS` "
                 "with a pad 0..47), `--out` equal to or inside `--golden` or the folder of the `--sd` image, "
                 "an option without the one it needs (`--tolerance` without `--golden`, "
-                "`--sd-writable` or `--sd-fault` without `--sd`), `--until` or `--expect` with `--frames`, "
+                "`--sd-writable`, `--sd-fault` or `--sd-access-time` without `--sd`), `--until` or `--expect` with `--frames`, "
                 "`--gdb-wait` without `--gdb`, `--gdb` with `--expect`/`--fail-on`, a `--gdb` or `--view` port above "
                 "65535, `--view-paused` without `--view`, `--view` with `--gdb`, `--expect` or `--uart-script`, "
                 "`--trace-from`/`--trace-to` without `--trace-insn` or in the wrong order, a `--grab` of a symbol "
@@ -120,6 +123,18 @@ def budget_seconds(text: str) -> float:
     return value
 
 
+def access_microseconds(text: str) -> float:
+    """A finite number of microseconds, 0 to 100,000 (the SD specification's longest read access time
+    for SDHC cards)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of microseconds") from None
+    if not math.isfinite(value) or not 0 <= value <= MAX_SD_ACCESS_US:
+        raise argparse.ArgumentTypeError(f"must be 0 to {MAX_SD_ACCESS_US:,} microseconds, not {text}")
+    return value
+
+
 def port_number(text: str) -> int:
     value = _whole_number(text)
     if not 0 <= value <= 65535:
@@ -185,6 +200,10 @@ def build_parser() -> argparse.ArgumentParser:
                      help="with --sd: make the card misbehave, to test firmware error paths: "
                           "no-init (never leaves idle), bad-crc (every block's CRC16 wrong), "
                           "flaky-crc (each block's first CRC16 wrong); repeatable")
+    run.add_argument("--sd-access-time", type=access_microseconds, default=None, metavar="MICROSECONDS",
+                     help=f"with --sd: the card's read access time, from a read command to its first block "
+                          f"(default {READ_ACCESS_TIME // PS_PER_US}, the card measured on a Dock; real cards "
+                          f"take about 100 to 1,000; 0: at once)")
     run.add_argument("--frames", type=frames_count, default=None,
                      help="stop after this many frames reach the LCD (default 8; at least 1)")
     run.add_argument("--until", type=budget_seconds, default=None, metavar="SECONDS",
@@ -378,6 +397,8 @@ def option_problem(args: argparse.Namespace) -> str | None:
         return "--sd-writable needs --sd (the card image the firmware's writes would reach)"
     if args.sd is None and args.sd_fault:
         return "--sd-fault needs --sd (a card in the slot to misbehave)"
+    if args.sd is None and args.sd_access_time is not None:
+        return "--sd-access-time needs --sd (a card in the slot)"
     return output_overwrites_input(args)
 
 

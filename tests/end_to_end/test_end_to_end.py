@@ -382,6 +382,11 @@ def test_nonsense_numbers_are_refused(tmp_path, option, value):
     (["--sd", "CARD", "--sd-fault", "bogus"], "argument --sd-fault: invalid choice: 'bogus'"),
     (["--sd-fault", "no-init"], "--sd-fault needs --sd"),
     (["--sd-writable"], "--sd-writable needs --sd"),
+    (["--sd-access-time", "100"], "--sd-access-time needs --sd"),
+    (["--sd", "CARD", "--sd-access-time", "-1"], "argument --sd-access-time: must be 0 to 100,000 microseconds"),
+    (["--sd", "CARD", "--sd-access-time", "100001"], "argument --sd-access-time: must be 0 to 100,000 microseconds"),
+    (["--sd", "CARD", "--sd-access-time", "nan"], "argument --sd-access-time: must be 0 to 100,000 microseconds"),
+    (["--sd", "CARD", "--sd-access-time", "fast"], "argument --sd-access-time: 'fast' is not a number of microseconds"),
 ])
 def test_sd_options_are_checked(tmp_path, card, options, expected):
     options = [str(card) if option == "CARD" else option for option in options]

@@ -107,5 +107,7 @@ def private_bench_history(monkeypatch, folder: Path) -> None:
     not the repository's docs (for the tests that run make coremark's and make thesis-firmware's tools)."""
     from tools import bench_history
     (folder / "page.md").write_text(f"{bench_history.BEGIN}\n{bench_history.END}\n")
+    (folder / "README.md").write_text(f"{bench_history.CALIBRATION_BEGIN}\n{bench_history.CALIBRATION_END}\n")
     monkeypatch.setattr(bench_history, "HISTORY", folder / "history.jsonl")
     monkeypatch.setattr(bench_history, "PAGE", folder / "page.md")
+    monkeypatch.setattr(bench_history, "README", folder / "README.md")

@@ -9,9 +9,9 @@ import pytest
 from k210_fixtures import idle_elf, make_board  # noqa: F401
 
 from emulator.errors import BadInput
-from emulator.devices.sdcard import (BLOCK, INIT_TIME, NAC_BYTES, NCR_BYTES, RULE_POWER_UP_CLOCKS, VARYING_NAC_MAX, SdCard,
+from emulator.devices.sdcard import (BLOCK, INIT_TIME, NAC_BYTES, NCR_BYTES, READ_ACCESS_TIME, RULE_POWER_UP_CLOCKS, VARYING_NAC_MAX, SdCard,
                              SdImage, command_frame, crc7, crc16, crc16_bitwise)
-from emulator.vtime import PS_PER_S, Time
+from emulator.vtime import PS_PER_NS, PS_PER_S, PS_PER_US, Time
 
 BLOCKS = 64
 
@@ -40,15 +40,17 @@ def command(card: SdCard, index: int, argument: int, reply_bytes: int, now: Time
     return clock(card, b"\xff" * reply_bytes, now)
 
 
-def powered(image_path, writable=False, faults: frozenset[str] = frozenset()) -> SdCard:
-    card = SdCard(SdImage(image_path, writable=writable), faults=faults)
+def powered(image_path, writable=False, faults: frozenset[str] = frozenset(), access_time: Time = 0) -> SdCard:
+    """A card that has had its power-up clocks and is selected; its reads' access time 0 unless given,
+    so that tests of the byte protocol can clock every byte at one moment."""
+    card = SdCard(SdImage(image_path, writable=writable), faults=faults, access_time=access_time)
     clock(card, b"\xff" * 10)            # 80 clocks with CS high
     card.set_selected(True, 0)
     return card
 
 
-def initialised(image_path, writable=False, faults: frozenset[str] = frozenset()) -> SdCard:
-    card = powered(image_path, writable, faults)
+def initialised(image_path, writable=False, faults: frozenset[str] = frozenset(), access_time: Time = 0) -> SdCard:
+    card = powered(image_path, writable, faults, access_time)
     command(card, 0, 0, 2)
     command(card, 8, 0x1AA, 6)
     for now in (0, INIT_TIME):
@@ -191,6 +193,67 @@ def test_cmd18_streams_blocks_until_cmd12(image_path):
     # one stuff byte, R1, busy, then released
     assert after[0] == 0xFF and after[1] == 0x00
     assert after[2:6] == b"\x00" * 4 and after[6:] == b"\xff" * 6
+
+
+BYTE = 400 * PS_PER_NS      # a byte at 20 MHz
+ACCESS = 200 * PS_PER_US
+
+
+def clock_from(card: SdCard, count: int, start: Time, period: Time = BYTE) -> bytes:
+    """Clocks `count` bytes of 0xFF in one batch, byte i at start + i x period, handed over after the last."""
+    data = np.full(count, 0xFF, dtype=np.uint8)
+    return card.exchange(data, start + count * period, lambda i: start + i * period).tobytes()
+
+
+def test_a_read_s_first_block_waits_for_the_access_time(image_path):
+    card = initialised(image_path, access_time=ACCESS)
+    clock(card, command_frame(17, 5), 0)                   # the command's last bit at 0
+    reply = clock_from(card, 1200, BYTE)
+    assert reply[NCR_BYTES] == 0x00                          # R1 at once
+    ready = -(-ACCESS // BYTE)                               # the first byte clocked at or after 200 us
+    assert reply[NCR_BYTES + 1:ready - 1] == b"\xff" * (ready - 2 - NCR_BYTES)
+    token = ready - 1 + NAC_BYTES
+    assert reply[ready - 1:token] == b"\xff" * NAC_BYTES
+    assert reply[token] == 0xFE and reply[token + 1:token + 1 + BLOCK] == _pattern(5)
+
+
+def test_a_slow_poller_gets_the_token_by_time_not_by_bytes(image_path):
+    """A host that polls one byte every 50 us (the thesis's firmware calls a function per byte) sees the
+    block after the access time, whatever few bytes it clocked meanwhile."""
+    card = initialised(image_path, access_time=ACCESS)
+    clock(card, command_frame(17, 3), 0)
+    polls, now = [], 0
+    while 0xFE not in polls:
+        now += 50 * PS_PER_US
+        polls += clock(card, b"\xff", now)
+    assert now == ACCESS + NAC_BYTES * 50 * PS_PER_US      # released by the poll at 200 us, then the gap
+
+
+def test_a_stream_waits_once_then_block_follows_block(image_path):
+    card = initialised(image_path, access_time=ACCESS)
+    clock(card, command_frame(18, 10), 0)
+    per_block = NAC_BYTES + 1 + BLOCK + 2
+    ready = -(-ACCESS // BYTE)
+    stream = clock_from(card, ready + 3 * per_block, BYTE)[ready - 1:]
+    for n in range(3):
+        chunk = stream[n * per_block:(n + 1) * per_block]
+        assert chunk[NAC_BYTES] == 0xFE and chunk[NAC_BYTES + 1:NAC_BYTES + 1 + BLOCK] == _pattern(10 + n)
+
+
+def test_cmd12_during_the_access_time_drops_the_block(image_path):
+    card = initialised(image_path, access_time=ACCESS)
+    clock(card, command_frame(18, 10), 0)
+    clock(card, b"\xff" * 4, 10 * PS_PER_US)
+    clock(card, command_frame(12, 0), 20 * PS_PER_US)
+    after = clock(card, b"\xff" * 8, 30 * PS_PER_US)
+    assert after[:6] == b"\xff\x00" + b"\x00" * 4 and after[6:] == b"\xff\xff"
+    assert 0xFE not in clock(card, b"\xff" * 600, ACCESS * 2)
+
+
+def test_the_default_access_time_is_the_dock_card_s(image_path):
+    assert SdCard(SdImage(image_path)).access_time == READ_ACCESS_TIME == 200 * PS_PER_US
+    with pytest.raises(BadInput, match="negative"):
+        SdCard(SdImage(image_path), access_time=-1)
 
 
 def test_varying_nac_gives_every_gap_from_1_to_its_maximum_in_a_stream(image_path):

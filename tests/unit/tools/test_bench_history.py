@@ -1,22 +1,33 @@
 """make bench's record (tools/bench_history.py): a line of JSON a run in docs/bench-history.jsonl, and
-docs/measurements.md's table generated from the latest line."""
+docs/measurements.md's tables and the README's calibration table generated from the latest lines."""
 from __future__ import annotations
 
 import json
 
+import pytest
+
 from tools import bench_history
+
+
+@pytest.fixture
+def private(tmp_path, monkeypatch):
+    """A history, a page and a README of the test's own: (history, page, readme)."""
+    history, page, readme = tmp_path / "history.jsonl", tmp_path / "page.md", tmp_path / "README.md"
+    page.write_text(f"# page\n\n{bench_history.BEGIN}\nold\n{bench_history.END}\n\nafter\n")
+    readme.write_text(f"# readme\n\n{bench_history.CALIBRATION_BEGIN}\n{bench_history.CALIBRATION_END}\n")
+    history.write_text("")
+    monkeypatch.setattr(bench_history, "HISTORY", history)
+    monkeypatch.setattr(bench_history, "PAGE", page)
+    monkeypatch.setattr(bench_history, "README", readme)
+    return history, page, readme
 
 
 def test_the_pages_table_is_the_latest_runs(capsys):
     assert bench_history.main(["--check"]) == 0, capsys.readouterr().out
 
 
-def test_a_run_is_appended_and_the_table_follows_it(tmp_path, monkeypatch, capsys):
-    history, page = tmp_path / "history.jsonl", tmp_path / "page.md"
-    page.write_text(f"# page\n\n{bench_history.BEGIN}\nold\n{bench_history.END}\n\nafter\n")
-    history.write_text("")
-    monkeypatch.setattr(bench_history, "HISTORY", history)
-    monkeypatch.setattr(bench_history, "PAGE", page)
+def test_a_run_is_appended_and_the_table_follows_it(private, capsys):
+    history, page, _ = private
     results = {"firmware": {"real_time_factor": 1.25, "host_ms_per_frame": 6.1}, "raw_unicorn_mips": 2600.0,
                "output_memory": {"10000": {"rss_after_mb": 69.4}}}
     line = bench_history.append(results)
@@ -47,15 +58,11 @@ def test_the_host_cost_of_a_cpu_fed_spi_fifo_is_stated():
     assert "feeds an SPI FIFO from the CPU" in guide and "DMA" in guide
 
 
-def test_the_thesis_and_the_settings_tables_come_from_their_latest_runs(tmp_path, monkeypatch):
+def test_the_thesis_and_the_settings_tables_come_from_their_latest_runs(private):
     """The page's other tables are data too (issue 32: no narrated runs): the thesis's spans beside the
     speed run's, and each precision setting's cost and PSNR from the latest full sweep, even when a
     later run measured speed only."""
-    history, page = tmp_path / "history.jsonl", tmp_path / "page.md"
-    page.write_text(f"{bench_history.BEGIN}\n{bench_history.END}\n")
-    history.write_text("")
-    monkeypatch.setattr(bench_history, "HISTORY", history)
-    monkeypatch.setattr(bench_history, "PAGE", page)
+    history, page, _ = private
 
     def sweep(setting, mode, scene, cycles, ideal):
         return {"scene": scene, "scale": 0.9, "mode": mode, "setting": setting, "instructions_hart0": cycles // 2,
@@ -75,12 +82,8 @@ def test_the_thesis_and_the_settings_tables_come_from_their_latest_runs(tmp_path
     assert bench_history.main(["--check"]) == 0
 
 
-def test_the_coremark_table_comes_from_the_latest_coremark_run(tmp_path, monkeypatch):
-    history, page = tmp_path / "history.jsonl", tmp_path / "page.md"
-    page.write_text(f"{bench_history.BEGIN}\n{bench_history.END}\n")
-    history.write_text("")
-    monkeypatch.setattr(bench_history, "HISTORY", history)
-    monkeypatch.setattr(bench_history, "PAGE", page)
+def test_the_coremark_table_comes_from_the_latest_coremark_run(private):
+    history, page, _ = private
     run = {"timing": "rocket", "cpu_hz": 390_000_000, "iterations": 10000, "iterations_per_second": 832.0,
            "coremark_per_mhz": 2.1333, "instructions": 3_000_000_000, "virtual_s": 12.0, "host_wall_s": 10.0}
     bench_history.append(None, coremark=[run])
@@ -89,13 +92,36 @@ def test_the_coremark_table_comes_from_the_latest_coremark_run(tmp_path, monkeyp
     assert "| rocket | 2.133 | 1.19-1.23 | 832.0 | 300 million | 1.20 |" in text
 
 
-def test_the_thesis_firmware_table_comes_from_its_latest_run(tmp_path, monkeypatch):
-    history, page = tmp_path / "history.jsonl", tmp_path / "page.md"
-    page.write_text(f"{bench_history.BEGIN}\n{bench_history.END}\n")
-    history.write_text("")
-    monkeypatch.setattr(bench_history, "HISTORY", history)
-    monkeypatch.setattr(bench_history, "PAGE", page)
+def test_the_thesis_firmware_table_comes_from_its_latest_run(private):
+    history, page, _ = private
     runs = [{"model": "A", "thesis_ms": 344.3, "timing": "rocket", "start_up_ms": 254.37},
             {"model": "A", "thesis_ms": 344.3, "timing": "ipc1", "start_up_ms": 231.84}]
     bench_history.append(None, thesis_firmware=runs)
-    assert "| A | 344.3 ms | 254.4 ms (0.74) | 231.8 ms (0.67) |" in page.read_text()
+    assert "| model A: start-up to its main loop | 344.3 ms | 254.4 ms (0.74) | 231.8 ms (0.67) |" in page.read_text()
+
+
+def test_the_readme_s_calibration_table_sets_the_default_model_against_the_chip(private, capsys):
+    """Issue 31: the calibration table in the README, each span the chip was measured on with its
+    source, from the latest CoreMark and thesis-firmware runs under the default timing."""
+    _, _, readme = private
+    coremark = [{"timing": "rocket", "cpu_hz": 390_000_000, "iterations": 10000, "iterations_per_second": 832.0,
+                 "coremark_per_mhz": 2.1333, "instructions": 3_000_000_000, "virtual_s": 12.0, "host_wall_s": 10.0},
+                {"timing": "ipc1", "coremark_per_mhz": 2.5, "cpu_hz": 1, "iterations": 1, "instructions": 1,
+                 "virtual_s": 1.0, "host_wall_s": 1.0}]
+    thesis = [{"model": "A", "thesis_ms": 344.3, "timing": "rocket", "start_up_ms": 347.6,
+               "thesis_sd_phases_ms": {"set_up": 32.35, "texture": 200.75}, "sd_phases_ms": {"set_up": 28.04,
+                                                                                          "texture": 205.17}},
+              {"model": "C", "thesis_ms": 87.8, "timing": "rocket", "start_up_ms": 88.5, "thesis_sd_phases_ms": {}},
+              {"model": "C", "thesis_ms": 87.8, "timing": "ipc1", "start_up_ms": 68.1}]
+    bench_history.append(None, coremark=coremark)
+    bench_history.append(None, thesis_firmware=thesis)
+    text = readme.read_text()
+    assert "| CoreMark/MHz | 1.74-1.79 | 2.133 | 1.19-1.23 | github.com/PaulStoffregen/CoreMark issue 1 (GCC 8.2) |" in text
+    assert "| thesis firmware, model A: start-up to its main loop | 344.3 ms | 347.6 ms | 1.01 |" in text
+    assert "| thesis firmware, model A: SD card set-up to the root directory | 32.35 ms | 28.0 ms | 0.87 |" in text
+    assert "| thesis firmware, model A: SD texture read | 200.75 ms | 205.2 ms | 1.02 |" in text
+    assert "| thesis firmware, model C: start-up to its main loop | 87.8 ms | 88.5 ms | 1.01 |" in text
+    assert "68.1" not in text                                   # the default timing's runs only
+    assert text.startswith("# readme\n") and bench_history.main(["--check"]) == 0
+    readme.write_text(text.replace("347.6", "300.0"))
+    assert bench_history.main(["--check"]) == 1 and "README.md" in capsys.readouterr().out
