@@ -253,8 +253,10 @@ def thesis_spans(runs: list[dict], timing: str) -> list[tuple[str, float, float 
             continue
         spans.append((f"thesis firmware, model {run['model']}: start-up to its main loop", run["thesis_ms"],
                       run.get("start_up_ms")))
-        for phase, dock_ms in run.get("thesis_sd_phases_ms", {}).items():
-            spans.append((f"thesis firmware, model {run['model']}: {PHASE_NAMES.get(phase, phase)}", dock_ms,
+        dock_phases = run.get("thesis_sd_phases_ms", {})
+        for phase in (name for name in PHASE_NAMES if name in dock_phases):    # in the thesis's order
+            dock_ms = dock_phases[phase]
+            spans.append((f"thesis firmware, model {run['model']}: {PHASE_NAMES[phase]}", dock_ms,
                           run.get("sd_phases_ms", {}).get(phase)))
     return spans
 
