@@ -25,7 +25,7 @@ FW_ORDER := boot clocks console crc errors \
             raster_lines \
             render render_triangles render_light render_texels render_clip render_wireframe \
             render_edges \
-            scene sd sd_read sd_command sd_spi spi_dma timer trap vertex
+            scene sd sd_read sd_command sd_spi spi_dma timer trap vertex depth_check
 FW_SRCS := $(wildcard firmware/*.S)
 ifneq ($(sort $(FW_ORDER)),$(sort $(patsubst firmware/%.S,%,$(FW_SRCS))))
 $(error FW_ORDER (Makefile) must list every firmware/*.S and no other)

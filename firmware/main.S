@@ -150,6 +150,7 @@ main_hart0:
     call    obj_parse_model             # the mesh into `scene` (obj.S)
     call    ppm_parse_texture           # the texture into `scene` (ppm.S)
     call    render_init                 # renderer buffers for this scene (render.S)
+    call    depth_check                 # near and far against the model (depth_check.S)
 
     li      s2, 0                       # s2 = frame number n
 1:  andi    s3, s2, 1                   # s3 = buffer index b

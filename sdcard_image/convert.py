@@ -19,6 +19,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from k210_common.firmware_errors import firmware_error
+from reference.depth import depth_warning
+from reference.obj import ModelError, parse_obj
 from reference.scene import Scene, SceneError, parse_scene
 
 from . import objcheck, ppm
@@ -342,9 +344,29 @@ def plan_card(inputs: list[Path], scene: dict[str, str] | None = None,
         planner.plan.files.append((PlacedFile(card_path=card_path, size=len(data), source=None,
                                               detail="written from --scene"), data))
     on_card = {fat_fold(p.card_path): p.card_path for p, _ in planner.plan.files}
+    settings = None
     if scene:
+        settings = scene_read
         refuse_missing_scene_files(scene_read, on_card, None)
     elif planner.scene_input:
         settings, origin = planner.scene_input
         refuse_missing_scene_files(settings, on_card, origin)
+    if settings is not None:
+        _warn_of_depth(planner.plan, settings)
     return planner.plan
+
+
+def _warn_of_depth(plan: CardPlan, settings: Scene) -> None:
+    """The firmware's warning at load when near and far leave the model few steps of the depth
+    buffer (reference/depth.py), said when the card is built."""
+    wanted = "/" + fat_fold(settings.model.replace("\\", "/").lstrip("/"))
+    model = next((data for placed, data in plan.files if fat_fold(placed.card_path) == wanted), None)
+    if model is None:
+        return
+    try:
+        vertices = parse_obj(model).vertices
+    except ModelError:
+        return          # objcheck has said what is wrong with it, or the firmware will
+    warning = depth_warning(settings, vertices)
+    if warning is not None:
+        plan.warnings.append(f"{settings.model}: {warning} (the firmware says so at boot)")

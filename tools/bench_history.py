@@ -270,11 +270,12 @@ def thesis_firmware_table(line: dict) -> list[str]:
             "",
             "| span | on a Dock | " + " | ".join(f"{timing} (x Dock)" for timing in timings) + " |",
             "|---|---|" + "---|" * len(timings)]
-    by_timing = {timing: thesis_spans(runs, timing) for timing in timings}
-    for n, (what, dock, _) in enumerate(by_timing[timings[0]]):
+    by_timing = {timing: {what: ms for what, _, ms in thesis_spans(runs, timing)} for timing in timings}
+    spans = {what: dock for timing in timings for what, dock, _ in thesis_spans(runs, timing)}
+    for what, dock in spans.items():
         cells = []
         for timing in timings:
-            ms = by_timing[timing][n][2] if n < len(by_timing[timing]) else None
+            ms = by_timing[timing].get(what)
             cells.append("-" if ms is None else f"{ms:.1f} ms ({ms / dock:.2f})")
         rows.append(f"| {what.removeprefix('thesis firmware, ')} | {dock:g} ms | " + " | ".join(cells) + " |")
     return rows

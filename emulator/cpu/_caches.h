@@ -33,7 +33,7 @@
 #define L1_WAYS 8
 #define L1_LINE_SHIFT 6
 #define L1_HOT 512      /* the hot lines' table: a line's slot is its number's low 9 bits */
-#define L1_DEVICE_WINDOWS 32   /* device windows timed: the Dock has 28 */
+#define L1_DEVICE_WINDOWS 32   /* device windows timed: the Dock has 23 */
 
 typedef struct {
     uint64_t line[L1_SETS * L1_WAYS];   /* (address >> 6) + 1 of the line each way holds; 0: invalid */

@@ -25,7 +25,8 @@ latencies, and the calibration (issue 31) compares whole programs against measur
   (redirect from memory, timing.py) and one more.
 
 A device register access leaves the core as the uncached view's does (a TileLink Get or Put, one in
-flight: DCache.scala's nMMIOs = 1, a second access nacked and replayed until the first is answered),
+flight: HellaCache.scala's nMMIOs = 1, which DCache.scala's maxUncachedInFlight follows, a second access
+nacked and replayed until the first is answered),
 and costs that round trip plus the path to the bus its registers sit on (memory_map.py, from the SDK's
 platform.h). No latency is published for any of them; estimated, each crossing a cycle each way:
 

@@ -400,6 +400,13 @@ class SdCard:
         self.commands_seen.append(index + (100 if app else 0))
         if not self.spi_mode and index != 0:
             return   # in SD mode the card does not answer on these lines
+        if index != 12 and self._hold_at is not None:
+            # a command while a read's block is still being fetched (a host that gave up waiting, or
+            # resets the card): the read is abandoned, so that the answer is not queued behind it
+            self._reading = None
+            self._out = bytearray()
+            self._out_pos = 0
+            self._hold_at = None
         if index == 12 and self._reading is not None:
             # stop transmission: drop what was queued, one stuff byte, R1, busy
             self._reading = None

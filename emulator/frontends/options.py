@@ -286,9 +286,10 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--timing", choices=TIMING_MODELS, default=TIMING_ROCKET,
                      help="what an instruction costs: rocket (the default), the cycles the K210's Rocket core "
                           "takes (result latencies, the iterative multiplier and divider, branch prediction, "
-                          "the L1 caches' misses; mcycle and virtual time follow them); rocket-nocache, the "
-                          "same with every access a cache hit (the model before the caches); ipc1, one cycle "
-                          "per instruction, the model before cycle timing")
+                          "the L1 caches' misses, device registers' round trips; mcycle and virtual time follow "
+                          "them); rocket-nocache, the same with every access a cache hit (the model before the "
+                          "caches); ipc1, one cycle per instruction, the model before cycle timing. A card's read "
+                          "access time applies under each (--sd-access-time 0: as before it)")
     run.add_argument("--engine", choices=ENGINES, default=ENGINE_FAST,
                      help="fast (the default): the harts' code in SRAM runs on the model's own interpreter, "
                           "the rest on Unicorn; precise: everything on Unicorn, each instruction counted by a "

@@ -250,6 +250,21 @@ def test_cmd12_during_the_access_time_drops_the_block(image_path):
     assert 0xFE not in clock(card, b"\xff" * 600, ACCESS * 2)
 
 
+def test_a_command_during_the_access_time_abandons_the_read(image_path):
+    """A host that gives up waiting for the block and resets the card (CMD0) or reads another block
+    gets its answer at once, not behind the abandoned block."""
+    card = initialised(image_path, access_time=ACCESS)
+    clock(card, command_frame(17, 5), 0)
+    clock(card, b"\xff" * 4, 10 * PS_PER_US)
+    clock(card, command_frame(13, 0), 20 * PS_PER_US)
+    assert clock(card, b"\xff" * 3, 30 * PS_PER_US)[NCR_BYTES:NCR_BYTES + 2] == b"\x00\x00"   # R2 at once
+    clock(card, command_frame(17, 7), 40 * PS_PER_US)
+    reply = clock_from(card, 1200, 40 * PS_PER_US + BYTE)
+    token = reply.index(0xFE)
+    assert reply[token + 1:token + 1 + BLOCK] == _pattern(7)     # the second read's block, after its own wait
+    assert token >= ACCESS // BYTE
+
+
 def test_the_default_access_time_is_the_dock_card_s(image_path):
     assert SdCard(SdImage(image_path)).access_time == READ_ACCESS_TIME == 200 * PS_PER_US
     with pytest.raises(BadInput, match="negative"):

@@ -1,0 +1,54 @@
+"""How many steps of the firmware's depth buffer the model's depth spans (firmware/depth_check.S, in
+the same single-precision steps): depth is z / w = far / (far - near) (1 - near / D) at a view distance
+D, so a far plane many times the near one crowds every distance past a few near-plane lengths into the
+top of 0 .. 1, where int16 (floor(65534 z / w)) or float32 (the floats' own spacing) resolve few values,
+and surfaces on one step hide each other by their drawing order. The model spans at most D = -tz -+ r,
+r its largest scaled vertex distance from its origin (whatever the rotation), clipped to near .. far.
+Fewer than DEPTH_WARN_STEPS steps is a warning: on the firmware's console at load, and from the card
+builder."""
+from __future__ import annotations
+
+import numpy as np
+
+from .scene import Scene
+
+DEPTH_WARN_STEPS = 256            # 8 bits (firmware/include/render.inc DEPTH_WARN_STEPS)
+DEPTH16_SPAN = np.float32(65534.0)
+
+
+def _fmadd(a: np.float32, b: np.float32, c: np.float32) -> np.float32:
+    """a b + c rounded once, as fmadd.s does (a product of two singles is exact in a double)."""
+    return np.float32(np.float64(a) * np.float64(b) + np.float64(c))
+
+
+def depth_steps(scene: Scene, vertices: np.ndarray) -> int | None:
+    """The steps of the depth buffer over the model's depth span; None when the span lies wholly
+    outside near .. far (no warning: nothing of it is drawn at any angle)."""
+    f32 = np.float32
+    scale = [f32(s) for s in scene.scale]
+    largest = f32(0.0)
+    for x, y, z in np.asarray(vertices, dtype=np.float32):
+        x, y, z = f32(x * scale[0]), f32(y * scale[1]), f32(z * scale[2])
+        squared = _fmadd(z, z, _fmadd(y, y, f32(x * x)))
+        largest = max(largest, squared)
+    r = np.sqrt(largest, dtype=np.float32)
+    centre = -f32(scene.translate[2])
+    near, far = f32(scene.near), f32(scene.far)
+    d0_at, d1_at = max(f32(centre - r), near), min(f32(centre + r), far)
+    if not d0_at < d1_at:
+        return None
+    k = f32(far / f32(far - near))
+    k_near = f32(k * near)
+    d0, d1 = f32(k - f32(k_near / d0_at)), f32(k - f32(k_near / d1_at))
+    if scene.depth == "int16":
+        return int(np.floor(f32(d1 * DEPTH16_SPAN))) - int(np.floor(f32(d0 * DEPTH16_SPAN)))
+    return int(np.array(d1, dtype=np.float32).view(np.int32)) - int(np.array(d0, dtype=np.float32).view(np.int32))
+
+
+def depth_warning(scene: Scene, vertices: np.ndarray) -> str | None:
+    """The firmware's warning, when it gives one."""
+    steps = depth_steps(scene, vertices)
+    if steps is None or steps >= DEPTH_WARN_STEPS:
+        return None
+    return (f"depth: near and far leave {steps} steps of the depth buffer over the model's depth (fewer "
+            f"than {DEPTH_WARN_STEPS}: its surfaces may hide each other wrongly)")
