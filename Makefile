@@ -150,7 +150,9 @@ riscv-tests: venv
 	    --suite $(RISCV_TESTS_SUITE) --out $(BUILD)/riscv-tests
 
 # EEMBC's CoreMark on the model under each timing (docs/measurements.md, calibration), from a
-# checkout of github.com/eembc/coremark: make coremark COREMARK=DIR [COREMARK_ITERATIONS=N]
+# checkout of github.com/eembc/coremark: make coremark COREMARK=DIR [COREMARK_ITERATIONS=N]. The same
+# program under QEMU's -M virt too, for the host time against QEMU's, where qemu-system-riscv64 is
+# installed (Debian's qemu-system-misc; without it the record says QEMU was not measured).
 COREMARK_ITERATIONS ?= 10000
 coremark: c-firmware venv
 	$(PYTHON) tools/coremark.py "$(COREMARK)" --iterations $(COREMARK_ITERATIONS) --out $(BUILD)/coremark

@@ -79,6 +79,10 @@ MODES = ("textured", "flat", "wireframe")
 # What a history line keeps of each CoreMark run (tools/coremark.py)
 COREMARK_FIELDS = ("timing", "cpu_hz", "iterations", "iterations_per_second", "coremark_per_mhz", "instructions",
                    "virtual_s", "host_wall_s", "host_cpu_s")
+# What a CoreMark line keeps of the same program's run under QEMU (tools/coremark_qemu.py), as `qemu`;
+# lines from before it have none
+QEMU_FIELDS = ("version", "validated", "coremark_s", "instructions", "host_cpu_s", "host_wall_s", "note")
+COREMARK_MIN_S = 10.0      # CoreMark's rule: a score counts from 10 s of the timed run up
 # the published K210 CoreMark runs: 695.5 and 697.8 iterations/s at a nominal 400 MHz, GCC 8.2, flags
 # unknown (github.com/PaulStoffregen/CoreMark issue 1); the boot ROM leaves the CPU at 390 MHz
 PUBLISHED_COREMARK = (695.5 / 400, 697.8 / 390)
@@ -108,9 +112,10 @@ def _commit() -> str:
 
 
 def record(results: dict | None, settings: list[dict] | None = None, coremark: list[dict] | None = None,
-           thesis_firmware: list[dict] | None = None) -> dict:
+           thesis_firmware: list[dict] | None = None, qemu: dict | None = None) -> dict:
     """One history line: when, on what, the speed figures (None where a run did not measure one; no
-    `figures` when the run measured no speed) and the precision sweep's records (`settings`)."""
+    `figures` when the run measured no speed), the precision sweep's records (`settings`), CoreMark's
+    runs on the board model (`coremark`) and under QEMU (`qemu`, its figures None when not measured)."""
     line: dict = {
         "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
         "commit": _commit(),
@@ -122,15 +127,17 @@ def record(results: dict | None, settings: list[dict] | None = None, coremark: l
         line["settings"] = [{key: r.get(key) for key in SETTING_FIELDS} for r in settings]
     if coremark:
         line["coremark"] = coremark
+    if qemu is not None:
+        line["qemu"] = {key: qemu.get(key) for key in QEMU_FIELDS}
     if thesis_firmware:
         line["thesis_firmware"] = thesis_firmware
     return line
 
 
 def append(results: dict | None, settings: list[dict] | None = None, coremark: list[dict] | None = None,
-           thesis_firmware: list[dict] | None = None) -> dict:
+           thesis_firmware: list[dict] | None = None, qemu: dict | None = None) -> dict:
     """Appends the run's line to the history and writes the tables from it; returns the line."""
-    line = record(results, settings, coremark, thesis_firmware)
+    line = record(results, settings, coremark, thesis_firmware, qemu)
     with HISTORY.open("a") as handle:
         handle.write(json.dumps(line, sort_keys=True) + "\n")
     write_table()
@@ -236,6 +243,39 @@ def coremark_table(line: dict) -> list[str]:
                     f"{_value(run.get('iterations_per_second'), '{:.1f}')} | "
                     f"{run['instructions'] / _host(run) / 1e6:.0f} million | "
                     f"{run['virtual_s'] / _host(run):.2f} |")
+    if "qemu" in line:
+        rows += ["", *qemu_rows(line["qemu"], line["coremark"])]
+    return rows
+
+
+def qemu_rows(qemu: dict, runs: list[dict]) -> list[str]:
+    """The board model's host time for CoreMark against QEMU's for the same program built for -M virt:
+    a note when QEMU was not measured; QEMU's instructions as it counted them, or else the board model's
+    count, which is the same program's to within its port (so stated)."""
+    if qemu.get("host_cpu_s") is None:
+        return [f"Against QEMU: not measured ({qemu.get('note') or 'no QEMU run'})."]
+    counted = qemu.get("instructions")
+    instructions = counted or next((run["instructions"] for run in runs if run.get("instructions")), None)
+    how = ("QEMU's instructions counted under `-icount` (minstret)" if counted else
+           "QEMU's instructions taken as the board model's count (approximate: the same program but its port)")
+    seconds = qemu.get("coremark_s")
+    verdict = (f"CoreMark's results validated under QEMU; its score did not count ({seconds:.2f} s of QEMU's "
+               "clock, under CoreMark's 10 s rule)" if seconds is not None and seconds < COREMARK_MIN_S
+               else "CoreMark validated QEMU's run")
+    rows = [f"Against QEMU: the same CoreMark (same sources, flags and iterations) built for QEMU's `-M virt` "
+            "with our port (tools/coremark/virt/), run under qemu-system-riscv64 with plain TCG on the same host. Host times are each whole process's, start-up included; "
+            f"{how}. {verdict}:",
+            "",
+            "| run | host CPU s | host wall s | instructions per host CPU second | host CPU time, board model / QEMU |",
+            "|---|---|---|---|---|",
+            f"| QEMU {qemu.get('version') or ''} -M virt | {qemu['host_cpu_s']:.2f} | {_value(qemu.get('host_wall_s'), '{:.2f}')} | "
+            f"{_value(None if instructions is None else instructions / qemu['host_cpu_s'] / 1e6, '{:.0f} million')} | "
+            "1 |"]
+    for run in runs:
+        ratio = _host(run) / qemu["host_cpu_s"]
+        rows.append(f"| board model, {run['timing']} | {_host(run):.2f} | {run['host_wall_s']:.2f} | "
+                    f"{run['instructions'] / _host(run) / 1e6:.0f} million | "
+                    + (f"{ratio:.1f} x slower |" if ratio >= 1 else f"{1 / ratio:.1f} x faster |"))
     return rows
 
 

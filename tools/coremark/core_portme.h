@@ -2,7 +2,8 @@
  * CoreMark's porting guide names). CoreMark itself is not in this repository: tools/coremark.py
  * builds it from a checkout of github.com/eembc/coremark with these two files. Timing by mcycle at
  * the CPU clock; output through picolibc's printf on UARTHS (tests/firmware's driver layer); the
- * data block on the stack, one context, seeds fixed at build time as a performance run has them. */
+ * data block on the stack, one context, seeds fixed at build time as a performance run has them.
+ * The port to QEMU's -M virt (virt/) uses this header too, so that both builds are one program. */
 #ifndef CORE_PORTME_H
 #define CORE_PORTME_H
 

@@ -90,6 +90,40 @@ def test_the_coremark_table_comes_from_the_latest_coremark_run(private):
     bench_history.append({"firmware": {"real_time_factor": 1.5}})     # a later speed run keeps it
     text = page.read_text()
     assert "| rocket | 2.133 | 1.19-1.23 | 832.0 | 300 million | 1.20 |" in text
+    assert "QEMU" not in text                                         # a line from before QEMU's figure
+
+
+def test_the_coremark_table_sets_the_board_model_s_host_time_against_qemu_s(private):
+    """Issue 31, item 4: the ratio to QEMU on the same CoreMark, per timing, with instructions per host
+    CPU second for both; QEMU's count where it counted them, else the board model's, said to be so."""
+    history, page, _ = private
+    runs = [{"timing": "rocket", "cpu_hz": 390_000_000, "iterations": 10000, "iterations_per_second": 830.8,
+             "coremark_per_mhz": 2.13, "instructions": 3_900_000_000, "virtual_s": 12.0, "host_wall_s": 13.5,
+             "host_cpu_s": 13.0},
+            {"timing": "ipc1", "cpu_hz": 390_000_000, "iterations": 10000, "iterations_per_second": 992.8,
+             "coremark_per_mhz": 2.55, "instructions": 3_900_000_000, "virtual_s": 10.0, "host_wall_s": 8.5,
+             "host_cpu_s": 0.5}]
+    qemu = {"version": "7.2.22", "validated": True, "coremark_s": 1.67, "instructions": 4_000_000_000,
+            "host_cpu_s": 1.6, "host_wall_s": 1.9, "note": None}
+    line = bench_history.append(None, coremark=runs, qemu={**qemu, "extra": 1})
+    assert line["qemu"] == qemu
+    text = page.read_text()
+    assert "| QEMU 7.2.22 -M virt | 1.60 | 1.90 | 2500 million | 1 |" in text
+    assert "| board model, rocket | 13.00 | 13.50 | 300 million | 8.1 x slower |" in text
+    assert "| board model, ipc1 | 0.50 | 8.50 | 7800 million | 3.2 x faster |" in text
+    assert "counted under `-icount`" in text and "(1.67 s of QEMU's clock, under CoreMark's 10 s rule)" in text
+    assert bench_history.main(["--check"]) == 0
+
+    bench_history.append(None, coremark=runs, qemu={**qemu, "instructions": None, "coremark_s": 12.0})
+    text = page.read_text()
+    assert "| QEMU 7.2.22 -M virt | 1.60 | 1.90 | 2438 million | 1 |" in text     # the board model's count
+    assert "taken as the board model's count (approximate" in text and "CoreMark validated QEMU's run" in text
+
+    note = "qemu-system-riscv64 is not installed (apt-get install qemu-system-misc): no QEMU figures"
+    bench_history.append(None, coremark=runs, qemu={**{key: None for key in bench_history.QEMU_FIELDS}, "note": note})
+    text = page.read_text()
+    assert f"Against QEMU: not measured ({note})." in text and "| QEMU" not in text
+    assert "| rocket | 2.130 |" in text
 
 
 def test_the_thesis_firmware_table_comes_from_its_latest_run(private):
