@@ -60,11 +60,13 @@
 .endm
 
 # PLANES_AT_X textured, gouraud, affine
-#   The attribute planes at the span's first pixel: t0 = 2 (x - xmin).
+#   The attribute planes at the span's first pixel: t0 = 2 (x - xmin); fs9
+#   = x - xmin, from which NEXT_PIXEL evaluates the depth plane.
 #   Clobbers t0, ft9.
 .macro PLANES_AT_X textured, gouraud, affine
     srli    t0, t0, 1
     fcvt.s.l ft9, t0
+    fmv.s   fs9, ft9
     fmadd.s fa0, fa4, ft9, ft0
     .if \textured
     .if !\affine
@@ -79,9 +81,13 @@
 .endm
 
 # PLANES_DOWN textured, gouraud, affine
-#   The attribute planes at the row's first pixel stepped one row down.
+#   The attribute planes at the row's first pixel one row down: depth from
+#   its plane (ft0 = origin + ft4 rows, fs10 the rows below ymin, exact as
+#   a float), the others stepped. Clobbers ft9.
 .macro PLANES_DOWN textured, gouraud, affine
-    fadd.s  ft0, ft0, ft4
+    fadd.s  fs10, fs10, fs11
+    flw     ft9, RT_DEPTH_ORIGIN(sp)
+    fmadd.s ft0, ft4, fs10, ft9
     .if \textured
     .if !\affine
     fadd.s  ft1, ft1, ft5
@@ -115,11 +121,13 @@
 .endm
 
 # NEXT_PIXEL textured, gouraud, affine, depth16
-#   Steps the planes, edge functions and buffer pointers one pixel right:
+#   Steps the planes, edge functions and buffer pointers one pixel right
+#   (depth from its plane: fa0 = ft0 + fa4 (x - xmin), one rounding):
 #   back to 4 while inside the triangle and the row, else on to 8.
 #   Clobbers t0.
 .macro NEXT_PIXEL textured, gouraud, affine, depth16
-    fadd.s  fa0, fa0, fa4
+    fadd.s  fs9, fs9, fs11
+    fmadd.s fa0, fa4, fs9, ft0
     .if \textured
     .if !\affine
     fadd.s  fa1, fa1, fa5
@@ -665,6 +673,9 @@ raster_triangle_return:
     fld     fs6, RT_FSAVE3 + 0(sp)
     fld     fs7, RT_FSAVE3 + 8(sp)
     fld     fs8, RT_FSAVE3 + 16(sp)
+    fld     fs9, RT_FSAVE4 + 0(sp)
+    fld     fs10, RT_FSAVE4 + 8(sp)
+    fld     fs11, RT_FSAVE4 + 16(sp)
     ld      ra, RT_RA(sp)
     addi    sp, sp, RT_FRAME
     ret

@@ -26,7 +26,9 @@
 #     compared as a signed 32-bit integer (render.inc); a fragment is drawn
 #     when it is strictly nearer than what the buffer holds.
 #   - Attributes are planes: gradients per pixel from the snapped corners,
-#     re-anchored at the first inside pixel of every row. Textured fills
+#     re-anchored at the first inside pixel of every row. Depth is evaluated
+#     from its plane at every pixel and every row (one rounding each), not
+#     stepped: a step under half an ulp would vanish. Textured fills
 #     interpolate u / w, v / w and 1 / w (perspective-correct) or the texel
 #     column and row themselves (affine).
 #   - Bands: each hart draws only the rows of its band (raster_set_band;
@@ -196,7 +198,7 @@
 #         (raster_set_sample; 0, 0 unless supersampling).
 #   Clobbers: only ABI temporaries. The pixel loops use every integer
 #         register but sp, gp and tp (ra holds a constant, saved here), every
-#         temporary and argument float register, and fs0..fs3 and fs6..fs8
+#         temporary and argument float register, and fs0..fs3 and fs6..fs11
 #         (saved here: the Gouraud intensity, the coverage fills' scales;
 #         the filtered fills save and use fs4, fs5 too).
 raster_triangle:
@@ -220,6 +222,9 @@ raster_triangle:
     fsd     fs6, RT_FSAVE3 + 0(sp)
     fsd     fs7, RT_FSAVE3 + 8(sp)
     fsd     fs8, RT_FSAVE3 + 16(sp)
+    fsd     fs9, RT_FSAVE4 + 0(sp)
+    fsd     fs10, RT_FSAVE4 + 8(sp)
+    fsd     fs11, RT_FSAVE4 + 16(sp)
     sd      ra, RT_RA(sp)
     mv      t4, a2                      # t4 = colour / intensity (kept to the end)
     mv      t5, a3                      # t5 = RASTER_* flags (until the loops)
@@ -377,6 +382,13 @@ raster_triangle:
     fmadd.s ft4, ft4, ft5, ft6
     fmadd.s ft0, ft0, ft5, ft6
 5:  GRADIENT ft11, ft4, ft0, fa4, ft4, ft0
+    # depth is evaluated from its plane at every pixel (raster_fills.S
+    # PLANES_DOWN, NEXT_PIXEL), not summed step by step: a step under half
+    # an ulp of the depth would be lost at every addition
+    fsw     ft0, RT_DEPTH_ORIGIN(sp)
+    fmv.w.x fs10, zero                  # fs10 = rows below ymin
+    li      t3, F32_ONE
+    fmv.w.x fs11, t3                    # fs11 = 1.0
     andi    t3, t5, RASTER_GOURAUD
     beqz    t3, 5f
     # Gouraud: the intensity k (fs0 at the pixel, fs1 per pixel right, fs2 at
@@ -508,8 +520,9 @@ raster_triangle:
     addi    a4, a4, 1
     # --- the band (raster_set_band): the rows past its end are dropped; the
     # rows above its first are stepped over exactly as the fill loops step
-    # from row to row (integers by multiples, floats one addition a row), so
-    # every value in the band is bit for bit what a whole-screen draw gives.
+    # from row to row (integers by multiples, depth from its plane, the other
+    # floats one addition a row), so every value in the band is bit for bit
+    # what a whole-screen draw gives.
     la      t3, raster_band
     add     t3, t3, tp
     lwu     t0, BAND_END(t3)
@@ -534,8 +547,10 @@ raster_triangle:
     srl     t3, t3, t1
     mul     t3, t3, a0
     add     t6, t6, t3
-64: fadd.s  ft0, ft0, ft4               # the planes (unused ones too: harmless)
-    fadd.s  ft1, ft1, ft5
+    fcvt.s.l fs10, a0                   # depth: from its plane a0 rows down
+    flw     ft9, RT_DEPTH_ORIGIN(sp)
+    fmadd.s ft0, ft4, fs10, ft9
+64: fadd.s  ft1, ft1, ft5               # the other planes (unused ones too: harmless)
     fadd.s  ft2, ft2, ft6
     fadd.s  ft3, ft3, ft7
     fadd.s  fs2, fs2, fs3
