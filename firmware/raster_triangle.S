@@ -471,7 +471,12 @@ raster_triangle:
     li      t3, F32_TEXEL_FRACTIONS_INV2
     fmv.w.x ft10, t3
     fmul.s  ft9, ft9, ft10
-    la      t3, raster_mip_rho2
+    andi    t3, t5, RASTER_SUPERSAMPLE  # supersampled: the four samples average
+    beqz    t3, 60f                     # the pixel, each sampling a quarter of its
+    li      t3, F32_SAMPLE_AREA         # area, so the level is one finer (rho^2 / 4):
+    fmv.w.x ft10, t3                    # a pixel's level would blur once more
+    fmul.s  ft9, ft9, ft10
+60: la      t3, raster_mip_rho2
     add     t3, t3, tp                  # (this hart's)
     fsw     ft9, 0(t3)
 62:
