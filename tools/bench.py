@@ -372,6 +372,11 @@ BENCH_SCENES = [
     ("C cube 6 faces, 8x8", "models/cube.obj", "textures/cube.ppm", (0.9, 0.45)),
     # where depth precision shows: a label 0.0005 in front of a wall, 3 units from the camera
     ("D decal 2 quads 0.0005 apart, 64x64", "models/decal.obj", "textures/decal.ppm", (1.0,)),
+    # held in (issue 34): models and textures of the kinds users bring, none tuned for
+    ("E icosphere 5120 tri, 128x128", "held-in/icosphere.obj", "held-in/icosphere.ppm", (0.9,)),
+    ("F cylinder 32-gon caps, 64x64", "held-in/cylinder.obj", "held-in/cylinder.ppm", (0.9,)),
+    ("G 2 quads crossing at slope 1e-4", "held-in/crossing.obj", "held-in/crossing.ppm", (1.0,)),
+    ("H 4096x1 stripes on a quad at 80 degrees", "held-in/slant.obj", "held-in/stripes.ppm", (1.0,)),
 ]
 # The motion of every bench scene: angles that are not multiples of 2 degrees, so that the angle
 # table's rounding shows as it would in a user's scene (with 2-degree multiples it is exact).
@@ -425,8 +430,8 @@ def run_bench_card(firmware: Path, folder: Path, card: Path, scene: dict) -> tup
     """Builds `card` from the bench's assets in `folder` with `scene`'s keys and runs the firmware on
     it for BENCH_FRAMES frames; returns the (closed) board and the frames shown."""
     from sdcard_image import build_image
-    build_image(card, [folder / "assets" / "models", folder / "assets" / "textures"], scene=scene, force=True,
-                on_warning=_warn_once)
+    build_image(card, [folder / "assets" / "models", folder / "assets" / "textures", folder / "assets" / "held-in"],
+                scene=scene, force=True, on_warning=_warn_once)
     images: list[np.ndarray] = []
     board = Board(str(firmware), sd_image=str(card), on_frame=lambda record, image: images.append(image))
     try:

@@ -10,6 +10,12 @@ and, for the depth precision measurements (not a thesis model):
   models/decal.obj     2 parallel quads 0.0005 apart, the far one first     + textures/decal.png 64x64
 and, a scene heavy enough for both harts to draw (issue 12):
   models/sphere.obj    5,120 triangles, a latitude-longitude grid           + textures/sphere.png 256x256
+and, in held-in/ (not on the default card), the bench's held-in cases of the kinds users bring
+(issue 34):
+  icosphere.obj 5,120 triangles, an icosahedron subdivided 4 times           + icosphere.png 128x128
+  cylinder.obj  32 sides and two 32-gon caps (fanned by the firmware)         + cylinder.png  64x64
+  crossing.obj  two quads crossing at a slope of 1e-4                         + crossing.png  2x1
+  slant.obj     a quad turned 80 degrees from the camera                      + stripes.png   4096x1
 The textures are PNGs: the card builder turns them into PPM, as it does for users' images.
 """
 from __future__ import annotations
@@ -20,6 +26,9 @@ from pathlib import Path
 
 import numpy as np
 from PIL import Image
+
+
+HELD_IN = "held-in"          # the bench's held-in cases' folder (not on the default card)
 
 
 def _obj(name: str, vertices, uvs, normals, faces) -> str:
@@ -162,6 +171,95 @@ def texture(width: int, height: int, seed: int) -> Image.Image:
     return Image.fromarray(image, "RGB")
 
 
+def icosphere(subdivisions: int = 4) -> str:
+    """An icosahedron's 20 faces, each cut into 4 `subdivisions` times and pushed onto the unit sphere
+    (20 x 4^4 = 5,120 triangles); texture coordinates from longitude and latitude, normals radial."""
+    t = (1 + math.sqrt(5)) / 2
+    points = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t), (0, -1, -t), (0, 1, -t),
+              (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
+    vertices = [tuple(c / math.sqrt(1 + t * t) for c in point) for point in points]
+    triangles = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4), (11, 10, 2),
+                 (10, 7, 6), (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8), (3, 8, 9), (4, 9, 5),
+                 (2, 4, 11), (6, 2, 10), (8, 6, 7), (9, 8, 1)]
+    for _ in range(subdivisions):
+        middles: dict[tuple[int, int], int] = {}
+
+        def middle(a: int, b: int) -> int:
+            key = (min(a, b), max(a, b))
+            if key not in middles:
+                m = [(vertices[a][k] + vertices[b][k]) / 2 for k in range(3)]
+                length = math.sqrt(sum(c * c for c in m))
+                vertices.append(tuple(c / length for c in m))
+                middles[key] = len(vertices) - 1
+            return middles[key]
+        finer = []
+        for a, b, c in triangles:
+            ab, bc, ca = middle(a, b), middle(b, c), middle(c, a)
+            finer += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
+        triangles = finer
+    uvs = [(0.5 + math.atan2(z, x) / (2 * math.pi), 0.5 + math.asin(max(-1.0, min(1.0, y))) / math.pi)
+           for x, y, z in vertices]
+    faces = [[(i + 1, i + 1, i + 1) for i in triangle] for triangle in triangles]
+    return _obj("icosphere", vertices, uvs, vertices, faces)
+
+
+def cylinder(sides: int = 32, radius: float = 0.6, height: float = 1.2) -> str:
+    """A cylinder of `sides` quads around y and two `sides`-gon caps (OBJ polygons, which the firmware
+    fans into triangles); the texture once around the side, and each cap's disc on it."""
+    vertices, uvs, normals, faces = [], [], [(0.0, 1.0, 0.0), (0.0, -1.0, 0.0)], []
+    for i in range(sides + 1):
+        a = 2 * math.pi * i / sides
+        x, z = radius * math.cos(a), radius * math.sin(a)
+        vertices += [(x, height / 2, z), (x, -height / 2, z)]
+        uvs += [(i / sides, 1.0), (i / sides, 0.0)]
+        normals.append((math.cos(a), 0.0, math.sin(a)))
+    for i in range(sides):
+        top, bottom, next_top, next_bottom = 2 * i + 1, 2 * i + 2, 2 * i + 3, 2 * i + 4
+        n, m = i + 3, i + 4
+        faces.append([(top, top, n), (next_top, next_top, m), (next_bottom, next_bottom, m), (bottom, bottom, n)])
+    cap_uv = len(uvs)
+    uvs += [(0.5 + 0.5 * math.cos(2 * math.pi * i / sides), 0.5 + 0.5 * math.sin(2 * math.pi * i / sides))
+            for i in range(sides)]
+    faces.append([(2 * i + 1, cap_uv + i + 1, 1) for i in reversed(range(sides))])     # top, facing +y
+    faces.append([(2 * i + 2, cap_uv + i + 1, 2) for i in range(sides)])              # bottom, facing -y
+    return _obj("cylinder", vertices, uvs, normals, faces)
+
+
+def crossing(slope: float = 1e-4, half: float = 0.6) -> str:
+    """Two squares facing the camera that cross on their vertical centre line: one at z = 0 (the
+    texture's left texel), the other turned about y by `slope` (its right texel). Where a depth
+    running sum loses sub-ulp steps, the split wanders off the centre line."""
+    vertices, uvs, faces = [], [(0.25, 0.5), (0.75, 0.5)], []
+    for turn, uv in ((0.0, 1), (slope, 2)):
+        base = len(vertices)
+        vertices += [(x, y, turn * x) for x, y in ((-half, -half), (half, -half), (half, half), (-half, half))]
+        a, b, c, d = (base + k + 1 for k in range(4))
+        faces += [[(a, uv, 1), (b, uv, 1), (c, uv, 1)], [(a, uv, 1), (c, uv, 1), (d, uv, 1)]]
+    return _obj("crossing", vertices, uvs, [(0.0, 0.0, 1.0)], faces)
+
+
+def slant(degrees: float = 80.0, half: float = 0.8) -> str:
+    """A square turned `degrees` about x from facing the camera: its texture's rows run into the
+    distance, so a texel footprint is long and thin (the case area-based mip levels alias)."""
+    a = math.radians(degrees)
+    vertices = [(x, y * math.cos(a), -y * math.sin(a)) for x, y in ((-half, -half), (half, -half), (half, half), (-half, half))]
+    uvs = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]
+    faces = [[(1, 1, 1), (2, 2, 1), (3, 3, 1)], [(1, 1, 1), (3, 3, 1), (4, 4, 1)]]
+    return _obj("slant", vertices, uvs, [(0.0, math.sin(a), math.cos(a))], faces)
+
+
+def stripes(width: int = 4096) -> Image.Image:
+    """`width` x 1 texels alternating black and white: its mean is mid-grey, and every filter that
+    does not follow the footprint shows stripes or moire instead."""
+    row = np.where(np.arange(width) % 2, 255, 0).astype(np.uint8)
+    return Image.fromarray(np.repeat(row[None, :, None], 3, axis=2), "RGB")
+
+
+def crossing_texture() -> Image.Image:
+    """A red texel and a blue one (crossing's two squares)."""
+    return Image.fromarray(np.array([[[220, 40, 40], [40, 60, 220]]], dtype=np.uint8), "RGB")
+
+
 def main(argv: list[str]) -> int:
     if len(argv) != 1:
         print(__doc__, file=sys.stderr)
@@ -179,6 +277,16 @@ def main(argv: list[str]) -> int:
     decal_texture().save(out / "textures" / "decal.png")
     (out / "models" / "sphere.obj").write_text(sphere())
     texture(256, 256, 5).save(out / "textures" / "sphere.png")
+    held_in = out / HELD_IN
+    held_in.mkdir(exist_ok=True)
+    (held_in / "icosphere.obj").write_text(icosphere())
+    texture(128, 128, 6).save(held_in / "icosphere.png")
+    (held_in / "cylinder.obj").write_text(cylinder())
+    texture(64, 64, 7).save(held_in / "cylinder.png")
+    (held_in / "crossing.obj").write_text(crossing())
+    crossing_texture().save(held_in / "crossing.png")
+    (held_in / "slant.obj").write_text(slant())
+    stripes().save(held_in / "stripes.png")
     return 0
 
 

@@ -195,8 +195,8 @@ def test_nice_ticks_cover_the_range_with_round_steps():
 def test_bench_plans_each_run_once():
     pytest.importorskip("unicorn")
     from tools import bench
-    runs = bench.planned_runs(["torus", "gem", "cube", "decal"], list(bench.MODES), None, renderer=True,
-                              sweep=True)
+    runs = bench.planned_runs([bench.scene_id(model) for _, model, _, _ in bench.BENCH_SCENES], list(bench.MODES),
+                              None, renderer=True, sweep=True)
     assert len(runs) == len(set(runs))
     keys = {(r[0], r[3], r[4], r[5]) for r in runs}
     # renderer table: every scale and mode, default settings
