@@ -7,8 +7,8 @@
 # order. The model's depth spans at most D = -tz -+ r, r its largest scaled
 # vertex distance from its origin (any rotation), clipped to near .. far;
 # fewer than DEPTH_WARN_STEPS steps of the buffer over that span is said on
-# the console once, at load. The card builder says the same
-# (reference/scene.py depth_steps).
+# the console once, at load (not in wireframe mode, which draws without
+# a depth buffer). The card builder says the same (reference/depth.py).
 
     .option norelax
     .include "k210.inc"
@@ -23,12 +23,17 @@
 #   What: the steps of the depth buffer over the model's depth span (file
 #         comment); fewer than DEPTH_WARN_STEPS is a console warning.
 #   Arguments: none (the scene and its mesh, loaded).
-#   Results: a0 = the steps, or -1 when the span lies wholly outside near
-#            .. far (nothing of the model is drawn at any angle: no warning).
+#   Results: a0 = the steps, or -1 when there is nothing to count (no
+#            warning): wireframe mode, or a span of no length inside near ..
+#            far (wholly outside them, a zero scale, a single point).
 #   Clobbers: only ABI temporaries.
 depth_check:
     FRAME_SAVE 16, ra, s0
+    li      s0, -1
     la      t0, scene
+    lwu     t1, SCENE_MODE(t0)
+    li      t2, MODE_WIREFRAME
+    beq     t1, t2, 9f                  # no depth buffer
     ld      t1, MESH_V(t0)
     lwu     t2, MESH_VCOUNT(t0)
     flw     ft0, SCENE_SCALE(t0)
@@ -58,7 +63,6 @@ depth_check:
     fmax.s  ft3, ft3, ft1               # D0
     fadd.s  ft4, ft0, fa0
     fmin.s  ft4, ft4, ft2               # D1
-    li      s0, -1
     flt.s   t3, ft3, ft4
     beqz    t3, 9f                      # nothing between near and far
     fsub.s  ft5, ft2, ft1

@@ -33,8 +33,9 @@
 #     column and row themselves (affine).
 #   - Bands: each hart draws only the rows of its band (raster_set_band;
 #     main.S splits a frame between the harts). The planes are still set up
-#     at the bounding box's first row and stepped row by row to the band,
-#     so a pixel gets the same bits whichever hart draws it.
+#     at the bounding box's first row and carried to the band as the fill
+#     loops carry them from row to row (depth from its plane, the others
+#     stepped), so a pixel gets the same bits whichever hart draws it.
 #   - antialias = edge (RASTER_EDGE_AA): a triangle with a silhouette edge
 #     (SILHOUETTE: the mesh ends there, or folds away) is drawn by a
 #     coverage fill: its box grown by half a pixel, its silhouette edges'

@@ -17,20 +17,26 @@ DEPTH16_SPAN = np.float32(65534.0)
 
 
 def _fmadd(a: np.float32, b: np.float32, c: np.float32) -> np.float32:
-    """a b + c rounded once, as fmadd.s does (a product of two singles is exact in a double)."""
+    """a b + c as fmadd.s gives it: the product of two singles is exact in a double, the sum is
+    rounded to a double and then to a single (twice, where fmadd.s rounds once: they can differ
+    only when the double lands exactly midway between two singles)."""
     return np.float32(np.float64(a) * np.float64(b) + np.float64(c))
 
 
 def depth_steps(scene: Scene, vertices: np.ndarray) -> int | None:
     """The steps of the depth buffer over the model's depth span; None when the span lies wholly
-    outside near .. far (no warning: nothing of it is drawn at any angle)."""
+    outside near .. far, or has no length, or the scene is drawn in wireframe (no depth buffer): no
+    warning."""
+    if scene.mode == "wireframe":
+        return None
     f32 = np.float32
     scale = [f32(s) for s in scene.scale]
     largest = f32(0.0)
-    for x, y, z in np.asarray(vertices, dtype=np.float32):
-        x, y, z = f32(x * scale[0]), f32(y * scale[1]), f32(z * scale[2])
-        squared = _fmadd(z, z, _fmadd(y, y, f32(x * x)))
-        largest = max(largest, squared)
+    with np.errstate(over="ignore"):        # a huge vertex squares to inf, as on the FPU
+        for x, y, z in np.asarray(vertices, dtype=np.float32):
+            x, y, z = f32(x * scale[0]), f32(y * scale[1]), f32(z * scale[2])
+            squared = _fmadd(z, z, _fmadd(y, y, f32(x * x)))
+            largest = max(largest, squared)
     r = np.sqrt(largest, dtype=np.float32)
     centre = -f32(scene.translate[2])
     near, far = f32(scene.near), f32(scene.far)

@@ -351,8 +351,8 @@ def plan_card(inputs: list[Path], scene: dict[str, str] | None = None,
     elif planner.scene_input:
         settings, origin = planner.scene_input
         refuse_missing_scene_files(settings, on_card, origin)
-    if settings is not None:
-        _warn_of_depth(planner.plan, settings)
+    # without a scene.ini the firmware draws with every key's default, and checks depth with them
+    _warn_of_depth(planner.plan, settings if settings is not None else parse_scene(b""))
     return planner.plan
 
 

@@ -66,6 +66,28 @@ def test_the_steps_follow_the_depth_mapping():
         assert abs(depth_steps(scene, vertices) - ideal) <= max(2, ideal * 1e-3), (z, depth)
 
 
+def test_wireframe_has_no_depth_buffer_to_warn_of(firmware, tmp_path):
+    text = scene_text(*FAR_SCENES["far-int16"]).replace("mode = flat", "mode = wireframe")
+    assert depth_steps(parse_scene(text), parse_obj(TORUS.read_bytes()).vertices) is None
+    assert not [line for line in firmware_console(firmware, tmp_path, text) if line.startswith("warning: depth")]
+
+
+def test_a_card_without_a_scene_is_checked_with_the_defaults(tmp_path):
+    """The firmware draws a card without scene.ini with every key's default (model.obj at 0 0 -3) and
+    checks its depth so; the builder too."""
+    (tmp_path / "in").mkdir()
+    (tmp_path / "in" / "model.obj").write_bytes(b"v 0 0 0\nv 0.001 0 0\nv 0 0.001 0\nf 1 2 3\n")
+    (tmp_path / "in" / "texture.ppm").write_bytes(b"P6\n1 1\n255\n\x80\x80\x80")
+    heard: list[str] = []
+    build_image(tmp_path / "card.img", [tmp_path / "in" / "model.obj", tmp_path / "in" / "texture.ppm"],
+                force=True, on_warning=heard.append)
+    steps = depth_steps(parse_scene(""), parse_obj((tmp_path / "in" / "model.obj").read_bytes()).vertices)
+    assert steps is not None and steps < DEPTH_WARN_STEPS
+    assert [message for message in heard if "depth" in message] == [
+        f"model.obj: depth: near and far leave {steps} steps of the depth buffer over the model's depth (fewer than "
+        f"{DEPTH_WARN_STEPS}: its surfaces may hide each other wrongly) (the firmware says so at boot)"]
+
+
 def test_a_model_wholly_beyond_the_far_plane_has_no_steps_to_count():
     scene = parse_scene("translate = 0 0 -500\nfar = 100\n")
     assert depth_steps(scene, np.array([[1.0, 0.0, 0.0]])) is None
