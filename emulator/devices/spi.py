@@ -324,7 +324,11 @@ class SpiController(Peripheral):
         if self._delivering is None:
             return now
         train, first, nbytes = self._delivering
-        return train.edge(first + i // nbytes + 1)
+        frame, byte = first + i // nbytes, i % nbytes
+        if byte == nbytes - 1:
+            return train.edge(frame + 1)
+        start = train.edge(frame)     # a frame of several bytes sends its first byte first (its top bits)
+        return start + (train.edge(frame + 1) - start) * (byte + 1) // nbytes
 
     def is_data_register(self, address: int) -> bool:
         return self.BASE + DR_FIRST <= address <= self.BASE + DR_LAST

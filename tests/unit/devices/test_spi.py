@@ -313,6 +313,21 @@ def test_a_device_knows_when_each_byte_of_a_late_batch_was_clocked(bus):
     assert spi.byte_clocked_at(0, 123) == 123             # outside a hand-over: the time given
 
 
+def test_the_bytes_of_a_16_bit_frame_are_clocked_one_after_the_other(bus):
+    board, spi, dev = bus
+    seen: list[list[Time]] = []
+    record = dev.spi_transfer
+
+    def transfer(data, lanes, now):
+        seen.append([spi.byte_clocked_at(i, now) for i in range(len(data))])
+        return record(data, lanes, now)
+    dev.spi_transfer = transfer
+    setup(spi, ctrlr0(16, s.TMOD_RX), ctrlr1=1)
+    spi.write(s.DR_FIRST, 4, 0, 0)
+    assert spi.read(s.RXFLR, 4, 10 * 16 * BIT) == 2
+    assert seen == [[8 * BIT, 16 * BIT, 24 * BIT, 32 * BIT]]
+
+
 def test_receive_only_16_bit_frames(bus):
     board, spi, dev = bus
     dev.replies = bytearray(b"\x12\x34\x56\x78")
