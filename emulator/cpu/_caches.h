@@ -247,6 +247,17 @@ static inline __attribute__((always_inline)) uint64_t l1_fetch(l1_caches_t *c, u
     return l1_fetch_lookup(c, key, line, (uint32_t)(key >> L1_LINE_SHIFT) & (L1_SETS - 1));
 }
 
+/* The cycles fetching the `size`-byte instruction at `key` stalls beyond a hit: its line's, and the
+ * next line's too when it straddles the two (Rocket's frontend needs both halves before it issues
+ * the instruction), so a straddling jump pays for the line it never runs more of. */
+static inline __attribute__((always_inline)) uint64_t l1_fetch_insn(l1_caches_t *c, uint64_t key, uint32_t size)
+{
+    uint64_t cost = l1_fetch(c, key);
+    if (((key + size - 1) >> L1_LINE_SHIFT) != (key >> L1_LINE_SHIFT))
+        cost += l1_fetch(c, key + size - 1);
+    return cost;
+}
+
 /*
  * FENCE.I: Rocket's instruction cache drops every line, and its data cache (rocket-chip 2017: IDecode
  * gives FENCE.I the memory command M_FLUSH_ALL; DCache.scala's flush walk) visits every way of every

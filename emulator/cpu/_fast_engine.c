@@ -107,8 +107,9 @@ typedef struct {
 #define T_TRANSFER 1
 #define T_MULDIV 2
 #define T_LOOP_HEAD 4
-#define T_FETCH 8       /* with the caches, a block's first instruction or the first in a new line: the
-                           instruction cache looks (none without: no time spent on it) */
+#define T_FETCH 8       /* with the caches, a block's first instruction, the first in a new line, or one
+                           that straddles two lines: the instruction cache looks (none without: no time
+                           spent on it) */
 
 /* A straight run of decoded instructions from `pc` up to a jump (a conditional branch taken leaves
  * it in the middle), an instruction for
@@ -703,7 +704,8 @@ static block_t *build_block(fast_state_t *f, const insn_counter_t *c, uint64_t p
         memcpy(&fetched, code + offset, 4);
         insn_t *in = &b->insns[n++];
         decode(c, in, pc + offset, fetched);
-        if (c->caches != NULL && (n == 1 || ((pc + offset) >> L1_LINE_SHIFT) != ((in[-1].pc) >> L1_LINE_SHIFT)))
+        if (c->caches != NULL && (n == 1 || ((pc + offset) >> L1_LINE_SHIFT) != ((in[-1].pc) >> L1_LINE_SHIFT)
+                                  || ((pc + offset) >> L1_LINE_SHIFT) != ((pc + offset + in->len - 1) >> L1_LINE_SHIFT)))
             in->timing |= T_FETCH;   /* (Hart.install_caches has the blocks decoded again) */
         offset += in->len;
         if (ends_block(in->op))
@@ -1035,7 +1037,7 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
         if (in->timing) { \
             uint32_t e = in->entry; \
             if (in->timing & T_FETCH) \
-                cycles += l1_fetch(kc, table_key(in->pc)); \
+                cycles += l1_fetch_insn(kc, table_key(in->pc), in->len); \
             if (in->timing & T_MULDIV) { \
                 uint64_t latency = muldiv_latency(e, x[E_RS1(e)], x[E_RS2(e)], E_KIND(e) == KIND_DIV); \
                 uint64_t distance = E_DIST(e); \

@@ -128,7 +128,7 @@ void count_instruction(void *uc, uint64_t address, uint32_t size, insn_counter_t
     } else {
         uint64_t cost = 1;
         if (counter->caches != NULL) {
-            uint64_t fetch = l1_fetch(counter->caches, table_key(address));
+            uint64_t fetch = l1_fetch_insn(counter->caches, table_key(address), size);
             counter->stall_cycles += fetch;
             cost += fetch;
         }

@@ -92,10 +92,11 @@ class L1Timing:
 
     @property
     def worst_instruction(self) -> int:
-        """The most a load's, store's or fetch's caches can add: a fetch miss, and a data miss whose
-        victim and whose copy in the other hart's cache are both written back first (or an uncached
-        or device access). FENCE.I's flush is not counted: no poll loop holds one."""
-        return self.fetch_fill + max(self.data_fill + 2 * self.write_back, self.uncached, self.ahb,
+        """The most a load's, store's or fetch's caches can add: two fetch misses (an instruction that
+        straddles two lines), and a data miss whose victim and whose copy in the other hart's cache
+        are both written back first (or an uncached or device access). FENCE.I's flush is not
+        counted: no poll loop holds one."""
+        return 2 * self.fetch_fill + max(self.data_fill + 2 * self.write_back, self.uncached, self.ahb,
                                      self.apb(APB_DIVIDER_MAX))
 
 

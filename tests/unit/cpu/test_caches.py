@@ -197,6 +197,41 @@ def test_code_is_fetched_into_the_instruction_cache_once(engine):
     assert misses in (32, 33)
 
 
+# A 4-byte jump whose second half lies in the next line, a line nothing else of runs: line S holds the
+# measured code and is fetched before the first mcycle read; the jump sits at byte 62 of line A.
+STRADDLE = """
+    j       start
+    .balign 64
+start:
+    nop
+    csrr    s2, mcycle
+    j       straddler
+back:
+    csrr    s3, mcycle
+    j       9f
+    .balign 64
+    .option push
+    .option norvc
+    .skip   62
+straddler:
+    j       back
+    .option pop
+9:
+"""
+
+
+@pytest.mark.parametrize("engine", [ENGINE_FAST, ENGINE_PRECISE])
+def test_an_instruction_across_two_lines_waits_for_both(engine):
+    """The jump cannot issue before both of its halves are in: it pays for line A and line B, though
+    nothing else of B runs (before: B's fill was charged to the next instruction, here never)."""
+    cycles = {}
+    for timing in (TIMING_ROCKET, TIMING_ROCKET_NOCACHE):
+        board = make_board(program(STRADDLE), timing=timing, engine=engine)
+        run_to_done(board, max_time_s=0.1)
+        cycles[timing] = reg(board, "s3") - reg(board, "s2")
+    assert cycles[TIMING_ROCKET] - cycles[TIMING_ROCKET_NOCACHE] == 2 * ROCKET_L1.fetch_fill
+
+
 def test_the_figures_come_from_the_bus_and_the_pipeline():
     """caches.py's figures from their parts: 8 beats of 8 bytes a line, the round trip, Rocket's
     replay and the instruction cache's latency."""
