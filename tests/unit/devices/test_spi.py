@@ -294,11 +294,8 @@ def test_receive_only_clocks_ctrlr1_plus_one_frames(bus):
     assert bytes(dev.received) == b"\xFF" * 5             # the data line idles high
 
 
-def test_a_device_knows_when_each_byte_of_a_late_batch_was_clocked(bus):
-    """Frames handed to the device in one batch, later than they were clocked (the controller moves
-    on lazily), each keep the time their last edge had: a device answering by time (the SD card's
-    read access time) reckons from it, not from the hand-over."""
-    board, spi, dev = bus
+def record_clock_times(spi, dev) -> list[list[Time]]:
+    """Each hand-over to the device, as the times its bytes were clocked (byte_clocked_at)."""
     seen: list[list[Time]] = []
     record = dev.spi_transfer
 
@@ -306,6 +303,15 @@ def test_a_device_knows_when_each_byte_of_a_late_batch_was_clocked(bus):
         seen.append([spi.byte_clocked_at(i, now) for i in range(len(data))])
         return record(data, lanes, now)
     dev.spi_transfer = transfer
+    return seen
+
+
+def test_a_device_knows_when_each_byte_of_a_late_batch_was_clocked(bus):
+    """Frames handed to the device in one batch, later than they were clocked (the controller moves
+    on lazily), each keep the time their last edge had: a device answering by time (the SD card's
+    read access time) reckons from it, not from the hand-over."""
+    board, spi, dev = bus
+    seen = record_clock_times(spi, dev)
     setup(spi, ctrlr0(8, s.TMOD_RX), ctrlr1=4)
     spi.write(s.DR_FIRST, 4, 0xFFFF_FFFF, 0)
     assert spi.read(s.RXFLR, 4, 10 * FRAME8) == 5         # handed over at once, long after
@@ -315,13 +321,7 @@ def test_a_device_knows_when_each_byte_of_a_late_batch_was_clocked(bus):
 
 def test_the_bytes_of_a_16_bit_frame_are_clocked_one_after_the_other(bus):
     board, spi, dev = bus
-    seen: list[list[Time]] = []
-    record = dev.spi_transfer
-
-    def transfer(data, lanes, now):
-        seen.append([spi.byte_clocked_at(i, now) for i in range(len(data))])
-        return record(data, lanes, now)
-    dev.spi_transfer = transfer
+    seen = record_clock_times(spi, dev)
     setup(spi, ctrlr0(16, s.TMOD_RX), ctrlr1=1)
     spi.write(s.DR_FIRST, 4, 0, 0)
     assert spi.read(s.RXFLR, 4, 10 * 16 * BIT) == 2

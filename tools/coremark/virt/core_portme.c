@@ -16,25 +16,7 @@
 #define CLINT_MTIME 0x0200BFF8UL
 #define MTIME_HZ 10000000u             /* virt's CLINT timebase (its device tree's timebase-frequency) */
 
-#if VALIDATION_RUN
-volatile ee_s32 seed1_volatile = 0x3415;
-volatile ee_s32 seed2_volatile = 0x3415;
-volatile ee_s32 seed3_volatile = 0x66;
-#endif
-#if PERFORMANCE_RUN
-volatile ee_s32 seed1_volatile = 0x0;
-volatile ee_s32 seed2_volatile = 0x0;
-volatile ee_s32 seed3_volatile = 0x66;
-#endif
-#if PROFILE_RUN
-volatile ee_s32 seed1_volatile = 0x8;
-volatile ee_s32 seed2_volatile = 0x8;
-volatile ee_s32 seed3_volatile = 0x8;
-#endif
-volatile ee_s32 seed4_volatile = ITERATIONS;
-volatile ee_s32 seed5_volatile = 0;
-
-ee_u32 default_num_contexts = 1;
+#include "core_seeds.h"   /* the run types' seeds, shared by both ports */
 
 static CORE_TICKS started, stopped;
 
