@@ -16,6 +16,7 @@ and, in held-in/ (not on the default card), the bench's held-in cases of the kin
   cylinder.obj  32 sides and two 32-gon caps (fanned by the firmware)         + cylinder.png  64x64
   crossing.obj  two quads crossing at a slope of 1e-4                         + crossing.png  2x1
   slant.obj     a quad turned 80 degrees from the camera                      + stripes.png   4096x1
+  (the latitude-longitude sphere of models/)                                  + logo.png      256x128
 The textures are PNGs: the card builder turns them into PPM, as it does for users' images.
 """
 from __future__ import annotations
@@ -255,6 +256,22 @@ def stripes(width: int = 4096) -> Image.Image:
     return Image.fromarray(np.repeat(row[None, :, None], 3, axis=2), "RGB")
 
 
+def logo(width: int = 256, height: int = 128) -> Image.Image:
+    """A logo as users put on a sphere: flat colours with hard edges (a disc, a ring, bars and a
+    diagonal band) on a plain ground, so that edges and their filtering show, and the poles'
+    squeeze."""
+    from PIL import ImageDraw
+    image = Image.new("RGB", (width, height), (240, 236, 220))
+    draw = ImageDraw.Draw(image)
+    draw.ellipse((width * 0.08, height * 0.2, width * 0.38, height * 0.8), fill=(200, 30, 40))
+    draw.ellipse((width * 0.14, height * 0.32, width * 0.32, height * 0.68), fill=(240, 236, 220))
+    for k in range(4):
+        x = width * (0.46 + 0.1 * k)
+        draw.rectangle((x, height * 0.25, x + width * 0.05, height * 0.75), fill=(20, 60, 160))
+    draw.polygon([(0, height * 0.9), (width, height * 0.85), (width, height), (0, height)], fill=(30, 140, 60))
+    return image
+
+
 def crossing_texture() -> Image.Image:
     """A red texel and a blue one (crossing's two squares)."""
     return Image.fromarray(np.array([[[220, 40, 40], [40, 60, 220]]], dtype=np.uint8), "RGB")
@@ -287,6 +304,7 @@ def main(argv: list[str]) -> int:
     crossing_texture().save(held_in / "crossing.png")
     (held_in / "slant.obj").write_text(slant())
     stripes().save(held_in / "stripes.png")
+    logo().save(held_in / "logo.png")
     return 0
 
 

@@ -37,3 +37,8 @@ def test_the_slanted_quad_turns_80_degrees_and_the_stripes_average_grey():
     assert np.isclose(np.degrees(np.arccos(normal[2] / np.linalg.norm(normal))), 80.0)
     stripes = np.asarray(make_assets.stripes())
     assert stripes.shape == (1, 4096, 3) and stripes.mean() == 127.5
+
+
+def test_the_logo_is_flat_colours_at_256_by_128():
+    image = np.asarray(make_assets.logo())
+    assert image.shape == (128, 256, 3) and len(np.unique(image.reshape(-1, 3), axis=0)) <= 8
