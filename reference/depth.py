@@ -16,11 +16,11 @@ DEPTH_WARN_STEPS = 256            # 8 bits (firmware/include/render.inc DEPTH_WA
 DEPTH16_SPAN = np.float32(65534.0)
 
 
-def _fmadd(a: np.float32, b: np.float32, c: np.float32) -> np.float32:
-    """a b + c as fmadd.s gives it: the product of two singles is exact in a double, the sum is
-    rounded to a double and then to a single (twice, where fmadd.s rounds once: they can differ
-    only when the double lands exactly midway between two singles)."""
-    return np.float32(np.float64(a) * np.float64(b) + np.float64(c))
+def _fmadd(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """a b + c (single precision, elementwise) as fmadd.s gives it: the product of two singles is exact
+    in a double, the sum is rounded to a double and then to a single (twice, where fmadd.s rounds
+    once: they can differ only when the double lands exactly midway between two singles)."""
+    return (a.astype(np.float64) * b.astype(np.float64) + c.astype(np.float64)).astype(np.float32)
 
 
 def depth_steps(scene: Scene, vertices: np.ndarray) -> int | None:
@@ -30,13 +30,12 @@ def depth_steps(scene: Scene, vertices: np.ndarray) -> int | None:
     if scene.mode == "wireframe":
         return None
     f32 = np.float32
-    scale = [f32(s) for s in scene.scale]
-    largest = f32(0.0)
+    points = np.asarray(vertices, dtype=np.float32).reshape(-1, 3)
     with np.errstate(over="ignore"):        # a huge vertex squares to inf, as on the FPU
-        for x, y, z in np.asarray(vertices, dtype=np.float32):
-            x, y, z = f32(x * scale[0]), f32(y * scale[1]), f32(z * scale[2])
-            squared = _fmadd(z, z, _fmadd(y, y, f32(x * x)))
-            largest = max(largest, squared)
+        scaled = points * np.asarray(scene.scale, dtype=np.float32)
+        x, y, z = scaled[:, 0], scaled[:, 1], scaled[:, 2]
+        squared = _fmadd(z, z, _fmadd(y, y, x * x))
+    largest = f32(squared.max()) if len(squared) else f32(0.0)
     r = np.sqrt(largest, dtype=np.float32)
     centre = -f32(scene.translate[2])
     near, far = f32(scene.near), f32(scene.far)

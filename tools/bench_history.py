@@ -310,8 +310,9 @@ def thesis_firmware_table(line: dict) -> list[str]:
             "",
             "| span | on a Dock | " + " | ".join(f"{timing} (x Dock)" for timing in timings) + " |",
             "|---|---|" + "---|" * len(timings)]
-    by_timing = {timing: {what: ms for what, _, ms in thesis_spans(runs, timing)} for timing in timings}
-    spans = {what: dock for timing in timings for what, dock, _ in thesis_spans(runs, timing)}
+    spans_of = {timing: thesis_spans(runs, timing) for timing in timings}
+    by_timing = {timing: {what: ms for what, _, ms in spans} for timing, spans in spans_of.items()}
+    spans = {what: dock for timing_spans in spans_of.values() for what, dock, _ in timing_spans}
     for what, dock in spans.items():
         cells = []
         for timing in timings:

@@ -337,6 +337,13 @@ class SdCard:
             self._out_pos = 0
         self._out += data
 
+    def _abandon_read(self) -> None:
+        """A read ends where it is: its stream, what it queued and its hold are dropped."""
+        self._reading = None
+        self._out = bytearray()
+        self._out_pos = 0
+        self._hold_at = None
+
     def _hold_next(self, now: Time) -> None:
         """What is said next waits for the read access time from `now` (a read command's last bit)."""
         if self.access_time:
@@ -403,16 +410,10 @@ class SdCard:
         if index != 12 and self._hold_at is not None:
             # a command while a read's block is still being fetched (a host that gave up waiting, or
             # resets the card): the read is abandoned, so that the answer is not queued behind it
-            self._reading = None
-            self._out = bytearray()
-            self._out_pos = 0
-            self._hold_at = None
+            self._abandon_read()
         if index == 12 and self._reading is not None:
             # stop transmission: drop what was queued, one stuff byte, R1, busy
-            self._reading = None
-            self._out = bytearray()
-            self._out_pos = 0
-            self._hold_at = None
+            self._abandon_read()
             self._say(b"\xff" + bytes([self._r1()]) + b"\x00" * STOP_BUSY_BYTES)
             return
         crc_ok = (crc7(frame[:5]) << 1 | 1) == frame[5]
