@@ -176,9 +176,10 @@
 #   outside), the depth stored only when at least half the pixel is covered
 #   (as the tie rule stores it without antialiasing), so what is drawn later
 #   behind a partly covered pixel still blends into it. Gouraud's k is
-#   clamped to LIGHT_ONE (extended past the corners it can exceed it).
+#   clamped to LIGHT_ONE (WIDE_LIGHT_ONE when wide; extended past the
+#   corners it can exceed it).
 #   Clobbers t0, t3.
-.macro DEPTH_TEST_AA depth16, gouraud
+.macro DEPTH_TEST_AA depth16, gouraud, wide=0
     .if \depth16
     lhu     t3, 0(a1)
     fcvt.w.s t0, fa0, rtz
@@ -197,7 +198,11 @@
 .Ldepth_kept\@:
     .if \gouraud
     fcvt.wu.s t4, fs0, rne              # k (a rounding-noise negative -> 0)
+    .if \wide
+    li      t3, WIDE_LIGHT_ONE
+    .else
     li      t3, LIGHT_ONE
+    .endif
     ble     t4, t3, .Lk_ok\@
     mv      t4, t3
 .Lk_ok\@:
@@ -209,7 +214,7 @@
 #   (at a0 ^ FB_PAIR_XOR) by its coverage a: (c a + old (64 - a)) / 64 per
 #   channel, rounded to nearest, in one multiplication as the light is (the
 #   fields' borrows cancel: every field's result fits it); the result, spread,
-#   in colour. Needs mask = RGB565_SPREAD_MASK and round = LIGHT_ROUND_SPREAD
+#   in colour. Needs mask = RGB565_SPREAD_MASK and round = AA_ROUND_SPREAD
 #   (with load_round, loaded into round here once behind is done with, for
 #   the FILTERED fills, short of registers). Clobbers t3, behind.
 .macro BLEND_BEHIND colour, behind, coverage, mask, round, load_round=0
@@ -223,7 +228,7 @@
     slli    \behind, \behind, AA_SHIFT
     add     \colour, \colour, \behind
     .if \load_round
-    li      \round, LIGHT_ROUND_SPREAD
+    li      \round, AA_ROUND_SPREAD
     .endif
     add     \colour, \colour, \round
     srli    \colour, \colour, AA_SHIFT
@@ -233,12 +238,54 @@
 # BLEND_COVERAGE
 #   FILL's coverage blend: t2 = the spread colour over what is behind by
 #   coverage t1 (BLEND_BEHIND); a whole pixel keeps c. Needs t5 =
-#   RGB565_SPREAD_MASK, ra = LIGHT_ROUND_SPREAD. Clobbers t0, t3.
+#   RGB565_SPREAD_MASK, ra = LIGHT_ROUND_SPREAD (= AA_ROUND_SPREAD).
+#   Clobbers t0, t3.
 .macro BLEND_COVERAGE
     li      t3, AA_FULL
     bge     t1, t3, .Lwhole\@
     BLEND_BEHIND t2, t0, t1, t5, ra
 .Lwhole\@:
+.endm
+
+# BLEND_COVERAGE_WIDE
+#   The same for a wide fill, whose t5 and ra hold the wide light's mask
+#   and rounding: t2 = the RGB565 colour (in its low 16 bits) over what is
+#   behind by coverage t1, as RGB565 (in its low 16 bits). t5 and ra lend
+#   themselves to the blend and are loaded again after it, on partly
+#   covered pixels only. Clobbers t0, t3.
+.macro BLEND_COVERAGE_WIDE
+    li      t3, AA_FULL
+    bge     t1, t3, .Lwhole\@
+    slli    t2, t2, 48                  # the colour alone
+    srli    t2, t2, 48
+    li      t0, RGB565_SPREAD_MASK
+    slli    t3, t2, RGB565_SPREAD_SHIFT
+    or      t2, t2, t3
+    and     t2, t2, t0
+    li      ra, AA_ROUND_SPREAD
+    BLEND_BEHIND t2, t5, t1, t0, ra
+    srli    t3, t2, RGB565_SPREAD_SHIFT
+    or      t2, t2, t3
+    li      t5, WIDE_SPREAD_MASK
+    li      ra, WIDE_ROUND_SPREAD
+.Lwhole\@:
+.endm
+
+# LIGHT_SPREAD colour, wide
+#   The RGB565 colour in its register spread for the light's multiply:
+#   RGB565_SPREAD_MASK's layout, or with wide WIDE_SPREAD_MASK's. Needs t5 =
+#   the mask. Clobbers t0 (wide) and t3.
+.macro LIGHT_SPREAD colour, wide
+    .if \wide
+    slli    t3, \colour, WIDE_SPREAD_R_SHIFT
+    slli    t0, \colour, WIDE_SPREAD_G_SHIFT
+    or      \colour, \colour, t3
+    or      \colour, \colour, t0
+    .else
+    slli    t3, \colour, RGB565_SPREAD_SHIFT
+    or      \colour, \colour, t3
+    .endif
+    and     \colour, \colour, t5
 .endm
 
 # FILL textured, gouraud, affine, depth16, aa
@@ -252,18 +299,31 @@
 #   triangle), and each pixel's colour is blended by its coverage
 #   (COVERAGE, DEPTH_TEST_AA, BLEND_COVERAGE). Ends at 90 (raster_triangle's
 #   epilogue).
-.macro FILL textured, gouraud, affine, depth16, aa=0
+.macro FILL textured, gouraud, affine, depth16, aa=0, wide=0
+    .if \wide && !(\textured || \gouraud)
+    .error "a flat colour is lit once a face: it has no wide fill"
+    .endif
     .if \textured
     LOAD_TEXTURE
     .endif
+    .if \wide
+    li      t5, WIDE_SPREAD_MASK
+    li      ra, WIDE_ROUND_SPREAD
+    .else
     li      t5, RGB565_SPREAD_MASK
     .if \textured || \gouraud || \aa
     li      ra, LIGHT_ROUND_SPREAD
     .endif
+    .endif
     .if \gouraud && !\textured
+    .if \wide
+    mv      a5, t4
+    LIGHT_SPREAD a5, 1
+    .else
     slli    t0, t4, RGB565_SPREAD_SHIFT
     or      a5, t4, t0
     and     a5, a5, t5
+    .endif
     .endif
 1:  mv      s0, s6
     mv      s1, s7
@@ -276,7 +336,7 @@
 4:
     .if \aa
     COVERAGE
-    DEPTH_TEST_AA \depth16, \gouraud
+    DEPTH_TEST_AA \depth16, \gouraud, \wide
     .else
     DEPTH_TEST \depth16, \gouraud
     .endif
@@ -298,15 +358,24 @@
     slli    t2, t2, 1
     add     t2, t2, a5
     lhu     t2, 0(t2)                   # texel
-    slli    t3, t2, RGB565_SPREAD_SHIFT # light: all channels times k / 64
-    or      t2, t2, t3
-    and     t2, t2, t5
-    mul     t2, t2, t4
+    LIGHT_SPREAD t2, \wide             # light: all channels times k / 64
+    mul     t2, t2, t4                  # (wide: k / 65536)
     .elseif \gouraud
     mul     t2, a5, t4                  # the base colour times k / 64
     .endif
     .if \textured || \gouraud
     add     t2, t2, ra                  # rounded to nearest
+    .if \wide
+    srli    t2, t2, WIDE_LIGHT_SHIFT
+    and     t2, t2, t5
+    srli    t3, t2, WIDE_SPREAD_R_SHIFT # RGB565 in the low 16 bits
+    srli    t0, t2, WIDE_SPREAD_G_SHIFT
+    or      t2, t2, t3
+    or      t2, t2, t0
+    .if \aa
+    BLEND_COVERAGE_WIDE
+    .endif
+    .else
     srli    t2, t2, LIGHT_SHIFT
     and     t2, t2, t5
     .if \aa
@@ -314,6 +383,7 @@
     .endif
     srli    t3, t2, RGB565_SPREAD_SHIFT
     or      t2, t2, t3
+    .endif
     xori    t3, a0, FB_PAIR_XOR
     sh      t2, 0(t3)
     .elseif \aa
@@ -371,7 +441,7 @@
 #   s6 (fx), s7 (fy), s8 (x1), fs5. With aa, a coverage fill as FILL's,
 #   the coverage kept on the stack (RT_AA) over the texel blend. Ends at 90
 #   (raster_triangle's epilogue).
-.macro FILTERED gouraud, affine, depth16, mipmap, aa=0
+.macro FILTERED gouraud, affine, depth16, mipmap, aa=0, wide=0
     sd      s6, RT_ROW_E0(sp)
     sd      s7, RT_ROW_E1(sp)
     sd      s8, RT_ROW_E2(sp)
@@ -396,7 +466,11 @@
     .endif
     li      t5, BLEND_SPREAD_MASK
     li      s9, BLEND_SPREAD_MUL
+    .if \wide
+    li      ra, WIDE_BLEND_ROUND | (WIDE_BLEND_ROUND << 32)
+    .else
     li      ra, BLEND_ROUND
+    .endif
 1:  ld      s0, RT_ROW_E0(sp)
     ld      s1, RT_ROW_E1(sp)
     ld      s2, RT_ROW_E2(sp)
@@ -410,7 +484,7 @@
 4:
     .if \aa
     COVERAGE
-    DEPTH_TEST_AA \depth16, \gouraud
+    DEPTH_TEST_AA \depth16, \gouraud, \wide
     sd      t1, RT_AA(sp)
     .else
     DEPTH_TEST \depth16, \gouraud
@@ -500,6 +574,31 @@
     mul     t6, t6, s7
     slli    t0, t0, TEXEL_FRACTION_BITS
     add     t0, t0, t6                  # 1024 c
+    .if \wide
+    # k of 16 bits makes 2^26 c: too wide for three fields in a register,
+    # so B | R << 32 and G are lit apart (render.inc WIDE_BLEND_*)
+    srli    t1, t0, WIDE_BLEND_G_FIELD
+    slli    t1, t1, 48
+    srli    t1, t1, 48                  # 1024 G
+    srli    t2, t0, WIDE_BLEND_R_FIELD
+    slli    t2, t2, 32                  # 1024 R << 32
+    slli    t0, t0, 48
+    srli    t0, t0, 48                  # 1024 B
+    or      t0, t0, t2
+    mul     t0, t0, t4                  # lit: 1024 c k, up to 2^31 each
+    mul     t1, t1, t4
+    add     t0, t0, ra                  # each rounded to nearest
+    li      t2, WIDE_BLEND_ROUND
+    add     t1, t1, t2
+    srli    t1, t1, WIDE_BLEND_SHIFT
+    slli    t1, t1, RGB565_G_SHIFT
+    srli    t2, t0, 32 + WIDE_BLEND_SHIFT
+    slli    t2, t2, RGB565_R_SHIFT
+    or      t1, t1, t2
+    srli    t2, t0, WIDE_BLEND_SHIFT
+    andi    t2, t2, BLEND_B_MASK
+    or      t1, t1, t2
+    .else
     mul     t0, t0, t4                  # lit: 1024 c k, up to 2^16 c
     add     t0, t0, ra                  # rounded to nearest
     srli    t1, t0, BLEND_R_SHIFT
@@ -510,6 +609,7 @@
     srli    t2, t0, BLEND_B_SHIFT
     andi    t2, t2, BLEND_B_MASK
     or      t1, t1, t2
+    .endif
     .if \aa
     # the lit texel t1 over what is behind, by the coverage (as FILL's, with
     # this loop's registers: none is free to keep the mask or the rounding)
@@ -645,6 +745,62 @@ aa_mipmap_gouraud_d16:  FILTERED 1, 0, 1, 1, 1
 aa_mipmap_affine_d16:   FILTERED 0, 1, 1, 1, 1
 aa_mipmap_affine_gouraud_d16:FILTERED 1, 1, 1, 1, 1
 
+# The wide-light fills (light_levels above LIGHT_LEVELS_NARROW: raster_fills_wide),
+# the same loops with k in 1 / WIDE_LIGHT_ONE; a flat colour has none (it is lit
+# once a face, shade_rgb565).
+wide_fill_flat_gouraud:         FILL 0, 1, 0, 0, 0, 1
+wide_fill_textured:             FILL 1, 0, 0, 0, 0, 1
+wide_fill_textured_gouraud:     FILL 1, 1, 0, 0, 0, 1
+wide_fill_affine:               FILL 1, 0, 1, 0, 0, 1
+wide_fill_affine_gouraud:       FILL 1, 1, 1, 0, 0, 1
+wide_fill_flat_gouraud_d16:     FILL 0, 1, 0, 1, 0, 1
+wide_fill_textured_d16:         FILL 1, 0, 0, 1, 0, 1
+wide_fill_textured_gouraud_d16: FILL 1, 1, 0, 1, 0, 1
+wide_fill_affine_d16:           FILL 1, 0, 1, 1, 0, 1
+wide_fill_affine_gouraud_d16:   FILL 1, 1, 1, 1, 0, 1
+wide_fill_bilinear:             FILTERED 0, 0, 0, 0, 0, 1
+wide_fill_bilinear_gouraud:     FILTERED 1, 0, 0, 0, 0, 1
+wide_fill_bilinear_affine:      FILTERED 0, 1, 0, 0, 0, 1
+wide_fill_bilinear_affine_gouraud:FILTERED 1, 1, 0, 0, 0, 1
+wide_fill_bilinear_d16:         FILTERED 0, 0, 1, 0, 0, 1
+wide_fill_bilinear_gouraud_d16: FILTERED 1, 0, 1, 0, 0, 1
+wide_fill_bilinear_affine_d16:  FILTERED 0, 1, 1, 0, 0, 1
+wide_fill_bilinear_affine_gouraud_d16:FILTERED 1, 1, 1, 0, 0, 1
+wide_fill_mipmap:               FILTERED 0, 0, 0, 1, 0, 1
+wide_fill_mipmap_gouraud:       FILTERED 1, 0, 0, 1, 0, 1
+wide_fill_mipmap_affine:        FILTERED 0, 1, 0, 1, 0, 1
+wide_fill_mipmap_affine_gouraud:FILTERED 1, 1, 0, 1, 0, 1
+wide_fill_mipmap_d16:           FILTERED 0, 0, 1, 1, 0, 1
+wide_fill_mipmap_gouraud_d16:   FILTERED 1, 0, 1, 1, 0, 1
+wide_fill_mipmap_affine_d16:    FILTERED 0, 1, 1, 1, 0, 1
+wide_fill_mipmap_affine_gouraud_d16:FILTERED 1, 1, 1, 1, 0, 1
+wide_aa_flat_gouraud:           FILL 0, 1, 0, 0, 1, 1
+wide_aa_textured:               FILL 1, 0, 0, 0, 1, 1
+wide_aa_textured_gouraud:       FILL 1, 1, 0, 0, 1, 1
+wide_aa_affine:                 FILL 1, 0, 1, 0, 1, 1
+wide_aa_affine_gouraud:         FILL 1, 1, 1, 0, 1, 1
+wide_aa_flat_gouraud_d16:       FILL 0, 1, 0, 1, 1, 1
+wide_aa_textured_d16:           FILL 1, 0, 0, 1, 1, 1
+wide_aa_textured_gouraud_d16:   FILL 1, 1, 0, 1, 1, 1
+wide_aa_affine_d16:             FILL 1, 0, 1, 1, 1, 1
+wide_aa_affine_gouraud_d16:     FILL 1, 1, 1, 1, 1, 1
+wide_aa_bilinear:               FILTERED 0, 0, 0, 0, 1, 1
+wide_aa_bilinear_gouraud:       FILTERED 1, 0, 0, 0, 1, 1
+wide_aa_bilinear_affine:        FILTERED 0, 1, 0, 0, 1, 1
+wide_aa_bilinear_affine_gouraud:FILTERED 1, 1, 0, 0, 1, 1
+wide_aa_bilinear_d16:           FILTERED 0, 0, 1, 0, 1, 1
+wide_aa_bilinear_gouraud_d16:   FILTERED 1, 0, 1, 0, 1, 1
+wide_aa_bilinear_affine_d16:    FILTERED 0, 1, 1, 0, 1, 1
+wide_aa_bilinear_affine_gouraud_d16:FILTERED 1, 1, 1, 0, 1, 1
+wide_aa_mipmap:                 FILTERED 0, 0, 0, 1, 1, 1
+wide_aa_mipmap_gouraud:         FILTERED 1, 0, 0, 1, 1, 1
+wide_aa_mipmap_affine:          FILTERED 0, 1, 0, 1, 1, 1
+wide_aa_mipmap_affine_gouraud:  FILTERED 1, 1, 0, 1, 1, 1
+wide_aa_mipmap_d16:             FILTERED 0, 0, 1, 1, 1, 1
+wide_aa_mipmap_gouraud_d16:     FILTERED 1, 0, 1, 1, 1, 1
+wide_aa_mipmap_affine_d16:      FILTERED 0, 1, 1, 1, 1, 1
+wide_aa_mipmap_affine_gouraud_d16:FILTERED 1, 1, 1, 1, 1, 1
+
     .globl raster_triangle_return
     .hidden raster_triangle_return      # (local in the image: still raster_triangle's
                                         # code to a profile, emulator --profile)
@@ -720,4 +876,50 @@ raster_fills:
 raster_fills_end:
     .if (raster_fills_end - raster_fills) != 2 * RASTER_FILLS * 8
     .error "raster_fills must have 2 RASTER_FILLS entries"
+    .endif
+
+# raster_fill_table: the table raster_triangle chooses its fill from,
+# raster_fills until render_init sees light_levels wide (raster_fills_wide).
+    .data
+    .balign 8
+    .globl raster_fill_table
+raster_fill_table:
+    .dword  raster_fills
+
+    .section .rodata
+    .balign 8
+# raster_fills_wide: the same with wide light (render_init chooses the table,
+# raster_fill_table)
+    .globl raster_fills_wide
+raster_fills_wide:
+    .dword  fill_flat, wide_fill_textured, wide_fill_flat_gouraud, wide_fill_textured_gouraud
+    .dword  fill_flat, wide_fill_affine, wide_fill_flat_gouraud, wide_fill_affine_gouraud
+    .dword  fill_flat_d16, wide_fill_textured_d16, wide_fill_flat_gouraud_d16, wide_fill_textured_gouraud_d16
+    .dword  fill_flat_d16, wide_fill_affine_d16, wide_fill_flat_gouraud_d16, wide_fill_affine_gouraud_d16
+# RASTER_BILINEAR (flat fills never have it)
+    .dword  fill_flat, wide_fill_bilinear, wide_fill_flat_gouraud, wide_fill_bilinear_gouraud
+    .dword  fill_flat, wide_fill_bilinear_affine, wide_fill_flat_gouraud, wide_fill_bilinear_affine_gouraud
+    .dword  fill_flat_d16, wide_fill_bilinear_d16, wide_fill_flat_gouraud_d16, wide_fill_bilinear_gouraud_d16
+    .dword  fill_flat_d16, wide_fill_bilinear_affine_d16, wide_fill_flat_gouraud_d16, wide_fill_bilinear_affine_gouraud_d16
+# RASTER_MIPMAP
+    .dword  fill_flat, wide_fill_mipmap, wide_fill_flat_gouraud, wide_fill_mipmap_gouraud
+    .dword  fill_flat, wide_fill_mipmap_affine, wide_fill_flat_gouraud, wide_fill_mipmap_affine_gouraud
+    .dword  fill_flat_d16, wide_fill_mipmap_d16, wide_fill_flat_gouraud_d16, wide_fill_mipmap_gouraud_d16
+    .dword  fill_flat_d16, wide_fill_mipmap_affine_d16, wide_fill_flat_gouraud_d16, wide_fill_mipmap_affine_gouraud_d16
+# the coverage fills, in the same order (RASTER_FILLS + the same index)
+    .dword  aa_flat, wide_aa_textured, wide_aa_flat_gouraud, wide_aa_textured_gouraud
+    .dword  aa_flat, wide_aa_affine, wide_aa_flat_gouraud, wide_aa_affine_gouraud
+    .dword  aa_flat_d16, wide_aa_textured_d16, wide_aa_flat_gouraud_d16, wide_aa_textured_gouraud_d16
+    .dword  aa_flat_d16, wide_aa_affine_d16, wide_aa_flat_gouraud_d16, wide_aa_affine_gouraud_d16
+    .dword  aa_flat, wide_aa_bilinear, wide_aa_flat_gouraud, wide_aa_bilinear_gouraud
+    .dword  aa_flat, wide_aa_bilinear_affine, wide_aa_flat_gouraud, wide_aa_bilinear_affine_gouraud
+    .dword  aa_flat_d16, wide_aa_bilinear_d16, wide_aa_flat_gouraud_d16, wide_aa_bilinear_gouraud_d16
+    .dword  aa_flat_d16, wide_aa_bilinear_affine_d16, wide_aa_flat_gouraud_d16, wide_aa_bilinear_affine_gouraud_d16
+    .dword  aa_flat, wide_aa_mipmap, wide_aa_flat_gouraud, wide_aa_mipmap_gouraud
+    .dword  aa_flat, wide_aa_mipmap_affine, wide_aa_flat_gouraud, wide_aa_mipmap_affine_gouraud
+    .dword  aa_flat_d16, wide_aa_mipmap_d16, wide_aa_flat_gouraud_d16, wide_aa_mipmap_gouraud_d16
+    .dword  aa_flat_d16, wide_aa_mipmap_affine_d16, wide_aa_flat_gouraud_d16, wide_aa_mipmap_affine_gouraud_d16
+raster_fills_wide_end:
+    .if (raster_fills_wide_end - raster_fills_wide) != 2 * RASTER_FILLS * 8
+    .error "raster_fills_wide must have 2 RASTER_FILLS entries"
     .endif

@@ -160,7 +160,7 @@ raster_aa_line:
     slli    t3, a0, RGB565_SPREAD_SHIFT
     or      t3, t3, a0
     and     t3, t3, t4                  # t3 = the colour, spread
-    li      t5, LIGHT_ROUND_SPREAD
+    li      t5, AA_ROUND_SPREAD
     # u, v = the major and minor axis (a7 = 1: u is y), a6, a5 = their sizes
     fsub.s  ft0, fa2, fa0
     fsub.s  ft1, fa3, fa1
@@ -604,7 +604,7 @@ raster_union_resolve:
     and     t5, t5, t4
     sub     a3, t3, t5                  # a3 = (c - bg), spread
     slli    a4, t5, AA_SHIFT
-    li      t6, LIGHT_ROUND_SPREAD
+    li      t6, AA_ROUND_SPREAD
     add     a4, a4, t6                  # a4 = bg 64 + the rounding
     la      t0, raster_fb
     ld      a0, 0(t0)                   # a0 = the framebuffer's row

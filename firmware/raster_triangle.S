@@ -190,7 +190,8 @@
 #              only with RASTER_TEXTURED), a1 = 1 to drop back faces,
 #              a2 = the colour: flat fill, RGB565 as drawn (or, with
 #              RASTER_GOURAUD, before lighting); textured, the intensity k
-#              0 .. LIGHT_ONE (unused with RASTER_GOURAUD), a3 = RASTER_*
+#              0 .. LIGHT_ONE (WIDE_LIGHT_ONE when raster_fill_table is
+#              raster_fills_wide; unused with RASTER_GOURAUD), a3 = RASTER_*
 #              flags (render.inc). The depth format is raster_set_depth's.
 #   Results: none.
 #         With RASTER_EDGE_AA the corners' RV_OPP_* say what lies across
@@ -564,6 +565,7 @@ raster_triangle:
     bnez    a0, 64b
 65:
     # --- the fill loop for these settings: raster_fills[flags | depth16 << 3]
+    # (or raster_fills_wide's: raster_fill_table)
     # (flags with RASTER_BILINEAR or RASTER_MIPMAP index past the first 16),
     # RASTER_FILLS further for a coverage fill (a silhouette edge)
     slli    t1, t1, RASTER_DEPTH16_SHIFT
@@ -574,7 +576,8 @@ raster_triangle:
     beqz    t3, 66f
     addi    t0, t0, RASTER_FILLS
 66: slli    t0, t0, 3
-    la      t3, raster_fills
+    la      t3, raster_fill_table
+    ld      t3, 0(t3)
     add     t3, t3, t0
     ld      t3, 0(t3)
     jr      t3

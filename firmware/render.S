@@ -97,17 +97,32 @@ render_init:
     sw      t2, 0(t0)
 33:
 
-    # The light quantisation: levels - 1 and LIGHT_ONE / (levels - 1).
+    # The light quantisation: levels - 1 and one / (levels - 1), where one
+    # is LIGHT_ONE up to LIGHT_LEVELS_NARROW levels (the fills of
+    # raster_fills), WIDE_LIGHT_ONE above (raster_fills_wide's, which cost
+    # 2 to 11 instructions more a lit pixel).
     la      t0, light_quantum
     flw     ft0, SCENE_LIGHT_LEVELS(s0)
     li      t1, F32_ONE
     fmv.w.x ft1, t1
     fsub.s  ft0, ft0, ft1
     fsw     ft0, LIGHT_QUANTUM_LEVELS(t0)
+    fcvt.w.s t3, ft0, rtz
     li      t1, F32_LIGHT_ONE
-    fmv.w.x ft1, t1
+    li      t2, WIDE_WIDEN
+    la      t4, raster_fills
+    li      t5, LIGHT_LEVELS_NARROW - 1
+    ble     t3, t5, 34f
+    li      t1, F32_WIDE_LIGHT_ONE
+    li      t2, 0
+    la      t4, raster_fills_wide
+34: fmv.w.x ft1, t1
+    fsw     ft1, LIGHT_QUANTUM_ONE(t0)
+    sw      t2, LIGHT_QUANTUM_WIDEN(t0)
     fdiv.s  ft1, ft1, ft0
     fsw     ft1, LIGHT_QUANTUM_STEP(t0)
+    la      t0, raster_fill_table
+    sd      t4, 0(t0)
 
     lwu     t1, SCENE_MODE(s0)
     li      t2, MODE_WIREFRAME
@@ -407,8 +422,9 @@ render_fill:
     .globl normal_light
 normal_light:
     .space  8
-# light_quantum: f32 levels - 1, then f32 LIGHT_ONE / (levels - 1)
-# (render_light.S light_level; render_init).
+# light_quantum: f32 levels - 1, f32 one / (levels - 1), f32 one (LIGHT_ONE,
+# or WIDE_LIGHT_ONE above LIGHT_LEVELS_NARROW levels), u32 the shift from k
+# to 1 / WIDE_LIGHT_ONE (render_light.S light_level, shade_rgb565; render_init).
     .globl light_quantum
 light_quantum:
     .space  LIGHT_QUANTUM_BYTES

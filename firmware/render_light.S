@@ -3,8 +3,9 @@
 # (never from vn; with flat shading the vertex stage keeps them,
 # vertex_world_array; otherwise vertex.S face_world computes them for the
 # face), intensity I = max(SCENE_AMBIENT, N . L / |N|) with L = SCENE_LIGHT,
-# as an integer k = round(64 I) in 0 .. 64 (render.inc; quantised to
-# SCENE_LIGHT_LEVELS, light_level). With shading = gouraud, per mesh normal
+# as an integer k = round(64 I) in 0 .. 64, or with more light levels than
+# the narrow fills take k = round(65536 I) in 0 .. 65536 (render.inc
+# LIGHT_LEVELS_NARROW; quantised to SCENE_LIGHT_LEVELS, light_level). With shading = gouraud, per mesh normal
 # once a frame (normals_light), and each corner takes its normal's
 # (corner_light). shade_rgb565 lights a colour by k.
 
@@ -18,24 +19,35 @@
     .text
     .globl shade_rgb565
 # shade_rgb565
-#   What: an RGB565 colour with each channel multiplied by k / 64 and
-#         rounded to nearest (ties up; the lit fills do the same inline): c is spread over 64 bits so
-#         that one multiplication scales R, G and B (RGB565_SPREAD_MASK).
-#   Arguments: a0 = colour, a1 = k (0 .. LIGHT_ONE).
+#   What: an RGB565 colour with each channel multiplied by k / one (the
+#         light_quantum's: 64, or 65536 with wide light) and rounded to
+#         nearest (ties up; the lit fills do the same inline): k is taken to
+#         1 / WIDE_LIGHT_ONE (exact: k << LIGHT_QUANTUM_WIDEN) and c spread
+#         over 64 bits so that one multiplication scales R, G and B
+#         (WIDE_SPREAD_MASK). With one = 64 the result is the narrow fills'
+#         round(c k / 64), since (1024 c k + 32768) >> 16 = (c k + 32) >> 6.
+#   Arguments: a0 = colour, a1 = k (0 .. one).
 #   Results: a0 = lit colour.
 #   Clobbers: only ABI temporaries.
 shade_rgb565:
-    li      t0, RGB565_SPREAD_MASK
-    slli    t1, a0, RGB565_SPREAD_SHIFT
+    la      t0, light_quantum
+    lwu     t0, LIGHT_QUANTUM_WIDEN(t0)
+    sll     a1, a1, t0
+    li      t0, WIDE_SPREAD_MASK
+    slli    t1, a0, WIDE_SPREAD_R_SHIFT
+    slli    t2, a0, WIDE_SPREAD_G_SHIFT
     or      a0, a0, t1
+    or      a0, a0, t2
     and     a0, a0, t0
     mul     a0, a0, a1
-    li      t1, LIGHT_ROUND_SPREAD
+    li      t1, WIDE_ROUND_SPREAD
     add     a0, a0, t1                  # rounded to nearest
-    srli    a0, a0, LIGHT_SHIFT
+    srli    a0, a0, WIDE_LIGHT_SHIFT
     and     a0, a0, t0
-    srli    t1, a0, RGB565_SPREAD_SHIFT
+    srli    t1, a0, WIDE_SPREAD_R_SHIFT
+    srli    t2, a0, WIDE_SPREAD_G_SHIFT
     or      a0, a0, t1
+    or      a0, a0, t2
     slli    a0, a0, 48
     srli    a0, a0, 48
     ret
@@ -47,7 +59,7 @@ shade_rgb565:
 #         (vertex_world_array, flat shading) or, where it keeps none,
 #         computed (face_world).
 #   Arguments: a0 = the face (MESH_F_BYTES).
-#   Results: a0 = k, 0 .. LIGHT_ONE; fa0 = the same before rounding to a
+#   Results: a0 = k, 0 .. one (light_level); fa0 = the same before rounding to a
 #            whole k (light_level).
 #   Clobbers: only ABI temporaries.
     .equ FACE_LIGHT_CORNERS,    16          # stack: N and |N| below, then the corners'
@@ -118,11 +130,13 @@ face_light:
 #   What: the intensity of a surface whose normal makes an angle with the
 #         light: I = max(SCENE_AMBIENT, cos), quantised to SCENE_LIGHT_LEVELS
 #         evenly spaced levels from 0 to 1 (level = round(I (levels - 1))),
-#         in units of 1 / LIGHT_ONE: kf = level (LIGHT_ONE / (levels - 1))
-#         (light_quantum, set by render_init). With 65, 33, 17, 9, 5, 3 or 2
-#         levels the step is exact; with 65 (the default) kf = round(64 I).
+#         in units of 1 / one: kf = level (one / (levels - 1)), one =
+#         LIGHT_ONE or WIDE_LIGHT_ONE (light_quantum, set by render_init).
+#         With 65, 33, 17, 9, 5, 3 or 2 levels (or 65537, 32769, ... wide)
+#         the step is exact; with 65 (the default) kf = round(64 I), with
+#         65537 round(65536 I).
 #   Arguments: fa0 = cos (NaN, for a zero normal, gives the ambient).
-#   Results: fa0 = kf; a0 = kf rounded to a whole k, 0 .. LIGHT_ONE.
+#   Results: fa0 = kf; a0 = kf rounded to a whole k, 0 .. one.
 #   Clobbers: only ft0..ft2, t0 and t1 (normals_light keeps its matrix in
 #         the other temporaries).
 light_level:
@@ -134,12 +148,11 @@ light_level:
     fmul.s  fa0, fa0, ft1
     fcvt.w.s t1, fa0, rne               # the level
     fcvt.s.w fa0, t1
-    flw     ft1, LIGHT_QUANTUM_STEP(t0)     # LIGHT_ONE / (levels - 1)
+    flw     ft1, LIGHT_QUANTUM_STEP(t0)     # one / (levels - 1)
     fmul.s  fa0, fa0, ft1               # kf
-    fmv.w.x ft2, zero                   # 0 <= kf <= LIGHT_ONE (cos just above 1)
+    fmv.w.x ft2, zero                   # 0 <= kf <= one (cos just above 1)
     fmax.s  fa0, fa0, ft2
-    li      t1, F32_LIGHT_ONE
-    fmv.w.x ft2, t1
+    flw     ft2, LIGHT_QUANTUM_ONE(t0)
     fmin.s  fa0, fa0, ft2
     fcvt.w.s a0, fa0, rne
     ret

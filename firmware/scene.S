@@ -36,7 +36,7 @@
 # settings" has what each costs and loses):
 # interpolation  perspective | affine                 perspective   SCENE_INTERPOLATION
 # shading     flat | gouraud                          flat          SCENE_SHADING
-# light_levels   whole number 2..65                   65            SCENE_LIGHT_LEVELS
+# light_levels   whole number 2..65537                65            SCENE_LIGHT_LEVELS
 # angles      polynomial | table                      polynomial    SCENE_ANGLES
 # depth       int16 | float32                         int16         SCENE_DEPTH
 # snap        subpixel | pixel                        subpixel      SCENE_SNAP
@@ -330,7 +330,7 @@ msg_expect_snap:    .asciz "bad value (expected subpixel or pixel)"
 msg_expect_filter:  .asciz "bad value (expected nearest, bilinear or mipmap)"
 msg_expect_harts:   .asciz "bad value (expected auto, 1 or 2)"
 msg_expect_antialias: .asciz "bad value (expected off, edge or supersample)"
-msg_levels:         .asciz "bad value (must be a whole number from 2 to 65)"
+msg_levels:         .asciz "bad value (must be a whole number from 2 to 65537)"
 
     .text
     .globl scene_load

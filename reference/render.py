@@ -49,11 +49,11 @@ Where the reference is exact and the firmware is not (these are what the compari
   shading (I per corner, interpolated) both approximate it; the two agree with the reference
   only on faces whose corner normals equal the face normal, or without vn;
 - each RGB565 channel times I rounded to nearest (the firmware quantises I to
-  k = round(64 I), or to its `light_levels`, and truncates channel * k / 64);
+  k = round(64 I), or to its `light_levels`, and rounds channel * k / 64; above 65 levels k / 65536);
 - texture coordinates: exact perspective-correct interpolation (the firmware interpolates
   u/w, v/w, 1/w incrementally in single precision and divides once per pixel);
 - bilinear weights: exact fractions (the firmware's are in 1/32 texel, truncated) and one
-  rounding of the lit blend (the firmware's is the same, with k / 64 for I); the mip level
+  rounding of the lit blend (the firmware's is the same, with k / 64 or k / 65536 for I); the mip level
   from the exact Jacobian (the firmware's from its float32 planes, |det H| w^3);
 - wireframe end points: exact projections (the firmware converts its Q4 positions to pixels).
 """

@@ -63,7 +63,9 @@ ANTIALIAS_WORDS: tuple[str, ...] = ("off", "edge", "supersample")
 # The keys taking one word that are not precision keys -> the words allowed, the default first.
 OTHER_WORDS: dict[str, tuple[str, ...]] = {"filter": FILTER_WORDS, "harts": HARTS_WORDS,
                                            "antialias": ANTIALIAS_WORDS}
-LIGHT_LEVELS_MIN, LIGHT_LEVELS_MAX = 2, 65
+# 2 .. 65 levels light in 1/64 steps, more in 1/65536 (the firmware's wide fills, render.inc)
+LIGHT_LEVELS_MIN, LIGHT_LEVELS_MAX = 2, 65537
+LIGHT_LEVELS_DEFAULT = 65
 KEYS = ("model", "texture", "mode", "cull", "scale", "axis", "angle", "step", "translate",
         "fov", "near", "far", "light", "ambient", "background",
         "interpolation", "shading", "light_levels", "angles", "depth", "snap", "filter", "harts",
@@ -104,7 +106,7 @@ class Scene:
     # precision keys: what the firmware approximates (the reference ignores them)
     interpolation: str = "perspective"           # perspective | affine
     shading: str = "flat"                        # flat | gouraud
-    light_levels: int = 65                       # 2 .. 65
+    light_levels: int = LIGHT_LEVELS_DEFAULT     # 2 .. 65537
     angles: str = "polynomial"                   # polynomial | table
     depth: str = "int16"                         # int16 | float32
     snap: str = "subpixel"                       # subpixel | pixel

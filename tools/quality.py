@@ -21,7 +21,8 @@ from collections.abc import Iterable
 from pathlib import Path
 from xml.sax.saxutils import escape
 
-from reference.scene import ANTIALIAS_WORDS, FILTER_WORDS, LIGHT_LEVELS_MAX, LIGHT_LEVELS_MIN, PRECISION_WORDS
+from reference.scene import (ANTIALIAS_WORDS, FILTER_WORDS, LIGHT_LEVELS_DEFAULT, LIGHT_LEVELS_MAX, LIGHT_LEVELS_MIN,
+                             PRECISION_WORDS)
 
 # --- the settings ---------------------------------------------------------------------------------
 
@@ -29,7 +30,9 @@ from reference.scene import ANTIALIAS_WORDS, FILTER_WORDS, LIGHT_LEVELS_MAX, LIG
 # reference renderer checks them exactly as the firmware does, so its tables serve here), and
 # the texture filter, which the reference's pixel-centre image follows.
 PRECISION_KEYS = {**PRECISION_WORDS, "filter": FILTER_WORDS, "antialias": ANTIALIAS_WORDS,
-                  "light_levels": tuple(str(n) for n in range(LIGHT_LEVELS_MAX, LIGHT_LEVELS_MIN - 1, -1))}
+                  "light_levels": tuple(str(n) for n in (LIGHT_LEVELS_DEFAULT,
+                                                          *(n for n in range(LIGHT_LEVELS_MAX, LIGHT_LEVELS_MIN - 1, -1)
+                                                            if n != LIGHT_LEVELS_DEFAULT)))}
 
 # Every setting the bench sweeps, in the order the tables list them: name -> scene.ini keys added
 # to the scene's own. "default" is the firmware as it ships; then one knob at a time; then presets.
@@ -49,10 +52,11 @@ SETTINGS: dict[str, dict[str, str]] = {
     "thesis":        {"interpolation": "affine", "shading": "flat", "light_levels": "33", "angles": "table",
                       "depth": "int16", "snap": "pixel"},
     "best":          {"interpolation": "perspective", "shading": "gouraud", "depth": "float32"},
-    # the closest to the ideal image: supersampling, and depth that separates the decal's two quads
-    # (with bilinear or mipmap filtering added, magnified textures blur where the ideal's texels
-    # stay sharp: the cube's 8x8 texture loses 14 dB against it, the decal's 5.5)
-    "most-accurate": {"antialias": "supersample", "depth": "float32"},
+    # the closest to the ideal image: supersampling, depth that separates the decal's two quads,
+    # and light in 1/65536 steps (with bilinear or mipmap filtering added, magnified textures blur
+    # where the ideal's texels stay sharp: the cube's 8x8 texture loses 14 dB against it, the
+    # decal's 5.5)
+    "most-accurate": {"antialias": "supersample", "depth": "float32", "light_levels": "65537"},
 }
 DEFAULT_SETTING = "default"
 # Wireframe has no texture, light or depth buffer: only the angles, the snapping and antialiased

@@ -170,7 +170,7 @@ BAD_FILES = {
     "scene-far-before-near": ({"/scene.ini": b"near = 5\nfar = 2\n"}, BAD_SCENE, "line 2"),
     "scene-bad-number": ({"/scene.ini": b"scale = 1e\n"}, BAD_SCENE, "line 1"),
     "scene-light-levels-fraction": ({"/scene.ini": b"light_levels = 3.5\n"}, BAD_SCENE, "line 1: bad value (must be a whole"),
-    "scene-light-levels-too-many": ({"/scene.ini": b"\nlight_levels = 66\n"}, BAD_SCENE, "line 2: bad value (must be a whole"),
+    "scene-light-levels-too-many": ({"/scene.ini": b"\nlight_levels = 65538\n"}, BAD_SCENE, "line 2: bad value (must be a whole"),
     "scene-bad-depth": ({"/scene.ini": b"depth = 24\n"}, BAD_SCENE, "line 1: bad value (expected int16 or float32)"),
 }
 
