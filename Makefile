@@ -106,10 +106,15 @@ CARD_SCENE  := --scene model=models/torus.obj --scene texture=textures/torus.ppm
                --scene "translate=0 0 -2.6" --scene "axis=1 0.6 0.2" --scene angle=40 --scene step=4 \
                --scene "light=0.3 0.5 1" --scene ambient=0.25
 
+# Reproducible (sdcard_image/README.md): the same card, volume ID and times, on every machine;
+# 2022-01-01 00:00:00 UTC, the thesis's year.
+CARD_DATE_EPOCH := 1640995200
+
 $(DEFAULT_CARD): tools/make_assets.py $(wildcard sdcard_image/*.py) Makefile | venv
 	rm -rf $(BUILD)/assets
 	$(PYTHON) tools/make_assets.py $(BUILD)/assets
-	$(PYTHON) -m sdcard_image build $@ --force -q $(CARD_SCENE) $(BUILD)/assets/models $(BUILD)/assets/textures
+	SOURCE_DATE_EPOCH=$(CARD_DATE_EPOCH) $(PYTHON) -m sdcard_image build $@ --force -q $(CARD_SCENE) \
+	    $(BUILD)/assets/models $(BUILD)/assets/textures
 
 card: $(DEFAULT_CARD)
 

@@ -16,6 +16,13 @@ of a volume that fsck.fat, mtools and a strict firmware reader accept, this modu
   created in one folder. `CardFS` replaces creation with Windows-style short names and a
   case-insensitive duplicate check.
 
+A card is reproducible when asked: its volume ID (and the MBR's disk signature) and every entry's
+times are otherwise random and the current time. With SOURCE_DATE_EPOCH set (the convention of
+reproducible-builds.org: seconds since 1970, UTC) or given `CardStamp` explicitly, the same files
+make the same image byte for byte (`card_stamp`). Firmware that reads a table indexed by a card's
+bytes (a CRC) meets the card's caches differently on different bytes, so cycle counts are only
+repeatable on a repeatable card.
+
 pyfatfs also reads the FAT one entry at a time through struct (0.15 s for the default card,
 on every open) and packs it with a struct format of one letter per entry (at every file created
 or closed); `CardFat` reads a FAT32 table in one go, to the same list, and packs it in one go, to
@@ -355,17 +362,51 @@ class CardFat(PyFat):
         return table.tobytes()
 
 
+@dataclass(frozen=True)
+class CardStamp:
+    """What makes a card image differ between two builds of the same files: the volume ID (also
+    the MBR's disk signature) and the time its entries are created at (None: the current time)."""
+    volume_id: int
+    time: datetime.datetime | None = None
+
+
+def _dos_date(when: datetime.datetime) -> int:
+    return (when.year - 1980) << 9 | when.month << 5 | when.day
+
+
+def _dos_time(when: datetime.datetime) -> int:
+    return when.hour << 11 | when.minute << 5 | when.second // 2
+
+
+def card_stamp() -> CardStamp:
+    """SOURCE_DATE_EPOCH's stamp when it is set (the time it names, UTC, and a volume ID from it),
+    otherwise a random volume ID and the current time. Raises UsageError for a value that is not
+    a whole number of seconds FAT can hold (1980 to 2107)."""
+    epoch = os.environ.get("SOURCE_DATE_EPOCH")
+    if epoch is None:
+        return CardStamp(volume_id=int.from_bytes(os.urandom(4), "little"))
+    try:
+        seconds = int(epoch)
+        when = datetime.datetime.fromtimestamp(seconds, datetime.timezone.utc).replace(tzinfo=None)
+    except (ValueError, OverflowError, OSError):
+        raise UsageError(f"SOURCE_DATE_EPOCH={epoch!r} is not a time (whole seconds since 1970)") from None
+    if not 1980 <= when.year <= 2107:
+        raise UsageError(f"SOURCE_DATE_EPOCH={epoch!r} is outside the years FAT can hold (1980-2107)")
+    return CardStamp(volume_id=seconds & 0xFFFFFFFF, time=when)
+
+
 class CardFS(PyFatFS):
     """pyfatfs' filesystem with FAT-correct entry creation (see the module docstring), on a
-    `CardFat`."""
+    `CardFat`; new entries take `time` (None: the current time)."""
 
-    def __init__(self, filename: str, offset: int) -> None:
+    def __init__(self, filename: str, offset: int, time: datetime.datetime | None = None) -> None:
         # PyFatFS.__init__, with CardFat for PyFat (defaults otherwise: preserve case, local time)
         FS.__init__(self)
         self.preserve_case = True
         self.fs = CardFat(offset=int(offset))
         self.fs.open(filename)
         self.tz = datetime.datetime.now(datetime.timezone.utc).astimezone().tzinfo
+        self.time = time
 
     def _entry_names(self, base: FATDirectoryEntry) -> list[tuple[FATDirectoryEntry, str]]:
         dirs, files, _ = base.get_entries()
@@ -391,6 +432,10 @@ class CardFS(PyFatFS):
         sfn = EightDotThree(encoding=self.fs.encoding)
         sfn.set_byte_name(sfn_bytes)
         entry = FATDirectoryEntry.new(name=sfn, tz=self.tz, encoding=self.fs.encoding, attr=attr)
+        if self.time is not None:
+            date, time = _dos_date(self.time), _dos_time(self.time)
+            entry.crttime = entry.wrttime = time
+            entry.crtdate = entry.wrtdate = entry.lstaccessdate = date
         if sfn.get_unpadded_filename() != name:
             entry.set_lfn_entry(make_lfn(name, sfn))
         return entry
@@ -464,29 +509,33 @@ class CardWriter:
     `close` (or the with-block) flushes pyfatfs and fixes the FSInfo sector.
     """
 
-    def __init__(self, image: Path, partition: mbr.PartitionEntry) -> None:
+    def __init__(self, image: Path, partition: mbr.PartitionEntry, stamp: CardStamp | None = None) -> None:
         self.image = Path(image)
         self.partition = partition
+        self.stamp = stamp if stamp is not None else card_stamp()
         self.offset = partition.start_lba * mbr.SECTOR_SIZE
         self.fs: CardFS = self._open()
 
     @classmethod
     def create(cls, image: Path, size_mib: int, label: str = VOLUME_LABEL,
-               layout: str = LAYOUT_FATGEN103) -> "CardWriter":
+               layout: str = LAYOUT_FATGEN103, stamp: CardStamp | None = None) -> "CardWriter":
         """Writes a blank card: MBR with one FAT32 (0x0C) partition from LBA 2048 to the end,
-        formatted by pyfatfs or (layout mkfs.fat) by mkfs.fat. The file is created or truncated."""
+        formatted by pyfatfs or (layout mkfs.fat) by mkfs.fat. The file is created or truncated.
+        `stamp` (default: `card_stamp()`) gives the volume ID and the entries' time."""
         total = size_mib * 1024 * 1024 // mbr.SECTOR_SIZE
         geometry = image_geometry(size_mib, layout)
         part = mbr.PartitionEntry(type=mbr.TYPE_FAT32_LBA, start_lba=mbr.PARTITION_START_LBA,
                                   sector_count=total - mbr.PARTITION_START_LBA)
-        volume_id = int.from_bytes(os.urandom(4), "little")
+        stamp = stamp if stamp is not None else card_stamp()
+        volume_id = stamp.volume_id
         with open(image, "wb") as f:
             # Sparse: the zeros pyfatfs relies on for free FAT entries cost no disk space.
             f.truncate(total * mbr.SECTOR_SIZE)
             f.write(mbr.build_mbr([part], disk_signature=volume_id))
         if layout == LAYOUT_MKFS_FAT:
             mkfs_fat_format(image, part, label, volume_id)
-            writer = cls(image, part)
+            writer = cls(image, part, stamp)
+            writer._stamp_label()
             if writer.cluster_count != geometry.cluster_count:
                 writer.fs.close()
                 raise RuntimeError(f"mkfs.fat formatted {writer.cluster_count} clusters; planned {geometry}")
@@ -496,7 +545,8 @@ class CardWriter:
                        size=part.sector_count * mbr.SECTOR_SIZE, label=label,
                        volume_id=volume_id)
         formatter.close()
-        writer = cls(image, part)
+        writer = cls(image, part, stamp)
+        writer._stamp_label()
         actual = writer.fs.fs.bpb_header
         if (actual["BPB_SecPerClus"], actual["BPB_FATSz32"]) != (geometry.sectors_per_cluster,
                                                                  geometry.fat_sectors):
@@ -504,6 +554,18 @@ class CardWriter:
             raise RuntimeError(f"pyfatfs formatted {actual['BPB_SecPerClus']} sectors/cluster, "
                                f"{actual['BPB_FATSz32']} FAT sectors; planned {geometry}")
         return writer
+
+    def _stamp_label(self) -> None:
+        """The formatter's volume label entry in the root folder at the stamp's time (it has the
+        formatting's), when the stamp has one."""
+        if self.stamp.time is None:
+            return
+        root = self.fs.fs.root_dir
+        for entry in root._get_entries_raw():
+            if entry.attr == FATDirectoryEntry.ATTR_VOLUME_ID:
+                entry.crttime = entry.wrttime = _dos_time(self.stamp.time)
+                entry.crtdate = entry.wrtdate = entry.lstaccessdate = _dos_date(self.stamp.time)
+        self.fs.fs.update_directory_entry(root)
 
     @classmethod
     def open(cls, image: Path) -> "CardWriter":
@@ -518,7 +580,7 @@ class CardWriter:
     def _open(self) -> CardFS:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # "not cleanly unmounted" right after mkfs
-            fs = CardFS(str(self.image), offset=self.offset)
+            fs = CardFS(str(self.image), offset=self.offset, time=self.stamp.time)
         pf = fs.fs
         header = pf.bpb_header
         # pyfatfs's mkfs leaves these 0; a volume another formatter made keeps its own

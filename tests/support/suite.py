@@ -3,6 +3,7 @@ paths, the board-model runs, and the folders and values made once for a whole py
 Tests import it as `suite` (pyproject.toml puts tests/support on the import path)."""
 from __future__ import annotations
 
+import datetime
 import fcntl
 import os
 import pickle
@@ -66,13 +67,20 @@ def run_together(jobs: dict[K, Callable[[], T]]) -> dict[K, T]:
         return {key: future.result() for key, future in futures.items()}
 
 
+# The test cards' volume ID and entry times: the same files make the same card, so that runs whose
+# cycles depend on the card's bytes (a CRC's table lookups in the data cache) repeat exactly.
+CARD_STAMP_VOLUME_ID = 0x4B323130       # "K210"
+CARD_STAMP_TIME = datetime.datetime(2022, 1, 1)
+
+
 def make_card(folder: Path, files: dict[str, bytes]) -> Path:
     """A card holding exactly these files (card path -> bytes), written without the card
-    builder's checks, so that malformed files reach the firmware as they are."""
-    from sdcard_image.fat32 import CardWriter
+    builder's checks, so that malformed files reach the firmware as they are; the same files
+    make the same image (CARD_STAMP_*)."""
+    from sdcard_image.fat32 import CardStamp, CardWriter
     folder.mkdir(parents=True, exist_ok=True)
     card = folder / "card.img"
-    with CardWriter.create(card, 64) as writer:
+    with CardWriter.create(card, 64, stamp=CardStamp(CARD_STAMP_VOLUME_ID, CARD_STAMP_TIME)) as writer:
         for path, data in files.items():
             parent = path.rpartition("/")[0]
             if parent:

@@ -14,6 +14,7 @@ import random
 import shutil
 import struct
 import subprocess
+import time
 from pathlib import Path
 
 import numpy as np
@@ -467,6 +468,44 @@ def test_api_build_list_read(tmp_path, inputs):
     with pytest.raises(UsageError):
         read_file(out, "/models/missing.obj")
     assert not list(tmp_path.glob(".*tmp"))
+
+
+@pytest.mark.parametrize("layout", [fat32.LAYOUT_FATGEN103, fat32.LAYOUT_MKFS_FAT])
+def test_source_date_epoch_makes_the_same_card_byte_for_byte(tmp_path, inputs, monkeypatch, layout):
+    """reproducible-builds.org's SOURCE_DATE_EPOCH: two builds of the same files a few seconds
+    apart give the same image (volume ID, disk signature, every entry's times); without it the
+    volume ID is random. The times read back as the epoch names (UTC)."""
+    if layout == fat32.LAYOUT_MKFS_FAT:
+        tool("fsck.fat")                        # dosfstools, which has mkfs.fat
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", "1700000000")          # 2023-11-14 22:13:20 UTC
+    digests = []
+    for name in ("a.img", "b.img"):
+        assert run_cli("build", tmp_path / name, "-q", "--layout", layout, inputs / "models").returncode == 0
+        digests.append(hashlib.sha256((tmp_path / name).read_bytes()).hexdigest())
+        time.sleep(1.1)
+    assert digests[0] == digests[1]
+    boot = (tmp_path / "a.img").read_bytes()[PART_OFFSET:PART_OFFSET + 512]
+    assert struct.unpack_from("<I", boot, 67)[0] == 1700000000      # BS_VolID
+    writer = fat32.CardWriter.open(tmp_path / "a.img")
+    try:
+        entry = writer.fs.getinfo("/models/cube.obj", namespaces=["details"])
+        assert entry.modified.replace(tzinfo=None).timetuple()[:6] == (2023, 11, 14, 22, 13, 20)
+    finally:
+        writer.fs.close()
+    monkeypatch.delenv("SOURCE_DATE_EPOCH")
+    for name in ("c.img", "d.img"):
+        assert run_cli("build", tmp_path / name, "-q", "--layout", layout, inputs / "models").returncode == 0
+    ids = {struct.unpack_from("<I", (tmp_path / n).read_bytes(), PART_OFFSET + 67)[0] for n in ("c.img", "d.img")}
+    assert len(ids) == 2
+
+
+@pytest.mark.parametrize("value", ["soon", "1.5", "100", "9999999999999"])
+def test_a_source_date_epoch_that_is_no_fat_time_is_a_usage_error(tmp_path, inputs, monkeypatch, value):
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", value)
+    result = run_cli("build", tmp_path / "x.img", "-q", inputs / "models")
+    assert result.returncode == EXIT_USAGE
+    assert "SOURCE_DATE_EPOCH" in result.stderr and "Traceback" not in result.stderr
+    assert not (tmp_path / "x.img").exists()
 
 
 def test_size_grows_in_64_mib_steps_when_content_needs_it():
