@@ -1,10 +1,14 @@
 # depth_check.S: whether the depth buffer can tell the model's surfaces apart
-# with the scene's near and far planes. Depth is z / w = far / (far - near) *
-# (1 - near / D) at a view distance D, so a far plane many times the near one
-# crowds every distance past a few near-plane lengths into the top of 0 .. 1,
-# where int16 (65534 steps) or float32 (the floats' spacing there) resolve
-# few values: surfaces that fall on one step hide each other by their drawing
-# order. The model's depth spans at most D = -tz -+ r, r its largest scaled
+# with the scene's near and far planes. int16 depth is z / w = far / (far -
+# near) * (1 - near / D) at a view distance D, so a far plane many times the
+# near one crowds every distance past a few near-plane lengths into the top
+# of 0 .. 1, where 65534 steps resolve few values: surfaces that fall on one
+# step hide each other by their drawing order. float32 depth is reversed
+# (render.inc), c1 / D - c0, whose floats grow finer towards the far plane;
+# but it is computed from 1 / D rounded to a float, so two distances whose
+# 1 / D round alike get one depth: its steps are the fewer of the floats
+# from d1 to d0 and of those from 1 / D1 to 1 / D0 (about 2^23 a doubling
+# of the distance; few only for a model thin against its distance). The model's depth spans at most D = -tz -+ r, r its largest scaled
 # vertex distance from its origin (any rotation), clipped to near .. far;
 # fewer than DEPTH_WARN_STEPS steps of the buffer over that span is said on
 # the console once, at load (not in wireframe mode, which draws without
@@ -65,21 +69,35 @@ depth_check:
     fmin.s  ft4, ft4, ft2               # D1
     flt.s   t3, ft3, ft4
     beqz    t3, 9f                      # nothing between near and far
-    fsub.s  ft5, ft2, ft1
+    lwu     t3, SCENE_DEPTH(t0)
+    li      t4, DEPTH_INT16
+    beq     t3, t4, 3f
+    fsub.s  ft5, ft2, ft1               # float32: as raster_set_depth and
+    fdiv.s  ft5, ft1, ft5               # raster_triangle compute it,
+    fmul.s  ft6, ft5, ft2               # c0 = near / (far - near), c1 = c0 far,
+    li      t5, F32_ONE                 # d = c1 (1 / D) - c0
+    fmv.w.x ft9, t5
+    fdiv.s  ft7, ft9, ft3               # 1 / D0
+    fdiv.s  ft8, ft9, ft4               # 1 / D1
+    fmv.x.w t5, ft7                     # the floats from 1 / D1 to 1 / D0,
+    fmv.x.w t6, ft8                     # which order as their bits (> 0)
+    sub     s0, t5, t6
+    fmsub.s ft7, ft7, ft6, ft5          # d0 (near side: the larger)
+    fmsub.s ft8, ft8, ft6, ft5          # d1
+    fmv.x.w t5, ft7                     # and from d1 to d0 (>= 0)
+    fmv.x.w t6, ft8
+    sub     t5, t5, t6
+    bge     t5, s0, 4f
+    mv      s0, t5
+    j       4f
+3:  fsub.s  ft5, ft2, ft1
     fdiv.s  ft5, ft2, ft5               # k = far / (far - near)
     fmul.s  ft6, ft5, ft1               # k near
     fdiv.s  ft7, ft6, ft3
     fsub.s  ft7, ft5, ft7               # d0 = k - k near / D0
     fdiv.s  ft8, ft6, ft4
     fsub.s  ft8, ft5, ft8               # d1
-    lwu     t3, SCENE_DEPTH(t0)
-    li      t4, DEPTH_INT16
-    beq     t3, t4, 3f
-    fmv.x.w t5, ft7                     # float32: the floats from d0 to d1,
-    fmv.x.w t6, ft8                     # which order as their bits (>= 0)
-    sub     s0, t6, t5
-    j       4f
-3:  li      t5, F32_DEPTH16_SPAN        # int16: floor(65534 d) from d0 to d1
+    li      t5, F32_DEPTH16_SPAN        # int16: floor(65534 d) from d0 to d1
     fmv.w.x ft9, t5
     fmul.s  ft7, ft7, ft9
     fcvt.w.s t5, ft7, rdn

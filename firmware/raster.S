@@ -79,6 +79,9 @@ raster_depth:
     .globl raster_depth_mode
 raster_depth_mode:
     .space  8
+    .globl raster_depth_reverse
+raster_depth_reverse:
+    .space  8
 # filter = mipmap: the level table (raster_texture.S raster_build_mips)
     .globl raster_mip_table
 raster_mip_table:

@@ -18,7 +18,10 @@
 # raster_set_depth
 #   What: sets the depth buffer and its format for the following frames.
 #   Arguments: a0 = the buffer (LCD_PIXELS entries, 64-aligned), a1 =
-#              DEPTH_FLOAT32 (f32 z / w) or DEPTH_INT16 (u16, render.inc).
+#              DEPTH_FLOAT32 (f32 reversed depth) or DEPTH_INT16 (u16,
+#              render.inc); fa0, fa1 = the near and far planes' distances
+#              (0 < near < far), from which the reversed depth's constants
+#              (raster_depth_reverse) come.
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 raster_set_depth:
@@ -26,6 +29,12 @@ raster_set_depth:
     sd      a0, 0(t0)
     la      t0, raster_depth_mode
     sd      a1, 0(t0)
+    fsub.s  ft0, fa1, fa0
+    fdiv.s  ft0, fa0, ft0               # c0 = near / (far - near)
+    fmul.s  ft1, ft0, fa1               # c1 = c0 far
+    la      t0, raster_depth_reverse
+    fsw     ft1, DEPTH_REVERSE_C1(t0)
+    fsw     ft0, DEPTH_REVERSE_C0(t0)
     ret
 
     .globl raster_clear

@@ -102,7 +102,8 @@
 
 # DEPTH_TEST depth16, gouraud
 #   The pixel's depth against the buffer's: not nearer, on to 7; nearer, the
-#   depth stored and (Gouraud) t4 = k. Clobbers t0, t1.
+#   depth stored and (Gouraud) t4 = k. (16-bit: the smaller is nearer;
+#   float32, reversed depth: the larger.) Clobbers t0, t1.
 .macro DEPTH_TEST depth16, gouraud
     .if \depth16
     lhu     t1, 0(a1)
@@ -112,7 +113,7 @@
     .else
     lw      t1, 0(a1)
     fmv.x.w t0, fa0
-    bge     t0, t1, 7f                  # not nearer
+    bge     t1, t0, 7f                  # not nearer
     sw      t0, 0(a1)
     .endif
     .if \gouraud
@@ -190,7 +191,7 @@
     .else
     lw      t3, 0(a1)
     fmv.x.w t0, fa0
-    bge     t0, t3, 7f                  # not nearer
+    bge     t3, t0, 7f                  # not nearer (reversed depth)
     li      t3, AA_DEPTH_WRITE
     blt     t1, t3, .Ldepth_kept\@
     sw      t0, 0(a1)

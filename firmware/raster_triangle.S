@@ -22,9 +22,10 @@
 #     the screen, is scanned row by row: each row skips to its first inside
 #     pixel and stops at the first outside one after it (triangles are
 #     convex).
-#   - Depth: z / w interpolated linearly in screen space as a float and
-#     compared as a signed 32-bit integer (render.inc); a fragment is drawn
-#     when it is strictly nearer than what the buffer holds.
+#   - Depth: the reversed depth (float32) or z / w (int16) interpolated
+#     linearly in screen space as a float and compared as a signed 32-bit
+#     integer (render.inc); a fragment is drawn when it is strictly nearer
+#     than what the buffer holds.
 #   - Attributes are planes: gradients per pixel from the snapped corners,
 #     re-anchored at the first inside pixel of every row. Depth is evaluated
 #     from its plane at every pixel and every row (one rounding each), not
@@ -369,13 +370,24 @@ raster_triangle:
     fcvt.s.l ft10, t3
     fmul.s  ft10, ft10, ft8
     # depth: fa4 = per pixel right, ft4 = per row, ft0 = at the first centre;
-    # z / w itself, or DEPTH16_NEAR + z / w * DEPTH16_SPAN for 16-bit depth
-    flw     ft11, RV_Z(t0)
-    flw     ft4, RV_Z(t1)
-    flw     ft0, RV_Z(t2)
+    # the reversed depth c1 (1 / w) - c0 (render.inc), or DEPTH16_NEAR + z /
+    # w * DEPTH16_SPAN for 16-bit depth
     la      t3, raster_depth_mode
     ld      t3, 0(t3)
-    beqz    t3, 5f
+    bnez    t3, 4f
+    la      t3, raster_depth_reverse
+    flw     ft5, DEPTH_REVERSE_C1(t3)
+    flw     ft6, DEPTH_REVERSE_C0(t3)
+    flw     ft11, RV_Q(t0)
+    flw     ft4, RV_Q(t1)
+    flw     ft0, RV_Q(t2)
+    fmsub.s ft11, ft11, ft5, ft6
+    fmsub.s ft4, ft4, ft5, ft6
+    fmsub.s ft0, ft0, ft5, ft6
+    j       5f
+4:  flw     ft11, RV_Z(t0)
+    flw     ft4, RV_Z(t1)
+    flw     ft0, RV_Z(t2)
     li      t3, F32_DEPTH16_SPAN
     fmv.w.x ft5, t3
     li      t3, F32_DEPTH16_NEAR

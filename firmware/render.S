@@ -147,6 +147,8 @@ render_init:
 5:  la      a1, msg_depth_buffer
     call    heap_alloc_or_fail
     lwu     a1, SCENE_DEPTH(s0)
+    flw     fa0, SCENE_NEAR(s0)
+    flw     fa1, SCENE_FAR(s0)
     call    raster_set_depth
     la      t0, render_fill
     lwu     t0, 0(t0)

@@ -16,12 +16,15 @@ from suite import ROOT, make_card
 
 TORUS = ROOT / "build" / "assets" / "models" / "torus.obj"
 # (translate z, scale, far, depth): the default scene; a model 100 times larger, 100 times further, with
-# a far plane of 1e7 (16-bit depth: a handful of steps; float32: thousands); and 10,000 times
+# a far plane of 1e7 (16-bit depth: a handful of steps; float32, reversed: millions), and 10,000 times
+# (float32: millions still); the model at its own size a million units away (float32: its 1 / D, rounded,
+# takes a few dozen values)
 FAR_SCENES = {
     "default": (-3, 1, "100", "int16"),
     "far-int16": (-300, 100, "1e7", "int16"),
     "far-float32": (-300, 100, "1e7", "float32"),
     "farther-float32": (-30000, 10000, "1e7", "float32"),
+    "thin-far-float32": (-1e6, 1, "1e7", "float32"),
 }
 
 
@@ -47,22 +50,30 @@ def test_the_firmware_warns_exactly_when_the_card_builder_does(firmware, tmp_pat
     expected = depth_warning(parse_scene(text), parse_obj(TORUS.read_bytes()).vertices)
     warnings = [line for line in firmware_console(firmware, tmp_path, text) if line.startswith("warning: depth")]
     assert warnings == ([] if expected is None else [f"warning: {expected}"])
-    assert (expected is not None) == (name in ("far-int16", "farther-float32"))
+    assert (expected is not None) == (name in ("far-int16", "thin-far-float32"))
+
+
+def _floats_between(a: float, b: float) -> int:
+    """How many float32 values lie between a and b (both >= 0, each rounded to a float32 first)."""
+    return abs(int(np.float32(a).view(np.int32)) - int(np.float32(b).view(np.int32)))
 
 
 def test_the_steps_follow_the_depth_mapping():
-    """The count against the mapping done in double precision: a span of the model's size at its
-    distance covers far / (far - near) near (1 / D0 - 1 / D1) of depth, which 16-bit depth cuts
-    into 65534ths and float32 near 1 into 2^-24ths (within a step or two of single-precision
-    rounding)."""
+    """The count against the mappings done in double precision: 16-bit depth cuts far / (far - near)
+    near (1 / D0 - 1 / D1) into 65534ths; float32's reversed depth c1 / D - c0 has as many steps as
+    there are floats between its values at D1 and D0, or between 1 / D1 and 1 / D0 where those are
+    fewer (within a step or two of single-precision rounding, or a thousandth)."""
     vertices = parse_obj(TORUS.read_bytes()).vertices
     r = float(np.max(np.linalg.norm(vertices, axis=1)))
     for z, scale, far, depth in FAR_SCENES.values():
         scene = parse_scene(scene_text(z, scale, far, depth))
         near, far_ = 0.1, float(far)
-        d0, d1 = -z - scale * r, -z + scale * r
-        span = far_ / (far_ - near) * near * (1 / max(d0, near) - 1 / d1)
-        ideal = span * 65534 if depth == "int16" else span * 2 ** 24
+        d0, d1 = max(-z - scale * r, near), -z + scale * r
+        if depth == "int16":
+            ideal = far_ / (far_ - near) * near * (1 / d0 - 1 / d1) * 65534
+        else:
+            c0 = near / (far_ - near)
+            ideal = min(_floats_between(c0 * far_ / d0 - c0, c0 * far_ / d1 - c0), _floats_between(1 / d0, 1 / d1))
         assert abs(depth_steps(scene, vertices) - ideal) <= max(2, ideal * 1e-3), (z, depth)
 
 
