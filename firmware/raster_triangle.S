@@ -94,6 +94,68 @@
     fmadd.s \base, \ddy, ft10, \base
 .endm
 
+# DEPTH_GRADIENT
+#   GRADIENT for float32 depth (ft11, ft4, ft0 = its values at corners t0,
+#   t1, t2; into fa4 per pixel right, ft4 per row down, ft0 at the first
+#   centre a2, a3), but through the corners where they project before
+#   snapping (RV_FX, RV_FY, moved by the sample's offset as the snapped ones
+#   are): snapping moves a corner by up to 1/32 pixel, and on a surface at 17
+#   degrees that shifts its plane by 1.5e-6, where two quads crossing at a
+#   slope of 1e-4 differ by 1.6e-8 a pixel from the crossing. A corner
+#   triangle of no positive area there (a sliver whose snapped area is not:
+#   or NaN) keeps the snapped plane, GRADIENT's. (int16 depth, 1000 times
+#   coarser, keeps GRADIENT's plane.) Clobbers a0, a1, t3, ft1..ft3, ft5..ft8,
+#   fa5, fa6.
+.macro DEPTH_GRADIENT
+    flw     ft1, RV_FX(t0)
+    flw     ft2, RV_FY(t0)
+    flw     ft3, RV_FX(t1)
+    flw     ft5, RV_FY(t1)
+    flw     ft6, RV_FX(t2)
+    flw     ft7, RV_FY(t2)
+    fsub.s  ft3, ft3, ft1               # dx1
+    fsub.s  ft5, ft5, ft2               # dy1
+    fsub.s  ft6, ft6, ft1               # dx2
+    fsub.s  ft7, ft7, ft2               # dy2
+    fmul.s  fa5, ft3, ft7
+    fnmsub.s fa5, ft6, ft5, fa5         # area = dx1 dy2 - dx2 dy1
+    fmv.w.x fa6, zero
+    flt.s   t3, fa6, fa5
+    bnez    t3, .Lexact\@
+    GRADIENT ft11, ft4, ft0, fa4, ft4, ft0
+    j       .Ldone\@
+.Lexact\@:
+    fsub.s  ft4, ft4, ft11              # d1
+    fsub.s  ft0, ft0, ft11              # d2
+    fmul.s  fa4, ft4, ft7
+    fnmsub.s fa4, ft0, ft5, fa4
+    fdiv.s  fa4, fa4, fa5               # (d1 dy2 - d2 dy1) / area
+    fmul.s  fa6, ft0, ft3
+    fnmsub.s ft4, ft4, ft6, fa6
+    fdiv.s  ft4, ft4, fa5               # (d2 dx1 - d1 dx2) / area
+    la      t3, raster_sample           # the first centre from corner 0
+    add     t3, t3, tp                  # (pixels): the centre, in pixels from
+    lw      a0, SAMPLE_OFFSET_X(t3)     # the screen's, where corner 0 lies
+    lw      a1, SAMPLE_OFFSET_Y(t3)     # once moved by minus the offset
+    add     a0, a0, a2
+    add     a1, a1, a3
+    li      t3, SCREEN_HALF_W_Q4
+    sub     a0, a0, t3
+    li      t3, SCREEN_HALF_H_Q4
+    sub     a1, a1, t3
+    fcvt.s.l ft3, a0
+    fcvt.s.l ft5, a1
+    li      t3, F32_Q4_TO_PIXEL
+    fmv.w.x ft6, t3
+    fmul.s  ft3, ft3, ft6
+    fmul.s  ft5, ft5, ft6
+    fsub.s  ft3, ft3, ft1
+    fsub.s  ft5, ft5, ft2
+    fmadd.s ft0, fa4, ft3, ft11
+    fmadd.s ft0, ft4, ft5, ft0
+.Ldone\@:
+.endm
+
 # SILHOUETTE rec, xa, ya, xb, yb, bit
 #   antialias = edge: sets RASTER_SILHOUETTE_SHIFT + bit in t5 when the edge
 #   a -> b (the triangle inside on its E >= 0 side) is a silhouette: the
@@ -384,7 +446,8 @@ raster_triangle:
     fmsub.s ft11, ft11, ft5, ft6
     fmsub.s ft4, ft4, ft5, ft6
     fmsub.s ft0, ft0, ft5, ft6
-    j       5f
+    DEPTH_GRADIENT
+    j       6f
 4:  flw     ft11, RV_Z(t0)
     flw     ft4, RV_Z(t1)
     flw     ft0, RV_Z(t2)
@@ -396,7 +459,7 @@ raster_triangle:
     fmadd.s ft4, ft4, ft5, ft6
     fmadd.s ft0, ft0, ft5, ft6
 5:  GRADIENT ft11, ft4, ft0, fa4, ft4, ft0
-    # depth is evaluated from its plane at every pixel (raster_fills.S
+6:  # depth is evaluated from its plane at every pixel (raster_fills.S
     # PLANES_DOWN, NEXT_PIXEL), not summed step by step: a step under half
     # an ulp of the depth would be lost at every addition
     fsw     ft0, RT_DEPTH_ORIGIN(sp)

@@ -105,6 +105,8 @@ clip_and_draw:
     sw      a1, RV_Y(s1)
     fsw     fa0, RV_Z(s1)
     fsw     fa1, RV_Q(s1)
+    fsw     fa2, RV_FX(s1)
+    fsw     fa3, RV_FY(s1)
     lw      t1, CV_S(s0)
     sw      t1, RV_S(s1)
     lw      t1, CV_T(s0)

@@ -152,6 +152,8 @@ draw_triangles:
     mv      t4, s6
     mv      t5, s7
     li      t2, TRIANGLE_CORNERS
+    la      a2, raster_depth_mode
+    ld      a2, 0(a2)                   # a2 = int16 depth
 5:  lw      t3, VTX_SX(t1)
     sw      t3, RV_X(t0)
     lw      t3, VTX_SY(t1)
@@ -160,7 +162,32 @@ draw_triangles:
     sw      t3, RV_Z(t0)
     lw      t3, VTX_Q(t1)
     sw      t3, RV_Q(t0)
-    addi    t0, t0, RV_BYTES
+    bnez    a2, 51f
+    # float32 depth: the corner before snapping (RV_FX, RV_FY), pixels from
+    # the screen's centre: the snapped position plus the snap's residual
+    li      t3, F32_Q4_TO_PIXEL
+    fmv.w.x ft2, t3
+    li      t3, F32_SNAP_UNIT
+    fmv.w.x ft3, t3
+    lh      t3, VTX_SNAP_X(t1)
+    fcvt.s.w ft0, t3
+    fmul.s  ft0, ft0, ft3
+    lw      t3, VTX_SX(t1)
+    li      a3, SCREEN_HALF_W_Q4
+    sub     t3, t3, a3
+    fcvt.s.w ft1, t3
+    fmadd.s ft0, ft1, ft2, ft0
+    fsw     ft0, RV_FX(t0)
+    lh      t3, VTX_SNAP_Y(t1)
+    fcvt.s.w ft0, t3
+    fmul.s  ft0, ft0, ft3
+    lw      t3, VTX_SY(t1)
+    li      a3, SCREEN_HALF_H_Q4
+    sub     t3, t3, a3
+    fcvt.s.w ft1, t3
+    fmadd.s ft0, ft1, ft2, ft0
+    fsw     ft0, RV_FY(t0)
+51: addi    t0, t0, RV_BYTES
     mv      t1, t4
     mv      t4, t5
     addi    t2, t2, -1

@@ -26,6 +26,31 @@
     .include "render.inc"
     .include "frame.inc"
 
+# SNAP_RESIDUAL q4, exact, half
+#   t1 = how far snapping moved one coordinate of a projected corner: exact
+#   (pixels from the screen's centre, project_clip's fa2 or fa3) minus q4
+#   (its snapped Q4 position; half = the centre's), in 2^-15 pixel (render.inc
+#   F32_SNAP_*), clamped to half a pixel (only a NaN position gets there).
+#   Clobbers t0, ft0, ft1.
+.macro SNAP_RESIDUAL q4, exact, half
+    li      t0, \half
+    sub     t0, \q4, t0
+    fcvt.s.w ft0, t0
+    li      t0, F32_Q4_TO_PIXEL
+    fmv.w.x ft1, t0
+    fmul.s  ft0, ft0, ft1               # snapped, pixels from the centre (exact)
+    fsub.s  ft0, \exact, ft0
+    li      t0, F32_SNAP_UNITS
+    fmv.w.x ft1, t0
+    fmul.s  ft0, ft0, ft1
+    li      t0, F32_SNAP_LIMIT
+    fmv.w.x ft1, t0
+    fmin.s  ft0, ft0, ft1
+    fneg.s  ft1, ft1
+    fmax.s  ft0, ft0, ft1
+    fcvt.w.s t1, ft0, rne
+.endm
+
     .text
     .globl vertex_init
 # vertex_init
@@ -230,8 +255,16 @@ vertex_range:
     call    project_clip
     sw      a0, VTX_SX(s3)
     sw      a1, VTX_SY(s3)
-    fsw     fa0, VTX_ZW(s3)
     fsw     fa1, VTX_Q(s3)
+    la      t0, raster_depth_mode
+    ld      t0, 0(t0)
+    beqz    t0, 3f
+    fsw     fa0, VTX_ZW(s3)             # int16 depth: z / w
+    j       2f
+3:  SNAP_RESIDUAL a0, fa2, SCREEN_HALF_W_Q4 # float32 depth: where snapping
+    sh      t1, VTX_SNAP_X(s3)          # moved the corner
+    SNAP_RESIDUAL a1, fa3, SCREEN_HALF_H_Q4
+    sh      t1, VTX_SNAP_Y(s3)
 2:  addi    s1, s1, MESH_V_BYTES
     addi    s3, s3, VTX_BYTES
     addi    s2, s2, -1
@@ -402,7 +435,9 @@ face_world:
 #         the same Q4 position whichever triangle or edge it belongs to.
 #   Arguments: fa0, fa1, fa2, fa3 = clip-space x, y, z, w.
 #   Results: a0 = screen x (Q4), a1 = screen y (Q4), fa0 = z / w,
-#            fa1 = 1 / w.
+#            fa1 = 1 / w, fa2, fa3 = screen x, y in pixels from the
+#            screen's centre (right, down), neither clamped nor snapped (the
+#            depth plane's corners: raster_triangle).
 #   Clobbers: only ABI temporaries.
 project_clip:
     li      t0, F32_ONE
@@ -410,6 +445,8 @@ project_clip:
     fdiv.s  ft0, ft0, fa3               # ft0 = 1 / w
     fmul.s  ft1, fa0, ft0               # x / w
     fmul.s  ft2, fa1, ft0               # y / w
+    fmv.s   ft5, ft1
+    fmv.s   ft6, ft2
     li      t0, SCREEN_HALF_W_Q4
     fcvt.s.w ft3, t0
     fmadd.s ft1, ft1, ft3, ft3          # (x / w + 1) * half width
@@ -427,6 +464,12 @@ project_clip:
     fcvt.w.s a1, ft2, rne
     fmul.s  fa0, fa2, ft0
     fmv.s   fa1, ft0
+    li      t0, LCD_WIDTH / 2
+    fcvt.s.w ft3, t0
+    fmul.s  fa2, ft5, ft3               # x / w * half width
+    li      t0, -LCD_HEIGHT / 2
+    fcvt.s.w ft3, t0
+    fmul.s  fa3, ft6, ft3               # - y / w * half height
     la      t0, scene
     lwu     t0, SCENE_SNAP(t0)
     bnez    t0, 1f

@@ -67,7 +67,14 @@ def test_vertex_clip_and_world_give_the_vertex_stage_values(fw):
     fw.call("vertex_range", [0, VERTICES])
 
     out_clip = fw.symbol("OUT_NEAR") | fw.symbol("OUT_GUARD")
-    offsets = {name: fw.symbol(name) for name in ("VTX_OUTCODE", "VTX_SX", "VTX_SY", "VTX_ZW", "VTX_Q")}
+    offsets = {name: fw.symbol(name) for name in ("VTX_OUTCODE", "VTX_SX", "VTX_SY", "VTX_ZW", "VTX_Q", "VTX_SNAP_X")}
+    # the records as float32 depth keeps them (the snap's residual where int16 keeps z / w)...
+    fw.write(fw.symbol("raster_depth_mode"), struct.pack("<Q", 0))
+    fw.call("vertex_range", [0, VERTICES])
+    residual_records = fw.read(records_at, VERTICES * vtx_bytes)
+    # ...and as int16 depth does
+    fw.write(fw.symbol("raster_depth_mode"), struct.pack("<Q", 1))
+    fw.call("vertex_range", [0, VERTICES])
     model = fw.read_f32(fw.symbol("vertex_model"), 12).astype(np.float64).reshape(3, 4)
     kinds = set()
     for index in range(VERTICES):
@@ -87,6 +94,19 @@ def test_vertex_clip_and_world_give_the_vertex_stage_values(fw):
             zw_q = struct.unpack_from("<II", record, offsets["VTX_ZW"])
             assert (int(np.float32(projected.fa(0)).view(np.uint32)),
                     int(np.float32(projected.fa(1)).view(np.uint32))) == zw_q, f"vertex {index}"
+            # project_clip's position before snapping, in pixels from the screen's centre (within
+            # float32 rounding of x / w * 160 and -y / w * 120), and with float32 depth the record's
+            # snap residual: that position less the snapped one, to the nearest 2^-15 pixel, at most
+            # 1/32 pixel (half a Q4 step)
+            fx, fy = np.float32(projected.fa(2)), np.float32(projected.fa(3))
+            assert abs(fx - x / w * 160) <= 1e-5 * max(1.0, abs(fx)) and abs(fy + y / w * 120) <= 1e-5 * max(1.0, abs(fy))
+            other = residual_records[index * vtx_bytes:(index + 1) * vtx_bytes]
+            assert other[:offsets["VTX_ZW"]] == record[:offsets["VTX_ZW"]], f"vertex {index}"
+            rx, ry = struct.unpack_from("<hh", other, offsets["VTX_SNAP_X"])
+            for residual, exact, snapped in ((rx, fx, (sx - 160 * 16) / 16), (ry, fy, (sy - 120 * 16) / 16)):
+                assert abs(residual) <= 2 ** 15 / 32 + 1, f"vertex {index}"
+                assert abs(residual / 2 ** 15 - (float(exact) - snapped)) <= 2 ** -16 + 1e-4 * abs(snapped) * 2 ** -10, \
+                    f"vertex {index}"
     # face_world on triangles of packed corners (scene.inc MESH_F: v in the low bits, vt and vn
     # above it, here all ones, as for a corner without them)
     no_index = fw.symbol("MESH_NO_INDEX")
