@@ -53,10 +53,11 @@ SETTINGS: dict[str, dict[str, str]] = {
                       "depth": "int16", "snap": "pixel"},
     "best":          {"interpolation": "perspective", "shading": "gouraud", "depth": "float32"},
     # the closest to the ideal image: supersampling, depth that separates the decal's two quads,
-    # and light in 1/65536 steps (with bilinear or mipmap filtering added, magnified textures blur
-    # where the ideal's texels stay sharp: the cube's 8x8 texture loses 14 dB against it, the
-    # decal's 5.5)
-    "most-accurate": {"antialias": "supersample", "depth": "float32", "light_levels": "65537"},
+    # light in 1/65536 steps and from the vertex normals, which the ideal lights by (with bilinear
+    # or mipmap filtering added, magnified textures blur where the ideal's texels stay sharp: the
+    # cube's 8x8 texture loses 14 dB against it, the decal's 5.5)
+    "most-accurate": {"antialias": "supersample", "depth": "float32", "light_levels": "65537",
+                      "shading": "gouraud"},
 }
 DEFAULT_SETTING = "default"
 # Wireframe has no texture, light or depth buffer: only the angles, the snapping and antialiased

@@ -33,7 +33,7 @@ def test_settings_are_ordered_default_first_and_use_known_keys_and_values():
         for key, value in keys.items():
             assert value in quality.PRECISION_KEYS[key], (name, key, value)
     assert quality.SETTINGS["most-accurate"] == {"antialias": "supersample", "depth": "float32",
-                                                 "light_levels": "65537"}
+                                                 "light_levels": "65537", "shading": "gouraud"}
     assert quality.SETTINGS["thesis"] == {"interpolation": "affine", "shading": "flat", "light_levels": "33",
                                           "angles": "table", "depth": "int16", "snap": "pixel"}
     # the single-knob settings differ from the default in exactly one key, and not in its default value
