@@ -86,6 +86,11 @@ raster_depth_reverse:
     .globl raster_mip_table
 raster_mip_table:
     .space  8
+# filter = anisotropic: nonzero when the mipmap fills walk the footprint
+# (render_init)
+    .globl raster_aniso
+raster_aniso:
+    .space  8
 # antialias = supersample: the sums of the samples (raster_supersample.S
 # raster_set_sums)
     .globl raster_sums
@@ -106,6 +111,11 @@ raster_band:
     .space  BAND_BYTES
     .globl raster_mip_rho2
 raster_mip_rho2:
+    .space  4
+# filter = anisotropic: how far a sample's footprint reaches, as a share of
+# the pixel's (1, or 1/2 supersampled; raster_triangle)
+    .globl raster_mip_footprint
+raster_mip_footprint:
     .space  4
     .balign 8
     .globl raster_sample

@@ -154,6 +154,123 @@
     bgez    t0, 4b
 .endm
 
+# ANISO_SETUP affine
+#   filter = anisotropic, in a mipmap fill (FILTERED, registers as there),
+#   for the pixel at ft10, ft11 = 32 s, 32 t (w in ft9, perspective): the
+#   footprint's axes are J's columns, 32 s and 32 t a pixel right (w (U_x -
+#   s Q_x), ...) and a row down, times raster_mip_footprint (a sample's
+#   reach); the longer, major, is walked by 2^k taps, k = round(log2(major /
+#   minor)) (the exponent e of major^2 / minor^2: (e + 1) >> 1), at most
+#   2^ANISO_MAX_TAPS_LOG2, in the level of major / 2^k (mipmap's rule on
+#   major^2 / 4^k), a step of major / 2^k apart, centred on the pixel:
+#   a5..a7 = the level, ft10, ft11 = the first tap in it, RT_ANISO_DS, _DT
+#   the step, RT_ANISO_SHIFT = k, RT_ANISO_SUM = 0, s11 = 2^k taps (0 for
+#   one: no sum). reference/render.py anisotropic is the same in float64.
+#   Clobbers t0..t3, fs5 (ft1..ft4 are kept on the stack meanwhile).
+.macro ANISO_SETUP affine
+    fsw     ft1, RT_ANISO_F + 0(sp)     # (the row's planes, free meanwhile)
+    fsw     ft2, RT_ANISO_F + 4(sp)
+    fsw     ft3, RT_ANISO_F + 8(sp)
+    fsw     ft4, RT_ANISO_F + 12(sp)
+    .if \affine
+    fmv.s   ft1, fa6                    # J: 32 s, 32 t a pixel right (ft1,
+    fmv.s   ft2, fa7                    # ft2) and a row down (ft3, ft4)
+    fmv.s   ft3, ft6
+    fmv.s   ft4, ft7
+    .else
+    fnmsub.s ft1, ft10, fa5, fa6        # w (U_x - s Q_x)
+    fmul.s  ft1, ft1, ft9
+    fnmsub.s ft2, ft11, fa5, fa7        # w (V_x - t Q_x)
+    fmul.s  ft2, ft2, ft9
+    fnmsub.s ft3, ft10, ft5, ft6        # w (U_y - s Q_y)
+    fmul.s  ft3, ft3, ft9
+    fnmsub.s ft4, ft11, ft5, ft7        # w (V_y - t Q_y)
+    fmul.s  ft4, ft4, ft9
+    .endif
+    la      t0, raster_mip_footprint
+    add     t0, t0, tp                  # (this hart's)
+    flw     fs5, 0(t0)
+    fmul.s  ft1, ft1, fs5
+    fmul.s  ft2, ft2, fs5
+    fmul.s  ft3, ft3, fs5
+    fmul.s  ft4, ft4, fs5
+    fmul.s  fs5, ft1, ft1
+    fmadd.s fs5, ft2, ft2, fs5
+    fmv.x.w t1, fs5                     # t1 = |J x|^2
+    fmul.s  fs5, ft3, ft3
+    fmadd.s fs5, ft4, ft4, fs5
+    fmv.x.w t2, fs5                     # t2 = |J y|^2
+    bgeu    t1, t2, 26f                 # (>= 0: they order as their bits)
+    fmv.s   ft1, ft3                    # the major axis: ft1, ft2; t1 = its
+    fmv.s   ft2, ft4                    # length^2, t2 = the minor one's
+    mv      t3, t1
+    mv      t1, t2
+    mv      t2, t3
+26: fmv.w.x fs5, t1
+    fmv.w.x ft3, t2
+    fdiv.s  fs5, fs5, ft3               # major^2 / minor^2 (minor 0: inf)
+    fmv.x.w t3, fs5
+    srliw   t3, t3, F32_EXP_SHIFT
+    andi    t3, t3, F32_EXP_MASK
+    addi    t3, t3, 1 - F32_EXP_BIAS
+    srai    t3, t3, 1                   # k
+    bgez    t3, 27f
+    li      t3, 0
+27: li      t2, ANISO_MAX_TAPS_LOG2
+    ble     t3, t2, 28f
+    mv      t3, t2
+28: sd      t3, RT_ANISO_SHIFT(sp)
+    fmv.w.x fs5, t1                     # the level: of (major / 2^k)^2 in
+    li      t0, F32_TEXEL_FRACTIONS_INV2 # texels, from its exponent less 2k
+    fmv.w.x ft3, t0
+    fmul.s  fs5, fs5, ft3
+    fmv.x.w t0, fs5
+    srliw   t0, t0, F32_EXP_SHIFT
+    andi    t0, t0, F32_EXP_MASK
+    slli    t2, t3, 1
+    sub     t0, t0, t2
+    bgez    t0, 29f
+    li      t0, 0
+29: addi    t0, t0, 1 - F32_EXP_BIAS
+    srai    t0, t0, 1                   # the level, -64 .. 64
+    slli    t0, t0, MIP_ENTRY_SHIFT
+    add     t0, t0, s10
+    ld      a5, MIP_PIXELS(t0)
+    lwu     a6, MIP_W(t0)
+    lwu     a7, MIP_H(t0)
+    flw     fs5, MIP_SCALE_S(t0)        # the centre and the axis, in the level
+    fmul.s  ft10, ft10, fs5
+    fmul.s  ft1, ft1, fs5
+    flw     fs5, MIP_SCALE_T(t0)
+    fmul.s  ft11, ft11, fs5
+    fmul.s  ft2, ft2, fs5
+    li      t1, F32_EXP_BIAS            # the step: the axis times 2^-k
+    sub     t1, t1, t3
+    slli    t1, t1, F32_EXP_SHIFT
+    fmv.w.x fs5, t1
+    fmul.s  ft1, ft1, fs5
+    fmul.s  ft2, ft2, fs5
+    fsw     ft1, RT_ANISO_DS(sp)
+    fsw     ft2, RT_ANISO_DT(sp)
+    li      s11, 1
+    sll     s11, s11, t3                # 2^k taps, the first (2^k - 1) / 2
+    addi    t1, s11, -1                 # steps back from the centre
+    fcvt.s.w fs5, t1
+    li      t1, F32_HALF
+    fmv.w.x ft3, t1
+    fmul.s  fs5, fs5, ft3
+    fnmsub.s ft10, fs5, ft1, ft10
+    fnmsub.s ft11, fs5, ft2, ft11
+    sd      zero, RT_ANISO_SUM(sp)
+    li      t1, 1
+    bne     s11, t1, 30f
+    li      s11, 0                      # one tap: as mipmap, no sum
+30: flw     ft1, RT_ANISO_F + 0(sp)
+    flw     ft2, RT_ANISO_F + 4(sp)
+    flw     ft3, RT_ANISO_F + 8(sp)
+    flw     ft4, RT_ANISO_F + 12(sp)
+.endm
+
 # The pieces of the coverage fills (antialias = edge; render.inc AA_*).
 # COVERAGE: t1 = the pixel's coverage a (0 .. AA_FULL, or more: whole) from
 #   the moved-out edge functions s0..s2 and their scales fs6..fs8 (the least
@@ -499,6 +616,10 @@
     fmul.s  ft11, fa3, ft9
     .endif
     .if \mipmap
+    li      s11, 0                      # taps to walk (0: one, mipmap's)
+    la      t0, raster_aniso
+    ld      t0, 0(t0)
+    bnez    t0, 20f                     # anisotropic (ANISO_SETUP, back at 22)
     .if \affine
     fmv.x.w t0, fs4                     # rho^2, the triangle's
     .else
@@ -521,7 +642,7 @@
     flw     fs5, MIP_SCALE_T(t0)
     fmul.s  ft11, ft11, fs5
     .endif
-    fcvt.l.s t2, ft10, rne              # 32 s, 32 t to the nearest 1/32 texel
+22: fcvt.l.s t2, ft10, rne              # 32 s, 32 t to the nearest 1/32 texel
     fcvt.l.s t3, ft11, rne
     addi    t2, t2, -TEXEL_HALF_FRACTION    # floor(32 (s - 1/2)): texel centres
     addi    t3, t3, -TEXEL_HALF_FRACTION
@@ -575,6 +696,10 @@
     mul     t6, t6, s7
     slli    t0, t0, TEXEL_FRACTION_BITS
     add     t0, t0, t6                  # 1024 c
+    .if \mipmap
+    bnez    s11, 23f                    # anisotropic: the next tap, or the average
+24:
+    .endif
     .if \wide
     # k of 16 bits makes 2^26 c: too wide for three fields in a register,
     # so B | R << 32 and G are lit apart (render.inc WIDE_BLEND_*)
@@ -668,6 +793,26 @@
     bgez    t3, 6b
     add     t3, t3, a7
     j       6b
+    .if \mipmap
+    # anisotropic: each tap's blend summed; then the next tap, or the average
+23: ld      t1, RT_ANISO_SUM(sp)
+    add     t1, t1, t0
+    sd      t1, RT_ANISO_SUM(sp)
+    addi    s11, s11, -1
+    beqz    s11, 25f
+    flw     fs5, RT_ANISO_DS(sp)
+    fadd.s  ft10, ft10, fs5
+    flw     fs5, RT_ANISO_DT(sp)
+    fadd.s  ft11, ft11, fs5
+    j       22b
+25: ld      t2, RT_ANISO_SHIFT(sp)
+    srl     t0, t1, t2                  # the sum over the 2^k taps
+    li      t1, BLEND_AVERAGE_MASK
+    and     t0, t0, t1
+    j       24b
+20: ANISO_SETUP \affine
+    j       22b
+    .endif
 .endm
 
     .text

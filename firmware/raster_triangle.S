@@ -548,14 +548,21 @@ raster_triangle:
     li      t3, F32_TEXEL_FRACTIONS_INV2
     fmv.w.x ft10, t3
     fmul.s  ft9, ft9, ft10
+    li      t3, F32_ONE                 # ft11 = the footprint's reach
+    fmv.w.x ft11, t3
     andi    t3, t5, RASTER_SUPERSAMPLE  # supersampled: the four samples average
     beqz    t3, 60f                     # the pixel, each sampling a quarter of its
     li      t3, F32_SAMPLE_AREA         # area, so the level is one finer (rho^2 / 4):
     fmv.w.x ft10, t3                    # a pixel's level would blur once more
     fmul.s  ft9, ft9, ft10
+    li      t3, F32_HALF                # (half the reach: anisotropic)
+    fmv.w.x ft11, t3
 60: la      t3, raster_mip_rho2
     add     t3, t3, tp                  # (this hart's)
     fsw     ft9, 0(t3)
+    la      t3, raster_mip_footprint
+    add     t3, t3, tp
+    fsw     ft11, 0(t3)
 62:
     # --- edge functions: s6..s8 = at the first centre of the row, s3..s5 =
     # steps right, s9..s11 = steps down (edge k is opposite corner k)

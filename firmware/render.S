@@ -76,8 +76,13 @@ render_init:
     bne     t0, t2, 22f
     ori     t1, t1, RASTER_BILINEAR
 22: li      t2, FILTER_MIPMAP
-    bne     t0, t2, 23f
-    ori     t1, t1, RASTER_MIPMAP
+    beq     t0, t2, 24f
+    li      t2, FILTER_ANISOTROPIC      # anisotropic: the mipmap fills, which
+    bne     t0, t2, 23f                 # then walk the footprint (raster_aniso)
+    la      t2, raster_aniso
+    li      t3, 1
+    sd      t3, 0(t2)
+24: ori     t1, t1, RASTER_MIPMAP
 23: la      t0, render_fill
     sw      t1, 0(t0)
     call    raster_set_texture

@@ -40,7 +40,7 @@
 # angles      polynomial | table                      polynomial    SCENE_ANGLES
 # depth       int16 | float32                         int16         SCENE_DEPTH
 # snap        subpixel | pixel                        subpixel      SCENE_SNAP
-# filter      nearest | bilinear | mipmap             nearest       SCENE_FILTER
+# filter      nearest | bilinear | mipmap | anisotropic nearest      SCENE_FILTER
 #             (texture filtering, raster_fills.S; its default, 0, is the
 #             zeros scene_defaults leaves after scene_default_values)
 # antialias   off | edge | supersample                off           SCENE_ANTIALIAS
@@ -227,6 +227,7 @@ words_filter:
     .dword  word_nearest, FILTER_NEAREST
     .dword  word_bilinear, FILTER_BILINEAR
     .dword  word_mipmap, FILTER_MIPMAP
+    .dword  word_anisotropic, FILTER_ANISOTROPIC
     .dword  0
 words_harts:
     .dword  word_auto, HARTS_AUTO
@@ -292,6 +293,7 @@ word_pixel:         .asciz "pixel"
 word_nearest:       .asciz "nearest"
 word_bilinear:      .asciz "bilinear"
 word_mipmap:        .asciz "mipmap"
+word_anisotropic:   .asciz "anisotropic"
 word_auto:          .asciz "auto"
 word_2:             .asciz "2"
 word_edge:          .asciz "edge"
@@ -327,7 +329,7 @@ msg_expect_shading: .asciz "bad value (expected flat or gouraud)"
 msg_expect_angles:  .asciz "bad value (expected polynomial or table)"
 msg_expect_depth:   .asciz "bad value (expected int16 or float32)"
 msg_expect_snap:    .asciz "bad value (expected subpixel or pixel)"
-msg_expect_filter:  .asciz "bad value (expected nearest, bilinear or mipmap)"
+msg_expect_filter:  .asciz "bad value (expected nearest, bilinear, mipmap or anisotropic)"
 msg_expect_harts:   .asciz "bad value (expected auto, 1 or 2)"
 msg_expect_antialias: .asciz "bad value (expected off, edge or supersample)"
 msg_levels:         .asciz "bad value (must be a whole number from 2 to 65537)"

@@ -34,7 +34,9 @@ Conventions (docs/design/firmware.md "Rendering", firmware/vertex.S, render.S, r
   `mipmap`: the chain `mip_chain` builds (each level a box average of the one above), the level
   the footprint chooses per pixel (`mip_level`: round(log2 rho), rho^2 = |det J| the area of the
   pixel's footprint in texels, J the exact Jacobian of (s, t) over screen (x, y) at the
-  centre), bilinear within it at s W_l / W - 1/2, t H_l / H - 1/2;
+  centre), bilinear within it at s W_l / W - 1/2, t H_l / H - 1/2; `anisotropic`: the same
+  chain, taps along the footprint's longer axis in the level of its length over the taps
+  (`anisotropic`);
 - wireframe: the unique (min, max) vertex index edges, white, no depth test or culling,
   rejected by outcodes, cut at the near plane, clipped to the screen rectangle [0, 320] x [0, 240]
   (Liang-Barsky), each end in the pixel it lies in (floor, clamped), Bresenham from the smaller
@@ -364,15 +366,57 @@ def raster_triangle(target: Target, screen: np.ndarray, zw: np.ndarray, q: np.nd
         gx, gy = np.array([g[0] for g in grad_l]), np.array([g[1] for g in grad_l])
         jac = np.array([[(ucol @ gx - s_texel * (q @ gx)) / inv_w, (ucol @ gy - s_texel * (q @ gy)) / inv_w],
                         [(vcol @ gx - t_texel * (q @ gx)) / inv_w, (vcol @ gy - t_texel * (q @ gy)) / inv_w]])
-        rho2 = np.abs(jac[0, 0] * jac[1, 1] - jac[0, 1] * jac[1, 0])
-        level = mip_level(rho2, len(chain))
-        channels = np.zeros((len(s_texel), 3))
-        for number in np.unique(level):
-            pick = level == number
-            mip = chain[number]
-            channels[pick] = bilinear(mip, s_texel[pick] * (mip.shape[1] / width),
-                                      t_texel[pick] * (mip.shape[0] / height))
+        if filter == "anisotropic":
+            channels = anisotropic(chain, jac, s_texel, t_texel)
+        else:
+            rho2 = np.abs(jac[0, 0] * jac[1, 1] - jac[0, 1] * jac[1, 0])
+            level = mip_level(rho2, len(chain))
+            channels = np.zeros((len(s_texel), 3))
+            for number in np.unique(level):
+                pick = level == number
+                mip = chain[number]
+                channels[pick] = bilinear(mip, s_texel[pick] * (mip.shape[1] / width),
+                                          t_texel[pick] * (mip.shape[0] / height))
     target.colour[ys, xs] = shade_channels(channels, intensity)
+
+
+ANISO_MAX_TAPS_LOG2 = 3         # at most 8 taps (firmware/include/render.inc ANISO_MAX_TAPS_LOG2)
+
+
+def anisotropic(chain: list[np.ndarray], jac: np.ndarray, s: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """(P, 3) float channels: `filter = anisotropic` at texel coordinates (s, t) of the base level
+    with Jacobian `jac` (2, 2, P) (rows s, t; columns x, y). The footprint's axes are taken as the
+    Jacobian's columns: the longer one, `major`, is walked by N = 2^k taps (k = round(log2(major /
+    minor)), the halves rounded up as (e + 1) >> 1 of major^2 / minor^2's exponent e, at most
+    2^ANISO_MAX_TAPS_LOG2), each bilinear in the level of major / N (mip_level of major^2 / 4^k),
+    evenly spaced about the centre: (i - (N - 1) / 2) / N of the major axis, i = 0 .. N - 1; the
+    taps' channels averaged."""
+    width = chain[0].shape[1]
+    height = chain[0].shape[0]
+    lx2 = jac[0, 0] ** 2 + jac[1, 0] ** 2
+    ly2 = jac[0, 1] ** 2 + jac[1, 1] ** 2
+    x_major = lx2 >= ly2
+    major2, minor2 = np.where(x_major, lx2, ly2), np.where(x_major, ly2, lx2)
+    axis_s = np.where(x_major, jac[0, 0], jac[0, 1])
+    axis_t = np.where(x_major, jac[1, 0], jac[1, 1])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio2 = major2 / minor2
+    finite = np.isfinite(ratio2) & (ratio2 > 0)
+    _, exponent = np.frexp(np.where(finite, ratio2, 1.0))           # ratio^2 = m 2^exponent, m in [1/2, 1)
+    k = np.where(finite, np.clip((exponent - 1 + 1) >> 1, 0, ANISO_MAX_TAPS_LOG2), ANISO_MAX_TAPS_LOG2)
+    level = mip_level(major2 / 4.0 ** k, len(chain))
+    channels = np.zeros((len(s), 3))
+    for taps_log2 in np.unique(k):
+        for number in np.unique(level[k == taps_log2]):
+            pick = (k == taps_log2) & (level == number)
+            mip = chain[number]
+            taps = 1 << int(taps_log2)
+            for i in range(taps):
+                along = (i - (taps - 1) / 2) / taps
+                channels[pick] += bilinear(mip, (s[pick] + along * axis_s[pick]) * (mip.shape[1] / width),
+                                           (t[pick] + along * axis_t[pick]) * (mip.shape[0] / height))
+            channels[pick] /= taps
+    return channels
 
 
 def bilinear(texture: np.ndarray, s: np.ndarray, t: np.ndarray) -> np.ndarray:

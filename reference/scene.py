@@ -55,7 +55,7 @@ PRECISION_WORDS: dict[str, tuple[str, ...]] = {
     "snap": ("subpixel", "pixel"),
 }
 # Texture filtering (firmware/raster.S), the default first.
-FILTER_WORDS: tuple[str, ...] = ("nearest", "bilinear", "mipmap")
+FILTER_WORDS: tuple[str, ...] = ("nearest", "bilinear", "mipmap", "anisotropic")
 # Which harts draw (firmware/main.S), the default first: changes how fast, never what is drawn.
 HARTS_WORDS: tuple[str, ...] = ("auto", "1", "2")
 # Antialiasing (firmware/raster.S), the default first: the reference renders the same images whatever it is.

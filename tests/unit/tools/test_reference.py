@@ -400,9 +400,9 @@ def test_wireframe_draws_each_edge_once_in_white():
     ("snap = none\n", 1, "bad value (expected subpixel or pixel)"),
     ("snap = pixel\n# again\nSNAP = subpixel\n", 3, "duplicate key"),
     # texture filtering
-    ("filter = trilinear\n", 1, "bad value (expected nearest, bilinear or mipmap)"),
+    ("filter = trilinear\n", 1, "bad value (expected nearest, bilinear, mipmap or anisotropic)"),
     ("filter = mipmap\nFilter = Nearest\n", 2, "duplicate key"),
-    ("filter = bilinear mipmap\n", 1, "bad value (expected nearest, bilinear or mipmap)"),
+    ("filter = bilinear mipmap\n", 1, "bad value (expected nearest, bilinear, mipmap or anisotropic)"),
     ("shading =\n", 1, "malformed line (no value)"),
     ("\nlight_levels = 3.5\n", 2, "bad value (must be a whole number from 2 to 65537)"),
     ("light_levels = 1\n", 1, "bad value (must be a whole number from 2 to 65537)"),
