@@ -1,5 +1,6 @@
-"""python -m reference render FOLDER --out DIR [--frames N] [--first K] [--ideal [--density D]] [--quiet]
-   python -m reference render-card CARD.img --out DIR [--frames N] [--first K] [--ideal [--density D]] [--quiet]
+"""python -m reference render FOLDER --out DIR [--frames N] [--first K] [--ideal [--density D] [--texels T]] [--quiet]
+   python -m reference render-card CARD.img --out DIR [--frames N] [--first K] [--ideal [--density D] [--texels T]]
+       [--quiet]
 
 Renders frames K .. K+N-1 of the scene (scene.ini, model and texture from a folder laid out
 like a card, or from a card image) and writes DIR/frame_NNNN.png as the LCD would show them:
@@ -20,7 +21,7 @@ from k210_common.exit_status import (EXIT_BAD_INPUT, EXIT_CORRUPT_CARD, EXIT_INT
                                      help_epilog)
 from k210_common.firmware_errors import firmware_error
 
-from .ideal import DEFAULT_DENSITY, DENSITY_MAX, LINE_ROWS_PER_DENSITY, render_ideal_image
+from .ideal import DEFAULT_DENSITY, DENSITY_MAX, LINE_ROWS_PER_DENSITY, TEXEL_MODELS, render_ideal_image
 from .load import load_card_folder, load_card_image
 from .obj import Mesh, ModelError
 from .ppm import TextureError
@@ -32,8 +33,8 @@ from .scene import Scene, SceneError
 EXIT_STATUS_DETAILS: dict[int, str] = {
     EXIT_OK: "the frames were written",
     EXIT_INTERNAL: "an internal error of the reference renderer (a bug: please report it with the command line)",
-    EXIT_USAGE: f"bad command line (a `--density` outside 1 to {DENSITY_MAX}, or without `--ideal`), or a "
-                "missing input: FOLDER, CARD, or a file the scene names",
+    EXIT_USAGE: f"bad command line (a `--density` outside 1 to {DENSITY_MAX}, `--density` or `--texels` "
+                "without `--ideal`), or a missing input: FOLDER, CARD, or a file the scene names",
     EXIT_BAD_INPUT: "a bad scene.ini, model or texture, with the firmware's error text (its errors "
                     f"{firmware_error('BAD_SCENE').code}, {firmware_error('BAD_MODEL').code} and "
                     f"{firmware_error('BAD_TEXTURE').code})",
@@ -77,6 +78,10 @@ def _parser() -> argparse.ArgumentParser:
                               f"per pixel for triangles, {LINE_ROWS_PER_DENSITY} D sample rows per "
                               f"pixel for wireframe lines (exact along each row); default "
                               f"{DEFAULT_DENSITY}, where the bench scenes have converged")
+        sub.add_argument("--texels", choices=TEXEL_MODELS, default=None,
+                         help="with --ideal: how a texture is read: square (default: constant texel "
+                              "squares, as nearest-texel sampling draws them) or smooth (the bilinear "
+                              "surface through the texel centres, as a camera sees a filtered texture)")
         sub.add_argument("--quiet", action="store_true",
                          help="do not print each frame's path and render time")
     return parser
@@ -132,6 +137,8 @@ def main(argv: list[str] | None = None) -> int:
         parser.error("--frames must be at least 1 and --first not negative")
     if args.density is not None and not args.ideal:
         parser.error("--density applies only with --ideal")
+    if args.texels is not None and not args.ideal:
+        parser.error("--texels applies only with --ideal")
     density = DEFAULT_DENSITY if args.density is None else args.density
     if not 1 <= density <= DENSITY_MAX:
         parser.error(f"--density must be from 1 to {DENSITY_MAX}")
@@ -148,7 +155,8 @@ def main(argv: list[str] | None = None) -> int:
         path = args.out / f"frame_{n:04d}.png"
         try:
             if args.ideal:
-                image = render_ideal_image(scene, mesh, texture, n, density=density)
+                image = render_ideal_image(scene, mesh, texture, n, density=density,
+                                           texels=args.texels or TEXEL_MODELS[0])
             else:
                 image = render_image(scene, mesh, texture, n)
             Image.fromarray(image).save(path)

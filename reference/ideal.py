@@ -8,14 +8,16 @@ render.frame_triangles and render.frame_segments) is integrated over each pixel'
   of pixel (x, y) at (x + (i + 0.5) / density, y + (j + 0.5) / density), each sample with its own
   depth test (the top-left rule decides a sample exactly on a shared edge, so a closed mesh covers
   each sample once);
-- a sample's colour is continuous: the texture is read as what the firmware's nearest-texel rule
-  makes of it, a grid of constant squares (texel (c, r) fills [c, c+1) x [r, r+1) in texel units,
+- a sample's colour is continuous: the texture is read (texels = "square", the default) as what
+  the firmware's nearest-texel rule makes of it, a grid of constant squares (texel (c, r) fills [c, c+1) x [r, r+1) in texel units,
   t = (u W, (1 - v) H), repeating), averaged exactly over the sample's footprint: the rectangle
   centred on the sample's t whose sides are |grad t_x| / density and |grad t_y| / density (from
   the perspective-correct Jacobian at the sample): the image of the sample's cell where the
   texture's axes follow the screen's, a rectangle of the same extent where they turn. A
   footprint within 2 x 2 texels is weighted directly; a larger one sums whole texels through an
-  integer summed-area table, so minification of any degree is exact, with no mip levels;
+  integer summed-area table, so minification of any degree is exact, with no mip levels; or
+  (texels = "smooth") as a camera sees a filtered texture, the bilinear surface through the texel
+  centres, averaged over the same footprint, exactly (SmoothTexture);
 - channels are the RGB565 stored values (red and blue 0-31, green 0-63) as floats, times the
   sample's light intensity (as render.py, lit per pixel where the corners have normals), not
   rounded per sample; the averaging is of stored values, the scale the renderer lights in, not
@@ -47,6 +49,7 @@ DENSITY_MAX = 64
 BAND_SAMPLES = 1 << 20           # samples held at once (about 32 MB of buffers)
 CHANNEL_MAX = np.array([31.0, 63.0, 31.0])
 FOOTPRINT_SPAN_MAX = float(1 << 40)    # texels: wider footprints are the texture's mean to 1e-12
+TEXEL_MODELS = ("square", "smooth")     # how the ideal reads a texture (BoxTexture, SmoothTexture)
 
 
 def channels(colour: int | np.ndarray) -> np.ndarray:
@@ -135,6 +138,74 @@ class BoxTexture:
                                             cells_y[b][used], cells_y[b + 1][used])
                 out[used] += weight[used][:, None] * total
         return out
+
+
+class SmoothTexture(BoxTexture):
+    """A texture read as a camera sees a filtered one: smooth, the bilinear surface through the
+    texel centres (texel (c, r)'s value at (c + 1/2, r + 1/2), linear between them, repeating),
+    averaged over the same axis-aligned rectangles. Bilinear interpolation is the texel squares
+    convolved with a 1 x 1 box, so the average over a rectangle is the squares' average under the
+    rectangle widened by that box: a trapezoid on each axis, whose weights per texel come from its
+    integral (`_trapezoid_cdf`), exact. A footprint of no size is the bilinear sample itself."""
+
+    def average(self, cx: np.ndarray, cy: np.ndarray, hx: np.ndarray, hy: np.ndarray) -> np.ndarray:
+        segments_x = _smooth_segments(cx, hx, self.width)
+        segments_y = _smooth_segments(cy, hy, self.height)
+        out = np.zeros((len(cx), 3))
+        for first_x, end_x, weight_x in segments_x:
+            for first_y, end_y, weight_y in segments_y:
+                weight = weight_x * weight_y
+                used = weight != 0
+                if not used.any():
+                    continue
+                single = used & (end_x - first_x == 1) & (end_y - first_y == 1)
+                if single.any():
+                    columns = first_x[single].astype(np.int64) % self.width
+                    rows = first_y[single].astype(np.int64) % self.height
+                    out[single] += weight[single][:, None] * self.texels[rows, columns]
+                block = used & ~single
+                if block.any():
+                    out[block] += weight[block][:, None] * self._rectangle_sum(
+                        first_x[block], end_x[block], first_y[block], end_y[block])
+        return out
+
+
+def _trapezoid_cdf(x: np.ndarray, centre: np.ndarray, half: np.ndarray) -> np.ndarray:
+    """The share of the kernel (the box [centre - half, centre + half], mean 1, convolved with the
+    unit box) that lies left of x: (G(x - centre + half + 1/2) - G(x - centre - half + 1/2)) / (2
+    half), G the integral of clamp(s, 0, 1); for a box of no width its limit, clamp(x - centre +
+    1/2, 0, 1)."""
+    def g(value):
+        return np.where(value <= 0, 0.0, np.where(value >= 1, value - 0.5, 0.5 * value * value))
+    wide = half > 1e-9
+    safe = np.where(wide, half, 1.0)
+    spread = (g(x - centre + safe + 0.5) - g(x - centre - safe + 0.5)) / (2 * safe)
+    return np.where(wide, spread, np.clip(x - centre + 0.5, 0.0, 1.0))
+
+
+def _smooth_segments(centre: np.ndarray, half: np.ndarray, period: int) -> list[tuple]:
+    """One axis of SmoothTexture's kernel in texel segments (first, end, weight per texel), five of
+    them: the two texels each ramp of the trapezoid may cross, exactly weighed, and the whole texels
+    between, where the kernel is flat (1 / (2 half) a texel). Moved by whole periods so that the
+    kernel starts in [0, period)."""
+    low, high = _reduced(centre, half + 0.5, period)
+    centre = (low + high) / 2
+    half = np.maximum((high - low) / 2 - 0.5, 0.0)
+    first = np.floor(low)
+    last = np.maximum(first, np.ceil(high) - 1.0)
+
+    def weight(texel):
+        return _trapezoid_cdf(texel + 1.0, centre, half) - _trapezoid_cdf(texel, centre, half)
+
+    zero = np.zeros_like(first)
+    middle = last - 1.0 > first + 2.0
+    segments = [(first, first + 1.0, weight(first)),
+                (first + 1.0, first + 2.0, np.where(last >= first + 1.0, weight(first + 1.0), zero)),
+                (first + 2.0, np.where(middle, last - 1.0, first + 3.0),
+                 np.where(middle, 1.0 / (2 * np.maximum(half, 0.5)), zero)),
+                (last - 1.0, last, np.where(last - 1.0 >= first + 2.0, weight(last - 1.0), zero)),
+                (last, last + 1.0, np.where(last >= first + 2.0, weight(last), zero))]
+    return segments
 
 
 def _reduced(centre: np.ndarray, half: np.ndarray, period: int) -> tuple[np.ndarray, np.ndarray]:
@@ -455,11 +526,14 @@ def check_region(region) -> tuple[int, int, int, int]:
 
 
 def ideal_channels(scene: Scene, mesh: Mesh, texture: np.ndarray | None, n: int,
-                   density: int = DEFAULT_DENSITY, region=None) -> np.ndarray:
+                   density: int = DEFAULT_DENSITY, region=None, texels: str = "square") -> np.ndarray:
     """Frame n's ideal pixels before rounding: (rows, columns, 3) float channels in RGB565 units
     (red and blue 0-31, green 0-63), each the mean of its density x density samples. `region`
-    (x0, y0, x1, y1), default the whole screen, limits the work to those pixels."""
+    (x0, y0, x1, y1), default the whole screen, limits the work to those pixels; `texels`, one of
+    TEXEL_MODELS, how a texture is read."""
     check_density(density)
+    if texels not in TEXEL_MODELS:
+        raise ValueError(f"texels must be one of {', '.join(TEXEL_MODELS)}, not {texels!r}")
     region = check_region(region)
     background = channels(scene.background)
     x0, y0, x1, y1 = region
@@ -468,7 +542,8 @@ def ideal_channels(scene: Scene, mesh: Mesh, texture: np.ndarray | None, n: int,
         segments = [(np.asarray(a, float), np.asarray(b, float)) for a, b in frame_segments(scene, mesh, n)]
         coverage = line_coverage(segments, region, LINE_ROWS_PER_DENSITY * density)
         return background + coverage[..., None] * (channels(WIRE_COLOUR) - background)
-    box = BoxTexture(texture) if is_textured(scene, texture) else None
+    model = SmoothTexture if texels == "smooth" else BoxTexture
+    box = model(texture) if is_textured(scene, texture) else None
     prepared = [p for p in (prepare(t, scene.cull) for t in frame_triangles(scene, mesh, texture, n)) if p]
     flat = channels(FLAT_COLOUR)
     tops = np.array([p.screen[:, 1].min() for p in prepared])
@@ -482,13 +557,13 @@ def ideal_channels(scene: Scene, mesh: Mesh, texture: np.ndarray | None, n: int,
 
 
 def render_ideal_frame(scene: Scene, mesh: Mesh, texture: np.ndarray | None, n: int,
-                       density: int = DEFAULT_DENSITY, region=None) -> np.ndarray:
+                       density: int = DEFAULT_DENSITY, region=None, texels: str = "square") -> np.ndarray:
     """Frame n's ideal image as RGB565 (240, 320) uint16 (or the region's rows and columns),
     row 0 at the top: each pixel's mean rounded to nearest per channel."""
-    return pack_rgb565(ideal_channels(scene, mesh, texture, n, density, region))
+    return pack_rgb565(ideal_channels(scene, mesh, texture, n, density, region, texels))
 
 
 def render_ideal_image(scene: Scene, mesh: Mesh, texture: np.ndarray | None, n: int,
-                       density: int = DEFAULT_DENSITY, region=None) -> np.ndarray:
+                       density: int = DEFAULT_DENSITY, region=None, texels: str = "square") -> np.ndarray:
     """Frame n's ideal image as the LCD shows it: (240, 320, 3) uint8 RGB, row 0 at the top."""
-    return rgb565_to_rgb888(render_ideal_frame(scene, mesh, texture, n, density, region))
+    return rgb565_to_rgb888(render_ideal_frame(scene, mesh, texture, n, density, region, texels))

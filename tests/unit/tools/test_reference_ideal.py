@@ -13,8 +13,11 @@ from PIL import Image
 
 from emulator_runs import run_module
 from reference import Mesh, Scene, load_card_image, render_frame, render_image
-from reference.ideal import (BoxTexture, channels, ideal_channels, line_coverage,
+from reference.ideal import (BoxTexture, SmoothTexture, channels, ideal_channels, line_coverage,
                              render_ideal_frame, render_ideal_image)
+from reference.obj import parse_obj
+from reference.render import bilinear
+from reference.scene import parse_scene
 
 BG = 0x0000
 GREY = np.array([24.0, 48.0, 24.0])          # 0xC618, the flat colour, lit by 1
@@ -284,6 +287,52 @@ def test_box_filter_matches_a_texel_by_texel_sum():
     assert np.allclose(far, texels.mean(axis=(0, 1)), atol=1e-6)
 
 
+def test_smooth_texels_are_the_bilinear_surface_averaged_over_the_footprint():
+    """SmoothTexture.average (texels = "smooth", a camera's view of a filtered texture) against the
+    bilinear surface through the texel centres (render.bilinear) averaged numerically over each
+    rectangle (a 600 x 600 midpoint grid: within 5e-4 of a channel step); a footprint of no size is
+    the bilinear sample itself, exactly; and far beyond the texture's size, its mean."""
+    rng = np.random.default_rng(4)
+    texture = rng.integers(0, 65536, (5, 7)).astype(np.uint16)
+    smooth = SmoothTexture(texture)
+
+    def numerically(cx, cy, hx, hy, n=600):
+        xs = cx + ((np.arange(n) + 0.5) / n * 2 - 1) * hx if hx > 0 else np.array([cx])
+        ys = cy + ((np.arange(n) + 0.5) / n * 2 - 1) * hy if hy > 0 else np.array([cy])
+        grid_x, grid_y = np.meshgrid(xs, ys)
+        return bilinear(texture, grid_x.ravel(), grid_y.ravel()).mean(axis=0)
+
+    sides = [0.0, 0.2, 0.5, 0.9, 1.3, 4.7, 11.5]
+    for _ in range(60):
+        cx, cy = rng.uniform(-30, 30, 2)
+        hx, hy = rng.choice(sides, 2)
+        got = smooth.average(np.array([cx]), np.array([cy]), np.array([hx]), np.array([hy]))[0]
+        assert np.abs(got - numerically(cx, cy, hx, hy)).max() < 5e-4, (cx, cy, hx, hy)
+    cx, cy = rng.uniform(-30, 30, 200), rng.uniform(-30, 30, 200)
+    zero = np.zeros(200)
+    assert np.abs(smooth.average(cx, cy, zero, zero) - bilinear(texture, cx, cy)).max() < 1e-9
+    far = smooth.average(np.array([1e30, -1e20]), np.array([5.0, 2e15]), np.array([1e25, 1e18]), np.array([1e25, 1e18]))
+    assert np.allclose(far, channels(texture).mean(axis=(0, 1)), atol=1e-6)
+
+
+def test_the_smooth_ideal_of_a_magnified_texture_is_bilinear_and_of_a_minified_one_the_square_ideal():
+    """Near, each of 256 x 256 texels about a pixel wide, the smooth ideal shows the texture blended
+    between texel centres where the square one shows hard texel edges (they differ); far away, a
+    sample's footprint covers a dozen texels and the two ideals agree within a channel step."""
+    texture = np.random.default_rng(9).integers(0, 65536, (256, 256)).astype(np.uint16)
+    mesh = parse_obj(b"v -0.5 -0.5 0\nv 0.5 -0.5 0\nv 0.5 0.5 0\nv -0.5 0.5 0\n"
+                     b"vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nf 1/1 2/2 3/3\nf 1/1 3/3 4/4\n")
+    for translate, expect_equal in (("0 0 -0.8", False), ("0 0 -40", True)):
+        scene = parse_scene(f"mode = textured\ncull = off\nambient = 1\nstep = 0\nangle = 20\naxis = 1 0 0\n"
+                            f"translate = {translate}\n")
+        square = ideal_channels(scene, mesh, texture, 0, density=4)
+        smooth = ideal_channels(scene, mesh, texture, 0, density=4, texels="smooth")
+        difference = np.abs(square - smooth).max()
+        assert (difference < 1.0) == expect_equal, (translate, difference)
+    with pytest.raises(ValueError, match="texels must be one of square, smooth"):
+        ideal_channels(scene, mesh, texture, 0, density=1, texels="round")
+
+
 # --------------------------------------------------------------------------- lines
 
 def test_a_line_is_one_pixel_wide_with_round_ends():
@@ -386,6 +435,7 @@ def test_cli_renders_the_ideal_and_refuses_a_bad_density(tmp_path):
     centres, ideal = (np.asarray(Image.open(tmp_path / out / "frame_0000.png")) for out in ("centres", "ideal"))
     assert 0 < np.any(centres != ideal, axis=2).mean() < 0.05            # the triangle's edges
     for extra, message in ((["--ideal", "--density", "65"], "--density must be from 1 to 64"),
-                           (["--density", "4"], "--density applies only with --ideal")):
+                           (["--density", "4"], "--density applies only with --ideal"),
+                           (["--texels", "smooth"], "--texels applies only with --ideal")):
         result = run_module("reference", "render", folder, "--out", tmp_path / "bad", *extra)
         assert result.returncode == 2 and message in result.stderr and "Traceback" not in result.stderr
