@@ -548,11 +548,14 @@ def scene_figures(firmware: Path, folder: Path, runs: list[tuple]) -> tuple[list
 
 @dataclass
 class ReferenceFrames:
-    """The reference renderer's frames of one scene (RGB as the LCD shows them), and the ideal
-    image's own figures: host seconds per frame, and frame 0 at the default density against
-    twice the density (PSNR, dB)."""
+    """The reference renderer's frames of one scene (RGB as the LCD shows them): the pixel-centre
+    image, the ideal image (a camera's: textures read smooth, as filtered; reference/ideal.py) and
+    the ideal with square texels (as nearest-texel sampling draws a magnified texture); and the
+    ideal's own figures: host seconds per frame, and frame 0 at the default density against twice
+    the density (PSNR, dB)."""
     pixel_centre: list[np.ndarray]
     ideal: list[np.ndarray]
+    square: list[np.ndarray]
     ideal_seconds_per_frame: float
     ideal_convergence_db: float
 
@@ -562,7 +565,7 @@ class ReferenceFrames:
 # follows `filter`, so once per filter too.
 _reference_cache: dict[tuple, ReferenceFrames] = {}
 # The ideal image ignores `filter` too: shared by the filter settings of a scene.
-_ideal_cache: dict[tuple, tuple[list[np.ndarray], float, float]] = {}
+_ideal_cache: dict[tuple, tuple[list[np.ndarray], list[np.ndarray], float, float]] = {}
 
 
 def _reference_key(scene, mesh, texture, count: int, ideal: bool = False) -> tuple:
@@ -590,10 +593,12 @@ def reference_frames(card: Path, count: int) -> ReferenceFrames:
         ideal_key = _reference_key(scene, mesh, texture, count, ideal=True)
         if ideal_key not in _ideal_cache:
             started = time.perf_counter()
-            ideal = [reference.render_ideal_image(scene, mesh, texture, n) for n in range(count)]
+            ideal = [reference.render_ideal_image(scene, mesh, texture, n, texels="smooth") for n in range(count)]
             seconds = (time.perf_counter() - started) / count
-            denser = reference.render_ideal_image(scene, mesh, texture, 0, density=2 * DEFAULT_DENSITY)
-            _ideal_cache[ideal_key] = (ideal, seconds, distance(ideal[:1], [denser])["psnr_db"])
+            square = [reference.render_ideal_image(scene, mesh, texture, n, texels="square") for n in range(count)]
+            denser = reference.render_ideal_image(scene, mesh, texture, 0, density=2 * DEFAULT_DENSITY,
+                                                  texels="smooth")
+            _ideal_cache[ideal_key] = (ideal, square, seconds, distance(ideal[:1], [denser])["psnr_db"])
         _reference_cache[key] = ReferenceFrames(pixel_centre, *_ideal_cache[ideal_key])
     return _reference_cache[key]
 
@@ -616,14 +621,18 @@ def distance(shown: list[np.ndarray], expected: list[np.ndarray]) -> dict:
 def compare_with_reference(card: Path, frames: list[np.ndarray]) -> dict:
     """How far the firmware's frames are from the float64 reference renderer's (reference/): PSNR
     over all frames, the largest channel error and the share of pixels that differ, against its
-    pixel-centre image (psnr_db, max_error, pixels_differ) and its ideal image (the same names
-    ending in _ideal), with the ideal's density, host time per frame and convergence."""
+    pixel-centre image (psnr_db, max_error, pixels_differ), its ideal image (the same names
+    ending in _ideal) and the ideal with square texels (psnr_square_db, max_error_square,
+    pixels_differ_square), with the ideal's density,
+    host time per frame and convergence."""
     from reference.ideal import DEFAULT_DENSITY
     expected = reference_frames(card, len(frames))
-    ideal = distance(frames, expected.ideal)
+    ideal, square = distance(frames, expected.ideal), distance(frames, expected.square)
     return {**distance(frames, expected.pixel_centre),
             "psnr_ideal_db": ideal["psnr_db"], "max_error_ideal": ideal["max_error"],
             "pixels_differ_ideal": ideal["pixels_differ"],
+            "psnr_square_db": square["psnr_db"], "max_error_square": square["max_error"],
+            "pixels_differ_square": square["pixels_differ"],
             "ideal_density": DEFAULT_DENSITY, "ideal_seconds_per_frame": expected.ideal_seconds_per_frame,
             "ideal_convergence_db": expected.ideal_convergence_db}
 

@@ -74,7 +74,7 @@ THESIS = [
 
 # The fields of a precision-sweep record (tools/bench.py's measure) a history line keeps
 SETTING_FIELDS = ("scene", "scale", "mode", "setting", "instructions_hart0", "cycles_hart0", "psnr_db",
-                  "psnr_ideal_db")
+                  "psnr_ideal_db", "psnr_square_db")
 MODES = ("textured", "flat", "wireframe")
 # What a history line keeps of each CoreMark run (tools/coremark.py)
 COREMARK_FIELDS = ("timing", "cpu_hz", "iterations", "iterations_per_second", "coremark_per_mhz", "instructions",
@@ -200,24 +200,32 @@ def _db(value: float | None) -> str:
 
 def settings_table(line: dict) -> list[str]:
     """Per mode and setting: hart 0's cycles a frame as a multiple of the default's (the range over the
-    scenes), and PSNR against the ideal image per scene, in the sweep's scene order."""
+    scenes), and PSNR against the ideal image per scene, in the sweep's scene order (and against the
+    square-texel ideal, where the records have it)."""
     records = line["settings"]
     scenes = list(dict.fromkeys(r["scene"] for r in records))
+    square = any(r.get("psnr_square_db") is not None for r in records)
     rows = [f"What each precision setting costs and buys, from the latest precision sweep ({_run(line)}): hart "
             "0's cycles a frame as a multiple of the default's (lowest-highest over the scenes), and PSNR in "
-            "dB against the reference renderer's ideal image, per scene (" + " / ".join(scenes) + ")."]
+            "dB against the reference renderer's ideal image, per scene (" + " / ".join(scenes) + ")"
+            + ("; the ideal reads textures smooth, as a camera sees a filtered texture, and the last column "
+               "against the same with square texels, as nearest-texel sampling draws a magnified one." if square
+               else ".")]
     for mode in MODES:
         in_mode = [r for r in records if r["mode"] == mode]
         if not in_mode:
             continue
         default = {r["scene"]: r for r in in_mode if r["setting"] == "default"}
-        rows += ["", f"{mode}:", "", "| setting | cycles (x default) | dB vs ideal |", "|---|---|---|"]
+        rows += ["", f"{mode}:", "", "| setting | cycles (x default) | dB vs ideal |"
+                 + (" dB vs square-texel ideal |" if square else ""), "|---|---|---|" + ("---|" if square else "")]
         for setting in dict.fromkeys(r["setting"] for r in in_mode):
             mine = {r["scene"]: r for r in in_mode if r["setting"] == setting}
             ratios = [mine[s]["cycles_hart0"] / default[s]["cycles_hart0"] for s in scenes
                       if s in mine and s in default and mine[s]["cycles_hart0"] and default[s]["cycles_hart0"]]
             rows.append(f"| {setting} | {_ranges(ratios) if ratios else '-'} | "
-                        + " / ".join(_db(mine[s]["psnr_ideal_db"]) if s in mine else "-" for s in scenes) + " |")
+                        + " / ".join(_db(mine[s]["psnr_ideal_db"]) if s in mine else "-" for s in scenes) + " |"
+                        + ((" " + " / ".join(_db(mine[s].get("psnr_square_db")) if s in mine else "-" for s in scenes)
+                            + " |") if square else ""))
     return rows
 
 

@@ -52,12 +52,12 @@ SETTINGS: dict[str, dict[str, str]] = {
     "thesis":        {"interpolation": "affine", "shading": "flat", "light_levels": "33", "angles": "table",
                       "depth": "int16", "snap": "pixel"},
     "best":          {"interpolation": "perspective", "shading": "gouraud", "depth": "float32"},
-    # the closest to the ideal image: supersampling, depth that separates the decal's two quads,
-    # light in 1/65536 steps and from the vertex normals, which the ideal lights by (with bilinear
-    # or mipmap filtering added, magnified textures blur where the ideal's texels stay sharp: the
-    # cube's 8x8 texture loses 14 dB against it, the decal's 5.5)
+    # the closest to the ideal image (a camera's, textures read smooth): supersampling, depth that
+    # separates the decal's two quads, light in 1/65536 steps and from the vertex normals, which the
+    # ideal lights by, and textures filtered along the footprint (against the square-texel ideal,
+    # nearest texels would be closer where textures are magnified: the cube's 8x8 texture)
     "most-accurate": {"antialias": "supersample", "depth": "float32", "light_levels": "65537",
-                      "shading": "gouraud"},
+                      "shading": "gouraud", "filter": "anisotropic"},
 }
 DEFAULT_SETTING = "default"
 # Wireframe has no texture, light or depth buffer: only the angles, the snapping and antialiased
@@ -85,13 +85,20 @@ def settings_for_mode(mode: str, wanted: Iterable[str] | None = None) -> list[st
 
 # What a PSNR is measured against: the record's key -> (its fields' suffix, the plot's axis label).
 PIXEL_CENTRE = "psnr_db"           # the reference renderer's pixel-centre image (reference/render.py)
-IDEAL = "psnr_ideal_db"            # its ideal image (reference/ideal.py)
-METRICS = {PIXEL_CENTRE: ("", "PSNR vs reference (dB)"), IDEAL: ("_ideal", "PSNR vs ideal (dB)")}
+IDEAL = "psnr_ideal_db"            # its ideal image, a camera's (reference/ideal.py, texels smooth)
+SQUARE = "psnr_square_db"          # the ideal with square texels (as nearest-texel sampling draws them)
+METRICS = {PIXEL_CENTRE: ("", "PSNR vs reference (dB)"), IDEAL: ("_ideal", "PSNR vs ideal (dB)"),
+           SQUARE: ("_square", "PSNR vs square-texel ideal (dB)")}
 
 
 def has_ideal(records: Iterable[dict]) -> bool:
     """Whether the records carry PSNRs against the ideal image."""
     return any(r.get(IDEAL) is not None for r in records)
+
+
+def has_square(records: Iterable[dict]) -> bool:
+    """Whether the records carry PSNRs against the square-texel ideal."""
+    return any(r.get(SQUARE) is not None for r in records)
 
 
 def _quality(record: dict, metric: str = PIXEL_CENTRE) -> float:
@@ -152,6 +159,8 @@ def front_report(records: Iterable[dict]) -> list[str]:
     metrics = [(PIXEL_CENTRE, "the Pareto front")]
     if has_ideal(records):
         metrics.append((IDEAL, "the Pareto front against the ideal"))
+    if has_square(records):
+        metrics.append((SQUARE, "the Pareto front against the square-texel ideal"))
     for metric, front_name in metrics:
         for (scene, scale, mode), group in panels(records).items():
             where = f"{scene}, scale {scale:g}, {mode}"
@@ -179,11 +188,16 @@ IDEAL_COLUMNS = [
     ("psnr_ideal_db", "PSNR vs ideal (dB)"), ("max_error_ideal", "max error vs ideal"),
     ("pixels_differ_ideal_percent", "pixels differ vs ideal (%)"), ("on_ideal_front", "on ideal front"),
 ]
+# and against the ideal with square texels, where they carry that
+SQUARE_COLUMNS = [("psnr_square_db", "PSNR vs square-texel ideal (dB)"), ("on_square_front", "on square-texel front")]
 
 
 def table_columns(records: Iterable[dict]) -> list[tuple[str, str]]:
-    """The table's columns: TABLE_COLUMNS, and IDEAL_COLUMNS where the records carry the ideal."""
-    return TABLE_COLUMNS + (IDEAL_COLUMNS if has_ideal(records) else [])
+    """The table's columns: TABLE_COLUMNS, IDEAL_COLUMNS where the records carry the ideal, and
+    SQUARE_COLUMNS where they carry the square-texel one."""
+    records = list(records)
+    return (TABLE_COLUMNS + (IDEAL_COLUMNS if has_ideal(records) else [])
+            + (SQUARE_COLUMNS if has_square(records) else []))
 
 
 def _optional(value, kind):
@@ -199,9 +213,11 @@ def table_rows(records: Iterable[dict]) -> list[dict]:
     for group in panels(records).values():
         front = pareto_front(group)
         ideal_front = pareto_front(group, IDEAL)
+        square_front = pareto_front(group, SQUARE)
         default = next((r for r in group if r["setting"] == DEFAULT_SETTING), None)
         for r in group:
             ideal = r.get(IDEAL) is not None
+            square = r.get(SQUARE) is not None
             rows.append({
                 "scene": r["scene"], "scale": r["scale"], "mode": r["mode"], "setting": r["setting"],
                 "instructions_per_frame": int(round(r["instructions_hart0"])),
@@ -214,6 +230,8 @@ def table_rows(records: Iterable[dict]) -> list[dict]:
                 "max_error_ideal": _optional(r.get("max_error_ideal"), int),
                 "pixels_differ_ideal_percent": _optional(r.get("pixels_differ_ideal"), lambda v: 100 * float(v)),
                 "on_ideal_front": (r["setting"] in ideal_front) if ideal else None,
+                "psnr_square_db": _optional(r.get(SQUARE), float),
+                "on_square_front": (r["setting"] in square_front) if square else None,
             })
     return rows
 
@@ -231,7 +249,7 @@ def csv_text(records: Iterable[dict]) -> str:
     default run), on_front yes/no; the ideal's columns where the records carry them (empty for a
     record without)."""
     records = list(records)
-    ideal = has_ideal(records)
+    ideal, square = has_ideal(records), has_square(records)
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")
     writer.writerow([c for c, _ in table_columns(records)])
@@ -248,6 +266,8 @@ def csv_text(records: Iterable[dict]) -> str:
                       "" if row["max_error_ideal"] is None else row["max_error_ideal"],
                       "" if row["pixels_differ_ideal_percent"] is None else f"{row['pixels_differ_ideal_percent']:.4f}",
                       _yes_no(row["on_ideal_front"])]
+        if square:
+            cells += [_csv_psnr(row["psnr_square_db"]), _yes_no(row["on_square_front"])]
         writer.writerow(cells)
     return out.getvalue()
 
@@ -261,9 +281,10 @@ def _psnr_text(psnr: float | None) -> str:
 def markdown_table(records: Iterable[dict]) -> str:
     """The table in Markdown (thousands separated, PSNR `exact` for identical frames)."""
     records = list(records)
-    ideal = has_ideal(records)
+    ideal, square = has_ideal(records), has_square(records)
     lines = ["| " + " | ".join(h for _, h in table_columns(records)) + " |",
-             "|" + "---|" * 3 + "---|" + "---:|" * 6 + "---|" + ("---:|" * 3 + "---|" if ideal else "")]
+             "|" + "---|" * 3 + "---|" + "---:|" * 6 + "---|" + ("---:|" * 3 + "---|" if ideal else "")
+             + ("---:|---|" if square else "")]
     for row in table_rows(records):
         relative = "" if row["relative_to_default"] is None else f"{row['relative_to_default']:.3f}"
         cycles = "" if row["cycles_per_frame"] is None else f"{row['cycles_per_frame']:,}"
@@ -277,6 +298,8 @@ def markdown_table(records: Iterable[dict]) -> str:
             line += (f" {_psnr_text(row['psnr_ideal_db'])} | "
                      f"{'' if row['max_error_ideal'] is None else row['max_error_ideal']} | "
                      f"{'' if differ is None else f'{differ:.2f}'} | {_yes_no(row['on_ideal_front'])} |")
+        if square:
+            line += f" {_psnr_text(row['psnr_square_db'])} | {_yes_no(row['on_square_front'])} |"
         lines.append(line)
     return "\n".join(lines) + "\n"
 
@@ -438,7 +461,7 @@ def _panel_svg(group: list[dict], title: str, ox: float, oy: float, metric: str 
         on_front = r["setting"] in front
         value = r.get(metric)
         psnr = _psnr_text(None if value is None else float(value))
-        against = "the ideal" if metric == IDEAL else "the pixel-centre reference"
+        against = {IDEAL: "the ideal", SQUARE: "the square-texel ideal"}.get(metric, "the pixel-centre reference")
         differ = r.get("pixels_differ" + suffix)
         cycles = r.get("cycles_hart0")
         tip = (f"{r['setting']}: {int(round(r['instructions_hart0'])):,} instructions/frame"
@@ -476,7 +499,7 @@ def svg_text(records: Iterable[dict], title: str = "Cycles per frame against PSN
     panels against the ideal."""
     records = list(records)
     groups = panels(records)
-    metrics = [PIXEL_CENTRE] + ([IDEAL] if has_ideal(records) else [])
+    metrics = [PIXEL_CENTRE] + ([IDEAL] if has_ideal(records) else []) + ([SQUARE] if has_square(records) else [])
     rows = [(scene, scale, metric) for scene, scale in dict.fromkeys((scene, scale) for scene, scale, _ in groups)
             for metric in metrics]
     cols = list(dict.fromkeys(mode for _, _, mode in groups))
@@ -502,13 +525,16 @@ def svg_text(records: Iterable[dict], title: str = "Cycles per frame against PSN
         for metric in metrics:
             ox = 10 + cols.index(mode) * PANEL_W
             oy = header + rows.index((scene, scale, metric)) * PANEL_H
-            title = f"{scene}, scale {scale:g}, {mode}" + (", vs ideal" if metric == IDEAL else "")
+            title = f"{scene}, scale {scale:g}, {mode}" + {IDEAL: ", vs ideal", SQUARE: ", vs square-texel ideal"}.get(metric, "")
             s += _panel_svg(group, title, ox, oy, metric)
     s.append(_text(20, height - 32, "Fewer cycles (left) and higher PSNR against the float64 reference renderer "
                    "(up) are better; hover a point for its maximum error and share of differing pixels.", 11))
     if IDEAL in metrics:
         s.append(_text(20, height - 50, "Rows marked 'vs ideal': PSNR against the ideal image (area-averaged pixels, "
-                       "area-filtered textures); the others against the pixel-centre image.", 11))
+                       "area-filtered textures" + ("; read smooth, as a camera sees them, and, 'vs square-texel ideal', "
+                                                   "as the squares nearest-texel sampling draws"
+                                                   if SQUARE in metrics else "")
+                       + "); the others against the pixel-centre image.", 11))
     s.append(_text(20, height - 14, f"Frames identical to the reference (infinite PSNR) sit on the row 'exact', "
                    f"plotted at a ceiling of {PSNR_CEILING_DB:g} dB above a break in the axis.", 11))
     s.append("</svg>")
@@ -533,8 +559,9 @@ def write_quality(records: list[dict], folder: Path) -> str:
         "scene and mode needs no more cycles and reaches at least the PSNR, being better in one. "
         + ("The first PSNR, error and front are against the reference's pixel-centre image (its sampling is "
            "the firmware's, so they measure arithmetic); the columns `vs ideal` against its ideal image "
-           "(area-averaged pixels, area-filtered textures: what a camera would see, so they measure aliasing "
-           "too). " if has_ideal(records) else "")
+           "(area-averaged pixels, area-filtered textures read smooth: what a camera would see of a filtered "
+           "texture, so they measure aliasing too), and `vs square-texel ideal` against the same with textures "
+           "read as the squares nearest-texel sampling draws. " if has_ideal(records) else "")
         + "Plot: quality.svg.\n\n"
         "| setting | scene.ini keys |\n|---|---|\n"
         + "".join(f"| {name} | {' '.join(f'`{k} = {v}`' for k, v in keys.items()) or '(firmware defaults)'} |\n"

@@ -82,6 +82,18 @@ def test_the_thesis_and_the_settings_tables_come_from_their_latest_runs(private)
     assert bench_history.main(["--check"]) == 0
 
 
+def test_the_settings_table_adds_the_square_texel_ideal_where_the_sweep_has_it(private):
+    history, page, _ = private
+    settings = [{"scene": scene, "scale": 0.9, "mode": "textured", "setting": "default", "instructions_hart0": 1,
+                 "cycles_hart0": 2, "psnr_db": 50.0, "psnr_ideal_db": ideal, "psnr_square_db": square}
+                for scene, ideal, square in (("torus", 44.4, 42.7), ("cube", 45.0, 31.0))]
+    bench_history.append(None, settings)
+    text = page.read_text()
+    assert "| setting | cycles (x default) | dB vs ideal | dB vs square-texel ideal |" in text
+    assert "| default | 1.00 | 44.4 / 45.0 | 42.7 / 31.0 |" in text
+    assert bench_history.main(["--check"]) == 0
+
+
 def test_the_coremark_table_comes_from_the_latest_coremark_run(private):
     history, page, _ = private
     run = {"timing": "rocket", "cpu_hz": 390_000_000, "iterations": 10000, "iterations_per_second": 832.0,

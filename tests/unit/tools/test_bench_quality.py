@@ -33,7 +33,8 @@ def test_settings_are_ordered_default_first_and_use_known_keys_and_values():
         for key, value in keys.items():
             assert value in quality.PRECISION_KEYS[key], (name, key, value)
     assert quality.SETTINGS["most-accurate"] == {"antialias": "supersample", "depth": "float32",
-                                                 "light_levels": "65537", "shading": "gouraud"}
+                                                 "light_levels": "65537", "shading": "gouraud",
+                                                 "filter": "anisotropic"}
     assert quality.SETTINGS["thesis"] == {"interpolation": "affine", "shading": "flat", "light_levels": "33",
                                           "angles": "table", "depth": "int16", "snap": "pixel"}
     # the single-knob settings differ from the default in exactly one key, and not in its default value
@@ -264,6 +265,24 @@ def test_front_against_the_ideal_is_its_own():
                      "A torus, scale 0.35, textured: default is NOT on the Pareto front against the ideal "
                      "(dominated by affine)",
                      "A torus, scale 0.35, wireframe: default is on the Pareto front against the ideal"]
+
+
+def test_the_square_texel_ideal_gets_its_columns_front_and_panels():
+    """Records measured against the square-texel ideal too (psnr_square_db): the table gains its PSNR and
+    front columns, the front report and the plot a row of their own."""
+    records = [{**r, "psnr_square_db": square} for r, square in zip(IDEAL_RECORDS, (40.0, 39.0, 38.0, 41.0, 30.0))]
+    assert quality.has_square(records) and not quality.has_square(IDEAL_RECORDS)
+    rows = list(csv.DictReader(io.StringIO(quality.csv_text(records))))
+    assert list(rows[0])[-2:] == ["psnr_square_db", "on_square_front"]
+    assert [r["on_square_front"] for r in rows] == ["yes", "no", "no", "yes", "yes"]
+    assert rows[0]["psnr_square_db"] == "40.000"
+    lines = quality.markdown_table(records).splitlines()
+    header = [c.strip() for c in lines[0].strip("|").split("|")]
+    assert header[-2:] == ["PSNR vs square-texel ideal (dB)", "on square-texel front"]
+    assert all(line.count("|") == len(header) + 1 for line in lines)
+    assert any("against the square-texel ideal" in line for line in quality.front_report(records))
+    assert ", vs square-texel ideal<" in quality.svg_text(records)
+    assert "square-texel" not in quality.svg_text(IDEAL_RECORDS)
 
 
 def test_csv_and_markdown_carry_both_psnrs_and_both_fronts():
