@@ -232,7 +232,7 @@
     bgez    t0, 29f
     li      t0, 0
 29: addi    t0, t0, 1 - F32_EXP_BIAS
-    srai    t0, t0, 1                   # the level, -64 .. 64
+    srai    t0, t0, 1                   # the level, -63 .. 64
     slli    t0, t0, MIP_ENTRY_SHIFT
     add     t0, t0, s10
     ld      a5, MIP_PIXELS(t0)
@@ -556,8 +556,11 @@
 #   and fs5 are saved here. Registers of the span loop beyond FILL's:
 #   s9 BLEND_SPREAD_MUL, t5 BLEND_SPREAD_MASK, ra BLEND_ROUND, s10 the level
 #   table's entry for level 0 (mipmap); temporaries t0..t3, t6, a3, a4,
-#   s6 (fx), s7 (fy), s8 (x1), fs5. With aa, a coverage fill as FILL's,
-#   the coverage kept on the stack (RT_AA) over the texel blend. Ends at 90
+#   s6 (fx), s7 (fy), s8 (x1), fs5. With mipmap, s11 the taps left to walk
+#   (filter = anisotropic: ANISO_SETUP, RT_ANISO_*; 0 for one). With wide
+#   (light in 1/65536), ra is WIDE_BLEND_ROUND in both halves instead and B
+#   | R and G are lit apart. With aa, a coverage fill as FILL's, the
+#   coverage kept on the stack (RT_AA) over the texel blend. Ends at 90
 #   (raster_triangle's epilogue).
 .macro FILTERED gouraud, affine, depth16, mipmap, aa=0, wide=0
     sd      s6, RT_ROW_E0(sp)
@@ -824,7 +827,8 @@
 #   a2 end of the row, a3 row start at xmin, t6 its depth, a4 rows left;
 #   a5 texels (textured) or the spread base colour (flat Gouraud), a6 width,
 #   a7 height; t4 colour (flat) or intensity k; t5 RGB565_SPREAD_MASK;
-#   ra LIGHT_ROUND_SPREAD (lit fills; ra is saved on the stack meanwhile);
+#   ra LIGHT_ROUND_SPREAD (lit fills; ra is saved on the stack meanwhile;
+#   the wide fills: WIDE_SPREAD_MASK and WIDE_ROUND_SPREAD);
 #   fa0 depth, fa1 1 / w, fa2, fa3 texel column and row (affine) or u / w,
 #   v / w (perspective) at the pixel, fa4..fa7 their steps right; ft0..ft3
 #   at the row's first pixel, ft4..ft7 their steps down; ft8 = 1;

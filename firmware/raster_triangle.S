@@ -26,10 +26,12 @@
 #     linearly in screen space as a float and compared as a signed 32-bit
 #     integer (render.inc); a fragment is drawn when it is strictly nearer
 #     than what the buffer holds.
-#   - Attributes are planes: gradients per pixel from the snapped corners,
-#     re-anchored at the first inside pixel of every row. Depth is evaluated
-#     from its plane at every pixel and every row (one rounding each), not
-#     stepped: a step under half an ulp would vanish. Textured fills
+#   - Attributes are planes: gradients per pixel from the snapped corners
+#     (float32 depth's from where they project before snapping:
+#     DEPTH_GRADIENT), re-anchored at the first inside pixel of every row.
+#     Depth is evaluated from its plane at every pixel and every row (one
+#     rounding each), not stepped: a step under half an ulp would vanish.
+#     Textured fills
 #     interpolate u / w, v / w and 1 / w (perspective-correct) or the texel
 #     column and row themselves (affine).
 #   - Bands: each hart draws only the rows of its band (raster_set_band;
@@ -101,11 +103,12 @@
 #   snapping (RV_FX, RV_FY, moved by the sample's offset as the snapped ones
 #   are): snapping moves a corner by up to 1/32 pixel, and on a surface at 17
 #   degrees that shifts its plane by 1.5e-6, where two quads crossing at a
-#   slope of 1e-4 differ by 1.6e-8 a pixel from the crossing. A corner
-#   triangle of no positive area there (a sliver whose snapped area is not:
-#   or NaN) keeps the snapped plane, GRADIENT's. (int16 depth, 1000 times
-#   coarser, keeps GRADIENT's plane.) Clobbers a0, a1, t3, ft1..ft3, ft5..ft8,
-#   fa5, fa6.
+#   slope of 1e-4 differ by 1.6e-8 a pixel from the crossing. Where the
+#   unsnapped triangle has under half the snapped one's area (a sliver that
+#   snapping fattened, or NaN), its plane would be ill-conditioned over the
+#   snapped pixels, which it extrapolates to: the snapped plane, GRADIENT's,
+#   stays. (int16 depth, 1000 times coarser, keeps GRADIENT's plane.)
+#   Clobbers a0, a1, t3, ft1..ft3, ft5..ft8, fa5, fa6.
 .macro DEPTH_GRADIENT
     flw     ft1, RV_FX(t0)
     flw     ft2, RV_FY(t0)
@@ -118,8 +121,11 @@
     fsub.s  ft6, ft6, ft1               # dx2
     fsub.s  ft7, ft7, ft2               # dy2
     fmul.s  fa5, ft3, ft7
-    fnmsub.s fa5, ft6, ft5, fa5         # area = dx1 dy2 - dx2 dy1
-    fmv.w.x fa6, zero
+    fnmsub.s fa5, ft6, ft5, fa5         # area = dx1 dy2 - dx2 dy1 (pixels^2)
+    fcvt.s.l fa6, s6                    # half the snapped area: s6 (Q8) / 512
+    li      t3, F32_HALF_Q8_AREA
+    fmv.w.x ft8, t3
+    fmul.s  fa6, fa6, ft8
     flt.s   t3, fa6, fa5
     bnez    t3, .Lexact\@
     GRADIENT ft11, ft4, ft0, fa4, ft4, ft0

@@ -75,13 +75,14 @@ render_init:
     li      t2, FILTER_BILINEAR
     bne     t0, t2, 22f
     ori     t1, t1, RASTER_BILINEAR
-22: li      t2, FILTER_MIPMAP
-    beq     t0, t2, 24f
-    li      t2, FILTER_ANISOTROPIC      # anisotropic: the mipmap fills, which
-    bne     t0, t2, 23f                 # then walk the footprint (raster_aniso)
+22: li      t2, FILTER_ANISOTROPIC      # anisotropic: the mipmap fills, which
+    sub     t3, t0, t2                  # then walk the footprint (raster_aniso)
+    seqz    t3, t3
     la      t2, raster_aniso
-    li      t3, 1
     sd      t3, 0(t2)
+    bnez    t3, 24f
+    li      t2, FILTER_MIPMAP
+    bne     t0, t2, 23f
 24: ori     t1, t1, RASTER_MIPMAP
 23: la      t0, render_fill
     sw      t1, 0(t0)
@@ -155,6 +156,11 @@ render_init:
     flw     fa0, SCENE_NEAR(s0)
     flw     fa1, SCENE_FAR(s0)
     call    raster_set_depth
+    lwu     t0, SCENE_DEPTH(s0)         # float32: the vertex records keep the
+    xori    t0, t0, DEPTH_INT16         # snap's residual for the depth plane
+    snez    t0, t0
+    la      t1, vertex_snap_kept
+    sd      t0, 0(t1)
     la      t0, render_fill
     lwu     t0, 0(t0)
     andi    t0, t0, RASTER_GOURAUD
@@ -424,7 +430,7 @@ msg_normal_intensities: .asciz "normal intensities"
     .globl render_fill
 render_fill:
     .space  8
-# normal_light: address (heap) of one f32 intensity (0 .. LIGHT_ONE) per
+# normal_light: address (heap) of one f32 intensity (0 .. one, light_quantum) per
 # mesh normal, this frame's (Gouraud only; render_light.S normals_light).
     .globl normal_light
 normal_light:

@@ -152,8 +152,8 @@ draw_triangles:
     mv      t4, s6
     mv      t5, s7
     li      t2, TRIANGLE_CORNERS
-    la      a2, raster_depth_mode
-    ld      a2, 0(a2)                   # a2 = int16 depth
+    la      a2, vertex_snap_kept
+    ld      a2, 0(a2)                   # a2 = the records keep the snap's residual
 5:  lw      t3, VTX_SX(t1)
     sw      t3, RV_X(t0)
     lw      t3, VTX_SY(t1)
@@ -162,7 +162,7 @@ draw_triangles:
     sw      t3, RV_Z(t0)
     lw      t3, VTX_Q(t1)
     sw      t3, RV_Q(t0)
-    bnez    a2, 51f
+    beqz    a2, 51f
     # float32 depth: the corner before snapping (RV_FX, RV_FY), pixels from
     # the screen's centre: the snapped position plus the snap's residual
     li      t3, F32_Q4_TO_PIXEL

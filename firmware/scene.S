@@ -259,7 +259,7 @@ scene_default_values:
     .word   0x10A2                      # SCENE_BACKGROUND: RGB 16, 20, 16
     .word   INTERP_PERSPECTIVE          # SCENE_INTERPOLATION
     .word   SHADING_FLAT                # SCENE_SHADING
-    .float  65.0                        # SCENE_LIGHT_LEVELS (LIGHT_LEVELS_MAX)
+    .float  65.0                        # SCENE_LIGHT_LEVELS (LIGHT_LEVELS_NARROW)
     .word   ANGLES_POLYNOMIAL           # SCENE_ANGLES
     .word   DEPTH_INT16                 # SCENE_DEPTH
     .word   SNAP_SUBPIXEL               # SCENE_SNAP

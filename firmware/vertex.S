@@ -30,7 +30,8 @@
 #   t1 = how far snapping moved one coordinate of a projected corner: exact
 #   (pixels from the screen's centre, project_clip's fa2 or fa3) minus q4
 #   (its snapped Q4 position; half = the centre's), in 2^-15 pixel (render.inc
-#   F32_SNAP_*), clamped to half a pixel (only a NaN position gets there).
+#   F32_SNAP_*), clamped to half a pixel (which only snap = pixel's ties
+#   reach, and NaN positions pass).
 #   Clobbers t0, ft0, ft1.
 .macro SNAP_RESIDUAL q4, exact, half
     li      t0, \half
@@ -256,10 +257,10 @@ vertex_range:
     sw      a0, VTX_SX(s3)
     sw      a1, VTX_SY(s3)
     fsw     fa1, VTX_Q(s3)
-    la      t0, raster_depth_mode
+    la      t0, vertex_snap_kept
     ld      t0, 0(t0)
-    beqz    t0, 3f
-    fsw     fa0, VTX_ZW(s3)             # int16 depth: z / w
+    bnez    t0, 3f
+    fsw     fa0, VTX_ZW(s3)             # int16 depth (or none): z / w
     j       2f
 3:  SNAP_RESIDUAL a0, fa2, SCREEN_HALF_W_Q4 # float32 depth: where snapping
     sh      t1, VTX_SNAP_X(s3)          # moved the corner
@@ -491,6 +492,11 @@ msg_world_positions: .asciz "world positions"
     .globl vertex_records
 # vertex_records: address of the MESH_VCOUNT vertex records (heap).
 vertex_records:
+    .space  8
+    .globl vertex_snap_kept
+# vertex_snap_kept: nonzero when the vertex records keep the snap's residual
+# in VTX_ZW's place (float32 depth: render_init), zero when they keep z / w
+vertex_snap_kept:
     .space  8
     .globl vertex_world_array
 # vertex_world_array: address of the MESH_VCOUNT world-space positions

@@ -678,7 +678,7 @@ def ideal_table(records: list[dict]) -> str:
 
 
 # the record's figures that are infinite for frames equal to what they are compared with
-INFINITE_WHEN_EQUAL = ("psnr_db", "psnr_ideal_db", "ideal_convergence_db")
+INFINITE_WHEN_EQUAL = ("psnr_db", "psnr_ideal_db", "psnr_square_db", "ideal_convergence_db")
 
 
 def strict_json_record(record: dict) -> dict:

@@ -69,11 +69,11 @@ def test_vertex_clip_and_world_give_the_vertex_stage_values(fw):
     out_clip = fw.symbol("OUT_NEAR") | fw.symbol("OUT_GUARD")
     offsets = {name: fw.symbol(name) for name in ("VTX_OUTCODE", "VTX_SX", "VTX_SY", "VTX_ZW", "VTX_Q", "VTX_SNAP_X")}
     # the records as float32 depth keeps them (the snap's residual where int16 keeps z / w)...
-    fw.write(fw.symbol("raster_depth_mode"), struct.pack("<Q", 0))
+    fw.write(fw.symbol("vertex_snap_kept"), struct.pack("<Q", 1))
     fw.call("vertex_range", [0, VERTICES])
     residual_records = fw.read(records_at, VERTICES * vtx_bytes)
-    # ...and as int16 depth does
-    fw.write(fw.symbol("raster_depth_mode"), struct.pack("<Q", 1))
+    # ...and as int16 depth (and wireframe) does
+    fw.write(fw.symbol("vertex_snap_kept"), struct.pack("<Q", 0))
     fw.call("vertex_range", [0, VERTICES])
     model = fw.read_f32(fw.symbol("vertex_model"), 12).astype(np.float64).reshape(3, 4)
     kinds = set()
