@@ -378,6 +378,7 @@ BENCH_SCENES = [
     ("G 2 quads crossing at slope 1e-4", "held-in/crossing.obj", "held-in/crossing.ppm", (1.0,)),
     ("H 4096x1 stripes on a quad at 80 degrees", "held-in/slant.obj", "held-in/stripes.ppm", (1.0,)),
     ("I sphere 5,120 tri with a logo, 256x128", "models/sphere.obj", "held-in/logo.ppm", (0.9,)),
+    ("J monkey-like head 1,832 tri, 128x128", "held-in/monkey.obj", "held-in/monkey.ppm", (0.9,)),
 ]
 # The motion of every bench scene: angles that are not multiples of 2 degrees, so that the angle
 # table's rounding shows as it would in a user's scene (with 2-degree multiples it is exact).

@@ -17,6 +17,8 @@ and, in held-in/ (not on the default card), the bench's held-in cases of the kin
   crossing.obj  two quads crossing at a slope of 1e-4                         + crossing.png  2x1
   slant.obj     a quad turned 80 degrees from the camera                      + stripes.png   4096x1
   (the latitude-longitude sphere of models/)                                  + logo.png      256x128
+  monkey.obj    a head of seven smooth parts, the way Blender's monkey is made  + monkey.png    128x128
+                (its own model cannot be shipped: 1,832 triangles of our own)
 The textures are PNGs: the card builder turns them into PPM, as it does for users' images.
 """
 from __future__ import annotations
@@ -249,6 +251,49 @@ def slant(degrees: float = 80.0, half: float = 0.8) -> str:
     return _obj("slant", vertices, uvs, [(0.0, math.sin(a), math.cos(a))], faces)
 
 
+# monkey(): its parts, as (centre, radii, rings, sides): ellipsoids, each smooth (its own normals)
+# and textured once around and pole to pole; they meet at creases and through one another, as a
+# modelled head's do (the head, two ears, the muzzle, two eyes and a brow)
+MONKEY_PARTS = [
+    ((0.0, 0.0, 0.0), (0.80, 0.75, 0.68), 16, 24),       # the head
+    ((-0.86, 0.16, -0.05), (0.10, 0.34, 0.30), 8, 12),   # the ears
+    ((0.86, 0.16, -0.05), (0.10, 0.34, 0.30), 8, 12),
+    ((0.0, -0.30, 0.50), (0.46, 0.28, 0.30), 10, 16),    # the muzzle
+    ((-0.27, 0.18, 0.58), (0.15, 0.15, 0.13), 6, 10),    # the eyes
+    ((0.27, 0.18, 0.58), (0.15, 0.15, 0.13), 6, 10),
+    ((0.0, 0.38, 0.48), (0.55, 0.10, 0.16), 6, 10),      # the brow
+]
+
+
+def monkey() -> str:
+    """A Blender-like monkey head (issue 34's held-in case; Blender's own model cannot be shipped):
+    MONKEY_PARTS' ellipsoids, 2 rings x sides triangles each (1,832 in all), with smooth normals
+    (the ellipsoid's gradient) and each part's own wrap of the texture, so the model has what
+    Suzanne has: curved smooth faces, creases where parts meet, parts through one another, thin
+    ears seen edge-on as it turns, and small parts a few pixels across."""
+    vertices, uvs, normals, faces = [], [], [], []
+    for (cx, cy, cz), (rx, ry, rz), rings, sides in MONKEY_PARTS:
+        base = len(vertices)
+        for i in range(rings + 1):
+            b = math.pi * i / rings
+            for j in range(sides + 1):
+                a = 2 * math.pi * j / sides
+                nx, ny, nz = math.sin(b) * math.sin(a), math.cos(b), math.sin(b) * math.cos(a)
+                vertices.append((cx + rx * nx, cy + ry * ny, cz + rz * nz))
+                gx, gy, gz = nx / rx, ny / ry, nz / rz
+                length = math.sqrt(gx * gx + gy * gy + gz * gz)
+                normals.append((gx / length, gy / length, gz / length))
+                uvs.append((j / sides, 1 - i / rings))
+        stride = sides + 1
+        for i in range(rings):
+            for j in range(sides):
+                a, b = base + i * stride + j + 1, base + (i + 1) * stride + j + 1
+                c, d = b + 1, a + 1
+                faces.append([(a, a, a), (b, b, b), (c, c, c)])
+                faces.append([(a, a, a), (c, c, c), (d, d, d)])
+    return _obj("monkey", vertices, uvs, normals, faces)
+
+
 def stripes(width: int = 4096) -> Image.Image:
     """`width` x 1 texels alternating black and white: its mean is mid-grey, and every filter that
     does not follow the footprint shows stripes or moire instead."""
@@ -305,6 +350,8 @@ def main(argv: list[str]) -> int:
     (held_in / "slant.obj").write_text(slant())
     stripes().save(held_in / "stripes.png")
     logo().save(held_in / "logo.png")
+    (held_in / "monkey.obj").write_text(monkey())
+    texture(128, 128, 9).save(held_in / "monkey.png")
     return 0
 
 
