@@ -101,7 +101,6 @@ INDEX = re.compile(r"[+-]?\d*")
 def _corner_indices(line: int, corner: str):
     """The corner's (kind, index text or None) in obj.S's order: each index is checked (by the
     caller, through _resolve) as soon as it is read, before the rest of the corner."""
-    kinds = ("vertex", "texture coordinate", "normal")
     pos = 0
 
     def index(kind: str):

@@ -1030,7 +1030,7 @@ def speed_figures(args: argparse.Namespace) -> dict:
     print(f"board with --check-writes:                 {checked['effective_mips']:8.1f} MIPS  "
           f"({checked['ratio_to_unchecked']:.3f} x the board without; fastest of {checked['rounds']} alternating "
           f"runs each; {checked['ratio_while_executing']:.3f} x while harts execute)")
-    print(f"cycle timing (Rocket) against --timing ipc1, default card, steady-state frames of hart 0:")
+    print("cycle timing (Rocket) against --timing ipc1, default card, steady-state frames of hart 0:")
     print(f"  instructions/frame {board['instructions_per_frame'][0]:,} (ipc1 {ipc1['instructions_per_frame'][0]:,}); "
           f"cycles/frame {board['cycles_per_frame'][0]:,} (ipc1 {ipc1['cycles_per_frame'][0]:,}), "
           f"{board['cycles_per_frame'][0] / board['instructions_per_frame'][0]:.2f} cycles per instruction")
