@@ -164,8 +164,9 @@
 #   2^ANISO_MAX_TAPS_LOG2, in the level of major / 2^k (mipmap's rule on
 #   major^2 / 4^k), a step of major / 2^k apart, centred on the pixel:
 #   a5..a7 = the level, ft10, ft11 = the first tap in it, RT_ANISO_DS, _DT
-#   the step, RT_ANISO_SHIFT = k, RT_ANISO_SUM = 0, s11 = 2^k taps (0 for
-#   one: no sum). reference/render.py anisotropic is the same in float64.
+#   the step, RT_ANISO_SHIFT = k, RT_ANISO_SUM = 0, s11 = 2^k taps (one tap
+#   too goes through the sum, shifted by 0). reference/render.py anisotropic
+#   is the same in float64.
 #   Clobbers t0..t3, fs5 (ft1..ft4 are kept on the stack meanwhile).
 .macro ANISO_SETUP affine
     fsw     ft1, RT_ANISO_F + 0(sp)     # (the row's planes, free meanwhile)
@@ -262,10 +263,7 @@
     fnmsub.s ft10, fs5, ft1, ft10
     fnmsub.s ft11, fs5, ft2, ft11
     sd      zero, RT_ANISO_SUM(sp)
-    li      t1, 1
-    bne     s11, t1, 30f
-    li      s11, 0                      # one tap: as mipmap, no sum
-30: flw     ft1, RT_ANISO_F + 0(sp)
+    flw     ft1, RT_ANISO_F + 0(sp)
     flw     ft2, RT_ANISO_F + 4(sp)
     flw     ft3, RT_ANISO_F + 8(sp)
     flw     ft4, RT_ANISO_F + 12(sp)
@@ -556,8 +554,9 @@
 #   and fs5 are saved here. Registers of the span loop beyond FILL's:
 #   s9 BLEND_SPREAD_MUL, t5 BLEND_SPREAD_MASK, ra BLEND_ROUND, s10 the level
 #   table's entry for level 0 (mipmap); temporaries t0..t3, t6, a3, a4,
-#   s6 (fx), s7 (fy), s8 (x1), fs5. With mipmap, s11 the taps left to walk
-#   (filter = anisotropic: ANISO_SETUP, RT_ANISO_*; 0 for one). With wide
+#   s6 (fx), s7 (fy), s8 (x1), fs5. With mipmap, s11: 0 (one tap a pixel),
+#   or -1 between pixels and the taps left within one (filter =
+#   anisotropic: ANISO_SETUP, RT_ANISO_*). With wide
 #   (light in 1/65536), ra is WIDE_BLEND_ROUND in both halves instead and B
 #   | R and G are lit apart. With aa, a coverage fill as FILL's, the
 #   coverage kept on the stack (RT_AA) over the texel blend. Ends at 90
@@ -582,6 +581,10 @@
     ld      s10, 0(t0)
     li      t0, MIP_TABLE_BIAS << MIP_ENTRY_SHIFT
     add     s10, s10, t0                # s10 = level 0's entry
+    la      t0, raster_aniso            # s11 = -1: walk every pixel's footprint
+    ld      t0, 0(t0)                   # (filter = anisotropic), 0: mipmap's one
+    snez    t0, t0                      # tap; within a walk the taps left
+    neg     s11, t0
     .else
     LOAD_TEXTURE
     .endif
@@ -619,10 +622,7 @@
     fmul.s  ft11, fa3, ft9
     .endif
     .if \mipmap
-    li      s11, 0                      # taps to walk (0: one, mipmap's)
-    la      t0, raster_aniso
-    ld      t0, 0(t0)
-    bnez    t0, 20f                     # anisotropic (ANISO_SETUP, back at 22)
+    bltz    s11, 20f                    # anisotropic (ANISO_SETUP, back at 22)
     .if \affine
     fmv.x.w t0, fs4                     # rho^2, the triangle's
     .else
@@ -700,7 +700,7 @@
     slli    t0, t0, TEXEL_FRACTION_BITS
     add     t0, t0, t6                  # 1024 c
     .if \mipmap
-    bnez    s11, 23f                    # anisotropic: the next tap, or the average
+    bgtz    s11, 23f                    # anisotropic: the next tap, or the average
 24:
     .endif
     .if \wide
@@ -812,6 +812,7 @@
     srl     t0, t1, t2                  # the sum over the 2^k taps
     li      t1, BLEND_AVERAGE_MASK
     and     t0, t0, t1
+    li      s11, -1                     # (the next pixel walks too)
     j       24b
 20: ANISO_SETUP \affine
     j       22b
