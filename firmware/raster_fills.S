@@ -992,38 +992,39 @@ raster_triangle_return:
 # ---------------------------------------------------------------------------
     .section .rodata
     .balign 8
+# FILL_ROWS kind, persp, affine, lit=, d16=
+#   Two rows of a fill table (raster_fills order: flat, textured, flat
+#   Gouraud, textured Gouraud), perspective-correct then affine, of the
+#   coverage fills (kind aa) or the others (fill), with 16-bit depth (d16 =
+#   _d16) or not; the lit fills of the wide table (lit = wide_) or the
+#   narrow one. A flat colour is lit once a face: its fill is the narrow one
+#   in both tables.
+.macro FILL_ROWS kind, persp, affine, lit=, d16=
+    .dword  \kind\()_flat\d16, \lit\kind\()_\persp\d16, \lit\kind\()_flat_gouraud\d16, \lit\kind\()_\persp\()_gouraud\d16
+    .dword  \kind\()_flat\d16, \lit\kind\()_\affine\d16, \lit\kind\()_flat_gouraud\d16, \lit\kind\()_\affine\()_gouraud\d16
+.endm
+
+# FILL_TABLE lit=
+#   A whole fill table, 2 RASTER_FILLS entries: nearest texels, bilinear,
+#   mipmap (flat fills never filter), each with 32- then 16-bit depth; then
+#   the coverage fills in the same order (RASTER_FILLS + the same index).
+.macro FILL_TABLE lit=
+    .irp kind, fill, aa
+    FILL_ROWS \kind, textured, affine, lit=\lit
+    FILL_ROWS \kind, textured, affine, lit=\lit, d16=_d16
+    FILL_ROWS \kind, bilinear, bilinear_affine, lit=\lit
+    FILL_ROWS \kind, bilinear, bilinear_affine, lit=\lit, d16=_d16
+    FILL_ROWS \kind, mipmap, mipmap_affine, lit=\lit
+    FILL_ROWS \kind, mipmap, mipmap_affine, lit=\lit, d16=_d16
+    .endr
+.endm
+
 # raster_fills: the fill loop for RASTER_* flags | 16-bit depth << 3
 # (RASTER_AFFINE, RASTER_BILINEAR, RASTER_MIPMAP mean nothing without
 # RASTER_TEXTURED).
     .globl raster_fills
 raster_fills:
-    .dword  fill_flat, fill_textured, fill_flat_gouraud, fill_textured_gouraud
-    .dword  fill_flat, fill_affine, fill_flat_gouraud, fill_affine_gouraud
-    .dword  fill_flat_d16, fill_textured_d16, fill_flat_gouraud_d16, fill_textured_gouraud_d16
-    .dword  fill_flat_d16, fill_affine_d16, fill_flat_gouraud_d16, fill_affine_gouraud_d16
-# RASTER_BILINEAR (flat fills never have it)
-    .dword  fill_flat, fill_bilinear, fill_flat_gouraud, fill_bilinear_gouraud
-    .dword  fill_flat, fill_bilinear_affine, fill_flat_gouraud, fill_bilinear_affine_gouraud
-    .dword  fill_flat_d16, fill_bilinear_d16, fill_flat_gouraud_d16, fill_bilinear_gouraud_d16
-    .dword  fill_flat_d16, fill_bilinear_affine_d16, fill_flat_gouraud_d16, fill_bilinear_affine_gouraud_d16
-# RASTER_MIPMAP
-    .dword  fill_flat, fill_mipmap, fill_flat_gouraud, fill_mipmap_gouraud
-    .dword  fill_flat, fill_mipmap_affine, fill_flat_gouraud, fill_mipmap_affine_gouraud
-    .dword  fill_flat_d16, fill_mipmap_d16, fill_flat_gouraud_d16, fill_mipmap_gouraud_d16
-    .dword  fill_flat_d16, fill_mipmap_affine_d16, fill_flat_gouraud_d16, fill_mipmap_affine_gouraud_d16
-# the coverage fills, in the same order (RASTER_FILLS + the same index)
-    .dword  aa_flat, aa_textured, aa_flat_gouraud, aa_textured_gouraud
-    .dword  aa_flat, aa_affine, aa_flat_gouraud, aa_affine_gouraud
-    .dword  aa_flat_d16, aa_textured_d16, aa_flat_gouraud_d16, aa_textured_gouraud_d16
-    .dword  aa_flat_d16, aa_affine_d16, aa_flat_gouraud_d16, aa_affine_gouraud_d16
-    .dword  aa_flat, aa_bilinear, aa_flat_gouraud, aa_bilinear_gouraud
-    .dword  aa_flat, aa_bilinear_affine, aa_flat_gouraud, aa_bilinear_affine_gouraud
-    .dword  aa_flat_d16, aa_bilinear_d16, aa_flat_gouraud_d16, aa_bilinear_gouraud_d16
-    .dword  aa_flat_d16, aa_bilinear_affine_d16, aa_flat_gouraud_d16, aa_bilinear_affine_gouraud_d16
-    .dword  aa_flat, aa_mipmap, aa_flat_gouraud, aa_mipmap_gouraud
-    .dword  aa_flat, aa_mipmap_affine, aa_flat_gouraud, aa_mipmap_affine_gouraud
-    .dword  aa_flat_d16, aa_mipmap_d16, aa_flat_gouraud_d16, aa_mipmap_gouraud_d16
-    .dword  aa_flat_d16, aa_mipmap_affine_d16, aa_flat_gouraud_d16, aa_mipmap_affine_gouraud_d16
+    FILL_TABLE
 raster_fills_end:
     .if (raster_fills_end - raster_fills) != 2 * RASTER_FILLS * 8
     .error "raster_fills must have 2 RASTER_FILLS entries"
@@ -1043,33 +1044,7 @@ raster_fill_table:
 # raster_fill_table)
     .globl raster_fills_wide
 raster_fills_wide:
-    .dword  fill_flat, wide_fill_textured, wide_fill_flat_gouraud, wide_fill_textured_gouraud
-    .dword  fill_flat, wide_fill_affine, wide_fill_flat_gouraud, wide_fill_affine_gouraud
-    .dword  fill_flat_d16, wide_fill_textured_d16, wide_fill_flat_gouraud_d16, wide_fill_textured_gouraud_d16
-    .dword  fill_flat_d16, wide_fill_affine_d16, wide_fill_flat_gouraud_d16, wide_fill_affine_gouraud_d16
-# RASTER_BILINEAR (flat fills never have it)
-    .dword  fill_flat, wide_fill_bilinear, wide_fill_flat_gouraud, wide_fill_bilinear_gouraud
-    .dword  fill_flat, wide_fill_bilinear_affine, wide_fill_flat_gouraud, wide_fill_bilinear_affine_gouraud
-    .dword  fill_flat_d16, wide_fill_bilinear_d16, wide_fill_flat_gouraud_d16, wide_fill_bilinear_gouraud_d16
-    .dword  fill_flat_d16, wide_fill_bilinear_affine_d16, wide_fill_flat_gouraud_d16, wide_fill_bilinear_affine_gouraud_d16
-# RASTER_MIPMAP
-    .dword  fill_flat, wide_fill_mipmap, wide_fill_flat_gouraud, wide_fill_mipmap_gouraud
-    .dword  fill_flat, wide_fill_mipmap_affine, wide_fill_flat_gouraud, wide_fill_mipmap_affine_gouraud
-    .dword  fill_flat_d16, wide_fill_mipmap_d16, wide_fill_flat_gouraud_d16, wide_fill_mipmap_gouraud_d16
-    .dword  fill_flat_d16, wide_fill_mipmap_affine_d16, wide_fill_flat_gouraud_d16, wide_fill_mipmap_affine_gouraud_d16
-# the coverage fills, in the same order (RASTER_FILLS + the same index)
-    .dword  aa_flat, wide_aa_textured, wide_aa_flat_gouraud, wide_aa_textured_gouraud
-    .dword  aa_flat, wide_aa_affine, wide_aa_flat_gouraud, wide_aa_affine_gouraud
-    .dword  aa_flat_d16, wide_aa_textured_d16, wide_aa_flat_gouraud_d16, wide_aa_textured_gouraud_d16
-    .dword  aa_flat_d16, wide_aa_affine_d16, wide_aa_flat_gouraud_d16, wide_aa_affine_gouraud_d16
-    .dword  aa_flat, wide_aa_bilinear, wide_aa_flat_gouraud, wide_aa_bilinear_gouraud
-    .dword  aa_flat, wide_aa_bilinear_affine, wide_aa_flat_gouraud, wide_aa_bilinear_affine_gouraud
-    .dword  aa_flat_d16, wide_aa_bilinear_d16, wide_aa_flat_gouraud_d16, wide_aa_bilinear_gouraud_d16
-    .dword  aa_flat_d16, wide_aa_bilinear_affine_d16, wide_aa_flat_gouraud_d16, wide_aa_bilinear_affine_gouraud_d16
-    .dword  aa_flat, wide_aa_mipmap, wide_aa_flat_gouraud, wide_aa_mipmap_gouraud
-    .dword  aa_flat, wide_aa_mipmap_affine, wide_aa_flat_gouraud, wide_aa_mipmap_affine_gouraud
-    .dword  aa_flat_d16, wide_aa_mipmap_d16, wide_aa_flat_gouraud_d16, wide_aa_mipmap_gouraud_d16
-    .dword  aa_flat_d16, wide_aa_mipmap_affine_d16, wide_aa_flat_gouraud_d16, wide_aa_mipmap_affine_gouraud_d16
+    FILL_TABLE lit=wide_
 raster_fills_wide_end:
     .if (raster_fills_wide_end - raster_fills_wide) != 2 * RASTER_FILLS * 8
     .error "raster_fills_wide must have 2 RASTER_FILLS entries"
