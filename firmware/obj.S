@@ -213,13 +213,14 @@ obj_parse_model:
     FRAME_SAVE 64, ra, s0, s1, s2, s3, s4, s5
     la      s2, obj_state               # s2 = state
     la      s3, scene                   # s3 = scene
-    # Normals only where they are drawn: Gouraud shading in a lit mode.
+    # Normals only where they are drawn: Gouraud or Phong shading in a lit
+    # mode.
     lwu     t0, SCENE_MODE(s3)
     addi    t0, t0, -MODE_WIREFRAME
     snez    t0, t0
     lwu     t1, SCENE_SHADING(s3)
-    addi    t1, t1, -SHADING_GOURAUD
-    seqz    t1, t1
+    addi    t1, t1, -SHADING_FLAT
+    snez    t1, t1
     and     t0, t0, t1
     sd      t0, OBJ_KEEP_NORMALS(s2)
 

@@ -91,6 +91,11 @@ raster_mip_table:
     .globl raster_aniso
 raster_aniso:
     .space  8
+# shading = phong: nonzero when the Gouraud fills' triangles carry normals
+# (RV_NA..RV_NC) and light per pixel (render_init)
+    .globl raster_phong
+raster_phong:
+    .space  8
 # antialias = supersample: the sums of the samples (raster_supersample.S
 # raster_set_sums)
     .globl raster_sums

@@ -59,9 +59,43 @@
     .endif
 .endm
 
+# PHONG_K
+#   shading = phong: t4 = k at the pixel from the normal interpolated there,
+#   light_level's I = max(ambient, N . L / |N|) quantised to its levels:
+#   N's components in the light's basis (a, b across, c towards the light)
+#   are planes in screen space (the corners' normals over w: perspective-
+#   correct, up to a factor the normalisation drops), each evaluated at x -
+#   xmin = fs9 from the row's value (RT_PHONG_ROW) and its step right (fs0,
+#   fs1, fs3). A zero N gives NaN, hence the ambient (fmax). Clobbers fs2,
+#   ft9..ft11.
+.macro PHONG_K
+    flw     ft9, RT_PHONG_ROW + 0(sp)
+    fmadd.s ft9, fs0, fs9, ft9          # a
+    flw     ft10, RT_PHONG_ROW + 4(sp)
+    fmadd.s ft10, fs1, fs9, ft10        # b
+    flw     ft11, RT_PHONG_ROW + 8(sp)
+    fmadd.s ft11, fs3, fs9, ft11        # c
+    fmul.s  fs2, ft9, ft9
+    fmadd.s fs2, ft10, ft10, fs2
+    fmadd.s fs2, ft11, ft11, fs2
+    fsqrt.s fs2, fs2                    # |N|
+    fdiv.s  ft11, ft11, fs2             # cos
+    flw     ft9, RT_PHONG_AMBIENT(sp)
+    fmax.s  ft11, ft11, ft9             # (fmax of NaN and ambient = ambient)
+    flw     ft9, RT_PHONG_LEVELS(sp)
+    fmul.s  ft11, ft11, ft9
+    fcvt.w.s t4, ft11, rne              # the level
+    fcvt.s.w ft11, t4
+    flw     ft9, RT_PHONG_STEP(sp)
+    fmul.s  ft11, ft11, ft9
+    fcvt.wu.s t4, ft11, rne             # k
+.endm
+
 # PLANES_AT_X textured, gouraud, affine
 #   The attribute planes at the span's first pixel: t0 = 2 (x - xmin); fs9
-#   = x - xmin, from which NEXT_PIXEL evaluates the depth plane.
+#   = x - xmin, from which NEXT_PIXEL evaluates the depth plane (and
+#   PHONG_K the normal's). gouraud: 0 one intensity a face, 1 Gouraud's
+#   interpolated (fs0), 2 Phong's per pixel (PHONG_K).
 #   Clobbers t0, ft9.
 .macro PLANES_AT_X textured, gouraud, affine
     srli    t0, t0, 1
@@ -75,7 +109,7 @@
     fmadd.s fa2, fa6, ft9, ft2
     fmadd.s fa3, fa7, ft9, ft3
     .endif
-    .if \gouraud
+    .if \gouraud == 1
     fmadd.s fs0, fs1, ft9, fs2
     .endif
 .endm
@@ -83,7 +117,8 @@
 # PLANES_DOWN textured, gouraud, affine
 #   The attribute planes at the row's first pixel one row down: depth from
 #   its plane (ft0 = origin + ft4 rows, fs10 the rows below ymin, exact as
-#   a float), the others stepped. Clobbers ft9.
+#   a float), and so the normal's (Phong: RT_PHONG_ROW), the others
+#   stepped. Clobbers ft9, ft10.
 .macro PLANES_DOWN textured, gouraud, affine
     fadd.s  fs10, fs10, fs11
     flw     ft9, RT_DEPTH_ORIGIN(sp)
@@ -95,15 +130,18 @@
     fadd.s  ft2, ft2, ft6
     fadd.s  ft3, ft3, ft7
     .endif
-    .if \gouraud
+    .if \gouraud == 1
     fadd.s  fs2, fs2, fs3
+    .elseif \gouraud == 2
+    PHONG_ROW
     .endif
 .endm
 
 # DEPTH_TEST depth16, gouraud
 #   The pixel's depth against the buffer's: not nearer, on to 7; nearer, the
-#   depth stored and (Gouraud) t4 = k. (16-bit: the smaller is nearer;
-#   float32, reversed depth: the larger.) Clobbers t0, t1.
+#   depth stored and (Gouraud, Phong) t4 = k. (16-bit: the smaller is
+#   nearer; float32, reversed depth: the larger.) Clobbers t0, t1 (and
+#   PHONG_K's).
 .macro DEPTH_TEST depth16, gouraud
     .if \depth16
     lhu     t1, 0(a1)
@@ -116,8 +154,10 @@
     bge     t1, t0, 7f                  # not nearer
     sw      t0, 0(a1)
     .endif
-    .if \gouraud
+    .if \gouraud == 1
     fcvt.wu.s t4, fs0, rne              # k (a rounding-noise negative -> 0)
+    .elseif \gouraud == 2
+    PHONG_K
     .endif
 .endm
 
@@ -136,7 +176,7 @@
     fadd.s  fa2, fa2, fa6
     fadd.s  fa3, fa3, fa7
     .endif
-    .if \gouraud
+    .if \gouraud == 1
     fadd.s  fs0, fs0, fs1
     .endif
     add     s0, s0, s3
@@ -293,8 +333,8 @@
 #   (as the tie rule stores it without antialiasing), so what is drawn later
 #   behind a partly covered pixel still blends into it. Gouraud's k is
 #   clamped to LIGHT_ONE (WIDE_LIGHT_ONE when wide; extended past the
-#   corners it can exceed it).
-#   Clobbers t0, t3.
+#   corners it can exceed it; Phong's cannot: its normal is normalised).
+#   Clobbers t0, t3 (and PHONG_K's).
 .macro DEPTH_TEST_AA depth16, gouraud, wide=0
     .if \depth16
     lhu     t3, 0(a1)
@@ -312,7 +352,9 @@
     sw      t0, 0(a1)
     .endif
 .Ldepth_kept\@:
-    .if \gouraud
+    .if \gouraud == 2
+    PHONG_K
+    .elseif \gouraud
     fcvt.wu.s t4, fs0, rne              # k (a rounding-noise negative -> 0)
     .if \wide
     li      t3, WIDE_LIGHT_ONE
@@ -952,6 +994,43 @@ wide_aa_mipmap_gouraud_d16:     FILTERED 1, 0, 1, 1, 1, 1
 wide_aa_mipmap_affine_d16:      FILTERED 0, 1, 1, 1, 1, 1
 wide_aa_mipmap_affine_gouraud_d16:FILTERED 1, 1, 1, 1, 1, 1
 
+# The Phong fills (shading = phong: raster_fills_phong, raster_fills_phong_wide),
+# the lit loops of both tables with k from the normal per pixel (PHONG_K).
+# PHONG_FILLS lit, wide: one table's, the narrow (lit empty, wide 0) or the
+# wide (lit wide_, wide 1).
+.macro PHONG_FILLS lit, wide
+\lit\()fill_flat_phong:                FILL 0, 2, 0, 0, 0, \wide
+\lit\()fill_textured_phong:            FILL 1, 2, 0, 0, 0, \wide
+\lit\()fill_affine_phong:              FILL 1, 2, 1, 0, 0, \wide
+\lit\()fill_flat_phong_d16:            FILL 0, 2, 0, 1, 0, \wide
+\lit\()fill_textured_phong_d16:        FILL 1, 2, 0, 1, 0, \wide
+\lit\()fill_affine_phong_d16:          FILL 1, 2, 1, 1, 0, \wide
+\lit\()fill_bilinear_phong:            FILTERED 2, 0, 0, 0, 0, \wide
+\lit\()fill_bilinear_affine_phong:     FILTERED 2, 1, 0, 0, 0, \wide
+\lit\()fill_bilinear_phong_d16:        FILTERED 2, 0, 1, 0, 0, \wide
+\lit\()fill_bilinear_affine_phong_d16: FILTERED 2, 1, 1, 0, 0, \wide
+\lit\()fill_mipmap_phong:              FILTERED 2, 0, 0, 1, 0, \wide
+\lit\()fill_mipmap_affine_phong:       FILTERED 2, 1, 0, 1, 0, \wide
+\lit\()fill_mipmap_phong_d16:          FILTERED 2, 0, 1, 1, 0, \wide
+\lit\()fill_mipmap_affine_phong_d16:   FILTERED 2, 1, 1, 1, 0, \wide
+\lit\()aa_flat_phong:                  FILL 0, 2, 0, 0, 1, \wide
+\lit\()aa_textured_phong:              FILL 1, 2, 0, 0, 1, \wide
+\lit\()aa_affine_phong:                FILL 1, 2, 1, 0, 1, \wide
+\lit\()aa_flat_phong_d16:              FILL 0, 2, 0, 1, 1, \wide
+\lit\()aa_textured_phong_d16:          FILL 1, 2, 0, 1, 1, \wide
+\lit\()aa_affine_phong_d16:            FILL 1, 2, 1, 1, 1, \wide
+\lit\()aa_bilinear_phong:              FILTERED 2, 0, 0, 0, 1, \wide
+\lit\()aa_bilinear_affine_phong:       FILTERED 2, 1, 0, 0, 1, \wide
+\lit\()aa_bilinear_phong_d16:          FILTERED 2, 0, 1, 0, 1, \wide
+\lit\()aa_bilinear_affine_phong_d16:   FILTERED 2, 1, 1, 0, 1, \wide
+\lit\()aa_mipmap_phong:                FILTERED 2, 0, 0, 1, 1, \wide
+\lit\()aa_mipmap_affine_phong:         FILTERED 2, 1, 0, 1, 1, \wide
+\lit\()aa_mipmap_phong_d16:            FILTERED 2, 0, 1, 1, 1, \wide
+\lit\()aa_mipmap_affine_phong_d16:     FILTERED 2, 1, 1, 1, 1, \wide
+.endm
+    PHONG_FILLS , 0
+    PHONG_FILLS wide_, 1
+
     .globl raster_triangle_return
     .hidden raster_triangle_return      # (local in the image: still raster_triangle's
                                         # code to a profile, emulator --profile)
@@ -992,30 +1071,31 @@ raster_triangle_return:
 # ---------------------------------------------------------------------------
     .section .rodata
     .balign 8
-# FILL_ROWS kind, persp, affine, lit=, d16=
+# FILL_ROWS kind, persp, affine, lit=, d16=, smooth=
 #   Two rows of a fill table (raster_fills order: flat, textured, flat
 #   Gouraud, textured Gouraud), perspective-correct then affine, of the
 #   coverage fills (kind aa) or the others (fill), with 16-bit depth (d16 =
 #   _d16) or not; the lit fills of the wide table (lit = wide_) or the
-#   narrow one. A flat colour is lit once a face: its fill is the narrow one
-#   in both tables.
-.macro FILL_ROWS kind, persp, affine, lit=, d16=
-    .dword  \kind\()_flat\d16, \lit\kind\()_\persp\d16, \lit\kind\()_flat_gouraud\d16, \lit\kind\()_\persp\()_gouraud\d16
-    .dword  \kind\()_flat\d16, \lit\kind\()_\affine\d16, \lit\kind\()_flat_gouraud\d16, \lit\kind\()_\affine\()_gouraud\d16
+#   narrow one; in the Gouraud columns the Gouraud fills (smooth = _gouraud)
+#   or the Phong ones (_phong). A flat colour is lit once a face: its fill is
+#   the narrow one in every table.
+.macro FILL_ROWS kind, persp, affine, lit=, d16=, smooth=_gouraud
+    .dword  \kind\()_flat\d16, \lit\kind\()_\persp\d16, \lit\kind\()_flat\smooth\d16, \lit\kind\()_\persp\()\smooth\d16
+    .dword  \kind\()_flat\d16, \lit\kind\()_\affine\d16, \lit\kind\()_flat\smooth\d16, \lit\kind\()_\affine\()\smooth\d16
 .endm
 
-# FILL_TABLE lit=
+# FILL_TABLE lit=, smooth=
 #   A whole fill table, 2 RASTER_FILLS entries: nearest texels, bilinear,
 #   mipmap (flat fills never filter), each with 32- then 16-bit depth; then
 #   the coverage fills in the same order (RASTER_FILLS + the same index).
-.macro FILL_TABLE lit=
+.macro FILL_TABLE lit=, smooth=_gouraud
     .irp kind, fill, aa
-    FILL_ROWS \kind, textured, affine, lit=\lit
-    FILL_ROWS \kind, textured, affine, lit=\lit, d16=_d16
-    FILL_ROWS \kind, bilinear, bilinear_affine, lit=\lit
-    FILL_ROWS \kind, bilinear, bilinear_affine, lit=\lit, d16=_d16
-    FILL_ROWS \kind, mipmap, mipmap_affine, lit=\lit
-    FILL_ROWS \kind, mipmap, mipmap_affine, lit=\lit, d16=_d16
+    FILL_ROWS \kind, textured, affine, lit=\lit, smooth=\smooth
+    FILL_ROWS \kind, textured, affine, lit=\lit, d16=_d16, smooth=\smooth
+    FILL_ROWS \kind, bilinear, bilinear_affine, lit=\lit, smooth=\smooth
+    FILL_ROWS \kind, bilinear, bilinear_affine, lit=\lit, d16=_d16, smooth=\smooth
+    FILL_ROWS \kind, mipmap, mipmap_affine, lit=\lit, smooth=\smooth
+    FILL_ROWS \kind, mipmap, mipmap_affine, lit=\lit, d16=_d16, smooth=\smooth
     .endr
 .endm
 
@@ -1048,4 +1128,21 @@ raster_fills_wide:
 raster_fills_wide_end:
     .if (raster_fills_wide_end - raster_fills_wide) != 2 * RASTER_FILLS * 8
     .error "raster_fills_wide must have 2 RASTER_FILLS entries"
+    .endif
+
+# raster_fills_phong, raster_fills_phong_wide: shading = phong's, the Gouraud
+# columns' fills lighting per pixel (render_init chooses the table)
+    .globl raster_fills_phong
+raster_fills_phong:
+    FILL_TABLE smooth=_phong
+raster_fills_phong_end:
+    .if (raster_fills_phong_end - raster_fills_phong) != 2 * RASTER_FILLS * 8
+    .error "raster_fills_phong must have 2 RASTER_FILLS entries"
+    .endif
+    .globl raster_fills_phong_wide
+raster_fills_phong_wide:
+    FILL_TABLE lit=wide_, smooth=_phong
+raster_fills_phong_wide_end:
+    .if (raster_fills_phong_wide_end - raster_fills_phong_wide) != 2 * RASTER_FILLS * 8
+    .error "raster_fills_phong_wide must have 2 RASTER_FILLS entries"
     .endif

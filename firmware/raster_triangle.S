@@ -96,6 +96,27 @@
     fmadd.s \base, \ddy, ft10, \base
 .endm
 
+# PHONG_PLANE field, at, step
+#   shading = phong: the plane of one component of the corners' normals
+#   over w (RV_NA, RV_NB or RV_NC times RV_Q: perspective-correct, up to the
+#   factor PHONG_K's normalisation drops): step right into step, per row and
+#   at the first centre into RT_PHONG_DOWN + at, RT_PHONG_ORIGIN + at.
+#   Clobbers ft1, ft2, ft8, ft11.
+.macro PHONG_PLANE field, at, step
+    flw     ft11, \field(t0)
+    flw     ft8, RV_Q(t0)
+    fmul.s  ft11, ft11, ft8
+    flw     ft1, \field(t1)
+    flw     ft8, RV_Q(t1)
+    fmul.s  ft1, ft1, ft8
+    flw     ft2, \field(t2)
+    flw     ft8, RV_Q(t2)
+    fmul.s  ft2, ft2, ft8
+    GRADIENT ft11, ft1, ft2, \step, ft1, ft2
+    fsw     ft1, RT_PHONG_DOWN + \at(sp)
+    fsw     ft2, RT_PHONG_ORIGIN + \at(sp)
+.endm
+
 # DEPTH_GRADIENT
 #   GRADIENT for float32 depth (ft11, ft4, ft0 = its values at corners t0,
 #   t1, t2; into fa4 per pixel right, ft4 per row down, ft0 at the first
@@ -474,12 +495,29 @@ raster_triangle:
     fmv.w.x fs11, t3                    # fs11 = 1.0
     andi    t3, t5, RASTER_GOURAUD
     beqz    t3, 5f
+    la      t3, raster_phong
+    ld      t3, 0(t3)
+    bnez    t3, 47f
     # Gouraud: the intensity k (fs0 at the pixel, fs1 per pixel right, fs2 at
     # the row's first pixel, fs3 per row)
     flw     ft11, RV_K(t0)
     flw     fs3, RV_K(t1)
     flw     fs2, RV_K(t2)
     GRADIENT ft11, fs3, fs2, fs1, fs3, fs2
+    j       5f
+    # Phong: the normal's planes (steps right in fs0, fs1, fs3; the rest in
+    # the frame, RT_PHONG_*) and the light's ambient and quantisation
+47: PHONG_PLANE RV_NA, 0, fs0
+    PHONG_PLANE RV_NB, 4, fs1
+    PHONG_PLANE RV_NC, 8, fs3
+    la      t3, scene
+    flw     ft1, SCENE_AMBIENT(t3)
+    fsw     ft1, RT_PHONG_AMBIENT(sp)
+    la      t3, light_quantum
+    flw     ft1, LIGHT_QUANTUM_LEVELS(t3)
+    fsw     ft1, RT_PHONG_LEVELS(sp)
+    flw     ft1, LIGHT_QUANTUM_STEP(t3)
+    fsw     ft1, RT_PHONG_STEP(sp)
 5:  andi    t3, t5, RASTER_TEXTURED
     beqz    t3, 6f
     andi    t3, t5, RASTER_AFFINE
@@ -651,7 +689,13 @@ raster_triangle:
     fadd.s  fs2, fs2, fs3
     addi    a0, a0, -1
     bnez    a0, 64b
-65:
+65: andi    t3, t5, RASTER_GOURAUD      # Phong: the normal at the first row
+    beqz    t3, 67f
+    la      t3, raster_phong
+    ld      t3, 0(t3)
+    beqz    t3, 67f
+    PHONG_ROW
+67:
     # --- the fill loop for these settings: raster_fills[flags | depth16 << 3]
     # (or raster_fills_wide's: raster_fill_table)
     # (flags with RASTER_BILINEAR or RASTER_MIPMAP index past the first 16),

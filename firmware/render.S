@@ -51,11 +51,17 @@ render_init:
     call    angle_table_build
 
     # The fill: textured (with a texture) or flat; affine or perspective;
-    # Gouraud or one intensity per face.
+    # Gouraud or Phong (the Gouraud fills' twins, raster_phong) or one
+    # intensity per face.
 1:  li      t1, RASTER_FLAT
     lwu     t0, SCENE_SHADING(s0)
-    li      t2, SHADING_GOURAUD
-    bne     t0, t2, 2f
+    li      t2, SHADING_PHONG
+    sub     t3, t0, t2
+    seqz    t3, t3
+    la      t2, raster_phong
+    sd      t3, 0(t2)
+    li      t2, SHADING_FLAT
+    beq     t0, t2, 2f
     ori     t1, t1, RASTER_GOURAUD
 2:  lwu     t0, SCENE_MODE(s0)
     li      t2, MODE_TEXTURED
@@ -127,7 +133,13 @@ render_init:
     sw      t2, LIGHT_QUANTUM_WIDEN(t0)
     fdiv.s  ft1, ft1, ft0
     fsw     ft1, LIGHT_QUANTUM_STEP(t0)
-    la      t0, raster_fill_table
+    la      t0, raster_phong            # Phong: the table's twin
+    ld      t0, 0(t0)
+    beqz    t0, 35f
+    la      t4, raster_fills_phong
+    bnez    t2, 35f                     # (t2 = 0: wide)
+    la      t4, raster_fills_phong_wide
+35: la      t0, raster_fill_table
     sd      t4, 0(t0)
 
     lwu     t1, SCENE_MODE(s0)
@@ -168,7 +180,14 @@ render_init:
     lwu     a0, MESH_NCOUNT(s0)
     slli    a0, a0, NORMAL_LIGHT_SHIFT
     la      a1, msg_normal_intensities
-    call    heap_alloc_or_fail
+    la      t0, raster_phong
+    ld      t0, 0(t0)
+    beqz    t0, 7f
+    call    phong_basis_init            # Phong: each normal in the light's basis
+    lwu     a0, MESH_NCOUNT(s0)
+    slli    a0, a0, NORMAL_PHONG_SHIFT
+    la      a1, msg_normals_turned
+7:  call    heap_alloc_or_fail
     la      t0, normal_light
     sd      a0, 0(t0)
     # antialias = edge: what lies across each triangle edge
@@ -279,7 +298,12 @@ render_vertex_share:
     mv      a1, s0
     mv      a2, s1
     call    share_range
+    la      t0, raster_phong
+    ld      t0, 0(t0)
+    bnez    t0, 8f
     call    normals_light
+    j       9f
+8:  call    normals_phong
 9:  FRAME_RESTORE 32, ra, s0, s1
     ret
 
@@ -422,6 +446,7 @@ msg_canonical_vertices: .asciz "canonical vertices"
 msg_vertex_keys:    .asciz "vertex keys"
 msg_depth_buffer:   .asciz "depth buffer"
 msg_normal_intensities: .asciz "normal intensities"
+msg_normals_turned: .asciz "normals in the light's basis"
 
 # ---------------------------------------------------------------------------
     .bss
@@ -431,7 +456,9 @@ msg_normal_intensities: .asciz "normal intensities"
 render_fill:
     .space  8
 # normal_light: address (heap) of one f32 intensity (0 .. one, light_quantum) per
-# mesh normal, this frame's (Gouraud only; render_light.S normals_light).
+# mesh normal, this frame's (Gouraud only; render_light.S normals_light), or
+# with Phong shading the normal in the light's basis (NORMAL_PHONG_BYTES,
+# normals_phong).
     .globl normal_light
 normal_light:
     .space  8

@@ -60,6 +60,12 @@ clip_and_draw:
     sw      t3, CV_T(s1)
     lw      t3, RV_K(s2)
     sw      t3, CV_K(s1)
+    lw      t3, RV_NA(s2)               # (Phong's normal)
+    sw      t3, CV_NA(s1)
+    lw      t3, RV_NB(s2)
+    sw      t3, CV_NB(s1)
+    lw      t3, RV_NC(s2)
+    sw      t3, CV_NC(s1)
     addi    s0, s0, MESH_CORNER_BYTES
     addi    s1, s1, CV_BYTES
     addi    s2, s2, RV_BYTES
@@ -113,6 +119,12 @@ clip_and_draw:
     sw      t1, RV_T(s1)
     lw      t1, CV_K(s0)
     sw      t1, RV_K(s1)
+    lw      t1, CV_NA(s0)
+    sw      t1, RV_NA(s1)
+    lw      t1, CV_NB(s0)
+    sw      t1, RV_NB(s1)
+    lw      t1, CV_NC(s0)
+    sw      t1, RV_NC(s1)
     addi    s0, s0, CV_BYTES
     addi    s1, s1, RV_BYTES
     addi    s7, s7, -1

@@ -6,7 +6,8 @@
 #      when culling, and a triangle whose rows all lie outside the band is
 #      skipped, both before any work on it.
 #   2. Lighting per face, or per corner with Gouraud shading
-#      (render_light.S): an intensity k in 0 .. 64. Flat mode draws
+#      (render_light.S): an intensity k in 0 .. 64; with Phong shading the
+#      corners' normals, lit per pixel by the fills. Flat mode draws
 #      FLAT_BASE_COLOUR (0xC618, light grey) with every RGB565 channel times
 #      k / 64; textured mode multiplies each texel the same way.
 #   3. Texture coordinates (textured; render_texels.S).
@@ -153,8 +154,13 @@ draw_triangles:
     mv      s9, a0
     j       4f
 20: mv      a0, s3                      # Gouraud: RV_K of render_rv
+    la      t0, raster_phong
+    ld      t0, 0(t0)
+    bnez    t0, 21f
     call    corner_light
-    li      s9, FLAT_BASE_COLOUR        # (flat fill: lit per pixel)
+    j       22f
+21: call    corner_phong                # Phong: RV_NA .. RV_NC
+22:    li      s9, FLAT_BASE_COLOUR        # (flat fill: lit per pixel)
     andi    t0, s10, RASTER_TEXTURED
     beqz    t0, 4f
 3:  mv      a0, s3

@@ -35,7 +35,7 @@
 # Precision settings (what the renderer approximates; docs/reference/scene-keys.md "Precision
 # settings" has what each costs and loses):
 # interpolation  perspective | affine                 perspective   SCENE_INTERPOLATION
-# shading     flat | gouraud                          flat          SCENE_SHADING
+# shading     flat | gouraud | phong                  flat          SCENE_SHADING
 # light_levels   whole number 2..65537                65            SCENE_LIGHT_LEVELS
 # angles      polynomial | table                      polynomial    SCENE_ANGLES
 # depth       int16 | float32                         int16         SCENE_DEPTH
@@ -210,6 +210,7 @@ words_interpolation:
 words_shading:
     .dword  word_flat, SHADING_FLAT
     .dword  word_gouraud, SHADING_GOURAUD
+    .dword  word_phong, SHADING_PHONG
     .dword  0
 words_angles:
     .dword  word_polynomial, ANGLES_POLYNOMIAL
@@ -284,6 +285,7 @@ word_0:             .asciz "0"
 word_perspective:   .asciz "perspective"
 word_affine:        .asciz "affine"
 word_gouraud:       .asciz "gouraud"
+word_phong:         .asciz "phong"
 word_polynomial:    .asciz "polynomial"
 word_table:         .asciz "table"
 word_float32:       .asciz "float32"
@@ -325,7 +327,7 @@ msg_unit_range:     .asciz "bad value (must be between 0 and 1)"
 msg_colour:         .asciz "bad value (expected R G B with 0..255 each, or #RRGGBB)"
 msg_far_near:       .asciz "bad value (far must be greater than near)"
 msg_expect_interpolation: .asciz "bad value (expected perspective or affine)"
-msg_expect_shading: .asciz "bad value (expected flat or gouraud)"
+msg_expect_shading: .asciz "bad value (expected flat, gouraud or phong)"
 msg_expect_angles:  .asciz "bad value (expected polynomial or table)"
 msg_expect_depth:   .asciz "bad value (expected int16 or float32)"
 msg_expect_snap:    .asciz "bad value (expected subpixel or pixel)"

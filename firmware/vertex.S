@@ -59,7 +59,7 @@
 #         and, when every drawn face is lit from its corners' world-space
 #         positions (shading = flat in a lit mode), an array of those
 #         positions, filled once a frame (vertex_world_array; 0 otherwise:
-#         Gouraud shading keeps the memory for its normals, which flat
+#         Gouraud and Phong shading keep the memory for their normals, which flat
 #         shading does not store, and computes the few it needs, face_world).
 #         Not enough memory is fatal (heap_alloc_or_fail).
 #   Arguments: none. Results: none.
@@ -80,8 +80,8 @@ vertex_init:
     li      t1, MODE_WIREFRAME
     beq     t0, t1, 9f
     lwu     t0, SCENE_SHADING(s0)
-    li      t1, SHADING_GOURAUD
-    beq     t0, t1, 9f
+    li      t1, SHADING_FLAT
+    bne     t0, t1, 9f                  # Gouraud, Phong: lit from the normals
     lwu     a0, MESH_VCOUNT(s0)
     li      t1, WORLD_POS_BYTES
     mul     a0, a0, t1

@@ -49,7 +49,7 @@ CULL_WORDS = {"on": True, "off": False, "yes": True, "no": False, "true": True, 
 # The precision keys taking one word: key -> the words allowed, the default first.
 PRECISION_WORDS: dict[str, tuple[str, ...]] = {
     "interpolation": ("perspective", "affine"),
-    "shading": ("flat", "gouraud"),
+    "shading": ("flat", "gouraud", "phong"),
     "angles": ("polynomial", "table"),
     "depth": ("int16", "float32"),
     "snap": ("subpixel", "pixel"),
@@ -105,7 +105,7 @@ class Scene:
     background: int = 0x10A2                     # RGB565 (RGB 16, 20, 16)
     # precision keys: what the firmware approximates (the reference ignores them)
     interpolation: str = "perspective"           # perspective | affine
-    shading: str = "flat"                        # flat | gouraud
+    shading: str = "flat"                        # flat | gouraud | phong
     light_levels: int = LIGHT_LEVELS_DEFAULT     # 2 .. 65537
     angles: str = "polynomial"                   # polynomial | table
     depth: str = "int16"                         # int16 | float32

@@ -78,16 +78,17 @@ def compute(firmware: Path) -> list[Limit]:
         lambda n: boot_outcomes(*crowded(n)) == {"ok"}, lambda n: boot_allocations(*crowded(n))[1].failed,
         3, layout.size // layout.VTX_BYTES, lambda n: f"{n:,} vertices",
         "100,000 triangles, 256x256 texture: vertices"))
-    for gouraud in (False, True):
-        def closed(n: int, gouraud: bool = gouraud) -> tuple:
+    for shading in ("flat", "gouraud", "phong"):
+        def closed(n: int) -> tuple:
             corners = n // 2 + 2
             return (layout, TEXTURE_256, corners, corners, corners, n)
+        lit = {"gouraud": shading == "gouraud", "phong": shading == "phong"}
         rows.append(_largest_with_failure(
-            lambda n, gouraud=gouraud: boot_outcomes(*closed(n), gouraud=gouraud) == {"ok"},
-            lambda n, gouraud=gouraud: boot_allocations(*closed(n), gouraud=gouraud)[1].failed,
+            lambda n, lit=lit: boot_outcomes(*closed(n), **lit) == {"ok"},
+            lambda n, lit=lit: boot_allocations(*closed(n), **lit)[1].failed,
             2, layout.size // layout.MESH_F_BYTES, lambda n: f"{n:,} triangles",
             f"closed mesh, a `vt` and a `vn` at every vertex (F / 2 + 2 vertices), 256x256 texture"
-            f"{', `shading = gouraud`' if gouraud else ''}"))
+            f"{'' if shading == 'flat' else f', `shading = {shading}`'}"))
 
     def alone(width: int, height: int, **keys) -> tuple:
         return (layout, p6_bytes(width, height), 3, 3, 0, 1)

@@ -252,7 +252,7 @@ class HeapLayout:
 
 NEEDED = ("HEAP_ALIGN", "FAT_SECTOR_BYTES", "MESH_V_BYTES", "MESH_T_BYTES", "MESH_N_BYTES", "MESH_F_BYTES",
           "VTX_BYTES", "WORLD_POS_BYTES", "EDGE_BYTES", "EDGES_PER_TRIANGLE", "DEPTH_BUFFER_BYTES", "DEPTH16_BUFFER_BYTES",
-          "NORMAL_LIGHT_SHIFT", "TEX_PIXEL_BYTES", "OBJ_WINDOW_BYTES", "MIP_TABLE_BYTES", "ADJ_BYTES",
+          "NORMAL_LIGHT_SHIFT", "NORMAL_PHONG_SHIFT", "TEX_PIXEL_BYTES", "OBJ_WINDOW_BYTES", "MIP_TABLE_BYTES", "ADJ_BYTES",
           "ADJ_FACE_BYTES", "ADJ_KEY_BYTES", "SUM_BUFFER_BYTES", "WIRE_BUFFER_BYTES")
 
 
@@ -306,7 +306,7 @@ class Heap:
 def boot_allocations(layout: HeapLayout, texture: int | None, vertices: int, texcoords: int, normals: int,
                      triangles: int, wireframe: bool = False, depth: str = "int16", gouraud: bool = False,
                      scene_ini: int | None = None, mipmap: tuple[int, int] | None = None,
-                     antialias: str = "off") -> tuple[str, Heap]:
+                     antialias: str = "off", phong: bool = False) -> tuple[str, Heap]:
     """Replays the firmware's heap use at boot, given the sizes of the files (texture: bytes of
     texture.ppm, None for none; scene_ini likewise) and the model's counts. The model's text
     takes no part: obj.S reads it through a window. In order: scene.S scene_load (scene.ini if
@@ -315,14 +315,16 @@ def boot_allocations(layout: HeapLayout, texture: int | None, vertices: int, tex
     size rounded up to whole sectors, error 7 when that does not fit), obj.S obj_parse_model (the
     first pass's window of OBJ_WINDOW_BYTES, given back; the v, vt, vn and triangle arrays, none
     for a count of 0, all four tried before failing: error 12 "model too large for memory: n
-    bytes needed, m bytes free"; normals only with `shading = gouraud` in a lit mode; the second
+    bytes needed, m bytes free"; normals only with `shading = gouraud` (or `phong`: phong = True)
+    in a lit mode; the second
     pass's window after them, given back), render.S render_init: vertex.S vertex_init's vertex
     records and, with flat shading in a lit mode, the world positions; then the wireframe edge
     list (and, with `antialias = supersample`, the union lines' cells and spans,
     WIRE_BUFFER_BYTES), or else the
     depth buffer (DEPTH16_BUFFER_BYTES for `depth = int16`, the default; DEPTH_BUFFER_BYTES for
     float32) and, with `shading = gouraud`, one f32 per normal (MESH_NCOUNT <<
-    NORMAL_LIGHT_SHIFT; heap.S's heap_alloc of 0 bytes always succeeds), with `antialias = edge`
+    NORMAL_LIGHT_SHIFT; heap.S's heap_alloc of 0 bytes always succeeds; with `phong`, the normal in
+    the light's basis, << NORMAL_PHONG_SHIFT), with `antialias = edge`
     the triangle adjacency (render.S adjacency_build: ADJ_FACE_BYTES a triangle, kept; then, given
     back at the end, the canonical vertex indices (ADJ_BYTES a vertex), the vertices' sort keys
     (ADJ_KEY_BYTES a vertex, given back first) and the edges' (three ADJ_KEY_BYTES a triangle)),
@@ -333,6 +335,7 @@ def boot_allocations(layout: HeapLayout, texture: int | None, vertices: int, tex
     error 12 "model too large for memory (<block>: n bytes needed, m bytes free)".
     Returns ("ok" | FILE_TOO_LARGE_OUTCOME | MODEL_TOO_LARGE_OUTCOME, heap); heap.failed is the console line for the block
     that did not fit (for error 7 its start: the line goes on with the file's name and sizes)."""
+    gouraud = gouraud or phong          # (per corner either way)
     heap = Heap(layout)
     sector = layout.FAT_SECTOR_BYTES
     for size, kept in ((scene_ini, False), (None if wireframe else texture, True)):
@@ -373,7 +376,10 @@ def boot_allocations(layout: HeapLayout, texture: int | None, vertices: int, tex
         blocks.append(("depth buffer",
                        layout.DEPTH16_BUFFER_BYTES if depth == "int16" else layout.DEPTH_BUFFER_BYTES))
         if gouraud:
-            blocks.append(("normal intensities", normals << layout.NORMAL_LIGHT_SHIFT))
+            if phong:
+                blocks.append(("normals in the light's basis", normals << layout.NORMAL_PHONG_SHIFT))
+            else:
+                blocks.append(("normal intensities", normals << layout.NORMAL_LIGHT_SHIFT))
         if antialias == "edge":
             blocks.append(("adjacency", triangles * layout.ADJ_FACE_BYTES))
         if antialias == "supersample":
