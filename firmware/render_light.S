@@ -371,8 +371,11 @@ phong_basis_init:
 # normals_phong
 #   What: Phong: this frame's mesh normals a0 .. a1 - 1 in the light's
 #         basis (phong_basis) into normal_light (NORMAL_PHONG_BYTES each):
-#         B n' with n' = R C n as normals_light's, unnormalised (the fills
-#         normalise per pixel; a zero n' stays zero, hence the ambient).
+#         B n' / |n'| with n' = R C n as normals_light's: unit, as a model's
+#         author means its vn whatever their lengths, so that a corner's
+#         length does not weigh its normal in the interpolation (the fills
+#         normalise again per pixel); a zero n' stays zero (no light of its
+#         own: the other corners', or the ambient).
 #   Arguments: a0 = first normal, a1 = the normal past the last (0 <= a0
 #              <= a1 <= MESH_NCOUNT).
 #   Results: none.
@@ -406,15 +409,25 @@ normals_phong:
     fmul.s  fa3, fs0, fa0               # a = e1 . n'
     fmadd.s fa3, fs1, fa1, fa3
     fmadd.s fa3, fs2, fa2, fa3
-    fsw     fa3, 0(s2)
-    fmul.s  fa3, fs3, fa0               # b = e2 . n'
-    fmadd.s fa3, fs4, fa1, fa3
-    fmadd.s fa3, fs5, fa2, fa3
-    fsw     fa3, 4(s2)
-    fmul.s  fa3, fs6, fa0               # c = L . n'
-    fmadd.s fa3, fs7, fa1, fa3
-    fmadd.s fa3, fs8, fa2, fa3
-    fsw     fa3, 8(s2)
+    fmul.s  fa4, fs3, fa0               # b = e2 . n'
+    fmadd.s fa4, fs4, fa1, fa4
+    fmadd.s fa4, fs5, fa2, fa4
+    fmul.s  fa5, fs6, fa0               # c = L . n'
+    fmadd.s fa5, fs7, fa1, fa5
+    fmadd.s fa5, fs8, fa2, fa5
+    fmul.s  fa0, fa3, fa3               # |n'|^2 (B keeps lengths)
+    fmadd.s fa0, fa4, fa4, fa0
+    fmadd.s fa0, fa5, fa5, fa0
+    fmv.w.x fa1, zero
+    feq.s   t0, fa0, fa1
+    bnez    t0, 2f                      # zero stays zero
+    fsqrt.s fa0, fa0
+    fdiv.s  fa3, fa3, fa0
+    fdiv.s  fa4, fa4, fa0
+    fdiv.s  fa5, fa5, fa0
+2:  fsw     fa3, 0(s2)
+    fsw     fa4, 4(s2)
+    fsw     fa5, 8(s2)
     addi    s0, s0, MESH_N_BYTES
     addi    s2, s2, NORMAL_PHONG_BYTES
     addi    s1, s1, -1

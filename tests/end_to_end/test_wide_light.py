@@ -1,6 +1,6 @@
 """Light without steps (light_levels above 65: the wide fills, render.inc WIDE_*): a surface lit
 at I draws each RGB565 channel c as round(c I), the exact value, whatever the fill (nearest,
-bilinear, mipmap; flat or Gouraud; perspective or affine; either depth; edge antialiasing and
+bilinear, mipmap, anisotropic; flat, Gouraud or Phong; perspective or affine; either depth; edge antialiasing and
 supersampling inside the triangles), where 65 levels draw round(c round(64 I) / 64).
 
 Each case draws a grid of 64 quads, each showing the inside of one uniform 8 x 8 block of a
@@ -100,6 +100,13 @@ CASES = {
     "edge-aa-gouraud": {"filter": "nearest", "shading": "gouraud", "antialias": "edge"},
     "edge-aa-bilinear": {"filter": "bilinear", "shading": "flat", "antialias": "edge"},
     "supersample-mipmap": {"filter": "mipmap", "shading": "flat", "antialias": "supersample"},
+    # Phong (shading = phong): every vn +z, so the normal found at each pixel gives I itself
+    "nearest-phong": {"filter": "nearest", "shading": "phong"},
+    "bilinear-phong-affine-float32": {"filter": "bilinear", "shading": "phong", "interpolation": "affine",
+                                      "depth": "float32"},
+    "anisotropic-phong": {"filter": "anisotropic", "shading": "phong"},
+    "edge-aa-mipmap-phong-float32": {"filter": "mipmap", "shading": "phong", "antialias": "edge",
+                                     "depth": "float32"},
 }
 
 
@@ -122,10 +129,12 @@ def test_wide_light_rounds_every_channel_exactly(firmware, tmp_path, case):
     assert len(np.unique(unlit[..., 1][drawn & where])) == 64
 
 
-def test_65_levels_light_in_steps_of_1_64(firmware, tmp_path):
+@pytest.mark.parametrize("shading", ["flat", "phong"])
+def test_65_levels_light_in_steps_of_1_64(firmware, tmp_path, shading):
     """The narrow fills, for comparison (and so that the test above can fail): k = round(64 I),
-    each channel round(c k / 64), which differs from round(c I) on some blocks."""
-    settings = {"filter": "nearest", "shading": "flat", "light_levels": "65"}
+    each channel round(c k / 64), which differs from round(c I) on some blocks; Phong's narrow
+    fills quantise the intensity they find at each pixel the same way."""
+    settings = {"filter": "nearest", "shading": shading, "light_levels": "65"}
     unlit = _frame(firmware, tmp_path / "unlit", settings, 1.0)
     lit = _frame(firmware, tmp_path / "lit", settings, INTENSITY)
     k = round(64 * INTENSITY)

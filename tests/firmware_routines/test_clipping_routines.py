@@ -39,7 +39,8 @@ U = 2.0 ** -24               # float32 unit roundoff
 CUT_ULPS = 8                 # a cut field's error, in u (|p| + |q|) (module docstring)
 PLANE_NAMES = ("near", "left", "right", "bottom", "top")
 NEAR = 0
-FIELDS = ("x", "y", "z", "w", "s", "t", "k")    # a clip vertex (render.inc CV_*), f32 each
+FIELDS = ("x", "y", "z", "w", "s", "t", "k", "na", "nb", "nc")    # a clip vertex (render.inc CV_*), f32 each
+ATTRIBUTES = len(FIELDS) - 4      # after the position
 CV_BYTES = 4 * len(FIELDS)
 CANARY = bytes(range(0xA0, 0xA0 + CV_BYTES)) * 8  # written after an output: a pattern no corner here has
 
@@ -49,7 +50,8 @@ def fw(firmware) -> FirmwareCaller:
     """One board per module: every call below sets up all the memory it reads."""
     caller = FirmwareCaller(firmware)
     # the clip vertex and clip-space position layouts the tests write (render.inc)
-    for offset, name in enumerate(("CV_X", "CV_Y", "CV_Z", "CV_W", "CV_S", "CV_T", "CV_K")):
+    for offset, name in enumerate(("CV_X", "CV_Y", "CV_Z", "CV_W", "CV_S", "CV_T", "CV_K", "CV_NA", "CV_NB",
+                                    "CV_NC")):
         assert caller.symbol(name) == 4 * offset, name
     for offset, name in enumerate(("CLIP_POS_X", "CLIP_POS_Y", "CLIP_POS_Z", "CLIP_POS_W")):
         assert caller.symbol(name) == 4 * offset, name
@@ -90,7 +92,7 @@ class ModelCorner:
     """A corner of the model's output: `copy` = the input corner it is, or `cut` = the input
     corners (inside, outside) of the edge it was cut from."""
 
-    values: np.ndarray            # float64 x, y, z, w, s, t, k
+    values: np.ndarray            # float64 x, y, z, w, s, t, k, na, nb, nc
     copy: int | None = None
     cut: tuple[int, int] | None = None
 
@@ -163,7 +165,7 @@ def plane_address(fw: FirmwareCaller, plane: int) -> int:
 
 def fw_plane_distance(fw: FirmwareCaller, corner, plane: int) -> np.float32:
     """plane_distance of a clip vertex written at the scratch address."""
-    fw.write_f32(fw.scratch, list(corner[:4]) + [0.0, 0.0, 0.0])
+    fw.write_f32(fw.scratch, list(corner[:4]) + [0.0] * ATTRIBUTES)
     return fw.call("plane_distance", [fw.scratch, plane_address(fw, plane)]).fa(0)
 
 
@@ -179,7 +181,7 @@ def fw_clip_polygon(fw: FirmwareCaller, corners: np.ndarray, plane: int, source:
 
 
 def corner(fw: FirmwareCaller, plane: int, r: float, w: float, a: float, b: float,
-           s: float, t: float, k: float) -> np.ndarray:
+           s: float, t: float, k: float, n: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> np.ndarray:
     """A clip vertex at distance d = r * scale from `plane` (scale = w for the near plane, G w
     for the guard planes: r < 0 outside), its other two coordinates a w and b w."""
     g = guard_band(fw)
@@ -189,14 +191,14 @@ def corner(fw: FirmwareCaller, plane: int, r: float, w: float, a: float, b: floa
         sign = 1 if plane in (1, 3) else -1                 # left, bottom: +x, +y inside
         along = sign * (r - 1) * g * w                      # d = sign * along + G w = r G w
         x, y, z = (along, a * w, b * w) if plane in (1, 2) else (a * w, along, b * w)
-    return np.array([x, y, z, w, s, t, k], dtype=np.float32)
+    return np.array([x, y, z, w, s, t, k, *n], dtype=np.float32)
 
 
 # Three corners' w, free coordinates (multiples of w) and attributes
 CORNER_BASE = [
-    dict(w=0.5, a=0.3, b=0.45, s=0.25, t=3.5, k=10.0),
-    dict(w=4.0, a=-2.7, b=0.9, s=12.75, t=-2.0, k=64.0),
-    dict(w=2.25, a=1.9, b=0.15, s=5.5, t=7.125, k=33.0),
+    dict(w=0.5, a=0.3, b=0.45, s=0.25, t=3.5, k=10.0, n=(0.25, -0.5, 0.875)),
+    dict(w=4.0, a=-2.7, b=0.9, s=12.75, t=-2.0, k=64.0, n=(-0.625, 0.125, 0.75)),
+    dict(w=2.25, a=1.9, b=0.15, s=5.5, t=7.125, k=33.0, n=(0.5, 0.375, -0.25)),
 ]
 # r of the three corners, and the corners the plane leaves: one corner outside adds a corner, two
 # keep three; a corner on the plane (d = 0 exactly) is inside, and the edge from it to the corner
@@ -308,7 +310,7 @@ def eight_corner_triangle(fw: FirmwareCaller) -> np.ndarray:
     for (x, y), w, s, t, k in (((0.0, 1.5), 2.0, 0.0, 0.0, 64.0), ((1.875, -0.375), 1.0, 64.0, 0.0, 0.0),
                                ((-3.75, -2.25), 0.5, 32.0, 64.0, 32.0)):
         z = x + y + 1.5
-        corners.append([x * g * w, y * g * w, z * g * w, w, s, t, k])
+        corners.append([x * g * w, y * g * w, z * g * w, w, s, t, k, 0.0, 0.0, 0.0])
     return np.array(corners, dtype=np.float32)
 
 
@@ -360,7 +362,7 @@ def test_five_planes_give_at_most_clip_max_out_corners(fw):
 # around the guard square's corners): its middle corner lies on the corner (G w, G w) of the
 # guard square within an ulp, so the right plane cuts its two edges at points that lie on the top
 # line within rounding, and the top plane then sees them inside and outside alternately: four
-# crossings instead of two. Singles as bit patterns (x, y, z, w); s, t, k = 0.
+# crossings instead of two. Singles as bit patterns (x, y, z, w); the attributes 0.
 NINE_CORNER_TRIANGLE = [
     (0xC229E4A3, 0x429420FF, 0x3FE673D6, 0x3FBBB76C),
     (0x4062900A, 0x40629009, 0x4021F88E, 0x3E629009),
@@ -377,7 +379,8 @@ def test_rounding_cannot_overflow_the_clip_buffers(fw):
     this case overflowed the 8-corner buffers it had before."""
     max_out = fw.symbol("CLIP_MAX_OUT")
     buffer_a, after_b = fw.symbol("clip_polygon_a"), fw.symbol("render_rv_out")
-    corners = np.array([[bits_f32(v) for v in c] + [0.0, 0.0, 0.0] for c in NINE_CORNER_TRIANGLE], dtype=np.float32)
+    corners = np.array([[bits_f32(v) for v in c] + [0.0] * ATTRIBUTES for c in NINE_CORNER_TRIANGLE],
+                       dtype=np.float32)
     codes = [frustum_outcode(c, guard_band(fw)) for c in corners]
     assert codes[0] & codes[1] & codes[2] & fw.symbol("OUT_FRUSTUM") == 0, "render_frame would reject it"
     either = codes[0] | codes[1] | codes[2]
