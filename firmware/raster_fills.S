@@ -461,6 +461,9 @@
     .if \wide && !(\textured || \gouraud)
     .error "a flat colour is lit once a face: it has no wide fill"
     .endif
+    .if \gouraud == 2
+    PHONG_ROW                           # (the first row's: fs10 rows down)
+    .endif
     .if \textured
     LOAD_TEXTURE
     .endif
@@ -604,6 +607,9 @@
 #   coverage kept on the stack (RT_AA) over the texel blend. Ends at 90
 #   (raster_triangle's epilogue).
 .macro FILTERED gouraud, affine, depth16, mipmap, aa=0, wide=0
+    .if \gouraud == 2
+    PHONG_ROW                           # (the first row's: fs10 rows down)
+    .endif
     sd      s6, RT_ROW_E0(sp)
     sd      s7, RT_ROW_E1(sp)
     sd      s8, RT_ROW_E2(sp)

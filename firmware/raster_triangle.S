@@ -689,13 +689,7 @@ raster_triangle:
     fadd.s  fs2, fs2, fs3
     addi    a0, a0, -1
     bnez    a0, 64b
-65: andi    t3, t5, RASTER_GOURAUD      # Phong: the normal at the first row
-    beqz    t3, 67f
-    la      t3, raster_phong
-    ld      t3, 0(t3)
-    beqz    t3, 67f
-    PHONG_ROW
-67:
+65:
     # --- the fill loop for these settings: raster_fills[flags | depth16 << 3]
     # (or raster_fills_wide's: raster_fill_table)
     # (flags with RASTER_BILINEAR or RASTER_MIPMAP index past the first 16),

@@ -47,7 +47,8 @@ Where the reference is exact and the firmware is not (these are what the compari
   sin/cos polynomials);
 - screen positions are not snapped to 1/16 pixel;
 - lighting from the vertex normals per pixel, which describe the surface the model's author
-  meant: the firmware's flat shading (one I per face, from the geometric normal) and Gouraud
+  meant (the firmware's Phong shading lights this way too, in single precision): the firmware's
+  flat shading (one I per face, from the geometric normal) and Gouraud
   shading (I per corner, interpolated) both approximate it; the two agree with the reference
   only on faces whose corner normals equal the face normal, or without vn;
 - each RGB565 channel times I rounded to nearest (the firmware quantises I to

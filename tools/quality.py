@@ -40,6 +40,7 @@ SETTINGS: dict[str, dict[str, str]] = {
     "default":       {},
     "affine":        {"interpolation": "affine"},
     "gouraud":       {"shading": "gouraud"},
+    "phong":         {"shading": "phong"},
     "light-33":      {"light_levels": "33"},
     "light-9":       {"light_levels": "9"},
     "angle-table":   {"angles": "table"},
@@ -53,11 +54,11 @@ SETTINGS: dict[str, dict[str, str]] = {
                       "depth": "int16", "snap": "pixel"},
     "best":          {"interpolation": "perspective", "shading": "gouraud", "depth": "float32"},
     # the closest to the ideal image (a camera's, textures read smooth): supersampling, depth that
-    # separates the decal's two quads, light in 1/65536 steps and from the vertex normals, which the
-    # ideal lights by, and textures filtered along the footprint (against the square-texel ideal,
+    # separates the decal's two quads, light in 1/65536 steps and per pixel from the vertex normals,
+    # as the ideal lights, and textures filtered along the footprint (against the square-texel ideal,
     # nearest texels would be closer where textures are magnified: the cube's 8x8 texture)
     "most-accurate": {"antialias": "supersample", "depth": "float32", "light_levels": "65537",
-                      "shading": "gouraud", "filter": "anisotropic"},
+                      "shading": "phong", "filter": "anisotropic"},
 }
 DEFAULT_SETTING = "default"
 # Wireframe has no texture, light or depth buffer: only the angles, the snapping and antialiased

@@ -269,9 +269,11 @@ def test_an_unknown_timing_model_is_refused():
 # And when the vertex stage and draw_triangles came to ask which depth the scene has (float32 keeps where
 # a corner projects before snapping): 4,083 to 4,095 more a frame on hart 0 (8,232 by the first frame).
 # And when render_init came to ask for filter = anisotropic: 2 more by the first frame; and to set
-# vertex_snap_kept (the vertex records' own flag for the snap's residual): 11 more.
-BEFORE_CYCLES = [(0.133775609719, [12102105, 14606]), (0.145044924858, [1051776, 3172]),
-                 (0.152669165554, [1051239, 718]), (0.16029340625, [1068988, 718])]
+# vertex_snap_kept (the vertex records' own flag for the snap's residual): 11 more. And when
+# shading = phong came (render_init's test for it, and its table's): 140 more by the first frame, which
+# comes 0.36 us later; the frames after it as before.
+BEFORE_CYCLES = [(0.133775967866, [12102245, 14606]), (0.145045283005, [1051776, 3172]),
+                 (0.152669523701, [1051239, 718]), (0.160293764397, [1068988, 718])]
 
 
 def test_ipc1_reproduces_the_model_before_cycle_timing(firmware, card, firmware_run, tmp_path):
