@@ -27,13 +27,13 @@ def rec(setting: str, instructions: float, psnr: float, *, scene: str = "A torus
 def test_settings_are_ordered_default_first_and_use_known_keys_and_values():
     names = list(quality.SETTINGS)
     assert names[0] == quality.DEFAULT_SETTING == "default" and quality.SETTINGS["default"] == {}
-    assert names == ["default", "affine", "gouraud", "light-33", "light-9", "angle-table", "depth-float32",
+    assert names == ["default", "affine", "gouraud", "phong", "light-33", "light-9", "angle-table", "depth-float32",
                      "pixel-snap", "bilinear", "mipmap", "edge-aa", "supersample", "thesis", "best", "most-accurate"]
     for name, keys in quality.SETTINGS.items():
         for key, value in keys.items():
             assert value in quality.PRECISION_KEYS[key], (name, key, value)
     assert quality.SETTINGS["most-accurate"] == {"antialias": "supersample", "depth": "float32",
-                                                 "light_levels": "65537", "shading": "gouraud",
+                                                 "light_levels": "65537", "shading": "phong",
                                                  "filter": "anisotropic"}
     assert quality.SETTINGS["thesis"] == {"interpolation": "affine", "shading": "flat", "light_levels": "33",
                                           "angles": "table", "depth": "int16", "snap": "pixel"}

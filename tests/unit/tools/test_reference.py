@@ -394,7 +394,7 @@ def test_wireframe_draws_each_edge_once_in_white():
     ("mode = flat\x01\n", 1, "malformed line (control character)"),
     # the precision keys
     ("interpolation = linear\n", 1, "bad value (expected perspective or affine)"),
-    ("mode = flat\nshading = phong\n", 2, "bad value (expected flat or gouraud)"),
+    ("mode = flat\nshading = smooth\n", 2, "bad value (expected flat, gouraud or phong)"),
     ("angles = lookup\n", 1, "bad value (expected polynomial or table)"),
     ("depth = float16\n", 1, "bad value (expected int16 or float32)"),
     ("snap = none\n", 1, "bad value (expected subpixel or pixel)"),
