@@ -146,11 +146,17 @@ render_init:
     li      t2, MODE_WIREFRAME
     bne     t1, t2, 4f
     call    edges_build
-    # antialias = supersample: the union lines' cells
+    # antialias = supersample: the union lines' cells, and the lines from
+    # where their ends project before snapping (the vertex records keep the
+    # snap's residual: a 1/32-pixel move of an end shows in the union's
+    # coverage)
     la      t0, render_fill
     lwu     t0, 0(t0)
     andi    t0, t0, RASTER_SUPERSAMPLE
     beqz    t0, 9f
+    li      t0, 1
+    la      t1, vertex_snap_kept
+    sd      t0, 0(t1)
     li      a0, WIRE_BUFFER_BYTES
     la      a1, msg_wire_cells
     call    heap_alloc_or_fail

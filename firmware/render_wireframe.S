@@ -15,6 +15,25 @@
     .include "render.inc"
     .include "frame.inc"
 
+# UNSNAPPED_END record, x, y
+#   An end's screen position in pixels before snapping, from its vertex
+#   record: VTX_SX, VTX_SY times ft0 = 1/16 plus VTX_SNAP_X, VTX_SNAP_Y times
+#   ft1 = 2^-15 (one rounding each). Clobbers t0, ft2.
+.macro UNSNAPPED_END record, x, y
+    lw      t0, VTX_SX(\record)
+    fcvt.s.w \x, t0
+    lh      t0, VTX_SNAP_X(\record)
+    fcvt.s.w ft2, t0
+    fmul.s  ft2, ft2, ft1
+    fmadd.s \x, \x, ft0, ft2
+    lw      t0, VTX_SY(\record)
+    fcvt.s.w \y, t0
+    lh      t0, VTX_SNAP_Y(\record)
+    fcvt.s.w ft2, t0
+    fmul.s  ft2, ft2, ft1
+    fmadd.s \y, \y, ft0, ft2
+.endm
+
     .text
     .globl render_wireframe
 # render_wireframe
@@ -80,7 +99,10 @@ render_wireframe:
     mv      a2, a3
     mv      a3, a4
     j       4f
-3:  lw      a0, VTX_SX(s3)
+3:  la      t0, vertex_snap_kept
+    ld      t0, 0(t0)
+    bnez    t0, 7f
+    lw      a0, VTX_SX(s3)
     lw      a1, VTX_SY(s3)
     lw      a2, VTX_SX(s4)
     lw      a3, VTX_SY(s4)
@@ -105,6 +127,15 @@ render_wireframe:
     j       8f
 6:  call    raster_union_line
     j       8f
+    # the union lines (render_init keeps the snap's residual for them): the
+    # ends where they project before snapping, Q4 / 16 + residual 2^-15
+7:  li      t0, F32_Q4_TO_PIXEL
+    fmv.w.x ft0, t0
+    li      t0, F32_SNAP_UNIT
+    fmv.w.x ft1, t0
+    UNSNAPPED_END s3, fa0, fa1
+    UNSNAPPED_END s4, fa2, fa3
+    j       6b
 5:  call    raster_segment
 8:  addi    s1, s1, EDGE_BYTES
     addi    s2, s2, -1
