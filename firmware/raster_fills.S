@@ -882,7 +882,8 @@
 #   v / w (perspective) at the pixel, fa4..fa7 their steps right; ft0..ft3
 #   at the row's first pixel, ft4..ft7 their steps down; ft8 = 1;
 #   fs0..fs3 the Gouraud intensity: at the pixel, step right, at the row's
-#   first pixel, step down; fs9 = x - xmin, fs10 = the rows below ymin, fs11
+#   first pixel, step down (Phong: fs0, fs1, fs3 the normal's steps right,
+#   fs2 PHONG_K's scratch, the rest in RT_PHONG_*); fs9 = x - xmin, fs10 = the rows below ymin, fs11
 #   = 1 (depth from its plane: ft0 = RT_DEPTH_ORIGIN(sp) + ft4 fs10, fa0 =
 #   ft0 + fa4 fs9).
 fill_flat:              FILL 0, 0, 0, 0

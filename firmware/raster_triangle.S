@@ -276,8 +276,9 @@
 #   What: draws the rows of one triangle that lie in this hart's band
 #         (raster_set_band), depth-tested (see the file comment).
 #   Arguments: a0 = three raster vertices in a row (RV_BYTES each,
-#              render.inc; RV_K only read with RASTER_GOURAUD, RV_S, RV_T
-#              only with RASTER_TEXTURED), a1 = 1 to drop back faces,
+#              render.inc; RV_K only read with RASTER_GOURAUD, RV_NA..RV_NC
+#              instead with raster_phong, RV_S, RV_T only with
+#              RASTER_TEXTURED), a1 = 1 to drop back faces,
 #              a2 = the colour: flat fill, RGB565 as drawn (or, with
 #              RASTER_GOURAUD, before lighting); textured, the intensity k
 #              0 .. LIGHT_ONE (WIDE_LIGHT_ONE when raster_fill_table is

@@ -147,14 +147,16 @@ render_init:
     bne     t1, t2, 4f
     call    edges_build
     # antialias = supersample: the union lines' cells, and the lines from
-    # where their ends project before snapping (the vertex records keep the
-    # snap's residual: a 1/32-pixel move of an end shows in the union's
-    # coverage)
+    # where their ends project before snapping to 1/16 pixel (the vertex
+    # records keep the snap's residual: a 1/32-pixel move of an end shows in
+    # the union's coverage); snap = pixel keeps its whole pixels
     la      t0, render_fill
     lwu     t0, 0(t0)
     andi    t0, t0, RASTER_SUPERSAMPLE
     beqz    t0, 9f
-    li      t0, 1
+    lwu     t0, SCENE_SNAP(s0)
+    xori    t0, t0, SNAP_PIXEL
+    snez    t0, t0
     la      t1, vertex_snap_kept
     sd      t0, 0(t1)
     li      a0, WIRE_BUFFER_BYTES
@@ -162,7 +164,8 @@ render_init:
     call    heap_alloc_or_fail
     call    raster_set_union
     j       9f
-    # Triangles: the depth buffer, and the Gouraud intensities of the normals.
+    # Triangles: the depth buffer, and the normals' Gouraud intensities (or
+    # Phong's coordinates in the light's basis).
 4:  li      a0, DEPTH_BUFFER_BYTES
     lwu     t0, SCENE_DEPTH(s0)
     li      t1, DEPTH_INT16
@@ -276,7 +279,9 @@ render_prepare:
 #         the vertex records (and flat shading's world positions) of mesh
 #         vertices [a0 V / a1, (a0 + 1) V / a1) (vertex_range), and with
 #         shading = gouraud the intensities of normals [a0 N / a1,
-#         (a0 + 1) N / a1) (normals_light); V, N the mesh's counts. The
+#         (a0 + 1) N / a1) (normals_light; with shading = phong their
+#         coordinates in the light's basis, normals_phong); V, N the mesh's
+#         counts. The
 #         shares of one frame may run on both harts at once; each item is
 #         computed as in one pass over all, so the records are the same
 #         however the stage is split. Every share must be done before any

@@ -3,7 +3,7 @@
 # plane (clip z >= 0) or beyond the guard band (|x|, |y| <= 16 w, render.inc
 # GUARD_BAND) is cut against each of those planes one of its corners is
 # outside of (Sutherland-Hodgman), the new corners interpolated linearly in
-# clip space (x, y, z, w, s, t, k), and drawn as a fan. The corners'
+# clip space (x, y, z, w, s, t, k and Phong's normal), and drawn as a fan. The corners'
 # clip-space positions come from vertex.S vertex_clip: the vertex stage's
 # own values, computed again. An edge is always cut from its corner inside
 # towards the one outside, so the two triangles sharing an edge compute

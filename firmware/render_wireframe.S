@@ -94,6 +94,9 @@ render_wireframe:
     mv      a2, s3
     call    clip_segment
     beqz    a0, 8f                      # nothing left
+    la      t0, vertex_snap_kept        # the union lines: the ends before
+    ld      t0, 0(t0)                   # snapping
+    bnez    t0, 6f
     mv      a0, a1
     mv      a1, a2
     mv      a2, a3
@@ -159,10 +162,12 @@ render_wireframe:
 #   Arguments: a0 = a's clip-space position (CLIP_POS_BYTES), a1 = b's,
 #              a2 = their outcodes ORed.
 #   Results: a0 = 1 when a part is left, else 0; then a1, a2 = its end
-#            towards a (screen x, y in Q4), a3, a4 = its end towards b.
+#            towards a (screen x, y in Q4), a3, a4 = its end towards b;
+#            fa0, fa1 and fa2, fa3 = the same ends in pixels before snapping
+#            (the union lines').
 #   Clobbers: only ABI temporaries.
 clip_segment:
-    FRAME_SAVE 80, ra, s0, s1, s2, s3, s4, fs0, fs1, fs2
+    FRAME_SAVE 96, ra, s0, s1, s2, s3, s4, fs0, fs1, fs2
     mv      s0, a0                      # s0 = a
     mv      s1, a1                      # s1 = b
     mv      s2, a2                      # s2 = outcodes
@@ -209,6 +214,8 @@ clip_segment:
     call    project_clip
     mv      s3, a0
     mv      s4, a1
+    fsw     fa2, 0(sp)                  # unsnapped, from the screen's centre
+    fsw     fa3, 4(sp)
     mv      a0, s0
     mv      a1, s1
     fmv.s   fa0, fs1
@@ -218,10 +225,20 @@ clip_segment:
     mv      a4, a1
     mv      a1, s3
     mv      a2, s4
+    li      a0, LCD_WIDTH / 2           # the unsnapped ends from the corner
+    fcvt.s.w ft0, a0
+    li      a0, LCD_HEIGHT / 2
+    fcvt.s.w ft1, a0
+    fadd.s  fa2, fa2, ft0
+    fadd.s  fa3, fa3, ft1
+    flw     fa0, 0(sp)
+    fadd.s  fa0, fa0, ft0
+    flw     fa1, 4(sp)
+    fadd.s  fa1, fa1, ft1
     li      a0, 1
     j       9f
 8:  li      a0, 0
-9:  FRAME_RESTORE 80, ra, s0, s1, s2, s3, s4, fs0, fs1, fs2
+9:  FRAME_RESTORE 96, ra, s0, s1, s2, s3, s4, fs0, fs1, fs2
     ret
 
 # segment_point (file-local)

@@ -495,7 +495,8 @@ vertex_records:
     .space  8
     .globl vertex_snap_kept
 # vertex_snap_kept: nonzero when the vertex records keep the snap's residual
-# in VTX_ZW's place (float32 depth: render_init), zero when they keep z / w
+# in VTX_ZW's place (float32 depth, and the supersampled wireframe's union
+# lines unless snap = pixel: render_init), zero when they keep z / w
 vertex_snap_kept:
     .space  8
     .globl vertex_world_array

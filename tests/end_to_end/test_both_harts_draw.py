@@ -90,6 +90,11 @@ SCENES = {
     "edge": (MODEL, TEXTURE, BIG + "antialias = edge\nfilter = bilinear\nshading = gouraud\n", 3),
     # antialias = supersample: each hart draws its band once per sample, sums and resolves it
     "supersample": (MODEL, TEXTURE, "antialias = supersample\nfilter = mipmap\n", 3),
+    # shading = phong: the normal's planes at hart 1's first row (each fill finds them from the rows
+    # above, PHONG_ROW), in the nearest-texel fills (flat) and the filtered ones; the normals turned
+    # in two shares (normals_phong)
+    "phong-flat": (MODEL, TEXTURE, BIG + "mode = flat\nshading = phong\n", 3),
+    "phong-filtered": (MODEL, TEXTURE, BIG + "shading = phong\nfilter = bilinear\nantialias = edge\n", 3),
     # the vertex stage in two shares of unequal cost: each hart waits for the other's share
     "race-hart1-early": (race_grid(0), TEXTURE, RACE_KEYS, 3),
     "race-hart0-early": (race_grid(1), TEXTURE, RACE_KEYS, 3),

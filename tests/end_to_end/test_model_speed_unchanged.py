@@ -91,7 +91,7 @@ warnings unchanged. And when the vertex records came to keep the snap's residual
 slivers: render_init sets two flags, and the code after it moves: hart 0 runs 7 fewer to 74 more
 instructions by each frame, cycles move by under 0.23 % (hart 1's by up to 3.9 %), frames and console
 lines by under 5 us; pixels, lines and warnings unchanged. And when shading = phong came (issue 34: its
-fills, 45 KiB after raster_fills.S's others; render_init's test for it; clip and raster vertices three
+fills, 46 KiB after raster_fills.S's others; render_init's test for it; clip and raster vertices three
 words longer; these cards use flat shading) and the supersampled wireframe's union lines came to start
 from the unsnapped ends (render_wireframe.S grew): hart 0 runs 83 to 221 more instructions by each
 frame, cycles move by under 0.02 % (hart 1's, mostly waiting, by up to 1.4 %), frames and console lines
