@@ -849,16 +849,20 @@ def write_check_figures(firmware: Path, card: Path, frames: int, unchecked: dict
 def timing_figures(firmware: Path, card: Path, frames: int, rocket: dict, rounds: int = 2,
                    other: str = TIMING_IPC1) -> dict:
     """The firmware under --timing `other` (ipc1, or rocket-nocache) against the default timing: `rounds`
-    runs of each, alternating (the first default one is `rocket`), compared fastest to fastest."""
+    runs of each, alternating (the first default one is `rocket`), compared fastest to fastest by host
+    time a frame after loading. The frames are the same instructions either way and come at the LCD's
+    pace, so this is what the timing costs the host a frame; the whole run's host time would mix in
+    the loading, whose virtual length the timing changes (it counted 0.996 x for ipc1 where the frames
+    cost 1.2 x)."""
     timed, flat = [rocket], []
     for n in range(rounds):
         flat.append(firmware_figures(firmware, card, frames, timing=other))
         if n + 1 < rounds:
             timed.append(firmware_figures(firmware, card, frames))
-    best_timed = min(timed, key=lambda figures: figures["host_time_s"])
-    best_flat = min(flat, key=lambda figures: figures["host_time_s"])
+    best_timed = min(timed, key=lambda figures: figures["host_ms_per_frame"])
+    best_flat = min(flat, key=lambda figures: figures["host_ms_per_frame"])
     return {**best_flat, "rounds": rounds,
-            "host_cost_of_cycle_model": best_timed["host_time_s"] / best_flat["host_time_s"]}
+            "host_cost_of_cycle_model": best_timed["host_ms_per_frame"] / best_flat["host_ms_per_frame"]}
 
 
 def print_load_figures(loads: dict) -> None:
@@ -1037,10 +1041,10 @@ def speed_figures(args: argparse.Namespace) -> dict:
     print(f"  reset to first frame {board['reset_to_first_frame_ms']:.1f} ms virtual (ipc1 "
           f"{ipc1['reset_to_first_frame_ms']:.1f} ms; the thesis's start-up, models A/B/C: "
           f"{' / '.join(f'{v:g}' for v in THESIS_START_UP_MS.values())} ms)")
-    print(f"  host time of the cycle model: {ipc1['host_cost_of_cycle_model']:.3f} x ipc1's "
+    print(f"  host time a frame after loading: {ipc1['host_cost_of_cycle_model']:.3f} x ipc1's "
           f"(fastest of {ipc1['rounds']} alternating runs each, {args.frames} frames)")
     print(f"  the L1 caches: {board['cycles_per_frame'][0]:,} cycles a frame against {nocache['cycles_per_frame'][0]:,} "
-          f"without (--timing rocket-nocache); host time {nocache['host_cost_of_cycle_model']:.3f} x")
+          f"without (--timing rocket-nocache); host time a frame {nocache['host_cost_of_cycle_model']:.3f} x")
     for label, figures in (("Rocket", sd), ("ipc1", sd_ipc1)):
         print(f"SD, {label} timing (virtual time; thesis in brackets): card set-up to root directory "
               f"{figures['card_setup_to_root_ms']:.2f} ms [32.35], model {figures['model_bytes']} bytes "
