@@ -19,6 +19,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+from tools.quality import cost
+
 ROOT = Path(__file__).resolve().parent.parent
 HISTORY = ROOT / "docs" / "bench-history.jsonl"
 PAGE = ROOT / "docs" / "measurements.md"
@@ -73,8 +75,8 @@ THESIS = [
 ]
 
 # The fields of a precision-sweep record (tools/bench.py's measure) a history line keeps
-SETTING_FIELDS = ("scene", "scale", "mode", "setting", "instructions_hart0", "cycles_hart0", "psnr_db",
-                  "psnr_ideal_db", "psnr_square_db")
+SETTING_FIELDS = ("scene", "scale", "mode", "setting", "instructions_hart0", "cycles_hart0", "cycles_hart1",
+                  "psnr_db", "psnr_ideal_db", "psnr_square_db")
 MODES = ("textured", "flat", "wireframe")
 # What a history line keeps of each CoreMark run (tools/coremark.py)
 COREMARK_FIELDS = ("timing", "cpu_hz", "iterations", "iterations_per_second", "coremark_per_mhz", "instructions",
@@ -199,14 +201,17 @@ def _db(value: float | None) -> str:
 
 
 def settings_table(line: dict) -> list[str]:
-    """Per mode and setting: hart 0's cycles a frame as a multiple of the default's (the range over the
-    scenes), and PSNR against the ideal image per scene, in the sweep's scene order (and against the
-    square-texel ideal, where the records have it)."""
+    """Per mode and setting: the cycles a frame as a multiple of the default's (the range over the
+    scenes; both harts' where the sweep kept hart 1's, quality.cost), and PSNR against the ideal image
+    per scene, in the sweep's scene order (and against the square-texel ideal, where the records have
+    it)."""
     records = line["settings"]
     scenes = list(dict.fromkeys(r["scene"] for r in records))
     square = any(r.get("psnr_square_db") is not None for r in records)
-    rows = [f"What each precision setting costs and buys, from the latest precision sweep ({_run(line)}): hart "
-            "0's cycles a frame as a multiple of the default's (lowest-highest over the scenes), and PSNR in "
+    both = all(r.get("cycles_hart1") is not None for r in records)
+    whose = "both harts' cycles" if both else "hart 0's cycles"
+    rows = [f"What each precision setting costs and buys, from the latest precision sweep ({_run(line)}): "
+            f"{whose} a frame as a multiple of the default's (lowest-highest over the scenes), and PSNR in "
             "dB against the reference renderer's ideal image, per scene (" + " / ".join(scenes) + ")"
             + ("; the ideal reads textures smooth, as a camera sees a filtered texture, and the last column "
                "against the same with square texels, as nearest-texel sampling draws a magnified one." if square
@@ -220,7 +225,7 @@ def settings_table(line: dict) -> list[str]:
                  + (" dB vs square-texel ideal |" if square else ""), "|---|---|---|" + ("---|" if square else "")]
         for setting in dict.fromkeys(r["setting"] for r in in_mode):
             mine = {r["scene"]: r for r in in_mode if r["setting"] == setting}
-            ratios = [mine[s]["cycles_hart0"] / default[s]["cycles_hart0"] for s in scenes
+            ratios = [cost(mine[s]) / cost(default[s]) for s in scenes
                       if s in mine and s in default and mine[s]["cycles_hart0"] and default[s]["cycles_hart0"]]
             rows.append(f"| {setting} | {_ranges(ratios) if ratios else '-'} | "
                         + " / ".join(_db(mine[s]["psnr_ideal_db"]) if s in mine else "-" for s in scenes) + " |"

@@ -5,9 +5,10 @@ plot (hand-written SVG, small multiples, one panel per scene and mode).
 Pure functions over records (dicts) with no emulator in sight, so they are tested quickly
 (tests/unit/tools/test_bench_quality.py). A record has at least `scene`, `scale`, `mode`, `setting`,
 `instructions_hart0`, `psnr_db`, `max_error` and `pixels_differ` (a share, 0 to 1): the distance
-from the reference renderer's pixel-centre image. Its cost is `cycles_hart0`, hart 0's CPU cycles
-per frame under the board model's Rocket timing (emulator/cpu/timing.py), or `instructions_hart0` in a
-record without cycles. A record may also carry `psnr_ideal_db`,
+from the reference renderer's pixel-centre image. Its cost is the CPU cycles a frame takes under the
+board model's Rocket timing (emulator/cpu/timing.py): `cycles_hart0` plus `cycles_hart1` (both harts,
+so that a setting that sets hart 1 drawing (`harts = auto`) is not counted at hart 0's share), hart 0's
+alone in a record without hart 1's, or `instructions_hart0` in a record without cycles. A record may also carry `psnr_ideal_db`,
 `max_error_ideal` and `pixels_differ_ideal`, the same against the ideal image (reference/ideal.py);
 where records carry them the tables gain their columns, the front against the ideal, and the plot
 a second row of panels.
@@ -109,13 +110,23 @@ def _quality(record: dict, metric: str = PIXEL_CENTRE) -> float:
 
 
 def cost(record: dict) -> float:
-    """What a frame costs: hart 0's cycles per frame, or its instructions in a record without cycles."""
-    return record["cycles_hart0"] if record.get("cycles_hart0") is not None else record["instructions_hart0"]
+    """What a frame costs: both harts' cycles per frame (hart 0's in a record without hart 1's), or hart
+    0's instructions in a record without cycles."""
+    if record.get("cycles_hart0") is None:
+        return record["instructions_hart0"]
+    return record["cycles_hart0"] + (record.get("cycles_hart1") or 0)
 
 
 def cost_unit(records: Iterable[dict]) -> str:
     """'cycles' when every record carries cycles, else 'instructions'."""
     return "cycles" if all(r.get("cycles_hart0") is not None for r in records) else "instructions"
+
+
+def cost_label(records: list[dict]) -> str:
+    """What cost counts, for an axis: its unit a frame and whose (both harts where every record has
+    hart 1's cycles)."""
+    whose = "both harts" if all(r.get("cycles_hart1") is not None for r in records) else "hart 0"
+    return f"{cost_unit(records)} / frame ({whose})"
 
 
 def dominates(a: dict, b: dict, metric: str = PIXEL_CENTRE) -> bool:
@@ -222,7 +233,7 @@ def table_rows(records: Iterable[dict]) -> list[dict]:
             rows.append({
                 "scene": r["scene"], "scale": r["scale"], "mode": r["mode"], "setting": r["setting"],
                 "instructions_per_frame": int(round(r["instructions_hart0"])),
-                "cycles_per_frame": _optional(r.get("cycles_hart0"), lambda v: int(round(v))),
+                "cycles_per_frame": None if r.get("cycles_hart0") is None else int(round(cost(r))),
                 "relative_to_default": (cost(r) / cost(default) if default and cost(default) else None),
                 "psnr_db": float(r["psnr_db"]), "max_error": int(r["max_error"]),
                 "pixels_differ_percent": 100 * float(r["pixels_differ"]),
@@ -443,7 +454,7 @@ def _panel_svg(group: list[dict], title: str, ox: float, oy: float, metric: str 
         s.append(f'<line x1="{left:.1f}" y1="{y:.1f}" x2="{right:.1f}" y2="{y:.1f}" stroke="#444444" '
                  f'stroke-dasharray="4 3"/>')
         s.append(_text(left - 6, top + EXACT_BAND / 2 + 3.5, "exact", 10, "end", ' font-style="italic"'))
-    s.append(_text((left + right) / 2, bottom + 32, f"{cost_unit(group)} / frame (hart 0)", 11, "middle"))
+    s.append(_text((left + right) / 2, bottom + 32, cost_label(group), 11, "middle"))
     s.append(_text(ox + 16, (top + bottom) / 2, axis_label, 11, "middle",
                    f' transform="rotate(-90 {ox + 16:.1f} {(top + bottom) / 2:.1f})"'))
     # the front as a step line: the best PSNR available at each budget of cycles
@@ -464,7 +475,7 @@ def _panel_svg(group: list[dict], title: str, ox: float, oy: float, metric: str 
         psnr = _psnr_text(None if value is None else float(value))
         against = {IDEAL: "the ideal", SQUARE: "the square-texel ideal"}.get(metric, "the pixel-centre reference")
         differ = r.get("pixels_differ" + suffix)
-        cycles = r.get("cycles_hart0")
+        cycles = None if r.get("cycles_hart0") is None else cost(r)
         tip = (f"{r['setting']}: {int(round(r['instructions_hart0'])):,} instructions/frame"
                f"{'' if cycles is None else f', {int(round(cycles)):,} cycles/frame'}, PSNR {psnr} dB "
                f"against {against}, max error {r.get('max_error' + suffix, '?')}, "

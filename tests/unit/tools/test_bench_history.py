@@ -94,6 +94,21 @@ def test_the_settings_table_adds_the_square_texel_ideal_where_the_sweep_has_it(p
     assert bench_history.main(["--check"]) == 0
 
 
+def test_the_settings_table_counts_both_harts_cycles_where_the_sweep_kept_hart_1_s(private):
+    """A setting that sets hart 1 drawing (harts = auto) costs both harts' cycles: here hart 0's own
+    fall to 0.8 of the default's while the frame costs 1.6 times as much."""
+    history, page, _ = private
+    settings = [{"scene": "monkey", "scale": 0.9, "mode": "flat", "setting": setting, "instructions_hart0": 1,
+                 "cycles_hart0": hart0, "cycles_hart1": hart1, "psnr_db": 50.0, "psnr_ideal_db": 47.0}
+                for setting, hart0, hart1 in (("default", 1000, 0), ("phong", 800, 800))]
+    line = bench_history.append(None, settings)
+    assert line["settings"][1]["cycles_hart1"] == 800
+    text = page.read_text()
+    assert "both harts' cycles a frame as a multiple of the default's" in text
+    assert "| phong | 1.60 | 47.0 |" in text
+    assert bench_history.main(["--check"]) == 0
+
+
 def test_the_coremark_table_comes_from_the_latest_coremark_run(private):
     history, page, _ = private
     run = {"timing": "rocket", "cpu_hz": 390_000_000, "iterations": 10000, "iterations_per_second": 832.0,

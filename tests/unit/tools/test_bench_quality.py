@@ -146,6 +146,19 @@ def test_the_front_and_the_ratio_use_cycles_where_records_carry_them():
     assert "cycles / frame (hart 0)" in quality.svg_text(records)
 
 
+def test_a_frame_costs_both_harts_cycles_where_records_carry_hart_1_s():
+    """With harts = auto a setting may set hart 1 drawing: its cost is both harts' cycles, so that
+    fewer of hart 0's (its share) do not make it look cheaper than the default."""
+    records = [{**rec("default", 200_000, 45.0), "cycles_hart0": 300_000, "cycles_hart1": 2_000},
+               {**rec("phong", 150_000, 47.0), "cycles_hart0": 240_000, "cycles_hart1": 250_000}]
+    assert quality.cost(records[1]) == 490_000
+    assert quality.pareto_front(records) == {"default", "phong"}
+    rows = list(csv.DictReader(io.StringIO(quality.csv_text(records))))
+    assert [r["cycles_per_frame"] for r in rows] == ["302000", "490000"]
+    assert rows[1]["relative_to_default"] == f"{490 / 302:.4f}"
+    assert "cycles / frame (both harts)" in quality.svg_text(records)
+
+
 def test_write_quality_writes_the_three_files(tmp_path):
     printed = quality.write_quality(RECORDS, tmp_path / "bench")
     assert {p.name for p in (tmp_path / "bench").iterdir()} == {"quality.csv", "quality.md", "quality.svg"}
