@@ -1106,19 +1106,26 @@ raster_triangle_return:
     .endr
 .endm
 
+# NAMED_FILL_TABLE name, lit=, smooth=
+#   FILL_TABLE under a global label, checked to hold 2 RASTER_FILLS entries.
+.macro NAMED_FILL_TABLE name, lit=, smooth=_gouraud
+    .globl \name
+\name:
+    FILL_TABLE lit=\lit, smooth=\smooth
+\name\()_end:
+    .if (\name\()_end - \name) != 2 * RASTER_FILLS * 8
+    .error "\name must have 2 RASTER_FILLS entries"
+    .endif
+.endm
+
 # raster_fills: the fill loop for RASTER_* flags | 16-bit depth << 3
 # (RASTER_AFFINE, RASTER_BILINEAR, RASTER_MIPMAP mean nothing without
 # RASTER_TEXTURED).
-    .globl raster_fills
-raster_fills:
-    FILL_TABLE
-raster_fills_end:
-    .if (raster_fills_end - raster_fills) != 2 * RASTER_FILLS * 8
-    .error "raster_fills must have 2 RASTER_FILLS entries"
-    .endif
+    NAMED_FILL_TABLE raster_fills
 
 # raster_fill_table: the table raster_triangle chooses its fill from,
-# raster_fills until render_init sees light_levels wide (raster_fills_wide).
+# raster_fills until render_init sees light_levels wide (raster_fills_wide)
+# or shading = phong (raster_fills_phong, raster_fills_phong_wide).
     .data
     .balign 8
     .globl raster_fill_table
@@ -1129,27 +1136,8 @@ raster_fill_table:
     .balign 8
 # raster_fills_wide: the same with wide light (render_init chooses the table,
 # raster_fill_table)
-    .globl raster_fills_wide
-raster_fills_wide:
-    FILL_TABLE lit=wide_
-raster_fills_wide_end:
-    .if (raster_fills_wide_end - raster_fills_wide) != 2 * RASTER_FILLS * 8
-    .error "raster_fills_wide must have 2 RASTER_FILLS entries"
-    .endif
-
+    NAMED_FILL_TABLE raster_fills_wide, lit=wide_
 # raster_fills_phong, raster_fills_phong_wide: shading = phong's, the Gouraud
 # columns' fills lighting per pixel (render_init chooses the table)
-    .globl raster_fills_phong
-raster_fills_phong:
-    FILL_TABLE smooth=_phong
-raster_fills_phong_end:
-    .if (raster_fills_phong_end - raster_fills_phong) != 2 * RASTER_FILLS * 8
-    .error "raster_fills_phong must have 2 RASTER_FILLS entries"
-    .endif
-    .globl raster_fills_phong_wide
-raster_fills_phong_wide:
-    FILL_TABLE lit=wide_, smooth=_phong
-raster_fills_phong_wide_end:
-    .if (raster_fills_phong_wide_end - raster_fills_phong_wide) != 2 * RASTER_FILLS * 8
-    .error "raster_fills_phong_wide must have 2 RASTER_FILLS entries"
-    .endif
+    NAMED_FILL_TABLE raster_fills_phong, smooth=_phong
+    NAMED_FILL_TABLE raster_fills_phong_wide, lit=wide_, smooth=_phong

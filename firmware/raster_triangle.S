@@ -96,6 +96,22 @@
     fmadd.s \base, \ddy, ft10, \base
 .endm
 
+# OVER_W field, r0, r1, r2
+#   The corners' field (RV_S, RV_T, RV_NA ...) times their 1 / w (RV_Q): a
+#   perspective-correct attribute's plane values, into r0, r1, r2 for corners
+#   t0, t1, t2. Clobbers ft8.
+.macro OVER_W field, r0, r1, r2
+    flw     \r0, \field(t0)
+    flw     ft8, RV_Q(t0)
+    fmul.s  \r0, \r0, ft8
+    flw     \r1, \field(t1)
+    flw     ft8, RV_Q(t1)
+    fmul.s  \r1, \r1, ft8
+    flw     \r2, \field(t2)
+    flw     ft8, RV_Q(t2)
+    fmul.s  \r2, \r2, ft8
+.endm
+
 # PHONG_PLANE field, at, step
 #   shading = phong: the plane of one component of the corners' normals
 #   over w (RV_NA, RV_NB or RV_NC times RV_Q: perspective-correct, up to the
@@ -103,15 +119,7 @@
 #   at the first centre into RT_PHONG_DOWN + at, RT_PHONG_ORIGIN + at.
 #   Clobbers ft1, ft2, ft8, ft11.
 .macro PHONG_PLANE field, at, step
-    flw     ft11, \field(t0)
-    flw     ft8, RV_Q(t0)
-    fmul.s  ft11, ft11, ft8
-    flw     ft1, \field(t1)
-    flw     ft8, RV_Q(t1)
-    fmul.s  ft1, ft1, ft8
-    flw     ft2, \field(t2)
-    flw     ft8, RV_Q(t2)
-    fmul.s  ft2, ft2, ft8
+    OVER_W  \field, ft11, ft1, ft2
     GRADIENT ft11, ft1, ft2, \step, ft1, ft2
     fsw     ft1, RT_PHONG_DOWN + \at(sp)
     fsw     ft2, RT_PHONG_ORIGIN + \at(sp)
@@ -540,25 +548,9 @@ raster_triangle:
     flw     ft5, RV_Q(t1)
     flw     ft1, RV_Q(t2)
     GRADIENT ft11, ft5, ft1, fa5, ft5, ft1
-    flw     ft11, RV_S(t0)
-    flw     ft8, RV_Q(t0)
-    fmul.s  ft11, ft11, ft8
-    flw     ft6, RV_S(t1)
-    flw     ft8, RV_Q(t1)
-    fmul.s  ft6, ft6, ft8
-    flw     ft2, RV_S(t2)
-    flw     ft8, RV_Q(t2)
-    fmul.s  ft2, ft2, ft8
+    OVER_W  RV_S, ft11, ft6, ft2
     GRADIENT ft11, ft6, ft2, fa6, ft6, ft2
-    flw     ft11, RV_T(t0)
-    flw     ft8, RV_Q(t0)
-    fmul.s  ft11, ft11, ft8
-    flw     ft7, RV_T(t1)
-    flw     ft8, RV_Q(t1)
-    fmul.s  ft7, ft7, ft8
-    flw     ft3, RV_T(t2)
-    flw     ft8, RV_Q(t2)
-    fmul.s  ft3, ft3, ft8
+    OVER_W  RV_T, ft11, ft7, ft3
     GRADIENT ft11, ft7, ft3, fa7, ft7, ft3
     li      t3, F32_ONE
     fmv.w.x ft8, t3                     # ft8 = 1 (for 1 / (1 / w))

@@ -20,6 +20,29 @@
     .include "render.inc"
     .include "frame.inc"
 
+# CORNER_NORMALS
+#   corner_light's and corner_phong's start, for the face at a0: t2, t3, t4 =
+#   its corners' normal indices, t0 = normal_light's array, t1 = this hart's
+#   render_rv; on to 2 (ahead) when a corner has no vn. Clobbers nothing
+#   else.
+.macro CORNER_NORMALS
+    la      t0, scene
+    lwu     t1, MESH_NCOUNT(t0)         # (MESH_NO_INDEX is past any count)
+    ld      t2, 0(a0)
+    srli    t2, t2, MESH_CORNER_N_SHIFT
+    bgeu    t2, t1, 2f
+    ld      t3, MESH_CORNER_BYTES(a0)
+    srli    t3, t3, MESH_CORNER_N_SHIFT
+    bgeu    t3, t1, 2f
+    ld      t4, 2 * MESH_CORNER_BYTES(a0)
+    srli    t4, t4, MESH_CORNER_N_SHIFT
+    bgeu    t4, t1, 2f
+    la      t0, normal_light
+    ld      t0, 0(t0)
+    la      t1, render_rv
+    add     t1, t1, tp
+.endm
+
 # NORMAL_MATRIX
 #   normals_light's and normals_phong's M = R C (their comments) into ft3..
 #   ft11, row by row. Needs t0 = scene. Clobbers t1, fa0..fa3.
@@ -221,21 +244,7 @@ light_level:
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 corner_light:
-    la      t0, scene
-    lwu     t1, MESH_NCOUNT(t0)         # (MESH_NO_INDEX is past any count)
-    ld      t2, 0(a0)
-    srli    t2, t2, MESH_CORNER_N_SHIFT
-    bgeu    t2, t1, 2f
-    ld      t3, MESH_CORNER_BYTES(a0)
-    srli    t3, t3, MESH_CORNER_N_SHIFT
-    bgeu    t3, t1, 2f
-    ld      t4, 2 * MESH_CORNER_BYTES(a0)
-    srli    t4, t4, MESH_CORNER_N_SHIFT
-    bgeu    t4, t1, 2f
-    la      t0, normal_light
-    ld      t0, 0(t0)
-    la      t1, render_rv
-    add     t1, t1, tp
+    CORNER_NORMALS
     slli    t2, t2, NORMAL_LIGHT_SHIFT
     add     t2, t2, t0
     lw      t2, 0(t2)
@@ -447,21 +456,7 @@ normals_phong:
 #   Results: none.
 #   Clobbers: only ABI temporaries.
 corner_phong:
-    la      t0, scene
-    lwu     t1, MESH_NCOUNT(t0)         # (MESH_NO_INDEX is past any count)
-    ld      t2, 0(a0)
-    srli    t2, t2, MESH_CORNER_N_SHIFT
-    bgeu    t2, t1, 2f
-    ld      t3, MESH_CORNER_BYTES(a0)
-    srli    t3, t3, MESH_CORNER_N_SHIFT
-    bgeu    t3, t1, 2f
-    ld      t4, 2 * MESH_CORNER_BYTES(a0)
-    srli    t4, t4, MESH_CORNER_N_SHIFT
-    bgeu    t4, t1, 2f
-    la      t0, normal_light
-    ld      t0, 0(t0)
-    la      t1, render_rv
-    add     t1, t1, tp
+    CORNER_NORMALS
     slli    t2, t2, NORMAL_PHONG_SHIFT
     add     t2, t2, t0
     slli    t3, t3, NORMAL_PHONG_SHIFT

@@ -28,24 +28,6 @@
     .include "render.inc"
     .include "frame.inc"
 
-# UNSNAPPED residual, snapped, half, out
-#   draw_triangles' copy of a vertex record (t1) into a raster vertex (t0):
-#   one coordinate of where the corner projects before snapping, in pixels
-#   from the screen's centre (half, Q4), into out: the snapped Q4 position
-#   (snapped) from the centre times ft2 = 1/16, plus the residual (i16)
-#   times ft3 = 2^-15. Clobbers t3, a3, ft0, ft1.
-.macro UNSNAPPED residual, snapped, half, out
-    lh      t3, \residual(t1)
-    fcvt.s.w ft0, t3
-    fmul.s  ft0, ft0, ft3
-    lw      t3, \snapped(t1)
-    li      a3, \half
-    sub     t3, t3, a3
-    fcvt.s.w ft1, t3
-    fmadd.s ft0, ft1, ft2, ft0
-    fsw     ft0, \out(t0)
-.endm
-
     .text
     .globl draw_triangles
 # draw_triangles
@@ -193,8 +175,10 @@ draw_triangles:
     fmv.w.x ft2, t3
     li      t3, F32_SNAP_UNIT
     fmv.w.x ft3, t3
-    UNSNAPPED VTX_SNAP_X, VTX_SX, SCREEN_HALF_W_Q4, RV_FX
-    UNSNAPPED VTX_SNAP_Y, VTX_SY, SCREEN_HALF_H_Q4, RV_FY
+    UNSNAPPED t1, VTX_SNAP_X, VTX_SX, ft0, SCREEN_HALF_W_Q4
+    fsw     ft0, RV_FX(t0)
+    UNSNAPPED t1, VTX_SNAP_Y, VTX_SY, ft0, SCREEN_HALF_H_Q4
+    fsw     ft0, RV_FY(t0)
 51: addi    t0, t0, RV_BYTES
     mv      t1, t4
     mv      t4, t5

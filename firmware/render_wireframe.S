@@ -15,25 +15,6 @@
     .include "render.inc"
     .include "frame.inc"
 
-# UNSNAPPED_END record, x, y
-#   An end's screen position in pixels before snapping, from its vertex
-#   record: VTX_SX, VTX_SY times ft0 = 1/16 plus VTX_SNAP_X, VTX_SNAP_Y times
-#   ft1 = 2^-15 (one rounding each). Clobbers t0, ft2.
-.macro UNSNAPPED_END record, x, y
-    lw      t0, VTX_SX(\record)
-    fcvt.s.w \x, t0
-    lh      t0, VTX_SNAP_X(\record)
-    fcvt.s.w ft2, t0
-    fmul.s  ft2, ft2, ft1
-    fmadd.s \x, \x, ft0, ft2
-    lw      t0, VTX_SY(\record)
-    fcvt.s.w \y, t0
-    lh      t0, VTX_SNAP_Y(\record)
-    fcvt.s.w ft2, t0
-    fmul.s  ft2, ft2, ft1
-    fmadd.s \y, \y, ft0, ft2
-.endm
-
     .text
     .globl render_wireframe
 # render_wireframe
@@ -133,11 +114,13 @@ render_wireframe:
     # the union lines (render_init keeps the snap's residual for them): the
     # ends where they project before snapping, Q4 / 16 + residual 2^-15
 7:  li      t0, F32_Q4_TO_PIXEL
-    fmv.w.x ft0, t0
+    fmv.w.x ft2, t0
     li      t0, F32_SNAP_UNIT
-    fmv.w.x ft1, t0
-    UNSNAPPED_END s3, fa0, fa1
-    UNSNAPPED_END s4, fa2, fa3
+    fmv.w.x ft3, t0
+    UNSNAPPED s3, VTX_SNAP_X, VTX_SX, fa0
+    UNSNAPPED s3, VTX_SNAP_Y, VTX_SY, fa1
+    UNSNAPPED s4, VTX_SNAP_X, VTX_SX, fa2
+    UNSNAPPED s4, VTX_SNAP_Y, VTX_SY, fa3
     j       6b
 5:  call    raster_segment
 8:  addi    s1, s1, EDGE_BYTES
