@@ -98,3 +98,13 @@ def test_a_model_without_normals_looks_as_with_flat_shading(firmware, tmp_path):
     phong, _ = _draw(firmware, tmp_path / "phong", faceted, {**scene, "shading": "phong"})
     assert (flat != flat[0, 0]).any(axis=-1).sum() > 8000
     assert np.array_equal(phong, flat)
+
+
+def test_a_zero_normal_leaves_its_corner_to_the_others(firmware, tmp_path):
+    """A `vn 0 0 0` stays zero (normals_phong makes only the others unit), so the corners with a
+    normal light the triangle and the zero one adds nothing, as the reference's unit_rows has it."""
+    quad = QUAD.replace("vn 0.9 -0.6 1.2", "vn 0 0 0")
+    phong, expected = _draw(firmware, tmp_path, quad, {**TURNED, **PLACES["in-front"], "shading": "phong"})
+    inside = _inside(expected)
+    error = np.abs(phong - expected).max(axis=-1)[inside]
+    assert inside.sum() > 8000 and error.max() <= 1 and (error == 0).mean() > 0.99
