@@ -194,6 +194,20 @@
     bgez    t0, 4b
 .endm
 
+# MIP_LEVEL
+#   The level's entry in the mipmap fills (FILTERED, ANISO_SETUP): from t0 =
+#   twice the level, or one more (halved here, rounding down) and s10 = level
+#   0's entry of the level table, t0 = the level's entry and a5, a6, a7 = its
+#   texels, width and height.
+.macro MIP_LEVEL
+    srai    t0, t0, 1                   # the level, -63 .. 64
+    slli    t0, t0, MIP_ENTRY_SHIFT
+    add     t0, t0, s10
+    ld      a5, MIP_PIXELS(t0)
+    lwu     a6, MIP_W(t0)
+    lwu     a7, MIP_H(t0)
+.endm
+
 # ANISO_SETUP affine
 #   filter = anisotropic, in a mipmap fill (FILTERED, registers as there),
 #   for the pixel at ft10, ft11 = 32 s, 32 t (w in ft9, perspective): the
@@ -273,12 +287,7 @@
     bgez    t0, 29f
     li      t0, 0
 29: addi    t0, t0, 1 - F32_EXP_BIAS
-    srai    t0, t0, 1                   # the level, -63 .. 64
-    slli    t0, t0, MIP_ENTRY_SHIFT
-    add     t0, t0, s10
-    ld      a5, MIP_PIXELS(t0)
-    lwu     a6, MIP_W(t0)
-    lwu     a7, MIP_H(t0)
+    MIP_LEVEL
     flw     fs5, MIP_SCALE_S(t0)        # the centre and the axis, in the level
     fmul.s  ft10, ft10, fs5
     fmul.s  ft1, ft1, fs5
@@ -682,12 +691,7 @@
     srliw   t0, t0, F32_EXP_SHIFT
     andi    t0, t0, F32_EXP_MASK        # e + bias (a noise sign bit dropped)
     addi    t0, t0, 1 - F32_EXP_BIAS
-    srai    t0, t0, 1                   # the level, -63 .. 64
-    slli    t0, t0, MIP_ENTRY_SHIFT
-    add     t0, t0, s10
-    ld      a5, MIP_PIXELS(t0)
-    lwu     a6, MIP_W(t0)
-    lwu     a7, MIP_H(t0)
+    MIP_LEVEL
     flw     fs5, MIP_SCALE_S(t0)
     fmul.s  ft10, ft10, fs5
     flw     fs5, MIP_SCALE_T(t0)
