@@ -68,7 +68,7 @@ typedef struct {
     int32_t pending_kind; /* a control transfer waiting for the next pc to be resolved (0: none) */
     uint64_t pending_pc;
     uint32_t pending_entry;
-    uint32_t pad;
+    uint32_t pending_penalty; /* the fast engine's: a transfer resolved, its cycles due at the next instruction */
     uint64_t mispredicts; /* statistics for the bench and the tests */
     uint64_t stall_cycles;
     predictor_t predictor;

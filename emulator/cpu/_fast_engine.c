@@ -1004,21 +1004,35 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
     int pending_kind = c->pending_kind;
     uint64_t pending_pc = c->pending_pc;
     uint32_t pending_entry = c->pending_entry;
+    /* A control transfer is resolved as soon as the instruction after it is sure to start (the limits
+     * cannot stop it, and it is the next one either engine counts): its penalty is charged when that
+     * instruction is counted, as count_instruction charges it, so every count and limit is as if the
+     * transfer had waited for it. The transfer's own handler or the next block's entry resolves it, not
+     * each instruction's COUNT (a third of the interpreter's time under --timing rocket went there). */
+    uint32_t pending_penalty = c->pending_penalty;
+    const uint64_t entry_penalty = pending_penalty;
     l1_caches_t *const kc = c->caches;
     int why;
 
 #define HAND_OVER() do { pc = in->pc; why = STOP_HANDOFF; goto out; } while (0)
-/* on to the next instruction of the block; each starts only below the counter's limits */
+/* on to the next instruction of the block; each starts only below the counter's limits (limits_reached) */
 #define DISPATCH() do { \
-        if (cycles >= check) { \
-            if (executed >= limit || cycles >= cycle_limit) { \
-                pc = in->pc; \
-                why = STOP_LIMIT; \
-                goto out; \
-            } \
-            check = limit_check(executed, cycles, limit, cycle_limit); \
-        } \
+        if (cycles >= check) \
+            goto limits_reached; \
         goto *dispatch[in->op]; \
+    } while (0)
+/* the transfer counted last (its table entry says it is one) waits for where it went */
+#define TRANSFER_PENDING() do { \
+        if (in->timing & T_TRANSFER) { \
+            pending_kind = (int)E_KIND(in->entry); \
+            pending_pc = in->pc; \
+            pending_entry = in->entry; \
+        } \
+    } while (0)
+/* the pending transfer went to `next`, the instruction that starts next */
+#define RESOLVE_PENDING(next) do { \
+        pending_penalty = (uint32_t)resolve_transfer(c, pending_pc, pending_entry, pending_kind, next); \
+        pending_kind = 0; \
     } while (0)
 #define NEXT() do { in++; DISPATCH(); } while (0)
 /* the rounding mode an FP instruction uses (7: frm's) */
@@ -1026,15 +1040,16 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
 #define NEED_FPU() do { if (!fpu_on) HAND_OVER(); } while (0)
 #define NEED_RNE() do { if (!fpu_on || RM() != 0) HAND_OVER(); } while (0)
 #define NEED_VALID_RM() do { if (!fpu_on || RM() > 4) HAND_OVER(); } while (0)
-/* Counts and times the instruction exactly as count_instruction does, its operands still unwritten. */
-#define COUNT() do { \
+/* Counts and times the instruction exactly as count_instruction does, its operands still unwritten; the
+ * timing flags in `handled` are the handler's own business (a transfer's: TRANSFER_PENDING). */
+#define COUNT_BUT(handled) do { \
         executed++; \
-        if (pending_kind) { \
-            cycles += resolve_transfer(c, pending_pc, pending_entry, pending_kind, in->pc); \
-            pending_kind = 0; \
-        } \
         cycles += in->cost; \
-        if (in->timing) { \
+        if (pending_penalty) { \
+            cycles += pending_penalty; \
+            pending_penalty = 0; \
+        } \
+        if (in->timing & ~(handled)) { \
             uint32_t e = in->entry; \
             if (in->timing & T_FETCH) \
                 cycles += l1_fetch_insn(kc, table_key(in->pc), in->len); \
@@ -1042,10 +1057,13 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
                 uint64_t latency = muldiv_latency(e, x[E_RS1(e)], x[E_RS2(e)], E_KIND(e) == KIND_DIV); \
                 uint64_t distance = E_DIST(e); \
                 cycles += latency > distance ? latency - distance : 0; \
-            } else if (in->timing & T_TRANSFER) { \
+            } else if (in->timing & ~(handled) & T_TRANSFER) { \
+                /* (the table calls an instruction that is no jump a transfer: code written since it was \
+                 * made) resolved where the next instruction starts: limits_reached */ \
                 pending_kind = (int)E_KIND(e); \
                 pending_pc = in->pc; \
                 pending_entry = e; \
+                check = cycles; \
             } \
             if (in->timing & T_LOOP_HEAD) { \
                 poll_loop_t *loop = loop_at(c, in->pc); \
@@ -1058,6 +1076,7 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
             } \
         } \
     } while (0)
+#define COUNT() COUNT_BUT(0)
 /* an SRAM access through the data cache (_caches.h) */
 #define CACHED(a, storing) do { if (kc != NULL) cycles += l1_data(kc, a, storing); } while (0)
 /* a store into decoded code: its blocks are compared with their code again at their next entry */
@@ -1166,14 +1185,24 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
 /* not taken: on in the block, unless the interpreter stored into decoded code since the block began
  * (QEMU ends its translated blocks at branches, so the code after one runs as it is now) */
 #define BRANCH(cond) do { \
-        COUNT(); \
+        COUNT_BUT(T_TRANSFER); \
         if (cond) { \
             pc = in->pc + (uint64_t)in->imm; \
+            TRANSFER_PENDING(); \
             goto next_block; \
         } \
         if (f->epoch != block_epoch) { \
             pc = in->pc + in->len; \
+            TRANSFER_PENDING(); \
             goto next_block; \
+        } \
+        if (in->timing & T_TRANSFER) { \
+            /* the next instruction, in this block, starts unless the limits stop it first */ \
+            if (cycles < check && in[1].op != OP_BLOCK_END) \
+                pending_penalty = (uint32_t)resolve_transfer(c, in->pc, in->entry, (int)E_KIND(in->entry), \
+                                                                in->pc + in->len); \
+            else \
+                TRANSFER_PENDING(); \
         } \
         NEXT(); \
     } while (0)
@@ -1209,7 +1238,20 @@ next_block:
         }
         in = b->insns;
     }
+    if (pending_kind && cycles < check)
+        RESOLVE_PENDING(pc);
     DISPATCH();
+limits_reached:
+    /* cycles >= check: a limit may be reached before the instruction at `in` */
+    if (executed >= limit || cycles >= cycle_limit) {
+        pc = in->pc;
+        why = STOP_LIMIT;
+        goto out;
+    }
+    check = limit_check(executed, cycles, limit, cycle_limit);
+    if (pending_kind && in->op != OP_BLOCK_END)
+        RESOLVE_PENDING(in->pc);   /* (a block's end: next_block resolves it, the next block found) */
+    goto *dispatch[in->op];
     {
         L_OP_BLOCK_END:
             pc = in->pc;
@@ -1218,16 +1260,18 @@ next_block:
         L_OP_LUI: ALU((uint64_t)in->imm);
         L_OP_AUIPC: ALU(in->pc + (uint64_t)in->imm);
         L_OP_JAL: {
-            COUNT();
+            COUNT_BUT(T_TRANSFER);
             x[in->rd] = in->pc + in->len;
             pc = in->pc + (uint64_t)in->imm;
+            TRANSFER_PENDING();
             goto next_block;
         }
         L_OP_JALR: {
-            COUNT();
+            COUNT_BUT(T_TRANSFER);
             uint64_t target = (x[in->rs1] + (uint64_t)in->imm) & ~(uint64_t)1;
             x[in->rd] = in->pc + in->len;
             pc = target;
+            TRANSFER_PENDING();
             goto next_block;
         }
         L_OP_BEQ: BRANCH(x[in->rs1] == x[in->rs2]);
@@ -1418,7 +1462,9 @@ out:
     c->pending_kind = pending_kind;
     c->pending_pc = pending_pc;
     c->pending_entry = pending_entry;
-    c->stall_cycles += (cycles - start_cycles) - (executed - start) -
+    c->pending_penalty = pending_penalty;
+    /* (a penalty carried in was a misprediction of an earlier run; one carried out is this run's) */
+    c->stall_cycles += (cycles + pending_penalty - entry_penalty - start_cycles) - (executed - start) -
                        MISPREDICT_PENALTY * (c->mispredicts - start_mispredicts);
     if (executed != start)
         c->last_pc = 0;   /* the precise engine's last instruction is no longer the hart's last */
@@ -1430,6 +1476,9 @@ out:
 #undef NEED_RNE
 #undef NEED_VALID_RM
 #undef COUNT
+#undef COUNT_BUT
+#undef TRANSFER_PENDING
+#undef RESOLVE_PENDING
 #undef CACHED
 #undef LOAD
 #undef STORE

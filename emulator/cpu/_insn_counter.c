@@ -132,6 +132,8 @@ void count_instruction(void *uc, uint64_t address, uint32_t size, insn_counter_t
             counter->stall_cycles += fetch;
             cost += fetch;
         }
+        cost += counter->pending_penalty;   /* the fast engine resolved a transfer before handing over */
+        counter->pending_penalty = 0;
         if (counter->pending_kind) {
             cost += resolve_transfer(counter, counter->pending_pc, counter->pending_entry,
                                      counter->pending_kind, address);

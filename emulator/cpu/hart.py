@@ -448,6 +448,7 @@ class Hart(PrivilegedArchitecture):
         """A trap or interrupt enters mtvec: the control transfer the counter last saw does not
         lead to the next instruction it will see, so it is not resolved (no misprediction)."""
         self._counter.pending_kind = 0
+        self._counter.pending_penalty = 0
 
     def take_poll_report(self) -> tuple[shared_memory.PollLoop, shared_memory.LoopSlot]:
         """The poll loop the last run stopped for (and clears the report)."""

@@ -60,7 +60,7 @@ class Counter(ctypes.Structure):
                 ("cycles", ctypes.c_uint64), ("cycle_limit", ctypes.c_uint64), ("table", ctypes.c_void_p),
                 ("table_base", ctypes.c_uint64), ("table_end", ctypes.c_uint64), ("reg_read", ctypes.c_void_p),
                 ("reg_x0", ctypes.c_int32), ("pending_kind", ctypes.c_int32), ("pending_pc", ctypes.c_uint64),
-                ("pending_entry", ctypes.c_uint32), ("pad", ctypes.c_uint32), ("mispredicts", ctypes.c_uint64),
+                ("pending_entry", ctypes.c_uint32), ("pending_penalty", ctypes.c_uint32), ("mispredicts", ctypes.c_uint64),
                 ("stall_cycles", ctypes.c_uint64), ("predictor", Predictor), ("csr_sites", ctypes.c_void_p),
                 ("csr_mask", ctypes.c_uint64), ("csr_report", ctypes.c_uint64), ("last_pc", ctypes.c_uint64),
                 ("sram", ctypes.c_void_p), ("sram_base", ctypes.c_uint64), ("sram_alias", ctypes.c_uint64),

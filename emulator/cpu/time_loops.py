@@ -332,7 +332,8 @@ class LoopSkipper:
     def _state(self) -> tuple:
         counter = self.counter
         return (counter.executed, counter.cycles, counter.mispredicts, counter.stall_cycles,
-                bytes(counter.predictor), counter.pending_kind, counter.pending_pc, counter.pending_entry)
+                bytes(counter.predictor), counter.pending_kind, counter.pending_pc, counter.pending_entry,
+                counter.pending_penalty)
 
     def _steady(self, key: int, now: tuple, body: int) -> tuple[tuple, tuple[int, ...]] | None:
         """Records this visit; (the last visit, the counts one iteration adds) when the last two
@@ -345,7 +346,7 @@ class LoopSkipper:
         older, last = seen
         step = tuple(b - a for a, b in zip(last[:4], now[:4]))
         if step != tuple(b - a for a, b in zip(older[:4], last[:4])) or step[0] != body or step[1] <= 0 or \
-                last[4:8] != now[4:8] or older[4:8] != last[4:8]:
+                last[4:9] != now[4:9] or older[4:9] != last[4:9]:
             return None
         return last, step
 
@@ -378,7 +379,7 @@ class LoopSkipper:
             return
         last, step = steady
         cycles_per = step[1]
-        if time - last[8] != cycles_per:
+        if time - last[9] != cycles_per:
             return                               # the clock changed, or mcycle was written
         limit = self._room(loop.body, cycles_per, turn_limit, beyond_turn)
         if limit <= 0 or loop.exits(time, register):

@@ -108,6 +108,44 @@ def test_multiply_and_divide_operands_are_worked_out_as_the_precise_engine_reads
         assert fast.harts[0].stall_cycles > 300 * 20     # the multiplier's and divider's iterations
 
 
+# Transfers, taken or not, predicted or not, whose next instruction the fast engine hands over (a CSR
+# read, an AMO, a CSR at a call's target and at a return's): the fast engine resolves a transfer as soon
+# as the next instruction is sure to start, and a penalty it has not charged yet goes with the hart to
+# the precise engine, which must charge it at that instruction as if it had resolved the transfer itself.
+TRANSFER_THEN_HAND_OVER = """
+    la      s0, table
+    li      s1, 400
+    li      s2, 0x9E3779B97F4A7C15
+    li      s3, 12345
+1:  mul     s3, s3, s2
+    addi    s3, s3, 7
+    srli    t0, s3, 61
+    andi    t1, t0, 1
+    beqz    t1, 2f                    # taken half the time, at random: mispredicted often
+    csrr    t2, mcycle                # not taken: the next instruction is the precise engine's
+    add     s4, s4, t2
+2:  amoadd.d zero, t0, (s0)           # taken: the target is
+    andi    t1, t0, 2
+    bnez    t1, 3f
+    jal     ra, 4f                    # a call whose target is a CSR read
+3:  addi    s1, s1, -1
+    bnez    s1, 1b
+    j       5f
+4:  csrr    t3, minstret
+    add     s5, s5, t3
+    ret                               # and a return to a branch
+5:
+"""
+
+
+@pytest.mark.parametrize("timing", [TIMING_ROCKET, TIMING_ROCKET_NOCACHE])
+def test_a_transfer_resolved_before_a_hand_over_is_charged_as_the_precise_engine_charges_it(timing):
+    precise, fast = run_on_both(TRANSFER_THEN_HAND_OVER, MULDIV_DATA, timing)
+    assert state(fast) == state(precise)
+    assert fast.harts[0].mispredicts > 100
+    assert fast.harts[0].fast_statistics()["handoffs"] > 100
+
+
 # A multiply's operand loaded from where the instruction before stored it: its latency must be
 # worked out from the value the load sees.
 STORE_THEN_LOAD = """
