@@ -29,7 +29,7 @@ import unicorn
 from unicorn import riscv_const as rv
 
 from ..cpu import shared_memory
-from ..cpu.native import QUIET_ENDS_MAX, AlonePlan
+from ..cpu.native import QUIET_ENDS_MAX, AlonePlan, PairPlan
 from .deadlines import Deadlines
 from .sram_waits import SramWaits
 from .traps import Traps
@@ -178,6 +178,9 @@ class Scheduler(SramWaits, Deadlines):
         # per hart: the poll loop it last came round without waiting, and what that loop read then
         self._poll_seen: dict[int, tuple[int, list[bytes], int]] = {}   # hart: (loop head, what it read, executed)
         self._alone_plan = AlonePlan()
+        self._pair_plan = PairPlan()
+        self.pairing = True           # both harts' turns run in C between device events (_go_on_paired)
+        self.paired_turns = 0         # statistics: turns run so
 
     def _mcycle_reader(self, h: int) -> Callable[[], int]:
         return lambda: self.cycles(self.hart_now(self.harts[h]))
@@ -583,8 +586,18 @@ class Scheduler(SramWaits, Deadlines):
         if self.pending_stop is not None:
             raise self.pending_stop
         hart.time = self.time_at_cycles(hart, hart.cycles)
-        if alone and hart.precise_runs == precise_runs and hart.device_accesses == device_accesses:
+        clean = hart.precise_runs == precise_runs and hart.device_accesses == device_accesses
+        if alone and clean:
             horizon = self._go_on_alone(hart, t0, outer, horizon)
+        if self._finish_turn(hart, horizon) and go_on_alone and not alone and clean and not priority_turn:
+            self._go_on_paired()
+
+    def _finish_turn(self, hart: Hart, horizon: Time) -> bool:
+        """After a hart's turn (up to `horizon`): a wfi with an interrupt pending falls through, harts
+        waiting on what it stored wake, a hart that polls waits for the next device event, and the
+        board catches up with the running harts. False when the frames asked for are all shown (the
+        board's time then moves on to the last one's delivery, and no more turns are run here)."""
+        board = self.board
         if hart.state is HartState.ASLEEP:
             # a wfi with an enabled interrupt already pending falls through (the privileged spec:
             # WFI resumes when an enabled interrupt is pending, whenever it became so); without
@@ -601,11 +614,12 @@ class Scheduler(SramWaits, Deadlines):
             self.move_hart(hart, max(hart.time, min(event, horizon) if event is not None else horizon))
         if len(self.frames) >= self.frames_wanted and self._trap_deadline is None:
             self.time = max(self.time, self.delivery_time)
-            return
+            return False
         running = [h.time for h in self.harts if h.state is HartState.RUNNING]
         if running:
             self._catch_up_to(min(running))
         self._check_deadlines()
+        return True
 
     def _outer_bound(self, t0: Time, event: Time | None) -> Time:
         """What bounds every turn from t0 until one of them happens: the device event `event`
@@ -707,6 +721,71 @@ class Scheduler(SramWaits, Deadlines):
             raise self.pending_stop
         hart.time = self.time_at_cycles(hart, hart.cycles)
         return plan.horizon
+
+    def _go_on_paired(self) -> None:
+        """Both harts run on the fast engine, between turns, and the turn just run needed no board (as
+        for _go_on_alone). Until a turn does, each next turn would begin with the same state of the
+        board and end with the devices only moving on in time: no interrupt can come before the next
+        device event, none is pending that either hart would take (it would be taken at the start of
+        its turn), no frame can be captured before the LCD has its bytes, and neither hart is in a
+        race window (lockstep), polls or spins in a loop that only waits (_turn skips those). So the
+        turns run here, in C, each exactly the turn _turn would give (the hart furthest behind, its
+        horizon a quantum of its cycles or a quantum past the other hart's time), without moving the
+        devices on between them; the last one ends where _turn would go on (issue 31: both harts
+        drawing had cost a return to Python and the devices moved on every quantum, 400 a frame)."""
+        if self._trap_deadline is not None or self._draining or self._priority is not None or \
+                self.pending_stop is not None or self.reset_requested is not None or not self.pairing:
+            return
+        harts = self.harts
+        if len(harts) != 2 or any(h.state is not HartState.RUNNING or h.polling or not h.fast_usable()
+                                  for h in harts):
+            return
+        t0 = min(h.time for h in harts)
+        if t0 < self._race_until:
+            return
+        for hart in harts:
+            if hart.in_idle_loop():
+                return
+            takeable = hart.takeable_interrupts()
+            if takeable and self.board.mip(hart.hart_id, hart.time, takeable):
+                return
+        outer = self._outer_bound(t0, self.board.next_device_event(t0))
+        stop_at = min(outer, self.board.earliest_frame_capture(t0))
+        if self.until is None:
+            stop_at = min(stop_at, self._last_frame_time + self.hang_budget)
+        if t0 >= stop_at:
+            return
+        plan = self._pair_plan
+        for hart in harts:
+            n = hart.hart_id
+            plan.anchor_time[n], plan.anchor_cycles[n] = self._anchor[n]
+            plan.time[n], plan.pc[n] = hart.time, hart.pc
+        plan.hz, plan.quantum, plan.outer, plan.stop_at = self._hz, self.quantum, outer, stop_at
+        plan.max_turns = MAX_TURNS_ALONE
+        started = host_time.perf_counter()
+        harts[0].run_pair(harts[1], plan)
+        self.host_time_in_harts += host_time.perf_counter() - started
+        self.paired_turns += plan.turns
+        if not plan.handed_over:
+            for hart in harts:
+                hart.time = plan.time[hart.hart_id]
+            self._catch_up_to(min(hart.time for hart in harts))
+            self._check_deadlines()
+            return
+        # the last turn stopped for the board: the board catches up with its start, as between any two
+        # turns, and that turn goes on as _run_hart would have run it from its start (_go_on_alone)
+        last = harts[plan.last]
+        for hart in harts:
+            hart.time = plan.time[hart.hart_id]
+        last.time = plan.t0
+        self.turn_horizon = self.time_at_cycles(last, plan.start_cycles + plan.budget)
+        self._set_time(plan.t0)
+        self._check_deadlines()
+        self._run_hart(last, plan.budget, since=(plan.start_executed, plan.start_cycles))
+        if self.pending_stop is not None:
+            raise self.pending_stop
+        last.time = self.time_at_cycles(last, last.cycles)
+        self._finish_turn(last, plan.horizon)
 
     def _catch_up_to(self, target: Time) -> None:
         """Moves the board's time on to `target` (the earliest time a running hart has reached), one

@@ -45,6 +45,7 @@
 #include "_fast_engine.h"
 #include "_host_fp.h"
 #include "_rocket_timing.h"
+#include "_turns.h"
 #include "_write_check.h"
 
 
@@ -1589,64 +1590,38 @@ void fast_abandon(fast_state_t *f, void *uc)
     end_run(f, uc);
 }
 
-#define QUIET_ENDS_MAX 16    /* native.py's */
-
-/* The scheduler's turns of a hart running alone (scheduler.py, _go_on_alone), as fast_run_alone runs
- * them: in, the hart's clock and what bounds the turns; out, where the last one began and how it ended.
- * Times are whole picoseconds (vtime.py), the arithmetic the scheduler's, exact in both. */
-typedef struct {
-    int64_t anchor_time;    /* the hart's time is anchor_time + cycles_time(cycles - anchor_cycles, hz) */
-    uint64_t anchor_cycles;
-    uint64_t hz;
-    uint64_t quantum;   /* cycles a turn */
-    int64_t outer;      /* no turn runs past it (a device event, a grab, the run's end) */
-    int64_t stop_at;    /* no turn begins at or after it */
-    uint64_t max_turns;
-    int64_t t0;         /* out: when the last turn began */
-    int64_t horizon;    /* out: the last turn's horizon */
-    uint64_t budget;    /* out: its cycle budget */
-    uint64_t start_cycles, start_executed;   /* out: the counter when it began */
-    uint64_t turns;     /* out: turns begun */
-    uint64_t handed_over;   /* out: 1 when the last turn stopped before its end (the pc needs the precise
-                               engine, or a poll loop came round): the scheduler finishes it */
-    int64_t end_time;   /* out, handed_over 0: when the last turn ended */
-    /* Device events that bound the turns as `outer` does but need no board between them (the console's
-     * bytes leaving the UART while nothing else hears them: Uarths.quiet_byte_ends): the first `ticks`
-     * of tick_ends, in order. */
-    int64_t tick_ends[QUIET_ENDS_MAX];
-    uint64_t ticks;
-} alone_plan_t;
-
-#define PS_PER_S 1000000000000ULL
-
-/* vtime.cycles_time: how long `cycles` cycles at `hz` take, rounded up to a picosecond */
-static int64_t cycles_time(uint64_t cycles, uint64_t hz)
+/* (_fast_engine.h) */
+void fast_begin_turns(fast_state_t *f, void *uc, uint64_t from)
 {
-    unsigned __int128 ps = (unsigned __int128)cycles * PS_PER_S;
-    return (int64_t)((ps + hz - 1) / hz);
+    begin_run(f, uc, from);
+    f->devices_here = 0;   /* a device access ends the turns: the scheduler finishes that turn */
 }
 
-/* Scheduler.time_at_cycles: the hart's time at cycle count `cycles` */
-static int64_t plan_time_at(const alone_plan_t *plan, uint64_t cycles)
+int fast_turn(fast_state_t *f, insn_counter_t *c)
 {
-    return plan->anchor_time + cycles_time(cycles - plan->anchor_cycles, plan->hz);
+    enter_guest_fp(f);   /* (the interpreter's host arithmetic must not raise the guest's flags) */
+    int why = interpret(f, c);
+    leave_guest_fp(f);
+    return why;
 }
 
-/* Scheduler.cycles_until: the least cycle count at which the hart's time is `time` or later */
-static uint64_t plan_cycles_until(const alone_plan_t *plan, int64_t time)
+int fast_wrote_astray(const fast_state_t *f)
 {
-    int64_t since = time - plan->anchor_time - 1;
-    if (since < 0)
-        return plan->anchor_cycles;
-    unsigned __int128 whole = (unsigned __int128)(uint64_t)since * plan->hz / PS_PER_S;
-    return plan->anchor_cycles + (uint64_t)whole + 1;
+    return f->write_watch != NULL && f->write_watch->stray;
+}
+
+uint64_t fast_end_turns(fast_state_t *f, void *uc)
+{
+    end_run(f, uc);
+    return f->pc;
 }
 
 /* The sizes of the structures native.py mirrors for ctypes (tests/unit/cpu/test_native_layout.py checks the
  * mirrors against them and against the field names here): predictor_t, insn_counter_t,
- * device_access_t, repeat_t, fast_state_t up to `windows` (the head Python reads), alone_plan_t. */
+ * device_access_t, repeat_t, fast_state_t up to `windows` (the head Python reads), alone_plan_t, pair_plan_t,
+ * and the caches' l1_cache_t and l1_caches_t. */
 __attribute__((visibility("default")))
-void struct_sizes_for_tests(uint64_t out[8])
+void struct_sizes_for_tests(uint64_t out[9])
 {
     out[6] = sizeof(l1_cache_t);
     out[7] = sizeof(l1_caches_t);
@@ -1656,55 +1631,5 @@ void struct_sizes_for_tests(uint64_t out[8])
     out[3] = sizeof(repeat_t);
     out[4] = offsetof(fast_state_t, windows);
     out[5] = sizeof(alone_plan_t);
+    out[8] = sizeof(pair_plan_t);
 }
-
-/*
- * Runs the turns the scheduler would give a hart running alone, one after another, while none needs
- * the board: each turn's budget from its start time as Scheduler._turn works it out, the counter's
- * limits set as Hart.run sets them, the next turn beginning when the last ended. Stops after the turn
- * that ends at or past stop_at, after max_turns, or inside a turn that hands over. Returns the pc.
- */
-__attribute__((visibility("default")))
-uint64_t fast_run_alone(fast_state_t *f, insn_counter_t *c, void *uc, uint64_t from, alone_plan_t *plan)
-{
-    begin_run(f, uc, from);
-    f->devices_here = 0;   /* a device access ends the turns here: the scheduler finishes that turn */
-    int64_t t0 = plan_time_at(plan, c->cycles);
-    uint64_t tick = 0;     /* the first of tick_ends not yet passed */
-    plan->turns = 0;
-    plan->handed_over = 0;
-    for (;;) {
-        /* the board's next event after t0, as the scheduler would find it: ticks up to t0 have passed */
-        while (tick < plan->ticks && plan->tick_ends[tick] <= t0)
-            tick++;
-        int64_t horizon = plan_time_at(plan, c->cycles + plan->quantum);
-        if (plan->outer < horizon)
-            horizon = plan->outer;
-        if (tick < plan->ticks && plan->tick_ends[tick] < horizon)
-            horizon = plan->tick_ends[tick];
-        uint64_t until = plan_cycles_until(plan, horizon);
-        uint64_t budget = until > c->cycles + 1 ? until - c->cycles : 1;
-        plan->t0 = t0;
-        plan->horizon = horizon;
-        plan->budget = budget;
-        plan->start_cycles = c->cycles;
-        plan->start_executed = c->executed;
-        plan->turns++;
-        c->limit = c->executed + budget;
-        c->cycle_limit = c->cycles + budget;
-        enter_guest_fp(f);   /* (the interpreter's host arithmetic must not raise the guest's flags) */
-        int why = interpret(f, c);
-        leave_guest_fp(f);
-        if (why != STOP_LIMIT || c->poll_report != 0 || (f->write_watch != NULL && f->write_watch->stray)) {
-            plan->handed_over = 1;
-            break;
-        }
-        t0 = plan_time_at(plan, c->cycles);
-        plan->end_time = t0;
-        if (t0 >= plan->stop_at || plan->turns >= plan->max_turns)
-            break;
-    }
-    end_run(f, uc);
-    return f->pc;
-}
-

@@ -19,4 +19,12 @@ struct fast_state;
  * `out` holds the access: window, address, width, is_store, the stored value, its pc. */
 int fast_step(struct fast_state *f, insn_counter_t *c, void *uc, uint64_t arg, int resume, uint64_t out[6]);
 
+/* A stretch of turns (_turns.c): the hart's registers from the precise engine, its device accesses
+ * handed over; a turn to the counter's limits (a stop); whether --check-writes saw a stray store; the
+ * registers back, and the pc. */
+void fast_begin_turns(struct fast_state *f, void *uc, uint64_t from);
+int fast_turn(struct fast_state *f, insn_counter_t *c);
+int fast_wrote_astray(const struct fast_state *f);
+uint64_t fast_end_turns(struct fast_state *f, void *uc);
+
 #endif

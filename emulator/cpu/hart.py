@@ -350,6 +350,14 @@ class Hart(PrivilegedArchitecture):
         self.pc = counter_lib.fast_run_alone(self._fast_state, ctypes.byref(self._counter), self.uc._uch, self.pc,
                                               ctypes.byref(plan))
 
+    def run_pair(self, other: "Hart", plan) -> None:
+        """Runs the turns `plan` (native.PairPlan) describes on the fast engine, this hart (hart 0) and
+        `other` (hart 1) from their pcs, which the plan gives back (fast_run_pair)."""
+        self.stop_requested = other.stop_requested = False
+        counter_lib.fast_run_pair(self._fast_state, other._fast_state, ctypes.byref(self._counter),
+                                  ctypes.byref(other._counter), self.uc._uch, other.uc._uch, ctypes.byref(plan))
+        self.pc, other.pc = plan.pc[0], plan.pc[1]
+
     def _fast_usable(self) -> bool:
         # below M-mode Unicorn gives no CSR to the fast engine's register load (mstatus: FS), and
         # CSR accesses are the precise engine's anyway: S- and U-mode code runs there

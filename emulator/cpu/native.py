@@ -87,6 +87,8 @@ fast_step = _insn_counter.fast_step   # runs the fast engine, CPython's way of c
 counter_lib.fast_run_alone.restype = ctypes.c_uint64
 counter_lib.fast_run_alone.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_uint64,
                                         ctypes.c_void_p]
+counter_lib.fast_run_pair.restype = None
+counter_lib.fast_run_pair.argtypes = [ctypes.c_void_p] * 7
 
 
 class DeviceStop(ctypes.Structure):
@@ -113,12 +115,12 @@ class FastHead(ctypes.Structure):
 
 
 # the most device events a plan of turns alone runs past (UARTHS's quiet byte ends: its FIFO's
-# 8 bytes and the one on the wire); _fast_engine.c's QUIET_ENDS_MAX
+# 8 bytes and the one on the wire); _turns.h's QUIET_ENDS_MAX
 QUIET_ENDS_MAX = 16
 
 
 class AlonePlan(ctypes.Structure):
-    """_fast_engine.c's alone_plan_t: the turns of a hart running alone (Scheduler._go_on_alone)."""
+    """_turns.h's alone_plan_t: the turns of a hart running alone (Scheduler._go_on_alone)."""
     _fields_ = [("anchor_time", ctypes.c_int64), ("anchor_cycles", ctypes.c_uint64), ("hz", ctypes.c_uint64),
                 ("quantum", ctypes.c_uint64), ("outer", ctypes.c_int64), ("stop_at", ctypes.c_int64),
                 ("max_turns", ctypes.c_uint64), ("t0", ctypes.c_int64), ("horizon", ctypes.c_int64),
@@ -126,6 +128,16 @@ class AlonePlan(ctypes.Structure):
                 ("start_executed", ctypes.c_uint64), ("turns", ctypes.c_uint64), ("handed_over", ctypes.c_uint64),
                 ("end_time", ctypes.c_int64), ("tick_ends", ctypes.c_int64 * QUIET_ENDS_MAX),
                 ("ticks", ctypes.c_uint64)]
+
+
+class PairPlan(ctypes.Structure):
+    """_turns.h's pair_plan_t: the turns of both harts running (Scheduler._go_on_paired)."""
+    _fields_ = [("anchor_time", ctypes.c_int64 * 2), ("anchor_cycles", ctypes.c_uint64 * 2),
+                ("time", ctypes.c_int64 * 2), ("hz", ctypes.c_uint64), ("quantum", ctypes.c_uint64),
+                ("outer", ctypes.c_int64), ("stop_at", ctypes.c_int64), ("max_turns", ctypes.c_uint64),
+                ("pc", ctypes.c_uint64 * 2), ("last", ctypes.c_uint64), ("t0", ctypes.c_int64),
+                ("horizon", ctypes.c_int64), ("budget", ctypes.c_uint64), ("start_cycles", ctypes.c_uint64),
+                ("start_executed", ctypes.c_uint64), ("turns", ctypes.c_uint64), ("handed_over", ctypes.c_uint64)]
 
 
 def add_native_hook(uc: unicorn.Uc, kind: int, callback: int, user_data: ctypes.Structure, begin: int, end: int,

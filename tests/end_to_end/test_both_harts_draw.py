@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from suite import run_together, shared_value
+from suite import make_card, run_together, shared_value
 from extremes_support import check_scene_key_agreement, run_scene
 from tools.make_assets import cube, sphere, texture
 
@@ -177,3 +177,29 @@ def test_a_silhouette_fringe_below_the_split_is_drawn_by_hart_1(firmware, tmp_pa
     assert one.returncode == 0 and two.returncode == 0, (one.stderr, two.stderr)
     assert np.any(one.frames[1][120] != one.frames[1][121])           # the fringe is there
     assert np.array_equal(one.frames[1], two.frames[1])
+
+
+def test_both_harts_turns_run_in_c_as_the_scheduler_runs_them_one_by_one(firmware, tmp_path):
+    """While both harts draw, the scheduler runs their turns in C between device events
+    (Scheduler._go_on_paired): every frame's time, both harts' instructions and cycles, their
+    mispredictions and stalls, and the pixels are those of the same turns run one at a time."""
+    from emulator.board.dock import Board
+    card = make_card(tmp_path, {"/model.obj": MODEL.encode(), "/texture.ppm": TEXTURE,
+                                "/scene.ini": (BIG + "harts = 2\n").encode()})
+    seen = {}
+    for pairing in (False, True):
+        images: list[np.ndarray] = []
+        board = Board(str(firmware), sd_image=str(card), on_frame=lambda record, image: images.append(image.copy()))
+        board.scheduler.pairing = pairing
+        try:
+            board.run(FRAMES)
+        finally:
+            board.close()
+        seen[pairing] = ([(f.virtual_time_s, f.instructions, f.cycles) for f in board.frames], images,
+                         [(h.executed, h.cycles, h.mispredicts, h.stall_cycles) for h in board.harts],
+                         board.scheduler.paired_turns)
+    alone, paired = seen[False], seen[True]
+    assert alone[3] == 0 and paired[3] > 100                  # the turns ran in C, hundreds of them
+    assert paired[0] == alone[0] and paired[2] == alone[2]
+    assert len(paired[1]) == len(alone[1]) == FRAMES
+    assert all(np.array_equal(a, b) for a, b in zip(alone[1], paired[1]))

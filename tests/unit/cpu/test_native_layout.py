@@ -18,7 +18,7 @@ CPU = ROOT / "emulator" / "cpu"
 
 def c_fields(struct: str) -> list[str]:
     """The field names of `typedef struct ... { ... } struct;` in the extension's sources, in order."""
-    source = "".join((CPU / name).read_text() for name in ("_caches.h", "_counter.h", "_fast_engine.h", "_fast_engine.c"))
+    source = "".join((CPU / name).read_text() for name in ("_caches.h", "_counter.h", "_fast_engine.h", "_turns.h", "_fast_engine.c"))
     source = re.sub(r"/\*.*?\*/", "", source, flags=re.S)
     match = re.search(r"typedef struct(?: \w+)? \{([^{}]*)\} " + struct + ";", source)
     assert match, f"no typedef of {struct}"
@@ -33,7 +33,7 @@ def c_fields(struct: str) -> list[str]:
 
 
 def c_sizes() -> list[int]:
-    out = (ctypes.c_uint64 * 8)()
+    out = (ctypes.c_uint64 * 9)()
     native.counter_lib.struct_sizes_for_tests(out)
     return list(out)
 
@@ -41,7 +41,7 @@ def c_sizes() -> list[int]:
 MIRRORS = [(native.Predictor, "predictor_t", 0), (native.Counter, "insn_counter_t", 1),
            (native.DeviceStop, "device_access_t", 2), (native.RepeatRecord, "repeat_t", 3),
            (native.AlonePlan, "alone_plan_t", 5), (native.L1Cache, "l1_cache_t", 6),
-           (native.L1Caches, "l1_caches_t", 7)]
+           (native.L1Caches, "l1_caches_t", 7), (native.PairPlan, "pair_plan_t", 8)]
 
 
 @pytest.mark.parametrize("mirror, struct, index", MIRRORS, ids=[m[1] for m in MIRRORS])
