@@ -36,6 +36,13 @@ CALIBRATION_TIMING = "rocket"     # the default timing model
 # (label, path into build/bench.json, unit, format): the figures each history line keeps
 FIGURES = [
     ("real-time factor after loading (virtual s per host s)", ("firmware", "real_time_factor"), "", "{:.3f}"),
+    ("real-time factor after loading, fastest run, wall time", ("firmware_fastest", "real_time_factor"), "", "{:.3f}"),
+    ("real-time factor after loading, fastest run, CPU time", ("firmware_fastest", "real_time_factor_cpu"), "",
+     "{:.3f}"),
+    ("both harts drawing the heavy sphere: real-time factor, fastest run, wall time",
+     ("both_harts_heavy", "real_time_factor"), "", "{:.3f}"),
+    ("both harts drawing the heavy sphere: real-time factor, fastest run, CPU time",
+     ("both_harts_heavy", "real_time_factor_cpu"), "", "{:.3f}"),
     ("host time per frame", ("firmware", "host_ms_per_frame"), "ms", "{:.2f}"),
     ("virtual time per frame", ("firmware", "virtual_ms_per_frame"), "ms", "{:.2f}"),
     ("board model, instructions per host second", ("firmware", "effective_mips"), "MIPS", "{:.1f}"),

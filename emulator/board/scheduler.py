@@ -71,6 +71,7 @@ class FrameRecord:
     host_time_s: float
     cycles: list[int] = field(default_factory=list)         # per hart, executing, since the previous frame
     cycles_total: list[int] = field(default_factory=list)   # per hart, executing, since reset
+    host_cpu_s: float = 0.0          # the process's CPU time since the run began (host_time_s: wall)
 
 
 @dataclass
@@ -153,6 +154,7 @@ class Scheduler(SramWaits, Deadlines):
         self._last_frame_instret = [0] * HARTS
         self._last_frame_cycles = [0] * HARTS
         self._host_start = host_time.perf_counter()
+        self._host_cpu_start = host_time.process_time()
         self.until: Time | None = None                    # run_until's end: virtual time, not frames
         self.pending_stop: BoardStop | None = None        # ends the run at the end of the turn
         self._draining = False                            # finish_console_line is running
@@ -339,6 +341,7 @@ class Scheduler(SramWaits, Deadlines):
             instructions=[t - last for t, last in zip(totals, self._last_frame_instret)],
             instructions_total=totals,
             host_time_s=host_time.perf_counter() - self._host_start,
+            host_cpu_s=host_time.process_time() - self._host_cpu_start,
             cycles=[c - last for c, last in zip(cycles, self._last_frame_cycles)],
             cycles_total=cycles,
         )
@@ -368,6 +371,7 @@ class Scheduler(SramWaits, Deadlines):
         """Runs until `frames` frames have been shown. Raises a BoardStop subclass otherwise."""
         self.frames_wanted = frames
         self._host_start = host_time.perf_counter()
+        self._host_cpu_start = host_time.process_time()
         last_progress = 0.0
         # a firmware that reported an error or trapped is given its grace period even when
         # its error screen was the last frame asked for: the run ends with that error
@@ -391,6 +395,7 @@ class Scheduler(SramWaits, Deadlines):
         self.frames_wanted = UNLIMITED_FRAMES
         self.until = until
         self._host_start = host_time.perf_counter()
+        self._host_cpu_start = host_time.process_time()
         last_progress = 0.0
         idle_since: Time | None = None
         while self.time < until or self._report_pending():
