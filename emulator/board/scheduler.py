@@ -60,6 +60,10 @@ UNLIMITED_FRAMES = 1 << 62        # run_until: no frame count ends a turn
 # reports) and at the trap deadline between calls, a firmware that spins alone without devices
 # would otherwise run in one call until the hang budget.
 MAX_TURNS_ALONE = 256
+# _go_on_paired's tries cost the host a look at the interrupts and the next device event: after a try
+# that ran fewer than two turns, the next 1, 2, 4 ... up to this many tries are let pass (the turns
+# they would have run run one by one, with the same outcome)
+PAIR_BACKOFF_MAX = 64
 
 
 @dataclass
@@ -183,6 +187,8 @@ class Scheduler(SramWaits, Deadlines):
         self._pair_plan = PairPlan()
         self.pairing = True           # both harts' turns run in C between device events (_go_on_paired)
         self.paired_turns = 0         # statistics: turns run so
+        self._pair_backoff = 0        # tries to let pass after one that ran fewer than two turns
+        self._pair_skip = 0           # tries still to let pass
 
     def _mcycle_reader(self, h: int) -> Callable[[], int]:
         return lambda: self.cycles(self.hart_now(self.harts[h]))
@@ -741,25 +747,35 @@ class Scheduler(SramWaits, Deadlines):
         if self._trap_deadline is not None or self._draining or self._priority is not None or \
                 self.pending_stop is not None or self.reset_requested is not None or not self.pairing:
             return
+        if self._pair_skip:
+            self._pair_skip -= 1      # the last tries ran a turn or none here: try again later (_pair_tried)
+            return
+        turns = self._pair_run()
+        if turns >= 2:
+            self._pair_backoff = 0
+        else:
+            self._pair_backoff = min(2 * self._pair_backoff or 1, PAIR_BACKOFF_MAX)
+            self._pair_skip = self._pair_backoff
+
+    def _pair_run(self) -> int:
+        """_go_on_paired's turns, when they may run: how many ran."""
         harts = self.harts
         if len(harts) != 2 or any(h.state is not HartState.RUNNING or h.polling or not h.fast_usable()
                                   for h in harts):
-            return
+            return 0
         t0 = min(h.time for h in harts)
-        if t0 < self._race_until:
-            return
+        if t0 < self._race_until or any(hart.in_idle_loop() for hart in harts):
+            return 0
         for hart in harts:
-            if hart.in_idle_loop():
-                return
             takeable = hart.takeable_interrupts()
             if takeable and self.board.mip(hart.hart_id, hart.time, takeable):
-                return
+                return 0
         outer = self._outer_bound(t0, self.board.next_device_event(t0))
         stop_at = min(outer, self.board.earliest_frame_capture(t0))
         if self.until is None:
             stop_at = min(stop_at, self._last_frame_time + self.hang_budget)
         if t0 >= stop_at:
-            return
+            return 0
         plan = self._pair_plan
         for hart in harts:
             n = hart.hart_id
@@ -776,7 +792,7 @@ class Scheduler(SramWaits, Deadlines):
                 hart.time = plan.time[hart.hart_id]
             self._catch_up_to(min(hart.time for hart in harts))
             self._check_deadlines()
-            return
+            return plan.turns
         # the last turn stopped for the board: the board catches up with its start, as between any two
         # turns, and that turn goes on as _run_hart would have run it from its start (_go_on_alone)
         last = harts[plan.last]
@@ -791,6 +807,7 @@ class Scheduler(SramWaits, Deadlines):
             raise self.pending_stop
         last.time = self.time_at_cycles(last, last.cycles)
         self._finish_turn(last, plan.horizon)
+        return plan.turns
 
     def _catch_up_to(self, target: Time) -> None:
         """Moves the board's time on to `target` (the earliest time a running hart has reached), one
