@@ -186,7 +186,7 @@ class Scheduler(SramWaits, Deadlines):
         self._alone_plan = AlonePlan()
         self._pair_plan = PairPlan()
         self.pairing = True           # both harts' turns run in C between device events (_go_on_paired)
-        self.paired_turns = 0         # statistics: turns run so
+        self.paired_turns = 0         # statistics: the turns _go_on_paired ran
         self._pair_backoff = 0        # tries to let pass after one that ran fewer than two turns
         self._pair_skip = 0           # tries still to let pass
 
@@ -748,7 +748,7 @@ class Scheduler(SramWaits, Deadlines):
                 self.pending_stop is not None or self.reset_requested is not None or not self.pairing:
             return
         if self._pair_skip:
-            self._pair_skip -= 1      # the last tries ran a turn or none here: try again later (_pair_tried)
+            self._pair_skip -= 1      # the last tries ran a turn or none: this one is let pass
             return
         turns = self._pair_run()
         if turns >= 2:
@@ -766,6 +766,8 @@ class Scheduler(SramWaits, Deadlines):
         t0 = min(h.time for h in harts)
         if t0 < self._race_until or any(hart.in_idle_loop() for hart in harts):
             return 0
+        if (self._grabs and self._grabs[0][0] <= t0) or (self.until is not None and self.until <= t0):
+            return 0      # a grab is due, or run_until's end is reached: the run loop sees to it first
         for hart in harts:
             takeable = hart.takeable_interrupts()
             if takeable and self.board.mip(hart.hart_id, hart.time, takeable):

@@ -100,7 +100,8 @@ typedef struct {
     uint16_t cost;     /* its cycles known statically: 1 + the entry's extra */
     uint8_t rd, rs1, rs2, rs3, rm;
     uint8_t len;       /* 2 or 4 */
-    uint8_t timing;    /* what COUNT does beyond adding `cost` (T_ flags) */
+    uint8_t timing;    /* what COUNT does beyond adding `cost` (T_ flags; a transfer's handler sees to
+                          T_TRANSFER itself) */
 } insn_t;
 
 /* insn_t.timing: a control transfer (resolved when the next instruction shows where it went), a

@@ -541,6 +541,7 @@ class Hart(PrivilegedArchitecture):
         `cycle_budget` cycles have been used (the last one may take a few cycles past it, as an
         instruction in flight does). Returns why it stopped and how many instructions ran."""
         counter = self._counter
+        self._turn_limit = counter.executed + budget   # (skip_idle's bound, even when nothing runs here)
         if counter.poll_report:
             return RunEnd.POLL, 0     # run_alone stopped at a poll loop's head: nothing runs before it is seen
         if self._stray_store_made():

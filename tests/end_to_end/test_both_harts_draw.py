@@ -203,3 +203,32 @@ def test_both_harts_turns_run_in_c_as_the_scheduler_runs_them_one_by_one(firmwar
     assert paired[0] == alone[0] and paired[2] == alone[2]
     assert len(paired[1]) == len(alone[1]) == FRAMES
     assert all(np.array_equal(a, b) for a, b in zip(alone[1], paired[1]))
+
+
+def test_both_harts_turns_in_c_stop_where_run_until_and_grabs_do(firmware, tmp_path):
+    """The turns run in C end where a run_until slice ends and where a grab is due, as the turns run
+    one by one do: after each slice, and at each grab, both harts have run the same instructions and
+    cycles either way."""
+    from emulator.board.dock import Board
+    from emulator.vtime import PS_PER_MS
+    card = make_card(tmp_path, {"/model.obj": MODEL.encode(), "/texture.ppm": TEXTURE,
+                                "/scene.ini": (BIG + "harts = 2\n").encode()})
+    seen = {}
+    for pairing in (False, True):
+        board = Board(str(firmware), sd_image=str(card))
+        board.scheduler.pairing = pairing
+        counts = []
+        try:
+            board.run(2)
+            start = board.scheduler.time
+            for n in range(1, 9):    # grabs every 0.37 ms, between slices ending every 0.73 ms
+                board.grab_at(start + n * 37 * PS_PER_MS // 100, lambda b: counts.append(
+                    ("grab", [(h.executed, h.cycles) for h in b.harts])))
+            for n in range(1, 6):
+                board.run_until(start + n * 73 * PS_PER_MS // 100)
+                counts.append(("slice", [(h.executed, h.cycles) for h in board.harts]))
+        finally:
+            board.close()
+        seen[pairing] = (counts, board.scheduler.paired_turns)
+    assert seen[True][1] > 0
+    assert seen[True][0] == seen[False][0]
