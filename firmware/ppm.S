@@ -51,6 +51,15 @@
     .equ PPM_BYTE_BITS,         8
     .equ PPM_NARROW_SAMPLE,     1           # bytes per P6 sample, maxval < 256
     .equ PPM_WIDE_SAMPLE,       2           # bytes per P6 sample, maxval >= 256
+    # One-byte P6 samples are looked up in tables of each sample value's RGB565 field (ppm_rgb565's, built
+    # once a texture), on ppm_parse_texture's stack: three divisions a pixel were 42 cycles of it
+    .equ PPM_BYTE_VALUES,       256
+    .equ PPM_FIELD_BYTES,       2           # a field, in its place in the RGB565 half-word
+    .equ PPM_RED_TABLE,         0
+    .equ PPM_GREEN_TABLE,       PPM_BYTE_VALUES * PPM_FIELD_BYTES
+    .equ PPM_BLUE_TABLE,        2 * PPM_BYTE_VALUES * PPM_FIELD_BYTES
+    .equ PPM_TABLES_BYTES,      3 * PPM_BYTE_VALUES * PPM_FIELD_BYTES
+    .equ PPM_FRAME,             96 + PPM_TABLES_BYTES   # saved registers above the tables
 
     .section .rodata
 msg_bad_texture:    .asciz "bad texture: "
@@ -77,7 +86,7 @@ msg_times:          .asciz "x"
 #   Arguments: none. Results: none (errors are fatal).
 #   Clobbers: only ABI temporaries.
 ppm_parse_texture:
-    FRAME_SAVE 96, ra, s0, s1, s2, s3, s4, s5, s6, s7, s8, s9
+    FRAME_SAVE PPM_FRAME, ra, s0, s1, s2, s3, s4, s5, s6, s7, s8, s9
     la      t0, scene_texture
     ld      s0, 0(t0)                   # s0 = file (and pixels)
     ld      s1, 8(t0)
@@ -155,11 +164,48 @@ ppm_parse_texture:
     beqz    s6, 20f
     li      t0, PPM_WIDE_SAMPLE
     beq     s9, t0, 10f
+    # One byte a sample: each value's fields, 0 .. maxval, into the tables
+    li      s2, 0                       # s2 = value (the format is no longer needed)
+7:  mv      a0, s2
+    mv      a1, s2
+    mv      a2, s2
+    mv      a3, s5
+    call    ppm_rgb565
+    slli    t0, s2, 1
+    add     t0, t0, sp
+    li      t1, RGB565_RED_MAX << RGB565_RED_SHIFT
+    and     t1, a0, t1
+    sh      t1, PPM_RED_TABLE(t0)
+    li      t1, RGB565_GREEN_MAX << RGB565_GREEN_SHIFT
+    and     t1, a0, t1
+    sh      t1, PPM_GREEN_TABLE(t0)
+    andi    t1, a0, RGB565_BLUE_MAX
+    sh      t1, PPM_BLUE_TABLE(t0)
+    addi    s2, s2, 1
+    bleu    s2, s5, 7b
 6:  lbu     a0, 0(s8)
     lbu     a1, 1(s8)
     lbu     a2, 2(s8)
     addi    s8, s8, PPM_SAMPLES
-    j       11f
+    bgtu    a0, s5, 87f
+    bgtu    a1, s5, 87f
+    bgtu    a2, s5, 87f
+    slli    a0, a0, 1
+    add     a0, a0, sp
+    lhu     a0, PPM_RED_TABLE(a0)
+    slli    a1, a1, 1
+    add     a1, a1, sp
+    lhu     a1, PPM_GREEN_TABLE(a1)
+    slli    a2, a2, 1
+    add     a2, a2, sp
+    lhu     a2, PPM_BLUE_TABLE(a2)
+    or      a0, a0, a1
+    or      a0, a0, a2
+    sh      a0, 0(s7)
+    addi    s7, s7, TEX_PIXEL_BYTES
+    addi    s6, s6, -1
+    bnez    s6, 6b
+    j       20f
 10: lbu     a0, 0(s8)                   # two bytes, big-endian
     lbu     t0, 1(s8)
     slli    a0, a0, PPM_BYTE_BITS
@@ -173,7 +219,7 @@ ppm_parse_texture:
     slli    a2, a2, PPM_BYTE_BITS
     or      a2, a2, t0
     addi    s8, s8, PPM_WIDE_SAMPLE * PPM_SAMPLES
-11: bgtu    a0, s5, 87f
+    bgtu    a0, s5, 87f
     bgtu    a1, s5, 87f
     bgtu    a2, s5, 87f
     mv      a3, s5
@@ -181,10 +227,8 @@ ppm_parse_texture:
     sh      a0, 0(s7)
     addi    s7, s7, TEX_PIXEL_BYTES
     addi    s6, s6, -1
-    beqz    s6, 20f
-    li      t0, PPM_WIDE_SAMPLE
-    beq     s9, t0, 10b
-    j       6b
+    bnez    s6, 10b
+    j       20f
 
     # P3: whitespace-separated decimal samples.
 30: mv      s8, a0                      # s8 = cursor
@@ -228,7 +272,7 @@ ppm_parse_texture:
     call    console_putc
     call    console_unlock
 
-90: FRAME_RESTORE 96, ra, s0, s1, s2, s3, s4, s5, s6, s7, s8, s9
+90: FRAME_RESTORE PPM_FRAME, ra, s0, s1, s2, s3, s4, s5, s6, s7, s8, s9
     ret
 
 80: la      a0, msg_bad_magic

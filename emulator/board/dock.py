@@ -48,7 +48,7 @@ from ..devices.spi import DWC_SSI, SpiController
 from ..devices.w25q128 import W25Q128
 from ..devices.st7789v import ST7789V
 from ..cpu.caches import HartCaches
-from ..cpu.timing import MISPREDICT_PENALTY, TIMING_IPC1, TIMING_MODELS, TIMING_ROCKET, build_table
+from ..cpu.timing import MISPREDICT_PENALTY, REDIRECT_BUBBLE, TIMING_IPC1, TIMING_MODELS, TIMING_ROCKET, build_table
 from ..devices.sysctl import Sysctl
 from ..devices.timer import DwTimer
 from ..devices.uart import DwUart
@@ -309,11 +309,12 @@ class Board:
         """Cycles within which `instructions` instructions of a loop surely run (a hart woken
         from a poll loop gets one iteration before the storer goes on): one each under ipc1; under
         the Rocket model each may stall up to 3 cycles on a load, and miss in the caches (the loop's
-        own line moves to the hart that stored to it), and the loop's branch may be mispredicted."""
+        own line moves to the hart that stored to it), and the loop's branch may be mispredicted and
+        its head wait for the second half of its fetch."""
         if self.timing == TIMING_IPC1:
             return instructions
         misses = 0 if self.caches is None else self.caches[0].figures.worst_instruction
-        return (3 + misses) * instructions + MISPREDICT_PENALTY
+        return (3 + misses) * instructions + MISPREDICT_PENALTY + REDIRECT_BUBBLE
 
     @property
     def quantum(self) -> int:

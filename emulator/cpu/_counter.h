@@ -106,6 +106,8 @@ typedef struct {
 enum { KIND_PLAIN = 0, KIND_BRANCH = 1, KIND_JAL = 2, KIND_JALR = 3, KIND_MUL = 4, KIND_DIV = 5 };
 
 #define MISPREDICT_PENALTY 3   /* redirect from the memory stage (Rocket.scala take_pc_mem) */
+#define REDIRECT_BUBBLE 1      /* a 32-bit instruction 2 mod 4 after a redirect waits for its second half
+                                  (_rocket_timing.h redirect_bubble) */
 
 
 /* The counter's tables, as both counters look them up, by table_key: an address in SRAM's

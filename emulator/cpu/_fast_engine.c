@@ -1031,9 +1031,14 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
             pending_entry = in->entry; \
         } \
     } while (0)
-/* the pending transfer went to `next`, the instruction that starts next */
-#define RESOLVE_PENDING(next) do { \
-        pending_penalty = (uint32_t)resolve_transfer(c, pending_pc, pending_entry, pending_kind, next); \
+/* the transfer at `from` (entry `e`, kind `k`) went to `next`, the `size`-byte instruction that starts next:
+ * its misprediction's cycles and the fetch's, due when that instruction is counted */
+#define RESOLVE(from, e, k, next, size) do { \
+        uint64_t penalty_ = resolve_transfer(c, from, e, k, next); \
+        pending_penalty = (uint32_t)(penalty_ + redirect_bubble(c, from, e, k, next, size, penalty_)); \
+    } while (0)
+#define RESOLVE_PENDING(next, size) do { \
+        RESOLVE(pending_pc, pending_entry, pending_kind, next, size); \
         pending_kind = 0; \
     } while (0)
 #define NEXT() do { in++; DISPATCH(); } while (0)
@@ -1201,8 +1206,7 @@ static int interpret(fast_state_t *f, insn_counter_t *c)
         if (in->timing & T_TRANSFER) { \
             /* the next instruction, in this block, starts unless the limits stop it first */ \
             if (cycles < check && in[1].op != OP_BLOCK_END) \
-                pending_penalty = (uint32_t)resolve_transfer(c, in->pc, in->entry, (int)E_KIND(in->entry), \
-                                                                in->pc + in->len); \
+                RESOLVE(in->pc, in->entry, (int)E_KIND(in->entry), in->pc + in->len, in[1].len); \
             else \
                 TRANSFER_PENDING(); \
         } \
@@ -1241,7 +1245,7 @@ next_block:
         in = b->insns;
     }
     if (pending_kind && cycles < check)
-        RESOLVE_PENDING(pc);
+        RESOLVE_PENDING(pc, in->len);
     DISPATCH();
 limits_reached:
     /* cycles >= check: a limit may be reached before the instruction at `in` */
@@ -1252,7 +1256,7 @@ limits_reached:
     }
     check = limit_check(executed, cycles, limit, cycle_limit);
     if (pending_kind && in->op != OP_BLOCK_END)
-        RESOLVE_PENDING(in->pc);   /* (a block's end: next_block resolves it, the next block found) */
+        RESOLVE_PENDING(in->pc, in->len);   /* (a block's end: next_block resolves it, the next block found) */
     goto *dispatch[in->op];
     {
         L_OP_BLOCK_END:
@@ -1481,6 +1485,7 @@ out:
 #undef COUNT_BUT
 #undef TRANSFER_PENDING
 #undef RESOLVE_PENDING
+#undef RESOLVE
 #undef CACHED
 #undef LOAD
 #undef STORE

@@ -135,8 +135,12 @@ void count_instruction(void *uc, uint64_t address, uint32_t size, insn_counter_t
         cost += counter->pending_penalty;   /* the fast engine resolved a transfer before handing over */
         counter->pending_penalty = 0;
         if (counter->pending_kind) {
-            cost += resolve_transfer(counter, counter->pending_pc, counter->pending_entry,
-                                     counter->pending_kind, address);
+            uint64_t penalty = resolve_transfer(counter, counter->pending_pc, counter->pending_entry,
+                                                counter->pending_kind, address);
+            uint64_t bubble = redirect_bubble(counter, counter->pending_pc, counter->pending_entry,
+                                              counter->pending_kind, address, size, penalty);
+            counter->stall_cycles += bubble;
+            cost += penalty + bubble;
             counter->pending_kind = 0;
         }
         uint32_t e = table_entry(counter, address);

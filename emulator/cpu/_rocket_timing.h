@@ -137,6 +137,23 @@ static inline uint64_t resolve_transfer(insn_counter_t *c, uint64_t pc, uint32_t
     return resolve_any_transfer(c, pc, e, kind, next, hit);
 }
 
+/* Rocket's frontend fetches 4 bytes a cycle (RocketCoreParams: fetchWidth 2 parcels of 16 bits when the
+ * core has RVC) and its IBuf (IBuf.scala) issues a 32-bit instruction only once it has both halves. After
+ * a redirect (a transfer taken, predicted or not, or any mispredicted one), the packet fetched at a
+ * target 2 mod 4 holds only the first half of a 32-bit instruction there, which waits a cycle for the
+ * next packet. Returns that cycle for the transfer at `pc` (entry `e`, `penalty` its misprediction's
+ * cycles) whose next instruction is the `next_size`-byte one at `next`. Charged with the caches only
+ * (the frontend's fetch is modelled with the instruction cache: --timing rocket-nocache is the
+ * pipeline alone, as it was). */
+static inline uint64_t redirect_bubble(const insn_counter_t *c, uint64_t pc, uint32_t e, int kind, uint64_t next,
+                                       uint32_t next_size, uint64_t penalty)
+{
+    if (c->caches == NULL || next_size != 4 || !(next & 2))
+        return 0;
+    int redirected = kind != KIND_BRANCH || next != pc + (E_SIZE4(e) ? 4 : 2) || penalty != 0;
+    return redirected ? REDIRECT_BUBBLE : 0;
+}
+
 static inline int msb(uint64_t x)   /* hardware Log2: index of the highest set bit, 0 for 0 */
 {
     return x ? 63 - __builtin_clzll(x) : 0;

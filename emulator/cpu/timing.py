@@ -50,6 +50,11 @@ What the model charges (the table `LATENCY` and the C code in _insn_counter.c):
   BHT of 2-bit entries indexed by pc xor 7 bits of global history (for branches that hit in the
   BTB), a 2-entry return-address stack. A correctly predicted transfer costs nothing more; a
   mispredicted one (direction or target, or a taken one the BTB does not know) 3 cycles [R][S].
+- Fetch after a redirect (with the caches, --timing rocket; the frontend's fetch is modelled with
+  the instruction cache): the frontend fetches 4 bytes a cycle (RocketCoreParams: fetchWidth, two
+  16-bit parcels with RVC) and the IBuf issues a 4-byte instruction only with both halves
+  (IBuf.scala), so a 4-byte instruction at an address 2 mod 4 that a transfer taken (or any
+  mispredicted one) leads to waits a cycle for the next fetch packet [R].
 - CSR writes flush the pipeline (3 cycles: Rocket of 2017 redirects from the memory stage;
   SiFive's later cores state 5), mret and fence.i too (4 and 3).
 
@@ -81,6 +86,7 @@ TIMING_MODELS = (TIMING_ROCKET, TIMING_ROCKET_NOCACHE, TIMING_IPC1)
 
 WINDOW = 31                  # instructions looked at after a producer (the entry's 5-bit distance)
 MISPREDICT_PENALTY = 3       # _insn_counter.c's MISPREDICT_PENALTY
+REDIRECT_BUBBLE = 1          # _counter.h's: a 4-byte instruction 2 mod 4 after a redirect (with the caches)
 CSR_WRITE_FLUSH = 3          # a CSR write flushes the pipeline from the memory stage [R]
 MRET_FLUSH = 4               # mret redirects from write-back [R] (take_pc_wb)
 FENCE_I_FLUSH = 3
