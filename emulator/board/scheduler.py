@@ -720,10 +720,14 @@ class Scheduler(SramWaits, Deadlines):
         if not plan.handed_over:
             hart.time = plan.end_time
             return plan.horizon
-        # the last turn stopped for the board: the board catches up with its start, as between any
-        # two turns (the UART hears the bytes that ended before it; the board's time is the turn's
-        # start for whatever reads it: a trap's grace period, a warning's time), and it goes on as
-        # _run_hart would have run it from its start
+        self._finish_handed_over(hart, plan)
+        return plan.horizon
+
+    def _finish_handed_over(self, hart: Hart, plan: AlonePlan | PairPlan) -> None:
+        """The last of the turns run in C (`plan`'s, `hart`'s) stopped for the board: the board catches
+        up with its start, as between any two turns (the UART hears the bytes that ended before it; the
+        board's time is the turn's start for whatever reads it: a trap's grace period, a warning's
+        time), and it goes on as _run_hart would have run it from its start."""
         hart.time = plan.t0
         self._set_time(plan.t0)
         self._check_deadlines()
@@ -731,7 +735,6 @@ class Scheduler(SramWaits, Deadlines):
         if self.pending_stop is not None:
             raise self.pending_stop
         hart.time = self.time_at_cycles(hart, hart.cycles)
-        return plan.horizon
 
     def _go_on_paired(self) -> None:
         """Both harts run on the fast engine, between turns, and the turn just run needed no board (as
@@ -795,19 +798,11 @@ class Scheduler(SramWaits, Deadlines):
             self._catch_up_to(min(hart.time for hart in harts))
             self._check_deadlines()
             return plan.turns
-        # the last turn stopped for the board: the board catches up with its start, as between any two
-        # turns, and that turn goes on as _run_hart would have run it from its start (_go_on_alone)
         last = harts[plan.last]
         for hart in harts:
             hart.time = plan.time[hart.hart_id]
-        last.time = plan.t0
         self.turn_horizon = self.time_at_cycles(last, plan.start_cycles + plan.budget)
-        self._set_time(plan.t0)
-        self._check_deadlines()
-        self._run_hart(last, plan.budget, since=(plan.start_executed, plan.start_cycles))
-        if self.pending_stop is not None:
-            raise self.pending_stop
-        last.time = self.time_at_cycles(last, last.cycles)
+        self._finish_handed_over(last, plan)
         self._finish_turn(last, plan.horizon)
         return plan.turns
 

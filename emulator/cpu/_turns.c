@@ -36,6 +36,32 @@ static uint64_t cycles_until(int64_t anchor_time, uint64_t anchor_cycles, uint64
     return anchor_cycles + (uint64_t)whole + 1;
 }
 
+/* Scheduler._turn's budget: the cycles up to `until`, one at least */
+static uint64_t turn_budget(uint64_t until, uint64_t cycles)
+{
+    return until > cycles + 1 ? until - cycles : 1;
+}
+
+/* The turn about to run, in a plan's out fields (alone_plan_t's and pair_plan_t's alike) */
+#define RECORD_TURN(plan, t0_, horizon_, budget_, c_) do { \
+        (plan)->t0 = (t0_); \
+        (plan)->horizon = (horizon_); \
+        (plan)->budget = (budget_); \
+        (plan)->start_cycles = (c_)->cycles; \
+        (plan)->start_executed = (c_)->executed; \
+        (plan)->turns++; \
+    } while (0)
+
+/* Runs a turn of `budget` cycles with the counter's limits set as Hart.run sets them; whether it
+ * stopped before its end for the board (a hand-over, a poll loop come round, a stray store) */
+static int turn_handed_over(struct fast_state *f, insn_counter_t *c, uint64_t budget)
+{
+    c->limit = c->executed + budget;
+    c->cycle_limit = c->cycles + budget;
+    int why = fast_turn(f, c);
+    return why != STOP_LIMIT || c->poll_report != 0 || fast_wrote_astray(f);
+}
+
 static int64_t plan_time_at(const alone_plan_t *plan, uint64_t cycles)
 {
     return time_at(plan->anchor_time, plan->anchor_cycles, plan->hz, cycles);
@@ -69,18 +95,9 @@ uint64_t fast_run_alone(struct fast_state *f, insn_counter_t *c, void *uc, uint6
             horizon = plan->outer;
         if (tick < plan->ticks && plan->tick_ends[tick] < horizon)
             horizon = plan->tick_ends[tick];
-        uint64_t until = plan_cycles_until(plan, horizon);
-        uint64_t budget = until > c->cycles + 1 ? until - c->cycles : 1;
-        plan->t0 = t0;
-        plan->horizon = horizon;
-        plan->budget = budget;
-        plan->start_cycles = c->cycles;
-        plan->start_executed = c->executed;
-        plan->turns++;
-        c->limit = c->executed + budget;
-        c->cycle_limit = c->cycles + budget;
-        int why = fast_turn(f, c);
-        if (why != STOP_LIMIT || c->poll_report != 0 || fast_wrote_astray(f)) {
+        uint64_t budget = turn_budget(plan_cycles_until(plan, horizon), c->cycles);
+        RECORD_TURN(plan, t0, horizon, budget, c);
+        if (turn_handed_over(f, c, budget)) {
             plan->handed_over = 1;
             break;
         }
@@ -124,19 +141,11 @@ void fast_run_pair(struct fast_state *f0, struct fast_state *f1, insn_counter_t 
             horizon = plan->outer;
         if (plan->time[1 - h] + quantum_time < horizon)
             horizon = plan->time[1 - h] + quantum_time;
-        uint64_t until = cycles_until(plan->anchor_time[h], plan->anchor_cycles[h], plan->hz, horizon);
-        uint64_t budget = until > k->cycles + 1 ? until - k->cycles : 1;
+        uint64_t budget = turn_budget(cycles_until(plan->anchor_time[h], plan->anchor_cycles[h], plan->hz, horizon),
+                                      k->cycles);
         plan->last = (uint64_t)h;
-        plan->t0 = t0;
-        plan->horizon = horizon;
-        plan->budget = budget;
-        plan->start_cycles = k->cycles;
-        plan->start_executed = k->executed;
-        plan->turns++;
-        k->limit = k->executed + budget;
-        k->cycle_limit = k->cycles + budget;
-        int why = fast_turn(f[h], k);
-        if (why != STOP_LIMIT || k->poll_report != 0 || fast_wrote_astray(f[h])) {
+        RECORD_TURN(plan, t0, horizon, budget, k);
+        if (turn_handed_over(f[h], k, budget)) {
             plan->handed_over = 1;
             break;
         }
