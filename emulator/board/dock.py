@@ -313,8 +313,9 @@ class Board:
         its head wait for the second half of its fetch."""
         if self.timing == TIMING_IPC1:
             return instructions
-        misses = 0 if self.caches is None else self.caches[0].figures.worst_instruction
-        return (3 + misses) * instructions + MISPREDICT_PENALTY + REDIRECT_BUBBLE
+        if self.caches is None:
+            return 3 * instructions + MISPREDICT_PENALTY
+        return (3 + self.caches[0].figures.worst_instruction) * instructions + MISPREDICT_PENALTY + REDIRECT_BUBBLE
 
     @property
     def quantum(self) -> int:

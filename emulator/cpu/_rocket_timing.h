@@ -144,13 +144,16 @@ static inline uint64_t resolve_transfer(insn_counter_t *c, uint64_t pc, uint32_t
  * next packet. Returns that cycle for the transfer at `pc` (entry `e`, `penalty` its misprediction's
  * cycles) whose next instruction is the `next_size`-byte one at `next`. Charged with the caches only
  * (the frontend's fetch is modelled with the instruction cache: --timing rocket-nocache is the
- * pipeline alone, as it was). */
+ * pipeline alone, as it was). Not charged after the other redirects, mret's, a CSR write's or
+ * fence.i's flush (their costs are the table's, timing.py), nor after a trap's entry (mtvec is
+ * 4-aligned). */
 static inline uint64_t redirect_bubble(const insn_counter_t *c, uint64_t pc, uint32_t e, int kind, uint64_t next,
                                        uint32_t next_size, uint64_t penalty)
 {
     if (c->caches == NULL || next_size != 4 || !(next & 2))
         return 0;
-    int redirected = kind != KIND_BRANCH || next != pc + (E_SIZE4(e) ? 4 : 2) || penalty != 0;
+    (void)kind;   /* a jump to the very next instruction, predicted right, redirects nothing either */
+    int redirected = next != pc + (E_SIZE4(e) ? 4 : 2) || penalty != 0;
     return redirected ? REDIRECT_BUBBLE : 0;
 }
 

@@ -54,12 +54,13 @@ What the model charges (the table `LATENCY` and the C code in _insn_counter.c):
   the instruction cache): the frontend fetches 4 bytes a cycle (RocketCoreParams: fetchWidth, two
   16-bit parcels with RVC) and the IBuf issues a 4-byte instruction only with both halves
   (IBuf.scala), so a 4-byte instruction at an address 2 mod 4 that a transfer taken (or any
-  mispredicted one) leads to waits a cycle for the next fetch packet [R].
+  mispredicted one) leads to waits a cycle for the next fetch packet [R]. (Not after mret's, a CSR
+  write's or fence.i's flush, whose costs are below.)
 - CSR writes flush the pipeline (3 cycles: Rocket of 2017 redirects from the memory stage;
   SiFive's later cores state 5), mret and fence.i too (4 and 3).
 
-Not modelled (choices, written down): cache misses (every access hits the 32 KiB caches; the
-model has no cache), the uncached alias and device registers being slower than SRAM, the FPU's
+Not in the table: cache misses, the uncached alias and device registers being slower than SRAM
+(caches.py charges those under --timing rocket). Not modelled (choices, written down): the FPU's
 write-port conflicts, special FP operands finishing division early, interrupt entry. The K210's
 multiplier configuration is not published: Rocket's default big core is taken.
 

@@ -90,8 +90,9 @@ def test_a_flag_set_for_six_instructions_is_seen_every_time(delay):
     # hart 0's two stores of the flag needs write permission back from hart 1, which read the line
     # meanwhile, and its load of the acknowledgement misses once or twice, waiting for hart 1's
     # write-back: at most four misses a round, each with a write-back; and the frontend, a cycle where
-    # a jump or branch taken leads to a 4-byte instruction 2 mod 4 (the delay loop's head here, each
-    # step, and at most the round's three other targets)
+    # a jump or branch taken leads to a 4-byte instruction 2 mod 4 (with DELAY 1000 the delay loop's
+    # head each step and two other targets a round; with 0 the acknowledgement loop's head each time
+    # round: a few)
     per_round = (reg(board, "s7", hart=0) - reg(board, "s6", hart=0)) / ROUNDS
     coherence = 4 * (ROCKET_L1.data_fill + ROCKET_L1.write_back)
     fetch = REDIRECT_BUBBLE * (delay + 3)
