@@ -103,7 +103,8 @@ typedef struct {
 #define E_CALL(e)      (((e) >> 30) & 1)     /* jal/jalr writing a link register */
 #define E_RETURN(e)    (((e) >> 31) & 1)     /* jalr through a link register, not writing one */
 
-enum { KIND_PLAIN = 0, KIND_BRANCH = 1, KIND_JAL = 2, KIND_JALR = 3, KIND_MUL = 4, KIND_DIV = 5 };
+enum { KIND_PLAIN = 0, KIND_BRANCH = 1, KIND_JAL = 2, KIND_JALR = 3, KIND_MUL = 4, KIND_DIV = 5,
+       KIND_FLUSH = 6 /* a CSR write, mret, fence.i: the next instruction is refetched, nothing predicted */ };
 
 #define MISPREDICT_PENALTY 3   /* redirect from the memory stage (Rocket.scala take_pc_mem) */
 #define REDIRECT_BUBBLE 1      /* a 32-bit instruction 2 mod 4 after a redirect waits for its second half

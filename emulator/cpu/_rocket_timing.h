@@ -118,6 +118,8 @@ static __attribute__((noinline)) uint64_t resolve_any_transfer(insn_counter_t *c
  * for everything else, with the same outcome. */
 static inline uint64_t resolve_transfer(insn_counter_t *c, uint64_t pc, uint32_t e, int kind, uint64_t next)
 {
+    if (kind == KIND_FLUSH)
+        return 0;     /* (its flush is the table's extra; the predictor takes no part) */
     predictor_t *p = &c->predictor;
     int hit = btb_find(p, pc);
     if (kind == KIND_BRANCH) {
@@ -141,19 +143,18 @@ static inline uint64_t resolve_transfer(insn_counter_t *c, uint64_t pc, uint32_t
  * core has RVC) and its IBuf (IBuf.scala) issues a 32-bit instruction only once it has both halves. After
  * a redirect (a transfer taken, predicted or not, or any mispredicted one), the packet fetched at a
  * target 2 mod 4 holds only the first half of a 32-bit instruction there, which waits a cycle for the
- * next packet. Returns that cycle for the transfer at `pc` (entry `e`, `penalty` its misprediction's
+ * next packet. Returns that cycle for the transfer or flush at `pc` (entry `e`, `penalty` its misprediction's
  * cycles) whose next instruction is the `next_size`-byte one at `next`. Charged with the caches only
  * (the frontend's fetch is modelled with the instruction cache: --timing rocket-nocache is the
- * pipeline alone, as it was). Not charged after the other redirects, mret's, a CSR write's or
- * fence.i's flush (their costs are the table's, timing.py), nor after a trap's entry (mtvec is
- * 4-aligned). */
+ * pipeline alone, as it was). A flush (a CSR write, mret, fence.i: KIND_FLUSH) refetches too; a
+ * trap's entry is not charged it (mtvec is 4-aligned). */
 static inline uint64_t redirect_bubble(const insn_counter_t *c, uint64_t pc, uint32_t e, int kind, uint64_t next,
                                        uint32_t next_size, uint64_t penalty)
 {
     if (c->caches == NULL || next_size != 4 || !(next & 2))
         return 0;
-    (void)kind;   /* a jump to the very next instruction, predicted right, redirects nothing either */
-    int redirected = next != pc + (E_SIZE4(e) ? 4 : 2) || penalty != 0;
+    /* (a jump to the very next instruction, predicted right, redirects nothing) */
+    int redirected = kind == KIND_FLUSH || next != pc + (E_SIZE4(e) ? 4 : 2) || penalty != 0;
     return redirected ? REDIRECT_BUBBLE : 0;
 }
 

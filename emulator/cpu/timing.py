@@ -54,8 +54,8 @@ What the model charges (the table `LATENCY` and the C code in _insn_counter.c):
   the instruction cache): the frontend fetches 4 bytes a cycle (RocketCoreParams: fetchWidth, two
   16-bit parcels with RVC) and the IBuf issues a 4-byte instruction only with both halves
   (IBuf.scala), so a 4-byte instruction at an address 2 mod 4 that a transfer taken (or any
-  mispredicted one) leads to waits a cycle for the next fetch packet [R]. (Not after mret's, a CSR
-  write's or fence.i's flush, whose costs are below.)
+  mispredicted one) leads to waits a cycle for the next fetch packet [R]; so does one that a CSR
+  write's, mret's or fence.i's flush refetches from.
 - CSR writes flush the pipeline (3 cycles: Rocket of 2017 redirects from the memory stage;
   SiFive's later cores state 5), mret and fence.i too (4 and 3).
 
@@ -103,6 +103,7 @@ class Kind(enum.IntEnum):
     JALR = 3
     MUL = 4
     DIV = 5
+    FLUSH = 6      # a CSR write, mret or fence.i: the pipeline refetches from the next pc (no prediction)
 
 
 # Result latencies in cycles from issue to the issue of an instruction that waits for it
@@ -204,14 +205,18 @@ def _decode32(w: int) -> Insn:
         return Insn(4, writes=_written(rd), reads=reads,
                     latency=LATENCY["load_subword" if funct5 == 0x03 else "load_word"])
     if opcode == 0x0F:
-        return Insn(4, extra=FENCE_I_FLUSH if f3 == 1 else 0)
+        if f3 == 1:
+            return Insn(4, Kind.FLUSH, extra=FENCE_I_FLUSH)
+        return Insn(4)
     if opcode == 0x73:
         if f3 == 0:                                              # ecall, ebreak, mret, wfi
-            return Insn(4, extra=MRET_FLUSH if w == 0x30200073 else 0, ends_run=True)
+            if w == 0x30200073:
+                return Insn(4, Kind.FLUSH, extra=MRET_FLUSH, ends_run=True)
+            return Insn(4, ends_run=True)
         reads = _regs(rs1) if f3 < 4 else ()
         writes_csr = (f3 & 3) == 1 or rs1 != 0
-        return Insn(4, writes=_written(rd), reads=reads, latency=LATENCY["csr_read"],
-                    extra=CSR_WRITE_FLUSH if writes_csr else 0)
+        return Insn(4, Kind.FLUSH if writes_csr else Kind.PLAIN, writes=_written(rd), reads=reads,
+                    latency=LATENCY["csr_read"], extra=CSR_WRITE_FLUSH if writes_csr else 0)
     if opcode in (0x43, 0x47, 0x4B, 0x4F):                       # fmadd, fmsub, fnmsub, fnmadd
         double = bits(w, 26, 25) == 1
         return Insn(4, writes=FP + rd, reads=(FP + rs1, FP + rs2, FP + bits(w, 31, 27)),

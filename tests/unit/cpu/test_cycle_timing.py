@@ -356,3 +356,54 @@ def test_a_four_byte_instruction_2_mod_4_after_a_branch_taken_waits_for_its_seco
     assert cycles[TIMING_ROCKET, "2 mod 4"] - cycles[TIMING_ROCKET, "aligned"] == LOOPS * REDIRECT_BUBBLE
     assert cycles[TIMING_ROCKET, "2-byte"] == cycles[TIMING_ROCKET, "aligned"]
     assert len({cycles[TIMING_ROCKET_NOCACHE, name] for name in variants}) == 1
+
+
+# The same with the loop in 4-byte instructions (its head and what follows its CSR write both 2 mod 4,
+# or both 4-aligned): a CSR write's flush refetches the next instruction as a branch's redirect does.
+FLUSH_LOOP = """
+    .balign 4
+    li      a7, {loops}
+    call    flush_loop
+    li      a7, {loops}
+    call    flush_loop
+    li      a7, {loops}
+    call    flush_loop
+    li      a7, {loops}
+    csrr    s0, mcycle
+    call    flush_loop
+    csrr    s2, mcycle
+    li      a7, 2 * {loops}
+    csrr    s4, mcycle
+    call    flush_loop
+    csrr    s6, mcycle
+    j       done
+    .balign 64
+flush_loop:
+    mv      t0, a7
+    .balign 4
+{pad}
+    .option push
+    .option norvc
+head:
+    csrw    mscratch, t0
+    addi    t0, t0, -1
+    bnez    t0, head
+    .option pop
+    ret
+"""
+
+
+@pytest.mark.parametrize("engine", [ENGINE_FAST, ENGINE_PRECISE])
+def test_a_csr_write_refetches_as_a_redirect_does(engine):
+    """A CSR write flushes the pipeline and the next instruction is fetched again: 2 mod 4 and 4 bytes
+    long, it waits for its second half, as the loop's head does after the branch back: two cycles more
+    an iteration under --timing rocket, none under rocket-nocache (the flush's own 3 in both)."""
+    cycles = {}
+    for timing in (TIMING_ROCKET, TIMING_ROCKET_NOCACHE):
+        for name, pad, where in (("aligned", "c.nop\n    c.nop", 0), ("2 mod 4", "c.nop", 2)):
+            board = make_board(program(FLUSH_LOOP.format(loops=LOOPS, pad=pad)), timing=timing, engine=engine)
+            run_to_done(board, max_time_s=0.1)
+            assert symbol(board, "head") % 4 == where
+            cycles[timing, name] = (reg(board, "s6") - reg(board, "s4")) - (reg(board, "s2") - reg(board, "s0"))
+    assert cycles[TIMING_ROCKET, "2 mod 4"] - cycles[TIMING_ROCKET, "aligned"] == 2 * LOOPS * REDIRECT_BUBBLE
+    assert cycles[TIMING_ROCKET_NOCACHE, "2 mod 4"] == cycles[TIMING_ROCKET_NOCACHE, "aligned"]
