@@ -7,7 +7,6 @@ import time
 
 import pytest
 
-from emulator.cpu import hart as hartmod
 from emulator.cpu.hart import ENGINE_FAST, ENGINE_PRECISE
 from emulator.cpu.time_loops import decode, find_time_loops
 from emulator.vtime import PS_PER_MS
