@@ -442,12 +442,23 @@ def _warn_once(message: str) -> None:
         print(f"bench: card: {message}", file=sys.stderr, flush=True)
 
 
-def run_bench_card(firmware: Path, folder: Path, card: Path, scene: dict) -> tuple[Board, list[np.ndarray]]:
-    """Builds `card` from the bench's assets in `folder` with `scene`'s keys and runs the firmware on
-    it for BENCH_FRAMES frames; returns the (closed) board and the frames shown."""
+def make_bench_assets(folder: Path) -> None:
+    """The bench's models and textures (tools/make_assets.py) under folder/assets."""
+    subprocess.run([sys.executable, str(ROOT / "tools" / "make_assets.py"), str(folder / "assets")], check=True,
+                   capture_output=True)
+
+
+def build_bench_card(folder: Path, card: Path, scene: dict) -> None:
+    """`card` from the bench's assets in `folder` (make_bench_assets) with `scene`'s keys."""
     from sdcard_image import build_image
     build_image(card, [folder / "assets" / "models", folder / "assets" / "textures", folder / "assets" / "held-in"],
                 scene=scene, force=True, on_warning=_warn_once)
+
+
+def run_bench_card(firmware: Path, folder: Path, card: Path, scene: dict) -> tuple[Board, list[np.ndarray]]:
+    """Builds `card` (build_bench_card) and runs the firmware on it for BENCH_FRAMES frames; returns the
+    (closed) board and the frames shown."""
+    build_bench_card(folder, card, scene)
     images: list[np.ndarray] = []
     board = Board(str(firmware), sd_image=str(card), on_frame=lambda record, image: images.append(image))
     try:
@@ -544,7 +555,7 @@ def harts_table(records: list[dict]) -> str:
 def scene_figures(firmware: Path, folder: Path, runs: list[tuple]) -> tuple[list[dict], list[str]]:
     """Every planned run (see planned_runs); returns the records and, for the runs that failed
     (a firmware that rejects a setting, a reference that cannot render it), what went wrong."""
-    subprocess.run([sys.executable, str(ROOT / "tools" / "make_assets.py"), str(folder / "assets")], check=True)
+    make_bench_assets(folder)
     records, failures = [], []
     for n, (name, model, texture, scale, mode, setting) in enumerate(runs, 1):
         what = f"{name}, scale {scale:g}, {mode}, {setting}"
@@ -833,7 +844,7 @@ def harts_main(firmware: Path, out: Path) -> int:
     """The heavy scenes with one and both harts: printed, written to OUT/harts.json and appended to
     OUT/results.md; status 1 when two harts showed other frames than one."""
     with tempfile.TemporaryDirectory() as tmp:
-        subprocess.run([sys.executable, str(ROOT / "tools" / "make_assets.py"), str(Path(tmp) / "assets")], check=True)
+        make_bench_assets(Path(tmp))
         records = harts_figures(firmware, Path(tmp))
     out.mkdir(parents=True, exist_ok=True)
     (out / "harts.json").write_text(json.dumps(records, indent=2) + "\n")
@@ -888,14 +899,11 @@ HEAVY_BOTH_HARTS = {"model": "models/sphere.obj", "texture": "textures/sphere.pp
 def both_harts_figures(firmware: Path, rounds: int = 2, frames: int = 24) -> dict:
     """The real-time factor after loading with both harts drawing the heavy sphere (HEAVY_BOTH_HARTS),
     fastest of `rounds` runs (issue 31 asks 1.0 of it)."""
-    from sdcard_image import build_image
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
-        subprocess.run([sys.executable, str(ROOT / "tools" / "make_assets.py"), str(folder / "assets")], check=True,
-                       capture_output=True)
+        make_bench_assets(folder)
         card = folder / "heavy.img"
-        build_image(card, [folder / "assets" / "models", folder / "assets" / "textures", folder / "assets" / "held-in"],
-                    scene=HEAVY_BOTH_HARTS, force=True, on_warning=_warn_once)
+        build_bench_card(folder, card, HEAVY_BOTH_HARTS)
         runs = []
         for _ in range(rounds):
             board = Board(str(firmware), sd_image=str(card))

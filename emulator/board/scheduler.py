@@ -157,8 +157,7 @@ class Scheduler(SramWaits, Deadlines):
         self._last_frame_time: Time = 0
         self._last_frame_instret = [0] * HARTS
         self._last_frame_cycles = [0] * HARTS
-        self._host_start = host_time.perf_counter()
-        self._host_cpu_start = host_time.process_time()
+        self._start_host_clocks()
         self.until: Time | None = None                    # run_until's end: virtual time, not frames
         self.pending_stop: BoardStop | None = None        # ends the run at the end of the turn
         self._draining = False                            # finish_console_line is running
@@ -189,6 +188,11 @@ class Scheduler(SramWaits, Deadlines):
         self.paired_turns = 0         # statistics: the turns _go_on_paired ran
         self._pair_backoff = 0        # tries to let pass after one that ran fewer than two turns
         self._pair_skip = 0           # tries still to let pass
+
+    def _start_host_clocks(self) -> None:
+        """A run's host time counts from here, wall and CPU (FrameRecord, RunResult)."""
+        self._host_start = host_time.perf_counter()
+        self._host_cpu_start = host_time.process_time()
 
     def _mcycle_reader(self, h: int) -> Callable[[], int]:
         return lambda: self.cycles(self.hart_now(self.harts[h]))
@@ -376,8 +380,7 @@ class Scheduler(SramWaits, Deadlines):
     def run(self, frames: int, progress: Callable[["Board"], None] | None = None) -> RunResult:
         """Runs until `frames` frames have been shown. Raises a BoardStop subclass otherwise."""
         self.frames_wanted = frames
-        self._host_start = host_time.perf_counter()
-        self._host_cpu_start = host_time.process_time()
+        self._start_host_clocks()
         last_progress = 0.0
         # a firmware that reported an error or trapped is given its grace period even when
         # its error screen was the last frame asked for: the run ends with that error
@@ -400,8 +403,7 @@ class Scheduler(SramWaits, Deadlines):
         stop recorded by a device ends the run as in run()."""
         self.frames_wanted = UNLIMITED_FRAMES
         self.until = until
-        self._host_start = host_time.perf_counter()
-        self._host_cpu_start = host_time.process_time()
+        self._start_host_clocks()
         last_progress = 0.0
         idle_since: Time | None = None
         while self.time < until or self._report_pending():
@@ -644,6 +646,14 @@ class Scheduler(SramWaits, Deadlines):
             outer = min(outer, self.until)
         return outer
 
+    def _stop_turns_at(self, outer: Time, now: Time) -> Time:
+        """Where turns run without the board (from `now`, bounded by `outer`) must stop: `outer`, the
+        first moment the LCD could capture a frame, the hang budget's end (unless run_until's)."""
+        stop_at = min(outer, self.board.earliest_frame_capture(now))
+        if self.until is None:
+            stop_at = min(stop_at, self._last_frame_time + self.hang_budget)
+        return stop_at
+
     def _alone_until(self, hart: Hart, t0: Time, outer: Time) -> int | None:
         """The cycle count up to which a time loop (usleep, msleep) or a loop that only spins (`j .`)
         may be skipped past the turn's end:
@@ -657,9 +667,7 @@ class Scheduler(SramWaits, Deadlines):
                 any(other.state is HartState.RUNNING and not self._inert(other) for other in self.harts
                     if other is not hart):
             return None
-        stop_at = min(outer, self.board.earliest_frame_capture(t0))
-        if self.until is None:
-            stop_at = min(stop_at, self._last_frame_time + self.hang_budget)
+        stop_at = self._stop_turns_at(outer, t0)
         if stop_at >= NEVER or stop_at <= t0:
             return None
         return max(hart.cycles + 1, self.cycles_until(hart, stop_at))
@@ -705,9 +713,7 @@ class Scheduler(SramWaits, Deadlines):
         plan.tick_ends[:plan.ticks] = quiet
         if plan.ticks:
             outer = self._outer_bound(t0, self.board.next_device_event(t0, past_quiet_console=True))
-        stop_at = min(outer, self.board.earliest_frame_capture(hart.time))
-        if self.until is None:
-            stop_at = min(stop_at, self._last_frame_time + self.hang_budget)
+        stop_at = self._stop_turns_at(outer, hart.time)
         if hart.time >= stop_at:
             return horizon
         plan.anchor_time, plan.anchor_cycles = self._anchor[hart.hart_id]
@@ -776,9 +782,7 @@ class Scheduler(SramWaits, Deadlines):
             if takeable and self.board.mip(hart.hart_id, hart.time, takeable):
                 return 0
         outer = self._outer_bound(t0, self.board.next_device_event(t0))
-        stop_at = min(outer, self.board.earliest_frame_capture(t0))
-        if self.until is None:
-            stop_at = min(stop_at, self._last_frame_time + self.hang_budget)
+        stop_at = self._stop_turns_at(outer, t0)
         if t0 >= stop_at:
             return 0
         plan = self._pair_plan
