@@ -27,6 +27,7 @@ from __future__ import annotations
 import functools
 from dataclasses import dataclass
 
+import numpy as np
 import unicorn
 from unicorn import riscv_const as rv
 
@@ -410,11 +411,10 @@ def find_csr_sites(code: bytes, base: int) -> list[tuple[int, int]]:
 @functools.lru_cache(maxsize=8)
 def _csr_sites(code: bytes, base: int) -> tuple[tuple[int, int], ...]:
     """find_csr_sites, once a process for the same code (every board of a firmware scans it)."""
-    sites = []
-    for offset in range(0, len(code) - 3, 2):
-        word = int.from_bytes(code[offset:offset + 4], "little")
-        if (word & 0x7F == 0x73 and (word >> 12) & 3 and (word >> 20) in INTERCEPTED_CSRS) \
-                or word in (INSN_MRET, INSN_SRET) or word & MASK_SFENCE_VM == INSN_SFENCE_VM \
-                or word & MASK_SFENCE_VMA == INSN_SFENCE_VMA:
-            sites.append((base + offset, word))
-    return tuple(sites)
+    halves = np.frombuffer(code[:len(code) & ~1], dtype="<u2").astype(np.uint32)
+    words = halves[:-1] | halves[1:] << 16      # the 4 bytes at every 2-byte-aligned offset
+    found = ((words & 0x7F) == 0x73) & ((words >> 12 & 3) != 0) & np.isin(words >> 20, sorted(INTERCEPTED_CSRS))
+    found |= np.isin(words, (INSN_MRET, INSN_SRET))
+    found |= (words & MASK_SFENCE_VM) == INSN_SFENCE_VM
+    found |= (words & MASK_SFENCE_VMA) == INSN_SFENCE_VMA
+    return tuple((base + 2 * int(i), int(words[i])) for i in np.flatnonzero(found))

@@ -27,6 +27,8 @@ import functools
 from dataclasses import dataclass
 from typing import Iterable, TypeVar
 
+import numpy as np
+
 from .riscv import CSR_CYCLE, CSR_MCYCLE, bits, instruction_at, signed
 from .shared_memory import MAX_LOOP_BYTES, PollLoop, _backward_branches
 
@@ -230,7 +232,6 @@ def find_idle_loops(code: bytes, base: int) -> list[PollLoop]:
     return list(_idle_loops(code, base))
 
 
-@functools.lru_cache(maxsize=8)
 def _first_at_each_head(found: Iterable[_L | None]) -> tuple[_L, ...]:
     """The loops found, the first one for each head address (several closing jumps may share one)."""
     loops: dict[int, _L] = {}
@@ -240,12 +241,18 @@ def _first_at_each_head(found: Iterable[_L | None]) -> tuple[_L, ...]:
     return tuple(loops.values())
 
 
+@functools.lru_cache(maxsize=8)
 def _idle_loops(code: bytes, base: int) -> tuple[PollLoop, ...]:
-    halves = [int.from_bytes(code[i:i + 2], "little") for i in range(0, len(code) - 1, 2)]
-    to_itself = [2 * i for i, half in enumerate(halves)
-                 if half == C_J_TO_ITSELF or (half == JAL_TO_ITSELF & 0xFFFF and i + 1 < len(halves) and
-                                              half | halves[i + 1] << 16 == JAL_TO_ITSELF)]
-    return _first_at_each_head(_idle_loop_at(code, base, offset) for offset in [*_backward_branches(code), *to_itself])
+    """find_idle_loops, once a process for the same code (every board of a firmware scans it)."""
+    return _first_at_each_head(_idle_loop_at(code, base, offset) for offset in [*_backward_branches(code), *_jumps_to_themselves(code)])
+
+
+def _jumps_to_themselves(code: bytes) -> list[int]:
+    """Offsets of every 2-byte-aligned `j .` (JAL_TO_ITSELF or C_J_TO_ITSELF)."""
+    halves = np.frombuffer(code[:len(code) & ~1], dtype="<u2").astype(np.uint32)
+    upper = np.append(halves[1:], 0xFFFF) if halves.size else halves    # no `jal` past the end
+    found = (halves == C_J_TO_ITSELF) | ((halves | upper << 16) == JAL_TO_ITSELF)
+    return [2 * int(i) for i in np.flatnonzero(found)]
 
 
 def _idle_loop_at(code: bytes, base: int, branch_offset: int) -> PollLoop | None:
