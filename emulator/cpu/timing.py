@@ -370,6 +370,10 @@ _TABLES_KEPT = 8
 # read or written is passed over: the table is then built as without one.
 CACHE_ENVIRONMENT = "K210_MODEL_CACHE"     # a folder to use instead of the user's cache folder
 _CACHE_FILES_KEPT = 32
+# Code this short is decoded in about as long as a file takes to write (some 2 ms for 4 KiB, 1 ms to
+# write and prune): a test's or a demo's small program is not kept, and does not push a firmware's
+# table out of the files kept
+_CACHE_MIN_BYTES = 4096
 
 
 def table_cache_folder() -> Path:
@@ -390,11 +394,14 @@ def build_table(code_ranges: list[tuple[int, bytes]]) -> CycleTable | None:
     key = tuple((address, bytes(code)) for address, code in code_ranges)
     table = _TABLES.get(key)
     if table is None:
-        digest = _digest(key)
-        table = _read_cached(digest, code_ranges)
-        if table is None:
+        if sum(len(code) for _, code in code_ranges) < _CACHE_MIN_BYTES:
             table = _build_table(code_ranges)
-            _write_cached(digest, table)
+        else:
+            digest = _digest(key)
+            table = _read_cached(digest, code_ranges)
+            if table is None:
+                table = _build_table(code_ranges)
+                _write_cached(digest, table)
         if len(_TABLES) >= _TABLES_KEPT:
             _TABLES.pop(next(iter(_TABLES)))
         _TABLES[key] = table

@@ -238,6 +238,19 @@ def test_a_built_cycle_table_is_kept_on_disk_and_read_back(firmware, tmp_path, m
     assert builds == 1 and (elsewhere.entries == built.entries).all()
 
 
+def test_a_small_programs_table_is_built_each_time_and_not_kept(tmp_path, monkeypatch):
+    """Code shorter than _CACHE_MIN_BYTES is decoded as fast as its file would be written: no file,
+    so that a test's thousands of small programs leave the firmware's tables in the folder."""
+    from emulator.cpu import timing
+    monkeypatch.setenv(timing.CACHE_ENVIRONMENT, str(tmp_path / "cache"))
+    monkeypatch.setattr(timing, "_TABLES", {})
+    small = [(0x8000_0000, b"\x01\x00" * (timing._CACHE_MIN_BYTES // 2 - 1))]
+    table = timing.build_table(small)
+    assert len(table.entries) == len(small[0][1]) // 2 and not (tmp_path / "cache").exists()
+    timing.build_table([(0x8000_0000, small[0][1] + b"\x01\x00")])
+    assert len(list((tmp_path / "cache").glob("*.u32"))) == 1
+
+
 def test_an_unknown_timing_model_is_refused():
     with pytest.raises(ValueError, match="unknown timing model 'fast'"):
         make_board(timing="fast")
