@@ -213,7 +213,7 @@ class Bus:
             name = next((n for base, length, n in K210_UNMODELLED if base <= address < base + length), None)
             if not fetch and not self.strict and DEBUG_BASE <= address < DEBUG_BASE + DEBUG_SIZE:
                 # mapped on first use: a mapping at address 0 slows every hart down by several per cent
-                uc.mmio_map(DEBUG_BASE, DEBUG_SIZE, self._debug_reader(hart), None, self._debug_writer(hart), None)
+                hart.map_device(DEBUG_BASE, DEBUG_SIZE, self._debug_reader(hart), self._debug_writer(hart))
                 return True     # Unicorn retries the access, which now reaches the debug region
             if fetch:
                 self._fetch_fault(hart, address, name)

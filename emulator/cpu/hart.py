@@ -160,6 +160,10 @@ class Hart(PrivilegedArchitecture):
         self.soft_mip = 0         # mip's SSIP and STIP as software wrote them (privileged.py)
         self.counter_enables = {PRIV_U: COUNTER_BITS, PRIV_S: COUNTER_BITS}   # mucounteren, mscounteren
         self._trigger_hook: int | None = None   # watches every instruction while a trigger is armed
+        # device windows' callbacks (map_device), by the index Unicorn hands back as user data
+        self._windows_read: list[Callable] = []
+        self._windows_write: list[Callable] = []
+        self._window_thunks: tuple | None = None
 
     def add_native_hook(self, kind: int, callback: int, user_data: ctypes.Structure, begin: int, end: int,
                         what: str) -> int:
@@ -702,9 +706,42 @@ class Hart(PrivilegedArchitecture):
         self.uc.mem_map_ptr(address, size, unicorn.UC_PROT_ALL, host_address)
 
     def map_device(self, address: int, size: int, read: Callable, write: Callable) -> None:
-        """A device window: loads call read(uc, offset, width, user_data), stores
-        write(uc, offset, width, value, user_data), as Unicorn's MMIO callbacks."""
-        self.uc.mmio_map(address, size, read, None, write, None)
+        """A device window: loads call read(uc, offset, width, None), stores
+        write(uc, offset, width, value, None), as Unicorn's MMIO callbacks do.
+
+        One pair of native callbacks serves every window of the hart, told apart by the window's
+        index: the binding's own mmio_map makes a pair a window (two dozen windows a hart, a quarter
+        of a board's making) and calls through two more Python frames each access."""
+        if self._window_thunks is None:
+            self._window_thunks = (_ucpy.MMIO_READ_CFUNC(self._window_read),
+                                   _ucpy.MMIO_WRITE_CFUNC(self._window_write))
+        index = len(self._windows_read)
+        self._windows_read.append(read)
+        self._windows_write.append(write)
+        status = _ucpy.uclib.uc_mmio_map(self.uc._uch, address, size, self._window_thunks[0], index,
+                                         self._window_thunks[1], index)
+        if status != unicorn.UC_ERR_OK:
+            raise unicorn.UcError(status)
+
+    def _window_read(self, handle, offset: int, size: int, index: int | None) -> int:
+        try:
+            return self._windows_read[index or 0](self.uc, offset, size, None)
+        except BaseException as error:      # as the binding's own callbacks: stop, raised by emu_start
+            self._hook_failed(error)
+            return 0
+
+    def _window_write(self, handle, offset: int, size: int, value: int, index: int | None) -> None:
+        try:
+            self._windows_write[index or 0](self.uc, offset, size, value, None)
+        except BaseException as error:
+            self._hook_failed(error)
+
+    def _hook_failed(self, error: BaseException) -> None:
+        """What the binding does with an exception in a callback: the first is kept, emulation stops,
+        and emu_start raises it."""
+        if self.uc._hook_exception is None:
+            self.uc._hook_exception = error
+        self.uc.emu_stop()
 
     def on_unmapped(self, callback: Callable) -> None:
         """Accesses and fetches where nothing is mapped (or not as asked) call

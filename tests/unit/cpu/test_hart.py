@@ -1167,3 +1167,36 @@ def test_constants_name_no_address(firmware):
     image = load_elf(firmware, Sram())
     assert "OBJ_INDEX_LIMIT" in image.symbol_values
     assert "OBJ_INDEX_LIMIT" not in image.symbols.values()
+
+
+def test_device_windows_each_reach_their_own_callbacks_and_a_failing_one_stops_the_run():
+    """map_device's windows share one pair of native callbacks, told apart by index: each load and
+    store reaches its own window's, and an exception in one ends the precise engine's run and is
+    raised from it, as with the binding's own callbacks."""
+    code = build_elf("""
+        .globl _start
+    _start:
+        li      t0, 0x50000000
+        li      t1, 0x50001000
+        lw      a0, 4(t0)
+        sw      a0, 8(t1)
+        lw      a1, 0(t1)
+        nop
+    """)
+    hart = Hart(0, CsrContext(mcycle=lambda: 0, mip=lambda: 0))
+    hart.uc.mem_map(0x8000_0000, 0x1000)
+    hart.uc.mem_write(0x8000_0000, load_segments(code))
+    seen = []
+    for window in range(2):
+        def read(uc, offset, size, data, window=window):
+            seen.append(("load", window, offset, size))
+            if window == 1:
+                raise ValueError("window 1 fails")
+            return 0x1234
+        def write(uc, offset, size, value, data, window=window):
+            seen.append(("store", window, offset, value))
+        hart.map_device(0x5000_0000 + 0x1000 * window, 0x1000, read, write)
+    hart.pc = 0x8000_0000
+    with pytest.raises(ValueError, match="window 1 fails"):
+        hart.run(20)
+    assert seen == [("load", 0, 4, 4), ("store", 1, 8, 0x1234), ("load", 1, 0, 4)]
