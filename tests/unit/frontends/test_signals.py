@@ -92,10 +92,23 @@ def test_a_signal_before_the_board_exists_is_no_traceback(c_firmware, tmp_path):
     fifo = tmp_path / "input.fifo"
     os.mkfifo(fifo)
     process = start(str(c_firmware / "echo.elf"), "--uart-input", str(fifo), "--out", str(tmp_path / "out"))
-    time.sleep(2)
+    waiting_for_a_writer(process)
     process.send_signal(signal.SIGINT)
     _, stderr = process.communicate(timeout=30)
     assert process.returncode == 130 and "Traceback" not in stderr and "interrupted" in stderr, stderr
+
+
+def waiting_for_a_writer(process: subprocess.Popen, longest: float = 2.0) -> None:
+    """Waits until the process sleeps opening a FIFO (Linux's /proc/PID/wchan: wait_for_partner), or
+    `longest` seconds where the kernel does not say."""
+    deadline = time.monotonic() + longest
+    while time.monotonic() < deadline and process.poll() is None:
+        try:
+            if Path(f"/proc/{process.pid}/wchan").read_text().strip() == "wait_for_partner":
+                return
+        except OSError:
+            pass
+        time.sleep(0.01)
 
 
 def test_signals_while_the_outputs_are_written_are_ignored():
