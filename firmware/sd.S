@@ -432,6 +432,12 @@ sd_ahead_end:
 sd_ahead:
     .space  SD_AHEAD_BYTES
     .balign 8
+    .globl sd_access_ticks
+# sd_access_ticks: how long (mtime ticks) a read command sleeps before it
+# looks for its first data token: SD_ACCESS_WAIT of the last read's access
+# time, 0 before the first (sd_read.S sd_wait_first_token).
+sd_access_ticks:
+    .space  8
     .globl sd_capacity
 # sd_capacity: the card's capacity in 512-byte blocks (its CSD), set by
 # sd_init; blocks 0 .. sd_capacity - 1 exist.

@@ -92,7 +92,8 @@ sd_read_blocks:
     call    sd_command
     bnez    a0, 14f
     call    sd_receive_setup
-    j       15f
+    call    sd_wait_first_token
+    j       16f
 14: mv      s9, a0
     call    sd_deselect
     li      t0, SD_R1_NONE
@@ -106,7 +107,7 @@ sd_read_blocks:
 15: # Block s0's token (SPI1 transmit-and-receive); the data bytes that
     # came after it in its burst go to the start of s8's buffer.
     call    sd_wait_token
-    li      t0, SD_TOKEN_START_BLOCK
+16: li      t0, SD_TOKEN_START_BLOCK
     bne     a0, t0, 40f                 # error token
     mv      a0, s8
     call    sd_take_ahead
@@ -323,6 +324,39 @@ sd_wait_token:
     li      a2, 0
     call    error_fatal
 2:  FRAME_RESTORE 16, ra, s0
+    ret
+
+# sd_wait_first_token (file-local)
+#   What: sd_wait_token for a read command's first block: sleeps in WFI for
+#         sd_access_ticks first (when at least SD_ACCESS_SLEEP_MIN_TICKS),
+#         then measures this command's access time
+#         (from the call to the token, the sleep included) and keeps
+#         SD_ACCESS_WAIT of it in sd_access_ticks for the next command (see
+#         sd.inc). Its timeout starts after the sleep, which is shorter than
+#         the last access time.
+#   Arguments: none.
+#   Results: a0 = the token byte.
+#   Clobbers: only ABI temporaries.
+sd_wait_first_token:
+    FRAME_SAVE 16, ra, s0
+    li      t0, CLINT_MTIME
+    ld      s0, 0(t0)                   # s0 = mtime at the call
+    la      t0, sd_access_ticks
+    ld      t1, 0(t0)
+    li      t2, SD_ACCESS_SLEEP_MIN_TICKS
+    bltu    t1, t2, 1f
+    add     a0, s0, t1
+    call    delay_until
+1:  call    sd_wait_token
+    li      t0, CLINT_MTIME
+    ld      t1, 0(t0)
+    sub     t1, t1, s0                  # t1 = the access time, in ticks
+    li      t2, SD_ACCESS_WAIT_NUM
+    mul     t1, t1, t2
+    srli    t1, t1, SD_ACCESS_WAIT_SHIFT
+    la      t0, sd_access_ticks
+    sd      t1, 0(t0)
+    FRAME_RESTORE 16, ra, s0
     ret
 
 # sd_receive_setup (file-local)
