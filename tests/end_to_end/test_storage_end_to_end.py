@@ -241,6 +241,45 @@ def test_blocks_whose_token_gaps_vary_load_byte_for_byte_without_reading_any_aga
     assert _load_line("files/model.obj", model) in console
 
 
+def test_a_read_command_sleeps_through_most_of_the_cards_access_time(firmware, tmp_path):
+    """sd_read.S sd_wait_first_token: a read command sleeps in WFI through 3/4 of the access time the
+    last one took (Nac, from the command to its first data token), then looks for the token in
+    bursts. The first read command has nothing to go by and polls the whole access time, a 2 ms one
+    here; each one after polls about a quarter of it (counted as hart 0's stores to SPI1 from one read
+    command to the next: the token bursts, and a few for the command and the DMA). The file loads
+    byte for byte."""
+    from emulator.board import Board
+    from emulator.vtime import PS_PER_US
+    from sdcard_image import build_image
+    model = obj_bytes(20 * 512 + 77, "twenty-one blocks")
+    (tmp_path / "files").mkdir()
+    (tmp_path / "files" / "model.obj").write_bytes(model)
+    card = tmp_path / "card.img"
+    build_image(card, [tmp_path / "files"], scene={"model": "files/model.obj", "mode": "wireframe"}, force=True)
+    board = Board(str(firmware), sd_image=str(card), sd_access_time=2000 * PS_PER_US)
+    sd = board.wiring.sd_slot.card
+    reads = lambda: sd.commands.get(17, 0) + sd.commands.get(18, 0)   # noqa: E731
+    marks = []        # hart 0's stores to SPI1 when each read command had reached the card
+    exchange = sd.exchange
+
+    def watched(mosi, now, clocked_at=None):
+        before = reads()
+        answer = exchange(mosi, now, clocked_at)
+        if reads() != before:
+            marks.append(board.bus.device_writes["SPI1"][0])
+        return answer
+    sd.exchange = watched
+    try:
+        board.run(1)
+    finally:
+        board.close()
+    assert _load_line("files/model.obj", model) in "".join(line + "\n" for _, line in board.console_lines)
+    per_command = [after - before for before, after in zip(marks, marks[1:])]
+    first, later = per_command[0], per_command[1:]
+    assert len(later) >= 8 and first > 2000, per_command
+    assert max(later) < 0.4 * first, per_command
+
+
 # --- failures ---------------------------------------------------------------------------------
 
 def assert_error(result, console: str, out: Path, name: str, words: str) -> None:
