@@ -23,6 +23,7 @@ from __future__ import annotations
 import hashlib
 import io
 import json
+import mmap
 import os
 import re
 import tempfile
@@ -44,6 +45,25 @@ HASH_SIZE = 32
 FLAG_AES, FLAG_DUAL_IO = 1, 2
 
 
+_erased_template: int | None = None     # a memory file of FLASH_SIZE erased bytes (erased_bytes)
+
+
+def erased_bytes() -> bytearray | mmap.mmap:
+    """FLASH_SIZE erased bytes to write into: a private, copy-on-write mapping of one erased template
+    a process (Linux's memfd_create), so that a board whose flash is never written, most of them,
+    fills no 16 MiB (a quarter of a small program's board's making); elsewhere a bytearray."""
+    global _erased_template
+    if not hasattr(os, "memfd_create"):
+        return bytearray([ERASED]) * FLASH_SIZE
+    if _erased_template is None:
+        template = os.memfd_create("k210-erased-flash")
+        os.ftruncate(template, FLASH_SIZE)
+        with mmap.mmap(template, FLASH_SIZE) as view:
+            view.write(bytes([ERASED]) * FLASH_SIZE)
+        _erased_template = template
+    return mmap.mmap(_erased_template, FLASH_SIZE, flags=mmap.MAP_PRIVATE, prot=mmap.PROT_READ | mmap.PROT_WRITE)
+
+
 def with_boot_header(program: bytes, flag: int = FLAG_DUAL_IO) -> bytes:
     """What kflash writes at the program's address: flag (by default kflash's: not encrypted, read
     in dual I/O), length, program, SHA-256 of those."""
@@ -57,7 +77,7 @@ class FlashImage:
     PROGRAM or DUMP), `writable` whether the run's changes go back to it (a dump only)."""
 
     path: Path
-    data: bytearray
+    data: bytearray | mmap.mmap       # (erased_bytes)
     kind: str = DUMP
     writable: bool = False
 
@@ -65,7 +85,7 @@ class FlashImage:
     def erased() -> "FlashImage":
         """The flash of a run given no --flash: every byte erased (a Dock's flash holds what was last
         written to it; a run that needs that gives it)."""
-        return FlashImage(Path("(erased flash)"), bytearray([ERASED]) * FLASH_SIZE, kind=ERASED_KIND)
+        return FlashImage(Path("(erased flash)"), erased_bytes(), kind=ERASED_KIND)
 
     @staticmethod
     def open(path: str | Path, writable: bool = False) -> "FlashImage":
@@ -78,7 +98,7 @@ class FlashImage:
             raw = path.read_bytes()
         except OSError as error:
             raise BadInput(f"{path}: cannot read it ({error.strerror or error})") from None
-        flash = FlashImage(path, bytearray([ERASED]) * FLASH_SIZE)
+        flash = FlashImage(path, erased_bytes())
         if raw.startswith(ZIP_MAGIC) or path.suffix.lower() == KFPKG_SUFFIX:
             flash.kind = KFPKG
             flash._write_package(raw)
