@@ -26,6 +26,7 @@ import json
 import mmap
 import os
 import re
+import resource
 import tempfile
 import struct
 import zipfile
@@ -53,15 +54,29 @@ def erased_bytes() -> bytearray | mmap.mmap:
     a process (Linux's memfd_create), so that a board whose flash is never written, most of them,
     fills no 16 MiB (a quarter of a small program's board's making); elsewhere a bytearray."""
     global _erased_template
-    if not hasattr(os, "memfd_create"):
-        return bytearray([ERASED]) * FLASH_SIZE
+    if _erased_template is None and hasattr(os, "memfd_create") and _file_size_allowed(FLASH_SIZE):
+        try:
+            template = os.memfd_create("k210-erased-flash")
+        except OSError:
+            template = None
+        if template is not None:
+            try:
+                os.ftruncate(template, FLASH_SIZE)
+                with mmap.mmap(template, FLASH_SIZE) as view:
+                    view.write(bytes([ERASED]) * FLASH_SIZE)
+                _erased_template = template
+            except OSError:
+                os.close(template)
     if _erased_template is None:
-        template = os.memfd_create("k210-erased-flash")
-        os.ftruncate(template, FLASH_SIZE)
-        with mmap.mmap(template, FLASH_SIZE) as view:
-            view.write(bytes([ERASED]) * FLASH_SIZE)
-        _erased_template = template
+        return bytearray([ERASED]) * FLASH_SIZE
     return mmap.mmap(_erased_template, FLASH_SIZE, flags=mmap.MAP_PRIVATE, prot=mmap.PROT_READ | mmap.PROT_WRITE)
+
+
+def _file_size_allowed(size: int) -> bool:
+    """Whether this process may make a file of `size` bytes: a memory file counts against its file
+    size limit (`ulimit -f`), and growing one past it sends SIGXFSZ, which ends the process."""
+    soft, _ = resource.getrlimit(resource.RLIMIT_FSIZE)
+    return soft == resource.RLIM_INFINITY or soft >= size
 
 
 def with_boot_header(program: bytes, flag: int = FLAG_DUAL_IO) -> bytes:

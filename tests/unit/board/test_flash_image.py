@@ -10,6 +10,7 @@ import json
 import shutil
 import struct
 import subprocess
+import sys
 import zipfile
 
 import pytest
@@ -169,3 +170,24 @@ def test_a_chip_reset_boots_the_flash_again_as_the_rom_does(hello_bin):
     board.flash.data[:len(rewritten)] = rewritten
     with pytest.raises(UnmodelledAccess, match="the program in the flash has changed"):
         board.reset_chip("soft", 0.003)
+
+
+def test_erased_flashes_are_each_their_own():
+    """FlashImage.erased maps one erased template copy-on-write (flash_image.erased_bytes): every
+    byte reads erased, and what one board's flash is written never shows in another's."""
+    first, second = FlashImage.erased(), FlashImage.erased()
+    assert len(first.data) == FLASH_SIZE and first.data[:16] == bytes([ERASED]) * 16
+    assert first.data[FLASH_SIZE - 1] == ERASED
+    first.data[0x1000:0x1004] = b"\x12\x34\x56\x78"
+    assert second.data[0x1000:0x1004] == bytes([ERASED]) * 4 and FlashImage.erased().data[0x1000] == ERASED
+    assert first.data[0x1000:0x1004] == b"\x12\x34\x56\x78"
+
+
+def test_an_erased_flash_under_a_file_size_limit_is_made_in_memory():
+    """A memory file counts against `ulimit -f`, and growing one past it would end the process
+    (SIGXFSZ): under a limit below the flash's size the erased flash is a bytearray."""
+    script = ("import resource; resource.setrlimit(resource.RLIMIT_FSIZE, (1 << 20, 1 << 20)); "
+              "from emulator.board.flash_image import FlashImage, ERASED; f = FlashImage.erased(); "
+              "print(type(f.data).__name__, f.data[123] == ERASED)")
+    result = subprocess.run([sys.executable, "-c", script], cwd=ROOT, capture_output=True, text=True, timeout=60)
+    assert result.returncode == 0 and result.stdout.split() == ["bytearray", "True"], result.stderr
