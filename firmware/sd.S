@@ -434,8 +434,8 @@ sd_ahead:
     .balign 8
     .globl sd_access_ticks
 # sd_access_ticks: how long (mtime ticks) a read command sleeps before it
-# looks for its first data token: SD_ACCESS_WAIT of the last read's access
-# time, 0 before the first (sd_read.S sd_wait_first_token).
+# looks for its first data token, from the last command's access time; 0:
+# no sleep (sd_read.S sd_wait_first_token).
 sd_access_ticks:
     .space  8
     .globl sd_capacity

@@ -2,8 +2,10 @@
 # block, CMD18 + CMD12 for several, so a run of contiguous clusters costs
 # one command.
 #
-# After the command, the first block's data token is looked for in bursts
-# of SD_TOKEN_BURST_BYTES; the data bytes after it are kept. Then each block
+# After the command, the CPU sleeps through most of the card's access time
+# (as long as the last command's took: sd_wait_first_token), then the first
+# block's data token is looked for in bursts of SD_TOKEN_BURST_BYTES; the
+# data bytes after it are kept. Then each block
 # comes by DMA (SPI1 receive-only, DMAC channel 1) into a staging buffer
 # (sd.S sd_stage): its data, its CRC16 and, while more blocks follow,
 # SD_LOOKAHEAD_BYTES of the stream after it. The next block's gap and token
@@ -327,36 +329,51 @@ sd_wait_token:
     ret
 
 # sd_wait_first_token (file-local)
-#   What: sd_wait_token for a read command's first block: sleeps in WFI for
-#         sd_access_ticks first (when at least SD_ACCESS_SLEEP_MIN_TICKS),
-#         then measures this command's access time
-#         (from the call to the token, the sleep included) and keeps
-#         SD_ACCESS_WAIT of it in sd_access_ticks for the next command (see
-#         sd.inc). Its timeout starts after the sleep, which is shorter than
-#         the last access time.
+#   What: sd_wait_token for a read command's first block, after sleeping in
+#         WFI for sd_access_ticks; then keeps the next command's sleep there
+#         (see sd.inc): 3/4 of this one's access time (from the call, the
+#         sleep included, to the token), or 0 when the token came in the
+#         first burst after a sleep (the card was ready sooner: measure
+#         again) or 3/4 is shorter than SD_ACCESS_SLEEP_MIN_US. The token's
+#         timeout starts after the sleep.
 #   Arguments: none.
 #   Results: a0 = the token byte.
-#   Clobbers: only ABI temporaries.
+#   Clobbers: only ABI temporaries; after a sleep, this hart's mtimecmp is
+#         all ones and mie.MTIE clear (delay_until).
 sd_wait_first_token:
-    FRAME_SAVE 16, ra, s0
+    FRAME_SAVE 32, ra, s0, s1
     li      t0, CLINT_MTIME
     ld      s0, 0(t0)                   # s0 = mtime at the call
+    li      s1, 0                       # s1 = mtime at the sleep's end, 0: none
     la      t0, sd_access_ticks
     ld      t1, 0(t0)
-    li      t2, SD_ACCESS_SLEEP_MIN_TICKS
-    bltu    t1, t2, 1f
+    beqz    t1, 1f
     add     a0, s0, t1
     call    delay_until
-1:  call    sd_wait_token
     li      t0, CLINT_MTIME
-    ld      t1, 0(t0)
-    sub     t1, t1, s0                  # t1 = the access time, in ticks
-    li      t2, SD_ACCESS_WAIT_NUM
-    mul     t1, t1, t2
-    srli    t1, t1, SD_ACCESS_WAIT_SHIFT
-    la      t0, sd_access_ticks
-    sd      t1, 0(t0)
-    FRAME_RESTORE 16, ra, s0
+    ld      s1, 0(t0)
+1:  call    sd_wait_token               # a0 = the token, kept to the end
+    li      t0, CLINT_MTIME
+    ld      t1, 0(t0)                   # t1 = mtime at the token
+    la      t2, cpu_hz
+    lwu     t2, 0(t2)
+    li      t3, SD_ACCESS_SLEEP_MIN_US
+    mul     t2, t2, t3
+    li      t3, MTIME_DIV * 1000000
+    divu    t2, t2, t3                  # t2 = the shortest sleep, in ticks
+    li      t4, 0                       # t4 = the next sleep
+    beqz    s1, 2f
+    sub     t3, t1, s1
+    bltu    t3, t2, 3f                  # the token came at once after the sleep
+2:  sub     t3, t1, s0                  # t3 = the access time, in ticks
+    li      t5, SD_ACCESS_WAIT_NUM
+    mul     t3, t3, t5
+    srli    t3, t3, SD_ACCESS_WAIT_SHIFT
+    bltu    t3, t2, 3f
+    mv      t4, t3
+3:  la      t0, sd_access_ticks
+    sd      t4, 0(t0)
+    FRAME_RESTORE 32, ra, s0, s1
     ret
 
 # sd_receive_setup (file-local)

@@ -241,22 +241,22 @@ def test_blocks_whose_token_gaps_vary_load_byte_for_byte_without_reading_any_aga
     assert _load_line("files/model.obj", model) in console
 
 
-def test_a_read_command_sleeps_through_most_of_the_cards_access_time(firmware, tmp_path):
-    """sd_read.S sd_wait_first_token: a read command sleeps in WFI through 3/4 of the access time the
-    last one took (Nac, from the command to its first data token), then looks for the token in
-    bursts. The first read command has nothing to go by and polls the whole access time, a 2 ms one
-    here; each one after polls about a quarter of it (counted as hart 0's stores to SPI1 from one read
-    command to the next: the token bursts, and a few for the command and the DMA). The file loads
-    byte for byte."""
+def _stores_per_read_command(firmware: Path, folder: Path, access_us: int,
+                             faster: tuple[int, int] | None = None) -> list[int]:
+    """Boots a card whose model takes some 20 read commands, with the card's read access time
+    `access_us`; `faster` = (n, us): once the n-th read command has reached the card, the card's
+    access time is `us` (from the next command on).
+    Returns hart 0's stores to SPI1 from each read command to the next (its token bursts, and a few
+    for the command and the DMA); checks that the model loaded byte for byte."""
     from emulator.board import Board
     from emulator.vtime import PS_PER_US
     from sdcard_image import build_image
     model = obj_bytes(20 * 512 + 77, "twenty-one blocks")
-    (tmp_path / "files").mkdir()
-    (tmp_path / "files" / "model.obj").write_bytes(model)
-    card = tmp_path / "card.img"
-    build_image(card, [tmp_path / "files"], scene={"model": "files/model.obj", "mode": "wireframe"}, force=True)
-    board = Board(str(firmware), sd_image=str(card), sd_access_time=2000 * PS_PER_US)
+    (folder / "files").mkdir()
+    (folder / "files" / "model.obj").write_bytes(model)
+    card = folder / "card.img"
+    build_image(card, [folder / "files"], scene={"model": "files/model.obj", "mode": "wireframe"}, force=True)
+    board = Board(str(firmware), sd_image=str(card), sd_access_time=access_us * PS_PER_US)
     sd = board.wiring.sd_slot.card
     reads = lambda: sd.commands.get(17, 0) + sd.commands.get(18, 0)   # noqa: E731
     marks = []        # hart 0's stores to SPI1 when each read command had reached the card
@@ -267,6 +267,8 @@ def test_a_read_command_sleeps_through_most_of_the_cards_access_time(firmware, t
         answer = exchange(mosi, now, clocked_at)
         if reads() != before:
             marks.append(board.bus.device_writes["SPI1"][0])
+            if faster is not None and reads() == faster[0]:
+                sd.access_time = faster[1] * PS_PER_US
         return answer
     sd.exchange = watched
     try:
@@ -274,10 +276,31 @@ def test_a_read_command_sleeps_through_most_of_the_cards_access_time(firmware, t
     finally:
         board.close()
     assert _load_line("files/model.obj", model) in "".join(line + "\n" for _, line in board.console_lines)
-    per_command = [after - before for before, after in zip(marks, marks[1:])]
+    return [after - before for before, after in zip(marks, marks[1:])]
+
+
+def test_a_read_command_sleeps_through_most_of_the_cards_access_time(firmware, tmp_path):
+    """sd_read.S sd_wait_first_token: a read command sleeps in WFI through 3/4 of the access time the
+    last one took (Nac, from its R1 to its data token), then looks for the token in bursts. The first
+    read command has nothing to go by and polls the whole access time, a 2 ms one here; each one
+    after polls about a quarter of it (4,021 stores, then 1,013-1,076; polling all of it, each took
+    4,021)."""
+    per_command = _stores_per_read_command(firmware, tmp_path, 2000)
     first, later = per_command[0], per_command[1:]
     assert len(later) >= 8 and first > 2000, per_command
     assert max(later) < 0.4 * first, per_command
+
+
+def test_a_card_that_gets_faster_is_measured_again(firmware, tmp_path):
+    """The card's access time drops from 2 ms to 200 us at its sixth read command: that command's
+    sleep outlasts it, and its token comes in the first burst after the sleep, which says only that
+    the card was ready sooner. The next command sleeps not at all and measures the new access time
+    (polling all of it), and the ones after sleep through 3/4 of that: one command oversleeps, not a
+    string of them each a quarter shorter (37 stores, then 437, then 117-180)."""
+    per_command = _stores_per_read_command(firmware, tmp_path, 2000, faster=(5, 200))
+    overslept, measuring, after = per_command[5], per_command[6], per_command[7:]
+    assert overslept < 100 and 200 < measuring < 1000, per_command
+    assert len(after) >= 4 and max(after) < 0.5 * measuring, per_command
 
 
 # --- failures ---------------------------------------------------------------------------------
