@@ -20,13 +20,13 @@ ROM checks the hash and copies the program to 0x8000_0000, where both harts star
 """
 from __future__ import annotations
 
+import functools
 import hashlib
 import io
 import json
 import mmap
 import os
 import re
-import resource
 import tempfile
 import struct
 import zipfile
@@ -35,6 +35,7 @@ from pathlib import Path
 
 from ..errors import BadInput
 from ..memory_map import SRAM_SIZE
+from .memory_files import memory_file, private_mapping
 
 FLASH_SIZE = 16 * 1024 * 1024        # the Dock's W25Q128 (Sipeed's schematic; MicroPython's flash layout)
 ERASED = 0xFF
@@ -46,37 +47,19 @@ HASH_SIZE = 32
 FLAG_AES, FLAG_DUAL_IO = 1, 2
 
 
-_erased_template: int | None = None     # a memory file of FLASH_SIZE erased bytes (erased_bytes)
+@functools.lru_cache(maxsize=1)
+def _erased_file() -> int | None:
+    return memory_file("k210-erased-flash", lambda: bytes([ERASED]) * FLASH_SIZE)
 
 
 def erased_bytes() -> bytearray | mmap.mmap:
-    """FLASH_SIZE erased bytes to write into: a private, copy-on-write mapping of one erased template
-    a process (Linux's memfd_create), so that a board whose flash is never written, most of them,
-    fills no 16 MiB (a quarter of a small program's board's making); elsewhere a bytearray."""
-    global _erased_template
-    if _erased_template is None and hasattr(os, "memfd_create") and _file_size_allowed(FLASH_SIZE):
-        try:
-            template = os.memfd_create("k210-erased-flash")
-        except OSError:
-            template = None
-        if template is not None:
-            try:
-                os.ftruncate(template, FLASH_SIZE)
-                with mmap.mmap(template, FLASH_SIZE) as view:
-                    view.write(bytes([ERASED]) * FLASH_SIZE)
-                _erased_template = template
-            except OSError:
-                os.close(template)
-    if _erased_template is None:
+    """FLASH_SIZE erased bytes to write into: a private mapping of one erased file a process
+    (memory_files.py), so that a board whose flash is never written, most of them, fills no 16 MiB
+    (a quarter of a small program's board's making); where there is none, a bytearray."""
+    descriptor = _erased_file()
+    if descriptor is None:
         return bytearray([ERASED]) * FLASH_SIZE
-    return mmap.mmap(_erased_template, FLASH_SIZE, flags=mmap.MAP_PRIVATE, prot=mmap.PROT_READ | mmap.PROT_WRITE)
-
-
-def _file_size_allowed(size: int) -> bool:
-    """Whether this process may make a file of `size` bytes: a memory file counts against its file
-    size limit (`ulimit -f`), and growing one past it sends SIGXFSZ, which ends the process."""
-    soft, _ = resource.getrlimit(resource.RLIMIT_FSIZE)
-    return soft == resource.RLIM_INFINITY or soft >= size
+    return private_mapping(descriptor, FLASH_SIZE)
 
 
 def with_boot_header(program: bytes, flag: int = FLAG_DUAL_IO) -> bytes:

@@ -10,14 +10,13 @@ from __future__ import annotations
 
 import ctypes
 import functools
-import mmap
-import os
 from typing import Callable
 
 import numpy as np
 
 from ..errors import HardwareMisuse
 from ..memory_map import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE
+from .memory_files import memory_file, private_mapping
 POWER_ON_SEED = 0x0210
 
 
@@ -36,21 +35,9 @@ def power_on_pattern(seed: int) -> np.ndarray:
 
 @functools.lru_cache(maxsize=2)
 def _power_on_file(seed: int) -> int | None:
-    """A memory-only file holding the power-on pattern of `seed`, or None where the system has
-    none (os.memfd_create is Linux's). Made once a process and kept open (a forked process
-    inherits it); the file is then the pattern's only copy in the process."""
-    if not hasattr(os, "memfd_create"):
-        return None
-    descriptor = os.memfd_create(f"k210-sram-power-on-{seed:#x}", os.MFD_CLOEXEC)
-    try:
-        with open(descriptor, "wb", closefd=False) as file:     # (a buffered write writes it all)
-            file.write(_draw_power_on_pattern(seed).tobytes())
-    except OSError:
-        # a memory file counts against a file size limit (RLIMIT_FSIZE) too: the copy in memory
-        # then serves, as where there is no memfd_create
-        os.close(descriptor)
-        return None
-    return descriptor
+    """A memory-only file holding the power-on pattern of `seed` (memory_files.memory_file), made
+    once a process; the file is then the pattern's only copy in the process."""
+    return memory_file(f"k210-sram-power-on-{seed:#x}", lambda: _draw_power_on_pattern(seed).tobytes())
 
 
 def _sram_buffer(fill_seed: int | None) -> ctypes.Array:
@@ -64,8 +51,7 @@ def _sram_buffer(fill_seed: int | None) -> ctypes.Array:
         if fill_seed is not None:
             np.frombuffer(buffer, dtype=np.uint8)[:] = power_on_pattern(fill_seed)
         return buffer
-    mapping = mmap.mmap(descriptor, SRAM_SIZE, flags=mmap.MAP_PRIVATE, prot=mmap.PROT_READ | mmap.PROT_WRITE)
-    return (ctypes.c_uint8 * SRAM_SIZE).from_buffer(mapping)
+    return (ctypes.c_uint8 * SRAM_SIZE).from_buffer(private_mapping(descriptor, SRAM_SIZE))
 
 
 class Sram:

@@ -737,8 +737,9 @@ class Hart(PrivilegedArchitecture):
             self._hook_failed(error)
 
     def _hook_failed(self, error: BaseException) -> None:
-        """What the binding does with an exception in a callback: the first is kept, emulation stops,
-        and emu_start raises it."""
+        """What the binding does with an exception in a callback (unicorn 2.1.4's uccallback, which
+        map_device no longer goes through; pyproject.toml pins that version): the first is kept in
+        the binding's own _hook_exception, emulation stops, and emu_start raises it."""
         if self.uc._hook_exception is None:
             self.uc._hook_exception = error
         self.uc.emu_stop()

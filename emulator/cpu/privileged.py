@@ -32,7 +32,7 @@ import unicorn
 from unicorn import riscv_const as rv
 
 from .decode import decode_memory_access
-from .riscv import (CAUSE_BREAKPOINT, CAUSE_FETCH_FAULT, CAUSE_ILLEGAL_INSTRUCTION, CAUSE_INTERRUPT,
+from .riscv import (code_parcels, CAUSE_BREAKPOINT, CAUSE_FETCH_FAULT, CAUSE_ILLEGAL_INSTRUCTION, CAUSE_INTERRUPT,
                     CAUSE_LOAD_FAULT, CAUSE_LOAD_MISALIGNED, CAUSE_STORE_FAULT, CAUSE_STORE_MISALIGNED,
                     CSR_CYCLE, CSR_INSTRET, CSR_MCYCLE, CSR_MEDELEG, CSR_MHARTID, CSR_MIDELEG, CSR_MIE,
                     CSR_MINSTRET, CSR_MIP, CSR_MSCOUNTEREN, CSR_MSTATUS, CSR_MTVEC, CSR_MUCOUNTEREN, CSR_SIE,
@@ -411,8 +411,7 @@ def find_csr_sites(code: bytes, base: int) -> list[tuple[int, int]]:
 @functools.lru_cache(maxsize=8)
 def _csr_sites(code: bytes, base: int) -> tuple[tuple[int, int], ...]:
     """find_csr_sites, once a process for the same code (every board of a firmware scans it)."""
-    halves = np.frombuffer(code[:len(code) & ~1], dtype="<u2").astype(np.uint32)
-    words = halves[:-1] | halves[1:] << 16      # the 4 bytes at every 2-byte-aligned offset
+    _, words = code_parcels(code)
     found = ((words & 0x7F) == 0x73) & ((words >> 12 & 3) != 0) & np.isin(words >> 20, sorted(INTERCEPTED_CSRS))
     found |= np.isin(words, (INSN_MRET, INSN_SRET))
     found |= (words & MASK_SFENCE_VM) == INSN_SFENCE_VM

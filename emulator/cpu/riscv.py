@@ -4,6 +4,8 @@ levels, the few whole-instruction encodings the harts look for, and the field he
 here uses (the privileged and unprivileged specifications, version 20191213 / 1.11)."""
 from __future__ import annotations
 
+import numpy as np
+
 # Integer and floating-point registers by ABI name (RISC-V psABI, "Integer Register Convention")
 GPR_NAMES = ("zero", "ra", "sp", "gp", "tp", "t0", "t1", "t2", "s0", "s1", "a0", "a1", "a2", "a3", "a4", "a5",
              "a6", "a7", "s2", "s3", "s4", "s5", "s6", "s7", "s8", "s9", "s10", "s11", "t3", "t4", "t5", "t6")
@@ -83,3 +85,11 @@ def instruction_at(code: bytes, offset: int) -> tuple[int, int] | None:
     if offset + 4 > len(code):
         return None
     return int.from_bytes(code[offset:offset + 4], "little"), 4
+
+
+def code_parcels(code: bytes) -> tuple[np.ndarray, np.ndarray]:
+    """For the scans of whole code (every 2-byte-aligned position tried as an instruction's start):
+    the 16-bit parcel at each position, and the 32-bit word that begins there at every position but
+    the last (the parcel and the next), as uint32 arrays (little-endian code)."""
+    halves = np.frombuffer(code[:len(code) & ~1], dtype="<u2").astype(np.uint32)
+    return halves, halves[:-1] | halves[1:] << 16

@@ -41,7 +41,7 @@ import numpy as np
 
 from . import _poll_watch
 from .decode import decode_memory_access
-from .riscv import bits, instruction_at, signed
+from .riscv import bits, code_parcels, instruction_at, signed
 from ..memory_map import SRAM_BASE, SRAM_SIZE, SRAM_UNCACHED_BASE
 
 MAX_LOOP_BYTES = 64            # longer loops are not taken for poll loops
@@ -207,14 +207,10 @@ def _poll_loop_at(code: bytes, base: int, branch_offset: int) -> PollLoop | None
 def _backward_branches(code: bytes) -> list[int]:
     """Offsets of every 2-byte-aligned position holding a branch or jump with a negative offset
     (a sign bit set), the only places a loop can close."""
-    halves = np.frombuffer(code[:len(code) & ~1], dtype="<u2").astype(np.uint32)
-    if halves.size == 0:
-        return []
-    upper = np.append(halves[1:], 0)
-    words = halves | (upper << 16)
-    long_branch = ((halves & 3) == 3) & np.isin(words & 0x7F, (0x63, 0x6F)) & ((words >> 31) == 1)
-    short_branch = ((halves & 3) == 1) & ((halves >> 13) >= 5) & ((halves >> 12 & 1) == 1)
-    return [2 * int(i) for i in np.flatnonzero(long_branch | short_branch)]
+    halves, words = code_parcels(code)
+    found = ((halves & 3) == 1) & ((halves >> 13) >= 5) & ((halves >> 12 & 1) == 1)     # compressed
+    found[:-1] |= ((words & 3) == 3) & np.isin(words & 0x7F, (0x63, 0x6F)) & ((words >> 31) == 1)
+    return [2 * int(i) for i in np.flatnonzero(found)]
 
 
 def table_key(address: int) -> int:

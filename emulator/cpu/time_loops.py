@@ -29,7 +29,7 @@ from typing import Iterable, TypeVar
 
 import numpy as np
 
-from .riscv import CSR_CYCLE, CSR_MCYCLE, bits, instruction_at, signed
+from .riscv import CSR_CYCLE, CSR_MCYCLE, bits, code_parcels, instruction_at, signed
 from .shared_memory import MAX_LOOP_BYTES, PollLoop, _backward_branches
 
 MASK = (1 << 64) - 1
@@ -249,9 +249,9 @@ def _idle_loops(code: bytes, base: int) -> tuple[PollLoop, ...]:
 
 def _jumps_to_themselves(code: bytes) -> list[int]:
     """Offsets of every 2-byte-aligned `j .` (JAL_TO_ITSELF or C_J_TO_ITSELF)."""
-    halves = np.frombuffer(code[:len(code) & ~1], dtype="<u2").astype(np.uint32)
-    upper = np.append(halves[1:], 0xFFFF) if halves.size else halves    # no `jal` past the end
-    found = (halves == C_J_TO_ITSELF) | ((halves | upper << 16) == JAL_TO_ITSELF)
+    halves, words = code_parcels(code)
+    found = halves == C_J_TO_ITSELF
+    found[:-1] |= words == JAL_TO_ITSELF
     return [2 * int(i) for i in np.flatnonzero(found)]
 
 

@@ -43,6 +43,7 @@ after EB or BB) and SFDP are not modelled either.
 """
 from __future__ import annotations
 
+import mmap
 from dataclasses import dataclass
 from typing import Callable
 
@@ -129,9 +130,9 @@ COMMAND, ADDRESS, MODE, DUMMY, DATA, DONE, IGNORE = range(7)
 
 class W25Q128:
     """The flash's storage and its command state machine, driven by an SPI controller (devices/spi.py's
-    SpiDevice). `data` is the flash's 16 MiB (a FlashImage's bytearray): programs and erases change it."""
+    SpiDevice). `data` is the flash's 16 MiB, writable (a FlashImage's data): programs and erases change it."""
 
-    def __init__(self, data: bytearray, warn: Callable[[str, Time], None]) -> None:
+    def __init__(self, data: bytearray | memoryview | mmap.mmap, warn: Callable[[str, Time], None]) -> None:
         if len(data) != SIZE:
             raise ValueError(f"the W25Q128 holds {SIZE} bytes, not {len(data)}")
         self.memory = np.frombuffer(data, dtype=np.uint8)

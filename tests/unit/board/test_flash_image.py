@@ -184,8 +184,8 @@ def test_erased_flashes_are_each_their_own():
 
 
 def test_an_erased_flash_under_a_file_size_limit_is_made_in_memory():
-    """A memory file counts against `ulimit -f`, and growing one past it would end the process
-    (SIGXFSZ): under a limit below the flash's size the erased flash is a bytearray."""
+    """A memory file counts against `ulimit -f`, and writing one past it fails (CPython ignores
+    SIGXFSZ): under a limit below the flash's size the erased flash is a bytearray."""
     script = ("import resource; resource.setrlimit(resource.RLIMIT_FSIZE, (1 << 20, 1 << 20)); "
               "from emulator.board.flash_image import FlashImage, ERASED; f = FlashImage.erased(); "
               "print(type(f.data).__name__, f.data[123] == ERASED)")
