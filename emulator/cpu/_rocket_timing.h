@@ -78,6 +78,15 @@ static __attribute__((noinline)) uint64_t resolve_any_transfer(insn_counter_t *c
             predicted_target = p->ras[p->ras_pos];
     }
     int mispredicted = taken != predicted_taken || (taken && predicted_target != next);
+    if (c->caches != NULL) {
+        /* Rocket compares the pc the frontend fetched next with the one the transfer computed
+         * (Rocket.scala, mem_wrong_npc): a transfer to the very next instruction, which the frontend
+         * fetched anyway, is no misprediction (and installs no BTB entry). The pipeline-only model
+         * (--timing rocket-nocache) keeps the misprediction it has always charged: issue 31 asks it
+         * to stay as it was. */
+        uint64_t predicted_next = (hit >= 0 && predicted_taken) ? predicted_target : fallthrough;
+        mispredicted = predicted_next != next;
+    }
     if (hit >= 0 && kind == KIND_BRANCH)
         bht_learn(p, bht_index, taken);
     if (taken && mispredicted) {

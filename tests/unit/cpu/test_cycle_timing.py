@@ -423,3 +423,32 @@ def test_a_csr_write_refetches_as_a_redirect_does(engine):
             cycles[timing, name] = (reg(board, "s6") - reg(board, "s4")) - (reg(board, "s2") - reg(board, "s0"))
     assert cycles[TIMING_ROCKET, "2 mod 4"] - cycles[TIMING_ROCKET, "aligned"] == 2 * LOOPS * REDIRECT_BUBBLE
     assert cycles[TIMING_ROCKET_NOCACHE, "2 mod 4"] == cycles[TIMING_ROCKET_NOCACHE, "aligned"]
+
+
+# Twenty jumps, each to the instruction after it (`j 1f` then `1:`), run once; against twenty nops.
+JUMPS_TO_THE_NEXT = """
+    .option push
+    .option norvc
+    .balign 4
+    .rept 20
+    {insn}
+    1:
+    .endr
+    .option pop
+"""
+
+
+@pytest.mark.parametrize("engine", [ENGINE_FAST, ENGINE_PRECISE])
+def test_a_jump_to_the_next_instruction_is_no_misprediction(engine):
+    """Rocket compares the pc its frontend fetched next with the one a transfer computed (Rocket.scala's
+    mem_wrong_npc): a jump the BTB does not know, to the instruction after it, which the frontend
+    fetched anyway, is not mispredicted under --timing rocket. --timing rocket-nocache, the pipeline as
+    it was (issue 31), still charges each its misprediction."""
+    mispredicts = {}
+    for timing in (TIMING_ROCKET, TIMING_ROCKET_NOCACHE):
+        for name, insn in (("jumps", "j 1f"), ("nops", "nop")):
+            board = make_board(program(JUMPS_TO_THE_NEXT.format(insn=insn)), timing=timing, engine=engine)
+            run_to_done(board, max_time_s=0.05)
+            mispredicts[timing, name] = board.harts[0].mispredicts
+    assert mispredicts[TIMING_ROCKET, "jumps"] == mispredicts[TIMING_ROCKET, "nops"]
+    assert mispredicts[TIMING_ROCKET_NOCACHE, "jumps"] == mispredicts[TIMING_ROCKET_NOCACHE, "nops"] + 20
