@@ -332,9 +332,11 @@ sd_wait_token:
 #   What: sd_wait_token for a read command's first block, after sleeping in
 #         WFI for sd_access_ticks; then keeps the next command's sleep there
 #         (see sd.inc): 3/4 of this one's access time (from the call, the
-#         sleep included, to the token), or 0 when the token came in the
-#         first burst after a sleep (the card was ready sooner: measure
-#         again) or 3/4 is shorter than SD_ACCESS_SLEEP_MIN_US. The token's
+#         sleep included, to the token), or 0 when the token came within
+#         SD_ACCESS_SLEEP_MIN_US of the end of a sleep at least
+#         2^SD_ACCESS_RECHECK_SHIFT times that long (the card was ready
+#         sooner: measure again) or 3/4 is shorter than
+#         SD_ACCESS_SLEEP_MIN_US. The token's
 #         timeout starts after the sleep.
 #   Arguments: none.
 #   Results: a0 = the token byte.
@@ -363,8 +365,11 @@ sd_wait_first_token:
     divu    t2, t2, t3                  # t2 = the shortest sleep, in ticks
     li      t4, 0                       # t4 = the next sleep
     beqz    s1, 2f
+    sub     t3, s1, s0                  # t3 = the sleep
+    slli    t5, t2, SD_ACCESS_RECHECK_SHIFT
+    bltu    t3, t5, 2f
     sub     t3, t1, s1
-    bltu    t3, t2, 3f                  # the token came at once after the sleep
+    bltu    t3, t2, 3f                  # the token came at once after a long sleep
 2:  sub     t3, t1, s0                  # t3 = the access time, in ticks
     li      t5, SD_ACCESS_WAIT_NUM
     mul     t3, t3, t5

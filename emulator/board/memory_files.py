@@ -16,13 +16,18 @@ def memory_file(name: str, contents: Callable[[], bytes]) -> int | None:
     (CPython ignores SIGXFSZ). The caller then keeps a copy of its own in memory."""
     if not hasattr(os, "memfd_create"):
         return None
-    descriptor = os.memfd_create(name, os.MFD_CLOEXEC)
+    try:
+        descriptor = os.memfd_create(name, os.MFD_CLOEXEC)
+    except OSError:                 # (a sandbox without it, no descriptors or memory left)
+        return None
     try:
         with open(descriptor, "wb", closefd=False) as file:     # (a buffered write writes it all)
             file.write(contents())
-    except OSError:
+    except BaseException as error:
         os.close(descriptor)
-        return None
+        if isinstance(error, OSError):
+            return None
+        raise
     return descriptor
 
 

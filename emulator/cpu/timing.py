@@ -50,6 +50,9 @@ What the model charges (the table `LATENCY` and the C code in _insn_counter.c):
   BHT of 2-bit entries indexed by pc xor 7 bits of global history (for branches that hit in the
   BTB), a 2-entry return-address stack. A correctly predicted transfer costs nothing more; a
   mispredicted one (direction or target, or a taken one the BTB does not know) 3 cycles [R][S].
+  Rocket compares the pc it fetched next with the one computed (mem_wrong_npc [R]), so with the
+  caches (--timing rocket) a transfer to the very next instruction is no misprediction;
+  --timing rocket-nocache keeps charging it, as before issue 31.
 - Fetch after a redirect (with the caches, --timing rocket; the frontend's fetch is modelled with
   the instruction cache): the frontend fetches 4 bytes a cycle (RocketCoreParams: fetchWidth, two
   16-bit parcels with RVC) and the IBuf issues a 4-byte instruction only with both halves

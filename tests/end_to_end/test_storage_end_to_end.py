@@ -242,12 +242,13 @@ def test_blocks_whose_token_gaps_vary_load_byte_for_byte_without_reading_any_aga
 
 
 def _stores_per_read_command(firmware: Path, folder: Path, access_us: int,
-                             faster: tuple[int, int] | None = None) -> list[int]:
+                             faster: tuple[int, int] | None = None) -> list[tuple[int, int]]:
     """Boots a card whose model takes some 20 read commands, with the card's read access time
     `access_us`; `faster` = (n, us): once the n-th read command has reached the card, the card's
     access time is `us` (from the next command on).
-    Returns hart 0's stores to SPI1 from each read command to the next (its token bursts, and a few
-    for the command and the DMA); checks that the model loaded byte for byte."""
+    Returns hart 0's stores to SPI1 and to the CLINT from each read command to the next (SPI1: its
+    token bursts, and a few for the command and the DMA; the CLINT: two for a sleep, mtimecmp set and
+    put back); checks that the model loaded byte for byte."""
     from emulator.board import Board
     from emulator.vtime import PS_PER_US
     from sdcard_image import build_image
@@ -266,7 +267,7 @@ def _stores_per_read_command(firmware: Path, folder: Path, access_us: int,
         before = reads()
         answer = exchange(mosi, now, clocked_at)
         if reads() != before:
-            marks.append(board.bus.device_writes["SPI1"][0])
+            marks.append((board.bus.device_writes["SPI1"][0], board.bus.device_writes.get("CLINT", [0])[0]))
             if faster is not None and reads() == faster[0]:
                 sd.access_time = faster[1] * PS_PER_US
         return answer
@@ -276,7 +277,7 @@ def _stores_per_read_command(firmware: Path, folder: Path, access_us: int,
     finally:
         board.close()
     assert _load_line("files/model.obj", model) in "".join(line + "\n" for _, line in board.console_lines)
-    return [after - before for before, after in zip(marks, marks[1:])]
+    return [(after[0] - before[0], after[1] - before[1]) for before, after in zip(marks, marks[1:])]
 
 
 def test_a_read_command_sleeps_through_most_of_the_cards_access_time(firmware, tmp_path):
@@ -286,9 +287,9 @@ def test_a_read_command_sleeps_through_most_of_the_cards_access_time(firmware, t
     after polls about a quarter of it (4,021 stores, then 1,013-1,076; polling all of it, each took
     4,021)."""
     per_command = _stores_per_read_command(firmware, tmp_path, 2000)
-    first, later = per_command[0], per_command[1:]
-    assert len(later) >= 8 and first > 2000, per_command
-    assert max(later) < 0.4 * first, per_command
+    (first, first_sleep), later = per_command[0], per_command[1:]
+    assert len(later) >= 8 and first > 2000 and first_sleep == 0, per_command
+    assert max(spi for spi, _ in later) < 0.4 * first and min(clint for _, clint in later) >= 2, per_command
 
 
 def test_a_card_that_gets_faster_is_measured_again(firmware, tmp_path):
@@ -297,10 +298,21 @@ def test_a_card_that_gets_faster_is_measured_again(firmware, tmp_path):
     the card was ready sooner. The next command sleeps not at all and measures the new access time
     (polling all of it), and the ones after sleep through 3/4 of that: one command oversleeps, not a
     string of them each a quarter shorter (37 stores, then 437, then 117-180)."""
-    per_command = _stores_per_read_command(firmware, tmp_path, 2000, faster=(5, 200))
-    overslept, measuring, after = per_command[5], per_command[6], per_command[7:]
-    assert overslept < 100 and 200 < measuring < 1000, per_command
-    assert len(after) >= 4 and max(after) < 0.5 * measuring, per_command
+    spi = [stores for stores, _ in _stores_per_read_command(firmware, tmp_path, 2000, faster=(5, 200))]
+    overslept, measuring, after = spi[5], spi[6], spi[7:]
+    assert overslept < 100 and 200 < measuring < 1000, spi
+    assert len(after) >= 4 and max(after) < 0.5 * measuring, spi
+
+
+@pytest.mark.parametrize("access_us, sleeps", [(20, True), (0, False)])
+def test_a_fast_card_is_slept_for_alike_every_command_or_not_at_all(firmware, tmp_path, access_us, sleeps):
+    """A card of 20 us: every command after the first sleeps (its 3/4, about 14 us, leaves less than a
+    burst, which must not count as the card getting faster: it would be measured again every other
+    command); one that answers at once (8 bytes of 0xFF): no command sleeps, 3/4 of its access time
+    being under SD_ACCESS_SLEEP_MIN_US."""
+    clint = [stores for _, stores in _stores_per_read_command(firmware, tmp_path, access_us)]
+    assert len(clint) >= 8 and clint[0] == 0
+    assert all(stores >= 2 for stores in clint[1:]) if sleeps else not any(clint), clint
 
 
 # --- failures ---------------------------------------------------------------------------------
