@@ -77,7 +77,7 @@ def test_a_signal_while_a_fifo_s_writer_is_quiet_ends_the_run(c_firmware, tmp_pa
         while not (out / "console.log").exists():    # the run's output is there: the board follows
             assert time.monotonic() < deadline and process.poll() is None
             time.sleep(0.05)
-        time.sleep(2)                                 # the firmware waits for a line meanwhile
+        sleeping_in(process, SELECT_WAITS)            # the firmware waits for a line meanwhile
         process.send_signal(signal.SIGTERM)
         _, stderr = process.communicate(timeout=30)
     finally:
@@ -92,19 +92,23 @@ def test_a_signal_before_the_board_exists_is_no_traceback(c_firmware, tmp_path):
     fifo = tmp_path / "input.fifo"
     os.mkfifo(fifo)
     process = start(str(c_firmware / "echo.elf"), "--uart-input", str(fifo), "--out", str(tmp_path / "out"))
-    waiting_for_a_writer(process)
+    sleeping_in(process, ("wait_for_partner",))   # opening the FIFO
     process.send_signal(signal.SIGINT)
     _, stderr = process.communicate(timeout=30)
     assert process.returncode == 130 and "Traceback" not in stderr and "interrupted" in stderr, stderr
 
 
-def waiting_for_a_writer(process: subprocess.Popen, longest: float = 2.0) -> None:
-    """Waits until the process sleeps opening a FIFO (Linux's /proc/PID/wchan: wait_for_partner), or
+# where Linux says (/proc/PID/wchan) a process sleeps in select(), by kernel version
+SELECT_WAITS = ("poll_schedule_timeout", "do_select", "do_sys_poll")
+
+
+def sleeping_in(process: subprocess.Popen, waits: tuple[str, ...], longest: float = 2.0) -> None:
+    """Waits until the process sleeps where Linux's /proc/PID/wchan names one of `waits` (a prefix), or
     `longest` seconds where the kernel does not say."""
     deadline = time.monotonic() + longest
     while time.monotonic() < deadline and process.poll() is None:
         try:
-            if Path(f"/proc/{process.pid}/wchan").read_text().strip() == "wait_for_partner":
+            if Path(f"/proc/{process.pid}/wchan").read_text().strip().startswith(waits):
                 return
         except OSError:
             pass
