@@ -337,7 +337,6 @@ def _distance(insns: list[Insn], slot: int, producer: Insn) -> int:
     return WINDOW
 
 
-@lru_cache(maxsize=65536)
 def entry(insn: Insn, distance: int) -> int:
     """The native counter's table entry for an instruction (_insn_counter.c E_* macros)."""
     extra = insn.extra
