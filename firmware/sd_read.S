@@ -343,7 +343,7 @@ sd_wait_token:
 #   Clobbers: only ABI temporaries; after a sleep, this hart's mtimecmp is
 #         all ones and mie.MTIE clear (delay_until).
 sd_wait_first_token:
-    FRAME_SAVE 32, ra, s0, s1
+    FRAME_SAVE 32, ra, s0, s1, s2
     li      t0, CLINT_MTIME
     ld      s0, 0(t0)                   # s0 = mtime at the call
     li      s1, 0                       # s1 = mtime at the sleep's end, 0: none
@@ -354,15 +354,15 @@ sd_wait_first_token:
     call    delay_until
     li      t0, CLINT_MTIME
     ld      s1, 0(t0)
-1:  call    sd_wait_token               # a0 = the token, kept to the end
+1:  call    sd_wait_token
     li      t0, CLINT_MTIME
-    ld      t1, 0(t0)                   # t1 = mtime at the token
-    la      t2, cpu_hz
-    lwu     t2, 0(t2)
-    li      t3, SD_ACCESS_SLEEP_MIN_US
-    mul     t2, t2, t3
-    li      t3, MTIME_DIV * 1000000
-    divu    t2, t2, t3                  # t2 = the shortest sleep, in ticks
+    ld      t5, 0(t0)                   # t5 = mtime at the token (timer_ticks leaves it)
+    mv      s2, a0                      # s2 = the token
+    li      a0, SD_ACCESS_SLEEP_MIN_US
+    call    timer_ticks
+    mv      t2, a0                      # t2 = the shortest sleep, in ticks
+    mv      a0, s2
+    mv      t1, t5
     li      t4, 0                       # t4 = the next sleep
     beqz    s1, 2f
     sub     t3, s1, s0                  # t3 = the sleep
@@ -378,7 +378,7 @@ sd_wait_first_token:
     mv      t4, t3
 3:  la      t0, sd_access_ticks
     sd      t4, 0(t0)
-    FRAME_RESTORE 32, ra, s0, s1
+    FRAME_RESTORE 32, ra, s0, s1, s2
     ret
 
 # sd_receive_setup (file-local)

@@ -66,18 +66,31 @@ delay_until:
 #         (cpu_hz), for timeouts checked with timer_expired between tries.
 #   Arguments: a0 = microseconds.
 #   Results: a0 = deadline (an mtime value).
-#   Clobbers: only ABI temporaries.
+#   Clobbers: only ABI temporaries (timer_ticks's t0, t1; t2, t3).
 timer_deadline:
+    mv      t3, ra                      # (timer_ticks leaves t3 alone)
+    call    timer_ticks
+    mv      ra, t3
+    li      t2, CLINT_MTIME
+    ld      t3, 0(t2)
+    add     a0, a0, t3
+    ret
+
+    .globl timer_ticks
+# timer_ticks
+#   What: a0 microseconds in mtime ticks at the CPU clock in force (cpu_hz),
+#         rounded up.
+#   Arguments: a0 = microseconds.
+#   Results: a0 = ticks.
+#   Clobbers: t0 and t1 only.
+timer_ticks:
     la      t0, cpu_hz
     lwu     t0, 0(t0)
     mul     t0, a0, t0
     li      t1, MTIME_DIV * 1000000
     add     t0, t0, t1
     addi    t0, t0, -1
-    divu    t0, t0, t1                  # ticks, rounded up
-    li      t2, CLINT_MTIME
-    ld      t3, 0(t2)
-    add     a0, t0, t3
+    divu    a0, t0, t1
     ret
 
     .globl timer_expired

@@ -204,13 +204,15 @@ def _poll_loop_at(code: bytes, base: int, branch_offset: int) -> PollLoop | None
     return PollLoop(head, branch_pc, len(insns), tuple(loads))
 
 
-def _backward_branches(code: bytes) -> list[int]:
+@functools.lru_cache(maxsize=8)
+def _backward_branches(code: bytes) -> tuple[int, ...]:
     """Offsets of every 2-byte-aligned position holding a branch or jump with a negative offset
-    (a sign bit set), the only places a loop can close."""
+    (a sign bit set), the only places a loop can close; once a process for the same code (the poll,
+    time and idle loops are looked for from them, in both views of SRAM)."""
     halves, words = code_parcels(code)
     found = ((halves & 3) == 1) & ((halves >> 13) >= 5) & ((halves >> 12 & 1) == 1)     # compressed
     found[:-1] |= ((words & 3) == 3) & np.isin(words & 0x7F, (0x63, 0x6F)) & ((words >> 31) == 1)
-    return [2 * int(i) for i in np.flatnonzero(found)]
+    return tuple(2 * int(i) for i in np.flatnonzero(found))
 
 
 def table_key(address: int) -> int:
